@@ -1,0 +1,115 @@
+"""Argument types and option groups shared by the subcommands (degrees only at this boundary)."""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import math
+from pathlib import Path
+
+from ..errors import InvalidParameterError
+
+HELP_FORMATTER = argparse.ArgumentDefaultsHelpFormatter
+
+
+def positive_int(text: str) -> int:
+    """argparse type: a whole number > 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number > 0, got {text!r}") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number > 0, got {value}")
+    return value
+
+
+def finite_float(text: str) -> float:
+    """argparse type: a finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def float_in(low: float, high: float):
+    """argparse type factory: a finite number in [low, high]."""
+
+    def parse(text: str) -> float:
+        value = finite_float(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected a number in [{low:g}, {high:g}], got {value:g}")
+        return value
+
+    return parse
+
+
+def aware_datetime(text: str) -> dt.datetime:
+    """argparse type: an ISO 8601 date-time with a UTC offset, e.g. ``2024-06-21T09:30+02:00`` or ``...Z``."""
+    try:
+        value = dt.datetime.fromisoformat(text.replace("Z", "+00:00").replace("z", "+00:00"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"cannot read time {text!r}: use ISO 8601 with a UTC offset, e.g. 2024-06-21T09:30+02:00"
+        ) from None
+    if value.tzinfo is None or value.utcoffset() is None:
+        raise argparse.ArgumentTypeError(
+            f"time {text!r} has no UTC offset: add one, e.g. {text}+00:00 or {text}Z"
+        )
+    return value
+
+
+def add_sun_options(parser: argparse.ArgumentParser, *, default_elevation: float = 35.0,
+                    default_azimuth: float = 120.0) -> None:
+    """Add the sun-placement options: explicit angles or a place and time."""
+    g = parser.add_argument_group(
+        "sun", "Place the sun either by angles or by --lat/--lon/--time (NREL SPA through pvlib)."
+    )
+    g.add_argument("--sun-elevation", type=float_in(-90, 90), default=None, metavar="DEG",
+                   help=f"sun elevation above the horizon [deg] (default {default_elevation:g} when no --time)")
+    g.add_argument("--sun-azimuth", type=float_in(-360, 360), default=None, metavar="DEG",
+                   help=f"sun azimuth from north towards east [deg] (default {default_azimuth:g} when no --time)")
+    g.add_argument("--lat", type=float_in(-90, 90), default=None, metavar="DEG",
+                   help="site latitude, north positive [deg]")
+    g.add_argument("--lon", type=float_in(-180, 180), default=None, metavar="DEG",
+                   help="site longitude, east positive [deg]")
+    g.add_argument("--time", type=aware_datetime, default=None, metavar="ISO",
+                   help="local time with UTC offset, ISO 8601, e.g. 2024-06-21T09:30+02:00")
+    parser.set_defaults(_default_sun=(default_elevation, default_azimuth))
+
+
+def sun_angles_from_args(args: argparse.Namespace) -> tuple[float, float]:
+    """Sun (zenith, azimuth) [rad] from the options of :func:`add_sun_options`."""
+    if args.time is not None or args.lat is not None or args.lon is not None:
+        if args.time is None or args.lat is None or args.lon is None:
+            raise InvalidParameterError("--lat, --lon and --time must be given together")
+        if args.sun_elevation is not None or args.sun_azimuth is not None:
+            raise InvalidParameterError("give either --sun-elevation/--sun-azimuth or --lat/--lon/--time, not both")
+        from ..sun.position import sun_position
+
+        pos = sun_position(args.lat, args.lon, args.time)
+        return float(pos.zenith), float(pos.azimuth)
+    elevation, azimuth = args._default_sun
+    if args.sun_elevation is not None:
+        elevation = args.sun_elevation
+    if args.sun_azimuth is not None:
+        azimuth = args.sun_azimuth
+    return math.radians(90.0 - elevation), math.radians(azimuth % 360.0)
+
+
+def add_image_output_options(parser: argparse.ArgumentParser, *, default_out: str) -> None:
+    """--out (EXR), --png (preview, default beside the EXR) and --exposure."""
+    g = parser.add_argument_group("output")
+    g.add_argument("--out", type=Path, default=Path(default_out), metavar="PATH",
+                   help="HDR output, OpenEXR float32 linear sRGB, Y = luminance / 683")
+    g.add_argument("--png", type=Path, default=None, metavar="PATH",
+                   help="tone-mapped preview PNG (default: the --out path with .png)")
+    g.add_argument("--exposure", type=finite_float, default=None, metavar="EV",
+                   help="preview exposure compensation [EV stops]; default: automatic (scene key)")
+
+
+def png_path(args: argparse.Namespace) -> Path:
+    """The preview path: --png, or --out with the suffix .png."""
+    return args.png if args.png is not None else args.out.with_suffix(".png")

@@ -1,0 +1,99 @@
+"""Reading and writing images: OpenEXR (linear HDR, float32) and PNG (tone-mapped 8-bit sRGB).
+
+Both writers are atomic (:func:`skyscatter.fileio.atomic_path`): an error or interruption leaves no partial
+file. HDR images hold linear sRGB (D65) with Y = luminance [cd m^-2] / 683 (``skyscatter.spectral.HDR_SCALE``).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import FileFormatError, InvalidParameterError
+from ..fileio import atomic_path
+from .tonemap import tonemap
+
+__all__ = ["read_exr", "write_exr", "write_png"]
+
+
+def _check_rgb(rgb: ArrayLike) -> NDArray:
+    a = np.asarray(rgb)
+    if a.ndim != 3 or a.shape[2] != 3 or a.shape[0] == 0 or a.shape[1] == 0:
+        raise InvalidParameterError(f"an image must have shape (H, W, 3) with H, W > 0; got {a.shape}")
+    return a
+
+
+def write_exr(path: str | os.PathLike[str], rgb: ArrayLike) -> Path:
+    """Write a linear RGB image (H, W, 3) as a float32 OpenEXR file (ZIP compression), atomically.
+
+    Non-finite values are refused (:class:`~skyscatter.errors.InvalidParameterError`) rather than written.
+    """
+    import OpenEXR
+
+    a = np.ascontiguousarray(_check_rgb(rgb), dtype=np.float32)
+    if not np.all(np.isfinite(a)):
+        raise InvalidParameterError("image contains NaN or infinite values; refusing to write it")
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    target = Path(path)
+    with atomic_path(target) as tmp:
+        OpenEXR.File(header, {"RGB": a}).write(str(tmp))
+    return target
+
+
+def read_exr(path: str | os.PathLike[str]) -> NDArray[np.float32]:
+    """Read an OpenEXR file's R, G, B channels as a float32 array (H, W, 3)."""
+    import OpenEXR
+
+    p = Path(path)
+    if not p.is_file():
+        raise FileFormatError(f"{p}: no such file")
+    try:
+        with OpenEXR.File(str(p)) as f:
+            channels = f.channels()
+            if "RGB" in channels:
+                return np.asarray(channels["RGB"].pixels, dtype=np.float32)
+            if all(c in channels for c in "RGB"):
+                return np.stack([np.asarray(channels[c].pixels, dtype=np.float32) for c in "RGB"], axis=-1)
+    except (OSError, RuntimeError) as exc:
+        raise FileFormatError(f"{p}: not a readable OpenEXR file ({exc})") from exc
+    raise FileFormatError(f"{p}: OpenEXR file has no R, G, B channels (has {sorted(channels)})")
+
+
+def write_png(
+    path: str | os.PathLike[str],
+    rgb: ArrayLike,
+    *,
+    exposure_ev: float | None = None,
+    auto_exposure: bool = True,
+    key: float = 0.18,
+    tonemapped: bool = False,
+) -> Path:
+    """Write an 8-bit sRGB PNG preview of a linear HDR image (H, W, 3), atomically.
+
+    Parameters
+    ----------
+    rgb : array_like, shape (H, W, 3)
+        Linear HDR image (skyscatter scale), or display values in [0, 1] when ``tonemapped``.
+    exposure_ev : float, optional
+        Exposure compensation [EV]; see :func:`skyscatter.render.tonemap.tonemap`.
+    auto_exposure : bool
+        Use the automatic (log-average) exposure of the tone mapper, default True.
+    key : float
+        Key value of the automatic exposure (0.18 a normal scene; sky-only images look right near 0.4).
+    tonemapped : bool
+        The input is already display-referred sRGB in [0, 1]; write it as is.
+    """
+    from PIL import Image
+
+    a = _check_rgb(rgb)
+    display = np.clip(np.asarray(a, dtype=float), 0, 1) if tonemapped else tonemap(
+        a, exposure_ev=exposure_ev, auto=auto_exposure, key=key
+    )
+    pixels = np.round(display * 255.0).astype(np.uint8)
+    target = Path(path)
+    with atomic_path(target) as tmp:
+        Image.fromarray(pixels).save(tmp, format="PNG")
+    return target

@@ -1,0 +1,148 @@
+"""Images of a sky model: equirectangular environment maps, hemispherical fisheyes and pinhole views."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..conventions import equirect_directions, fisheye_directions, pinhole_directions
+from ..errors import InvalidParameterError
+from ..sky.base import SkyModel
+from ..spectral import HDR_SCALE, xyz_to_linear_srgb
+
+__all__ = ["pixel_solid_angles", "sky_image"]
+
+Projection = Literal["equirect", "fisheye", "pinhole"]
+# XYZ of 1 cd m^-2 at the D65 white point (x, y) = (0.31271, 0.32902): the ground is shown as a neutral grey.
+_D65_XYZ = np.array([0.31271 / 0.32902, 1.0, (1.0 - 0.31271 - 0.32902) / 0.32902])
+
+
+def _directions(projection: str, width: int, height: int | None, heading: float, pitch: float, fov: float):
+    if projection == "equirect":
+        d = equirect_directions(width, height)
+        return d, np.ones(d.shape[:2], dtype=bool)
+    if projection == "fisheye":
+        if height is not None and height != width:
+            raise InvalidParameterError("a fisheye image is square: give only width (or height == width)")
+        return fisheye_directions(width)
+    if projection == "pinhole":
+        h = height if height is not None else max(1, round(width * 3 / 4))
+        d = pinhole_directions(width, h, heading=heading, pitch=pitch, fov=fov)
+        return d, np.ones(d.shape[:2], dtype=bool)
+    raise InvalidParameterError(f"projection must be 'equirect', 'fisheye' or 'pinhole'; got {projection!r}")
+
+
+def pixel_solid_angles(
+    projection: Projection, width: int, height: int | None = None, *, fov: float = np.radians(60.0)
+) -> NDArray[np.float64]:
+    """Solid angle [sr] of each pixel of an image made by :func:`sky_image` with the same arguments.
+
+    Equirect: ``(2 pi / W)(pi / H) sin(theta)``; fisheye (equidistant): ``(pi / W)^2 sin(theta) / theta``;
+    pinhole: ``(2 tan(fov/2) / W)^2 cos^3(alpha)`` with alpha the angle off the optical axis.
+    """
+    if projection == "equirect":
+        d = equirect_directions(width, height)
+        h, w = d.shape[:2]
+        theta = np.arccos(np.clip(d[..., 2], -1, 1))
+        return (2 * np.pi / w) * (np.pi / h) * np.sin(theta)
+    if projection == "fisheye":
+        d, _ = fisheye_directions(width)
+        theta = np.arccos(np.clip(d[..., 2], -1, 1))
+        return (np.pi / width) ** 2 * _sin_over(theta)
+    if projection == "pinhole":
+        h = height if height is not None else max(1, round(width * 3 / 4))
+        d = pinhole_directions(width, h, heading=0.0, pitch=0.0, fov=fov)
+        cos_alpha = d[..., 1]  # heading 0, pitch 0: the optical axis is north
+        return (2 * np.tan(fov / 2) / width) ** 2 * cos_alpha**3
+    raise InvalidParameterError(f"projection must be 'equirect', 'fisheye' or 'pinhole'; got {projection!r}")
+
+
+def _sin_over(theta: NDArray[np.float64]) -> NDArray[np.float64]:
+    """sin(theta) / theta with the limit 1 at 0."""
+    return np.sinc(theta / np.pi)
+
+
+def sky_image(
+    model: SkyModel,
+    *,
+    projection: Projection = "equirect",
+    width: int = 1024,
+    height: int | None = None,
+    heading: float = 0.0,
+    pitch: float = 0.0,
+    fov: float = np.radians(60.0),
+    sun_disc: bool = True,
+    ground_albedo: float | None = 0.2,
+    dtype: type = np.float32,
+) -> NDArray:
+    """Render a sky model to a linear HDR image (H, W, 3) in skyscatter's scale (Y = luminance / 683).
+
+    Parameters
+    ----------
+    model : SkyModel
+        Any sky answering the protocol (``xyz(directions)``).
+    projection : {"equirect", "fisheye", "pinhole"}
+        ``equirect``: full-sphere latitude-longitude map, north at the centre column, width x width/2 by
+        default (:func:`skyscatter.conventions.equirect_directions`). ``fisheye``: equidistant upper hemisphere,
+        zenith at the centre, north up, east left, width x width; pixels outside the horizon circle are 0.
+        ``pinhole``: a rectilinear camera with ``heading``, ``pitch`` and horizontal ``fov``.
+    width, height : int
+        Image size [px]; ``height`` defaults to width/2 (equirect), width (fisheye) or 3/4 width (pinhole).
+    heading, pitch, fov : float
+        Pinhole camera: azimuth of the optical axis from north towards east [rad], its elevation [rad], and
+        the horizontal field of view [rad] (default 60 deg).
+    sun_disc : bool
+        Add the solar disc of sun-aware models (default True). Pixels whose centre lies within the sun's
+        angular radius get the disc's radiance; if no pixel centre does (pixels larger than the sun), the
+        pixel nearest the sun gets the disc's flux spread over that pixel's solid angle, so the image's
+        irradiance is right at any resolution.
+    ground_albedo : float or None
+        Below the horizon (for models that do not render the ground themselves): a neutral (D65) Lambertian
+        ground of this albedo lit by the model's global horizontal illuminance,
+        ``L = albedo * E_v / pi``, computed with :func:`skyscatter.photometry.horizontal_illuminance`
+        (sun included). None leaves the ground black. Default 0.2.
+    dtype : numpy dtype
+        float32 (default, as stored in EXR files) or float64.
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3)
+    """
+    if ground_albedo is not None and not (np.isfinite(ground_albedo) and 0.0 <= ground_albedo <= 1.0):
+        raise InvalidParameterError(f"ground_albedo must be in [0, 1] or None; got {ground_albedo!r}")
+    directions, inside = _directions(projection, width, height, heading, pitch, fov)
+    xyz = np.asarray(model.xyz(directions), dtype=float)
+    below = directions[..., 2] < 0.0
+    if not model.renders_ground:
+        if ground_albedo is not None and np.any(below & inside):
+            from ..photometry import horizontal_illuminance
+
+            e_v = float(horizontal_illuminance(model, include_sun=getattr(model, "has_sun", False)))
+            xyz[below] = ground_albedo * e_v / np.pi * _D65_XYZ
+        else:
+            xyz[below] = 0.0
+    if sun_disc and getattr(model, "has_sun", False):
+        _add_sun(xyz, directions, model, projection, width, height, fov)
+    xyz[~inside] = 0.0
+    return (xyz_to_linear_srgb(xyz) * HDR_SCALE).astype(dtype)
+
+
+def _add_sun(xyz, directions, model, projection, width, height, fov) -> None:
+    sun = model.sun_direction
+    if not model.renders_ground and sun[2] < -np.sin(model.sun_angular_radius):
+        return
+    cos_r = np.cos(model.sun_angular_radius)
+    dots = directions @ sun
+    disc = dots >= cos_r
+    sun_xyz = np.asarray(model.sun_xyz(), dtype=float)
+    if np.any(disc):
+        xyz[disc] += sun_xyz
+        return
+    idx = np.unravel_index(np.argmax(dots), dots.shape)
+    # Only splat if the sun actually falls within this pixel's footprint (it may be outside a pinhole view).
+    omega = pixel_solid_angles(projection, width, height, fov=fov)[idx]
+    pixel_radius = np.sqrt(omega / np.pi)
+    if np.arccos(min(1.0, dots[idx])) <= pixel_radius + model.sun_angular_radius:
+        xyz[idx] += sun_xyz * min(1.0, model.sun_solid_angle / omega)

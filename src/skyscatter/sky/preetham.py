@@ -1,0 +1,354 @@
+"""Preetham, Shirley & Smits 1999, "A Practical Analytic Model for Daylight": the skylight model.
+
+Sky luminance Y and chromaticity (x, y) follow the Perez form (Sec. 3.2, Eq. 3-4)::
+
+    F(theta, gamma) = (1 + A exp(B / cos theta)) (1 + C exp(D gamma) + E cos^2 gamma)
+    Y = Y_z F(theta, gamma) / F(0, theta_s)       (likewise x and y)
+
+with the distribution coefficients linear in turbidity T and the zenith values Y_z [kcd m^-2], x_z, y_z of
+Appendix A.2 (zenith chromaticity matrices with the published 5-digit values, see ``shared/seeds/README.md``).
+Spectra are reconstructed from (x, y) with the CIE daylight basis (A.5) and scaled to the model's luminance.
+The sun is the A.1 spectral sunlight (:func:`skyscatter.sun.sunlight.sun_spectral_radiance`).
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Literal
+
+import numba
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..conventions import as_directions
+from ..errors import InvalidDirectionError, InvalidParameterError
+from ..spectral import (
+    LUMINOUS_EFFICACY,
+    REFERENCE_WAVELENGTHS,
+    as_wavelengths,
+    cie_cmfs,
+    daylight_basis,
+    daylight_coefficients,
+    integration_weights,
+    xyY_to_xyz,
+)
+from .base import SkyModel, SunSkyMixin, check_sun_angles
+
+__all__ = [
+    "MAX_TURBIDITY",
+    "MIN_TURBIDITY",
+    "PreethamSky",
+    "perez_f",
+    "preetham_coefficients",
+    "preetham_zenith_values",
+]
+
+#: Smallest turbidity for which the published coefficients keep F(0, theta_s) > 0 for Y: below about 1.64
+#: ``1 + A_Y exp(B_Y)`` changes sign and the luminance turns negative (seeds README, errata).
+MIN_TURBIDITY = 1.65
+#: Largest turbidity for which Y_z stays positive with the sun on the horizon: ``-0.2155 T + 2.4192 > 0``
+#: needs T < 11.226 (A.2).
+MAX_TURBIDITY = 11.0
+
+# A.2: Perez coefficients [A, B, C, D, E] = M @ [T, 1].
+_COEFF_Y = np.array(
+    [[0.1787, -1.4630], [-0.3554, 0.4275], [-0.0227, 5.3251], [0.1206, -2.5771], [-0.0670, 0.3703]]
+)
+_COEFF_X = np.array(
+    [[-0.0193, -0.2592], [-0.0665, 0.0008], [-0.0004, 0.2125], [-0.0641, -0.8989], [-0.0033, 0.0452]]
+)
+_COEFF_YCHROMA = np.array(
+    [[-0.0167, -0.2608], [-0.0950, 0.0092], [-0.0079, 0.2102], [-0.0441, -1.6537], [-0.0109, 0.0529]]
+)
+# A.2 zenith chromaticity: x_z = [T^2 T 1] M [theta_s^3 theta_s^2 theta_s 1]^T, theta_s in radians.
+_ZENITH_X = np.array(
+    [
+        [0.00166, -0.00375, 0.00209, 0.0],
+        [-0.02903, 0.06377, -0.03202, 0.00394],
+        [0.11693, -0.21196, 0.06052, 0.25886],
+    ]
+)
+_ZENITH_Y = np.array(
+    [
+        [0.00275, -0.00610, 0.00317, 0.0],
+        [-0.04214, 0.08970, -0.04153, 0.00516],
+        [0.15346, -0.26756, 0.06670, 0.26688],
+    ]
+)
+# Smallest cos(theta) used in exp(B / cos theta): B < 0 in the valid range, so the term vanishes at the horizon.
+_MIN_COS = 1e-6
+
+
+def preetham_coefficients(turbidity: float) -> dict[str, NDArray[np.float64]]:
+    """Perez distribution coefficients (A, B, C, D, E) for Y, x and y (Preetham 1999, Appendix A.2).
+
+    Parameters
+    ----------
+    turbidity : float
+        Atmospheric turbidity T (dimensionless).
+
+    Returns
+    -------
+    dict
+        ``{"Y": array(5), "x": array(5), "y": array(5)}``.
+    """
+    tv = np.array([turbidity, 1.0])
+    return {"Y": _COEFF_Y @ tv, "x": _COEFF_X @ tv, "y": _COEFF_YCHROMA @ tv}
+
+
+def preetham_zenith_values(turbidity: float, sun_zenith: float) -> tuple[float, float, float]:
+    """Zenith luminance Y_z [kcd m^-2] and chromaticity x_z, y_z (Preetham 1999, Appendix A.2).
+
+    ``Y_z = (4.0453 T - 4.9710) tan(chi) - 0.2155 T + 2.4192`` with ``chi = (4/9 - T/120)(pi - 2 theta_s)``;
+    x_z, y_z from the 3 x 4 matrices with theta_s in radians.
+
+    Parameters
+    ----------
+    turbidity : float
+        Turbidity T.
+    sun_zenith : float
+        Sun zenith angle theta_s [rad].
+    """
+    t = float(turbidity)
+    chi = (4.0 / 9.0 - t / 120.0) * (np.pi - 2.0 * sun_zenith)
+    y_z = (4.0453 * t - 4.9710) * np.tan(chi) - 0.2155 * t + 2.4192
+    tv = np.array([t * t, t, 1.0])
+    sv = np.array([sun_zenith**3, sun_zenith**2, sun_zenith, 1.0])
+    return float(y_z), float(tv @ _ZENITH_X @ sv), float(tv @ _ZENITH_Y @ sv)
+
+
+def perez_f(cos_theta: ArrayLike, gamma: ArrayLike, coefficients: ArrayLike) -> NDArray[np.float64]:
+    """Perez et al. 1993 luminance distribution in Preetham's form (Preetham 1999, Eq. 3).
+
+    ``F = (1 + A exp(B / cos theta)) (1 + C exp(D gamma) + E cos^2 gamma)``.
+
+    Parameters
+    ----------
+    cos_theta : array_like
+        Cosine of the view zenith angle; clamped to >= 1e-6 so the horizon gives the finite limit.
+    gamma : array_like
+        Angle between the view direction and the sun [rad].
+    coefficients : array_like, shape (5,)
+        A, B, C, D, E.
+    """
+    a, b, c, d, e = np.asarray(coefficients, dtype=float)
+    cos_theta = np.maximum(np.asarray(cos_theta, dtype=float), _MIN_COS)
+    gamma = np.asarray(gamma, dtype=float)
+    cos_g = np.cos(gamma)
+    return (1.0 + a * np.exp(b / cos_theta)) * (1.0 + c * np.exp(d * gamma) + e * cos_g * cos_g)
+
+
+class PreethamSky(SunSkyMixin, SkyModel):
+    """The Preetham et al. 1999 analytic clear-sky model (Sec. 3, Appendix A.2 and A.5) with its sun (A.1).
+
+    Parameters
+    ----------
+    turbidity : float
+        Turbidity T (dimensionless, ratio of the optical thickness of haze + molecules to molecules alone).
+        The published fit is valid for ``MIN_TURBIDITY <= T <= MAX_TURBIDITY`` (1.65 to 11).
+    sun_zenith : float
+        Sun zenith angle [rad], 0 to pi/2. The model cannot represent a sun below the horizon
+        (:class:`~skyscatter.errors.SunBelowHorizonError`).
+    sun_azimuth : float
+        Sun azimuth [rad] from north towards east.
+    below_horizon : {"zero", "horizon"}
+        Radiance for view directions below the horizon: ``"zero"`` (default; the ground is not part of the
+        sky) or ``"horizon"`` (the sky value on the horizon at the same azimuth).
+    strict : bool
+        With True (default) a turbidity outside [1.65, 11] raises
+        :class:`~skyscatter.errors.InvalidParameterError`. With False, turbidities in [1, 20] are accepted
+        with a :class:`UserWarning`, and any negative luminance the extrapolated fit produces is clipped to 0.
+        A turbidity for which the zenith normalisation F(0, theta_s) is not positive always raises.
+
+    Notes
+    -----
+    Spectra: ``L(lambda) = Y S_D(lambda; x, y) / (683 integral S_D ybar)`` where S_D is the CIE daylight
+    spectrum for the chromaticity (Preetham 1999 A.5), normalised on a 5 nm grid over 360-830 nm. Where (x, y)
+    lies far from the daylight locus (low sun, near the sun at high turbidity) S_D can dip below zero at
+    some wavelengths; those values are clipped to zero.
+    """
+
+    def __init__(
+        self,
+        turbidity: float,
+        sun_zenith: float,
+        sun_azimuth: float,
+        *,
+        below_horizon: Literal["zero", "horizon"] = "zero",
+        strict: bool = True,
+    ) -> None:
+        t = _check_turbidity(turbidity, strict)
+        self.turbidity = t
+        self.sun_zenith, self.sun_azimuth = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=False)
+        if below_horizon not in ("zero", "horizon"):
+            raise InvalidParameterError(f"below_horizon must be 'zero' or 'horizon'; got {below_horizon!r}")
+        self.below_horizon = below_horizon
+        self.strict = strict
+        self._coefficients = preetham_coefficients(t)
+        y_z, x_z, yc_z = preetham_zenith_values(t, self.sun_zenith)
+        self._zenith = {"Y": y_z * 1000.0, "x": x_z, "y": yc_z}
+        self._norm = {}
+        for key, coeff in self._coefficients.items():
+            f0 = float(perez_f(1.0, self.sun_zenith, coeff))
+            if not f0 > 0:
+                raise InvalidParameterError(
+                    f"turbidity {t:g} with sun zenith {np.degrees(self.sun_zenith):.4g} deg gives a non-positive "
+                    f"zenith normalisation for {key}; the Preetham fit is valid for T in "
+                    f"[{MIN_TURBIDITY}, {MAX_TURBIDITY}]"
+                )
+            self._norm[key] = f0
+        if self._zenith["Y"] <= 0:
+            raise InvalidParameterError(
+                f"turbidity {t:g} gives a negative zenith luminance at this sun position; "
+                f"use T in [{MIN_TURBIDITY}, {MAX_TURBIDITY}]"
+            )
+
+    def __repr__(self) -> str:
+        return (
+            f"PreethamSky(turbidity={self.turbidity:g}, sun_zenith={self.sun_zenith:.6g}, "
+            f"sun_azimuth={self.sun_azimuth:.6g})"
+        )
+
+    # -- Y, x, y ---------------------------------------------------------------------------------------
+    def zenith_luminance(self) -> float:
+        """Zenith luminance Y_z [cd m^-2] (A.2; the paper's kcd m^-2 times 1000)."""
+        return self._zenith["Y"]
+
+    def _xyY(self, directions: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:  # noqa: N802
+        d = np.asarray(directions)
+        if d.ndim == 0 or d.shape[-1] != 3:
+            as_directions(d)  # raises the standard shape error
+        flat = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
+        coefficients = np.stack([self._coefficients[k] for k in ("x", "y", "Y")])
+        scale = np.array([self._zenith[k] / self._norm[k] for k in ("x", "y", "Y")])
+        out = np.empty((3, flat.shape[0]))
+        n_bad = _preetham_kernel(
+            flat, self.sun_direction, coefficients, scale, self.below_horizon == "horizon", not self.strict, out
+        )
+        if n_bad:
+            raise InvalidDirectionError(f"directions contain NaN, infinite or zero-length vectors ({n_bad} vectors)")
+        x, y, Y = (o.reshape(d.shape[:-1]) for o in out)  # noqa: N806
+        return x, y, Y
+
+    def luminance(self, directions: ArrayLike) -> NDArray[np.float64]:
+        """Sky luminance [cd m^-2] for directions (..., 3) (Sec. 3.2: Y = Y_z F(theta, gamma) / F(0, theta_s))."""
+        return self._xyY(directions)[2]
+
+    def chromaticity(self, directions: ArrayLike) -> NDArray[np.float64]:
+        """CIE 1931 chromaticity (x, y) of the sky, shape (..., 2) (Sec. 3.2 with the A.2 coefficients)."""
+        x, y, _ = self._xyY(directions)
+        return np.stack([x, y], axis=-1)
+
+    def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
+        """CIE XYZ [cd m^-2] of the sky, shape (..., 3), from the model's Y, x, y."""
+        x, y, Y = self._xyY(directions)  # noqa: N806
+        return xyY_to_xyz(x, y, Y)
+
+    # -- spectra ---------------------------------------------------------------------------------------
+    def spectral_radiance(self, directions: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] of the sky, shape (..., n_wavelengths) (A.5).
+
+        Parameters
+        ----------
+        directions : array_like, shape (..., 3)
+            View directions (ENU).
+        wavelengths : array_like, optional
+            Wavelengths [nm]; default 380-780 nm every 10 nm.
+        """
+        wl = as_wavelengths(wavelengths)
+        x, y, Y = self._xyY(directions)  # noqa: N806
+        m1, m2 = daylight_coefficients(x, y)
+        # 683 * integral(S_i ybar) on the reference grid, for S0, S1, S2: normalisation is linear in M1, M2.
+        ref_y = (cie_cmfs(REFERENCE_WAVELENGTHS)[:, 1] * integration_weights(REFERENCE_WAVELENGTHS)) @ daylight_basis(
+            REFERENCE_WAVELENGTHS
+        )
+        norm = LUMINOUS_EFFICACY * (ref_y[0] + m1 * ref_y[1] + m2 * ref_y[2])
+        scale = np.where(Y > 0, Y / np.where(norm > 0, norm, 1.0), 0.0)
+        basis = daylight_basis(wl)
+        spectrum = np.stack([np.ones_like(m1), m1, m2], axis=-1) @ basis.T
+        return np.maximum(spectrum, 0.0) * scale[..., None]
+
+    def sun_spectral_radiance(self, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Spectral radiance of the solar disc at the ground [W m^-2 sr^-1 nm^-1] (A.1, Table 2), shape (n,)."""
+        from ..sun.sunlight import sun_spectral_radiance
+
+        return sun_spectral_radiance(self.sun_zenith, self.turbidity, as_wavelengths(wavelengths))
+
+
+@numba.njit(parallel=True, cache=True)
+def _preetham_kernel(d, sun, coefficients, scale, horizon_mode, clip_negative, out):  # pragma: no cover - JIT
+    """x, y, Y of the Preetham sky for unit-normalised copies of ``d`` (n, 3); returns the number of bad rows.
+
+    One fused pass over the directions (Perez form, Eq. 3, for the three channels) instead of many numpy
+    temporaries; it evaluates exactly :func:`perez_f` per channel.
+    """
+    n = d.shape[0]
+    bad = 0
+    for i in numba.prange(n):
+        dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
+        norm = np.sqrt(dx * dx + dy * dy + dz * dz)
+        if not (norm > 0.0 and np.isfinite(norm)):
+            bad += 1
+            out[0, i] = 0.0
+            out[1, i] = 0.0
+            out[2, i] = 0.0
+            continue
+        dx /= norm
+        dy /= norm
+        dz /= norm
+        below = dz < 0.0
+        if below and horizon_mode:
+            h = np.sqrt(dx * dx + dy * dy)
+            if h > 1e-12:
+                dx /= h
+                dy /= h
+            else:
+                h = np.sqrt(sun[0] * sun[0] + sun[1] * sun[1])
+                if h > 0:
+                    dx, dy = sun[0] / h, sun[1] / h
+                else:
+                    dx, dy = 0.0, 1.0
+            dz = 0.0
+            below = False
+        cos_gamma = min(1.0, max(-1.0, dx * sun[0] + dy * sun[1] + dz * sun[2]))
+        gamma = np.arccos(cos_gamma)
+        inv_cos = 1.0 / max(dz, _MIN_COS)
+        for c in range(3):
+            a = coefficients[c, 0]
+            b = coefficients[c, 1]
+            cc = coefficients[c, 2]
+            dd = coefficients[c, 3]
+            e = coefficients[c, 4]
+            f = (1.0 + a * np.exp(b * inv_cos)) * (1.0 + cc * np.exp(dd * gamma) + e * cos_gamma * cos_gamma)
+            out[c, i] = scale[c] * f
+        if clip_negative and out[2, i] < 0.0:
+            out[2, i] = 0.0
+        if below:
+            out[2, i] = 0.0
+    return bad
+
+
+def _check_turbidity(turbidity: float, strict: bool) -> float:
+    try:
+        t = float(turbidity)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"turbidity must be a number; got {turbidity!r}") from exc
+    if not np.isfinite(t):
+        raise InvalidParameterError(f"turbidity must be finite; got {t}")
+    if MIN_TURBIDITY <= t <= MAX_TURBIDITY:
+        return t
+    if strict:
+        raise InvalidParameterError(
+            f"turbidity {t:g} is outside the Preetham model's valid range [{MIN_TURBIDITY}, {MAX_TURBIDITY}]"
+            " (below 1.64 the fitted luminance turns negative, above 11.2 the zenith luminance does);"
+            " pass strict=False to extrapolate within [1, 20] with a warning"
+        )
+    if not 1.0 <= t <= 20.0:
+        raise InvalidParameterError(f"turbidity must be within [1, 20] even with strict=False; got {t:g}")
+    warnings.warn(
+        f"turbidity {t:g} is outside the Preetham fit's range [{MIN_TURBIDITY}, {MAX_TURBIDITY}]; "
+        "negative luminances are clipped to zero",
+        UserWarning,
+        stacklevel=3,
+    )
+    return t

@@ -1,0 +1,144 @@
+"""CIE 1931 colorimetry of spectra and the linear sRGB conversion.
+
+The colour-matching functions are the CIE 1931 2-degree standard observer tabulated by colour-science
+(1 nm, 360-830 nm), linearly interpolated to the caller's wavelengths and zero outside that range.
+Photometric quantities use K_m = 683 lm/W, so ``Y`` of a spectral radiance [W m^-2 sr^-1 nm^-1] is a
+luminance [cd m^-2] and of a spectral irradiance an illuminance [lx].
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import InvalidParameterError
+from .grid import as_wavelengths
+
+__all__ = [
+    "HDR_SCALE",
+    "LUMINOUS_EFFICACY",
+    "cie_cmfs",
+    "integration_weights",
+    "linear_srgb_to_xyz",
+    "spectrum_to_luminance",
+    "spectrum_to_xyz",
+    "xyY_to_xyz",
+    "xyz_to_chromaticity",
+    "xyz_to_linear_srgb",
+]
+
+#: Maximum luminous efficacy of radiation K_m [lm/W] (CIE 1931 photopic).
+LUMINOUS_EFFICACY = 683.0
+#: Absolute scale of HDR images: linear sRGB whose Y equals luminance [cd m^-2] / 683, i.e. radiance-like
+#: units [W m^-2 sr^-1] weighted by the photopic curve, the scale Blender and Mitsuba treat as radiance.
+HDR_SCALE = 1.0 / LUMINOUS_EFFICACY
+
+# IEC 61966-2-1 sRGB primaries with D65 white (the matrix colour-science also uses for 'sRGB').
+_XYZ_TO_SRGB = np.array(
+    [
+        [3.2406, -1.5372, -0.4986],
+        [-0.9689, 1.8758, 0.0415],
+        [0.0557, -0.2040, 1.0570],
+    ]
+)
+_SRGB_TO_XYZ = np.linalg.inv(_XYZ_TO_SRGB)
+
+
+@lru_cache(maxsize=1)
+def _cmfs_table() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    import colour  # imported lazily: colour-science takes about 2 s to import
+
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    return np.asarray(cmfs.wavelengths, dtype=float), np.asarray(cmfs.values, dtype=float)
+
+
+def cie_cmfs(wavelengths: ArrayLike) -> NDArray[np.float64]:
+    """CIE 1931 2-degree colour-matching functions xbar, ybar, zbar at ``wavelengths`` [nm].
+
+    Returns an array of shape (n_wavelengths, 3); zero outside 360-830 nm.
+    """
+    wl = as_wavelengths(wavelengths)
+    table_wl, table = _cmfs_table()
+    return np.stack([np.interp(wl, table_wl, table[:, i], left=0.0, right=0.0) for i in range(3)], axis=-1)
+
+
+def integration_weights(wavelengths: ArrayLike) -> NDArray[np.float64]:
+    """Trapezoidal quadrature weights [nm] for a strictly increasing wavelength grid [nm]."""
+    wl = as_wavelengths(wavelengths)
+    if wl.size < 2 or np.any(np.diff(wl) <= 0):
+        raise InvalidParameterError(
+            "integrating over wavelength needs at least 2 strictly increasing wavelengths [nm]"
+        )
+    w = np.empty_like(wl)
+    d = np.diff(wl)
+    w[0] = d[0] / 2
+    w[-1] = d[-1] / 2
+    w[1:-1] = (d[:-1] + d[1:]) / 2
+    return w
+
+
+def spectrum_to_xyz(spectrum: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64]:
+    """CIE XYZ of spectra (trailing wavelength axis), ``X = 683 * integral(S xbar d lambda)``.
+
+    Parameters
+    ----------
+    spectrum : array_like, shape (..., n_wavelengths)
+        Spectral radiance [W m^-2 sr^-1 nm^-1] (giving XYZ in cd m^-2) or spectral irradiance
+        [W m^-2 nm^-1] (giving lx).
+    wavelengths : array_like, shape (n_wavelengths,)
+        Strictly increasing wavelengths [nm].
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+    """
+    wl = as_wavelengths(wavelengths)
+    s = np.asarray(spectrum)
+    if s.shape[-1:] != wl.shape:
+        raise InvalidParameterError(
+            f"spectrum's last axis ({s.shape[-1:] if s.ndim else '()'}) must match the {wl.size} wavelengths"
+        )
+    m = cie_cmfs(wl) * integration_weights(wl)[:, None] * LUMINOUS_EFFICACY
+    return s @ m
+
+
+def spectrum_to_luminance(spectrum: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64]:
+    """Luminance [cd m^-2] (or illuminance [lx]) ``683 * integral(S ybar d lambda)`` of spectra (..., n)."""
+    return spectrum_to_xyz(spectrum, wavelengths)[..., 1]
+
+
+def xyz_to_chromaticity(xyz: ArrayLike) -> NDArray[np.float64]:
+    """CIE 1931 chromaticity (x, y) of XYZ (..., 3); black (X + Y + Z = 0) maps to the D65 white point."""
+    xyz = np.asarray(xyz, dtype=float)
+    s = np.sum(xyz, axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        xy = xyz[..., :2] / s
+    return np.where(s > 0, xy, np.array([0.31271, 0.32902]))
+
+
+def xyY_to_xyz(x: ArrayLike, y: ArrayLike, Y: ArrayLike) -> NDArray[np.float64]:  # noqa: N802, N803
+    """CIE XYZ (..., 3) from chromaticity (x, y) and luminance Y [any photometric unit]."""
+    x, y, Y = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (x, y, Y)))  # noqa: N806
+    with np.errstate(invalid="ignore", divide="ignore"):
+        X = np.where(y > 0, x * Y / y, 0.0)  # noqa: N806
+        Z = np.where(y > 0, (1.0 - x - y) * Y / y, 0.0)  # noqa: N806
+    return np.stack([X, Y, Z], axis=-1)
+
+
+def xyz_to_linear_srgb(xyz: ArrayLike) -> NDArray[np.floating]:
+    """Linear sRGB (IEC 61966-2-1 primaries, D65) of XYZ (..., 3); no scaling, no clipping.
+
+    float32 input stays float32.
+    """
+    xyz = np.asarray(xyz)
+    dtype = xyz.dtype if xyz.dtype == np.float32 else np.float64
+    return (xyz @ _XYZ_TO_SRGB.T).astype(dtype, copy=False)
+
+
+def linear_srgb_to_xyz(rgb: ArrayLike) -> NDArray[np.floating]:
+    """CIE XYZ of linear sRGB values (..., 3), the inverse of :func:`xyz_to_linear_srgb`."""
+    rgb = np.asarray(rgb)
+    dtype = rgb.dtype if rgb.dtype == np.float32 else np.float64
+    return (rgb @ _SRGB_TO_XYZ.T).astype(dtype, copy=False)

@@ -1,0 +1,13 @@
+import numpy as np
+import pytest
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(12345)
+
+
+@pytest.fixture(autouse=True)
+def _isolated_cache(tmp_path_factory, monkeypatch):
+    """Keep generated lookup tables out of the user's cache folder."""
+    monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "cache"))

@@ -1,0 +1,80 @@
+"""`skyscatter sky`: defaults, options, exit codes and one-line errors."""
+
+import math
+
+import numpy as np
+import pytest
+
+from skyscatter.cli import main
+from skyscatter.render import read_exr
+
+
+def run(capsys, *args):
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_bare_command_writes_exr_and_png(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, "sky", "--width", "64")
+    assert code == 0, err
+    img = read_exr(tmp_path / "sky.exr")
+    assert img.shape == (32, 64, 3) and np.all(np.isfinite(img)) and img.max() > 0
+    assert (tmp_path / "sky.png").stat().st_size > 0
+    # default: clear mid-morning sky; the zenith (top row) is bluer than red
+    assert img[0, :, 2].mean() > img[0, :, 0].mean()
+
+
+def test_fisheye_with_place_and_time(tmp_path, capsys):
+    out = tmp_path / "f.exr"
+    code, stdout, err = run(capsys, "sky", "--projection", "fisheye", "--width", "32", "--lat", "48.85",
+                            "--lon", "2.35", "--time", "2024-06-21T10:00+02:00", "--out", str(out),
+                            "--png", str(tmp_path / "f.png"))
+    assert code == 0, err
+    assert read_exr(out).shape == (32, 32, 3)
+    assert "sun zenith" in stdout
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["--turbidity", "25"], "turbidity"),
+        (["--turbidity", "1.2"], "turbidity"),
+        (["--width", "0"], "whole number > 0"),
+        (["--width", "-5"], "whole number > 0"),
+        (["--time", "yesterday", "--lat", "1", "--lon", "1"], "cannot read time"),
+        (["--time", "2024-06-21T10:00", "--lat", "1", "--lon", "1"], "no UTC offset"),
+        (["--sun-elevation", "-10"], "below the horizon"),
+        (["--lat", "10"], "together"),
+        (["--sky-type", "3"], "does not apply"),
+    ],
+)
+def test_bad_values_exit_2_with_one_line(tmp_path, monkeypatch, capsys, args, message):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, "sky", "--width", "16", *args) if "--width" not in args else run(capsys, "sky", *args)
+    assert code == 2
+    assert message in err
+    assert len(err.strip().splitlines()) == 1
+    assert "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_unwritable_path(tmp_path, capsys):
+    code, out, err = run(capsys, "sky", "--width", "16", "--out", str(tmp_path / "no" / "sky.exr"))
+    assert code == 2 and "does not exist" in err and len(err.strip().splitlines()) == 1
+
+
+def test_help_lists_units_and_defaults(capsys):
+    code, text, err = run(capsys, "sky", "--help")
+    assert code == 0
+    for fragment in ("[deg]", "[px]", "default: 1024", "--turbidity", "--projection", "[m]"):
+        assert fragment in text
+
+
+def test_sun_angles_from_elevation(tmp_path, capsys):
+    code, out, err = run(capsys, "sky", "--width", "16", "--sun-elevation", "30", "--sun-azimuth", "200",
+                         "--out", str(tmp_path / "s.exr"))
+    assert code == 0
+    assert f"{60:.2f} deg" in out and f"{200:.2f} deg" in out
+    assert math.isfinite(read_exr(tmp_path / "s.exr").sum())
