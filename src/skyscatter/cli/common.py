@@ -89,7 +89,7 @@ def sun_angles_from_args(args: argparse.Namespace) -> tuple[float, float]:
             raise InvalidParameterError("give either --sun-elevation/--sun-azimuth or --lat/--lon/--time, not both")
         from ..sun.position import sun_position
 
-        pos = sun_position(args.lat, args.lon, args.time)
+        pos = sun_position(math.radians(args.lat), math.radians(args.lon), args.time)
         return float(pos.zenith), float(pos.azimuth)
     elevation, azimuth = args._default_sun
     if args.sun_elevation is not None:

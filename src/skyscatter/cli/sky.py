@@ -88,8 +88,9 @@ def _model_options(args: argparse.Namespace) -> dict:
     if wrong:
         from ..errors import InvalidParameterError
 
-        flags = ", ".join("--" + k.replace("_", "-") for k in wrong)
-        raise InvalidParameterError(f"{flags} do(es) not apply to --model {args.model}")
+        special = {"direct_normal_irradiance": "--dni", "diffuse_horizontal_irradiance": "--dhi"}
+        flags = ", ".join(special.get(k, "--" + k.replace("_", "-")) for k in wrong)
+        raise InvalidParameterError(f"{flags}: does not apply to --model {args.model}")
     return {k: getattr(args, k) for k in allowed}
 
 
