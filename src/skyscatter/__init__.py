@@ -22,14 +22,16 @@ _LAZY = {
     "CIEClearSky": "skyscatter.sky.cie",
     "CIEStandardSky": "skyscatter.sky.cie",
     "PerezSky": "skyscatter.sky.perez",
-    "skymatrix": "skyscatter.skymatrix",
+    "skymatrix": "skyscatter.sky_matrix",
     "BrunetonSky": "skyscatter.precomputed.sky",
 }
 _SUBMODULES = {
     "aerial",
     "atmosphere",
     "conventions",
+    "epw",
     "errors",
+    "patches",
     "photometry",
     "precomputed",
     "render",

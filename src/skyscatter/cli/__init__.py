@@ -15,7 +15,7 @@ from .. import __version__
 from ..errors import SkyscatterError
 
 # Subcommand modules in the order ``--help`` lists them.
-_COMMANDS = ["sun", "sky"]
+_COMMANDS = ["sun", "sky", "illuminance", "skymatrix"]
 
 
 class OneLineParser(argparse.ArgumentParser):

@@ -1,0 +1,71 @@
+"""``skyscatter skymatrix``: hourly Perez sky luminance over sky patches from an EPW weather file."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from .common import HELP_FORMATTER, positive_int
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "skymatrix",
+        help="annual sky matrix (hours x patches) from an EPW weather file, like Radiance gendaymtx",
+        description="Read an hourly EnergyPlus weather file (.epw), place the sun at the middle of every hour "
+        "(NREL SPA), build the Perez 1993 all-weather sky of every hour from its direct normal and diffuse "
+        "horizontal irradiance (Perez 1990 luminous efficacies with the hour's dew point) and write the mean "
+        "luminance [cd m^-2] of every sky patch: an hours x patches matrix in a .npz file (and optionally a "
+        "CSV). Patches: Tregenza (145) or Reinhart MF 2 (577) / MF 4 (2305), ordered from the horizon band up, "
+        "each band starting at north and going east, zenith last (Radiance's order without its ground patch). "
+        "Example: skyscatter skymatrix weather.epw --patches reinhart2 --out matrix.npz --csv matrix.csv",
+        formatter_class=HELP_FORMATTER,
+    )
+    p.add_argument("epw", type=Path, help="hourly EnergyPlus weather file (.epw)")
+    p.add_argument("--patches", choices=["tregenza", "reinhart1", "reinhart2", "reinhart4"], default="reinhart2",
+                   help="patch scheme: tregenza = reinhart1 (145 patches), reinhart2 (577), reinhart4 (2305)")
+    p.add_argument("--out", type=Path, default=Path("skymatrix.npz"), metavar="PATH",
+                   help="output .npz: luminance [cd m^-2] (hours x patches, float32), times, sun angles [rad], "
+                   "Perez epsilon/delta, diffuse and sun illuminance [lx], patch zenith/azimuth [rad] and solid "
+                   "angle [sr]")
+    p.add_argument("--csv", type=Path, default=None, metavar="PATH",
+                   help="also write a CSV: a time column (ISO 8601, mid-hour) and one luminance column per patch")
+    p.add_argument("--include-sun", action="store_true",
+                   help="add the direct sun to the patch that contains it (E_sun / patch solid angle)")
+    p.add_argument("--samples", type=positive_int, default=3, metavar="N",
+                   help="average each patch over N x N equal-area cells (1: patch centre only, as gendaymtx)")
+    p.add_argument("--no-progress", dest="progress", action="store_false", help="hide the progress bar")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from ..errors import InvalidParameterError, OutputError
+    from ..sky_matrix import skymatrix
+
+    if args.out.suffix.lower() != ".npz":
+        raise InvalidParameterError(f"--out must end in .npz; got {args.out}")
+    for target in (args.out, args.csv):
+        if target is not None and not (target.parent if str(target.parent) else Path(".")).is_dir():
+            raise OutputError(f"cannot write {target}: folder {target.parent} does not exist")
+    if args.samples > 16:
+        raise InvalidParameterError(f"--samples must be at most 16; got {args.samples}")
+    t0 = time.perf_counter()
+    matrix = skymatrix(args.epw, scheme=args.patches, include_sun=args.include_sun, samples=args.samples,
+                       progress=args.progress)
+    elapsed = time.perf_counter() - t0
+    out = matrix.save_npz(args.out)
+    written = [str(out)]
+    if args.csv is not None:
+        written.append(str(matrix.save_csv(args.csv)))
+    hours, patches = matrix.shape
+    lit = int(np.count_nonzero(matrix.diffuse_illuminance > 0))
+    loc = matrix.location
+    print(f"{args.epw}: {loc.city}, {loc.country} ({loc.latitude_deg:.3f}, {loc.longitude_deg:.3f} deg, "
+          f"UTC{loc.timezone_hours:+g} h); {hours} hours, {lit} with daylight")
+    print(f"{patches} patches ({matrix.scheme.name}), sun {'included' if matrix.include_sun else 'excluded'}; "
+          f"computed in {elapsed:.2f} s")
+    print("wrote " + " and ".join(written))
+    return 0

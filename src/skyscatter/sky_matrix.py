@@ -1,0 +1,353 @@
+"""Annual sky matrices: hourly Perez (1993) sky luminance over Tregenza/Reinhart patches from an EPW file.
+
+The job Radiance's ``gendaymtx`` does, vectorised over hours:
+
+1. read the EPW file (:func:`skyscatter.epw.read_epw`): site, time zone, hourly direct normal and diffuse
+   horizontal irradiance and dew point;
+2. the sun for every hour at the middle of the hour the EPW values average over (file hour - 30 min, local
+   standard time), NREL SPA through :func:`skyscatter.sun.position.sun_position` (apparent zenith, the site
+   elevation as altitude);
+3. the Perez sky of every hour with :func:`skyscatter.sky.perez.perez_parameters` (clearness and brightness from
+   the irradiances, Perez 1990 luminous efficacies with the hour's dew point, all the guards of
+   :mod:`skyscatter.sky.perez`); the sky is scaled so that it integrates to the hour's diffuse horizontal
+   illuminance (Gauss-Legendre rule of :func:`skyscatter.photometry.plane_quadrature`, 48 x 96 nodes);
+4. every patch gets the sky's mean luminance over ``samples x samples`` equal-area cells (``samples=1``: the
+   patch centre, as gendaymtx does).
+
+Hours without diffuse light (D_h = 0) give a row of zeros. Hours with diffuse light but the sun below the
+horizon at mid-hour (sunrise or sunset inside the hour) are modelled with the sun on the horizon at its
+azimuth, as gendaymtx does. With ``include_sun`` the direct normal illuminance of the sun (Perez 1990 direct
+efficacy) is added to the patch that contains the sun as ``E_sun / Omega_patch`` (a sun below the horizon at
+mid-hour goes to the horizon patch at its azimuth); gendaymtx instead spreads it over the 4 nearest patch
+centres.
+
+The result is a :class:`SkyMatrix`: ``luminance`` [cd m^-2] of shape (hours, patches), with the sun angles, the
+Perez parameters and the patch geometry, savable as ``.npz`` and ``.csv``.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from .epw import EPWData, EPWLocation, read_epw
+from .errors import FileFormatError, InvalidParameterError
+from .fileio import atomic_path
+from .patches import PatchScheme, patch_scheme
+
+__all__ = ["NORMALISATION_NODES", "SkyMatrix", "perez_patch_luminance", "skymatrix"]
+
+#: Gauss-Legendre nodes (zenith, azimuth) of the per-hour normalisation integral.
+NORMALISATION_NODES = (48, 96)
+
+
+@numba.njit(cache=True, inline="always")
+def _perez_f(a, b, c, d, e, cos_theta, cos_gamma):  # pragma: no cover - compiled
+    ct = max(cos_theta, 0.01)
+    cg = min(1.0, max(-1.0, cos_gamma))
+    f = (1.0 + a * np.exp(b / ct)) * (1.0 + c * np.exp(d * np.arccos(cg)) + e * cg * cg)
+    return max(f, 0.0)
+
+
+@numba.njit(cache=True, parallel=True)
+def _kernel(coeffs, sun, scale, qdirs, qweights, sdirs, n_sub, out):  # pragma: no cover - compiled
+    n_hours = coeffs.shape[0]
+    n_patch = out.shape[1]
+    for h in numba.prange(n_hours):
+        if scale[h] <= 0.0:
+            for p in range(n_patch):
+                out[h, p] = 0.0
+            continue
+        a, b, c, d, e = coeffs[h, 0], coeffs[h, 1], coeffs[h, 2], coeffs[h, 3], coeffs[h, 4]
+        sx, sy, sz = sun[h, 0], sun[h, 1], sun[h, 2]
+        total = 0.0
+        for k in range(qdirs.shape[0]):
+            cg = qdirs[k, 0] * sx + qdirs[k, 1] * sy + qdirs[k, 2] * sz
+            total += qweights[k] * _perez_f(a, b, c, d, e, qdirs[k, 2], cg)
+        if total <= 0.0:  # no positive luminance anywhere: uniform sky (as PerezSky and gendaymtx)
+            for p in range(n_patch):
+                out[h, p] = scale[h] / np.pi
+            continue
+        norm = scale[h] / total
+        for p in range(n_patch):
+            acc = 0.0
+            base = p * n_sub
+            for s in range(n_sub):
+                k = base + s
+                cg = sdirs[k, 0] * sx + sdirs[k, 1] * sy + sdirs[k, 2] * sz
+                acc += _perez_f(a, b, c, d, e, sdirs[k, 2], cg)
+            out[h, p] = norm * acc / n_sub
+
+
+def perez_patch_luminance(
+    coefficients: NDArray[np.float64],
+    model_sun: NDArray[np.float64],
+    diffuse_illuminance: NDArray[np.float64],
+    scheme: PatchScheme,
+    *,
+    samples: int = 3,
+) -> NDArray[np.float64]:
+    """Mean patch luminance [cd m^-2] of many Perez skies at once, shape (n_skies, n_patches).
+
+    Parameters
+    ----------
+    coefficients : ndarray, shape (n, 5)
+        Perez (a, b, c, d, e) per sky (:func:`skyscatter.sky.perez.perez_coefficients`).
+    model_sun : ndarray, shape (n, 3)
+        Unit vectors to the sun the model uses (after the altitude clamp).
+    diffuse_illuminance : ndarray, shape (n,)
+        D_v [lx] each sky integrates to; 0 gives a zero row.
+    scheme : PatchScheme
+    samples : int
+        Cells per patch side (1: patch centres).
+    """
+    from .photometry import plane_quadrature
+
+    qd, qw = plane_quadrature(0.0, 0.0, nodes=NORMALISATION_NODES)
+    if samples == 1:
+        sdirs = scheme.centre_directions.reshape(-1, 3)
+    else:
+        sdirs = scheme.sample_directions(samples).reshape(-1, 3)
+    n_sub = sdirs.shape[0] // scheme.n_patches
+    coeffs = np.ascontiguousarray(coefficients, dtype=np.float64).reshape(-1, 5)
+    out = np.empty((coeffs.shape[0], scheme.n_patches))
+    _kernel(
+        coeffs,
+        np.ascontiguousarray(model_sun, dtype=np.float64).reshape(-1, 3),
+        np.ascontiguousarray(diffuse_illuminance, dtype=np.float64).reshape(-1),
+        np.ascontiguousarray(qd),
+        np.ascontiguousarray(qw),
+        np.ascontiguousarray(sdirs),
+        n_sub,
+        out,
+    )
+    return out
+
+
+@dataclass(eq=False)
+class SkyMatrix:
+    """Hourly sky luminance over a patch scheme.
+
+    Attributes
+    ----------
+    luminance : ndarray, shape (n_hours, n_patches)
+        Mean patch luminance [cd m^-2] (sky; plus the sun's share if ``include_sun``).
+    times : pandas.DatetimeIndex
+        Middle of each hour, local standard time of the file.
+    sun_zenith, sun_azimuth : ndarray, shape (n_hours,)
+        SPA sun position at mid-hour [rad] (azimuth from north towards east).
+    epsilon, delta : ndarray
+        Perez sky clearness and brightness used (NaN for hours without diffuse light).
+    diffuse_illuminance, sun_illuminance_normal : ndarray
+        D_v and the sun's direct normal illuminance [lx] (0 without light).
+    scheme : PatchScheme
+    location : EPWLocation
+    include_sun : bool
+    samples : int
+    """
+
+    luminance: NDArray[np.float64]
+    times: object
+    sun_zenith: NDArray[np.float64]
+    sun_azimuth: NDArray[np.float64]
+    epsilon: NDArray[np.float64]
+    delta: NDArray[np.float64]
+    diffuse_illuminance: NDArray[np.float64]
+    sun_illuminance_normal: NDArray[np.float64]
+    scheme: PatchScheme
+    location: EPWLocation
+    include_sun: bool
+    samples: int
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(n_hours, n_patches)."""
+        return self.luminance.shape  # type: ignore[return-value]
+
+    def horizontal_illuminance(self) -> NDArray[np.float64]:
+        """Horizontal illuminance [lx] per hour from the patches: ``sum(L_p Omega_p sin(alt_p))`` (a check)."""
+        g = self.scheme
+        return self.luminance @ (g.solid_angles * np.sin(g.centre_altitude))
+
+    def save_npz(self, path: str | os.PathLike[str]) -> Path:
+        """Write a compressed ``.npz`` (atomically); returns the path. Keys are listed in ``docs/standard_skies.md``."""
+        target = Path(path)
+        g = self.scheme
+        with atomic_path(target) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez_compressed(
+                    fh,
+                    luminance=self.luminance.astype(np.float32),
+                    times=np.asarray([t.isoformat() for t in self.times]),
+                    sun_zenith=self.sun_zenith,
+                    sun_azimuth=self.sun_azimuth,
+                    epsilon=self.epsilon,
+                    delta=self.delta,
+                    diffuse_illuminance=self.diffuse_illuminance,
+                    sun_illuminance_normal=self.sun_illuminance_normal,
+                    patch_zenith=g.centre_zenith,
+                    patch_azimuth=g.azimuth_centre,
+                    patch_solid_angle=g.solid_angles,
+                    scheme=np.array(g.name),
+                    include_sun=np.array(self.include_sun),
+                    samples=np.array(self.samples),
+                    latitude=np.array(self.location.latitude),
+                    longitude=np.array(self.location.longitude),
+                    units=np.array("luminance cd m^-2; angles rad; illuminance lx"),
+                )
+        return target
+
+    def save_csv(self, path: str | os.PathLike[str]) -> Path:
+        """Write a CSV (atomically): a ``time`` column (ISO 8601, mid-hour) and one column per patch [cd m^-2]."""
+        target = Path(path)
+        header = "time," + ",".join(f"patch_{i}" for i in range(self.scheme.n_patches))
+        stamps = [t.isoformat() for t in self.times]
+        zero_row = ",".join(["0"] * self.scheme.n_patches)
+        with atomic_path(target) as tmp:
+            with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+                fh.write(header + "\n")
+                for stamp, row in zip(stamps, self.luminance, strict=True):
+                    if not row.any():
+                        fh.write(f"{stamp},{zero_row}\n")
+                    else:
+                        fh.write(stamp + "," + ",".join(f"{v:.6g}" for v in row.tolist()) + "\n")
+        return target
+
+
+def _check_scheme(scheme: str | PatchScheme) -> PatchScheme:
+    return scheme if isinstance(scheme, PatchScheme) else patch_scheme(scheme)
+
+
+def _check_irradiance(epw: EPWData) -> None:
+    for name, arr in (
+        ("direct normal radiation", epw.direct_normal_irradiance),
+        ("diffuse horizontal radiation", epw.diffuse_horizontal_irradiance),
+    ):
+        bad = ~np.isfinite(arr)
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            raise FileFormatError(
+                f"{epw.path}: line {int(epw.line_numbers[i])}: {name} is missing (9999); a sky matrix needs "
+                "the direct normal and diffuse horizontal radiation of every hour"
+            )
+
+
+def skymatrix(
+    epw_path: str | os.PathLike[str] | EPWData,
+    *,
+    scheme: str | PatchScheme = "reinhart2",
+    include_sun: bool = False,
+    samples: int = 3,
+    chunk_hours: int = 512,
+    progress: bool = False,
+) -> SkyMatrix:
+    """Hourly Perez sky luminance over sky patches for a year of weather (the job of Radiance's gendaymtx).
+
+    Parameters
+    ----------
+    epw_path : path or EPWData
+        An hourly EnergyPlus weather file (or one already read with :func:`skyscatter.epw.read_epw`).
+    scheme : str or PatchScheme
+        "tregenza" (= "reinhart1", 145 patches), "reinhart2" (577, default) or "reinhart4" (2305).
+    include_sun : bool
+        Add the direct sun to the patch that contains it (default False: sky only).
+    samples : int
+        Equal-area cells per patch side for the patch mean (default 3; 1 samples the patch centre only).
+    chunk_hours : int
+        Hours computed per vectorised step (memory vs. progress granularity).
+    progress : bool
+        Show a tqdm progress bar over the hours (advances per chunk).
+
+    Returns
+    -------
+    SkyMatrix
+
+    Raises
+    ------
+    FileFormatError
+        Malformed EPW file, or missing direct/diffuse radiation in a record (the message names the line).
+    InvalidParameterError
+        Unknown scheme or bad options.
+    """
+    from .sky.perez import perez_parameters
+    from .sun.position import sun_position
+
+    geom = _check_scheme(scheme)
+    if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 16:
+        raise InvalidParameterError(f"samples must be a whole number in [1, 16]; got {samples!r}")
+    if isinstance(chunk_hours, bool) or int(chunk_hours) != chunk_hours or chunk_hours < 1:
+        raise InvalidParameterError(f"chunk_hours must be a whole number >= 1; got {chunk_hours!r}")
+    epw = epw_path if isinstance(epw_path, EPWData) else read_epw(epw_path)
+    _check_irradiance(epw)
+    loc = epw.location
+    times = epw.times(offset_hours=-0.5)
+    pos = sun_position(loc.latitude, loc.longitude, times, altitude=loc.elevation)
+    zen = np.asarray(pos.zenith, dtype=float)
+    azi = np.asarray(pos.azimuth, dtype=float)
+    n = len(epw)
+    dni = epw.direct_normal_irradiance
+    dhi = epw.diffuse_horizontal_irradiance
+    dew = np.where(np.isfinite(epw.dew_point), epw.dew_point, 11.0)
+    doy = epw.day_of_year
+    lit = dhi > 0.0
+    lum = np.zeros((n, geom.n_patches))
+    eps = np.full(n, np.nan)
+    dlt = np.full(n, np.nan)
+    d_v = np.zeros(n)
+    e_sun = np.zeros(n)
+    idx = np.flatnonzero(lit)
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=n, unit="h", desc=f"sky matrix ({geom.name})")
+        bar.update(n - idx.size)  # dark hours need no work
+    try:
+        for start in range(0, idx.size, int(chunk_hours)):
+            sel = idx[start : start + int(chunk_hours)]
+            p = perez_parameters(
+                zen[sel],
+                direct_normal_irradiance=dni[sel],
+                diffuse_horizontal_irradiance=dhi[sel],
+                day_of_year=doy[sel],
+                dew_point=dew[sel],
+            )
+            model_sun = np.stack(
+                [np.sin(p.sun_zenith) * np.sin(azi[sel]), np.sin(p.sun_zenith) * np.cos(azi[sel]),
+                 np.cos(p.sun_zenith)], axis=-1,
+            )
+            lum[sel] = perez_patch_luminance(p.coefficients, model_sun, p.diffuse_illuminance, geom, samples=samples)
+            eps[sel], dlt[sel] = p.epsilon, p.delta
+            d_v[sel], e_sun[sel] = p.diffuse_illuminance, p.sun_illuminance_normal
+            if bar is not None:
+                bar.update(sel.size)
+    finally:
+        if bar is not None:
+            bar.close()
+    # direct sun without diffuse light cannot be modelled (epsilon undefined); such records are left dark
+    if include_sun:
+        sunny = np.flatnonzero(e_sun > 0.0)
+        if sunny.size:
+            el = np.maximum(np.pi / 2 - zen[sunny], 1e-9)
+            sdir = np.stack([np.cos(el) * np.sin(azi[sunny]), np.cos(el) * np.cos(azi[sunny]), np.sin(el)], axis=-1)
+            patch = geom.patch_index(sdir)
+            lum[sunny, patch] += e_sun[sunny] / geom.solid_angles[patch]
+    return SkyMatrix(
+        luminance=lum,
+        times=times,
+        sun_zenith=zen,
+        sun_azimuth=azi,
+        epsilon=eps,
+        delta=dlt,
+        diffuse_illuminance=d_v,
+        sun_illuminance_normal=e_sun,
+        scheme=geom,
+        location=loc,
+        include_sun=bool(include_sun),
+        samples=int(samples),
+    )

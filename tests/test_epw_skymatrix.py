@@ -1,0 +1,193 @@
+"""EPW reading (good and malformed files) and the annual sky matrix."""
+
+import math
+
+import numpy as np
+import pytest
+
+import skyscatter
+from skyscatter.epw import read_epw
+from skyscatter.errors import FileFormatError, InvalidParameterError
+from skyscatter.patches import patch_luminance, patch_scheme
+from skyscatter.sky.perez import PerezSky
+
+HEADER = [
+    "LOCATION,Testville,BY,DEU,skyscatter test,999999,48.14,11.58,1.0,520.0",
+    "DESIGN CONDITIONS,0",
+    "TYPICAL/EXTREME PERIODS,0",
+    "GROUND TEMPERATURES,0",
+    "HOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0",
+    "COMMENTS 1,written by tests/test_epw_skymatrix.py",
+    "COMMENTS 2,",
+    "DATA PERIODS,1,1,Data,Sunday, 6/20,6/21",
+]
+
+
+def record(month, day, hour, dni, dhi, dew=10.0, year=2023):
+    """One 35-field EPW data line (unused fields carry the dictionary's missing codes)."""
+    ghi = 9999 if 9999 in (dni, dhi) else dni + dhi
+    fields = [year, month, day, hour, 60, "?9?9?9?9E0?9?9?9?9?9?9?9?9?9?9?9?9?9?9?9*9*9?9?9?9", 18.0, dew, 60,
+              95500, 9999, 9999, 9999, ghi, dni, dhi, 999999, 999999, 999999, 9999, 180, 2.0, 5, 5, 9999,
+              99999, 9, 999999999, 999, 0.999, 999, 99, 999, 999, 99]
+    return ",".join(str(f) for f in fields)
+
+
+def day_records():
+    """Two June days: plausible clear-ish morning, cloudier afternoon, dark nights."""
+    rows = []
+    for day in (20, 21):
+        for hour in range(1, 25):
+            solar = math.sin(math.pi * (hour - 0.5 - 4.5) / 16) if 5 <= hour <= 21 else 0.0
+            solar = max(solar, 0.0)
+            dni = round(750 * solar**0.4) if hour < 15 else round(200 * solar)
+            dhi = round(30 + 120 * solar) if solar > 0 else 0
+            rows.append(record(6, day, hour, dni, dhi, dew=8.0 + hour / 4))
+    return rows
+
+
+@pytest.fixture
+def epw_file(tmp_path):
+    path = tmp_path / "test.epw"
+    path.write_text("\n".join(HEADER + day_records()) + "\n", encoding="utf-8")
+    return path
+
+
+def test_read_good_file(epw_file):
+    epw = read_epw(epw_file)
+    loc = epw.location
+    assert (loc.city, loc.country, loc.latitude_deg, loc.longitude_deg, loc.timezone_hours, loc.elevation) == (
+        "Testville", "DEU", 48.14, 11.58, 1.0, 520.0)
+    assert loc.latitude == pytest.approx(math.radians(48.14))
+    assert len(epw) == 48
+    assert epw.hour[0] == 1 and epw.hour[-1] == 24
+    times = epw.times()
+    assert str(times[0]) == "2023-06-20 00:30:00+01:00"  # middle of the hour ending 01:00 local standard time
+    assert str(times[-1]) == "2023-06-21 23:30:00+01:00"
+    assert epw.day_of_year[0] == 171
+    assert epw.line_numbers[0] == 9
+    assert epw.dew_point[0] == pytest.approx(8.25)
+    assert epw.direct_normal_irradiance[12] > 0 and epw.diffuse_horizontal_irradiance[0] == 0
+
+
+def _write(tmp_path, lines):
+    path = tmp_path / "bad.epw"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def _replace_record(i, row):
+    return lambda h, r: (h, r[:i] + [row] + r[i + 1 :])
+
+
+def _edit_first(old, new):
+    return lambda h, r: (h, [r[0].replace(old, new, 1)] + r[1:])
+
+
+@pytest.mark.parametrize(
+    "mutate,message",
+    [
+        (lambda h, r: (["NOT A LOCATION"] + h[1:], r), r"line 1: header line 1 should start with 'LOCATION'"),
+        (lambda h, r: ([h[0]] + h[2:], r), r"line 2: header line 2 should start with 'DESIGN CONDITIONS'"),
+        (lambda h, r: (["LOCATION,A,B,C"] + h[1:], r), r"line 1: LOCATION needs 10 fields"),
+        (lambda h, r: ([h[0].replace("48.14", "95.0")] + h[1:], r), r"line 1: latitude 95 deg is outside"),
+        (lambda h, r: ([h[0].replace("11.58", "east")] + h[1:], r), r"line 1: longitude 'east' is not a number"),
+        (lambda h, r: (h[:7] + ["DATA PERIODS,1,4,Data,Sunday, 6/20,6/21"], r), r"line 8: only hourly EPW files"),
+        (lambda h, r: (h, r[:5] + [r[5] + ",7"] + r[6:]), r"line 14: a data record has 35 .* found 36"),
+        (lambda h, r: (h, r[:3] + [",".join(r[3].split(",")[:-2])] + r[4:]), r"line 12: .*found 33"),
+        (lambda h, r: (h, r[:2] + [r[2].replace(",18.0,", ",hot,", 1)] + r[3:]), r"line 11: dry bulb .*'hot' is not"),
+        (_edit_first("2023,6,20,1,", "2023,13,20,1,"), r"line 9: month 13 is outside 1-12"),
+        (_edit_first("2023,6,20,1,", "2023,6,31,1,"), r"line 9: 2023-06-31 is not a date"),
+        (_edit_first("2023,6,20,1,", "2023,6,20,0,"), r"line 9: hour 0 is outside 1-24"),
+        (_replace_record(12, record(6, 20, 13, -5, 100)), r"line 21: direct normal radiation -5 Wh m\^-2 is outside"),
+        (_replace_record(12, record(6, 20, 13, 500, 100, dew=85)), r"line 21: dew point temperature 85"),
+        (lambda h, r: (h, []), r"has 8 lines"),
+    ],
+)
+def test_malformed_files_name_the_line(tmp_path, mutate, message):
+    header, rows = mutate(list(HEADER), day_records())
+    with pytest.raises(FileFormatError, match=message):
+        read_epw(_write(tmp_path, header + rows))
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(FileFormatError, match="no such file"):
+        read_epw(tmp_path / "nope.epw")
+
+
+def test_skymatrix_missing_radiation_names_the_line(tmp_path):
+    rows = day_records()
+    rows[12] = record(6, 20, 13, 9999, 100)
+    with pytest.raises(FileFormatError, match=r"line 21: direct normal radiation is missing"):
+        skyscatter.skymatrix(_write(tmp_path, HEADER + rows))
+
+
+def test_skymatrix_shape_zero_nights_and_scale(epw_file):
+    m = skyscatter.skymatrix(epw_file, scheme="reinhart2")
+    assert m.shape == (48, 577)
+    assert np.all(np.isfinite(m.luminance)) and np.all(m.luminance >= 0)
+    dark = m.diffuse_illuminance == 0
+    assert np.all(m.luminance[dark] == 0) and dark.sum() >= 10
+    lit = ~dark
+    # the patch sum (centre cosine, mean luminance) reproduces the hour's diffuse illuminance to 1 %
+    np.testing.assert_allclose(m.horizontal_illuminance()[lit], m.diffuse_illuminance[lit], rtol=1e-2)
+    assert np.all((m.epsilon[lit] >= 1) & (m.epsilon[lit] <= 11.9))
+
+
+def test_skymatrix_rows_match_the_perez_sky_class(epw_file):
+    """The compiled hourly kernel against PerezSky + patch_luminance (numpy, finer normalisation rule)."""
+    epw = read_epw(epw_file)
+    m = skyscatter.skymatrix(epw, scheme="tregenza", samples=3)
+    for h in (9, 12, 17, 33):
+        assert m.sun_zenith[h] < math.pi / 2
+        sky = PerezSky(m.sun_zenith[h], m.sun_azimuth[h], direct_normal_irradiance=epw.direct_normal_irradiance[h],
+                       diffuse_horizontal_irradiance=epw.diffuse_horizontal_irradiance[h],
+                       day_of_year=int(epw.day_of_year[h]), dew_point=epw.dew_point[h])
+        assert m.diffuse_illuminance[h] == pytest.approx(sky.diffuse_illuminance, rel=1e-12)
+        np.testing.assert_allclose(m.luminance[h], patch_luminance(sky, "tregenza", samples=3), rtol=1e-3)
+
+
+def test_skymatrix_sun_goes_into_its_patch(epw_file):
+    sky_only = skyscatter.skymatrix(epw_file, scheme="reinhart2", samples=1)
+    with_sun = skyscatter.skymatrix(epw_file, scheme="reinhart2", samples=1, include_sun=True)
+    g = patch_scheme("reinhart2")
+    diff = with_sun.luminance - sky_only.luminance
+    assert np.all(diff >= 0)
+    sunny = with_sun.sun_illuminance_normal > 0
+    assert sunny.sum() > 10
+    np.testing.assert_allclose((diff * g.solid_angles).sum(axis=1)[sunny], with_sun.sun_illuminance_normal[sunny],
+                               rtol=1e-12)
+    assert np.all(np.count_nonzero(diff[sunny], axis=1) == 1)
+    h = int(np.flatnonzero(sunny & (with_sun.sun_zenith < 1.2))[0])
+    el = math.pi / 2 - with_sun.sun_zenith[h]
+    sun = np.array([math.cos(el) * math.sin(with_sun.sun_azimuth[h]), math.cos(el) * math.cos(with_sun.sun_azimuth[h]),
+                    math.sin(el)])
+    assert int(np.flatnonzero(diff[h])[0]) == int(g.patch_index(sun))
+
+
+def test_save_npz_and_csv(epw_file, tmp_path):
+    m = skyscatter.skymatrix(epw_file, scheme="tregenza")
+    npz = m.save_npz(tmp_path / "m.npz")
+    with np.load(npz) as data:
+        assert data["luminance"].shape == (48, 145)
+        np.testing.assert_allclose(data["luminance"], m.luminance, rtol=1e-6)
+        assert str(data["scheme"]) == "tregenza" and data["patch_solid_angle"].sum() == pytest.approx(2 * math.pi)
+        assert data["times"][0] == "2023-06-20T00:30:00+01:00"
+    csv = m.save_csv(tmp_path / "m.csv")
+    lines = csv.read_text().splitlines()
+    assert len(lines) == 49 and lines[0].startswith("time,patch_0,patch_1")
+    row = np.array(lines[13].split(",")[1:], dtype=float)
+    np.testing.assert_allclose(row, m.luminance[12], rtol=1e-5)
+
+
+def test_progress_bar(epw_file, capsys):
+    from skyscatter.sky_matrix import skymatrix
+
+    m = skymatrix(epw_file, scheme="tregenza", progress=True, chunk_hours=5)
+    assert skyscatter.skymatrix(epw_file, scheme="tregenza").luminance == pytest.approx(m.luminance)
+    assert "48/48" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("kwargs", [{"scheme": "nope"}, {"samples": 0}, {"samples": 17}, {"chunk_hours": 0}])
+def test_bad_options(epw_file, kwargs):
+    with pytest.raises(InvalidParameterError):
+        skyscatter.skymatrix(epw_file, **kwargs)
