@@ -219,3 +219,13 @@ def test_blend_limits_and_zenith():
     np.testing.assert_allclose(spectrum_to_luminance(spec, REFERENCE_WAVELENGTHS), mid.luminance(d), rtol=2e-3)
     with pytest.raises(InvalidParameterError):
         overcast_weight(5.0, 8.0, 6.0)
+
+
+def test_bool_sky_type_refused():
+    import pytest as _pytest
+
+    from skyscatter import CIEStandardSky
+    from skyscatter.errors import InvalidParameterError as _E
+
+    with _pytest.raises(_E, match="whole number"):
+        CIEStandardSky(True, 0.5, 0.0)

@@ -78,3 +78,31 @@ def test_sun_angles_from_elevation(tmp_path, capsys):
     assert code == 0
     assert f"{60:.2f} deg" in out and f"{200:.2f} deg" in out
     assert math.isfinite(read_exr(tmp_path / "s.exr").sum())
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["--out", "sky.png"], "must be an OpenEXR file"),
+        (["--out", "a.exr", "--png", "a.exr"], "must end in .png"),
+        (["--png", "nodir/p.png"], "does not exist"),
+        (["--exposure", "2000"], "expected a number in [-30, 30]"),
+        (["--width", "100000", "--height", "100000"], "exceeds"),
+        (["--width", "1"], "width >= 2"),
+        (["--turb", "3"], "unrecognized arguments"),
+    ],
+)
+def test_output_and_size_errors_leave_nothing(tmp_path, monkeypatch, capsys, args, message):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "keep").mkdir()
+    code, out, err = run(capsys, "sky", *args) if "--width" in args else run(capsys, "sky", "--width", "16", *args)
+    assert code == 2
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["keep"]
+
+
+def test_preetham_overcast_blend_model(tmp_path, capsys):
+    code, out, err = run(capsys, "sky", "--model", "preetham-overcast", "--turbidity", "9", "--width", "16",
+                         "--out", str(tmp_path / "b.exr"))
+    assert code == 0, err
+    assert read_exr(tmp_path / "b.exr").max() > 0

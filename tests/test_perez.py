@@ -269,3 +269,14 @@ def test_sun_disc_carries_direct_illuminance():
     sky = PerezSky(0.7, 1.0, direct_normal_irradiance=750.0, diffuse_horizontal_irradiance=110.0)
     assert sky.sun_xyz()[1] * sky.sun_solid_angle == pytest.approx(sky.sun_illuminance_normal, rel=1e-10)
     assert 80 < sky.sun_illuminance_normal / 750.0 < 110  # direct efficacy of a clear sky, lm/W
+
+
+def test_delta_zero_raises_no_numpy_warnings():
+    import warnings
+
+    from skyscatter import PerezSky
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sky = PerezSky(0.8, 1.0, epsilon=3.0, delta=0.0)
+    assert sky.guards_applied

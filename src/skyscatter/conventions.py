@@ -126,6 +126,8 @@ def equirect_directions(width: int, height: int | None = None) -> NDArray[np.flo
     ndarray, shape (height, width, 3)
     """
     width = _check_size("width", width)
+    if height is None and width < 2:
+        raise InvalidParameterError(f"an equirectangular image needs width >= 2 px (height = width / 2); got {width}")
     height = _check_size("height", width // 2 if height is None else height)
     v = (np.arange(height) + 0.5) / height
     u = (np.arange(width) + 0.5) / width

@@ -21,6 +21,10 @@ _COMMANDS = ["sun", "sky", "illuminance", "skymatrix"]
 class OneLineParser(argparse.ArgumentParser):
     """ArgumentParser whose usage errors are a single line, ``skyscatter <cmd>: error: ...``."""
 
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("allow_abbrev", False)  # "--tilt" must not silently mean "--tilted"
+        super().__init__(*args, **kwargs)
+
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
@@ -56,6 +60,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except OSError as exc:
         print(f"skyscatter {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "),
+              file=sys.stderr)
+        return 2
+    except MemoryError:
+        print(f"skyscatter {args.command}: error: not enough memory; use a smaller image or table size",
               file=sys.stderr)
         return 2
     except KeyboardInterrupt:

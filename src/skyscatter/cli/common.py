@@ -106,10 +106,27 @@ def add_image_output_options(parser: argparse.ArgumentParser, *, default_out: st
                    help="HDR output, OpenEXR float32 linear sRGB, Y = luminance / 683")
     g.add_argument("--png", type=Path, default=None, metavar="PATH",
                    help="tone-mapped preview PNG (default: the --out path with .png)")
-    g.add_argument("--exposure", type=finite_float, default=None, metavar="EV",
+    g.add_argument("--exposure", type=float_in(-30.0, 30.0), default=None, metavar="EV",
                    help="preview exposure compensation [EV stops]; default: automatic (scene key)")
 
 
 def png_path(args: argparse.Namespace) -> Path:
     """The preview path: --png, or --out with the suffix .png."""
     return args.png if args.png is not None else args.out.with_suffix(".png")
+
+
+def check_output_paths(args: argparse.Namespace) -> None:
+    """Refuse bad --out/--png paths before any work: wrong suffix, same file, or a missing folder."""
+    from ..errors import OutputError
+
+    png = png_path(args)
+    if args.out.suffix.lower() != ".exr":
+        raise InvalidParameterError(f"--out {args.out}: the HDR output must be an OpenEXR file ending in .exr")
+    if png.suffix.lower() != ".png":
+        raise InvalidParameterError(f"--png {png}: the preview must end in .png")
+    if args.out.resolve() == png.resolve():
+        raise InvalidParameterError("--out and --png must be different files")
+    for path in (args.out, png):
+        folder = path.parent if str(path.parent) else Path(".")
+        if not folder.is_dir():
+            raise OutputError(f"cannot write {path}: folder {folder} does not exist")

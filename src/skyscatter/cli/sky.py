@@ -10,6 +10,7 @@ from .common import (
     HELP_FORMATTER,
     add_image_output_options,
     add_sun_options,
+    check_output_paths,
     finite_float,
     float_in,
     png_path,
@@ -20,6 +21,7 @@ from .common import (
 # Options that belong to each model (a model refuses options meant for another).
 _MODEL_OPTIONS = {
     "preetham": {"turbidity"},
+    "preetham-overcast": {"turbidity"},
     "cie": {"sky_type", "zenith_luminance", "diffuse_illuminance"},
     "cie-overcast": {"zenith_luminance", "diffuse_illuminance"},
     "cie-clear": {"zenith_luminance", "diffuse_illuminance"},
@@ -43,7 +45,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="sky model: " + "; ".join(f"{k}: {v}" for k, v in SKY_MODELS.items()))
     m = p.add_argument_group("model parameters (each applies to the models named)")
     m.add_argument("--turbidity", type=finite_float, default=None, metavar="T",
-                   help="preetham: turbidity, 1.65 to 11 (default 2.5, a clear sky)")
+                   help="preetham: turbidity, 1.65 to 11 (default 2.5, a clear sky); preetham-overcast: "
+                   "1.65 to 11, blended into the CIE overcast sky from T = 6 to 10 (default 8)")
     m.add_argument("--sky-type", type=int, choices=range(1, 16), default=None, metavar="N",
                    help="cie: CIE 2003 standard sky type 1-15 (default 12, clear sky with low turbidity)")
     m.add_argument("--zenith-luminance", type=finite_float, default=None, metavar="CD_M2",
@@ -95,9 +98,10 @@ def _model_options(args: argparse.Namespace) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..render import sky_image, write_exr, write_png
+    from ..render import sky_image, write_exr_and_png
     from ..sky.registry import build_sky
 
+    check_output_paths(args)
     zenith, azimuth = sun_angles_from_args(args)
     model = build_sky(args.model, zenith, azimuth, **_model_options(args))
     t0 = time.perf_counter()
@@ -113,8 +117,7 @@ def run(args: argparse.Namespace) -> int:
         ground_albedo=args.ground_albedo,
     )
     elapsed = time.perf_counter() - t0
-    out = write_exr(args.out, image)
-    png = write_png(png_path(args), image, exposure_ev=args.exposure, key=0.45)
+    out, png = write_exr_and_png(args.out, png_path(args), image, exposure_ev=args.exposure, key=0.45)
     print(f"{model!r}: sun zenith {math.degrees(zenith):.2f} deg, azimuth {math.degrees(azimuth):.2f} deg")
     print(f"wrote {out} and {png} ({image.shape[1]} x {image.shape[0]}, rendered in {elapsed:.2f} s)")
     return 0

@@ -16,7 +16,7 @@ from ..errors import FileFormatError, InvalidParameterError
 from ..fileio import atomic_path
 from .tonemap import tonemap
 
-__all__ = ["read_exr", "write_exr", "write_png"]
+__all__ = ["read_exr", "write_exr", "write_exr_and_png", "write_png"]
 
 
 def _check_rgb(rgb: ArrayLike) -> NDArray:
@@ -31,16 +31,63 @@ def write_exr(path: str | os.PathLike[str], rgb: ArrayLike) -> Path:
 
     Non-finite values are refused (:class:`~skyscatter.errors.InvalidParameterError`) rather than written.
     """
-    import OpenEXR
+    a = _exr_pixels(rgb)
+    target = _check_suffix(path, ".exr")
+    with atomic_path(target) as tmp:
+        _save_exr(tmp, a)
+    return target
 
+
+def _check_suffix(path: str | os.PathLike[str], suffix: str) -> Path:
+    target = Path(path)
+    if target.suffix.lower() != suffix:
+        raise InvalidParameterError(f"{target}: the file name must end in {suffix}")
+    return target
+
+
+def _exr_pixels(rgb: ArrayLike) -> NDArray[np.float32]:
     a = np.ascontiguousarray(_check_rgb(rgb), dtype=np.float32)
     if not np.all(np.isfinite(a)):
         raise InvalidParameterError("image contains NaN or infinite values; refusing to write it")
+    return a
+
+
+def _save_exr(path: Path, pixels: NDArray[np.float32]) -> None:
+    import OpenEXR
+
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    target = Path(path)
-    with atomic_path(target) as tmp:
-        OpenEXR.File(header, {"RGB": a}).write(str(tmp))
-    return target
+    OpenEXR.File(header, {"RGB": pixels}).write(str(path))
+
+
+def _save_png(path: Path, display: NDArray[np.float64]) -> None:
+    from PIL import Image
+
+    Image.fromarray(np.round(display * 255.0).astype(np.uint8)).save(path, format="PNG")
+
+
+def write_exr_and_png(
+    exr_path: str | os.PathLike[str],
+    png_path: str | os.PathLike[str],
+    rgb: ArrayLike,
+    *,
+    exposure_ev: float | None = None,
+    key: float = 0.18,
+) -> tuple[Path, Path]:
+    """Write an HDR image and its PNG preview together: both files appear, or neither does.
+
+    See :func:`write_exr` and :func:`write_png` for the formats; ``exposure_ev`` and ``key`` go to the tone
+    mapper. The two paths must differ and end in ``.exr`` and ``.png``.
+    """
+    exr = _check_suffix(exr_path, ".exr")
+    png = _check_suffix(png_path, ".png")
+    if exr.resolve() == png.resolve():
+        raise InvalidParameterError(f"the HDR and PNG outputs must be different files; both are {exr}")
+    pixels = _exr_pixels(rgb)
+    display = tonemap(pixels, exposure_ev=exposure_ev, key=key)
+    with atomic_path(exr) as tmp_exr, atomic_path(png) as tmp_png:
+        _save_exr(tmp_exr, pixels)
+        _save_png(tmp_png, display)
+    return exr, png
 
 
 def read_exr(path: str | os.PathLike[str]) -> NDArray[np.float32]:
@@ -86,14 +133,11 @@ def write_png(
     tonemapped : bool
         The input is already display-referred sRGB in [0, 1]; write it as is.
     """
-    from PIL import Image
-
     a = _check_rgb(rgb)
     display = np.clip(np.asarray(a, dtype=float), 0, 1) if tonemapped else tonemap(
         a, exposure_ev=exposure_ev, auto=auto_exposure, key=key
     )
-    pixels = np.round(display * 255.0).astype(np.uint8)
-    target = Path(path)
+    target = _check_suffix(path, ".png")
     with atomic_path(target) as tmp:
-        Image.fromarray(pixels).save(tmp, format="PNG")
+        _save_png(tmp, display)
     return target

@@ -19,7 +19,16 @@ Projection = Literal["equirect", "fisheye", "pinhole"]
 _D65_XYZ = np.array([0.31271 / 0.32902, 1.0, (1.0 - 0.31271 - 0.32902) / 0.32902])
 
 
+#: Largest image sky_image renders in one piece [pixels] (about 3 GB of float64 working arrays).
+MAX_PIXELS = 64 * 1024 * 1024
+
+
 def _directions(projection: str, width: int, height: int | None, heading: float, pitch: float, fov: float):
+    h = height if height is not None else (width // 2 if projection == "equirect" else width)
+    if width * max(h, 1) > MAX_PIXELS:
+        raise InvalidParameterError(
+            f"image of {width} x {h} px exceeds the {MAX_PIXELS // 2**20} Mpx that sky_image renders at once"
+        )
     if projection == "equirect":
         d = equirect_directions(width, height)
         return d, np.ones(d.shape[:2], dtype=bool)

@@ -76,8 +76,8 @@ def tonemap(
     if not white > 0:
         raise InvalidParameterError(f"white must be > 0; got {white}")
     ev = 0.0 if exposure_ev is None else float(exposure_ev)
-    if not np.isfinite(ev):
-        raise InvalidParameterError(f"exposure must be finite [EV]; got {exposure_ev}")
+    if not (np.isfinite(ev) and abs(ev) <= 60.0):
+        raise InvalidParameterError(f"exposure must be within [-60, 60] EV; got {exposure_ev}")
     scale = 2.0**ev
     if auto:
         scale *= key / max(log_average_luminance(rgb), 1e-12)

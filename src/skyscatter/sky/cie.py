@@ -88,7 +88,9 @@ def cie_sky_parameters(sky_type: int) -> tuple[float, float, float, float, float
 
 
 def _check_sky_type(sky_type: int) -> int:
-    if isinstance(sky_type, bool) or not isinstance(sky_type, int | np.integer):
+    if isinstance(sky_type, bool | np.bool_):
+        raise InvalidParameterError(f"sky_type must be a whole number 1-15; got {sky_type!r}")
+    if not isinstance(sky_type, int | np.integer):
         try:
             as_float = float(sky_type)
         except (TypeError, ValueError):

@@ -472,9 +472,10 @@ class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
             raw_z = min(self.sun_zenith, np.pi / 2)
             if raw_z < MIN_SUN_ZENITH:
                 notes.append(f"sun zenith {np.degrees(raw_z):.3g} deg raised to 3 deg (altitude clamp)")
-            raw = perez_parameters(
-                self.sun_zenith, day_of_year=day_of_year, dew_point=self.dew_point, guards=False, **kwargs
-            )
+            with np.errstate(all="ignore"):  # the unguarded model is evaluated only to describe the guards
+                raw = perez_parameters(
+                    self.sun_zenith, day_of_year=day_of_year, dew_point=self.dew_point, guards=False, **kwargs
+                )
             if float(raw.epsilon) > EPSILON_CAP:
                 notes.append(f"epsilon {float(raw.epsilon):.4g} capped at {EPSILON_CAP}")
             if not DELTA_RANGE[0] <= float(raw.delta) <= DELTA_RANGE[1]:

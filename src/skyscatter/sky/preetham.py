@@ -263,9 +263,17 @@ class PreethamSky(SunSkyMixin, SkyModel):
             REFERENCE_WAVELENGTHS
         )
         norm = LUMINOUS_EFFICACY * (ref_y[0] + m1 * ref_y[1] + m2 * ref_y[2])
-        scale = np.where(Y > 0, Y / np.where(norm > 0, norm, 1.0), 0.0)
-        basis = daylight_basis(wl)
-        spectrum = np.stack([np.ones_like(m1), m1, m2], axis=-1) @ basis.T
+        weights = np.stack([np.ones_like(m1), m1, m2], axis=-1)
+        odd = norm <= 0
+        if np.any(odd):
+            # Far off the daylight locus (only reachable with strict=False) the linear normalisation breaks
+            # down; use the luminance of the clipped spectrum itself for those few directions.
+            ref_basis = daylight_basis(REFERENCE_WAVELENGTHS)
+            ybar = cie_cmfs(REFERENCE_WAVELENGTHS)[:, 1] * integration_weights(REFERENCE_WAVELENGTHS)
+            norm = norm.copy()
+            norm[odd] = LUMINOUS_EFFICACY * np.maximum(weights[odd] @ ref_basis.T, 0.0) @ ybar
+        scale = np.where((Y > 0) & (norm > 0), Y / np.where(norm > 0, norm, 1.0), 0.0)
+        spectrum = weights @ daylight_basis(wl).T
         return np.maximum(spectrum, 0.0) * scale[..., None]
 
     def sun_spectral_radiance(self, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:

@@ -12,6 +12,7 @@ __all__ = ["SKY_MODELS", "build_sky"]
 #: name -> one-line description (shown by ``skyscatter sky --help``)
 SKY_MODELS = {
     "preetham": "Preetham et al. 1999 analytic clear sky, spectral, with sun (needs --turbidity)",
+    "preetham-overcast": "Preetham 1999 Sec. 5: Preetham sky blended into the CIE overcast sky at high turbidity",
     "cie": "CIE S 011/E:2003 standard general sky, 15 types (needs --sky-type)",
     "cie-overcast": "CIE overcast sky (Moon & Spencer 1942), luminance only",
     "cie-clear": "CIE 1973 clear sky (Kittler), luminance only",
@@ -30,6 +31,10 @@ def build_sky(name: str, sun_zenith: float, sun_azimuth: float, **options: Any) 
         from .preetham import PreethamSky
 
         return PreethamSky(opts.pop("turbidity", 2.5), sun_zenith, sun_azimuth, **opts)
+    if name == "preetham-overcast":
+        from .overcast_blend import PreethamOvercastBlendSky
+
+        return PreethamOvercastBlendSky(opts.pop("turbidity", 8.0), sun_zenith, sun_azimuth, **opts)
     if name == "cie":
         from .cie import CIEStandardSky
 
