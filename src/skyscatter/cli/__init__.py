@@ -15,7 +15,7 @@ from .. import __version__
 from ..errors import SkyscatterError
 
 # Subcommand modules in the order ``--help`` lists them.
-_COMMANDS = ["sun", "sky", "illuminance", "skymatrix"]
+_COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo"]
 
 
 class OneLineParser(argparse.ArgumentParser):

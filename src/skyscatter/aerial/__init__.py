@@ -1,0 +1,36 @@
+"""Aerial perspective: how the air between a viewer and an object changes the object's radiance.
+
+``L = L_0 tau + L_in`` (Preetham, Shirley & Smits 1999, Sec. 4). Models:
+
+* :class:`PreethamAerialPerspective` -- the paper's two-species exponential atmosphere with in-scattering
+  from the sun and sky (Eq. 7-11, A.4), analytic or numeric;
+* :class:`ConstantDensityAerialPerspective` -- constant density along the ray, sunlight only (Preetham's
+  course notes);
+* :class:`WardLarsonAerialPerspective` -- the direction-independent "ambient" model the paper compares
+  against in Figure 8.
+
+All follow the :class:`AerialPerspective` protocol, so :class:`skyscatter.render.Scene` accepts any of them
+(or another provider with the same two methods).
+"""
+
+from .base import AerialPerspective
+from .constant_density import ConstantDensityAerialPerspective
+from .integrals import ALPHA_HAZE, ALPHA_MOLECULES, effective_length, extinction, in_scattering_integrals
+from .preetham import PreethamAerialPerspective
+from .scattering import ScatteringTable, hemisphere_quadrature
+from .ward_larson import ConstantColourSky, WardLarsonAerialPerspective
+
+__all__ = [
+    "ALPHA_HAZE",
+    "ALPHA_MOLECULES",
+    "AerialPerspective",
+    "ConstantColourSky",
+    "ConstantDensityAerialPerspective",
+    "PreethamAerialPerspective",
+    "ScatteringTable",
+    "WardLarsonAerialPerspective",
+    "effective_length",
+    "extinction",
+    "hemisphere_quadrature",
+    "in_scattering_integrals",
+]

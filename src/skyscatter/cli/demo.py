@@ -1,0 +1,292 @@
+"""``skyscatter demo``: render the built-in landscape as in Preetham, Shirley & Smits (1999), Figures 7 and 8.
+
+With no options it writes, into the current folder, one HDR OpenEXR file (linear sRGB, Y = luminance / 683)
+and one tone-mapped PNG per panel, plus a PNG of each figure with its panels stacked top to bottom:
+
+* Figure 7, looking west: (a) morning, T = 2; (b) evening, T = 2; (c) evening, T = 6; (d) overcast, T = 10
+  (CIE overcast sky, achromatic; aerial perspective with T = 10 lit by that sky only).
+* Figure 8, looking east half an hour before sunset, T = 6: (a) the CIE clear sky with one colour
+  everywhere (the spectrum of the Preetham zenith) and Ward-Larson's direction-independent aerial
+  perspective; (b) the Preetham sky and aerial perspective.
+
+Any scene option (sky, turbidity, sun, aerial model) renders one custom panel instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .common import HELP_FORMATTER, add_sun_options, finite_float, float_in, positive_int, sun_angles_from_args
+
+#: (elevation, azimuth) [deg] of the sun in the figure panels.
+MORNING_SUN = (25.0, 120.0)
+EVENING_SUN = (4.0, 290.0)
+#: Camera headings [deg]: Figure 7 looks west, Figure 8 east.
+WEST, EAST = 270.0, 90.0
+#: Camera (x, y) [m] on the built-in landscape: Figure 7 (and custom panels) and Figure 8, chosen for ranges of
+#: mountains at several distances in the view.
+FIG7_CAMERA_XY = (12_000.0, 0.0)
+FIG8_CAMERA_XY = (-26_000.0, -16_000.0)
+
+_SCENE_OPTIONS = ("sky", "turbidity", "sun_elevation", "sun_azimuth", "lat", "lon", "time", "aerial")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "demo",
+        help="render the landscape of Preetham et al. 1999, Figures 7 and 8 (EXR + PNG)",
+        description="Render the built-in procedural mountains (fixed seed) under the Preetham sky with its "
+        "aerial perspective, as in Preetham, Shirley & Smits 1999. With no options: Figure 7 (looking west: "
+        "morning T=2, evening T=2, evening T=6, overcast T=10) and Figure 8 (looking east before sunset, T=6: "
+        "CIE clear sky of one colour with Ward-Larson's ambient aerial perspective, then the Preetham model), "
+        "one EXR (linear sRGB, Y = luminance/683) and one PNG per panel plus fig7.png and fig8.png, in the "
+        "current folder. Giving --sky, --turbidity, a sun option or --aerial renders one custom panel "
+        "(landscape.exr/.png) instead. Nothing is written unless every image renders.",
+        formatter_class=HELP_FORMATTER,
+    )
+    p.add_argument("--figure", choices=["all", "7", "8", "custom"], default=None,
+                   help="which figure to render (default: all, or custom when a scene option is given)")
+    p.add_argument("--out-dir", type=Path, default=Path("."), metavar="DIR",
+                   help="existing folder for the output files")
+    g = p.add_argument_group("image")
+    g.add_argument("--width", type=positive_int, default=640, metavar="PX", help="width of each panel [px]")
+    g.add_argument("--height", type=positive_int, default=360, metavar="PX", help="height of each panel [px]")
+    g.add_argument("--no-glare", dest="glare", action="store_false",
+                   help="leave out the glare of the eye (Spencer et al. 1995 point-spread function)")
+    g.add_argument("--no-sun-disc", dest="sun_disc", action="store_false", help="leave out the solar disc")
+    g.add_argument("--exposure", type=finite_float, default=None, metavar="EV",
+                   help="PNG exposure compensation [EV stops] on top of the automatic exposure")
+    g.add_argument("--wavelength-step", type=float_in(1.0, 50.0), default=10.0, metavar="NM",
+                   help="spacing of the spectral samples over 380-780 nm [nm]")
+    s = p.add_argument_group("custom scene (any of these renders one custom panel)")
+    s.add_argument("--sky", choices=["preetham", "cie-clear", "cie-overcast"], default=None,
+                   help="sky model: preetham (Preetham 1999, spectral); cie-clear (CIE 1973 clear sky with the "
+                   "Preetham zenith colour and sun); cie-overcast (CIE overcast, D65 colour, no sun) "
+                   "(default preetham)")
+    s.add_argument("--turbidity", type=float_in(1.65, 11.0), default=None, metavar="T",
+                   help="turbidity of the sky and of the haze, 1.65 to 11 (default 2.5)")
+    s.add_argument("--aerial", choices=["analytic", "numeric", "constant", "ward-larson", "none"], default=None,
+                   help="aerial perspective: analytic (Preetham 1999 closed form), numeric (quadrature), "
+                   "constant (constant density, sunlight only), ward-larson (ambient), none (default analytic)")
+    add_sun_options(p, default_elevation=EVENING_SUN[0], default_azimuth=EVENING_SUN[1])
+    c = p.add_argument_group("camera and terrain")
+    c.add_argument("--dem", type=Path, default=None, metavar="PATH",
+                   help="elevation model instead of the built-in landscape: .npy (2-D heights [m], north-up; "
+                   "needs --dem-spacing) or GeoTIFF .tif/.tiff (needs the optional tifffile package)")
+    c.add_argument("--dem-spacing", type=float_in(1e-3, 1e6), default=None, metavar="M",
+                   help="sample spacing of the elevation model [m] (GeoTIFF: default from the file)")
+    c.add_argument("--albedo", type=float_in(0.0, 1.0), default=0.2, metavar="RHO",
+                   help="Lambertian albedo of the terrain")
+    c.add_argument("--camera-x", type=finite_float, default=None, metavar="M",
+                   help="camera east coordinate [m] (default on the built-in landscape: 12000 for figure 7 and "
+                   "custom panels, -26000 for figure 8; the centre of a DEM)")
+    c.add_argument("--camera-y", type=finite_float, default=None, metavar="M",
+                   help="camera north coordinate [m] (default on the built-in landscape: 0 for figure 7 and "
+                   "custom panels, -16000 for figure 8; the centre of a DEM)")
+    h = c.add_mutually_exclusive_group()
+    h.add_argument("--camera-height", type=float_in(0.01, 1e6), default=None, metavar="M",
+                   help="camera height above the ground [m] (default 300)")
+    h.add_argument("--camera-altitude", type=finite_float, default=None, metavar="M",
+                   help="camera height above sea level [m] (must be above the terrain)")
+    c.add_argument("--heading", type=finite_float, default=None, metavar="DEG",
+                   help="azimuth of the view centre from north towards east [deg] (default: 270 for figure 7 "
+                   "and custom panels, 90 for figure 8)")
+    c.add_argument("--pitch", type=float_in(-89.0, 89.0), default=-3.0, metavar="DEG",
+                   help="elevation of the view centre [deg]")
+    c.add_argument("--fov", type=float_in(1.0, 150.0), default=60.0, metavar="DEG",
+                   help="horizontal field of view [deg]")
+    p.set_defaults(func=run)
+
+
+@dataclass
+class _Panel:
+    name: str
+    title: str
+    sky: Any
+    aerial: Any
+    heading: float
+    camera_xy: tuple[float, float] = FIG7_CAMERA_XY
+
+
+def _preetham(turbidity: float, elevation: float, azimuth: float):
+    from ..sky.preetham import PreethamSky
+
+    return PreethamSky(turbidity, math.radians(90.0 - elevation), math.radians(azimuth))
+
+
+def _cie_clear_like(preetham_sky):
+    """CIE 1973 clear sky scaled to the Preetham zenith luminance, coloured with its zenith spectrum, with the
+    Preetham sun's illuminance (Figure 8, top)."""
+    import numpy as np
+
+    from ..aerial.ward_larson import ConstantColourSky
+    from ..sky.cie import CIEClearSky
+    from ..spectral import REFERENCE_WAVELENGTHS, spectrum_to_luminance
+
+    wl = REFERENCE_WAVELENGTHS
+    sun_lum = float(spectrum_to_luminance(preetham_sky.sun_spectral_radiance(wl), wl))
+    cie = CIEClearSky(preetham_sky.sun_zenith, preetham_sky.sun_azimuth,
+                      zenith_luminance=preetham_sky.zenith_luminance(),
+                      sun_illuminance_normal=sun_lum * preetham_sky.sun_solid_angle)
+    zenith = preetham_sky.spectral_radiance(np.array([0.0, 0.0, 1.0]), wl)
+    sky = ConstantColourSky(cie, zenith, wl)
+    sky.turbidity = preetham_sky.turbidity
+    return sky
+
+
+def _overcast():
+    """The CIE overcast sky (10 000 lx diffuse). The paper uses "a flat spectral curve", i.e. no colour; in
+    skyscatter's sRGB (D65 white) images the achromatic spectrum is D65, the CIE sky's own (an equal-energy
+    spectrum would show pink)."""
+    from ..sky.cie import CIEOvercastSky
+
+    return CIEOvercastSky()
+
+
+def _aerial(kind: str, sky, turbidity: float):
+    from ..aerial import (
+        ConstantDensityAerialPerspective,
+        PreethamAerialPerspective,
+        WardLarsonAerialPerspective,
+    )
+
+    if kind == "none":
+        return None
+    if kind == "constant":
+        return ConstantDensityAerialPerspective(sky, turbidity=turbidity)
+    if kind == "ward-larson":
+        return WardLarsonAerialPerspective(sky, turbidity=turbidity)
+    return PreethamAerialPerspective(sky, method="numeric" if kind == "numeric" else "analytic",
+                                     turbidity=turbidity)
+
+
+def _panels(args: argparse.Namespace, figure: str) -> list[_Panel]:
+    panels: list[_Panel] = []
+    if figure in ("all", "7"):
+        for name, title, t, sun in (("fig7a_morning_T2", "Figure 7a: morning, T = 2", 2.0, MORNING_SUN),
+                                    ("fig7b_evening_T2", "Figure 7b: evening, T = 2", 2.0, EVENING_SUN),
+                                    ("fig7c_evening_T6", "Figure 7c: evening, T = 6", 6.0, EVENING_SUN)):
+            sky = _preetham(t, *sun)
+            panels.append(_Panel(name, title, sky, _aerial("analytic", sky, t), WEST))
+        sky = _overcast()
+        panels.append(_Panel("fig7d_overcast_T10", "Figure 7d: overcast (CIE), T = 10", sky,
+                             _aerial("analytic", sky, 10.0), WEST))
+    if figure in ("all", "8"):
+        preetham = _preetham(6.0, *EVENING_SUN)
+        cie = _cie_clear_like(preetham)
+        panels.append(_Panel("fig8a_cie_clear_ward_larson", "Figure 8a: CIE clear sky + Ward-Larson ambient",
+                             cie, _aerial("ward-larson", cie, 6.0), EAST, FIG8_CAMERA_XY))
+        panels.append(_Panel("fig8b_preetham", "Figure 8b: Preetham sky + aerial perspective", preetham,
+                             _aerial("analytic", preetham, 6.0), EAST, FIG8_CAMERA_XY))
+    if figure == "custom":
+        zenith, azimuth = sun_angles_from_args(args)
+        elevation, az = 90.0 - math.degrees(zenith), math.degrees(azimuth)
+        t = 2.5 if args.turbidity is None else args.turbidity
+        model = args.sky or "preetham"
+        if model == "cie-overcast":
+            sky = _overcast()
+        else:
+            sky = _preetham(t, elevation, az)
+            if model == "cie-clear":
+                sky = _cie_clear_like(sky)
+        panels.append(_Panel("landscape", f"{model}, T = {t:g}, sun {elevation:.1f} deg at {az:.1f} deg", sky,
+                             _aerial(args.aerial or "analytic", sky, t), WEST))
+    return panels
+
+
+def _check_out_dir(out_dir: Path) -> None:
+    from ..errors import OutputError
+
+    if not out_dir.is_dir():
+        raise OutputError(f"output folder {out_dir} does not exist; create it first")
+    if not os.access(out_dir, os.W_OK | os.X_OK):
+        raise OutputError(f"output folder {out_dir} is not writable")
+
+
+def run(args: argparse.Namespace) -> int:
+    import contextlib
+    import time
+
+    import numpy as np
+    from tqdm import tqdm
+
+    from ..errors import InvalidParameterError
+    from ..fileio import atomic_path
+    from ..render.camera import PinholeCamera
+    from ..render.image_io import write_exr, write_png
+    from ..render.scene import DEFAULT_CAMERA_HEIGHT, Scene
+    from ..render.terrain import Terrain, default_terrain
+    from ..render.tonemap import tonemap
+    from ..spectral import wavelength_grid
+
+    scene_given = any(getattr(args, k) is not None for k in _SCENE_OPTIONS)
+    figure = args.figure or ("custom" if scene_given else "all")
+    if figure != "custom" and scene_given:
+        given = [("--" + k.replace("_", "-")) for k in _SCENE_OPTIONS if getattr(args, k) is not None]
+        raise InvalidParameterError(f"{', '.join(given)}: scene options apply to --figure custom only")
+    if args.dem_spacing is not None and args.dem is None:
+        raise InvalidParameterError("--dem-spacing needs --dem")
+    _check_out_dir(args.out_dir)
+
+    terrain = Terrain.load(args.dem, spacing=args.dem_spacing) if args.dem is not None else default_terrain()
+    wavelengths = wavelength_grid(380.0, 780.0, args.wavelength_step)
+
+    panels = _panels(args, figure)
+    scenes = []
+    for panel in panels:  # build (and validate) every scene before rendering anything
+        if terrain.wrap:
+            x, y = panel.camera_xy
+        else:
+            x0, x1, y0, y1 = terrain.extent
+            x, y = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+        x = x if args.camera_x is None else args.camera_x
+        y = y if args.camera_y is None else args.camera_y
+        if args.camera_altitude is not None:
+            z = args.camera_altitude
+        else:
+            z = float(terrain.height_at(x, y)) + (DEFAULT_CAMERA_HEIGHT if args.camera_height is None
+                                                   else args.camera_height)
+        heading = panel.heading if args.heading is None else args.heading
+        camera = PinholeCamera.from_degrees((x, y, z), heading, args.pitch, args.fov)
+        scenes.append(Scene(panel.sky, terrain=terrain, camera=camera, aerial=panel.aerial, albedo=args.albedo,
+                            sun_disc=args.sun_disc, wavelengths=wavelengths))
+
+    images = []
+    t0 = time.perf_counter()
+    with tqdm(total=len(panels) * args.height, unit="row", desc="skyscatter demo", disable=None) as bar:
+        for panel, scene in zip(panels, scenes, strict=True):
+            bar.set_postfix_str(panel.name)
+            images.append(scene.render(args.width, args.height, glare=args.glare, progress=bar.update).rgb)
+    elapsed = time.perf_counter() - t0
+
+    # Write everything to temporary files first and rename only when all succeeded.
+    displays = {}
+    outputs = []
+    with contextlib.ExitStack() as stack:
+        for panel, rgb in zip(panels, images, strict=True):
+            display = tonemap(rgb, exposure_ev=args.exposure)
+            displays[panel.name] = display
+            for suffix, writer in ((".exr", lambda p, im=rgb: write_exr(p, im)),
+                                   (".png", lambda p, d=display: write_png(p, d, tonemapped=True))):
+                target = args.out_dir / f"{panel.name}{suffix}"
+                writer(stack.enter_context(atomic_path(target)))
+                outputs.append(target)
+        if figure != "custom":
+            for fig in ("fig7", "fig8"):
+                stack_panels = [displays[p.name] for p in panels if p.name.startswith(fig)]
+                if stack_panels:
+                    gap = np.ones((max(2, args.height // 60), args.width, 3))
+                    montage = np.concatenate([x for d in stack_panels for x in (d, gap)][:-1], axis=0)
+                    target = args.out_dir / f"{fig}.png"
+                    write_png(stack.enter_context(atomic_path(target)), montage, tonemapped=True)
+                    outputs.append(target)
+    for panel in panels:
+        print(f"{panel.name}: {panel.title}")
+    print(f"rendered {len(panels)} panel(s) of {args.width} x {args.height} in {elapsed:.1f} s; wrote "
+          + ", ".join(str(o) for o in outputs))
+    return 0
