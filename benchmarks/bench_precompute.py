@@ -1,0 +1,121 @@
+"""Benchmark of the precomputed atmosphere (Bruneton & Neyret 2008), printed as a small report.
+
+1. JIT compilation of all kernels, from an empty numba cache (a temporary NUMBA_CACHE_DIR).
+2. Precomputation with the default table sizes (256 x 64, 64 x 16, 32 x 128 x 32 x 8), 4 orders and 3
+   wavelengths, compiled code (best of ``--repeat`` runs; wall and CPU time).
+3. A 1024 x 768 sky-and-ground camera view from 1 km altitude looking 10 deg down, from the tables.
+4. Radiance's genssky (shipped in pyradiance's ``bin/``), which also precomputes multiple-scattering tables
+   (Bruneton's 2017 scheme, 20 wavelengths), timed from an empty data folder in the same run; the ratio of
+   the two precompute times is reported.
+
+Usage: ``python benchmarks/bench_precompute.py [--repeat N] [--spectral N] [--no-genssky]``. Run on an otherwise idle
+machine: other processes on the two cores inflate every figure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+
+def _timed(fn):
+    w0, c0 = time.perf_counter(), time.process_time()
+    out = fn()
+    return out, time.perf_counter() - w0, time.process_time() - c0
+
+
+def bench_genssky(threads: int) -> float | None:
+    try:
+        import pyradiance
+    except ImportError:
+        print("genssky: pyradiance not installed, skipped")
+        return None
+    root = Path(pyradiance.__file__).parent
+    exe = root / "bin" / "genssky"
+    if not exe.exists():
+        print(f"genssky: {exe} not found, skipped")
+        return None
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, RAYPATH=f".{os.pathsep}{root / 'lib'}")
+        cmd = [str(exe), "6", "21", "12", "-a", "45", "-o", "0", "-m", "0", "-y", "2024", "-n", str(threads),
+               "-f", "bench"]
+        t0 = time.perf_counter()
+        proc = subprocess.run(cmd, cwd=tmp, env=env, capture_output=True, text=True)
+        dt = time.perf_counter() - t0
+        data = sorted(p.name for p in (Path(tmp) / "atmos_data").glob("*"))
+        if proc.returncode != 0 or not data:
+            print(f"genssky failed (status {proc.returncode}): {proc.stderr.strip()[:200]}")
+            return None
+    print(f"genssky precompute + one sky ({threads} threads): {dt:.1f} s wall; tables: {', '.join(data)}")
+    return dt
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=2, help="precompute runs (best is reported)")
+    ap.add_argument("--no-genssky", action="store_true", help="skip Radiance's genssky")
+    ap.add_argument("--spectral", type=int, default=0, metavar="N",
+                    help="also time the spectral mode with N wavelengths evenly spread over 380-760 nm")
+    args = ap.parse_args()
+
+    numba_cache = tempfile.mkdtemp(prefix="skyscatter-numba-")
+    os.environ["NUMBA_CACHE_DIR"] = numba_cache  # before numba is imported: cold JIT cache
+    import numpy as np
+
+    from skyscatter.precomputed import PrecomputedAtmosphere
+    from skyscatter.precomputed.parallel import n_threads
+    from skyscatter.precomputed.views import camera_view
+
+    threads = n_threads()
+    print(f"machine: {os.cpu_count()} CPUs, {threads} worker threads; python {sys.version.split()[0]}")
+    tiny = dict(transmittance_mu=16, transmittance_r=4, irradiance_mu_s=4, irradiance_r=4, scattering_r=4,
+                scattering_mu=8, scattering_mu_s=4, scattering_nu=2)
+    small_atm, wall, _ = _timed(lambda: PrecomputedAtmosphere.compute(orders=2, sizes=tiny, progress=False))
+    _, wall_r, _ = _timed(lambda: camera_view(small_atm, 0.5, 0.0, width=8, height=8))
+    print(f"JIT compilation (cold cache, all kernels): {wall + wall_r:.1f} s "
+          f"(precompute kernels {wall:.1f} s, rendering kernels and colour set-up {wall_r:.1f} s)")
+
+    best = None
+    for i in range(max(1, args.repeat)):
+        atm, wall, cpu = _timed(lambda: PrecomputedAtmosphere.compute(progress=False))
+        print(f"precompute run {i + 1}: {wall:.1f} s wall, {cpu:.1f} s CPU")
+        if best is None or wall < best[1]:
+            best = (atm, wall, cpu)
+    atm, wall, cpu = best
+    print(f"precompute, default sizes {atm.sizes.scattering_shape}, 4 orders, 3 wavelengths: {wall:.1f} s wall "
+          f"(target <= 30 s), {cpu:.1f} s CPU")
+    for name, t in atm.timings.items():
+        print(f"    {name:<22s} {t:6.2f} s")
+
+    if args.spectral:
+        wl = np.linspace(380.0, 760.0, args.spectral)
+        spec, w_s, c_s = _timed(lambda: PrecomputedAtmosphere.compute(wavelengths=wl, progress=False))
+        print(f"precompute, spectral mode with {wl.size} wavelengths: {w_s:.1f} s wall, {c_s:.1f} s CPU")
+        del spec
+
+    times = []
+    for _ in range(3):
+        img, dt, _ = _timed(lambda: camera_view(atm, math.radians(60), math.radians(180), altitude=1000.0,
+                                                heading=math.radians(180), pitch=math.radians(-10),
+                                                fov=math.radians(90), width=1024, height=768, include_sun=False))
+        times.append(dt)
+    print(f"1024 x 768 sky-and-ground view (XYZ -> HDR sRGB included): {min(times):.3f} s (target < 0.5 s); "
+          f"finite {bool(np.all(np.isfinite(img)))}")
+
+    if not args.no_genssky:
+        g = bench_genssky(threads)
+        if g:
+            print(f"ratio skyscatter / genssky precompute time: {wall / g:.2f}")
+    shutil.rmtree(numba_cache, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

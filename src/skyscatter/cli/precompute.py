@@ -1,0 +1,150 @@
+"""``skyscatter precompute``: build the Bruneton & Neyret (2008) tables, into the cache or an .npz file."""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+import time
+from pathlib import Path
+
+from ..errors import InvalidParameterError
+from .common import HELP_FORMATTER, float_in, positive_int
+
+
+def _sizes(n: int, name: str):
+    def parse(text: str) -> tuple[int, ...]:
+        parts = re.split(r"[x,]", text.strip().lower())
+        try:
+            values = tuple(int(p) for p in parts)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name}: expected {n} whole numbers like 'AxB', got {text!r}") from None
+        if len(values) != n or min(values) < 2:
+            raise argparse.ArgumentTypeError(f"{name}: expected {n} whole numbers >= 2 separated by 'x', got {text!r}")
+        return values
+
+    return parse
+
+
+def _wavelengths(text: str) -> list[float]:
+    """'680,550,440' or a range 'START:STOP:STEP' [nm] (inclusive)."""
+    t = text.strip()
+    try:
+        if ":" in t:
+            start, stop, step = (float(v) for v in t.split(":"))
+            if step <= 0 or stop < start:
+                raise ValueError
+            n = int(round((stop - start) / step)) + 1
+            return [start + i * step for i in range(n)]
+        return [float(v) for v in t.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"wavelengths: expected a list like 680,550,440 or a range like 380:780:10 [nm], got {text!r}"
+        ) from None
+
+
+def add_atmosphere_options(p: argparse.ArgumentParser) -> None:
+    """Options describing the atmosphere and the tables (shared with ``export-luts``)."""
+    g = p.add_argument_group("atmosphere", "Earth defaults of Bruneton & Neyret / the seeds README unless changed.")
+    g.add_argument("--turbidity", type=float_in(1.0, 20.0), default=None, metavar="T",
+                   help="aerosols from turbidity (Preetham 1999 A.1: Angstrom alpha 1.3, beta 0.04608 T - 0.04586)"
+                        " instead of the default (vertical aerosol optical depth 0.0053, alpha 0)")
+    g.add_argument("--albedo", type=float_in(0.0, 1.0), default=0.1, metavar="A",
+                   help="ground albedo (Lambertian, same at every wavelength)")
+    g.add_argument("--ozone", type=float_in(0.0, 1000.0), default=300.0, metavar="DU",
+                   help="total ozone column [Dobson units]")
+    g.add_argument("--mie-g", type=float_in(-0.99, 0.99), default=0.8, metavar="G",
+                   help="aerosol phase asymmetry (Cornette-Shanks g)")
+    g.add_argument("--max-sun-zenith", type=float_in(102.0, 180.0), default=102.0, metavar="DEG",
+                   help="largest sun zenith angle tabulated [deg]; the sky is dark beyond it")
+    t = p.add_argument_group("tables")
+    t.add_argument("--orders", type=positive_int, default=4, metavar="N", help="scattering orders")
+    t.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="LIST",
+                   help="wavelengths [nm]: a list '680,550,440' (the default) or a range '380:780:10'; "
+                        "15 or more give the spectral mode (XYZ by integration with the CIE observer)")
+    t.add_argument("--transmittance-size", type=_sizes(2, "transmittance size"), default=(256, 64), metavar="MUxR",
+                   help="transmittance table: view-zenith x radius samples")
+    t.add_argument("--irradiance-size", type=_sizes(2, "irradiance size"), default=(64, 16), metavar="MUSxR",
+                   help="irradiance table: sun-zenith x radius samples")
+    t.add_argument("--scattering-size", type=_sizes(4, "scattering size"), default=(32, 128, 32, 8),
+                   metavar="RxMUxMUSxNU",
+                   help="4D scattering table: radius x view-zenith (even) x sun-zenith x view-sun angle samples")
+    t.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def atmosphere_from_args(args: argparse.Namespace):
+    """(AtmosphereParameters, TableSizes) from the options of :func:`add_atmosphere_options`."""
+    import math
+
+    from ..precomputed import AtmosphereParameters, TableSizes
+
+    changes = dict(ground_albedo=args.albedo, ozone_column=args.ozone, mie_phase_g=args.mie_g,
+                   max_sun_zenith=math.radians(args.max_sun_zenith))
+    if args.turbidity is not None:
+        params = AtmosphereParameters.from_turbidity(args.turbidity, **changes)
+    else:
+        params = AtmosphereParameters(**changes)
+    mu, r = args.transmittance_size
+    mus, r_e = args.irradiance_size
+    sr, smu, smus, snu = args.scattering_size
+    sizes = TableSizes(transmittance_mu=mu, transmittance_r=r, irradiance_mu_s=mus, irradiance_r=r_e,
+                       scattering_r=sr, scattering_mu=smu, scattering_mu_s=smus, scattering_nu=snu)
+    return params, sizes
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "precompute",
+        help="precompute the Bruneton & Neyret 2008 atmosphere tables (cache or .npz)",
+        description=(
+            "Run the precomputation of Bruneton & Neyret (2008), Algorithm 4.1: transmittance, irradiance and "
+            "4D single + multiple scattering tables, one scattering order after the other, with a progress bar "
+            "and the time of each step. Without --out the tables go to the cache ($SKYSCATTER_CACHE_DIR or "
+            "~/.cache/skyscatter), where BrunetonSky and 'skyscatter sky --model bruneton' find them."
+        ),
+        formatter_class=HELP_FORMATTER,
+    )
+    p.add_argument("--out", type=Path, default=None, metavar="FILE.npz",
+                   help="write the tables to this .npz file instead of the cache")
+    p.add_argument("--force", action="store_true", help="recompute even if the cache already holds the tables")
+    add_atmosphere_options(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..precomputed import PrecomputedAtmosphere
+    from ..precomputed.cache import cache_path, cached_atmosphere
+    from ..precomputed.tables import _as_wavelengths, cache_key
+
+    params, sizes = atmosphere_from_args(args)
+    if args.out is not None and args.out.suffix != ".npz":
+        raise InvalidParameterError(f"--out must name an .npz file; got {args.out}")
+    if args.out is not None and not args.out.parent.is_dir() and str(args.out.parent):
+        raise InvalidParameterError(f"--out: folder {args.out.parent} does not exist")
+    progress = not args.no_progress and sys.stderr.isatty()
+    t0 = time.perf_counter()
+    if args.out is None:
+        target = cache_path(cache_key(params, args.orders, _as_wavelengths(args.wavelengths), sizes))
+        if args.force and target.exists():
+            target.unlink()
+        computed = not target.exists()
+        atm = cached_atmosphere(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
+                                progress=progress)
+    else:
+        atm = PrecomputedAtmosphere.compute(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
+                                            progress=progress)
+        target = atm.save(args.out)
+        computed = True
+    wall = time.perf_counter() - t0
+    wl = ", ".join(f"{w:g}" for w in atm.wavelengths)
+    print(f"tables: {atm.orders} orders, wavelengths [{wl}] nm, "
+          f"{'spectral mode' if atm.spectral_mode else 'few-wavelength mode'}")
+    print(f"sizes: transmittance {sizes.transmittance_mu}x{sizes.transmittance_r}, irradiance "
+          f"{sizes.irradiance_mu_s}x{sizes.irradiance_r}, scattering {'x'.join(map(str, sizes.scattering_shape))}")
+    if computed:
+        for name, seconds in atm.timings.items():
+            print(f"  {name:<24s} {seconds:8.2f} s")
+        print(f"wrote {target} ({wall:.1f} s including compilation and writing)")
+    else:
+        print(f"already cached: {target} (use --force to recompute)")
+    return 0

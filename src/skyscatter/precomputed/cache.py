@@ -1,0 +1,79 @@
+"""On-disk cache of precomputed tables.
+
+Tables live in ``$SKYSCATTER_CACHE_DIR`` or, by default, ``~/.cache/skyscatter/``, one ``.npz`` file per
+configuration named after the first 24 hex digits of :func:`.tables.cache_key` (a SHA-256 of the atmosphere
+parameters, orders, wavelengths, table sizes, library version and table format). Files are written atomically
+and verified when read (format, per-table SHA-256 checksums, stored key): a corrupt, truncated or mismatched
+file triggers a :class:`CacheRebuildWarning` and is recomputed, never trusted. Tables loaded once are also
+kept in memory for the life of the process.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Mapping
+from pathlib import Path
+
+from numpy.typing import ArrayLike
+
+from ..errors import FileFormatError, OutputError
+from .parameters import AtmosphereParameters
+from .tables import PrecomputedAtmosphere, TableSizes, _as_wavelengths, cache_key
+
+__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "cached_atmosphere", "clear_memory_cache"]
+
+_MEMORY: dict[str, PrecomputedAtmosphere] = {}
+
+
+class CacheRebuildWarning(UserWarning):
+    """A cached table file was unreadable, damaged or for other parameters and is being recomputed."""
+
+
+def cache_dir() -> Path:
+    """The cache folder: ``$SKYSCATTER_CACHE_DIR`` if set, else ``~/.cache/skyscatter``."""
+    env = os.environ.get("SKYSCATTER_CACHE_DIR")
+    return Path(env).expanduser() if env else Path.home() / ".cache" / "skyscatter"
+
+
+def cache_path(key: str) -> Path:
+    """Path of the cache file for a table key."""
+    return cache_dir() / f"bruneton-{key[:24]}.npz"
+
+
+def clear_memory_cache() -> None:
+    """Forget tables kept in memory (the files stay)."""
+    _MEMORY.clear()
+
+
+def cached_atmosphere(params: AtmosphereParameters | None = None, *, orders: int = 4,
+                      wavelengths: ArrayLike | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
+                      progress: bool | None = None) -> PrecomputedAtmosphere:
+    """Tables for ``params`` from memory, from the disk cache, or computed and then cached.
+
+    Same arguments as :meth:`PrecomputedAtmosphere.compute`. If the cache folder cannot be written the
+    tables are still returned (with a warning).
+    """
+    params = AtmosphereParameters() if params is None else params
+    wl = _as_wavelengths(wavelengths)
+    sz = TableSizes.coerce(sizes)
+    key = cache_key(params, orders, wl, sz)
+    hit = _MEMORY.get(key)
+    if hit is not None:
+        return hit
+    path = cache_path(key)
+    atm = None
+    if path.exists():
+        try:
+            atm = PrecomputedAtmosphere.load(path, expected_key=key)
+        except (FileFormatError, OSError) as exc:
+            warnings.warn(f"rebuilding cached atmosphere tables: {exc}", CacheRebuildWarning, stacklevel=2)
+    if atm is None:
+        atm = PrecomputedAtmosphere.compute(params, orders=orders, wavelengths=wl, sizes=sz, progress=progress)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            atm.save(path)
+        except (OSError, OutputError) as exc:
+            warnings.warn(f"could not write the table cache {path}: {exc}", RuntimeWarning, stacklevel=2)
+    _MEMORY[key] = atm
+    return atm

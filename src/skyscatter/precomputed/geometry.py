@@ -1,0 +1,296 @@
+"""Ray geometry in a spherical atmosphere and the table parameterisations (numba scalar functions).
+
+A view ray starts at radius ``r`` [m] with direction cosine ``mu`` against the local vertical; the sun has
+direction cosine ``mu_s`` there and ``nu`` is the cosine of the view-sun angle (Bruneton & Neyret 2008,
+Sec. 4, notation of the paper). Rays that meet the planet end on the ground, others at the top of the
+atmosphere.
+
+Table coordinates are *index positions* ``p`` in ``[0, n - 1]``: texel ``i`` sits at ``p = i`` and a lookup
+interpolates linearly between ``floor(p)`` and ``floor(p) + 1``, so the first and last texels hold the values
+at the ends of each range exactly.
+
+Mappings (Sec. 4, "Parameterization", with the distance-based forms of Bruneton's 2017 rewrite):
+
+* ``rho = sqrt(r^2 - R_g^2)`` (distance to the horizon), ``H = sqrt(R_t^2 - R_g^2)``; ``x_r = rho / H``
+  (the paper's ``u_r``).
+* Transmittance table: ``x_mu = (d - d_min) / (d_max - d_min)`` with ``d`` the distance to the top boundary,
+  ``d_min = R_t - r`` (looking up) and ``d_max = rho + H`` (looking at the horizon). Only rays that miss the
+  ground are stored; the others use ``T(x, y) = T(y, -v) / T(x, -v)`` (Sec. 4).
+* Scattering tables: ``u_mu`` is split at the horizon (the paper's Figure 4), which keeps the discontinuity
+  of the ray length out of the interpolation. The first half of the ``mu`` axis holds rays that meet the
+  ground, ordered from grazing (index 0) to straight down, with ``x = (d - d_min) / (d_max - d_min)``,
+  ``d`` the distance to the ground, ``d_min = r - R_g``, ``d_max = rho``; the second half holds the other rays
+  from straight up to grazing, with ``d`` the distance to the top, ``d_min = R_t - r``, ``d_max = rho + H``.
+* ``u_mu_s``: with ``d`` the distance from the ground to the top along the sun direction,
+  ``a = (d - d_min) / (d_max - d_min)`` (``d_min = R_t - R_g``, ``d_max = H``) and ``A`` its value at the
+  largest tabulated sun zenith, ``x_mu_s = max(1 - a / A, 0) / (1 + a)``: dense near the horizon like the
+  paper's ``(1 - exp(-3 mu_s - 0.6)) / (1 - exp(-3.6))`` but ending exactly at the chosen ``mu_s_min``.
+* ``x_nu = (1 + nu) / 2`` (the paper's ``u_nu``).
+* Irradiance table: ``x_r = (r - R_g) / (R_t - R_g)``, ``x_mu_s = (1 + mu_s) / 2``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+
+__all__ = [
+    "clamp",
+    "distance_to_bottom",
+    "distance_to_boundary",
+    "distance_to_top",
+    "irradiance_coord",
+    "irradiance_params",
+    "lerp_index",
+    "ray_hits_ground",
+    "scattering_coords",
+    "scattering_params",
+    "transmittance_coord",
+    "transmittance_params",
+]
+
+_jit = numba.njit(cache=True, fastmath=False)
+
+
+@_jit
+def clamp(x: float, lo: float, hi: float) -> float:
+    return min(max(x, lo), hi)
+
+
+@_jit
+def distance_to_top(r: float, mu: float, top: float) -> float:
+    """Distance [m] from radius ``r`` along direction cosine ``mu`` to the sphere of radius ``top`` (r <= top).
+
+    Solves ``t^2 + 2 r mu t + r^2 - top^2 = 0`` for its non-negative root, written without cancellation.
+    """
+    disc = max(r * r * (mu * mu - 1.0) + top * top, 0.0)
+    s = math.sqrt(disc)
+    if mu > 0.0:
+        return max((top * top - r * r) / (r * mu + s), 0.0) if r * mu + s > 0.0 else 0.0
+    return max(-r * mu + s, 0.0)
+
+
+@_jit
+def distance_to_bottom(r: float, mu: float, bottom: float) -> float:
+    """Distance [m] from radius ``r`` along ``mu`` to the first hit of the sphere ``bottom`` (r >= bottom).
+
+    Only meaningful when :func:`ray_hits_ground` is true.
+    """
+    disc = max(r * r * (mu * mu - 1.0) + bottom * bottom, 0.0)
+    s = math.sqrt(disc)
+    q = -r * mu + s
+    if q <= 0.0:
+        return 0.0
+    return max((r * r - bottom * bottom) / q, 0.0)
+
+
+@_jit
+def ray_hits_ground(r: float, mu: float, bottom: float) -> bool:
+    """True if the ray from radius ``r`` with direction cosine ``mu`` meets the planet."""
+    return mu < 0.0 and r * r * (mu * mu - 1.0) + bottom * bottom >= 0.0
+
+
+@_jit
+def distance_to_boundary(r: float, mu: float, hits_ground: bool, bottom: float, top: float) -> float:
+    """Distance [m] to the end of the ray: the ground if ``hits_ground`` else the top of the atmosphere."""
+    if hits_ground:
+        return distance_to_bottom(r, mu, bottom)
+    return distance_to_top(r, mu, top)
+
+
+@_jit
+def lerp_index(p: float, lo: int, hi: int) -> tuple[int, float]:
+    """Interpolation cell of index position ``p`` within texels ``lo..hi`` (hi > lo): (i0, weight of i0 + 1)."""
+    if p <= lo:
+        return lo, 0.0
+    if p >= hi:
+        return hi - 1, 1.0
+    i = int(math.floor(p))
+    if i >= hi:
+        i = hi - 1
+    return i, p - i
+
+
+# --------------------------------------------------------------------------------------------- transmittance
+
+
+@_jit
+def transmittance_coord(r: float, mu: float, bottom: float, top: float, n_r: int, n_mu: int) -> tuple[float, float]:
+    """Index positions (p_r, p_mu) of (r, mu) in the transmittance table (rays reaching the top)."""
+    big_h = math.sqrt(top * top - bottom * bottom)
+    rho = math.sqrt(max(r * r - bottom * bottom, 0.0))
+    d = distance_to_top(r, mu, top)
+    d_min = top - r
+    d_max = rho + big_h
+    x_mu = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
+    return clamp(rho / big_h, 0.0, 1.0) * (n_r - 1), clamp(x_mu, 0.0, 1.0) * (n_mu - 1)
+
+
+@_jit
+def transmittance_params(i_r: int, i_mu: int, bottom: float, top: float, n_r: int, n_mu: int) -> tuple[float, float]:
+    """(r, mu) of texel (i_r, i_mu) of the transmittance table; inverse of :func:`transmittance_coord`."""
+    big_h = math.sqrt(top * top - bottom * bottom)
+    rho = big_h * i_r / (n_r - 1)
+    r = math.sqrt(rho * rho + bottom * bottom)
+    d_min = top - r
+    d_max = rho + big_h
+    d = d_min + (d_max - d_min) * i_mu / (n_mu - 1)
+    if d <= 0.0:
+        return r, 1.0
+    mu = (big_h * big_h - rho * rho - d * d) / (2.0 * r * d)
+    return r, clamp(mu, -1.0, 1.0)
+
+
+# --------------------------------------------------------------------------------------------- irradiance
+
+
+@_jit
+def irradiance_coord(r: float, mu_s: float, bottom: float, top: float, n_r: int, n_mu_s: int) -> tuple[float, float]:
+    """Index positions (p_r, p_mu_s) in the irradiance table."""
+    x_r = clamp((r - bottom) / (top - bottom), 0.0, 1.0)
+    x_mu_s = clamp(0.5 * (mu_s + 1.0), 0.0, 1.0)
+    return x_r * (n_r - 1), x_mu_s * (n_mu_s - 1)
+
+
+@_jit
+def irradiance_params(i_r: int, i_mu_s: int, bottom: float, top: float, n_r: int, n_mu_s: int) -> tuple[float, float]:
+    """(r, mu_s) of texel (i_r, i_mu_s) of the irradiance table."""
+    r = bottom + (top - bottom) * i_r / (n_r - 1)
+    mu_s = 2.0 * i_mu_s / (n_mu_s - 1) - 1.0
+    return r, clamp(mu_s, -1.0, 1.0)
+
+
+# --------------------------------------------------------------------------------------------- scattering
+
+
+@_jit
+def _mu_s_a(mu_s: float, bottom: float, top: float) -> float:
+    big_h = math.sqrt(top * top - bottom * bottom)
+    d = distance_to_top(bottom, mu_s, top)
+    d_min = top - bottom
+    return (d - d_min) / (big_h - d_min)
+
+
+@_jit
+def scattering_r_mu_coord(r: float, mu: float, hits_ground: bool, bottom: float, top: float,
+                          n_r: int, n_mu: int) -> tuple[float, float]:
+    """Index positions (p_r, p_mu) of a view ray in the 4D scattering tables."""
+    big_h = math.sqrt(top * top - bottom * bottom)
+    rho = math.sqrt(max(r * r - bottom * bottom, 0.0))
+    p_r = clamp(rho / big_h, 0.0, 1.0) * (n_r - 1)
+    half = n_mu // 2
+    if hits_ground:
+        d = distance_to_bottom(r, mu, bottom)
+        d_min = r - bottom
+        d_max = rho
+        x = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
+        p_mu = (1.0 - clamp(x, 0.0, 1.0)) * (half - 1)
+    else:
+        d = distance_to_top(r, mu, top)
+        d_min = top - r
+        d_max = rho + big_h
+        x = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
+        p_mu = half + clamp(x, 0.0, 1.0) * (half - 1)
+    return p_r, p_mu
+
+
+@_jit
+def mu_s_limit_a(mu_s_min: float, bottom: float, top: float) -> float:
+    """The constant ``A`` of the ``mu_s`` mapping (``a`` at the largest tabulated sun zenith)."""
+    return _mu_s_a(mu_s_min, bottom, top)
+
+
+@_jit
+def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float, n_mu_s: int) -> float:
+    """:func:`scattering_mu_s_coord` with ``A = mu_s_limit_a(mu_s_min)`` precomputed (inner loops)."""
+    h2 = top * top - bottom * bottom
+    disc = max(bottom * bottom * (mu_s * mu_s - 1.0) + top * top, 0.0)
+    s = math.sqrt(disc)
+    if mu_s > 0.0:
+        d = h2 / (bottom * mu_s + s)
+    else:
+        d = -bottom * mu_s + s
+    d_min = top - bottom
+    a = (d - d_min) / (math.sqrt(h2) - d_min)
+    x = max(1.0 - a / big_a, 0.0) / (1.0 + a)
+    return clamp(x, 0.0, 1.0) * (n_mu_s - 1)
+
+
+@_jit
+def scattering_mu_s_coord(mu_s: float, bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> float:
+    """Index position of ``mu_s`` in the scattering tables (0 at ``mu_s_min``, n - 1 at the zenith)."""
+    return scattering_mu_s_coord_a(mu_s, bottom, top, _mu_s_a(mu_s_min, bottom, top), n_mu_s)
+
+
+@_jit
+def scattering_coords(r: float, mu: float, mu_s: float, nu: float, hits_ground: bool, bottom: float, top: float,
+                      mu_s_min: float, n_r: int, n_mu: int, n_mu_s: int,
+                      n_nu: int) -> tuple[float, float, float, float]:
+    """Index positions (p_r, p_mu, p_mu_s, p_nu) of a ray in the 4D scattering tables."""
+    p_r, p_mu = scattering_r_mu_coord(r, mu, hits_ground, bottom, top, n_r, n_mu)
+    p_mu_s = scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_mu_s)
+    p_nu = clamp(0.5 * (nu + 1.0), 0.0, 1.0) * (n_nu - 1)
+    return p_r, p_mu, p_mu_s, p_nu
+
+
+@_jit
+def scattering_r_mu_params(i_r: int, i_mu: int, bottom: float, top: float, n_r: int,
+                           n_mu: int) -> tuple[float, float, bool]:
+    """(r, mu, hits_ground) of texel indices (i_r, i_mu) of the scattering tables."""
+    big_h = math.sqrt(top * top - bottom * bottom)
+    rho = big_h * i_r / (n_r - 1)
+    r = math.sqrt(rho * rho + bottom * bottom)
+    half = n_mu // 2
+    if i_mu < half:
+        x = 1.0 - i_mu / (half - 1)
+        d_min = r - bottom
+        d_max = rho
+        d = d_min + x * (d_max - d_min)
+        if d <= 0.0:
+            return r, -1.0, True
+        mu = -(rho * rho + d * d) / (2.0 * r * d)
+        return r, clamp(mu, -1.0, 1.0), True
+    x = (i_mu - half) / (half - 1)
+    d_min = top - r
+    d_max = rho + big_h
+    d = d_min + x * (d_max - d_min)
+    if d <= 0.0:
+        return r, 1.0, False
+    mu = (big_h * big_h - rho * rho - d * d) / (2.0 * r * d)
+    return r, clamp(mu, -1.0, 1.0), False
+
+
+@_jit
+def scattering_mu_s_param(i_mu_s: int, bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> float:
+    """``mu_s`` of texel index ``i_mu_s``; inverse of :func:`scattering_mu_s_coord`."""
+    big_h = math.sqrt(top * top - bottom * bottom)
+    d_min = top - bottom
+    d_max = big_h
+    big_a = _mu_s_a(mu_s_min, bottom, top)
+    x = i_mu_s / (n_mu_s - 1)
+    a = (big_a - x * big_a) / (1.0 + x * big_a)
+    d = d_min + min(a, big_a) * (d_max - d_min)
+    if d <= 0.0:
+        return 1.0
+    mu_s = (big_h * big_h - d * d) / (2.0 * bottom * d)
+    return clamp(mu_s, -1.0, 1.0)
+
+
+@_jit
+def nu_range(mu: float, mu_s: float) -> tuple[float, float]:
+    """Possible view-sun cosines for view and sun zenith cosines ``mu``, ``mu_s``."""
+    s = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+    return max(mu * mu_s - s, -1.0), min(mu * mu_s + s, 1.0)
+
+
+@_jit
+def scattering_params(i_r: int, i_mu: int, i_mu_s: int, i_nu: int, bottom: float, top: float, mu_s_min: float,
+                      n_r: int, n_mu: int, n_mu_s: int, n_nu: int) -> tuple[float, float, float, float, bool]:
+    """(r, mu, mu_s, nu, hits_ground) of a texel of the 4D tables; ``nu`` is clamped to the values that the
+    texel's ``mu`` and ``mu_s`` allow."""
+    r, mu, hits = scattering_r_mu_params(i_r, i_mu, bottom, top, n_r, n_mu)
+    mu_s = scattering_mu_s_param(i_mu_s, bottom, top, mu_s_min, n_mu_s)
+    nu = 2.0 * i_nu / (n_nu - 1) - 1.0
+    lo, hi = nu_range(mu, mu_s)
+    return r, mu, mu_s, clamp(nu, lo, hi), hits

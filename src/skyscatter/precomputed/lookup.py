@@ -1,0 +1,288 @@
+"""Rendering from the precomputed tables (Bruneton & Neyret 2008, Sec. 5), vectorised over rays with numba.
+
+All kernels take positions [m] in a planet-centred frame, unit directions in the same frame, and one sun
+direction per ray; they return spectral quantities at the table wavelengths.
+
+* :func:`sky_kernel` - radiance seen along each ray: inscattered light ``S[L]`` (single Rayleigh and single
+  Mie with their phase functions applied here, multiple scattering) and, where the ray meets the
+  planet, the ground ``R[L0] + R^[L*]`` (Eqs. 10, 14) seen through the atmosphere (Eq. 16). An optional
+  shadowed length at the near end of each ray gives light shafts by Eq. 18.
+* :func:`aerial_kernel` - transmittance and inscattered radiance between a camera and a point (Eq. 16's
+  last two terms, ``S|x - T(x, xs) S|xs``), with an optional shadowed length at the far end (Eq. 17).
+* :func:`irradiance_kernel` - sun and sky irradiance on a surface of any normal (Eq. 14's ambient occlusion
+  ``(1 + n.n_bar) / 2`` for the sky part).
+* :func:`sun_kernel` - transmittance to the sun (times the visible fraction of its disc) from any position.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .geometry import clamp, distance_to_bottom, distance_to_boundary, ray_hits_ground
+from .sampling import (
+    irradiance_lookup,
+    lookup4_cell,
+    mie_phase,
+    mu_s_nu_cell,
+    r_mu_cell,
+    rayleigh_phase,
+    transmittance_segment,
+    transmittance_to_sun,
+    transmittance_to_top,
+)
+
+_kjit = numba.njit(cache=True, nogil=True, fastmath=False)
+_jit = numba.njit(cache=True, fastmath=False)
+
+PI = math.pi
+#: Half-width, in mu, of the band around the horizon where two rays just above and below it are blended
+#: (Bruneton's 2017 rewrite): the inscatter difference S|x - T S|xs loses precision there.
+HORIZON_EPSILON = 0.004
+
+
+@_jit
+def _enter_atmosphere(px, py, pz, vx, vy, vz, top):
+    """Move a point outside the atmosphere to where the ray enters it: (x, y, z, distance, hits)."""
+    r2 = px * px + py * py + pz * pz
+    if r2 <= top * top:
+        return px, py, pz, 0.0, True
+    rmu = px * vx + py * vy + pz * vz
+    disc = rmu * rmu - r2 + top * top
+    if disc < 0.0 or rmu >= 0.0:
+        return px, py, pz, 0.0, False
+    d = -rmu - math.sqrt(disc)
+    if d < 0.0:
+        return px, py, pz, 0.0, False
+    return px + d * vx, py + d * vy, pz + d * vz, d, True
+
+
+@_jit
+def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, out):
+    """Inscattered radiance ``S_R P_R + S_M P_M + S_multiple`` from the tables at a point, into ``out``
+    (``p_r``, ``p_m``: phase functions at ``nu``); zero below the sun-zenith limit."""
+    for k in range(out.shape[0]):
+        out[k] = 0.0
+    if mu_s < mu_s_min:
+        return
+    n_r, n_mu, n_s, n_n, _ = ray.shape
+    i_r, w_r, i_mu, w_mu = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
+    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
+    lookup4_cell(ray, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_r, out)
+    lookup4_cell(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_m, out)
+    lookup4_cell(mult, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, 1.0, out)
+
+
+@_jit
+def _sun_cos_factor(mu, alpha):
+    """Cosine factor averaged over the solar disc (0 below the horizon, smooth across it)."""
+    if mu < -alpha:
+        return 0.0
+    if mu > alpha:
+        return mu
+    return (mu + alpha) * (mu + alpha) / (4.0 * alpha)
+
+
+@_kjit
+def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, bottom, top,
+               mu_s_min, g, alpha, include_ground, rad_out, tr_out, start, stop):
+    """Radiance [W m^-2 sr^-1 nm^-1] and transmittance along rays ``start..stop``; see the module docstring.
+
+    Writes ``rad_out`` and ``tr_out`` (n_rays, n_wavelengths), which the caller initialises to 0 and 1
+    (the values of rays that miss the atmosphere).
+    """
+    n_l = transmittance.shape[2]
+    c = np.empty(n_l)
+    t = np.empty(n_l)
+    tmp = np.empty(n_l)
+    e_sky = np.empty(n_l)
+    e_sun = np.empty(n_l)
+    for q in range(start, stop):
+        vx, vy, vz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
+        sx, sy, sz = suns[q, 0], suns[q, 1], suns[q, 2]
+        px, py, pz, _, inside = _enter_atmosphere(pos[q, 0], pos[q, 1], pos[q, 2], vx, vy, vz, top)
+        if not inside:
+            continue
+        r = math.sqrt(px * px + py * py + pz * pz)
+        rc = clamp(r, bottom, top)
+        mu = clamp((px * vx + py * vy + pz * vz) / r, -1.0, 1.0)
+        mu_s = clamp((px * sx + py * sy + pz * sz) / r, -1.0, 1.0)
+        nu = clamp(vx * sx + vy * sy + vz * sz, -1.0, 1.0)
+        hits = ray_hits_ground(rc, mu, bottom)
+        p_r = rayleigh_phase(nu)
+        p_m = mie_phase(nu, g)
+        l_sh = shadow[q]
+        if l_sh > 0.0:
+            # Eq. 18: the first l_sh metres are in shadow; inscatter starts at xs = x + l v.
+            l_sh = min(l_sh, distance_to_boundary(rc, mu, hits, bottom, top))
+            r_s = clamp(math.sqrt(max(l_sh * l_sh + 2.0 * rc * mu * l_sh + rc * rc, 0.0)), bottom, top)
+            mu_ss = clamp((rc * mu + l_sh) / r_s, -1.0, 1.0)
+            mu_s_s = clamp((rc * mu_s + l_sh * nu) / r_s, -1.0, 1.0)
+            if r_s >= top and mu_ss > 0.0:
+                for k in range(n_l):
+                    c[k] = 0.0
+            else:
+                _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, c)
+            transmittance_segment(transmittance, rc, mu, l_sh, hits, bottom, top, t, tmp)
+            for k in range(n_l):
+                c[k] *= t[k]
+        else:
+            _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, c)
+        for k in range(n_l):
+            rad_out[q, k] = c[k]
+        if hits:
+            d = distance_to_bottom(rc, mu, bottom)
+            transmittance_segment(transmittance, rc, mu, d, True, bottom, top, t, tmp)
+            for k in range(n_l):
+                tr_out[q, k] = t[k]
+            if include_ground:
+                gx = px + d * vx
+                gy = py + d * vy
+                gz = pz + d * vz
+                gr = math.sqrt(gx * gx + gy * gy + gz * gz)
+                mu_s_g = clamp((gx * sx + gy * sy + gz * sz) / gr, -1.0, 1.0)
+                irradiance_lookup(irradiance, bottom, mu_s_g, bottom, top, e_sky)
+                transmittance_to_top(transmittance, bottom, mu_s_g, bottom, top, e_sun)
+                cf = _sun_cos_factor(mu_s_g, alpha)
+                for k in range(n_l):
+                    e = solar[k] * e_sun[k] * cf + e_sky[k]
+                    rad_out[q, k] += t[k] * albedo[k] / PI * e
+        else:
+            transmittance_to_top(transmittance, rc, mu, bottom, top, t)
+            for k in range(n_l):
+                tr_out[q, k] = t[k]
+
+
+@_jit
+def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, p_r, p_m,
+                        c, t, c2, tmp):
+    """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``."""
+    _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, c)
+    r_p = clamp(math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0)), bottom, top)
+    mu_p = clamp((r * mu + d) / r_p, -1.0, 1.0)
+    mu_s_p = clamp((r * mu_s + d * nu) / r_p, -1.0, 1.0)
+    _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, p_r, p_m, c2)
+    transmittance_segment(transmittance, r, mu, d, hits, bottom, top, t, tmp)
+    for k in range(c.shape[0]):
+        c[k] = max(c[k] - t[k] * c2[k], 0.0)
+
+
+@_kjit
+def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, g, tr_out,
+                  in_out, start, stop):
+    """Transmittance and inscattered radiance between cameras and points (Eqs. 16-17), rays ``start..stop``.
+
+    Writes ``tr_out`` (initialised to 1) and ``in_out`` (initialised to 0), each (n_rays, n_wavelengths).
+    ``shadow`` is the shadowed length [m] of each ray, moved to the point's end as in Eq. 17.
+    """
+    n_l = transmittance.shape[2]
+    c = np.empty(n_l)
+    t = np.empty(n_l)
+    c2 = np.empty(n_l)
+    tmp = np.empty(n_l)
+    lo_c = np.empty(n_l)
+    for q in range(start, stop):
+        dx = points[q, 0] - cams[q, 0]
+        dy = points[q, 1] - cams[q, 1]
+        dz = points[q, 2] - cams[q, 2]
+        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if dist <= 0.0:
+            continue
+        vx, vy, vz = dx / dist, dy / dist, dz / dist
+        sx, sy, sz = suns[q, 0], suns[q, 1], suns[q, 2]
+        px, py, pz, d_in, inside = _enter_atmosphere(cams[q, 0], cams[q, 1], cams[q, 2], vx, vy, vz, top)
+        if not inside:
+            continue
+        d = dist - d_in
+        if d <= 0.0:
+            continue
+        r = math.sqrt(px * px + py * py + pz * pz)
+        rc = clamp(r, bottom, top)
+        mu = clamp((px * vx + py * vy + pz * vz) / r, -1.0, 1.0)
+        mu_s = clamp((px * sx + py * sy + pz * sz) / r, -1.0, 1.0)
+        nu = clamp(vx * sx + vy * sy + vz * sz, -1.0, 1.0)
+        hits = ray_hits_ground(rc, mu, bottom)
+        transmittance_segment(transmittance, rc, mu, d, hits, bottom, top, t, tmp)
+        for k in range(n_l):
+            tr_out[q, k] = t[k]
+        d_lit = max(d - shadow[q], 0.0)
+        if d_lit <= 0.0:
+            continue
+        p_r = rayleigh_phase(nu)
+        p_m = mie_phase(nu, g)
+        mu_h = -math.sqrt(max(1.0 - (bottom / rc) ** 2, 0.0))
+        if abs(mu - mu_h) < HORIZON_EPSILON:
+            # Blend the rays just above and below the horizon: the two halves of the table disagree there.
+            mu_lo = mu_h - HORIZON_EPSILON
+            mu_hi = mu_h + HORIZON_EPSILON
+            _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_lo, mu_s, nu, d_lit, True, bottom, top,
+                                mu_s_min, p_r, p_m, lo_c, t, c2, tmp)
+            _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_hi, mu_s, nu, d_lit, False, bottom, top,
+                                mu_s_min, p_r, p_m, c, t, c2, tmp)
+            a = (mu - mu_lo) / (mu_hi - mu_lo)
+            for k in range(n_l):
+                c[k] = (1.0 - a) * lo_c[k] + a * c[k]
+        else:
+            _inscatter_to_point(transmittance, ray, mie, mult, rc, mu, mu_s, nu, d_lit, hits, bottom, top,
+                                mu_s_min, p_r, p_m, c, t, c2, tmp)
+        for k in range(n_l):
+            in_out[q, k] = c[k]
+
+
+@_kjit
+def irradiance_kernel(points, normals, suns, transmittance, irradiance, solar, bottom, top, alpha, sun_out, sky_out,
+                      start, stop):
+    """Sun and sky irradiance [W m^-2 nm^-1] on surfaces at ``points`` with unit ``normals``.
+
+    Sun: ``E_sun T_sun max(n.s, 0)`` with the planet's occlusion of the disc; sky: the table's horizontal
+    irradiance times ``(1 + n.up) / 2`` (Eq. 14). Writes ``sun_out`` and ``sky_out`` (n, n_wavelengths).
+    """
+    n_l = transmittance.shape[2]
+    t = np.empty(n_l)
+    e = np.empty(n_l)
+    for q in range(start, stop):
+        px, py, pz = points[q, 0], points[q, 1], points[q, 2]
+        r = math.sqrt(px * px + py * py + pz * pz)
+        ux, uy, uz = px / r, py / r, pz / r
+        sx, sy, sz = suns[q, 0], suns[q, 1], suns[q, 2]
+        nx, ny, nz = normals[q, 0], normals[q, 1], normals[q, 2]
+        rc = clamp(r, bottom, top)
+        mu_s = clamp(ux * sx + uy * sy + uz * sz, -1.0, 1.0)
+        transmittance_to_sun(transmittance, rc, mu_s, bottom, top, alpha, t)
+        cos_n = max(nx * sx + ny * sy + nz * sz, 0.0)
+        irradiance_lookup(irradiance, rc, mu_s, bottom, top, e)
+        occl = 0.5 * (1.0 + nx * ux + ny * uy + nz * uz)
+        for k in range(n_l):
+            sun_out[q, k] = solar[k] * t[k] * cos_n
+            sky_out[q, k] = e[k] * occl
+
+
+@_kjit
+def sun_kernel(pos, suns, transmittance, bottom, top, alpha, out, start, stop):
+    """Transmittance towards the sun (times the visible disc fraction) from each position into ``out``
+    (n, n_wl), initialised to 1 by the caller."""
+    n_l = transmittance.shape[2]
+    t = np.empty(n_l)
+    for q in range(start, stop):
+        sx, sy, sz = suns[q, 0], suns[q, 1], suns[q, 2]
+        px, py, pz = pos[q, 0], pos[q, 1], pos[q, 2]
+        r0 = math.sqrt(px * px + py * py + pz * pz)
+        if r0 > top:
+            rmu = px * sx + py * sy + pz * sz
+            # Blocked by the planet?
+            disc_g = rmu * rmu - r0 * r0 + bottom * bottom
+            if rmu < 0.0 and disc_g >= 0.0:
+                for k in range(n_l):
+                    out[q, k] = 0.0
+                continue
+        px, py, pz, _, inside = _enter_atmosphere(px, py, pz, sx, sy, sz, top)
+        if not inside:
+            continue
+        r = math.sqrt(px * px + py * py + pz * pz)
+        rc = clamp(r, bottom, top)
+        mu_s = clamp((px * sx + py * sy + pz * sz) / r, -1.0, 1.0)
+        transmittance_to_sun(transmittance, rc, mu_s, bottom, top, alpha, t)
+        for k in range(n_l):
+            out[q, k] = t[k]

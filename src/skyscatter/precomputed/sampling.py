@@ -1,0 +1,216 @@
+"""Interpolated reads of the precomputed tables and the phase functions (numba scalar functions).
+
+Shared by the precomputation kernels (:mod:`.kernels`) and the rendering kernels (:mod:`.lookup`). Every
+function writes its per-wavelength result into a caller-provided ``out`` array so that inner loops do not
+allocate.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+
+from .geometry import (
+    clamp,
+    irradiance_coord,
+    lerp_index,
+    scattering_mu_s_coord,
+    scattering_r_mu_coord,
+    transmittance_coord,
+)
+
+_jit = numba.njit(cache=True, fastmath=False)
+
+PI = math.pi
+
+
+@_jit
+def rayleigh_phase(nu: float) -> float:
+    """Rayleigh phase function [sr^-1] (Bruneton & Neyret 2008, Eq. 2): ``3 / (16 pi) (1 + nu^2)``."""
+    return 3.0 / (16.0 * PI) * (1.0 + nu * nu)
+
+
+@_jit
+def mie_phase(nu: float, g: float) -> float:
+    """Cornette-Shanks phase function [sr^-1] (Bruneton & Neyret 2008, Eq. 4).
+
+    ``3 / (8 pi) (1 - g^2) (1 + nu^2) / ((2 + g^2) (1 + g^2 - 2 g nu)^(3/2))``.
+    """
+    k = 3.0 / (8.0 * PI) * (1.0 - g * g) / (2.0 + g * g)
+    den = max(1.0 + g * g - 2.0 * g * nu, 1e-12)
+    return k * (1.0 + nu * nu) / (den * math.sqrt(den))
+
+
+@_jit
+def transmittance_to_top(table, r, mu, bottom, top, out):
+    """Transmittance from (r, mu) to the top of the atmosphere, ignoring the ground (table lookup)."""
+    n_r, n_mu, n_l = table.shape
+    p_r, p_mu = transmittance_coord(r, mu, bottom, top, n_r, n_mu)
+    i, wr = lerp_index(p_r, 0, n_r - 1)
+    j, wm = lerp_index(p_mu, 0, n_mu - 1)
+    a00 = (1.0 - wr) * (1.0 - wm)
+    a01 = (1.0 - wr) * wm
+    a10 = wr * (1.0 - wm)
+    a11 = wr * wm
+    for k in range(n_l):
+        out[k] = (a00 * table[i, j, k] + a01 * table[i, j + 1, k]
+                  + a10 * table[i + 1, j, k] + a11 * table[i + 1, j + 1, k])
+
+
+@_jit
+def transmittance_segment(table, r, mu, d, hits_ground, bottom, top, out, tmp):
+    """Transmittance between the ray origin (r, mu) and the point at distance ``d`` [m] along the ray.
+
+    Uses ``T(x, y) = T(x, v) / T(y, v)`` for rays to the top and the reversed rays for rays that meet the
+    ground (Bruneton & Neyret 2008, Sec. 4).
+    """
+    r_d = clamp(math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0)), bottom, top)
+    mu_d = clamp((r * mu + d) / r_d, -1.0, 1.0)
+    if hits_ground:
+        transmittance_to_top(table, r_d, -mu_d, bottom, top, out)
+        transmittance_to_top(table, r, -mu, bottom, top, tmp)
+    else:
+        transmittance_to_top(table, r, mu, bottom, top, out)
+        transmittance_to_top(table, r_d, mu_d, bottom, top, tmp)
+    for k in range(out.shape[0]):
+        out[k] = min(out[k] / tmp[k], 1.0) if tmp[k] > 0.0 else 0.0
+
+
+@_jit
+def sun_visible_fraction(r, mu_s, bottom, alpha):
+    """Fraction of the solar disc (angular radius ``alpha`` [rad]) above the planet's horizon seen from ``r``.
+
+    The horizon is a straight line across the small disc, so the visible part is a circular segment:
+    ``1/2 + (h sqrt(1 - h^2) + asin h) / pi`` with ``h`` the elevation of the disc centre above the horizon in
+    disc radii.
+    """
+    sin_h = bottom / r
+    cos_h = -math.sqrt(max(1.0 - sin_h * sin_h, 0.0))
+    h = (mu_s - cos_h) / (max(sin_h, 1e-6) * alpha)
+    if h <= -1.0:
+        return 0.0
+    if h >= 1.0:
+        return 1.0
+    return 0.5 + (h * math.sqrt(1.0 - h * h) + math.asin(h)) / PI
+
+
+@_jit
+def transmittance_to_sun(table, r, mu_s, bottom, top, alpha, out):
+    """Transmittance to the sun from radius ``r`` (sun zenith cosine ``mu_s``), times the visible disc fraction."""
+    f = sun_visible_fraction(r, mu_s, bottom, alpha)
+    if f <= 0.0:
+        for k in range(out.shape[0]):
+            out[k] = 0.0
+        return
+    transmittance_to_top(table, r, mu_s, bottom, top, out)
+    for k in range(out.shape[0]):
+        out[k] *= f
+
+
+@_jit
+def irradiance_lookup(table, r, mu_s, bottom, top, out):
+    """Bilinear read of an irradiance table (n_r, n_mu_s, n_wavelengths)."""
+    n_r, n_m, n_l = table.shape
+    p_r, p_m = irradiance_coord(r, mu_s, bottom, top, n_r, n_m)
+    i, wr = lerp_index(p_r, 0, n_r - 1)
+    j, wm = lerp_index(p_m, 0, n_m - 1)
+    a00 = (1.0 - wr) * (1.0 - wm)
+    a01 = (1.0 - wr) * wm
+    a10 = wr * (1.0 - wm)
+    a11 = wr * wm
+    for k in range(n_l):
+        out[k] = (a00 * table[i, j, k] + a01 * table[i, j + 1, k]
+                  + a10 * table[i + 1, j, k] + a11 * table[i + 1, j + 1, k])
+
+
+@_jit
+def r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu):
+    """Interpolation cell (i_r, w_r, i_mu, w_mu) of a view ray in the 4D tables (mu stays in its half)."""
+    p_r, p_mu = scattering_r_mu_coord(r, mu, hits_ground, bottom, top, n_r, n_mu)
+    i_r, w_r = lerp_index(p_r, 0, n_r - 1)
+    half = n_mu // 2
+    if hits_ground:
+        i_mu, w_mu = lerp_index(p_mu, 0, half - 1)
+    else:
+        i_mu, w_mu = lerp_index(p_mu, half, n_mu - 1)
+    return i_r, w_r, i_mu, w_mu
+
+
+@_jit
+def mu_s_nu_cell(mu_s, nu, bottom, top, mu_s_min, n_mu_s, n_nu):
+    """Interpolation cell (i_mu_s, w_mu_s, i_nu, w_nu) in the 4D tables."""
+    p_s = scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_mu_s)
+    p_n = clamp(0.5 * (nu + 1.0), 0.0, 1.0) * (n_nu - 1)
+    i_s, w_s = lerp_index(p_s, 0, n_mu_s - 1)
+    i_n, w_n = lerp_index(p_n, 0, n_nu - 1)
+    return i_s, w_s, i_n, w_n
+
+
+@_jit
+def lookup4_cell(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scale, out):
+    """``out += scale * table(cell)``: quadrilinear interpolation of a 4D table (..., n_wavelengths)."""
+    n_l = table.shape[4]
+    for a in range(2):
+        wa = w_r if a else 1.0 - w_r
+        if wa == 0.0:
+            continue
+        for b in range(2):
+            wb = wa * (w_mu if b else 1.0 - w_mu)
+            if wb == 0.0:
+                continue
+            for c in range(2):
+                wc = wb * (w_s if c else 1.0 - w_s)
+                if wc == 0.0:
+                    continue
+                for e in range(2):
+                    we = wc * (w_n if e else 1.0 - w_n)
+                    if we == 0.0:
+                        continue
+                    we *= scale
+                    for k in range(n_l):
+                        out[k] += we * table[i_r + a, i_mu + b, i_s + c, i_n + e, k]
+
+
+@_jit
+def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min, scale, out):
+    """``out += scale * S(r, mu, mu_s, nu)`` for a 4D table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths)."""
+    n_r, n_mu, n_s, n_n, _ = table.shape
+    i_r, w_r, i_mu, w_mu = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
+    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
+    lookup4_cell(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scale, out)
+
+
+@_jit
+def density_at(profile, n_layers, h):
+    """Relative density of a profile (rows: width, exp_term, exp_scale, linear_term, constant_term) at altitude h."""
+    start = 0.0
+    for k in range(n_layers):
+        if k == n_layers - 1 or h < start + profile[k, 0]:
+            v = profile[k, 1] * math.exp(profile[k, 2] * h) + profile[k, 3] * h + profile[k, 4]
+            return max(v, 0.0)
+        start += profile[k, 0]
+    return 0.0
+
+
+@_jit
+def exp_segment_weights(sa, sb, h):
+    """Weights (c_a, c_b) with ``integral_0^h s(t) g(t) dt ~= c_a s_a g_a + c_b s_b g_b``.
+
+    Product integration: ``s`` varies exponentially between its end values ``s_a``, ``s_b`` (exact for the
+    exponential density layers of Eqs. 1 and 3) and ``g`` (transmittance, phase-weighted radiance) linearly.
+    With ``x = ln(s_b / s_a)``, ``c_a = h f(x)`` and ``c_b = h f(-x)``, ``f(x) = (e^x - 1 - x) / x^2``; this
+    tends to the trapezoidal rule (h/2, h/2) as x -> 0, which is also used when an end value is zero.
+    """
+    if sa <= 0.0 or sb <= 0.0:
+        return 0.5 * h, 0.5 * h
+    ratio = sb / sa
+    x = math.log(ratio)
+    if abs(x) < 1e-3:
+        fa = 0.5 + x / 6.0 + x * x / 24.0
+        fb = 0.5 - x / 6.0 + x * x / 24.0
+    else:
+        x2 = x * x
+        fa = (ratio - 1.0 - x) / x2
+        fb = (1.0 / ratio - 1.0 + x) / x2
+    return h * fa, h * fb

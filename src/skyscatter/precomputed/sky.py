@@ -1,0 +1,148 @@
+"""The precomputed atmosphere as a skyscatter sky model: :class:`BrunetonSky`.
+
+The observer stands at ``altitude`` above the planet's surface; the local East-North-Up frame is the
+planet-centred frame with the observer on its +z axis. Directions that meet the planet return the ground
+(Lambertian, the atmosphere's albedo, lit by the sun and the sky) seen through the atmosphere, so the model
+renders the whole sphere of directions from the ground to orbit (``renders_ground = True``). The solar disc is
+separate (:meth:`BrunetonSky.sun_spectral_radiance`).
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..conventions import as_directions
+from ..errors import InvalidParameterError, SunBelowHorizonError
+from ..sky.base import SkyModel, SunSkyMixin, check_sun_angles
+from ..spectral import DEFAULT_WAVELENGTHS, as_wavelengths
+from .parameters import AtmosphereParameters
+from .tables import PrecomputedAtmosphere
+
+__all__ = ["BrunetonSky"]
+
+
+def _resolve_atmosphere(atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None) -> PrecomputedAtmosphere:
+    if isinstance(atmosphere, PrecomputedAtmosphere):
+        return atmosphere
+    if atmosphere is None or isinstance(atmosphere, AtmosphereParameters):
+        from .cache import cached_atmosphere
+
+        return cached_atmosphere(atmosphere)
+    raise InvalidParameterError(
+        f"atmosphere must be a PrecomputedAtmosphere, AtmosphereParameters or None; got {type(atmosphere).__name__}"
+    )
+
+
+class BrunetonSky(SunSkyMixin, SkyModel):
+    """Physically based sky from precomputed multiple scattering (Bruneton & Neyret 2008).
+
+    Parameters
+    ----------
+    sun_zenith : float
+        Sun zenith angle [rad] at the observer, up to the atmosphere's ``max_sun_zenith`` (102 deg by
+        default): the sun may be below the horizon (twilight).
+    sun_azimuth : float
+        Sun azimuth [rad] from north towards east.
+    altitude : float
+        Observer altitude above the surface [m], >= 0; above the top of the atmosphere (60 km for the Earth)
+        the view is from space.
+    atmosphere : PrecomputedAtmosphere or AtmosphereParameters, optional
+        Precomputed tables, or parameters whose tables are taken from the disk cache (computed the first
+        time, about 20 s); default: the Earth defaults.
+
+    Notes
+    -----
+    ``spectral_radiance`` reconstructs spectra from the table wavelengths (see
+    :mod:`skyscatter.precomputed.conversion`); ``xyz`` applies the table's XYZ matrix directly (observer
+    integration for 15 or more wavelengths).
+    """
+
+    renders_ground = True
+
+    def __init__(self, sun_zenith: float, sun_azimuth: float, *, altitude: float = 0.0,
+                 atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None = None) -> None:
+        zen, azi = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=True)
+        try:
+            alt = float(altitude)
+        except (TypeError, ValueError):
+            raise InvalidParameterError(f"altitude must be a number [m]; got {altitude!r}") from None
+        if not (math.isfinite(alt) and alt >= 0.0):
+            raise InvalidParameterError(f"altitude must be finite and >= 0 m; got {altitude!r}")
+        atm = _resolve_atmosphere(atmosphere)
+        limit = atm.parameters.max_sun_zenith
+        if zen > limit + 1e-12:
+            raise SunBelowHorizonError(
+                f"sun zenith {math.degrees(zen):.4g} deg is beyond the precomputed limit "
+                f"{math.degrees(limit):.4g} deg (AtmosphereParameters.max_sun_zenith)"
+            )
+        self.sun_zenith = zen
+        self.sun_azimuth = azi
+        self.altitude = alt
+        self.atmosphere = atm
+        self.sun_angular_radius = atm.parameters.sun_angular_radius
+
+    def __repr__(self) -> str:
+        return (f"BrunetonSky(sun_zenith={self.sun_zenith:.6g}, sun_azimuth={self.sun_azimuth:.6g}, "
+                f"altitude={self.altitude:g})")
+
+    @cached_property
+    def position(self) -> NDArray[np.float64]:
+        """Observer position [m] in the planet-centred frame (on the +z axis)."""
+        return np.array([0.0, 0.0, self.atmosphere.parameters.bottom_radius + self.altitude])
+
+    def table_radiance(self, directions: ArrayLike) -> NDArray[np.float64]:
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] at the table wavelengths, shape (..., n_table_wavelengths)."""
+        d = as_directions(directions)
+        return self.atmosphere.sky_radiance(self.position, d, self.sun_direction)
+
+    def spectral_radiance(self, directions: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] of sky and ground (no solar disc), (..., n_wavelengths)."""
+        wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
+        return self.atmosphere.resample(self.table_radiance(directions), wl)
+
+    def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
+        """CIE 1931 XYZ [cd m^-2] of sky and ground in ``directions`` (..., 3)."""
+        return self.atmosphere.to_xyz(self.table_radiance(directions))
+
+    def luminance(self, directions: ArrayLike) -> NDArray[np.float64]:
+        """Luminance [cd m^-2] of sky and ground in ``directions`` (..., 3)."""
+        return self.atmosphere.luminance(self.table_radiance(directions))
+
+    def aerial_perspective(self, points: ArrayLike, *, shadow_length: ArrayLike | None = None
+                           ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Transmittance and inscattered radiance between the observer and ``points`` (Eqs. 16-17).
+
+        Parameters
+        ----------
+        points : array_like, shape (..., 3)
+            Positions [m] in the local frame of the surface point below the observer (x east, y north, z up
+            from the surface); the observer is at ``(0, 0, altitude)``. The planet's curvature is the caller's:
+            a point 100 km away at z = 0 lies about 800 m above the curved surface.
+        shadow_length : array_like, optional
+            Shadowed length [m] of each view ray (light shafts, Eq. 17).
+
+        Returns
+        -------
+        transmittance, inscatter : ndarray, shape (..., n_table_wavelengths)
+            ``L = transmittance * L_object + inscatter`` [W m^-2 sr^-1 nm^-1] at the table wavelengths; use
+            ``self.atmosphere.to_xyz`` for colour.
+        """
+        pts = np.asarray(points, dtype=float) + np.array([0.0, 0.0, self.atmosphere.parameters.bottom_radius])
+        return self.atmosphere.aerial_perspective(self.position, pts, self.sun_direction, shadow_length=shadow_length)
+
+    def sun_table_radiance(self) -> NDArray[np.float64]:
+        """Mean radiance of the solar disc at the table wavelengths [W m^-2 sr^-1 nm^-1] (after transmission)."""
+        return self.atmosphere.sun_radiance(self.position, self.sun_direction)
+
+    def sun_spectral_radiance(self, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Mean spectral radiance of the solar disc [W m^-2 sr^-1 nm^-1] seen by the observer (Eq. 9)."""
+        wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
+        return self.atmosphere.resample(self.sun_table_radiance(), wl)
+
+    def sun_xyz(self) -> NDArray[np.float64]:
+        """CIE XYZ [cd m^-2] of the solar disc after transmission."""
+        return self.atmosphere.to_xyz(self.sun_table_radiance())

@@ -1,0 +1,97 @@
+"""Disk cache of the precomputed tables: keyed, verified on load, rebuilt (with a warning) when damaged."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from skyscatter.precomputed import AtmosphereParameters, CacheRebuildWarning, PrecomputedAtmosphere, cached_atmosphere
+from skyscatter.precomputed.cache import cache_dir, cache_path, clear_memory_cache
+
+TINY = dict(transmittance_mu=32, transmittance_r=8, irradiance_mu_s=8, irradiance_r=4, scattering_r=4,
+            scattering_mu=16, scattering_mu_s=4, scattering_nu=4)
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(tmp_path / "cache"))
+    clear_memory_cache()
+    yield tmp_path / "cache"
+    clear_memory_cache()
+
+
+def _no_compute(*args, **kwargs):
+    raise AssertionError("tables were recomputed")
+
+
+def test_cache_location_from_environment(cache):
+    assert cache_dir() == cache
+
+
+def test_cache_writes_then_reads_without_recomputing(cache, monkeypatch):
+    atm = cached_atmosphere(orders=1, sizes=TINY)
+    path = cache_path(atm.cache_key)
+    assert path.exists() and path.parent == cache
+    assert cached_atmosphere(orders=1, sizes=TINY) is atm  # memory
+    clear_memory_cache()
+    monkeypatch.setattr(PrecomputedAtmosphere, "compute", classmethod(_no_compute))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        again = cached_atmosphere(orders=1, sizes=TINY)
+    np.testing.assert_array_equal(again.tables["multiple"], atm.tables["multiple"])
+
+
+def test_key_changes_with_parameters_sizes_orders_wavelengths():
+    base = PrecomputedAtmosphere.compute(orders=1, sizes=TINY, progress=False).cache_key
+    from skyscatter.precomputed.tables import TableSizes, _as_wavelengths, cache_key
+
+    p = AtmosphereParameters()
+    wl = _as_wavelengths(None)
+    sz = TableSizes(**TINY)
+    assert cache_key(p, 1, wl, sz) == base
+    assert cache_key(p.replace(ground_albedo=0.3), 1, wl, sz) != base
+    assert cache_key(p, 2, wl, sz) != base
+    assert cache_key(p, 1, wl + 1, sz) != base
+    assert cache_key(p, 1, wl, TableSizes(**{**TINY, "scattering_nu": 6})) != base
+
+
+@pytest.mark.parametrize("damage", ["flip", "truncate", "garbage"])
+def test_corrupt_cache_file_is_rebuilt(cache, damage):
+    atm = cached_atmosphere(orders=1, sizes=TINY)
+    path = cache_path(atm.cache_key)
+    data = bytearray(path.read_bytes())
+    if damage == "flip":
+        data[len(data) // 2] ^= 0x55
+    elif damage == "truncate":
+        data = data[: len(data) // 3]
+    else:
+        data = bytearray(b"not an npz file at all")
+    path.write_bytes(bytes(data))
+    clear_memory_cache()
+    with pytest.warns(CacheRebuildWarning):
+        rebuilt = cached_atmosphere(orders=1, sizes=TINY)
+    np.testing.assert_array_equal(rebuilt.tables["multiple"], atm.tables["multiple"])
+    # the rebuilt file is valid again
+    assert PrecomputedAtmosphere.load(path, expected_key=atm.cache_key).cache_key == atm.cache_key
+
+
+def test_mismatched_cache_file_is_rebuilt(cache):
+    atm = cached_atmosphere(orders=1, sizes=TINY)
+    other = PrecomputedAtmosphere.compute(AtmosphereParameters(ground_albedo=0.5), orders=1, sizes=TINY,
+                                          progress=False)
+    other.save(cache_path(atm.cache_key))  # a valid file, but for other parameters
+    clear_memory_cache()
+    with pytest.warns(CacheRebuildWarning, match="other parameters"):
+        again = cached_atmosphere(orders=1, sizes=TINY)
+    assert again.parameters == AtmosphereParameters()
+
+
+def test_unwritable_cache_still_returns_tables(tmp_path, monkeypatch):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(blocker / "sub"))
+    clear_memory_cache()
+    with pytest.warns(RuntimeWarning, match="could not write"):
+        atm = cached_atmosphere(orders=1, sizes=TINY)
+    assert atm.tables["transmittance"].shape == (8, 32, 3)
+    clear_memory_cache()

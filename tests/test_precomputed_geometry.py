@@ -1,0 +1,114 @@
+"""Ray geometry and table parameterisations (Bruneton & Neyret 2008, Sec. 4): the analytic cases and the
+mapping round trips at the horizon and the bounds."""
+
+import math
+
+import numpy as np
+import pytest
+
+from skyscatter.precomputed import geometry as g
+
+BOTTOM, TOP = 6_360_000.0, 6_420_000.0
+H = math.sqrt(TOP**2 - BOTTOM**2)
+MU_S_MIN = math.cos(math.radians(102.0))
+
+
+def test_distances_analytic():
+    """Vertical up from the ground = thickness; horizontal from the ground = sqrt(Rt^2 - Rg^2); straight down
+    from altitude h = h; a ray grazing the ground touches it at the horizon distance rho."""
+    assert math.isclose(g.distance_to_top(BOTTOM, 1.0, TOP), TOP - BOTTOM, rel_tol=1e-12)
+    assert math.isclose(g.distance_to_top(BOTTOM, 0.0, TOP), H, rel_tol=1e-12)
+    assert math.isclose(g.distance_to_top(BOTTOM, -1.0, TOP), 2 * BOTTOM + (TOP - BOTTOM), rel_tol=1e-12)
+    for h in (1.0, 1000.0, 30_000.0):
+        assert math.isclose(g.distance_to_bottom(BOTTOM + h, -1.0, BOTTOM), h, rel_tol=1e-9)
+        assert g.ray_hits_ground(BOTTOM + h, -1.0, BOTTOM)
+    r = BOTTOM + 10_000.0
+    rho = math.sqrt(r * r - BOTTOM * BOTTOM)
+    mu_h = -rho / r
+    assert g.ray_hits_ground(r, mu_h - 1e-9, BOTTOM)
+    assert not g.ray_hits_ground(r, mu_h + 1e-6, BOTTOM)
+    assert math.isclose(g.distance_to_bottom(r, mu_h - 1e-12, BOTTOM), rho, rel_tol=1e-4)
+    # from the top looking up: zero length, without cancellation
+    assert g.distance_to_top(TOP, 1.0, TOP) == 0.0
+
+
+def test_distance_matches_quadratic(rng):
+    """Both roots written without cancellation agree with the textbook formula."""
+    for _ in range(200):
+        r = BOTTOM + rng.uniform(0, TOP - BOTTOM)
+        mu = rng.uniform(-1, 1)
+        d = g.distance_to_top(r, mu, TOP)
+        assert math.isclose(d * d + 2 * r * mu * d + r * r, TOP * TOP, rel_tol=1e-12)
+        if g.ray_hits_ground(r, mu, BOTTOM):
+            d = g.distance_to_bottom(r, mu, BOTTOM)
+            assert math.isclose(d * d + 2 * r * mu * d + r * r, BOTTOM * BOTTOM, rel_tol=1e-10)
+
+
+@pytest.mark.parametrize("n", [(16, 64)])
+def test_transmittance_mapping_round_trip(n):
+    n_r, n_mu = n
+    for i_r in range(n_r):
+        for i_mu in range(n_mu):
+            r, mu = g.transmittance_params(i_r, i_mu, BOTTOM, TOP, n_r, n_mu)
+            p_r, p_mu = g.transmittance_coord(r, mu, BOTTOM, TOP, n_r, n_mu)
+            assert abs(p_r - i_r) < 1e-6 and abs(p_mu - i_mu) < 1e-5
+    # bounds: ground and top; straight up and the horizon
+    assert g.transmittance_params(0, 0, BOTTOM, TOP, n_r, n_mu) == (BOTTOM, 1.0)
+    r, mu = g.transmittance_params(0, n_mu - 1, BOTTOM, TOP, n_r, n_mu)
+    assert r == BOTTOM and abs(mu) < 1e-9
+    r, mu = g.transmittance_params(n_r - 1, n_mu - 1, BOTTOM, TOP, n_r, n_mu)
+    assert math.isclose(r, TOP, rel_tol=1e-12) and math.isclose(mu, -H / TOP, rel_tol=1e-9)
+
+
+def test_scattering_mapping_round_trip_and_bounds():
+    n_r, n_mu, n_s, n_n = 8, 32, 8, 4
+    half = n_mu // 2
+    for i_r in range(n_r):
+        r_ref = math.sqrt((H * i_r / (n_r - 1)) ** 2 + BOTTOM**2)
+        for i_mu in range(n_mu):
+            r, mu, hits = g.scattering_r_mu_params(i_r, i_mu, BOTTOM, TOP, n_r, n_mu)
+            assert math.isclose(r, r_ref, rel_tol=1e-12)
+            assert hits == (i_mu < half)
+            if i_r == 0 and hits:
+                continue  # from the ground every downward ray has zero length: mu = -1 by convention
+            p_r, p_mu = g.scattering_r_mu_coord(r, mu, hits, BOTTOM, TOP, n_r, n_mu)
+            assert abs(p_r - i_r) < 1e-6
+            assert abs(p_mu - i_mu) < 1e-4, (i_r, i_mu, p_mu)
+        if i_r > 0:
+            # the horizon is at both ends of the mu axis, seen from its two sides
+            mu_h = -math.sqrt(1 - (BOTTOM / r_ref) ** 2)
+            assert math.isclose(g.scattering_r_mu_params(i_r, 0, BOTTOM, TOP, n_r, n_mu)[1], mu_h, rel_tol=1e-6)
+            assert math.isclose(g.scattering_r_mu_params(i_r, n_mu - 1, BOTTOM, TOP, n_r, n_mu)[1], mu_h,
+                                rel_tol=1e-6)
+            assert math.isclose(g.scattering_r_mu_params(i_r, half - 1, BOTTOM, TOP, n_r, n_mu)[1], -1.0, abs_tol=1e-12)
+    assert g.scattering_r_mu_params(0, half, BOTTOM, TOP, n_r, n_mu)[1] == 1.0
+    for i_s in range(n_s):
+        mu_s = g.scattering_mu_s_param(i_s, BOTTOM, TOP, MU_S_MIN, n_s)
+        assert abs(g.scattering_mu_s_coord(mu_s, BOTTOM, TOP, MU_S_MIN, n_s) - i_s) < 1e-6
+    assert math.isclose(g.scattering_mu_s_param(0, BOTTOM, TOP, MU_S_MIN, n_s), MU_S_MIN, rel_tol=1e-9)
+    assert g.scattering_mu_s_param(n_s - 1, BOTTOM, TOP, MU_S_MIN, n_s) == 1.0
+    # below the limit the coordinate clamps to the first texel
+    assert g.scattering_mu_s_coord(-0.5, BOTTOM, TOP, MU_S_MIN, n_s) == 0.0
+    # nu: linear, clamped to what mu and mu_s allow
+    _, _, _, nu, _ = g.scattering_params(3, 20, 4, 0, BOTTOM, TOP, MU_S_MIN, n_r, n_mu, n_s, n_n)
+    lo, hi = g.nu_range(g.scattering_r_mu_params(3, 20, BOTTOM, TOP, n_r, n_mu)[1],
+                        g.scattering_mu_s_param(4, BOTTOM, TOP, MU_S_MIN, n_s))
+    assert nu == lo and lo > -1.0
+
+
+def test_mu_s_mapping_is_denser_near_the_horizon():
+    """Like the paper's u_mu_s, the texels crowd near mu_s = 0 rather than near the zenith."""
+    n = 32
+    mus = np.array([g.scattering_mu_s_param(i, BOTTOM, TOP, MU_S_MIN, n) for i in range(n)])
+    assert np.all(np.diff(mus) > 0)
+    steps = np.diff(mus)
+    near_horizon = steps[np.argmin(np.abs(mus[:-1]))]
+    assert near_horizon < steps[-1] / 3
+
+
+def test_irradiance_mapping_round_trip():
+    for i_r in range(8):
+        for i_s in range(16):
+            r, mu_s = g.irradiance_params(i_r, i_s, BOTTOM, TOP, 8, 16)
+            p = g.irradiance_coord(r, mu_s, BOTTOM, TOP, 8, 16)
+            assert abs(p[0] - i_r) < 1e-9 and abs(p[1] - i_s) < 1e-9
