@@ -60,7 +60,7 @@ def test_illuminance_perez_from_irradiance(capsys):
 @pytest.mark.parametrize(
     "args,message",
     [
-        (["--model", "cie-overcast", "--epsilon", "3"], "--epsilon do(es) not apply to --model cie-overcast"),
+        (["--model", "cie-overcast", "--epsilon", "3"], "--epsilon: does not apply to --model cie-overcast"),
         (["--model", "perez", "--epsilon", "3"], "epsilon and delta must be given together"),
         (["--model", "perez"], "PerezSky needs the sky condition"),
         (["--model", "cie-overcast", "--include-sun"], "has no sun"),

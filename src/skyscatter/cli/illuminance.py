@@ -6,7 +6,14 @@ import argparse
 import json
 import math
 
-from .common import HELP_FORMATTER, add_sun_options, finite_float, float_in, sun_angles_from_args
+from .common import (
+    HELP_FORMATTER,
+    add_sun_options,
+    finite_float,
+    float_in,
+    select_model_options,
+    sun_angles_from_args,
+)
 
 # Options that belong to each model (a model refuses options meant for another).
 _MODEL_OPTIONS = {
@@ -83,20 +90,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _model_options(args: argparse.Namespace) -> dict:
-    from ..errors import InvalidParameterError
-
-    allowed = _MODEL_OPTIONS[args.model]
-    every = set().union(*_MODEL_OPTIONS.values())
-    wrong = sorted(k for k in every - allowed if getattr(args, k, None) is not None)
-    if wrong:
-        flags = ", ".join("--" + k.replace("_normal", "").replace("_", "-") for k in wrong)
-        raise InvalidParameterError(f"{flags} do(es) not apply to --model {args.model}")
-    return {k: getattr(args, k) for k in allowed if getattr(args, k) is not None}
-
-
 def _build(args: argparse.Namespace, zenith: float, azimuth: float):
-    opts = _model_options(args)
+    opts = select_model_options(args, _MODEL_OPTIONS)
     if args.model == "cie":
         from ..sky.cie import CIEStandardSky
 

@@ -15,6 +15,7 @@ from .common import (
     float_in,
     png_path,
     positive_int,
+    select_model_options,
     sun_angles_from_args,
 )
 
@@ -84,26 +85,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _model_options(args: argparse.Namespace) -> dict:
-    allowed = _MODEL_OPTIONS[args.model]
-    every = set().union(*_MODEL_OPTIONS.values())
-    wrong = sorted(k for k in every - allowed if getattr(args, k, None) is not None)
-    if wrong:
-        from ..errors import InvalidParameterError
-
-        special = {"direct_normal_irradiance": "--dni", "diffuse_horizontal_irradiance": "--dhi"}
-        flags = ", ".join(special.get(k, "--" + k.replace("_", "-")) for k in wrong)
-        raise InvalidParameterError(f"{flags}: does not apply to --model {args.model}")
-    return {k: getattr(args, k) for k in allowed}
-
-
 def run(args: argparse.Namespace) -> int:
     from ..render import sky_image, write_exr_and_png
     from ..sky.registry import build_sky
 
     check_output_paths(args)
     zenith, azimuth = sun_angles_from_args(args)
-    model = build_sky(args.model, zenith, azimuth, **_model_options(args))
+    model = build_sky(args.model, zenith, azimuth, **select_model_options(args, _MODEL_OPTIONS))
     t0 = time.perf_counter()
     image = sky_image(
         model,
