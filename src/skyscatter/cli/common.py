@@ -80,8 +80,12 @@ def add_sun_options(parser: argparse.ArgumentParser, *, default_elevation: float
     parser.set_defaults(_default_sun=(default_elevation, default_azimuth))
 
 
-def sun_angles_from_args(args: argparse.Namespace) -> tuple[float, float]:
-    """Sun (zenith, azimuth) [rad] from the options of :func:`add_sun_options`."""
+def sun_angles_from_args(args: argparse.Namespace, *, apparent: bool = True) -> tuple[float, float]:
+    """Sun (zenith, azimuth) [rad] from the options of :func:`add_sun_options`.
+
+    With a place and time, ``apparent`` chooses SPA's refraction-corrected position (default) or the geometric
+    one, which models that ignore refraction (the precomputed atmosphere) need.
+    """
     if args.time is not None or args.lat is not None or args.lon is not None:
         if args.time is None or args.lat is None or args.lon is None:
             raise InvalidParameterError("--lat, --lon and --time must be given together")
@@ -89,7 +93,7 @@ def sun_angles_from_args(args: argparse.Namespace) -> tuple[float, float]:
             raise InvalidParameterError("give either --sun-elevation/--sun-azimuth or --lat/--lon/--time, not both")
         from ..sun.position import sun_position
 
-        pos = sun_position(math.radians(args.lat), math.radians(args.lon), args.time)
+        pos = sun_position(math.radians(args.lat), math.radians(args.lon), args.time, apparent=apparent)
         return float(pos.zenith), float(pos.azimuth)
     elevation, azimuth = args._default_sun
     if args.sun_elevation is not None:

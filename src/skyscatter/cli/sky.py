@@ -90,7 +90,8 @@ def run(args: argparse.Namespace) -> int:
     from ..sky.registry import build_sky
 
     check_output_paths(args)
-    zenith, azimuth = sun_angles_from_args(args)
+    # The precomputed atmosphere ignores refraction, so it wants the geometric sun (docs/bruneton.md).
+    zenith, azimuth = sun_angles_from_args(args, apparent=args.model != "bruneton")
     model = build_sky(args.model, zenith, azimuth, **select_model_options(args, _MODEL_OPTIONS))
     t0 = time.perf_counter()
     image = sky_image(
