@@ -433,3 +433,93 @@ def test_accuracy_table_module_small_grid():
     assert np.nanmax(err) < 0.02
     table = markdown_table(err, elevations=(-10.0, 0.5, 20.0), distances_km=(1.0, 50.0))
     assert "| -10 deg |" in table and " - |" in table
+
+
+# -- review of issue 4: domain limits, construction checks, sunless skies, S^0 normalisation ------------------
+def test_high_observers_are_finite_and_beyond_100_km_refused(evening_sky):
+    """Observers up to the documented 100 km: finite, and the analytic form agrees with the quadrature; the
+    density ratio u_2/u_1 is formed as one exponential (e2 / e1 was 0/0 above ~850 km)."""
+    d = direction_from_angles(np.radians([60.0, 89.0, 95.0, 150.0]), np.radians([0.0, 90.0, 180.0, 270.0]))
+    s = np.array([2e5, 5e5, 3e5, 1.5e5])
+    a = PreethamAerialPerspective(evening_sky)
+    n = PreethamAerialPerspective(evening_sky, method="numeric")
+    for h in (9e4, 1e5):
+        ta, la = a.evaluate(d, s, h, WL)
+        tn, ln = n.evaluate(d, s, h, WL)
+        assert np.all(np.isfinite(la)) and np.all(la >= 0) and np.all(np.isfinite(ta))
+        np.testing.assert_allclose(la, ln, rtol=0.02)
+        np.testing.assert_allclose(ta, tn, rtol=1e-9, atol=1e-20)
+    for h in (1.0001e5, 9e5, -2e5):
+        with pytest.raises(InvalidParameterError, match="100000 m"):
+            a.evaluate(d, s, h, WL)
+        with pytest.raises(InvalidParameterError, match="100000 m"):
+            in_scattering_integrals(0.5, 10.0, h, *_betas(2.0))
+
+
+def test_extreme_path_lengths_stay_finite():
+    """Paths of 1e9 m (far below sea level, or out of the atmosphere) give finite integrals that agree with
+    the quadrature; a descending one is opaque (tau = 0)."""
+    b1, b2 = _betas(2.0)
+    c = np.cos(np.radians([30.0, 89.9, 90.0, 90.5, 175.0]))
+    for h in (0.0, 5e4):
+        ia = in_scattering_integrals(c, 1e9, h, b1, b2, return_transmittance=True)
+        iq = in_scattering_integrals(c, 1e9, h, b1, b2, method="quadrature", return_transmittance=True)
+        assert all(np.all(np.isfinite(x)) for x in ia + iq)
+        np.testing.assert_allclose(ia[0], iq[0], rtol=0.02)  # the 2 % requirement
+        np.testing.assert_allclose(ia[1], iq[1], rtol=0.02)
+        assert np.all(ia[2][-1] < 1e-20)
+        assert np.all(np.isfinite(extinction(c, 1e9, h, b1, b2)))
+
+
+def test_segments_are_validated_when_the_model_is_built(evening_sky):
+    for bad in (0, -1, 2.5, "many", True, None, 20_000):
+        with pytest.raises(InvalidParameterError, match="segments"):
+            PreethamAerialPerspective(evening_sky, segments=bad)
+    assert PreethamAerialPerspective(evening_sky, segments=np.int64(3)).segments == 3
+
+
+def test_constant_density_under_a_sunless_sky_is_lit_by_the_sky():
+    """CIE overcast has no sun: sunlight-only haze would be black. By default the sky lights it, and the
+    saturated value of a horizontal ray is S^0 / beta (course-notes form with the sky's S^0)."""
+    sky = CIEOvercastSky()
+    model = ConstantDensityAerialPerspective(sky, turbidity=10.0)
+    assert model.include_sky
+    d = direction_from_angles(np.pi / 2, 0.0)
+    tau, l_in = model.evaluate(d, np.array([1e3, 3e4]), 0.0, WL)
+    assert np.all(l_in > 0)
+    s1, s2 = ScatteringTable(sky, 10.0, WL).lookup(d)
+    b1, b2 = _betas(10.0)
+    np.testing.assert_allclose(l_in[1], (s1 + s2) / (b1 + b2) * (1 - tau[1]), rtol=1e-9)
+    with pytest.raises(InvalidParameterError, match="no sun"):
+        ConstantDensityAerialPerspective(sky, turbidity=10.0, include_sky=False)
+    with pytest.raises(InvalidParameterError, match="alpha_haze"):
+        ConstantDensityAerialPerspective(sky, turbidity=10.0, alpha_haze=-1.0)
+
+
+def test_sun_share_of_s0_integrates_to_the_total_coefficients(evening_sky):
+    """Independent of the angular functions: over the sphere of view directions the sun's share of S^0,
+    divided by E_sun, must integrate to the total scattering coefficient (A.3 totals from their own closed
+    forms): int beta_i(gamma) d omega = beta_i. Quadrature in (gamma, psi) about the sun, fine in gamma for
+    the Mie forward peak. Tolerance 1 % (the Table 1/2 Mie data hold to ~0.5 %)."""
+    table = ScatteringTable(evening_sky, 3.0, WL, include_sky=False)
+    sun = np.asarray(evening_sky.sun_direction)
+    e1 = np.cross(sun, [0.0, 0.0, 1.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(sun, e1)
+    x, w = np.polynomial.legendre.leggauss(64)
+    edges = np.radians([0.0, 0.5, 2.0, 10.0, 40.0, 180.0])  # panels refine the forward peak
+    lo, hi = edges[:-1, None], edges[1:, None]
+    gamma = (0.5 * (hi - lo) * x + 0.5 * (hi + lo)).ravel()
+    wg = (0.5 * (hi - lo) * w).ravel() * np.sin(gamma)
+    psi = np.linspace(0.0, 2 * np.pi, 4, endpoint=False)
+    g, p = np.meshgrid(gamma, psi, indexing="ij")
+    dirs = (np.cos(g)[..., None] * sun + np.sin(g)[..., None] * (np.cos(p)[..., None] * e1
+                                                                   + np.sin(p)[..., None] * e2))
+    s1, s2 = table.lookup(dirs)
+    e_sun = evening_sky.sun_spectral_radiance(WL) * evening_sky.sun_solid_angle
+    weights = wg[:, None] * (2 * np.pi / psi.size)
+    total1 = np.einsum("gp,gpn->n", weights, s1) / e_sun
+    total2 = np.einsum("gp,gpn->n", weights, s2) / e_sun
+    b1, b2 = _betas(3.0)
+    np.testing.assert_allclose(total1, b1, rtol=0.01)
+    np.testing.assert_allclose(total2, b2, rtol=0.01)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -118,3 +120,77 @@ def test_help_explains_units(capsys):
     out = capsys.readouterr().out
     for text in ("[deg]", "[px]", "[m]", "--no-glare", "--dem", "--out-dir", "Figure 7", "default: 640"):
         assert text in out
+
+
+def test_a_folder_named_like_an_output_is_refused_before_rendering(tmp_path, capsys, monkeypatch):
+    blocker = tmp_path / "fig8b_preetham.png"
+    blocker.mkdir()
+    import skyscatter.render.scene as scene
+
+    monkeypatch.setattr(scene.Scene, "render", lambda *a, **k: pytest.fail("rendered before checking outputs"))
+    code, out, err = run(capsys, "--out-dir", str(tmp_path), "--width", "8", "--height", "6", "--figure", "8")
+    assert code == 2 and str(blocker) in err and "folder" in err
+    assert len(err.strip().splitlines()) == 1
+    assert [p.name for p in tmp_path.iterdir()] == [blocker.name]
+
+
+def test_a_failed_rename_restores_the_folder(tmp_path, capsys, monkeypatch):
+    """All or nothing: if the 3rd rename fails, the two files renamed before it are removed (or, if they
+    existed, restored) and no temporary file is left; the message names the target."""
+    import os
+
+    old = tmp_path / "fig8a_cie_clear_ward_larson.exr"
+    old.write_bytes(b"previous version")
+    real = os.replace
+    calls = []
+
+    def flaky(src, dst):
+        if str(src).endswith(".tmp.png"):
+            calls.append(dst)
+            if Path(dst).name == "fig8b_preetham.png":
+                raise IsADirectoryError(21, "Is a directory", str(src))
+        return real(src, dst)
+
+    monkeypatch.setattr(os, "replace", flaky)
+    code, out, err = run(capsys, "--out-dir", str(tmp_path), "--width", "8", "--height", "6", "--figure", "8")
+    assert code == 2 and str(tmp_path / "fig8b_preetham.png") in err and ".tmp" not in err
+    assert calls  # the failure happened during the renames
+    assert [p.name for p in tmp_path.iterdir()] == [old.name]
+    assert old.read_bytes() == b"previous version"
+
+
+def test_overcast_sky_with_constant_density_haze_is_not_black(tmp_path, capsys):
+    """CIE overcast has no sun; the constant-density haze is lit by the sky, so the distant terrain fades
+    towards the sky's brightness instead of to black."""
+    code, out, err = run(capsys, "--out-dir", str(tmp_path), "--width", "24", "--height", "14", "--no-glare",
+                         "--sky", "cie-overcast", "--turbidity", "10", "--aerial", "constant")
+    assert code == 0, err
+    img = read_exr(tmp_path / "landscape.exr").astype(float)
+    lum = img @ np.array([0.2126, 0.7152, 0.0722])
+    assert np.all(np.isfinite(img))
+    assert lum.min() > 0.1 * lum.max()  # was ~0 for the distant ridges before
+
+
+@pytest.mark.parametrize("option,value", [("--camera-x", "1e300"), ("--camera-y", "-2e7"),
+                                          ("--camera-altitude", "1e6"), ("--camera-height", "2e5")])
+def test_camera_options_are_bounded(tmp_path, capsys, option, value):
+    code, out, err = run(capsys, "--out-dir", str(tmp_path), f"{option}={value}")
+    assert code == 2 and option in err and "expected a number in" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_help_shows_each_default_once(capsys):
+    assert cli.main(["demo", "--help"]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "(default: None)" not in out and "(default: True)" not in out
+    assert "(default preetham) (default" not in out and "(default 2.5) (default" not in out
+    assert "default: 640" in out and "default: 0.2" in out
+
+
+def test_bruneton_model_refuses_preetham_options(tmp_path, capsys):
+    from skyscatter.cli import main
+
+    code = main(["demo", "--model", "bruneton", "--turbidity", "3", "--out-dir", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 2 and "does not apply to --model bruneton" in err and len(err.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []

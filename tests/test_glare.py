@@ -109,3 +109,19 @@ def test_tone_mapping_after_glare_is_monotonic(rng):
     img = np.stack([y, y, y], axis=-1)[None]
     out = tonemap(img)[0, :, 1]
     assert np.all(np.diff(out) >= 0) and out[0] >= 0 and out[-1] <= 1
+
+
+def test_point_source_lights_whole_row_without_truncation_circle():
+    # A bright point near the left edge: with the default kernel the PSF fills the whole (2H-1) x (2W-1)
+    # rectangle, so pixels farther away than min(H, W) still receive light, decreasing smoothly with distance
+    # (a disc truncation left a sharp circle around the sun).
+    import numpy as np
+
+    from skyscatter.render.glare import apply_glare
+
+    img = np.zeros((40, 120, 3))
+    img[20, 5] = 1e6
+    out = apply_glare(img, math.radians(0.1))[20, :, 1]
+    far = out[50:]
+    assert np.all(far > 0)
+    assert np.all(np.diff(out[6:]) < 0)

@@ -197,3 +197,84 @@ def test_procedural_landscape_is_fixed_and_seamless():
     assert np.abs(a[:, 0] - a[:, -1]).max() <= 1.5 * inner
     t = default_terrain()
     assert t.wrap and t.shape == (1024, 1024) and t.height_range == (0.0, pytest.approx(2400.0))
+
+
+def test_intersection_matches_marching_for_renderer_rays(rng):
+    """The renderer's usual rays: cameras below the highest peaks, grazing and upward rays, and (periodic
+    terrain) origins several periods away from the grid, against the independent march."""
+    h = rng.random((16, 16)) * 100.0
+    for wrap in (False, True):
+        terrain = Terrain(h, 10.0, wrap=wrap)
+        tracer = HeightfieldTracer(terrain, block=4)
+        n = 60
+        x = rng.uniform(0, 150, n) + (rng.integers(-3, 4, n) * 160.0 if wrap else 0.0)
+        y = rng.uniform(0, 150, n) + (rng.integers(-3, 4, n) * 160.0 if wrap else 0.0)
+        z = terrain.height_at(x, y) + rng.uniform(0.5, 30.0, n)  # mostly below the highest peak (~100 m)
+        dz = np.concatenate([rng.uniform(-0.05, 0.05, n // 2), rng.uniform(0.0, 0.4, n - n // 2)])  # grazing, up
+        az = rng.uniform(0, 2 * np.pi, n)
+        dirs = np.column_stack([np.sin(az), np.cos(az), dz])
+        dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+        origins = np.column_stack([x, y, z])
+        t_max = 400.0
+        got = tracer.intersect(origins, dirs, t_max=t_max)
+        ref = np.array([_march(terrain, origins[i], dirs[i], t_max, 0.02) for i in range(n)])
+        with np.errstate(invalid="ignore"):
+            same = (np.isinf(got) & np.isinf(ref)) | (np.abs(got - ref) < 1e-6)
+        for i in np.flatnonzero(~same):  # a grazing contact thinner than the march's step (see above)
+            assert got[i] < ref[i]
+            p = origins[i] + got[i] * dirs[i]
+            assert abs(terrain.height_at(p[0], p[1]) - p[2]) < 1e-6
+        assert np.count_nonzero(~same) <= 2
+        assert np.count_nonzero(np.isfinite(got) & same) > 15 and np.count_nonzero(np.isinf(got)) > 3
+
+
+def test_huge_origins_on_a_periodic_terrain_are_reduced_to_one_period():
+    """Origins far away (1e21 m once stalled the block walk) are shifted by whole periods first."""
+    h = procedural_heights(seed=3, size=32, relief=500.0, spacing=30.0)
+    terrain = Terrain(h, 30.0, wrap=True)
+    tracer = HeightfieldTracer(terrain)
+    d = np.array([0.99, 0.0, -0.1]) / np.linalg.norm([0.99, 0.0, -0.1])
+    period = 32 * 30.0
+    near = tracer.intersect(np.array([100.0, 50.0, 900.0]), d)
+    far = tracer.intersect(np.array([100.0 + 10**9 * period, 50.0 - 7 * period, 900.0]), d)
+    assert np.isfinite(near) and far == pytest.approx(near, abs=1e-3)
+    assert np.isfinite(tracer.intersect(np.array([1e21, -16000.0, 900.0]), d))  # returns (precision is gone)
+
+
+def test_geotiff_in_geographic_degrees_needs_an_explicit_spacing(tmp_path):
+    """GTModelTypeGeoKey = 2 (geographic): the pixel scale is in degrees, not metres (GeoTIFF 1.1, 7.1.1)."""
+    tifffile = pytest.importorskip("tifffile")
+    raster = np.array([[5.0, 6.0], [1.0, 2.0]], dtype=np.float32)
+    geokeys = (1, 1, 0, 1, 1024, 0, 1, 2)  # header, then GTModelTypeGeoKey = ModelTypeGeographic
+    tifffile.imwrite(tmp_path / "geo.tif", raster, extratags=[(33550, "d", 3, (0.00027, 0.00027, 0.0), False),
+                                                              (34735, "H", 8, geokeys, False)])
+    with pytest.raises(FileFormatError, match="geographic.*spacing"):
+        Terrain.load(tmp_path / "geo.tif")
+    assert Terrain.load(tmp_path / "geo.tif", spacing=30.0).spacing == 30.0
+    projected = (1, 1, 0, 1, 1024, 0, 1, 1)  # ModelTypeProjected: the scale is metres
+    tifffile.imwrite(tmp_path / "utm.tif", raster, extratags=[(33550, "d", 3, (25.0, 25.0, 0.0), False),
+                                                              (34735, "H", 8, projected, False)])
+    assert Terrain.load(tmp_path / "utm.tif").spacing == 25.0
+
+
+def test_geotiff_nodata_samples_are_refused(tmp_path):
+    tifffile = pytest.importorskip("tifffile")
+    raster = np.array([[5.0, -9999.0], [1.0, 2.0]], dtype=np.float32)
+    tifffile.imwrite(tmp_path / "holes.tif", raster, extratags=[(33550, "d", 3, (30.0, 30.0, 0.0), False),
+                                                                (42113, "s", 0, "-9999", False)])
+    with pytest.raises(FileFormatError, match="NaN"):
+        Terrain.load(tmp_path / "holes.tif")
+
+
+def test_complex_boolean_and_absurd_heights_are_refused(tmp_path):
+    np.save(tmp_path / "complex.npy", np.ones((3, 3), dtype=complex))
+    np.save(tmp_path / "bool.npy", np.ones((3, 3), dtype=bool))
+    for name in ("complex.npy", "bool.npy"):
+        with pytest.raises(FileFormatError, match="real-valued"):
+            Terrain.load(tmp_path / name, spacing=10.0)
+    with pytest.raises(InvalidParameterError, match="real numbers"):
+        Terrain(np.ones((3, 3), dtype=complex), 10.0)
+    with pytest.raises(InvalidParameterError, match="100000 m"):
+        Terrain(np.full((3, 3), 1e300), 10.0)
+    with pytest.raises(InvalidParameterError, match="spacing"):
+        Terrain(np.zeros((3, 3)), None)

@@ -223,3 +223,51 @@ def test_render_matches_stored_reference():
     per_pixel = rel.max(axis=-1)
     assert np.quantile(per_pixel, 0.99) < 1e-3
     assert np.mean(per_pixel > 2e-2) <= 0.01
+
+
+def test_rendered_shadow_of_a_wall_matches_the_geometry():
+    """A 100 m north-south wall on flat ground, sun 45 deg high in the west: ground up to 100 m east of the
+    wall's crest is in its shadow. Rendered shadow pixels must equal rho E_v(sky only) / pi and sunlit ones
+    rho E_v(sky + sun) / pi, both from skyscatter.photometry (independent quadrature)."""
+    sky = PreethamSky(2.5, math.radians(45.0), math.radians(270.0))
+    h = np.zeros((41, 41))
+    h[:, 20] = 100.0  # crest at x = 200 m; its eastern face reaches the ground at x = 210 m
+    terrain = Terrain(h, 10.0, base_height=0.0)
+    camera = PinholeCamera((300.0, 200.0, 1500.0), math.radians(90.0), math.radians(-89.9), math.radians(20.0))
+    width, height = 48, 48
+    image = Scene(sky, terrain=terrain, camera=camera, aerial=None, albedo=0.3, sun_disc=False).render(width, height)
+    d = camera.ray_directions(width, height)
+    p = np.asarray(camera.position) + image.distance[..., None].astype(float) * d
+    lum = _luminance(image.rgb)
+    band = np.abs(p[..., 1] - 200.0) < 150.0
+    # keep clear of the wall's smoothed normals (x < 222) and of the shadow edge (x = 300 m)
+    shadow = band & (p[..., 0] > 222.0) & (p[..., 0] < 295.0)
+    sunlit = band & (p[..., 0] > 305.0)
+    assert shadow.sum() > 30 and sunlit.sum() > 30
+    e_sky = horizontal_illuminance(sky, include_sun=False)
+    e_all = horizontal_illuminance(sky, include_sun=True)
+    np.testing.assert_allclose(lum[shadow], 0.3 * e_sky / np.pi, rtol=5e-3)
+    np.testing.assert_allclose(lum[sunlit], 0.3 * e_all / np.pi, rtol=5e-3)
+    assert lum[sunlit].min() > 2 * lum[shadow].max()
+
+
+def test_bad_render_arguments_and_a_replaced_camera(sky):
+    terrain = Terrain(np.full((5, 5), 100.0), 10.0)
+    scene = Scene(sky, terrain=terrain, camera=PinholeCamera((20.0, 20.0, 150.0), 0.0))
+    for w in ("abc", float("nan"), None, float("inf"), 1e400):
+        with pytest.raises(InvalidParameterError, match="positive whole number"):
+            scene.render(w, 4)
+    for dtype in ("x", None, np.int32):
+        with pytest.raises(InvalidParameterError, match="dtype"):
+            scene.render(4, 4, dtype=dtype)
+    scene.camera = PinholeCamera((20.0, 20.0, 50.0), 0.0)  # replaced after construction: checked again
+    with pytest.raises(InvalidParameterError, match="below the terrain"):
+        scene.render(4, 4)
+
+
+def test_camera_position_is_bounded():
+    for position, message in (((1e8, 0.0, 10.0), "x and y"), ((0.0, -2e7, 10.0), "x and y"),
+                              ((0.0, 0.0, 1e6), "height")):
+        with pytest.raises(InvalidParameterError, match=message):
+            PinholeCamera(position, 0.0)
+    PinholeCamera((1e7, -1e7, 1e5), 0.0)

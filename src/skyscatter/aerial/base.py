@@ -10,8 +10,9 @@ plugged into :class:`skyscatter.render.Scene`:
 
 ``directions`` (..., 3) point from the observer towards the object (ENU unit vectors), ``distances`` (...)
 are path lengths [m], ``observer_height`` is the observer's height above sea level [m] (scalar or
-broadcastable), ``wavelengths`` [nm] (default 380-780 nm every 10 nm). Models may also offer
-``evaluate(...) -> (tau, L_in)`` to share work; the renderer uses it when present.
+broadcastable; within +-100 km, the domain of the flat exponential atmosphere), ``wavelengths`` [nm]
+(default 380-780 nm every 10 nm). Models may also offer ``evaluate(...) -> (tau, L_in)`` to share work; the
+renderer uses it when present.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
 from ..spectral import as_wavelengths
+from .integrals import check_observer_height
 
 __all__ = ["AerialPerspective", "check_path"]
 
@@ -50,15 +52,15 @@ def check_path(directions: ArrayLike, distances: ArrayLike, observer_height: Arr
     InvalidDirectionError
         Malformed directions.
     InvalidParameterError
-        Negative or non-finite distances, non-finite heights, or shapes that do not broadcast.
+        Negative or non-finite distances, observer heights not finite or beyond +-100 km
+        (:data:`~skyscatter.aerial.integrals.MAX_OBSERVER_HEIGHT`), or shapes that do not broadcast.
     """
     d = as_directions(directions)
     s = np.asarray(distances, dtype=float)
     h = np.asarray(observer_height, dtype=float)
     if not np.all(np.isfinite(s)) or np.any(s < 0):
         raise InvalidParameterError("distances must be finite and >= 0 [m]")
-    if not np.all(np.isfinite(h)):
-        raise InvalidParameterError("observer_height must be finite [m above sea level]")
+    check_observer_height(h)
     try:
         shape = np.broadcast_shapes(d.shape[:-1], s.shape, h.shape)
     except ValueError:

@@ -13,6 +13,8 @@ exercise"; for haze (1) and molecules (2), single scattering gives
     tau = exp(-(beta_1 + beta_2) s),   L_in = (S_1 + S_2) / (beta_1 + beta_2) (1 - tau)
 
 with ``S_i = E^s beta_i(omega, omega^s)`` (and, optionally, the sky's share of S^0, as in Preetham 1999).
+A sky without a sun (the CIE overcast sky) has no E^s: with sunlight only its haze would be black, so for such
+skies the sky's share is included by default.
 Here the "constant" density is the one at the observer's height, ``beta_i = beta_i^0 exp(-alpha_i h0)`` with
 the A.4 decay constants, so the model agrees with :class:`PreethamAerialPerspective` for horizontal rays
 (test_aerial.py checks this).
@@ -24,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..atmosphere import mie_total_scattering, rayleigh_total_scattering
+from ..errors import InvalidParameterError
 from .base import check_path
 from .integrals import ALPHA_HAZE, ALPHA_MOLECULES
 from .preetham import resolve_turbidity
@@ -41,17 +44,35 @@ class ConstantDensityAerialPerspective:
         Sun (and optionally sky) providing the in-scattered light.
     turbidity : float, optional
         Haze turbidity [-]; default ``sky.turbidity``.
-    include_sky : bool
-        Add the sky's in-scattering (default False: sunlight only, as in the course notes).
+    include_sky : bool, optional
+        Add the sky's in-scattering. Default: False (sunlight only, as in the course notes) for a sky with a
+        sun; True for a sky without one, whose haze would otherwise be black.
     alpha_haze, alpha_molecules : float
-        Decay constants [m^-1] that set the density at the observer's height.
+        Decay constants [m^-1] that set the density at the observer's height (positive).
+
+    Raises
+    ------
+    InvalidParameterError
+        A bad turbidity or decay constant, or ``include_sky=False`` for a sky without a sun (no light
+        would be scattered towards the viewer).
     """
 
-    def __init__(self, sky, *, turbidity: float | None = None, include_sky: bool = False,
+    def __init__(self, sky, *, turbidity: float | None = None, include_sky: bool | None = None,
                  alpha_haze: float = ALPHA_HAZE, alpha_molecules: float = ALPHA_MOLECULES) -> None:
+        for name, value in (("alpha_haze", alpha_haze), ("alpha_molecules", alpha_molecules)):
+            if not (isinstance(value, int | float | np.number) and np.isfinite(value) and value > 0):
+                raise InvalidParameterError(f"{name} must be a positive decay constant [m^-1]; got {value!r}")
         self.sky = sky
         self.turbidity = resolve_turbidity(sky, turbidity)
-        self.include_sky = include_sky
+        sunny = bool(getattr(sky, "has_sun", False)) and hasattr(sky, "sun_spectral_radiance")
+        if include_sky is None:
+            include_sky = not sunny
+        elif not include_sky and not sunny:
+            raise InvalidParameterError(
+                f"{type(sky).__name__} has no sun, so with include_sky=False nothing would light the haze (it "
+                "would render black); use include_sky=True or leave it at the default"
+            )
+        self.include_sky = bool(include_sky)
         self.alpha_haze = float(alpha_haze)
         self.alpha_molecules = float(alpha_molecules)
         self._tables: dict[tuple[float, ...], ScatteringTable] = {}

@@ -6,6 +6,10 @@ coefficient at height h is ``beta_i(h) = beta_i^0 exp(-alpha_i h)`` (Eq. 5) with
 [m] with view zenith angle theta (``c = cos theta``, negative looking down) and is followed for a distance s
 [m]; ``u_i(x) = exp(-alpha_i (h0 + x c))`` and ``H_i = u_i(0)``.
 
+Domain: observers within +-100 km of sea level (``MAX_OBSERVER_HEIGHT``; InvalidParameterError beyond); a path
+is followed only between 200 km below and 500 km above sea level (``PATH_BOTTOM``, ``PATH_TOP``), where the
+model's densities are respectively opaque and negligible, so every exponential stays finite.
+
 * Extinction (Eq. 7): ``tau = exp(-K_1 (H_1 - u_1(s))) exp(-K_2 (H_2 - u_2(s)))`` with
   ``K_i = beta_i^0 / (alpha_i c)``. (The paper prints ``K = -beta^0 / (alpha cos theta)`` together with
   ``e^{-K(H - u)}``, which would make tau > 1; the sign here is the one that integrates Eq. 5.) It is
@@ -50,6 +54,7 @@ __all__ = [
     "ALPHA_HAZE",
     "ALPHA_MOLECULES",
     "HORIZON_THRESHOLD",
+    "MAX_OBSERVER_HEIGHT",
     "effective_length",
     "extinction",
     "in_scattering_integrals",
@@ -65,9 +70,19 @@ HORIZON_THRESHOLD = 1e-3
 SEGMENT_DEPTH = 1.0
 #: Largest ``alpha_haze |cos theta| dx`` (haze density change in e-folds) over one piece.
 SEGMENT_DECAY = 1.0
-#: Upper bound on the number of pieces (reached only for paths of optical depth > 50, whose far part does
-#: not contribute).
-MAX_SEGMENTS = 200
+#: Largest |observer height| [m] accepted: the flat, exponential atmosphere of Eq. 5 describes the lower
+#: atmosphere; far above it the model has no meaning (and its density ratios leave floating point range).
+MAX_OBSERVER_HEIGHT = 100_000.0
+#: Paths are followed between these heights [m] only. Above PATH_TOP the molecular density is below 3e-25 of
+#: sea level (nothing left to scatter or absorb); below PATH_BOTTOM the model's density is > 1e72 times sea
+#: level, so any path reaching it is opaque long before. The clip keeps every exponential finite.
+PATH_TOP = 500_000.0
+PATH_BOTTOM = -200_000.0
+#: Optical depth beyond which the rest of a level or descending path is dropped (transmittance < 1e-26).
+OPAQUE_DEPTH = 60.0
+#: Upper bound on the number of pieces (paths are first cut where they become opaque, see OPAQUE_DEPTH, so
+#: it is reached only by paths hundreds of km long; pieces past an optical depth of 50 are skipped).
+MAX_SEGMENTS = 2000
 
 _METHODS = {"near_horizon": 0, "hermite": 1, "analytic": 2, "quadrature": 3}
 
@@ -117,6 +132,40 @@ def _hermite_integral(z, p0, p1, d0, d1):
     return p0 * m0 + d0 * m1 + c2 * m2 + c3 * m3
 
 
+@numba.njit(cache=True, inline="always")
+def _clip_length(c, h0, s):
+    """The part [m] of a path of length s from height h0 [m] (direction cosine c) between PATH_BOTTOM and
+    PATH_TOP."""
+    if c > 0.0:
+        return min(s, max(0.0, (PATH_TOP - h0) / c))
+    if c < 0.0:
+        return min(s, max(0.0, (PATH_BOTTOM - h0) / c))
+    return s
+
+
+@numba.njit(cache=True)
+def _opaque_length(c, h0, s, b1min, b2min, a1, a2):
+    """The path length [m] up to where every wavelength's optical depth reaches OPAQUE_DEPTH (or s).
+
+    Beyond it ``u_i tau <= -dtau/dx / beta_i``, so the rest adds less than ``e^-60 / beta_i`` to I_i; dropping
+    it lets the pieces of the composite form (and the quadrature's segments) resolve the part that matters.
+    The depth ``b1min L_1(x) + b2min L_2(x)`` grows monotonically with x, so bisection finds the point.
+    """
+    e1 = math.exp(-a1 * h0)
+    e2 = math.exp(-a2 * h0)
+    if b1min * e1 * s * _e(a1 * c * s) + b2min * e2 * s * _e(a2 * c * s) <= OPAQUE_DEPTH:
+        return s
+    lo = 0.0
+    hi = s
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if b1min * e1 * mid * _e(a1 * c * mid) + b2min * e2 * mid * _e(a2 * c * mid) > OPAQUE_DEPTH:
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
 @numba.njit(cache=True)
 def _segment_count(c, h0, s, b1max, b2max, a1, a2):
     """Pieces of the composite analytic form: at most SEGMENT_DEPTH optical depth per species (at the
@@ -128,7 +177,9 @@ def _segment_count(c, h0, s, b1max, b2max, a1, a2):
     need = max(rate * s / SEGMENT_DEPTH, a1 * abs(c) * s / SEGMENT_DECAY)
     if need <= 1.0:
         return 1
-    return min(int(math.ceil(need)), MAX_SEGMENTS)
+    if need >= MAX_SEGMENTS:  # compare before int(): need may exceed the integer range
+        return MAX_SEGMENTS
+    return int(math.ceil(need))
 
 
 @numba.njit(cache=True, parallel=True)
@@ -144,13 +195,17 @@ def _integrals_many(cos_t, h0, s, beta1, beta2, a1, a2, method, threshold, segme
     nw = beta1.shape[0]
     b1max = 0.0
     b2max = 0.0
+    b1min = math.inf
+    b2min = math.inf
     for j in range(nw):
         b1max = max(b1max, beta1[j])
         b2max = max(b2max, beta2[j])
+        b1min = min(b1min, beta1[j])
+        b2min = min(b2min, beta2[j])
     for i in numba.prange(n):
         c = cos_t[i]
         hh = h0[i]
-        ss = s[i]
+        ss = _opaque_length(c, hh, _clip_length(c, hh, s[i]), b1min, b2min, a1, a2)
         if method == 3:
             e1 = math.exp(-a1 * hh)
             e2 = math.exp(-a2 * hh)
@@ -181,7 +236,11 @@ def _integrals_many(cos_t, h0, s, beta1, beta2, a1, a2, method, threshold, segme
             e2 = math.exp(-a2 * hk)
             l1 = e1 * dx * _e(a1 * c * dx)
             l2 = e2 * dx * _e(a2 * c * dx)
-            u2_over_u1 = e2 / e1 * math.exp((a1 - a2) * c * dx)  # at the far end of the piece
+            if l1 == 0.0 and l2 == 0.0:
+                continue  # empty piece (zero length)
+            # Density ratios u_2/u_1 at both ends as one exponential: e2 / e1 would be 0/0 high up.
+            r21_near = math.exp((a1 - a2) * hk)
+            r21_far = math.exp((a1 - a2) * (hk + c * dx))
             done = True
             for j in range(nw):
                 if depth[j] > 50.0:
@@ -198,9 +257,9 @@ def _integrals_many(cos_t, h0, s, beta1, beta2, a1, a2, method, threshold, segme
                     t2 = math.exp(-b2 * l2)
                     # I_1: exponential in the haze optical depth, cubic in w for the molecular transmittance
                     # f, with slopes df/dw = -beta_2 u_2 f L_1 / u_1 at both ends ...
-                    j1 = l1 * _hermite_integral(-b1 * l1, 1.0, t2, -b2 * l1 * e2 / e1, -b2 * l1 * t2 * u2_over_u1)
+                    j1 = l1 * _hermite_integral(-b1 * l1, 1.0, t2, -b2 * l1 * r21_near, -b2 * l1 * t2 * r21_far)
                     # ... and I_2 the same with the species swapped.
-                    j2 = l2 * _hermite_integral(-b2 * l2, 1.0, t1, -b1 * l2 * e1 / e2, -b1 * l2 * t1 / u2_over_u1)
+                    j2 = l2 * _hermite_integral(-b2 * l2, 1.0, t1, -b1 * l2 / r21_near, -b1 * l2 * t1 / r21_far)
                 att = math.exp(-depth[j])
                 out1[i, j] += att * j1
                 out2[i, j] += att * j2
@@ -221,8 +280,8 @@ def _quadrature(c, h1, h2, s, b1, b2, a1, a2):
     dens1 = max(h1, h1 * math.exp(-a1 * c * s))
     dens2 = max(h2, h2 * math.exp(-a2 * c * s))
     rate = b1 * dens1 + b2 * dens2 + max(a1, a2) * abs(c)
-    nseg = int(math.ceil(rate * s / 0.5))
-    nseg = min(max(nseg, 1), 100000)
+    need = rate * s / 0.5
+    nseg = 100000 if need >= 100000 else max(int(math.ceil(need)), 1)
     dx = s / nseg
     i1 = 0.0
     i2 = 0.0
@@ -248,9 +307,27 @@ def _prepare(cos_theta: ArrayLike, distance: ArrayLike, observer_height: ArrayLi
         raise InvalidParameterError("cos_theta must be finite and within [-1, 1]")
     if not np.all(np.isfinite(s)) or np.any(s < 0):
         raise InvalidParameterError("distances must be finite and >= 0 [m]")
-    if not np.all(np.isfinite(h)):
-        raise InvalidParameterError("observer heights must be finite [m]")
+    check_observer_height(h)
     return np.clip(c, -1.0, 1.0), s, h
+
+
+def check_observer_height(h: NDArray[np.float64]) -> None:
+    """Raise InvalidParameterError unless every observer height [m] is finite and within +-MAX_OBSERVER_HEIGHT."""
+    if not np.all(np.isfinite(h)):
+        raise InvalidParameterError("observer heights must be finite [m above sea level]")
+    if h.size and np.max(np.abs(h)) > MAX_OBSERVER_HEIGHT:
+        raise InvalidParameterError(
+            f"observer heights must be within +-{MAX_OBSERVER_HEIGHT:g} m of sea level (the flat exponential "
+            f"atmosphere of Preetham et al. 1999 describes the lower atmosphere only); got {np.max(np.abs(h)):.6g} m"
+        )
+
+
+def _clip_lengths(c: NDArray[np.float64], s: NDArray[np.float64], h: NDArray[np.float64]) -> NDArray[np.float64]:
+    """numpy twin of ``_clip_length``: the part of each path between PATH_BOTTOM and PATH_TOP [m]."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        up = np.where(c > 0, (PATH_TOP - h) / np.where(c > 0, c, 1.0), np.inf)
+        down = np.where(c < 0, (PATH_BOTTOM - h) / np.where(c < 0, c, 1.0), np.inf)
+    return np.minimum(s, np.maximum(np.minimum(up, down), 0.0))
 
 
 def _coefficients(beta: ArrayLike, name: str) -> NDArray[np.float64]:
@@ -276,6 +353,7 @@ def effective_length(cos_theta: ArrayLike, distance: ArrayLike, observer_height:
         Density decay constant [m^-1].
     """
     c, s, h = _prepare(cos_theta, distance, observer_height)
+    s = _clip_lengths(c, s, h)
     a = alpha * c * s
     small = np.abs(a) < 1e-8
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -80,7 +80,13 @@ class PreethamAerialPerspective:
         self.sky = sky
         self.method = method
         self.turbidity = resolve_turbidity(sky, turbidity)
-        self.segments = segments
+        if not (segments == "auto" if isinstance(segments, str) else
+                (isinstance(segments, int | np.integer) and not isinstance(segments, bool)
+                 and 1 <= segments <= 10_000)):
+            raise InvalidParameterError(
+                f"segments must be 'auto' or a whole number in [1, 10000]; got {segments!r}"
+            )
+        self.segments = segments if isinstance(segments, str) else int(segments)
         self.include_sun = include_sun
         self.include_sky = include_sky
         self.alpha_haze = float(alpha_haze)

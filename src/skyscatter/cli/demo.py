@@ -33,7 +33,23 @@ WEST, EAST = 270.0, 90.0
 FIG7_CAMERA_XY = (12_000.0, 0.0)
 FIG8_CAMERA_XY = (-26_000.0, -16_000.0)
 
-_SCENE_OPTIONS = ("sky", "turbidity", "sun_elevation", "sun_azimuth", "lat", "lon", "time", "aerial")
+#: Bounds of the camera options [m]: the flat-earth scene's horizontal extent and the flat atmosphere's height
+#: (as PinholeCamera.MAX_CAMERA_OFFSET and MAX_CAMERA_HEIGHT).
+_MAX_CAMERA_XY = 1e7
+_MAX_CAMERA_Z = 1e5
+
+_SCENE_OPTIONS = ("sky", "turbidity", "sun_elevation", "sun_azimuth", "lat", "lon", "time", "aerial", "model")
+
+
+class _HelpFormatter(HELP_FORMATTER):
+    """Shows "(default: ...)" only where it says something: not for flags, options whose default (None) is
+    described in the help text, or help that already names its default."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        if action.default is None or isinstance(action.default, bool) or "(default" in text:
+            return text
+        return super()._get_help_string(action)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -46,8 +62,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "CIE clear sky of one colour with Ward-Larson's ambient aerial perspective, then the Preetham model), "
         "one EXR (linear sRGB, Y = luminance/683) and one PNG per panel plus fig7.png and fig8.png, in the "
         "current folder. Giving --sky, --turbidity, a sun option or --aerial renders one custom panel "
-        "(landscape.exr/.png) instead. Nothing is written unless every image renders.",
-        formatter_class=HELP_FORMATTER,
+        "(landscape.exr/.png) instead. Nothing is written unless every image renders and every file can be "
+        "written.",
+        formatter_class=_HelpFormatter,
     )
     p.add_argument("--figure", choices=["all", "7", "8", "custom"], default=None,
                    help="which figure to render (default: all, or custom when a scene option is given)")
@@ -57,10 +74,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     g.add_argument("--width", type=positive_int, default=640, metavar="PX", help="width of each panel [px]")
     g.add_argument("--height", type=positive_int, default=360, metavar="PX", help="height of each panel [px]")
     g.add_argument("--no-glare", dest="glare", action="store_false",
-                   help="leave out the glare of the eye (Spencer et al. 1995 point-spread function)")
-    g.add_argument("--no-sun-disc", dest="sun_disc", action="store_false", help="leave out the solar disc")
+                   help="leave out the glare of the eye (Spencer et al. 1995 point-spread function), which is "
+                   "applied by default")
+    g.add_argument("--no-sun-disc", dest="sun_disc", action="store_false",
+                   help="leave out the solar disc (drawn by default)")
     g.add_argument("--exposure", type=finite_float, default=None, metavar="EV",
-                   help="PNG exposure compensation [EV stops] on top of the automatic exposure")
+                   help="PNG exposure compensation [EV stops] on top of the automatic exposure (default 0)")
     g.add_argument("--wavelength-step", type=float_in(1.0, 50.0), default=10.0, metavar="NM",
                    help="spacing of the spectral samples over 380-780 nm [nm]")
     s = p.add_argument_group("custom scene (any of these renders one custom panel)")
@@ -72,7 +91,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="turbidity of the sky and of the haze, 1.65 to 11 (default 2.5)")
     s.add_argument("--aerial", choices=["analytic", "numeric", "constant", "ward-larson", "none"], default=None,
                    help="aerial perspective: analytic (Preetham 1999 closed form), numeric (quadrature), "
-                   "constant (constant density, sunlight only), ward-larson (ambient), none (default analytic)")
+                   "constant (constant density; lit by the sun only, or by the sky for the sunless cie-overcast "
+                   "sky), ward-larson (ambient), none (default analytic)")
+    s.add_argument("--model", choices=["preetham", "bruneton"], default=None,
+                   help="atmosphere model: preetham (the sky and aerial perspective above); bruneton (precomputed "
+                   "multiple scattering of Bruneton & Neyret 2008 with the Earth defaults, cached after the "
+                   "first run (about 30 s): sky, sunlight, aerial perspective, and light shafts from the "
+                   "mountains' shadow; --sky, --turbidity and --aerial do not apply) (default preetham)")
     add_sun_options(p, default_elevation=EVENING_SUN[0], default_azimuth=EVENING_SUN[1])
     c = p.add_argument_group("camera and terrain")
     c.add_argument("--dem", type=Path, default=None, metavar="PATH",
@@ -82,17 +107,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="sample spacing of the elevation model [m] (GeoTIFF: default from the file)")
     c.add_argument("--albedo", type=float_in(0.0, 1.0), default=0.2, metavar="RHO",
                    help="Lambertian albedo of the terrain")
-    c.add_argument("--camera-x", type=finite_float, default=None, metavar="M",
-                   help="camera east coordinate [m] (default on the built-in landscape: 12000 for figure 7 and "
-                   "custom panels, -26000 for figure 8; the centre of a DEM)")
-    c.add_argument("--camera-y", type=finite_float, default=None, metavar="M",
-                   help="camera north coordinate [m] (default on the built-in landscape: 0 for figure 7 and "
-                   "custom panels, -16000 for figure 8; the centre of a DEM)")
+    c.add_argument("--camera-x", type=float_in(-_MAX_CAMERA_XY, _MAX_CAMERA_XY), default=None, metavar="M",
+                   help="camera east coordinate [m], within +-1e7 (default on the built-in landscape: 12000 for "
+                   "figure 7 and custom panels, -26000 for figure 8; the centre of a DEM)")
+    c.add_argument("--camera-y", type=float_in(-_MAX_CAMERA_XY, _MAX_CAMERA_XY), default=None, metavar="M",
+                   help="camera north coordinate [m], within +-1e7 (default on the built-in landscape: 0 for "
+                   "figure 7 and custom panels, -16000 for figure 8; the centre of a DEM)")
     h = c.add_mutually_exclusive_group()
-    h.add_argument("--camera-height", type=float_in(0.01, 1e6), default=None, metavar="M",
-                   help="camera height above the ground [m] (default 300)")
-    h.add_argument("--camera-altitude", type=finite_float, default=None, metavar="M",
-                   help="camera height above sea level [m] (must be above the terrain)")
+    h.add_argument("--camera-height", type=float_in(0.01, _MAX_CAMERA_Z), default=None, metavar="M",
+                   help="camera height above the ground [m], up to 1e5 (default 300)")
+    h.add_argument("--camera-altitude", type=float_in(-_MAX_CAMERA_Z, _MAX_CAMERA_Z), default=None, metavar="M",
+                   help="camera height above sea level [m], within +-1e5 (the flat atmosphere's domain) and "
+                   "above the terrain (default: --camera-height over the ground)")
     c.add_argument("--heading", type=finite_float, default=None, metavar="DEG",
                    help="azimuth of the view centre from north towards east [deg] (default: 270 for figure 7 "
                    "and custom panels, 90 for figure 8)")
@@ -111,6 +137,8 @@ class _Panel:
     aerial: Any
     heading: float
     camera_xy: tuple[float, float] = FIG7_CAMERA_XY
+    #: (zenith, azimuth) [rad] of the sun for a Bruneton panel, whose sky depends on the camera's altitude.
+    bruneton_sun: tuple[float, float] | None = None
 
 
 def _preetham(turbidity: float, elevation: float, azimuth: float):
@@ -158,6 +186,7 @@ def _aerial(kind: str, sky, turbidity: float):
     if kind == "none":
         return None
     if kind == "constant":
+        # Sunlight only, as in the course notes; a sunless sky (CIE overcast) lights the haze itself.
         return ConstantDensityAerialPerspective(sky, turbidity=turbidity)
     if kind == "ward-larson":
         return WardLarsonAerialPerspective(sky, turbidity=turbidity)
@@ -186,6 +215,17 @@ def _panels(args: argparse.Namespace, figure: str) -> list[_Panel]:
     if figure == "custom":
         zenith, azimuth = sun_angles_from_args(args)
         elevation, az = 90.0 - math.degrees(zenith), math.degrees(azimuth)
+        if args.model == "bruneton":
+            from ..errors import InvalidParameterError
+            from .demo_bruneton import bruneton_panel_title
+
+            for opt in ("sky", "turbidity", "aerial"):
+                if getattr(args, opt) is not None:
+                    raise InvalidParameterError(f"--{opt} does not apply to --model bruneton (the precomputed "
+                                                "atmosphere gives the sky and the aerial perspective)")
+            panels.append(_Panel("landscape", bruneton_panel_title(zenith, azimuth), None, None, WEST,
+                                 bruneton_sun=(zenith, azimuth)))
+            return panels
         t = 2.5 if args.turbidity is None else args.turbidity
         model = args.sky or "preetham"
         if model == "cie-overcast":
@@ -208,15 +248,106 @@ def _check_out_dir(out_dir: Path) -> None:
         raise OutputError(f"output folder {out_dir} is not writable")
 
 
-def run(args: argparse.Namespace) -> int:
+def _targets(out_dir: Path, panels: list[_Panel], figure: str) -> list[Path]:
+    """Every file the run will write, in writing order: EXR and PNG per panel, then the figure montages."""
+    targets = [out_dir / f"{panel.name}{suffix}" for panel in panels for suffix in (".exr", ".png")]
+    if figure != "custom":
+        targets += [out_dir / f"{fig}.png" for fig in ("fig7", "fig8") if any(p.name.startswith(fig) for p in panels)]
+    return targets
+
+
+def _check_targets(targets: list[Path]) -> None:
+    """Refuse, before any rendering, targets that cannot be replaced by a regular file."""
+    from ..errors import OutputError
+
+    for target in targets:
+        if target.suffix.lower() not in (".exr", ".png"):  # pragma: no cover - names are built above
+            raise OutputError(f"cannot write {target}: unknown image format {target.suffix!r}")
+        if not target.parent.is_dir():
+            raise OutputError(f"cannot write {target}: folder {target.parent} does not exist")
+        if target.is_dir():
+            raise OutputError(f"cannot write {target}: a folder of that name exists; move it or use --out-dir")
+        if target.exists() and not target.is_file():
+            raise OutputError(f"cannot write {target}: it exists and is not a regular file")
+
+
+def _write_all(jobs: list[tuple[Path, Any]]) -> None:
+    """Write every (target, writer) pair, all or none.
+
+    Each writer fills a temporary file beside its target. Only when all are written are they renamed into
+    place; an existing target is first moved aside, so that if a rename fails the targets renamed so far are
+    restored (or removed, if they did not exist before) and the folder is left as it was. Errors name the
+    target, not the temporary file.
+    """
     import contextlib
+    import tempfile
+
+    from ..errors import OutputError
+
+    umask = os.umask(0)
+    os.umask(umask)
+
+    def scratch(target: Path, tag: str) -> Path:
+        try:
+            fd, name = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=f".{tag}{target.suffix}",
+                                        dir=target.parent)
+        except OSError as exc:
+            raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from exc
+        os.close(fd)
+        return Path(name)
+
+    temps: list[tuple[Path, Path]] = []
+    done: list[tuple[Path, Path | None]] = []  # (target, its moved-aside previous version or None)
+    try:
+        for target, writer in jobs:
+            tmp = scratch(target, "tmp")
+            temps.append((target, tmp))
+            os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; give what a plain open() would
+            try:
+                writer(tmp)
+            except OSError as exc:
+                raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from exc
+        for target, tmp in temps:
+            backup = None
+            moved = False
+            try:
+                if target.exists():
+                    backup = scratch(target, "old")
+                    os.replace(target, backup)
+                    moved = True
+                os.replace(tmp, target)
+            except OSError as exc:
+                with contextlib.suppress(OSError):
+                    if moved:  # put the previous version back
+                        os.replace(backup, target)
+                    elif backup is not None:
+                        backup.unlink()
+                raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from exc
+            done.append((target, backup))
+    except BaseException:
+        for target, backup in reversed(done):  # undo the renames of this run
+            with contextlib.suppress(OSError):
+                if backup is not None:
+                    os.replace(backup, target)
+                else:
+                    target.unlink()
+        for _, tmp in temps:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+        raise
+    for _, backup in done:
+        if backup is not None:
+            with contextlib.suppress(OSError):
+                backup.unlink()
+
+
+def run(args: argparse.Namespace) -> int:
     import time
 
     import numpy as np
     from tqdm import tqdm
 
     from ..errors import InvalidParameterError
-    from ..fileio import atomic_path
     from ..render.camera import PinholeCamera
     from ..render.image_io import write_exr, write_png
     from ..render.scene import DEFAULT_CAMERA_HEIGHT, Scene
@@ -237,6 +368,8 @@ def run(args: argparse.Namespace) -> int:
     wavelengths = wavelength_grid(380.0, 780.0, args.wavelength_step)
 
     panels = _panels(args, figure)
+    targets = _targets(args.out_dir, panels, figure)
+    _check_targets(targets)
     scenes = []
     for panel in panels:  # build (and validate) every scene before rendering anything
         if terrain.wrap:
@@ -253,6 +386,12 @@ def run(args: argparse.Namespace) -> int:
                                                    else args.camera_height)
         heading = panel.heading if args.heading is None else args.heading
         camera = PinholeCamera.from_degrees((x, y, z), heading, args.pitch, args.fov)
+        if panel.bruneton_sun is not None:
+            from .demo_bruneton import bruneton_scene
+
+            scenes.append(bruneton_scene(terrain, camera, *panel.bruneton_sun, albedo=args.albedo,
+                                         sun_disc=args.sun_disc, wavelengths=wavelengths))
+            continue
         scenes.append(Scene(panel.sky, terrain=terrain, camera=camera, aerial=panel.aerial, albedo=args.albedo,
                             sun_disc=args.sun_disc, wavelengths=wavelengths))
 
@@ -264,27 +403,25 @@ def run(args: argparse.Namespace) -> int:
             images.append(scene.render(args.width, args.height, glare=args.glare, progress=bar.update).rgb)
     elapsed = time.perf_counter() - t0
 
-    # Write everything to temporary files first and rename only when all succeeded.
-    displays = {}
-    outputs = []
-    with contextlib.ExitStack() as stack:
-        for panel, rgb in zip(panels, images, strict=True):
-            display = tonemap(rgb, exposure_ev=args.exposure)
-            displays[panel.name] = display
-            for suffix, writer in ((".exr", lambda p, im=rgb: write_exr(p, im)),
-                                   (".png", lambda p, d=display: write_png(p, d, tonemapped=True))):
-                target = args.out_dir / f"{panel.name}{suffix}"
-                writer(stack.enter_context(atomic_path(target)))
-                outputs.append(target)
-        if figure != "custom":
-            for fig in ("fig7", "fig8"):
-                stack_panels = [displays[p.name] for p in panels if p.name.startswith(fig)]
-                if stack_panels:
-                    gap = np.ones((max(2, args.height // 60), args.width, 3))
-                    montage = np.concatenate([x for d in stack_panels for x in (d, gap)][:-1], axis=0)
-                    target = args.out_dir / f"{fig}.png"
-                    write_png(stack.enter_context(atomic_path(target)), montage, tonemapped=True)
-                    outputs.append(target)
+    # Tone-map, then write everything to temporary files and rename only when all are written.
+    displays = {p.name: tonemap(rgb, exposure_ev=args.exposure) for p, rgb in zip(panels, images, strict=True)}
+    jobs = []
+    for panel, rgb in zip(panels, images, strict=True):
+        jobs.append((args.out_dir / f"{panel.name}.exr", lambda path, im=rgb: write_exr(path, im)))
+        jobs.append((args.out_dir / f"{panel.name}.png",
+                     lambda path, d=displays[panel.name]: write_png(path, d, tonemapped=True)))
+    if figure != "custom":
+        for fig in ("fig7", "fig8"):
+            stack_panels = [displays[p.name] for p in panels if p.name.startswith(fig)]
+            if stack_panels:
+                gap = np.ones((max(2, args.height // 60), args.width, 3))
+                montage = np.concatenate([x for d in stack_panels for x in (d, gap)][:-1], axis=0)
+                jobs.append((args.out_dir / f"{fig}.png",
+                             lambda path, m=montage: write_png(path, m, tonemapped=True)))
+    outputs = [target for target, _ in jobs]
+    if outputs != targets:  # pragma: no cover - both lists are built from the same panels
+        raise RuntimeError("demo: the files written differ from the files checked")
+    _write_all(jobs)
     for panel in panels:
         print(f"{panel.name}: {panel.title}")
     print(f"rendered {len(panels)} panel(s) of {args.width} x {args.height} in {elapsed:.1f} s; wrote "

@@ -11,7 +11,14 @@ from numpy.typing import ArrayLike, NDArray
 from ..conventions import direction_from_angles, pinhole_directions
 from ..errors import InvalidParameterError
 
-__all__ = ["PinholeCamera"]
+__all__ = ["MAX_CAMERA_HEIGHT", "MAX_CAMERA_OFFSET", "PinholeCamera"]
+
+#: Largest |x|, |y| [m] of a camera: 10 000 km from the ENU origin. The scene is a flat earth, and beyond this
+#: double precision no longer resolves centimetres along the rays.
+MAX_CAMERA_OFFSET = 1e7
+#: Largest |z| [m] of a camera: the flat exponential atmosphere of the aerial-perspective models (Preetham et
+#: al. 1999, Eq. 5) covers the lower atmosphere only.
+MAX_CAMERA_HEIGHT = 1e5
 
 
 @dataclass(frozen=True)
@@ -21,7 +28,8 @@ class PinholeCamera:
     Parameters
     ----------
     position : array_like, shape (3,)
-        Eye position [m] in the ENU frame (x east, y north, z height above sea level).
+        Eye position [m] in the ENU frame (x east, y north, z height above sea level); ``|x|, |y| <= 1e7`` m
+        and ``|z| <= 1e5`` m (:data:`MAX_CAMERA_OFFSET`, :data:`MAX_CAMERA_HEIGHT`).
     heading : float
         Azimuth of the optical axis [rad], from north towards east (3 pi / 2 looks west).
     pitch : float
@@ -40,6 +48,16 @@ class PinholeCamera:
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise InvalidParameterError(
                 f"camera position must be three finite coordinates (x east, y north, z up) [m]; got {self.position!r}"
+            )
+        if max(abs(p[0]), abs(p[1])) > MAX_CAMERA_OFFSET:
+            raise InvalidParameterError(
+                f"camera x and y must be within +-{MAX_CAMERA_OFFSET:g} m of the origin (a flat-earth scene); "
+                f"got ({p[0]:.6g}, {p[1]:.6g}) m"
+            )
+        if abs(p[2]) > MAX_CAMERA_HEIGHT:
+            raise InvalidParameterError(
+                f"camera height must be within +-{MAX_CAMERA_HEIGHT:g} m of sea level (the flat atmosphere of the "
+                f"aerial-perspective models); got {p[2]:.6g} m"
             )
         object.__setattr__(self, "position", tuple(float(v) for v in p))
         for name in ("heading", "pitch", "fov"):

@@ -26,9 +26,10 @@ Discretisation choices (documented here because they decide the energy balance):
   centre pixel, which is integrated in closed form (the peak of ``f1`` is narrower than a sub-sample).
 * ``f2`` has no finite integral over the plane (its mass grows like ``log theta``), so the PSF is truncated at
   ``max_angle`` and normalised to unit mass over that disc with the closed-form radial integrals of
-  :func:`spencer_psf_mass`. :func:`apply_glare` uses a (2H - 1) x (2W - 1) kernel and truncates at its
-  inscribed radius, ``min(H, W) - 0.5`` pixels (about 34 deg for a 60-deg-wide 16:9 image; the photopic PSF
-  beyond that holds about 1 % of the light). The discrete kernel then sums to 1 to within the sub-sampling
+  :func:`spencer_psf_mass`. :func:`apply_glare` uses a (2H - 1) x (2W - 1) kernel; the PSF fills the whole
+  rectangle (every source reaches every pixel; truncating at the inscribed disc instead, about 34 deg for a
+  60-deg-wide 16:9 image, drew a visible circle around the sun), and the sampling accuracy is checked on the
+  inscribed disc against the closed form. The discrete kernel then sums to 1 to within the sub-sampling
   error, which :func:`glare_kernel` reports (tests require < 1e-3); it is finally rescaled to sum to exactly
   1, so the convolution conserves the image's energy apart from light the PSF sends beyond the image border.
 """
@@ -152,7 +153,8 @@ class GlareKernel:
 
 
 def glare_kernel(pixel_angle: float, half_size: tuple[int, int], *, adaptation: str = "photopic",
-                 wavelength: float = 568.0, max_angle: float | None = None) -> GlareKernel:
+                 wavelength: float = 568.0, max_angle: float | None = None,
+                 fill_corners: bool = False) -> GlareKernel:
     """Sample the Spencer et al. 1995 PSF on a pixel grid.
 
     Parameters
@@ -167,6 +169,10 @@ def glare_kernel(pixel_angle: float, half_size: tuple[int, int], *, adaptation: 
     max_angle : float, optional
         Truncation angle [rad], at most the radius of the disc inscribed in the kernel (the default), so
         that the truncated PSF lies wholly inside the kernel.
+    fill_corners : bool
+        Also sample the PSF outside that disc, up to the kernel's rectangular edge, so a source lights every
+        pixel of an image of the kernel's half size and the truncation leaves no visible circle around a
+        bright source. The reported sampling error is still measured on the disc (closed form).
     """
     if not (np.isfinite(pixel_angle) and 0 < pixel_angle < math.pi):
         raise InvalidParameterError(f"pixel_angle must be in (0, pi) rad; got {pixel_angle!r}")
@@ -198,6 +204,7 @@ def glare_kernel(pixel_angle: float, half_size: tuple[int, int], *, adaptation: 
     yy, xx = np.meshgrid(np.arange(ky + 1), np.arange(kx + 1), indexing="ij")
     rr = np.hypot(yy, xx)
     quad = np.zeros(rr.shape)
+    corners = np.zeros(rr.shape)
     for lo, hi, nsub in ((0.0, 4.0, 64), (4.0, 16.0, 8), (16.0, 64.0, 2), (64.0, np.inf, 1)):
         sel = (rr >= lo) & (rr < hi)
         if not sel.any():
@@ -213,19 +220,29 @@ def glare_kernel(pixel_angle: float, half_size: tuple[int, int], *, adaptation: 
         if w[3]:
             val += w[3] * _F3 * (568.0 / wavelength) * np.exp(-_K3 * (theta - 3.0 * wavelength / 568.0) ** 2)
         keep = theta <= r_max
+        outside = ~keep
         if lo == 0.0:
             # The peak of f1 (width 0.02 deg) is narrower than the sub-samples of a coarse pixel: integrate the
             # disc inscribed in the centre pixel in closed form and sub-sample only its corners.
             keep &= r_px >= 0.5
         quad[sel] = np.where(keep, val, 0.0).mean(axis=1) * px_deg * px_deg
+        if fill_corners:
+            corners[sel] = np.where(outside, val, 0.0).mean(axis=1) * px_deg * px_deg
     core = _radial_masses(min(0.5 * px_deg, r_max), wavelength)
     quad[0, 0] += float(w[1:] @ core[1:])
-    radial = np.concatenate([quad[:0:-1], quad], axis=0)
-    radial = np.concatenate([radial[:, :0:-1], radial], axis=1)
-    kernel = kernel + radial
+    kernel = kernel + _mirror(quad)
     mass = float(w @ _radial_masses(r_max, wavelength))
-    raw_sum = float(kernel.sum())
-    return GlareKernel(kernel / raw_sum, float(pixel_angle), float(max_angle), abs(raw_sum / mass - 1.0))
+    disc_sum = float(kernel.sum())
+    if fill_corners:
+        kernel = kernel + _mirror(corners)
+    return GlareKernel(kernel / float(kernel.sum()), float(pixel_angle), float(max_angle),
+                       abs(disc_sum / mass - 1.0))
+
+
+def _mirror(quadrant: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Full kernel from its quadrant with rows/columns >= 0 (symmetric about both axes)."""
+    full = np.concatenate([quadrant[:0:-1], quadrant], axis=0)
+    return np.concatenate([full[:, :0:-1], full], axis=1)
 
 
 def _padded_shape(h: int, w: int, kh: int, kw: int) -> tuple[int, int]:
@@ -276,7 +293,7 @@ def _kernel_and_spectrum(pixel_angle: float, shape: tuple[int, int], adaptation:
     key = (round(pixel_angle, 15), h, w, adaptation, wavelength, max_angle)
     if key not in _SPECTRA:
         k = glare_kernel(pixel_angle, (h - 1, w - 1), adaptation=adaptation, wavelength=wavelength,
-                         max_angle=max_angle).values
+                         max_angle=max_angle, fill_corners=max_angle is None).values
         spec = sfft.rfft2(k, s=_padded_shape(h, w, *k.shape), workers=-1)
         while len(_SPECTRA) >= 2:
             _SPECTRA.pop(next(iter(_SPECTRA)))
@@ -297,8 +314,9 @@ def apply_glare(rgb: ArrayLike, pixel_angle: float, *, adaptation: str = "photop
     adaptation : {"photopic", "scotopic"}
         Photopic for daylight scenes (the default); scotopic adds the wavelength-dependent lenticular halo.
     max_angle : float, optional
-        Truncation of the PSF [rad]; default (and at most) ``min(H, W) - 0.5`` pixels, the disc inscribed in
-        the (2H - 1) x (2W - 1) kernel, so that a source reaches at least every pixel within ``min(H, W)``.
+        Truncation of the PSF [rad], at most ``min(H, W) - 0.5`` pixels (the disc inscribed in the
+        (2H - 1) x (2W - 1) kernel). By default the PSF fills the whole kernel rectangle instead, so every source
+        reaches every pixel of the image and no truncation circle shows around the sun.
 
     Returns
     -------

@@ -28,6 +28,8 @@ __all__ = ["HeightfieldTracer", "DEFAULT_MAX_DISTANCE"]
 DEFAULT_MAX_DISTANCE = 500_000.0
 
 _INF = np.inf
+#: Largest |x|, |y| [m] of a ray origin over a finite grid (beyond it grid indices lose their meaning).
+_MAX_OFFSET = 1e12
 
 
 @numba.njit(cache=True, inline="always")
@@ -343,12 +345,24 @@ class HeightfieldTracer:
         if o.shape[-1:] != (3,) or not np.all(np.isfinite(o)):
             raise InvalidParameterError(f"ray origins must be finite ENU positions [m], shape (..., 3); got {o.shape}")
         if o.ndim == 1:
-            o2 = o.reshape(1, 3)
+            o2 = o.reshape(1, 3).copy()
         else:
-            o2 = np.ascontiguousarray(np.broadcast_to(o, d.shape).reshape(-1, 3))
+            o2 = np.array(np.broadcast_to(o, d.shape).reshape(-1, 3))
+        t = self.terrain
+        if t.wrap:
+            # Shift the origins into the first period: the same rays, but the walk's cell and block indices
+            # stay small (huge coordinates would overflow them and stall the walk).
+            ny, nx = t.shape
+            for k, n in ((0, nx), (1, ny)):
+                period = n * t.spacing
+                o2[:, k] = t.origin[k] + np.mod(o2[:, k] - t.origin[k], period)
+        elif np.max(np.abs(o2[:, :2])) > _MAX_OFFSET:
+            raise InvalidParameterError(
+                f"ray origins must be within +-{_MAX_OFFSET:g} m of the ENU origin horizontally; got "
+                f"{np.max(np.abs(o2[:, :2])):.6g} m"
+            )
         t_max = self.max_distance if t_max is None else float(t_max)
         out = np.empty(d2.shape[0])
-        t = self.terrain
         _trace_many(t.heights, self._bmax, t.wrap, self.block, t.spacing, t.origin[0], t.origin[1],
                     float(t.base_height), self._hmin, self._hmax, o2, d2, float(t_min), t_max, out)
         return out.reshape(shape)

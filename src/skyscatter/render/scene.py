@@ -215,10 +215,14 @@ class Scene:
         -------
         RenderResult
         """
-        for name, value in (("width", width), ("height", height)):
-            if isinstance(value, bool) or int(value) != value or value < 1:
-                raise InvalidParameterError(f"image {name} must be a positive whole number of pixels; got {value!r}")
-        width, height = int(width), int(height)
+        width, height = (_pixel_count(name, value) for name, value in (("width", width), ("height", height)))
+        try:
+            out_dtype = None if dtype is None else np.dtype(dtype)
+        except TypeError:
+            out_dtype = None
+        if out_dtype is None or out_dtype.name not in ("float32", "float64"):
+            raise InvalidParameterError(f"dtype must be numpy.float32 or numpy.float64; got {dtype!r}")
+        self._check_camera()  # the camera attribute may have been replaced since __init__
         timings = dict.fromkeys(("setup", "intersection", "shading", "aerial_perspective", "sky", "colour",
                                  "glare"), 0.0)
         t_start = time.perf_counter()
@@ -267,7 +271,7 @@ class Scene:
             t2 = time.perf_counter()
             timings["shading"] += t2 - t1
             if self.aerial is not None and pos.shape[0]:
-                tau, l_in = _evaluate(self.aerial, d[hit], t[hit], origin[2], wl)
+                tau, l_in = _evaluate(self.aerial, d[hit], t[hit], origin, wl)
                 l0 = l0 * tau + l_in
             spec[hit] = l0
             t3 = time.perf_counter()
@@ -275,12 +279,16 @@ class Scene:
             miss = ~hit
             if np.any(miss):
                 dm = d[miss]
-                sky_l = np.asarray(self.sky.spectral_radiance(dm, wl), dtype=float)
+                if hasattr(self.aerial, "sky_radiance"):
+                    # Light shafts in the sky (Bruneton & Neyret 2008, Eq. 18) need the camera position.
+                    sky_l = np.asarray(self.aerial.sky_radiance(origin, dm, wl), dtype=float)
+                else:
+                    sky_l = np.asarray(self.sky.spectral_radiance(dm, wl), dtype=float)
                 below = dm[:, 2] < 0
                 if self.aerial is not None and np.any(below):
                     # A periodic terrain followed to the tracer's range without a hit: the whole path's haze.
                     _, haze = _evaluate(self.aerial, dm[below], np.full(int(below.sum()), tracer.max_distance),
-                                        origin[2], wl)
+                                        origin, wl)
                     sky_l[below] = haze
                 if sun_disc_radiance is not None:
                     cover = _sun_coverage(cam, rr.reshape(-1)[miss], cc.reshape(-1)[miss], width, height,
@@ -307,7 +315,21 @@ class Scene:
         return RenderResult(rgb.astype(dtype), dist, timings)
 
 
-def _evaluate(aerial, d, s, h, wl):
+def _pixel_count(name: str, value) -> int:
+    """A positive whole number of pixels, or InvalidParameterError."""
+    try:
+        ok = not isinstance(value, bool) and int(value) == value and value >= 1
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise InvalidParameterError(f"image {name} must be a positive whole number of pixels; got {value!r}")
+    return int(value)
+
+
+def _evaluate(aerial, d, s, origin, wl):
+    if hasattr(aerial, "evaluate_rays"):  # providers that need the camera position (terrain light shafts)
+        return aerial.evaluate_rays(origin, d, s, wl)
+    h = origin[2]
     if hasattr(aerial, "evaluate"):
         return aerial.evaluate(d, s, h, wl)
     return aerial.transmittance(d, s, h, wl), aerial.inscattered(d, s, h, wl)

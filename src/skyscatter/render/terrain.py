@@ -22,7 +22,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FileFormatError, InvalidParameterError
 
-__all__ = ["DEFAULT_SEED", "Terrain", "default_terrain", "procedural_heights"]
+__all__ = ["DEFAULT_SEED", "MAX_TERRAIN_HEIGHT", "Terrain", "default_terrain", "procedural_heights"]
+
+#: Largest |height| [m] of a terrain sample: the flat, exponential atmosphere of the aerial-perspective models
+#: (Preetham et al. 1999, Eq. 5) is meant for the lower atmosphere, and observers are limited to 100 km too.
+MAX_TERRAIN_HEIGHT = 100_000.0
 
 #: Seed of the built-in landscape; changing it changes every demo image and the render regression reference.
 DEFAULT_SEED = 1999
@@ -64,7 +68,10 @@ class Terrain:
     name: str = "terrain"
 
     def __post_init__(self) -> None:
-        h = np.asarray(self.heights, dtype=np.float64)
+        raw = np.asarray(self.heights)
+        if np.issubdtype(raw.dtype, np.complexfloating) or raw.dtype == bool or raw.dtype.kind in "OUSV":
+            raise InvalidParameterError(f"terrain heights must be real numbers [m]; got dtype {raw.dtype}")
+        h = np.asarray(raw, dtype=np.float64)
         if h.ndim != 2 or min(h.shape) < 2:
             raise InvalidParameterError(
                 f"terrain heights must be a 2-D array of at least 2 x 2 samples [m]; got shape {h.shape}"
@@ -76,7 +83,16 @@ class Terrain:
                 f"terrain heights contain {int(bad.sum())} NaN or infinite values (first at row {iy}, "
                 f"column {ix}); fill the holes before rendering"
             )
-        spacing = float(self.spacing)
+        if np.abs(h).max() > MAX_TERRAIN_HEIGHT:
+            raise InvalidParameterError(
+                f"terrain heights must lie within +-{MAX_TERRAIN_HEIGHT:g} m of sea level (the flat-atmosphere "
+                f"model's domain); got {h.min():.6g} to {h.max():.6g} m"
+            )
+        try:
+            spacing = float(self.spacing)
+        except (TypeError, ValueError):
+            raise InvalidParameterError(
+                f"terrain spacing must be a finite positive length [m]; got {self.spacing!r}") from None
         if not (np.isfinite(spacing) and spacing > 0):
             raise InvalidParameterError(f"terrain spacing must be a finite positive length [m]; got {self.spacing!r}")
         x0, y0 = (float(v) for v in self.origin)
@@ -180,7 +196,7 @@ class Terrain:
         ``origin`` is the ENU position [m] of the south-west sample; by default the grid is centred on the
         ENU origin.
         """
-        r = np.asarray(raster, dtype=np.float64)
+        r = np.asarray(raster)  # converted (and its dtype checked) by the constructor
         if r.ndim != 2:
             raise InvalidParameterError(f"an elevation raster must be 2-D (rows, columns); got shape {r.shape}")
         h = r[::-1]
@@ -199,12 +215,15 @@ class Terrain:
             ``.npy`` with a 2-D float array of heights [m], north-up (row 0 = north edge); or a single-band
             GeoTIFF with heights [m] in a projected (metric) coordinate system.
         spacing : float, optional
-            Sample spacing [m]. Required for ``.npy``; for GeoTIFF it defaults to the ModelPixelScale tag.
+            Sample spacing [m]. Required for ``.npy`` and for GeoTIFFs in a geographic (degree) or geocentric
+            coordinate system; for other GeoTIFFs it defaults to the ModelPixelScale tag. Samples equal to the
+            GDAL_NODATA value become NaN and are refused.
 
         Raises
         ------
         FileFormatError
-            Unknown extension, unreadable file, wrong shape or dtype, NaN/inf heights, or no spacing.
+            Unknown extension, unreadable file, wrong shape or dtype (complex, boolean), NaN/inf or no-data
+            heights, heights beyond +-100 km, or no usable spacing.
         """
         p = Path(path)
         suffix = p.suffix.lower()
@@ -218,13 +237,19 @@ class Terrain:
             if spacing is None:
                 raise FileFormatError(f"{p}: a .npy elevation model carries no sample spacing; pass spacing [m]")
         elif suffix in (".tif", ".tiff"):
-            raster, tag_spacing = _read_geotiff(p)
+            raster, tag_spacing, crs_kind = _read_geotiff(p)
+            if spacing is None and tag_spacing is None:
+                why = (f"its coordinate system is {crs_kind}, so the pixel scale is not a length in metres"
+                       if crs_kind else "it has no ModelPixelScale tag")
+                raise FileFormatError(f"{p}: {why}; pass the ground spacing of the samples [m] explicitly "
+                                      "(--dem-spacing on the command line)")
             spacing = tag_spacing if spacing is None else spacing
         else:
             raise FileFormatError(f"{p}: unknown elevation model format {suffix!r}; use .npy, .tif or .tiff")
-        if raster.ndim != 2 or min(raster.shape) < 2 or not np.issubdtype(raster.dtype, np.number):
+        if (raster.ndim != 2 or min(raster.shape) < 2 or not np.issubdtype(raster.dtype, np.number)
+                or np.issubdtype(raster.dtype, np.complexfloating)):
             raise FileFormatError(
-                f"{p}: an elevation model must be a 2-D numeric array of at least 2 x 2 heights [m]; "
+                f"{p}: an elevation model must be a 2-D real-valued array of at least 2 x 2 heights [m]; "
                 f"got shape {raster.shape} and dtype {raster.dtype}"
             )
         try:
@@ -312,7 +337,11 @@ def _default_terrain_cached() -> Terrain:
     return _DEFAULT[0]
 
 
-def _read_geotiff(path: Path) -> tuple[NDArray[np.float64], float | None]:
+#: GeoTIFF GTModelTypeGeoKey codes (GeoTIFF 1.1, Sec. 7.1.1) whose pixel scale is not a length in metres.
+_NON_METRIC_MODEL_TYPES = {2: "geographic (latitude/longitude)", 3: "geocentric"}
+
+
+def _read_geotiff(path: Path) -> tuple[NDArray[np.float64], float | None, str | None]:
     try:
         import tifffile
     except ImportError as exc:  # pragma: no cover - depends on the environment
@@ -345,7 +374,13 @@ def _read_geotiff(path: Path) -> tuple[NDArray[np.float64], float | None]:
         if not np.isclose(sx, sy, rtol=1e-6):
             raise FileFormatError(f"{path}: pixels are not square ({sx} x {sy}); resample the DEM first")
         spacing = sx
-        if "Geographic" in str(geokeys.get("GTModelTypeGeoKey", "")):
-            # Pixel scale in degrees of latitude/longitude: not a length the flat-earth renderer can use.
-            spacing = None
-    return raster, spacing
+    model_type = geokeys.get("GTModelTypeGeoKey", 0)
+    try:
+        # tifffile gives an IntEnum whose str() is the number on Python >= 3.11: compare the code itself.
+        model_type = int(model_type)
+    except (TypeError, ValueError):
+        model_type = 0
+    if model_type in _NON_METRIC_MODEL_TYPES:
+        # Pixel scale in degrees (geographic) or an earth-centred frame: not a ground spacing in metres.
+        spacing = None
+    return raster, spacing, _NON_METRIC_MODEL_TYPES.get(model_type)
