@@ -41,7 +41,9 @@ def log_average_luminance(rgb: ArrayLike) -> float:
 
 def srgb_encode(linear: ArrayLike) -> NDArray[np.float64]:
     """sRGB transfer function (IEC 61966-2-1) of linear values in [0, 1]."""
-    from colour.models import eotf_inverse_sRGB
+    from ..spectral._colour import colour_module
+
+    eotf_inverse_sRGB = colour_module("colour.models").eotf_inverse_sRGB  # noqa: N806
 
     return np.asarray(eotf_inverse_sRGB(np.clip(np.asarray(linear, dtype=float), 0.0, 1.0)), dtype=float)
 

@@ -186,7 +186,9 @@ def _daylight_xy(cct: float) -> tuple[float, float]:
     """CIE daylight-locus chromaticity for a correlated colour temperature [K] (CIE 15:2004, via colour-science)."""
     if not 4000.0 <= cct <= 25000.0:
         raise InvalidParameterError(f"daylight CCT must be within 4000-25000 K; got {cct}")
-    from colour.temperature import CCT_to_xy_CIE_D
+    from ..spectral._colour import colour_module
+
+    CCT_to_xy_CIE_D = colour_module("colour.temperature").CCT_to_xy_CIE_D  # noqa: N806
 
     x, y = CCT_to_xy_CIE_D(float(cct))
     return float(x), float(y)

@@ -48,7 +48,9 @@ _SRGB_TO_XYZ = np.linalg.inv(_XYZ_TO_SRGB)
 
 @lru_cache(maxsize=1)
 def _cmfs_table() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    import colour  # imported lazily: colour-science takes about 2 s to import
+    from ._colour import colour_module
+
+    colour = colour_module()  # imported lazily: colour-science takes about 2 s to import
 
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
     return np.asarray(cmfs.wavelengths, dtype=float), np.asarray(cmfs.values, dtype=float)

@@ -19,7 +19,9 @@ __all__ = ["daylight_basis", "daylight_coefficients", "daylight_spectrum"]
 
 @lru_cache(maxsize=1)
 def _basis_table() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    from colour.colorimetry import SDS_BASIS_FUNCTIONS_CIE_ILLUMINANT_D_SERIES as basis
+    from ._colour import colour_module
+
+    basis = colour_module("colour.colorimetry").SDS_BASIS_FUNCTIONS_CIE_ILLUMINANT_D_SERIES
 
     wl = np.asarray(basis["S0"].wavelengths, dtype=float)
     values = np.stack([np.asarray(basis[k].values, dtype=float) for k in ("S0", "S1", "S2")], axis=-1)
