@@ -141,6 +141,12 @@ class SunSkyMixin:
         spectrum = self.sun_spectral_radiance(REFERENCE_WAVELENGTHS)  # type: ignore[attr-defined]
         return spectrum_to_xyz(spectrum, REFERENCE_WAVELENGTHS)
 
+    def _gamma(self, d: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Angle [rad] between unit directions ``d`` (..., 3) and the sun, accurate near the sun (atan2 form)."""
+        s = self.sun_direction
+        cross = np.linalg.norm(np.cross(d, s), axis=-1)
+        return np.arctan2(cross, d @ s)
+
     def _cos_gamma(self, d: NDArray[np.float64]) -> NDArray[np.float64]:
         """Cosine of the angle between unit directions ``d`` (..., 3) and the sun."""
         return np.clip(d @ self.sun_direction, -1.0, 1.0)

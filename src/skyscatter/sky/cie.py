@@ -338,7 +338,7 @@ class CIEClearSky(LuminanceSunMixin, SunSkyMixin, _ScaledCIESky):
         )
 
     def _relative(self, d: NDArray[np.float64]) -> NDArray[np.float64]:
-        gamma = np.arccos(self._cos_gamma(d))
+        gamma = self._gamma(d)
         return kittler_clear_relative_luminance(np.clip(d[..., 2], 0.0, 1.0), gamma, self.sun_zenith)
 
 
@@ -397,7 +397,7 @@ class CIEStandardSky(LuminanceSunMixin, SunSkyMixin, _ScaledCIESky):
 
     def _relative(self, d: NDArray[np.float64]) -> NDArray[np.float64]:
         a, b, c, dd, e = self.parameters
-        chi = np.arccos(self._cos_gamma(d))
+        chi = self._gamma(d)
         num = cie_indicatrix(chi, c, dd, e) * cie_gradation(np.clip(d[..., 2], 0.0, 1.0), a, b)
         return num / self._norm
 
