@@ -24,6 +24,7 @@ tables can be computed at any wavelengths.
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 import json
 import math
@@ -57,16 +58,18 @@ SOLAR_BAND_WIDTH = 10.0
 # --------------------------------------------------------------------------------------------- spectra
 
 
-class Spectrum:
+class Spectrum(abc.ABC):
     """A non-negative function of wavelength [nm]; call it with an array of wavelengths."""
 
     name: str
 
-    def __call__(self, wavelengths: ArrayLike) -> NDArray[np.float64]:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def __call__(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        """Values at ``wavelengths`` [nm]."""
 
-    def to_dict(self) -> dict[str, Any]:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-serialisable description that :meth:`from_dict` reads back."""
 
     @staticmethod
     def from_dict(data: dict[str, Any]) -> Spectrum:

@@ -27,6 +27,7 @@ the illuminance ``sun_illuminance_normal`` [lx] (default 0; set it to add a sun 
 
 from __future__ import annotations
 
+import abc
 from functools import cached_property
 
 import numpy as np
@@ -247,8 +248,9 @@ class _ScaledCIESky(LuminanceOnlySky):
         rel = self._relative(d)
         return np.where(cos_z >= 0.0, rel, 0.0)
 
-    def _relative(self, d: NDArray[np.float64]) -> NDArray[np.float64]:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def _relative(self, d: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``L / L_z`` for unit directions (..., 3) in the upper hemisphere."""
 
     def relative_diffuse_illuminance(self) -> float:
         """``integral (L / L_z) cos theta dOmega`` over the sky [sr]; D_v = L_z times this."""
