@@ -35,6 +35,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from .conventions import direction_from_angles
 from .epw import EPWData, EPWLocation, read_epw
 from .errors import FileFormatError, InvalidParameterError
 from .fileio import atomic_path
@@ -333,8 +334,8 @@ def skymatrix(
     if include_sun:
         sunny = np.flatnonzero(e_sun > 0.0)
         if sunny.size:
-            el = np.maximum(np.pi / 2 - zen[sunny], 1e-9)
-            sdir = np.stack([np.cos(el) * np.sin(azi[sunny]), np.cos(el) * np.cos(azi[sunny]), np.sin(el)], axis=-1)
+            # A sun exactly on the horizon is kept just above it so it falls into a sky patch.
+            sdir = direction_from_angles(np.minimum(zen[sunny], np.pi / 2 - 1e-9), azi[sunny])
             patch = geom.patch_index(sdir)
             lum[sunny, patch] += e_sun[sunny] / geom.solid_angles[patch]
     return SkyMatrix(
