@@ -17,8 +17,13 @@ The tables hold spectral radiance at a few wavelengths ``lambda_k``. Two rules t
   matrix, the kind of "radiance to luminance" coefficients Bruneton's 2017 rewrite precomputes, here derived
   from a stated spectral model rather than a fit. ``E_sun`` is the 10-nm box-filtered solar spectrum used
   for the tables. Against the spectral mode (41 wavelengths) the luminance agrees within 0.1 % in daylight
-  and 3 % at -6 deg twilight; see ``docs/bruneton.md``. Spectra returned to callers are clamped at zero (the
-  extrapolated polynomial can dip below it far from the samples); XYZ uses the unclamped matrix.
+  and 3 % at -6 deg twilight; see ``docs/bruneton.md``.
+* **Guard against negative lobes.** Near a low or set sun ``rho`` falls steeply towards the blue, and the
+  quadratic through three samples can dip below zero between or beyond them (it gave negative Z and an
+  invented violet peak at sunset). Where the quadratic of a sample triple is negative anywhere on 360-830 nm,
+  that sample triple uses the piecewise-linear interpolant in ``x`` held constant beyond the end samples
+  instead, which is a convex combination of the samples and so never negative (:class:`ColourConversion`).
+  Both rules are linear, so the choice costs one extra small matrix product per sample.
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ from ..spectral import cie_cmfs, integration_weights
 from ..spectral.colorimetry import LUMINOUS_EFFICACY
 from .parameters import AtmosphereParameters
 
-__all__ = ["SPECTRAL_MODE_MIN_WAVELENGTHS", "reconstruction_matrix", "xyz_matrix"]
+__all__ = ["SPECTRAL_MODE_MIN_WAVELENGTHS", "ColourConversion", "reconstruction_matrix", "xyz_matrix"]
 
 #: From this many wavelengths on, XYZ is integrated directly from the samples.
 SPECTRAL_MODE_MIN_WAVELENGTHS = 15
@@ -68,6 +73,11 @@ def reconstruction_matrix(table_wavelengths: ArrayLike, wavelengths: ArrayLike,
     linear (4 or more) interpolant of ``L_k / E_sun(lambda_k)`` in ``x = (lambda / 550 nm)^-4`` (module
     docstring). Not clamped: apply ``max(., 0)`` to spectra shown to users.
     """
+    return _reconstruction(table_wavelengths, wavelengths, params, piecewise_linear=False)
+
+
+def _reconstruction(table_wavelengths: ArrayLike, wavelengths: ArrayLike, params: AtmosphereParameters, *,
+                    piecewise_linear: bool) -> NDArray[np.float64]:
     tw = np.asarray(table_wavelengths, dtype=float)
     wl = np.asarray(wavelengths, dtype=float)
     # x = lambda^-4 decreases with lambda: interpolate on the reversed (increasing) node order.
@@ -75,7 +85,8 @@ def reconstruction_matrix(table_wavelengths: ArrayLike, wavelengths: ArrayLike,
     x_nodes = (tw[order] / 550.0) ** -4
     x = (wl / 550.0) ** -4
     basis = np.zeros((wl.size, tw.size))
-    basis[:, order] = _lagrange_basis(x_nodes, x) if tw.size <= 3 else _hat_basis(x_nodes, x)
+    polynomial = tw.size <= 3 and not piecewise_linear
+    basis[:, order] = _lagrange_basis(x_nodes, x) if polynomial else _hat_basis(x_nodes, x)
     e_out = params.solar_irradiance_at(wl)
     e_tab = params.solar_irradiance_at(tw)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -95,3 +106,53 @@ def xyz_matrix(table_wavelengths: ArrayLike, params: AtmosphereParameters) -> ND
     rec = reconstruction_matrix(tw, _FINE_GRID, params)
     cmf = cie_cmfs(_FINE_GRID) * integration_weights(_FINE_GRID)[:, None] * LUMINOUS_EFFICACY
     return cmf.T @ rec
+
+
+class ColourConversion:
+    """Table radiance (..., n_table) to XYZ or to spectra, with the negative-lobe guard of the module docstring.
+
+    Parameters
+    ----------
+    table_wavelengths : array_like
+        Wavelengths of the tables [nm].
+    params : AtmosphereParameters
+        Gives the solar spectrum that ``rho = L / E_sun`` is interpolated against.
+    """
+
+    def __init__(self, table_wavelengths: ArrayLike, params: AtmosphereParameters) -> None:
+        self.table_wavelengths = np.asarray(table_wavelengths, dtype=float)
+        self.params = params
+        tw = self.table_wavelengths
+        self.spectral = tw.size >= SPECTRAL_MODE_MIN_WAVELENGTHS
+        self.guarded = 2 <= tw.size <= 3
+        cmf = cie_cmfs(_FINE_GRID) * integration_weights(_FINE_GRID)[:, None] * LUMINOUS_EFFICACY
+        self.xyz_polynomial = xyz_matrix(tw, params)
+        if self.guarded:
+            self.xyz_linear = cmf.T @ _reconstruction(tw, _FINE_GRID, params, piecewise_linear=True)
+            # Where the polynomial is evaluated to detect a negative lobe: 5 nm over the observer's range.
+            self._check = reconstruction_matrix(tw, _FINE_GRID[::5], params)
+
+    def _negative_lobe(self, radiance: NDArray[np.float64]) -> NDArray[np.bool_]:
+        return np.any(radiance @ self._check.T < 0.0, axis=-1)
+
+    def to_xyz(self, radiance: ArrayLike) -> NDArray[np.float64]:
+        """CIE XYZ [cd m^-2] of radiance (..., n_table) at the table wavelengths."""
+        rad = np.asarray(radiance, dtype=float)
+        xyz = rad @ self.xyz_polynomial.T
+        if self.guarded:
+            bad = self._negative_lobe(rad)
+            if np.any(bad):
+                xyz[bad] = rad[bad] @ self.xyz_linear.T
+        return xyz
+
+    def resample(self, radiance: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        """Radiance (..., n_table) at the table wavelengths to (..., n) at ``wavelengths`` [nm], never negative."""
+        rad = np.asarray(radiance, dtype=float)
+        wl = np.atleast_1d(np.asarray(wavelengths, dtype=float))
+        out = rad @ reconstruction_matrix(self.table_wavelengths, wl, self.params).T
+        if self.guarded:
+            bad = self._negative_lobe(rad)
+            if np.any(bad):
+                linear = _reconstruction(self.table_wavelengths, wl, self.params, piecewise_linear=True)
+                out[bad] = rad[bad] @ linear.T
+        return np.maximum(out, 0.0)

@@ -295,10 +295,7 @@ class BrunetonAerialPerspective:
             if wl.shape == atm.wavelengths.shape and np.allclose(wl, atm.wavelengths, rtol=0, atol=1e-9):
                 self._matrices[key] = None
             else:
-                from .conversion import reconstruction_matrix
-
-                self._matrices[key] = (transmittance_matrix(atm.wavelengths, wl, atm.parameters),
-                                       reconstruction_matrix(atm.wavelengths, wl, atm.parameters))
+                self._matrices[key] = transmittance_matrix(atm.wavelengths, wl, atm.parameters)
         return self._matrices[key]
 
     def _to_wavelengths(self, tau, inscatter, wl):
@@ -306,7 +303,7 @@ class BrunetonAerialPerspective:
         if m is None:
             return tau, inscatter
         depth = -np.log(np.clip(tau, 1e-300, 1.0))
-        return np.exp(-np.maximum(depth @ m[0].T, 0.0)), np.maximum(inscatter @ m[1].T, 0.0)
+        return np.exp(-np.maximum(depth @ m.T, 0.0)), self.atmosphere.resample(inscatter, wl)
 
     # -- geometry ---------------------------------------------------------------------------------------
     def _planet(self, height: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -231,6 +231,7 @@ class PrecomputedAtmosphere:
         self._solar = params.solar_irradiance_at(self.wavelengths)
         self._albedo = params.ground_albedo_at(self.wavelengths)
         self._xyz_matrix: NDArray[np.float64] | None = None
+        self._colour = None
 
     # ------------------------------------------------------------------ computation
 
@@ -390,22 +391,27 @@ class PrecomputedAtmosphere:
             self._xyz_matrix = xyz_matrix(self.wavelengths, self.parameters)
         return self._xyz_matrix
 
+    @property
+    def colour(self):
+        """The :class:`.conversion.ColourConversion` of these tables (built once)."""
+        if self._colour is None:
+            from .conversion import ColourConversion
+
+            self._colour = ColourConversion(self.wavelengths, self.parameters)
+        return self._colour
+
     def to_xyz(self, radiance: ArrayLike) -> NDArray[np.float64]:
         """CIE XYZ [cd m^-2] of spectral radiance (..., n_wavelengths) at the table wavelengths."""
-        return np.asarray(radiance, dtype=float) @ self.xyz_matrix.T
+        return self.colour.to_xyz(radiance)
 
     def luminance(self, radiance: ArrayLike) -> NDArray[np.float64]:
         """Luminance [cd m^-2] of spectral radiance (..., n_wavelengths) at the table wavelengths."""
-        return np.asarray(radiance, dtype=float) @ self.xyz_matrix[1]
+        return self.to_xyz(radiance)[..., 1]
 
     def resample(self, radiance: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64]:
-        """Radiance (..., n_table) at the table wavelengths to (..., n) at ``wavelengths`` [nm] (see
-        :func:`.conversion.reconstruction_matrix`), clamped at zero."""
-        from .conversion import reconstruction_matrix
-
-        m = reconstruction_matrix(self.wavelengths, np.atleast_1d(np.asarray(wavelengths, dtype=float)),
-                                  self.parameters)
-        return np.maximum(np.asarray(radiance, dtype=float) @ m.T, 0.0)
+        """Radiance (..., n_table) at the table wavelengths to (..., n) at ``wavelengths`` [nm], never negative
+        (see :class:`.conversion.ColourConversion`)."""
+        return self.colour.resample(radiance, wavelengths)
 
     # ------------------------------------------------------------------ lookups
 
