@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import re
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from ..errors import InvalidParameterError
@@ -62,11 +64,11 @@ def add_atmosphere_options(p: argparse.ArgumentParser) -> None:
     t.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="LIST",
                    help="wavelengths [nm]: a list '680,550,440' (the default) or a range '380:780:10'; "
                         "15 or more give the spectral mode (XYZ by integration with the CIE observer)")
-    t.add_argument("--transmittance-size", type=_sizes(2, "transmittance size"), default=(256, 64), metavar="MUxR",
+    t.add_argument("--transmittance-size", type=_sizes(2, "transmittance size"), default="256x64", metavar="MUxR",
                    help="transmittance table: view-zenith x radius samples")
-    t.add_argument("--irradiance-size", type=_sizes(2, "irradiance size"), default=(64, 16), metavar="MUSxR",
+    t.add_argument("--irradiance-size", type=_sizes(2, "irradiance size"), default="64x16", metavar="MUSxR",
                    help="irradiance table: sun-zenith x radius samples")
-    t.add_argument("--scattering-size", type=_sizes(4, "scattering size"), default=(32, 128, 32, 8),
+    t.add_argument("--scattering-size", type=_sizes(4, "scattering size"), default="32x128x32x8",
                    metavar="RxMUxMUSxNU",
                    help="4D scattering table: radius x view-zenith (even) x sun-zenith x view-sun angle samples")
     t.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -111,10 +113,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+@contextlib.contextmanager
+def one_line_warnings():
+    """Print warnings raised inside the block as one line, ``warning: <message>``, on stderr."""
+    with warnings.catch_warnings():
+        warnings.showwarning = lambda message, category, *a, **k: print(f"warning: {message}", file=sys.stderr)
+        yield
+
+
 def run(args: argparse.Namespace) -> int:
     from ..precomputed import PrecomputedAtmosphere
-    from ..precomputed.cache import cache_path, cached_atmosphere
-    from ..precomputed.tables import _as_wavelengths, cache_key
+    from ..precomputed.cache import load_or_compute
 
     params, sizes = atmosphere_from_args(args)
     if args.out is not None and args.out.suffix != ".npz":
@@ -124,12 +133,13 @@ def run(args: argparse.Namespace) -> int:
     progress = not args.no_progress and sys.stderr.isatty()
     t0 = time.perf_counter()
     if args.out is None:
-        target = cache_path(cache_key(params, args.orders, _as_wavelengths(args.wavelengths), sizes))
-        if args.force and target.exists():
-            target.unlink()
-        computed = not target.exists()
-        atm = cached_atmosphere(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
-                                progress=progress)
+        from ..precomputed.cache import cache_path
+
+        # --force recomputes first and then replaces the file atomically: an interrupted run keeps the old one.
+        with one_line_warnings():
+            atm, computed = load_or_compute(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
+                                            progress=progress, force=args.force)
+        target = cache_path(atm.cache_key)
     else:
         atm = PrecomputedAtmosphere.compute(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
                                             progress=progress)

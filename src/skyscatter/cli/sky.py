@@ -80,7 +80,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     g.add_argument("--no-sun-disc", dest="sun_disc", action="store_false",
                    help="leave the solar disc out of the image")
     g.add_argument("--ground-albedo", type=float_in(0.0, 1.0), default=0.2, metavar="RHO",
-                   help="albedo of the neutral Lambertian ground drawn below the horizon")
+                   help="albedo of the neutral Lambertian ground drawn below the horizon; not used by bruneton, "
+                   "which draws its own ground with its atmosphere's albedo (0.1, the Earth default; other values "
+                   "from Python with AtmosphereParameters(ground_albedo=...))")
     add_image_output_options(p, default_out="sky.exr")
     p.set_defaults(func=run)
 

@@ -21,7 +21,8 @@ from ..errors import FileFormatError, OutputError
 from .parameters import AtmosphereParameters
 from .tables import PrecomputedAtmosphere, TableSizes, _as_wavelengths, cache_key
 
-__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "cached_atmosphere", "clear_memory_cache"]
+__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "cached_atmosphere", "clear_memory_cache",
+           "load_or_compute"]
 
 _MEMORY: dict[str, PrecomputedAtmosphere] = {}
 
@@ -54,26 +55,38 @@ def cached_atmosphere(params: AtmosphereParameters | None = None, *, orders: int
     Same arguments as :meth:`PrecomputedAtmosphere.compute`. If the cache folder cannot be written the
     tables are still returned (with a warning).
     """
+    return load_or_compute(params, orders=orders, wavelengths=wavelengths, sizes=sizes, progress=progress)[0]
+
+
+def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int = 4,
+                    wavelengths: ArrayLike | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
+                    progress: bool | None = None, force: bool = False) -> tuple[PrecomputedAtmosphere, bool]:
+    """Like :func:`cached_atmosphere`, also saying whether the tables were computed: ``(tables, computed)``.
+
+    With ``force`` the tables are recomputed even if cached; the cache file is replaced only once the new
+    tables are written (atomically), so an interrupted run keeps the old, valid file.
+    """
     params = AtmosphereParameters() if params is None else params
     wl = _as_wavelengths(wavelengths)
     sz = TableSizes.coerce(sizes)
     key = cache_key(params, orders, wl, sz)
-    hit = _MEMORY.get(key)
+    hit = None if force else _MEMORY.get(key)
     if hit is not None:
-        return hit
+        return hit, False
     path = cache_path(key)
     atm = None
-    if path.exists():
+    if path.exists() and not force:
         try:
             atm = PrecomputedAtmosphere.load(path, expected_key=key)
         except (FileFormatError, OSError) as exc:
-            warnings.warn(f"rebuilding cached atmosphere tables: {exc}", CacheRebuildWarning, stacklevel=2)
-    if atm is None:
+            warnings.warn(f"rebuilding cached atmosphere tables: {exc}", CacheRebuildWarning, stacklevel=3)
+    computed = atm is None
+    if computed:
         atm = PrecomputedAtmosphere.compute(params, orders=orders, wavelengths=wl, sizes=sz, progress=progress)
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             atm.save(path)
         except (OSError, OutputError) as exc:
-            warnings.warn(f"could not write the table cache {path}: {exc}", RuntimeWarning, stacklevel=2)
+            warnings.warn(f"could not write the table cache {path}: {exc}", RuntimeWarning, stacklevel=3)
     _MEMORY[key] = atm
-    return atm
+    return atm, computed
