@@ -95,3 +95,24 @@ def test_unwritable_cache_still_returns_tables(tmp_path, monkeypatch):
         atm = cached_atmosphere(orders=1, sizes=TINY)
     assert atm.tables["transmittance"].shape == (8, 32, 3)
     clear_memory_cache()
+
+
+def test_force_keeps_the_old_file_until_the_new_tables_are_written(cache, monkeypatch):
+    """--force / load_or_compute(force=True): a failure during the computation leaves the valid cache file."""
+    from skyscatter.precomputed.cache import load_or_compute
+
+    atm, computed = load_or_compute(orders=1, sizes=TINY)
+    assert computed
+    path = cache_path(atm.cache_key)
+    before = path.read_bytes()
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(PrecomputedAtmosphere, "compute", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        load_or_compute(orders=1, sizes=TINY, force=True)
+    assert path.read_bytes() == before
+    clear_memory_cache()
+    again, computed = load_or_compute(orders=1, sizes=TINY)
+    assert not computed and again.cache_key == atm.cache_key

@@ -60,8 +60,10 @@ def test_symmetric_about_the_solar_meridian(atm):
 
 def test_sun_limits_and_bad_input(atm):
     BrunetonSky(math.radians(101.9), 0.0, atmosphere=atm)
-    with pytest.raises(SunBelowHorizonError, match="precomputed limit"):
+    with pytest.raises(SunBelowHorizonError, match=r"precomputed limit.*max_sun_zenith=math.radians"):
         BrunetonSky(math.radians(103.0), 0.0, atmosphere=atm)
+    with pytest.raises(SunBelowHorizonError, match="inside the atmosphere"):
+        BrunetonSky(math.radians(103.0), 0.0, altitude=59e3, atmosphere=atm)
     with pytest.raises(InvalidParameterError, match="altitude"):
         BrunetonSky(0.5, 0.0, altitude=-1.0, atmosphere=atm)
     with pytest.raises(InvalidParameterError, match="atmosphere"):
@@ -99,14 +101,60 @@ def test_views_from_altitude_and_orbit(atm):
 
 
 def test_earth_shadow_at_dusk(atm):
-    """Sun 2 deg below the horizon in the west: looking east, the sky just above the horizon (in the Earth's
-    shadow) is darker than the band a few degrees higher (the Belt of Venus)."""
-    sky = BrunetonSky(math.radians(92), math.radians(270), atmosphere=atm)
+    """Sun 3 deg below the horizon in the west; looking east. Measured structure (small tables):
+
+    * luminance: the shadow band (1-3 deg elevation, ~33 cd/m^2) is less than 0.6 x the brightest sky above it
+      (8-20 deg, ~82 cd/m^2, measured ratio 0.41), and the sky darkens again higher up (30 deg < 0.9 x that peak,
+      measured 0.81);
+    * colour: the shadow is blue (440/680 nm radiance ratio > 1.5, measured 1.6-1.8), the band above it (the
+      Belt of Venus, lit by reddened sunlight) red (ratio < 0.7, measured 0.55 at 8 deg) and the sky above
+      turns blue again (ratio at 30 deg > 1.5 x the belt's, measured 2.2).
+    A sky without the Earth's shadow (lit down to the horizon) brightens and reddens towards the horizon.
+    """
+    sky = BrunetonSky(math.radians(93), math.radians(270), atmosphere=atm)
     from skyscatter.conventions import direction_from_angles
 
-    elevations = np.radians([1.0, 3.0, 6.0, 10.0, 15.0])
-    lum = sky.luminance(direction_from_angles(np.pi / 2 - elevations, np.full(5, np.pi / 2)))
-    assert lum[0] < lum.max()
+    el = np.array([1.0, 2.0, 3.0, 8.0, 10.0, 12.0, 15.0, 20.0, 30.0])
+    d = direction_from_angles(np.radians(90.0 - el), np.full(el.size, np.pi / 2))
+    lum = sky.luminance(d)
+    shadow, belt, high = lum[:3], lum[3:8], lum[8]
+    assert shadow.max() < 0.6 * belt.max()
+    assert high < 0.9 * belt.max()
+    rad = sky.table_radiance(d)
+    blue_red = rad[:, np.argmin(atm.wavelengths)] / rad[:, np.argmax(atm.wavelengths)]
+    assert np.all(blue_red[:3] > 1.5)
+    assert blue_red[3:6].min() < 0.7
+    assert blue_red[8] > 1.5 * blue_red[3:8].min()
+
+
+def test_sun_below_the_observers_horizon_seen_from_orbit(atm):
+    """From 400 km the sun stays above the limb down to a zenith of about 109.8 deg, beyond the tables' 102 deg:
+    the limit applies where each ray enters the atmosphere, so the view changes across 102 deg as it does for
+    the same sun step just before, and the lit limb fades as the sun sets behind the planet."""
+    from skyscatter.conventions import equirect_directions
+
+    d = equirect_directions(48, 24)
+    lum = {z: BrunetonSky(math.radians(z), 0.0, altitude=4e5, atmosphere=atm).luminance(d)
+           for z in (101.7, 101.9, 102.1)}
+    # 0.2 deg steps move the terminator: the change across 102 deg is like the change just before it
+    step_before = np.abs(lum[101.9] - lum[101.7]).sum()
+    step_across = np.abs(lum[102.1] - lum[101.9]).sum()
+    assert 0 < step_across < 1.5 * step_before < 0.1 * lum[101.9].sum()
+    peaks = [BrunetonSky(math.radians(z), 0.0, altitude=4e5, atmosphere=atm).luminance(d).max()
+             for z in (105.0, 109.0, 112.0, 150.0)]
+    assert peaks[0] > peaks[1] > peaks[2] > 0 and peaks[3] == 0
+    sun = BrunetonSky(math.radians(105.0), 0.0, altitude=4e5, atmosphere=atm).sun_xyz()
+    assert sun[1] > 1e8  # the disc is still above the limb
+    assert np.all(BrunetonSky(math.radians(115.0), 0.0, altitude=4e5, atmosphere=atm).sun_xyz() == 0)
+
+
+def test_positions_inside_the_planet_are_refused(atm):
+    with pytest.raises(InvalidParameterError, match="on or above the planet's surface"):
+        atm.sky_radiance(np.array([0.0, 0.0, 6.0e6]), np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, 1.0]))
+    # rounding below the surface (< 1 m) is accepted and gives the surface value
+    at = atm.sky_radiance(np.array([0.0, 0.0, R]), np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.6, 0.8]))
+    just = atm.sky_radiance(np.array([0.0, 0.0, R - 0.5]), np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.6, 0.8]))
+    np.testing.assert_allclose(just, at, rtol=1e-6)
 
 
 def test_aerial_perspective_and_light_shafts(atm):
@@ -179,6 +227,70 @@ def test_cli_precompute_and_export(monkeypatch, tmp_path, capsys):
     assert "already cached" in capsys.readouterr().out
     with pytest.raises(SystemExit):
         _cli(["precompute", "--scattering-size", "4x16x4"], monkeypatch, tmp_path)
+
+
+SMALL_CLI = ["--scattering-size", "4x16x4x4", "--transmittance-size", "32x8", "--irradiance-size", "8x4",
+             "--orders", "2", "--no-progress"]
+
+
+def test_cli_precompute_rebuilds_a_corrupt_cache(monkeypatch, tmp_path, capsys):
+    """Finding: after rebuilding a damaged cache file the CLI reported "already cached" and no timings."""
+    from skyscatter.precomputed.cache import cache_dir, clear_memory_cache
+
+    clear_memory_cache()
+    assert _cli(["precompute", *SMALL_CLI], monkeypatch, tmp_path) == 0
+    capsys.readouterr()
+    (path,) = cache_dir().glob("*.npz")
+    data = bytearray(path.read_bytes())
+    data[len(data) // 2: len(data) // 2 + 64] = bytes(64)
+    path.write_bytes(bytes(data))
+    clear_memory_cache()
+    assert _cli(["precompute", *SMALL_CLI], monkeypatch, tmp_path) == 0
+    out, err = capsys.readouterr()
+    assert "already cached" not in out and "order 2 multiple" in out and f"wrote {path}" in out
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("warning: rebuilding cached atmosphere tables")
+    assert PrecomputedAtmosphere.load(path).orders == 2
+    # --force recomputes (timings printed) over the valid file
+    clear_memory_cache()
+    assert _cli(["precompute", "--force", *SMALL_CLI], monkeypatch, tmp_path) == 0
+    out = capsys.readouterr().out
+    assert "already cached" not in out and "order 2 multiple" in out
+    clear_memory_cache()
+
+
+def test_cli_help_texts():
+    from skyscatter.cli import export_luts, precompute
+
+    parser = argparse.ArgumentParser()
+    sub = parser.add_subparsers(dest="command")
+    precompute.register(sub)
+    export_luts.register(sub)
+    text = sub.choices["export-luts"].format_help()
+    flat = " ".join(text.split())
+    for name in ("transmittance.raw", "irradiance.raw", "single_rayleigh_scattering.raw",
+                 "single_mie_scattering.raw", "multiple_scattering.raw", "scattering.raw", "scattering_rgba.raw",
+                 "atmosphere.json"):
+        assert name in flat
+    assert "written atomically" in flat
+    flat = " ".join(sub.choices["precompute"].format_help().split())
+    for default in ("(default: 256x64)", "(default: 64x16)", "(default: 32x128x32x8)"):
+        assert default in flat
+    args = parser.parse_args(["precompute"])
+    assert args.transmittance_size == (256, 64) and args.scattering_size == (32, 128, 32, 8)
+
+
+def test_cli_export_from_a_junk_file(monkeypatch, tmp_path):
+    from skyscatter.errors import FileFormatError
+
+    junk = tmp_path / "junk.npz"
+    np.savez(junk, metadata=np.array([{"a": 1}], dtype=object))
+    text = tmp_path / "text.npz"
+    text.write_text("not a zip")
+    for bad in (junk, text):
+        with pytest.raises(FileFormatError, match="not a readable skyscatter table file") as info:
+            _cli(["export-luts", "--out-dir", str(tmp_path / "luts"), "--from", str(bad)], monkeypatch, tmp_path)
+        assert "pickle" not in str(info.value)
 
 
 def test_renderer_entry_points(atm):

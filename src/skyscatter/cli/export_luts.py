@@ -16,11 +16,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "export-luts",
         help="export the Bruneton tables as raw float32 textures + JSON for real-time engines",
         description=(
-            "Write transmittance.raw (2D, mu x r), irradiance.raw (2D, mu_s x r), scattering.raw and "
-            "single_mie_scattering.raw (the 4D tables packed into 3D textures with the nu slices side by side "
-            "along x, as in Bruneton & Neyret 2008 Sec. 6), scattering_rgba.raw for 3 wavelengths, and "
-            "atmosphere.json (sizes, coordinate mappings, constants, XYZ conversion). Little-endian float32, "
-            "channels in decreasing wavelength. Tables come from --from FILE.npz, else from the cache "
+            "Write, into --out-dir: transmittance.raw (2D, mu x r), irradiance.raw (2D, mu_s x r), "
+            "single_rayleigh_scattering.raw, single_mie_scattering.raw, multiple_scattering.raw and "
+            "scattering.raw (the 4D tables packed into 3D textures with the nu slices side by side along x, as in "
+            "Bruneton & Neyret 2008 Sec. 6; scattering.raw is the paper's packed C* = S_R + S_multiple / P_R), "
+            "scattering_rgba.raw for 3 wavelengths, and atmosphere.json (sizes, coordinate mappings, constants, "
+            "XYZ conversion), written last. Little-endian float32, channels in decreasing wavelength. Each file is "
+            "written atomically, the folder as a whole is not: an interrupted export can leave new textures next "
+            "to an older atmosphere.json, so re-run it. Tables come from --from FILE.npz, else from the cache "
             "(computed if missing) for the atmosphere options below."
         ),
         formatter_class=HELP_FORMATTER,
@@ -36,14 +39,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..precomputed import PrecomputedAtmosphere
     from ..precomputed.cache import cached_atmosphere
-    from .precompute import atmosphere_from_args
+    from .precompute import atmosphere_from_args, one_line_warnings
 
     if args.source is not None:
         atm = PrecomputedAtmosphere.load(args.source)
     else:
         params, sizes = atmosphere_from_args(args)
-        atm = cached_atmosphere(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
-                                progress=not args.no_progress and sys.stderr.isatty())
+        with one_line_warnings():
+            atm = cached_atmosphere(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
+                                    progress=not args.no_progress and sys.stderr.isatty())
     description = atm.export(args.out_dir)
     for f in sorted(args.out_dir.glob("*.raw")):
         print(f"wrote {f} ({f.stat().st_size / 1e6:.1f} MB)")

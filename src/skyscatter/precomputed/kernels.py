@@ -276,7 +276,6 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
         sx = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
         for w in range(n_om):
             wx = om[w, 0]
-            om[w, 1]
             wz = om[w, 2]
             nu_w = clamp(wx * sx + wz * mu_s, -1.0, 1.0)
             hits = ray_hits_ground(r, wz, bottom)

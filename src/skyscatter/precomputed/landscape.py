@@ -418,5 +418,4 @@ class BrunetonAerialPerspective:
             reach = np.full(d.shape[:-1], self.tracer.max_distance)
             shadow = self.shadow_length(o, d, reach)
         rad = self.atmosphere.sky_radiance(cam, d, self.sun_direction, shadow_length=shadow)
-        m = self._spectral(wl)
-        return rad if m is None else np.maximum(rad @ m[1].T, 0.0)
+        return rad if self._spectral(wl) is None else self.atmosphere.resample(rad, wl)

@@ -43,8 +43,10 @@ class BrunetonSky(SunSkyMixin, SkyModel):
     Parameters
     ----------
     sun_zenith : float
-        Sun zenith angle [rad] at the observer, up to the atmosphere's ``max_sun_zenith`` (102 deg by
-        default): the sun may be below the horizon (twilight).
+        Sun zenith angle [rad] at the observer. Inside the atmosphere, up to the atmosphere's
+        ``max_sun_zenith`` (102 deg by default): the sun may be below the horizon (twilight). Above the top of
+        the atmosphere any value in [0, pi]: the limit then applies where each view ray enters the atmosphere,
+        and parts whose sun is beyond it are dark.
     sun_azimuth : float
         Sun azimuth [rad] from north towards east.
     altitude : float
@@ -74,10 +76,18 @@ class BrunetonSky(SunSkyMixin, SkyModel):
             raise InvalidParameterError(f"altitude must be finite and >= 0 m; got {altitude!r}")
         atm = _resolve_atmosphere(atmosphere)
         limit = atm.parameters.max_sun_zenith
-        if zen > limit + 1e-12:
+        top_altitude = atm.parameters.top_radius - atm.parameters.bottom_radius
+        # Inside the atmosphere every lookup starts at the observer, with the observer's sun zenith: beyond
+        # the table's limit there is no data. From above the top, lookups start where each ray enters the
+        # atmosphere, with that point's own sun zenith (the kernels return 0 where it is beyond the limit),
+        # so any sun zenith is valid there (terminator and night-side views from orbit).
+        if zen > limit + 1e-12 and alt < top_altitude:
             raise SunBelowHorizonError(
                 f"sun zenith {math.degrees(zen):.4g} deg is beyond the precomputed limit "
-                f"{math.degrees(limit):.4g} deg (AtmosphereParameters.max_sun_zenith)"
+                f"{math.degrees(limit):.4g} deg, which applies to observers inside the atmosphere (below "
+                f"{top_altitude / 1e3:g} km; above it any sun zenith is accepted). Raise the limit (up to 180 deg) "
+                f"from Python with AtmosphereParameters(max_sun_zenith=math.radians(...)); 'skyscatter sky' uses "
+                f"the default tables"
             )
         self.sun_zenith = zen
         self.sun_azimuth = azi

@@ -182,6 +182,32 @@ def cache_key(params: AtmosphereParameters, orders: int, wavelengths: NDArray[np
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
+def _check_colour_range(params: AtmosphereParameters, wavelengths: NDArray[np.float64]) -> None:
+    """Refuse a solar spectrum too narrow for the colour conversion of the few-wavelength mode.
+
+    Below 15 wavelengths, XYZ integrates spectra rebuilt over the CIE observer's range, which needs the solar
+    irradiance (a 10 nm band average) there too; the spectral mode integrates the table wavelengths only.
+    """
+    from . import conversion
+    from .parameters import SOLAR_BAND_WIDTH
+
+    if wavelengths.size >= conversion.SPECTRAL_MODE_MIN_WAVELENGTHS:
+        return
+    grid = np.asarray(getattr(conversion, "_FINE_GRID", np.arange(360.0, 831.0)), dtype=float)
+    try:
+        params.solar_irradiance_at(grid)
+    except InvalidParameterError:
+        lo, hi = grid.min() - SOLAR_BAND_WIDTH / 2, grid.max() + SOLAR_BAND_WIDTH / 2
+        spec = params.solar_irradiance
+        covers = f"covers {spec.range[0]:g}-{spec.range[1]:g} nm" if hasattr(spec, "range") else "does not"
+        raise InvalidParameterError(
+            f"solar_irradiance {covers}; with fewer than {conversion.SPECTRAL_MODE_MIN_WAVELENGTHS} table "
+            f"wavelengths the colour conversion rebuilds spectra over {grid.min():g}-{grid.max():g} nm, so the "
+            f"solar spectrum must cover {lo:g}-{hi:g} nm. Extend it, or use 15 or more wavelengths "
+            f"(spectral mode)"
+        ) from None
+
+
 def _as_points(name: str, value: ArrayLike) -> NDArray[np.float64]:
     a = np.asarray(value, dtype=float)
     if a.ndim == 0 or a.shape[-1] != 3:
@@ -270,6 +296,7 @@ class PrecomputedAtmosphere:
             raise InvalidParameterError(f"orders must be a whole number in [1, 50]; got {orders!r}")
         wl = _as_wavelengths(wavelengths)
         params.check_wavelengths(wl)
+        _check_colour_range(params, wl)
         sz = TableSizes.coerce(sizes)
         if chunk_size is None:
             chunk_size = max(1, int(512e6 // (24 * math.prod(sz.scattering_shape))))
@@ -466,6 +493,16 @@ class PrecomputedAtmosphere:
         sh = flat(np.asarray(extra, dtype=float), None) if extra is not None else None
         return shape, flat(pos, 3), flat(dirs, 3), flat(sun, 3), sh
 
+    def _check_above_ground(self, pos: NDArray[np.float64], name: str = "positions") -> None:
+        """Refuse points below the surface (the tables start at ``bottom_radius``); 1 m tolerance for rounding."""
+        bottom = self.parameters.bottom_radius
+        r = np.sqrt(np.einsum("ij,ij->i", pos, pos))
+        if r.size and r.min() < bottom - 1.0:
+            raise InvalidParameterError(
+                f"{name} must be on or above the planet's surface (distance from its centre >= bottom_radius "
+                f"= {bottom:.7g} m); got one at {r.min():.7g} m, {bottom - r.min():.4g} m below the surface"
+            )
+
     def _sky(self, pos, dirs, sun, shadow, include_ground):
         from .lookup import sky_kernel
         from .parallel import parallel_for
@@ -490,7 +527,8 @@ class PrecomputedAtmosphere:
         Parameters
         ----------
         positions : array_like, shape (..., 3)
-            Observer positions [m] from the planet centre; anywhere, also outside the atmosphere.
+            Observer positions [m] from the planet centre; on or above the surface (1 m tolerance), also
+            outside the atmosphere.
         directions : array_like, shape (..., 3)
             View directions (unit vectors, same frame).
         sun_direction : array_like, shape (3,) or (..., 3)
@@ -508,6 +546,7 @@ class PrecomputedAtmosphere:
             The solar disc is not included (see :meth:`sun_radiance`); rays that miss the atmosphere give 0.
         """
         shape, pos, dirs, sun, sh = self._broadcast_rays(positions, directions, sun_direction, shadow_length)
+        self._check_above_ground(pos)
         rad, t = self._sky(pos, dirs, sun, sh, bool(include_ground))
         rad = rad.reshape(*shape, -1)
         if return_transmittance:
@@ -630,10 +669,14 @@ class PrecomputedAtmosphere:
                 arrays = {name: np.array(data[name]) for name in _TABLE_NAMES}
         except FileNotFoundError:
             raise
-        except (OSError, ValueError, KeyError, EOFError, json.JSONDecodeError) as exc:
-            raise FileFormatError(f"{p}: not a readable skyscatter table file ({exc})") from None
-        except Exception as exc:  # zipfile.BadZipFile and friends
-            raise FileFormatError(f"{p}: not a readable skyscatter table file ({type(exc).__name__}: {exc})") from None
+        except KeyError as exc:
+            raise FileFormatError(f"{p}: not a skyscatter table file (no table {exc})") from None
+        except Exception:  # OSError, ValueError (NumPy's pickle advice), zipfile.BadZipFile, JSON errors...
+            # NumPy's messages (e.g. "allow_pickle=True") would mislead: say what the file should be instead.
+            raise FileFormatError(
+                f"{p}: not a readable skyscatter table file (damaged, or not an .npz written by "
+                "'skyscatter precompute --out' or PrecomputedAtmosphere.save)"
+            ) from None
         if meta.get("format") != "skyscatter-bruneton-tables":
             raise FileFormatError(f"{p}: not a skyscatter table file")
         if meta.get("format_version") != FORMAT_VERSION:
