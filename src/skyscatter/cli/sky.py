@@ -15,20 +15,9 @@ from .common import (
     float_in,
     png_path,
     positive_int,
-    select_model_options,
     sun_angles_from_args,
 )
-
-# Options that belong to each model (a model refuses options meant for another).
-_MODEL_OPTIONS = {
-    "preetham": {"turbidity"},
-    "preetham-overcast": {"turbidity"},
-    "cie": {"sky_type", "zenith_luminance", "diffuse_illuminance"},
-    "cie-overcast": {"zenith_luminance", "diffuse_illuminance"},
-    "cie-clear": {"zenith_luminance", "diffuse_illuminance"},
-    "perez": {"epsilon", "delta", "diffuse_illuminance", "direct_normal_irradiance", "diffuse_horizontal_irradiance"},
-    "bruneton": {"altitude"},
-}
+from .sky_options import add_model_options, build_sky_from_args
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -42,26 +31,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "writes sky.exr and sky.png: a clear (T = 2.5) mid-morning sky, sun 35 deg high in the south-east.",
         formatter_class=HELP_FORMATTER,
     )
-    p.add_argument("--model", choices=list(SKY_MODELS), default="preetham",
-                   help="sky model: " + "; ".join(f"{k}: {v}" for k, v in SKY_MODELS.items()))
-    m = p.add_argument_group("model parameters (each applies to the models named)")
-    m.add_argument("--turbidity", type=finite_float, default=None, metavar="T",
-                   help="preetham: turbidity, 1.65 to 11 (default 2.5, a clear sky); preetham-overcast: "
-                   "1.65 to 11, blended into the CIE overcast sky from T = 6 to 10 (default 8)")
-    m.add_argument("--sky-type", type=int, choices=range(1, 16), default=None, metavar="N",
-                   help="cie: CIE 2003 standard sky type 1-15 (default 12, clear sky with low turbidity)")
-    m.add_argument("--zenith-luminance", type=finite_float, default=None, metavar="CD_M2",
-                   help="cie*: zenith luminance [cd m^-2] (default: the model's own scale)")
-    m.add_argument("--diffuse-illuminance", type=finite_float, default=None, metavar="LX",
-                   help="cie*, perez: horizontal diffuse illuminance [lx] to scale the sky to")
-    m.add_argument("--epsilon", type=finite_float, default=None, help="perez: sky clearness epsilon [1, inf)")
-    m.add_argument("--delta", type=finite_float, default=None, help="perez: sky brightness delta [0, 1)")
-    m.add_argument("--dni", dest="direct_normal_irradiance", type=finite_float, default=None, metavar="W_M2",
-                   help="perez: direct normal irradiance [W m^-2]")
-    m.add_argument("--dhi", dest="diffuse_horizontal_irradiance", type=finite_float, default=None, metavar="W_M2",
-                   help="perez: diffuse horizontal irradiance [W m^-2]")
-    m.add_argument("--altitude", type=float_in(0.0, 1e8), default=None, metavar="M",
-                   help="bruneton: observer altitude above sea level [m], from the ground to orbit (default 0)")
+    add_model_options(p, list(SKY_MODELS), default="preetham")
     add_sun_options(p)
     g = p.add_argument_group("image")
     g.add_argument("--projection", choices=["equirect", "fisheye", "pinhole"], default="equirect",
@@ -89,12 +59,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..render import sky_image, write_exr_and_png
-    from ..sky.registry import build_sky
-
     check_output_paths(args)
     # The precomputed atmosphere ignores refraction, so it wants the geometric sun (docs/bruneton.md).
     zenith, azimuth = sun_angles_from_args(args, apparent=args.model != "bruneton")
-    model = build_sky(args.model, zenith, azimuth, **select_model_options(args, _MODEL_OPTIONS))
+    model = build_sky_from_args(args, zenith, azimuth)
     t0 = time.perf_counter()
     image = sky_image(
         model,

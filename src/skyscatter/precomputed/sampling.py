@@ -43,19 +43,26 @@ def mie_phase(nu: float, g: float) -> float:
 
 
 @_jit
-def transmittance_to_top(table, r, mu, bottom, top, out):
-    """Transmittance from (r, mu) to the top of the atmosphere, ignoring the ground (table lookup)."""
-    n_r, n_mu, n_l = table.shape
-    p_r, p_mu = transmittance_coord(r, mu, bottom, top, n_r, n_mu)
-    i, wr = lerp_index(p_r, 0, n_r - 1)
-    j, wm = lerp_index(p_mu, 0, n_mu - 1)
-    a00 = (1.0 - wr) * (1.0 - wm)
-    a01 = (1.0 - wr) * wm
-    a10 = wr * (1.0 - wm)
-    a11 = wr * wm
+def bilinear_read(table, p0, p1, out):
+    """Bilinear read of a 2D table of spectra (n0, n1, n_wavelengths) at texel coordinates (p0, p1)."""
+    n0, n1, n_l = table.shape
+    i, w0 = lerp_index(p0, 0, n0 - 1)
+    j, w1 = lerp_index(p1, 0, n1 - 1)
+    a00 = (1.0 - w0) * (1.0 - w1)
+    a01 = (1.0 - w0) * w1
+    a10 = w0 * (1.0 - w1)
+    a11 = w0 * w1
     for k in range(n_l):
         out[k] = (a00 * table[i, j, k] + a01 * table[i, j + 1, k]
                   + a10 * table[i + 1, j, k] + a11 * table[i + 1, j + 1, k])
+
+
+@_jit
+def transmittance_to_top(table, r, mu, bottom, top, out):
+    """Transmittance from (r, mu) to the top of the atmosphere, ignoring the ground (table lookup)."""
+    n_r, n_mu, _ = table.shape
+    p_r, p_mu = transmittance_coord(r, mu, bottom, top, n_r, n_mu)
+    bilinear_read(table, p_r, p_mu, out)
 
 
 @_jit
@@ -111,17 +118,9 @@ def transmittance_to_sun(table, r, mu_s, bottom, top, alpha, out):
 @_jit
 def irradiance_lookup(table, r, mu_s, bottom, top, out):
     """Bilinear read of an irradiance table (n_r, n_mu_s, n_wavelengths)."""
-    n_r, n_m, n_l = table.shape
+    n_r, n_m, _ = table.shape
     p_r, p_m = irradiance_coord(r, mu_s, bottom, top, n_r, n_m)
-    i, wr = lerp_index(p_r, 0, n_r - 1)
-    j, wm = lerp_index(p_m, 0, n_m - 1)
-    a00 = (1.0 - wr) * (1.0 - wm)
-    a01 = (1.0 - wr) * wm
-    a10 = wr * (1.0 - wm)
-    a11 = wr * wm
-    for k in range(n_l):
-        out[k] = (a00 * table[i, j, k] + a01 * table[i, j + 1, k]
-                  + a10 * table[i + 1, j, k] + a11 * table[i + 1, j + 1, k])
+    bilinear_read(table, p_r, p_m, out)
 
 
 @_jit
