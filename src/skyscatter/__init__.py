@@ -23,7 +23,7 @@ _LAZY = {
     "CIEStandardSky": "skyscatter.sky.cie",
     "PerezSky": "skyscatter.sky.perez",
     "skymatrix": "skyscatter.sky_matrix",
-    "BrunetonSky": "skyscatter.precomputed.sky",
+    "BrunetonSky": "skyscatter.sky.bruneton",
 }
 _SUBMODULES = {
     "aerial",

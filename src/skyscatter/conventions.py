@@ -84,9 +84,14 @@ def as_directions(directions: ArrayLike, *, normalise: bool = True) -> NDArray[n
     InvalidDirectionError
         If the last axis is not of length 3, or a vector contains NaN/inf or has zero length.
     """
-    d = np.asarray(directions)
-    if not np.issubdtype(d.dtype, np.floating):
-        d = d.astype(float)
+    try:
+        d = np.asarray(directions)
+        if not np.issubdtype(d.dtype, np.floating):
+            d = d.astype(float)
+    except (TypeError, ValueError):  # ragged lists, strings, objects
+        raise InvalidDirectionError(
+            f"directions must be numbers in an array of shape (..., 3) (x east, y north, z up); got {directions!r:.60}"
+        ) from None
     if d.ndim == 0 or d.shape[-1] != 3:
         raise InvalidDirectionError(
             f"directions must be an array of shape (..., 3) (x east, y north, z up); got shape {d.shape}"

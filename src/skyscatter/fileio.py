@@ -7,13 +7,32 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
+import secrets
 from collections.abc import Iterator
 from pathlib import Path
 
 from .errors import OutputError
 
 __all__ = ["atomic_path"]
+
+
+def _create_temporary(target: Path, folder: Path) -> Path:
+    """Create an empty, unique hidden file beside ``target`` with the permissions a plain ``open()`` would give.
+
+    ``os.open(..., 0o666)`` lets the kernel apply the process umask, so no thread ever changes the umask (reading
+    it with ``os.umask`` means setting it, which races with other threads creating files).
+    """
+    for _ in range(100):
+        name = folder / f".{target.stem}.{secrets.token_hex(4)}.tmp{target.suffix}"
+        try:
+            fd = os.open(name, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from exc
+        os.close(fd)
+        return name
+    raise OutputError(f"cannot write {target}: no free temporary name in {folder}")  # pragma: no cover
 
 
 @contextlib.contextmanager
@@ -32,16 +51,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     folder = target.parent if str(target.parent) else Path(".")
     if not folder.is_dir():
         raise OutputError(f"cannot write {target}: folder {folder} does not exist")
-    try:
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=f".tmp{target.suffix}", dir=folder)
-    except OSError as exc:
-        raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from exc
-    os.close(fd)
-    tmp = Path(tmp_name)
-    # mkstemp creates the file private (0600); give the result the permissions a plain open() would.
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
+    tmp = _create_temporary(target, folder)
     try:
         yield tmp
         os.replace(tmp, target)

@@ -40,6 +40,7 @@ from .epw import EPWData, EPWLocation, read_epw
 from .errors import FileFormatError, InvalidParameterError
 from .fileio import atomic_path
 from .patches import PatchScheme, patch_scheme
+from .sky.perez_family import extended_perez_scalar
 
 __all__ = ["NORMALISATION_NODES", "SkyMatrix", "perez_patch_luminance", "skymatrix"]
 
@@ -49,10 +50,9 @@ NORMALISATION_NODES = (48, 96)
 
 @numba.njit(cache=True, inline="always")
 def _perez_f(a, b, c, d, e, cos_theta, cos_gamma):  # pragma: no cover - compiled
-    ct = max(cos_theta, 0.01)
-    cg = min(1.0, max(-1.0, cos_gamma))
-    f = (1.0 + a * np.exp(b / ct)) * (1.0 + c * np.exp(d * np.arccos(cg)) + e * cg * cg)
-    return max(f, 0.0)
+    """Perez 1993 F through the shared kernel, negative values clipped (PerezSky's guards)."""
+    gamma = np.arccos(min(1.0, max(-1.0, cos_gamma)))
+    return max(extended_perez_scalar(cos_theta, gamma, a, b, 1.0, c, d, e, 0.0, 0.0, 0.0, 0.0), 0.0)
 
 
 @numba.njit(cache=True, parallel=True)

@@ -217,14 +217,13 @@ def _panels(args: argparse.Namespace, figure: str) -> list[_Panel]:
         elevation, az = 90.0 - math.degrees(zenith), math.degrees(azimuth)
         if args.model == "bruneton":
             from ..errors import InvalidParameterError
-            from .demo_bruneton import bruneton_panel_title
 
             for opt in ("sky", "turbidity", "aerial"):
                 if getattr(args, opt) is not None:
                     raise InvalidParameterError(f"--{opt} does not apply to --model bruneton (the precomputed "
                                                 "atmosphere gives the sky and the aerial perspective)")
-            panels.append(_Panel("landscape", bruneton_panel_title(zenith, azimuth), None, None, WEST,
-                                 bruneton_sun=(zenith, azimuth)))
+            title = (f"bruneton (precomputed, light shafts), sun {elevation:.1f} deg at {az:.1f} deg")
+            panels.append(_Panel("landscape", title, None, None, WEST, bruneton_sun=(zenith, azimuth)))
             return panels
         t = 2.5 if args.turbidity is None else args.turbidity
         model = args.sky or "preetham"
@@ -387,7 +386,7 @@ def run(args: argparse.Namespace) -> int:
         heading = panel.heading if args.heading is None else args.heading
         camera = PinholeCamera.from_degrees((x, y, z), heading, args.pitch, args.fov)
         if panel.bruneton_sun is not None:
-            from .demo_bruneton import bruneton_scene
+            from ..render.bruneton import bruneton_scene
 
             scenes.append(bruneton_scene(terrain, camera, *panel.bruneton_sun, albedo=args.albedo,
                                          sun_disc=args.sun_disc, wavelengths=wavelengths))

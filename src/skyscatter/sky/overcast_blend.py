@@ -52,6 +52,8 @@ class PreethamOvercastBlendSky(SunSkyMixin, SkyModel):
         Turbidities where the overcast weight starts rising from 0 and reaches 1 (default 6 and 10).
     """
 
+    model_name = "preetham-overcast"
+
     def __init__(
         self,
         turbidity: float,
@@ -62,6 +64,7 @@ class PreethamOvercastBlendSky(SunSkyMixin, SkyModel):
         blend_end: float = 10.0,
     ) -> None:
         self.clear = PreethamSky(turbidity, sun_zenith, sun_azimuth)
+        self._remember(turbidity=self.clear.turbidity, blend_start=float(blend_start), blend_end=float(blend_end))
         self.turbidity = self.clear.turbidity
         self.sun_zenith, self.sun_azimuth = self.clear.sun_zenith, self.clear.sun_azimuth
         self.weight = overcast_weight(self.turbidity, float(blend_start), float(blend_end))

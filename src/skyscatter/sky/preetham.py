@@ -33,6 +33,7 @@ from ..spectral import (
     xyY_to_xyz,
 )
 from .base import SkyModel, SunSkyMixin, check_sun_angles
+from .perez_family import extended_perez_scalar, perez_f
 
 __all__ = [
     "MAX_TURBIDITY",
@@ -75,8 +76,6 @@ _ZENITH_Y = np.array(
         [0.15346, -0.26756, 0.06670, 0.26688],
     ]
 )
-# Smallest cos(theta) used in exp(B / cos theta): B < 0 in the valid range, so the term vanishes at the horizon.
-_MIN_COS = 1e-6
 
 
 def preetham_coefficients(turbidity: float) -> dict[str, NDArray[np.float64]]:
@@ -117,27 +116,6 @@ def preetham_zenith_values(turbidity: float, sun_zenith: float) -> tuple[float, 
     return float(y_z), float(tv @ _ZENITH_X @ sv), float(tv @ _ZENITH_Y @ sv)
 
 
-def perez_f(cos_theta: ArrayLike, gamma: ArrayLike, coefficients: ArrayLike) -> NDArray[np.float64]:
-    """Perez et al. 1993 luminance distribution in Preetham's form (Preetham 1999, Eq. 3).
-
-    ``F = (1 + A exp(B / cos theta)) (1 + C exp(D gamma) + E cos^2 gamma)``.
-
-    Parameters
-    ----------
-    cos_theta : array_like
-        Cosine of the view zenith angle; clamped to >= 1e-6 so the horizon gives the finite limit.
-    gamma : array_like
-        Angle between the view direction and the sun [rad].
-    coefficients : array_like, shape (5,)
-        A, B, C, D, E.
-    """
-    a, b, c, d, e = np.asarray(coefficients, dtype=float)
-    cos_theta = np.maximum(np.asarray(cos_theta, dtype=float), _MIN_COS)
-    gamma = np.asarray(gamma, dtype=float)
-    cos_g = np.cos(gamma)
-    return (1.0 + a * np.exp(b / cos_theta)) * (1.0 + c * np.exp(d * gamma) + e * cos_g * cos_g)
-
-
 class PreethamSky(SunSkyMixin, SkyModel):
     """The Preetham et al. 1999 analytic clear-sky model (Sec. 3, Appendix A.2 and A.5) with its sun (A.1).
 
@@ -168,6 +146,8 @@ class PreethamSky(SunSkyMixin, SkyModel):
     some wavelengths; those values are clipped to zero.
     """
 
+    model_name = "preetham"
+
     def __init__(
         self,
         turbidity: float,
@@ -184,6 +164,7 @@ class PreethamSky(SunSkyMixin, SkyModel):
             raise InvalidParameterError(f"below_horizon must be 'zero' or 'horizon'; got {below_horizon!r}")
         self.below_horizon = below_horizon
         self.strict = strict
+        self._remember(turbidity=t, below_horizon=below_horizon, strict=strict)
         self._coefficients = preetham_coefficients(t)
         y_z, x_z, yc_z = preetham_zenith_values(t, self.sun_zenith)
         self._zenith = {"Y": y_z * 1000.0, "x": x_z, "y": yc_z}
@@ -288,7 +269,7 @@ def _preetham_kernel(d, sun, coefficients, scale, horizon_mode, clip_negative, o
     """x, y, Y of the Preetham sky for unit-normalised copies of ``d`` (n, 3); returns the number of bad rows.
 
     One fused pass over the directions (Perez form, Eq. 3, for the three channels) instead of many numpy
-    temporaries; it evaluates exactly :func:`perez_f` per channel.
+    temporaries; it evaluates the shared Perez-family kernel (:mod:`skyscatter.sky.perez_family`) per channel.
     """
     n = d.shape[0]
     bad = 0
@@ -320,15 +301,10 @@ def _preetham_kernel(d, sun, coefficients, scale, horizon_mode, clip_negative, o
             below = False
         cos_gamma = min(1.0, max(-1.0, dx * sun[0] + dy * sun[1] + dz * sun[2]))
         gamma = np.arccos(cos_gamma)
-        inv_cos = 1.0 / max(dz, _MIN_COS)
         for c in range(3):
-            a = coefficients[c, 0]
-            b = coefficients[c, 1]
-            cc = coefficients[c, 2]
-            dd = coefficients[c, 3]
-            e = coefficients[c, 4]
-            f = (1.0 + a * np.exp(b * inv_cos)) * (1.0 + cc * np.exp(dd * gamma) + e * cos_gamma * cos_gamma)
-            out[c, i] = scale[c] * f
+            k = coefficients[c]
+            out[c, i] = scale[c] * extended_perez_scalar(dz, gamma, k[0], k[1], 1.0, k[2], k[3], k[4], 0.0, 0.0, 0.0,
+                                                         0.0)
         if clip_negative and out[2, i] < 0.0:
             out[2, i] = 0.0
         if below:
