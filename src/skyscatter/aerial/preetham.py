@@ -5,6 +5,9 @@
 (:class:`~skyscatter.aerial.scattering.ScatteringTable`) and I from :mod:`skyscatter.aerial.integrals`.
 Scattering coefficients: Rayleigh for molecules and Mie with the Table 1/Table 2 data for haze (A.3), via
 :mod:`skyscatter.atmosphere`.
+
+Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
+doi:10.1145/311535.311545.
 """
 
 from __future__ import annotations

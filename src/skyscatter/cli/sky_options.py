@@ -42,16 +42,23 @@ def _specs(models: Iterable[str]):
     return [registry.get(m) for m in models]
 
 
-def add_model_options(parser: argparse.ArgumentParser, models: list[str] | None = None, default: str = "preetham",
-                      *, flag: str = "--model") -> None:
-    """``--model`` (one of ``models``, default: every registered model) and those models' parameters."""
+def add_model_options(parser, models: list[str] | None = None, default: str | None = "preetham",
+                      *, flag: str = "--model", dest: str = "model", shown_default: str | None = None) -> None:
+    """``--model`` (one of ``models``, default: every registered model) and those models' parameters.
+
+    ``parser`` is a parser or an argument group; ``flag`` and ``dest`` name the model option (the demo calls it
+    ``--sky``, since its ``--model`` chooses the atmosphere).
+    """
     from ..sky import registry
 
     names = list(models) if models is not None else registry.names()
     specs = _specs(names)
-    parser.add_argument(flag, dest="model", choices=names, default=default,
-                        help=f"sky model (default {default}): " + "; ".join(f"{s.name}: {s.summary}" for s in specs))
-    group = parser.add_argument_group("model parameters (each applies to the models named)")
+    parser.add_argument(flag, dest=dest, choices=names, default=default,
+                        help=f"sky model (default {shown_default or default}): "
+                        + "; ".join(f"{s.name}: {s.summary}" for s in specs))
+    # an argument group (the demo's scene options) takes the parameters itself: groups do not nest
+    nested = isinstance(parser, argparse.ArgumentParser)
+    group = parser.add_argument_group("model parameters (each applies to the models named)") if nested else parser
     by_flag: dict[str, list[tuple[str, Any]]] = {}
     for spec in specs:
         for p in spec.parameters:
@@ -74,14 +81,15 @@ def add_model_options(parser: argparse.ArgumentParser, models: list[str] | None 
             kwargs["type"] = _PARSERS.get(first.kind, str)
             kwargs["metavar"] = _metavar(first)
         group.add_argument(cli_flag, **kwargs)
-    parser.set_defaults(_models=names)
+    parser.set_defaults(_models=names, _model_dest=dest, _model_flag=flag)
 
 
 def model_options(args: argparse.Namespace) -> dict[str, Any]:
     """The parameters given for ``args.model``, range-checked; an option of another model is refused."""
     from ..sky import registry
 
-    spec = registry.get(args.model)
+    chosen = getattr(args, args._model_dest)
+    spec = registry.get(chosen)
     own = {p.name: p for p in spec.parameters if p.cli}
     given: dict[str, Any] = {}
     for other in _specs(args._models):
@@ -89,7 +97,7 @@ def model_options(args: argparse.Namespace) -> dict[str, Any]:
             if not p.cli or getattr(args, p.name, None) is None:
                 continue
             if p.name not in own:
-                raise InvalidParameterError(f"{p.cli_flag}: does not apply to --model {args.model}")
+                raise InvalidParameterError(f"{p.cli_flag}: does not apply to {args._model_flag} {chosen}")
             value = getattr(args, p.name)
             try:
                 given[p.name] = own[p.name].check(value, spec.name)
@@ -102,4 +110,4 @@ def build_sky_from_args(args: argparse.Namespace, sun_zenith: float, sun_azimuth
     """The sky model chosen by ``--model`` with its options, for a sun at (zenith, azimuth) [rad]."""
     from ..sky import registry
 
-    return registry.build(args.model, sun_zenith, sun_azimuth, **model_options(args))
+    return registry.build(getattr(args, args._model_dest), sun_zenith, sun_azimuth, **model_options(args))

@@ -17,6 +17,9 @@ decreasing wavelength, so the default tables are R = 680 nm, G = 550 nm, B = 440
   channel of ``C_M`` in A; the other Mie channels follow from the proportionality rule of Sec. 4.
 * ``atmosphere.json`` - sizes, coordinate mappings, constants, per-channel coefficients, the radiance formula
   and the matrix from channels to CIE XYZ.
+
+Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
+doi:10.1111/j.1467-8659.2008.01245.x.
 """
 
 from __future__ import annotations

@@ -27,6 +27,9 @@ Mappings (Sec. 4, "Parameterization", with the distance-based forms of Bruneton'
   paper's ``(1 - exp(-3 mu_s - 0.6)) / (1 - exp(-3.6))`` but ending exactly at the chosen ``mu_s_min``.
 * ``x_nu = (1 + nu) / 2`` (the paper's ``u_nu``).
 * Irradiance table: ``x_r = (r - R_g) / (R_t - R_g)``, ``x_mu_s = (1 + mu_s) / 2``.
+
+Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
+doi:10.1111/j.1467-8659.2008.01245.x.
 """
 
 from __future__ import annotations

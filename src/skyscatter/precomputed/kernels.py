@@ -17,6 +17,9 @@ Tables are float32 arrays with a trailing wavelength axis; sums are accumulated 
 Ray integrals use product integration (:func:`.sampling.exp_segment_weights`): exact when the scattering
 coefficient is exponential between two samples and the rest of the integrand linear, which keeps 50 samples
 accurate for the 1.2 km aerosol layer on vertical rays where the plain trapezoidal rule is 8 % off.
+
+Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
+doi:10.1111/j.1467-8659.2008.01245.x.
 """
 
 from __future__ import annotations

@@ -36,6 +36,9 @@ Guards (on by default, ``guards=False`` turns them off; each is what Radiance's 
   uniform (gendaymtx's last resort), noted in ``guards_applied``.
 
 Spectra: CIE D65 scaled to the luminance (``cct`` = 6504 K). Directions below the horizon are 0.
+
+Reference: Perez, Seals & Michalsky (1993), Solar Energy 50(3):235-245, doi:10.1016/0038-092X(93)90017-I; Perez et
+al. (1990), Solar Energy 44(5):271-289, doi:10.1016/0038-092X(90)90055-H.
 """
 
 from __future__ import annotations

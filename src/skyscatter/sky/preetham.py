@@ -9,6 +9,9 @@ with the distribution coefficients linear in turbidity T and the zenith values Y
 Appendix A.2 (zenith chromaticity matrices with the published 5-digit values, see ``shared/seeds/README.md``).
 Spectra are reconstructed from (x, y) with the CIE daylight basis (A.5) and scaled to the model's luminance.
 The sun is the A.1 spectral sunlight (:func:`skyscatter.sun.sunlight.sun_spectral_radiance`).
+
+Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
+doi:10.1145/311535.311545.
 """
 
 from __future__ import annotations
@@ -45,7 +48,7 @@ __all__ = [
 ]
 
 #: Smallest turbidity for which the published coefficients keep F(0, theta_s) > 0 for Y: below about 1.64
-#: ``1 + A_Y exp(B_Y)`` changes sign and the luminance turns negative (seeds README, errata).
+#: ``1 + A_Y exp(B_Y)`` changes sign and the luminance turns negative (a known limit of the published fit).
 MIN_TURBIDITY = 1.65
 #: Largest turbidity for which Y_z stays positive with the sun on the horizon: ``-0.2155 T + 2.4192 > 0``
 #: needs T < 11.226 (A.2).
