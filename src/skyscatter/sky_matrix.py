@@ -51,8 +51,8 @@ NORMALISATION_NODES = (48, 96)
 @numba.njit(cache=True, inline="always")
 def _perez_f(a, b, c, d, e, cos_theta, cos_gamma):  # pragma: no cover - compiled
     """Perez 1993 F through the shared kernel, negative values clipped (PerezSky's guards)."""
-    gamma = np.arccos(min(1.0, max(-1.0, cos_gamma)))
-    return max(extended_perez_scalar(cos_theta, gamma, a, b, 1.0, c, d, e, 0.0, 0.0, 0.0, 0.0), 0.0)
+    cg = min(1.0, max(-1.0, cos_gamma))
+    return max(extended_perez_scalar(cos_theta, np.arccos(cg), cg, a, b, 1.0, c, d, e, 0.0, 0.0, 0.0, 0.0), 0.0)
 
 
 @numba.njit(cache=True, parallel=True)

@@ -55,11 +55,13 @@ HORIZON_COS = 0.01
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def extended_perez_scalar(cos_theta, gamma, a, b, c, d, e, f, g, h, i, offset):  # pragma: no cover - compiled
-    """F(theta, gamma) for one direction; ``offset`` 0 applies the 0.01 floor, > 0 adds it (Hosek-Wilkie)."""
+def extended_perez_scalar(cos_theta, gamma, cos_g, a, b, c, d, e, f, g, h, i, offset):  # pragma: no cover
+    """F(theta, gamma) for one direction, given gamma [rad] and its cosine (callers usually have both).
+
+    ``offset`` 0 applies the 0.01 floor of the classic models; > 0 adds it to cos theta (Hosek-Wilkie).
+    """
     ct = max(cos_theta, 0.0)
     denominator = ct + offset if offset > 0.0 else max(ct, HORIZON_COS)
-    cos_g = math.cos(gamma)
     indicatrix = c + d * math.exp(e * gamma) + f * cos_g * cos_g
     if g != 0.0:  # Hosek-Wilkie's aureole term; zero for the classic models (saves a pow per direction)
         indicatrix += g * (1.0 + cos_g * cos_g) / (1.0 + h * h - 2.0 * h * cos_g) ** 1.5
@@ -68,10 +70,14 @@ def extended_perez_scalar(cos_theta, gamma, a, b, c, d, e, f, g, h, i, offset): 
     return (1.0 + a * math.exp(b / denominator)) * indicatrix
 
 
+def _from_gamma(cos_theta, gamma, a, b, c, d, e, f, g, h, i, offset):  # pragma: no cover - compiled
+    return extended_perez_scalar(cos_theta, gamma, math.cos(gamma), a, b, c, d, e, f, g, h, i, offset)
+
+
 _extended_perez_ufunc = numba.vectorize(
     ["float64(float64, float64, float64, float64, float64, float64, float64, float64, float64, float64, float64, "
      "float64)"], nopython=True, cache=True,
-)(extended_perez_scalar.py_func)
+)(_from_gamma)
 
 
 def extended_perez(cos_theta: ArrayLike, gamma: ArrayLike, parameters: ArrayLike, *, offset: float = 0.0

@@ -306,8 +306,8 @@ def _preetham_kernel(d, sun, coefficients, scale, horizon_mode, clip_negative, o
         gamma = np.arccos(cos_gamma)
         for c in range(3):
             k = coefficients[c]
-            out[c, i] = scale[c] * extended_perez_scalar(dz, gamma, k[0], k[1], 1.0, k[2], k[3], k[4], 0.0, 0.0, 0.0,
-                                                         0.0)
+            out[c, i] = scale[c] * extended_perez_scalar(dz, gamma, cos_gamma, k[0], k[1], 1.0, k[2], k[3], k[4],
+                                                         0.0, 0.0, 0.0, 0.0)
         if clip_negative and out[2, i] < 0.0:
             out[2, i] = 0.0
         if below:
