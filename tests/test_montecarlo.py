@@ -168,3 +168,26 @@ def test_bad_input(kw):
     wl = args.pop("wavelengths")
     with pytest.raises(InvalidParameterError):
         sky_radiance(EARTH, DIRS, wl, **args)
+
+
+# ----------------------------------------------------------------------------------------------- sky model
+
+
+def test_montecarlo_sky_model_answers_the_protocol():
+    from skyscatter.sky.montecarlo import MonteCarloSky
+    from skyscatter.sky.registry import build_sky
+
+    sky = build_sky("montecarlo", math.radians(40.0), 1.0, samples=256)
+    assert isinstance(sky, MonteCarloSky)
+    d = np.array([[[0.0, 0.0, 1.0], [0.3, 0.3, 0.9]], [[0.0, 1.0, 0.1], [1.0, 0.0, 0.2]]])
+    wl = [450.0, 550.0]
+    L = sky.spectral_radiance(d, wl)
+    assert L.shape == (2, 2, 2) and np.all(L > 0)
+    # same seed and samples: identical to the driver
+    ref = sky_radiance(EARTH, d.reshape(-1, 3), wl, sun_zenith=math.radians(40.0), sun_azimuth=1.0, samples=256)
+    np.testing.assert_array_equal(L.reshape(-1, 2), ref.radiance)
+    sun = sky.sun_spectral_radiance(wl)
+    assert sun.shape == (2,) and np.all(sun > 1e3)
+    assert np.allclose(sky.sun_direction @ [0, 0, 1], math.cos(math.radians(40.0)))
+    with pytest.raises(InvalidParameterError):
+        MonteCarloSky(0.5, samples=0)

@@ -16,6 +16,7 @@ MODEL_OPTIONS: dict[str, set[str]] = {
     "perez": {"epsilon", "delta", "diffuse_illuminance", "direct_normal_irradiance",
               "diffuse_horizontal_irradiance", "day_of_year", "dew_point"},
     "bruneton": {"altitude"},
+    "montecarlo": {"altitude"},
 }
 
 

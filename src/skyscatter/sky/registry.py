@@ -18,6 +18,7 @@ SKY_MODELS = {
     "cie-clear": "CIE 1973 clear sky (Kittler), luminance only",
     "perez": "Perez et al. 1993 all-weather sky (--epsilon/--delta or --dni/--dhi)",
     "bruneton": "Bruneton & Neyret 2008 precomputed multiple scattering (any --altitude)",
+    "montecarlo": "spectral Monte Carlo reference (all orders, spherical atmosphere; slow, see docs/montecarlo.md)",
 }
 
 
@@ -55,4 +56,8 @@ def build_sky(name: str, sun_zenith: float, sun_azimuth: float, **options: Any) 
         from ..precomputed.sky import BrunetonSky
 
         return BrunetonSky(sun_zenith, sun_azimuth, **opts)
+    if name == "montecarlo":
+        from .montecarlo import MonteCarloSky
+
+        return MonteCarloSky(sun_zenith, sun_azimuth, **opts)
     raise InvalidParameterError(f"unknown sky model {name!r}; choose one of {', '.join(SKY_MODELS)}")
