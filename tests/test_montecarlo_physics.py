@@ -19,8 +19,7 @@ import math
 import numpy as np
 import pytest
 
-from skyscatter.montecarlo import sky_radiance, solar_disc_radiance
-from skyscatter.montecarlo import kernels
+from skyscatter.montecarlo import kernels, sky_radiance, solar_disc_radiance
 from skyscatter.montecarlo.driver import prepare_medium
 from skyscatter.precomputed import AtmosphereParameters, DensityProfile
 
@@ -140,7 +139,6 @@ def _disort_principal_plane(p: AtmosphereParameters, wl: float, sun_zen_deg: flo
     n = edges.size - 1
     br = float(p.rayleigh_scattering_at([wl])[0])
     be = float(p.mie_extinction_at([wl])[0])
-    bs = be * p.mie_single_scattering_albedo
     g = p.mie_phase_g
     streams = 32
     nmom = streams
