@@ -111,8 +111,10 @@ def test_result_does_not_depend_on_task_sizes_or_threads():
     assert not np.any(other.radiance == ref.radiance)
 
 
+@pytest.mark.slow
 def test_identical_on_a_local_cluster_with_two_worker_processes():
-    """synchronous == LocalCluster(n_workers=2, threads_per_worker=1, processes=True), bit for bit."""
+    """synchronous == LocalCluster(n_workers=2, threads_per_worker=1, processes=True), bit for bit. Kept small (6
+    tasks of 600 paths); most of its time is starting the two worker processes."""
     distributed = pytest.importorskip("distributed")
     kw = dict(sun_zenith=math.radians(45.0), samples=600, seed=21, directions_per_task=1, batches_per_task=1)
     ref = sky_radiance(EARTH, DIRS, [450.0, 550.0], scheduler="synchronous", **kw)
