@@ -433,6 +433,26 @@ register(ModelSpec(
     spectral=True,
     cost="tables",
 ))
+register(ModelSpec(
+    name="montecarlo",
+    factory="skyscatter.sky.montecarlo:MonteCarloSky",
+    summary="spectral Monte Carlo reference: all orders of scattering in the spherical atmosphere (slow)",
+    citation="Brute-force spectral path tracing as in Hosek & Wilkie (2012), Sec. 3, doi:10.1145/2185520.2185591; "
+             "method: skyscatter docs/montecarlo.md",
+    parameters=(
+        Parameter("altitude", "m", 0.0, "observer altitude above the ground", low=0.0, high=1e8),
+        Parameter("samples", "1", 1024, "paths per direction (the standard error falls as 1/sqrt(samples))",
+                  kind="int", low=1, high=1e8),
+        Parameter("seed", "1", 0, "seed of the counter-based random streams", kind="int", low=0, high=2**63 - 1),
+        Parameter("phase", "", "cornette-shanks", "aerosol phase function", kind="choice",
+                  choices=("cornette-shanks", "henyey-greenstein"), cli=False),
+        Parameter("atmosphere", "", None, "the medium (AtmosphereParameters; default: the Earth defaults)",
+                  kind="atmosphere", cli=False),
+    ),
+    sun_below_horizon=True,
+    spectral=True,
+    cost="expensive",
+))
 
 
 class _Summaries(Mapping):
