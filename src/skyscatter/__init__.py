@@ -1,6 +1,7 @@
 """skyscatter: physically based daylight.
 
-Sun position, spectral sunlight, sky models (Preetham 1999, CIE, Perez 1993, Bruneton & Neyret 2008),
+Sun position, spectral sunlight, sky models (Preetham 1999, CIE, Perez 1993, Hosek & Wilkie 2012,
+Bruneton & Neyret 2008),
 aerial perspective and sky/landscape images. Frame, units and colour conventions are in
 ``docs/conventions.md``: ENU directions, radians, nm, SI radiometric units, cd m^-2.
 
@@ -22,6 +23,7 @@ _LAZY = {
     "CIEClearSky": "skyscatter.sky.cie",
     "CIEStandardSky": "skyscatter.sky.cie",
     "PerezSky": "skyscatter.sky.perez",
+    "HosekWilkieSky": "skyscatter.sky.hosek_wilkie",
     "skymatrix": "skyscatter.sky_matrix",
     "BrunetonSky": "skyscatter.precomputed.sky",
 }
