@@ -338,3 +338,31 @@ def test_dataset_round_trip_and_bad_files(tmp_path):
         HosekWilkieDataset.load(tmp_path / "other.npz")
     with pytest.raises(FileFormatError):
         HosekWilkieDataset(ds.wavelengths, ds.params[:, :, :, :5], ds.radiance)
+
+
+# -- registry and command line -------------------------------------------------------------------------------
+def test_registry_builds_hosek_wilkie():
+    from skyscatter.sky.registry import SKY_MODELS, build_sky
+
+    assert "hosek-wilkie" in SKY_MODELS
+    sky = build_sky("hosek-wilkie", 0.5, 1.0, turbidity=4.0, albedo=None)
+    assert isinstance(sky, HosekWilkieSky) and sky.turbidity == 4.0 and sky.albedo == 0.1
+
+
+def test_cli_sky_and_illuminance(tmp_path, capsys):
+    from skyscatter.cli import main
+    from skyscatter.render import read_exr
+
+    out = tmp_path / "hw.exr"
+    code = main(["sky", "--model", "hosek-wilkie", "--turbidity", "4", "--albedo", "0.3", "--width", "32",
+                 "--sun-elevation", "30", "--out", str(out), "--png", str(tmp_path / "hw.png")])
+    assert code == 0, capsys.readouterr().err
+    img = read_exr(out)
+    assert img.shape == (16, 32, 3) and np.all(np.isfinite(img)) and img.max() > 0
+    assert main(["illuminance", "--model", "hosek-wilkie", "--sun-elevation", "30", "--json"]) == 0
+    capsys.readouterr()
+    assert main(["sky", "--model", "hosek-wilkie", "--albedo", "1.5", "--out", str(out)]) == 2
+    assert "--albedo: expected a number in [0, 1]" in capsys.readouterr().err
+    assert main(["illuminance", "--model", "hosek-wilkie", "--turbidity", "0.5"]) == 2
+    err = capsys.readouterr().err
+    assert "turbidity must be in [1, 10]" in err and len(err.strip().splitlines()) == 1

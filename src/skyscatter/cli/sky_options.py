@@ -16,6 +16,7 @@ MODEL_OPTIONS: dict[str, set[str]] = {
     "perez": {"epsilon", "delta", "diffuse_illuminance", "direct_normal_irradiance",
               "diffuse_horizontal_irradiance", "day_of_year", "dew_point"},
     "bruneton": {"altitude"},
+    "hosek-wilkie": {"turbidity", "albedo"},
 }
 
 
@@ -33,7 +34,10 @@ def _day_of_year(text: str) -> int:
 _OPTIONS: dict[str, tuple[str, dict]] = {
     "turbidity": ("--turbidity", dict(type=finite_float, metavar="T",
                   help="preetham: turbidity, 1.65 to 11 (default 2.5, a clear sky); preetham-overcast: 1.65 to 11, "
-                  "blended into the CIE overcast sky from T = 6 to 10 (default 8)")),
+                  "blended into the CIE overcast sky from T = 6 to 10 (default 8); hosek-wilkie: 1 to 10 "
+                  "(default 3)")),
+    "albedo": ("--albedo", dict(type=float_in(0.0, 1.0), metavar="RHO",
+               help="hosek-wilkie: ground albedo 0 to 1, all wavelengths (default 0.1)")),
     "sky_type": ("--sky-type", dict(type=int, choices=range(1, 16), metavar="N",
                  help="cie: CIE 2003 standard sky type 1-15 (default 12, the CIE clear sky)")),
     "zenith_luminance": ("--zenith-luminance", dict(type=finite_float, metavar="CD_M2",

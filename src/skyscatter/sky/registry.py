@@ -17,6 +17,7 @@ SKY_MODELS = {
     "cie-overcast": "CIE overcast sky (Moon & Spencer 1942), luminance only",
     "cie-clear": "CIE 1973 clear sky (Kittler), luminance only",
     "perez": "Perez et al. 1993 all-weather sky (--epsilon/--delta or --dni/--dhi)",
+    "hosek-wilkie": "Hosek & Wilkie 2012 spectral clear sky with the 2013 solar disc (--turbidity 1-10, --albedo)",
     "bruneton": "Bruneton & Neyret 2008 precomputed multiple scattering (any --altitude)",
 }
 
@@ -51,6 +52,10 @@ def build_sky(name: str, sun_zenith: float, sun_azimuth: float, **options: Any) 
         from .perez import PerezSky
 
         return PerezSky(sun_zenith, sun_azimuth, **opts)
+    if name == "hosek-wilkie":
+        from .hosek_wilkie import HosekWilkieSky
+
+        return HosekWilkieSky(sun_zenith, sun_azimuth, **opts)
     if name == "bruneton":
         from ..precomputed.sky import BrunetonSky
 
