@@ -43,6 +43,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import math
+
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -51,7 +54,7 @@ from ..errors import FileFormatError, InvalidParameterError
 from ..fileio import atomic_path
 from ..spectral import as_wavelengths
 from .base import SkyModel, SunSkyMixin, check_sun_angles
-from .perez_family import hosek_wilkie_f
+from .perez_family import hosek_wilkie_f_scalar
 
 __all__ = [
     "BANDS",
@@ -413,19 +416,12 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
 
         With ``clip`` negative values are set to 0 (see the class notes).
         """
-        flat, gamma, shape = self._geometry(directions)
-        out = np.zeros((flat.shape[0], scale.size))
-        chunk = 65536
-        for start in range(0, flat.shape[0], chunk):
-            sl = slice(start, start + chunk)
-            cos_t = flat[sl, 2]
-            up = cos_t >= 0.0
-            if not np.any(up):
-                continue
-            f = hosek_wilkie_f(cos_t[up, None], gamma[sl][up, None], params) * scale
-            block = np.zeros((cos_t.size, scale.size))
-            block[up] = np.maximum(f, 0.0) if clip else f
-            out[sl] = block
+        d = as_directions(directions)
+        shape = d.shape[:-1]
+        flat = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
+        out = np.empty((flat.shape[0], scale.size))
+        _evaluate_kernel(flat, np.asarray(self.sun_direction, dtype=np.float64),
+                         np.ascontiguousarray(params), np.ascontiguousarray(scale), clip, out)
         return out.reshape(*shape, scale.size)
 
     def band_radiance(self, directions: ArrayLike) -> NDArray[np.float64]:
@@ -445,7 +441,12 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
             d = as_directions(directions)
             return np.zeros((*d.shape[:-1], wl.size))
         bands = self._evaluate(directions, self._params[used], self._radiance[used], clip=False)
-        return np.maximum(bands @ weights[:, used].T, 0.0)
+        w = weights[:, used]
+        out = np.zeros((*bands.shape[:-1], wl.size))
+        for j in range(wl.size):  # at most two bands per wavelength
+            for k in np.nonzero(w[j])[0]:
+                out[..., j] += w[j, k] * bands[..., k]
+        return np.maximum(out, 0.0, out=out)
 
     def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
         """CIE 1931 XYZ [cd m^-2] from the authors' XYZ dataset (683 times its X, Y, Z), shape (..., 3)."""
@@ -558,6 +559,29 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         """CIE XYZ [cd m^-2] of the disc-averaged sun, integrated from its spectrum over 320-720 nm."""
         self._require_sun()
         return super().sun_xyz()
+
+
+@numba.njit(parallel=True, nogil=True, cache=True)
+def _evaluate_kernel(d, sun, params, scale, clip, out):  # pragma: no cover - compiled
+    """out[n, b] = F(theta_n, gamma_n; params[b]) * scale[b] (0 below the horizon, clipped at 0 if ``clip``).
+
+    gamma = atan2(|d x s|, d . s), accurate near the sun; the reference code takes cos(gamma) of it.
+    """
+    n_bands = scale.size
+    for n in numba.prange(d.shape[0]):
+        x, y, z = d[n, 0], d[n, 1], d[n, 2]
+        if z < 0.0:
+            for b in range(n_bands):
+                out[n, b] = 0.0
+            continue
+        cx = y * sun[2] - z * sun[1]
+        cy = z * sun[0] - x * sun[2]
+        cz = x * sun[1] - y * sun[0]
+        gamma = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), x * sun[0] + y * sun[1] + z * sun[2])
+        for b in range(n_bands):
+            p = params[b]
+            v = scale[b] * hosek_wilkie_f_scalar(z, gamma, p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8])
+            out[n, b] = max(v, 0.0) if clip else v
 
 
 @lru_cache(maxsize=1)

@@ -11,10 +11,13 @@ L. Hosek and A. Wilkie, "An Analytic Model for Full Spectral Sky-Dome Radiance",
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["HOSEK_WILKIE_PARAMETER_ORDER", "hosek_wilkie_f"]
+__all__ = ["HOSEK_WILKIE_PARAMETER_ORDER", "hosek_wilkie_f", "hosek_wilkie_f_scalar"]
 
 #: The order of the nine parameters in the published datasets and in ``hosek_wilkie_f``'s last axis: the
 #: paper's A-I with I (the zenith term) stored before H (the aerosol anisotropy), exactly as the authors'
@@ -55,11 +58,24 @@ def hosek_wilkie_f(cos_theta: ArrayLike, gamma: ArrayLike, params: ArrayLike) ->
     p = np.asarray(params, dtype=np.float64)
     if p.shape[-1:] != (9,):
         raise ValueError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
-    a, b, c, d, e, f, g, i, h = (p[..., k] for k in range(9))
-    ct = np.clip(np.asarray(cos_theta, dtype=np.float64), 0.0, 1.0)
-    gam = np.asarray(gamma, dtype=np.float64)
-    cg = np.cos(gam)
+    return _hosek_wilkie_ufunc(
+        np.asarray(cos_theta, dtype=np.float64), np.asarray(gamma, dtype=np.float64), *(p[..., k] for k in range(9))
+    )
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def hosek_wilkie_f_scalar(cos_theta, gamma, a, b, c, d, e, f, g, i, h):  # pragma: no cover - compiled
+    """:func:`hosek_wilkie_f` for one direction and one parameter set (numba; callable from compiled loops)."""
+    ct = min(max(cos_theta, 0.0), 1.0)
+    cg = math.cos(gamma)
     cg2 = cg * cg
-    mie = (1.0 + cg2) / np.power(1.0 + h * h - 2.0 * h * cg, 1.5)
-    gradation = 1.0 + a * np.exp(b / (ct + 0.01))
-    return gradation * (c + d * np.exp(e * gam) + f * cg2 + g * mie + i * np.sqrt(ct))
+    q = 1.0 + h * h - 2.0 * h * cg
+    mie = (1.0 + cg2) / (q * math.sqrt(q))  # q^1.5 (equal to pow(q, 1.5) to rounding, and faster)
+    gradation = 1.0 + a * math.exp(b / (ct + 0.01))
+    return gradation * (c + d * math.exp(e * gamma) + f * cg2 + g * mie + i * math.sqrt(ct))
+
+
+@numba.vectorize(["float64(float64, float64, float64, float64, float64, float64, float64, float64, float64, "
+                  "float64, float64)"], nopython=True, cache=True)
+def _hosek_wilkie_ufunc(cos_theta, gamma, a, b, c, d, e, f, g, i, h):  # pragma: no cover - compiled
+    return hosek_wilkie_f_scalar(cos_theta, gamma, a, b, c, d, e, f, g, i, h)
