@@ -36,14 +36,13 @@ Graphics and Applications 33(3), 44-52 (2013), https://doi.org/10.1109/MCG.2013.
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 from typing import Any
-
-import math
 
 import numba
 import numpy as np
