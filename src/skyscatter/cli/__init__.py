@@ -15,7 +15,7 @@ from .. import __version__
 from ..errors import SkyscatterError
 
 # Subcommand modules in the order ``--help`` lists them.
-_COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo", "precompute", "export_luts"]
+_COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo", "precompute", "export_luts", "fit_hosek_wilkie"]
 
 
 class OneLineParser(argparse.ArgumentParser):

@@ -17,7 +17,7 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["HOSEK_WILKIE_PARAMETER_ORDER", "hosek_wilkie_f", "hosek_wilkie_f_scalar"]
+__all__ = ["HOSEK_WILKIE_PARAMETER_ORDER", "hosek_wilkie_f", "hosek_wilkie_f_jacobian", "hosek_wilkie_f_scalar"]
 
 #: The order of the nine parameters in the published datasets and in ``hosek_wilkie_f``'s last axis: the
 #: paper's A-I with I (the zenith term) stored before H (the aerosol anisotropy), exactly as the authors'
@@ -61,6 +61,46 @@ def hosek_wilkie_f(cos_theta: ArrayLike, gamma: ArrayLike, params: ArrayLike) ->
     return _hosek_wilkie_ufunc(
         np.asarray(cos_theta, dtype=np.float64), np.asarray(gamma, dtype=np.float64), *(p[..., k] for k in range(9))
     )
+
+
+def hosek_wilkie_f_jacobian(cos_theta: ArrayLike, gamma: ArrayLike, params: ArrayLike) -> NDArray[np.float64]:
+    """Partial derivatives of :func:`hosek_wilkie_f` with respect to its nine parameters, shape (..., 9).
+
+    Same arguments and broadcasting as :func:`hosek_wilkie_f`; the last axis follows the parameter order
+    A, B, C, D, E, F, G, I, H. With gradation ``Q = 1 + A exp(B / (cos theta + 0.01))`` and
+    ``S = C + D exp(E gamma) + F cos^2 gamma + G chi + I sqrt(cos theta)``: dF/dA = exp(...) S,
+    dF/dB = A exp(...) S / (cos theta + 0.01), dF/dC = Q, dF/dD = Q exp(E gamma), dF/dE = Q D gamma exp(E gamma),
+    dF/dF = Q cos^2 gamma, dF/dG = Q chi, dF/dI = Q sqrt(cos theta),
+    dF/dH = -3 Q G (1 + cos^2 gamma) (H - cos gamma) / (1 + H^2 - 2 H cos gamma)^(5/2).
+    """
+    p = np.asarray(params, dtype=np.float64)
+    if p.shape[-1:] != (9,):
+        raise ValueError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
+    a, b, c, d, e, f, g, i, h = (p[..., k] for k in range(9))
+    ct = np.clip(np.asarray(cos_theta, dtype=np.float64), 0.0, 1.0)
+    gam = np.asarray(gamma, dtype=np.float64)
+    cg = np.cos(gam)
+    cg2 = cg * cg
+    q = 1.0 + h * h - 2.0 * h * cg
+    chi = (1.0 + cg2) / (q * np.sqrt(q))
+    grad_exp = np.exp(b / (ct + 0.01))
+    ray = np.exp(e * gam)
+    sq = np.sqrt(ct)
+    big_q = 1.0 + a * grad_exp
+    s = c + d * ray + f * cg2 + g * chi + i * sq
+    parts = [
+        grad_exp * s,
+        a * grad_exp * s / (ct + 0.01),
+        big_q,
+        big_q * ray,
+        big_q * d * gam * ray,
+        big_q * cg2,
+        big_q * chi,
+        big_q * sq,
+        -3.0 * big_q * g * (1.0 + cg2) * (h - cg) / (q * q * np.sqrt(q)),
+    ]
+    shape = np.broadcast_shapes(*(x.shape for x in parts))
+    return np.stack([np.broadcast_to(x, shape) for x in parts], axis=-1)
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
