@@ -40,7 +40,6 @@ def main(out_dir: Path) -> None:
     t0 = time.perf_counter()
     ds = fit_hosek_wilkie(make, WL, provenance={"atmosphere": "skyscatter AtmosphereParameters() Earth defaults"})
     fit_seconds = time.perf_counter() - t0
-    ds.save(out_dir / "hosek_wilkie_fit_bruneton_default.npz")
     print(f"fit: {WL.size} wavelengths, {fit_seconds:.1f} s (sampling {ds.provenance['fit']['sampling_seconds']} s)")
     t_fit = np.power(fit_sun_elevations() / (np.pi / 2), 1 / 3)
     t_test = 0.5 * (t_fit[:-1] + t_fit[1:])
@@ -66,11 +65,15 @@ def main(out_dir: Path) -> None:
     except ImportError:
         return
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    colours = ("tab:blue", "tab:green", "tab:red")
     for k, w in enumerate(WL):
-        ax[0].semilogy([r[0] for r in rows], [r[1][k] * 100 for r in rows], "o-", label=f"fit {w:g} nm, >= 5 deg")
-        ax[0].semilogy([r[0] for r in rows], [r[2][k] * 100 for r in rows], "s--", label=f"fit {w:g} nm, 0-5 deg")
-        ax[1].plot([r[0] for r in rows], [r[3][k] * 100 for r in rows], "o-", label=f"published T=1, {w:g} nm")
-    ax[0].axhline(5, color="k", lw=0.8)
+        c = colours[k]
+        ax[0].semilogy([r[0] for r in rows], [r[1][k] * 100 for r in rows], "o-", color=c,
+                       label=f"{w:g} nm, sky >= 5 deg")
+        ax[0].semilogy([r[0] for r in rows], [r[2][k] * 100 for r in rows], "s--", color=c,
+                       label=f"{w:g} nm, 0-5 deg above horizon")
+        ax[1].plot([r[0] for r in rows], [r[3][k] * 100 for r in rows], "o-", color=c, label=f"{w:g} nm")
+    ax[0].axhline(5, color="k", lw=0.8, label="5 % target")
     ax[0].set(xscale="log", xlabel="sun elevation [deg] (between fitted elevations)", ylabel="RMS relative error [%]",
               title="Hosek-Wilkie form fitted to the precomputed atmosphere")
     ax[1].set(xscale="log", xlabel="sun elevation [deg]", ylabel="RMS relative error [%]",

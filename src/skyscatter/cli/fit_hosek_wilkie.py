@@ -46,7 +46,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     f = p.add_argument_group("fit")
     f.add_argument("--fit-wavelengths", type=_wavelength_list, default=[440.0, 550.0, 680.0], metavar="LIST",
                    help="wavelengths to fit [nm], e.g. 440,550,680")
-    f.add_argument("--elevations", type=positive_int, default=10, metavar="N",
+    f.add_argument("--elevations", type=positive_int, default=16, metavar="N",
                    help="number of sun elevations sampled, even in (elevation / 90 deg)^(1/3), at least 6")
     p.set_defaults(func=run)
 

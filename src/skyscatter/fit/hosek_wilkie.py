@@ -34,7 +34,7 @@ from ..sky.perez_family import hosek_wilkie_f, hosek_wilkie_f_jacobian
 __all__ = ["default_sample_directions", "fit_hosek_wilkie", "fit_sun_elevations", "sky_fit_error"]
 
 
-def fit_sun_elevations(n: int = 10) -> NDArray[np.float64]:
+def fit_sun_elevations(n: int = 16) -> NDArray[np.float64]:
     """Sun elevations [rad] evenly spaced in the Bezier parameter t = (eta / (pi/2))^(1/3), horizon to zenith."""
     t = np.linspace(0.0, 1.0, n)
     return t**3 * (np.pi / 2.0)
@@ -122,7 +122,7 @@ def fit_hosek_wilkie(
     wavelengths : array_like
         Wavelengths [nm] to fit (each independently), increasing.
     sun_elevations : array_like, optional
-        Sun elevations [rad] to sample, in [0, pi/2]; default :func:`fit_sun_elevations` (10, even in t).
+        Sun elevations [rad] to sample, in [0, pi/2]; default :func:`fit_sun_elevations` (16, even in t).
         At least 6 (one per control point).
     directions : array_like, shape (n, 3), optional
         Sample directions for a sun at azimuth 0 (default :func:`default_sample_directions`).
