@@ -33,6 +33,7 @@ REFERENCE_TESTS = {
     "perez": "test_perez.py",
     "bruneton": "test_precomputed_sky.py",
     "montecarlo": "test_montecarlo_physics.py",
+    "hosek-wilkie": "test_hosek_wilkie.py",
 }
 #: Parameters that keep costly models quick in this suite (the statistics are tested in the model's own tests).
 QUICK = {"montecarlo": {"samples": 4}}
@@ -181,8 +182,11 @@ def test_xyz_luminance_and_spectrum_agree(spec):
     from_spectrum = spectrum_to_luminance(sky.spectral_radiance(d, REFERENCE_WAVELENGTHS), REFERENCE_WAVELENGTHS)
     # Luminance-only skies scale one spectrum of luminance 1 (exact to rounding); spectral models integrate their
     # own spectra: Preetham's Y comes from its Perez fit, not from the reconstructed spectrum (within 0.5 %,
-    # README); the precomputed tables' XYZ matrix against their reconstructed spectra (within 1 %).
-    tolerance = {"preetham": 5e-3, "preetham-overcast": 5e-3, "bruneton": 1e-2}.get(spec.name, 1e-9)
+    # README); the precomputed tables' XYZ matrix against their reconstructed spectra (within 1 %); Hosek-Wilkie's
+    # luminance comes from the authors' separately fitted CIE XYZ dataset, and their spectral model stops at
+    # 720 nm (within 6 %, docs/hosek_wilkie.md and tests/test_hosek_wilkie.py).
+    tolerance = {"preetham": 5e-3, "preetham-overcast": 5e-3, "bruneton": 1e-2, "hosek-wilkie": 6e-2}.get(
+        spec.name, 1e-9)
     np.testing.assert_allclose(from_spectrum, y, rtol=tolerance, atol=1e-9 * float(np.max(y)))
 
 

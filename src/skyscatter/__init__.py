@@ -1,8 +1,9 @@
 """skyscatter: physically based daylight.
 
-Sun position, spectral sunlight, sky models (Preetham 1999, CIE, Perez 1993, Bruneton & Neyret 2008),
-aerial perspective and sky/landscape images. Frame, units and colour conventions are in
-``docs/conventions.md``: ENU directions, radians, nm, SI radiometric units, cd m^-2.
+Sun position, spectral sunlight, sky models (Preetham 1999, CIE, Perez 1993, Hosek & Wilkie 2012, Bruneton &
+Neyret 2008), fitting of the Hosek-Wilkie form to any atmosphere, aerial perspective and sky/landscape images.
+Frame, units and colour conventions are in ``docs/conventions.md``: ENU directions, radians, nm, SI radiometric
+units, cd m^-2.
 
 Public names are imported lazily so ``import skyscatter`` stays fast.
 """
@@ -22,6 +23,7 @@ _LAZY = {
     "CIEClearSky": "skyscatter.sky.cie",
     "CIEStandardSky": "skyscatter.sky.cie",
     "PerezSky": "skyscatter.sky.perez",
+    "HosekWilkieSky": "skyscatter.sky.hosek_wilkie",
     "skymatrix": "skyscatter.sky_matrix",
     "BrunetonSky": "skyscatter.sky.bruneton",
 }
@@ -31,6 +33,7 @@ _SUBMODULES = {
     "conventions",
     "epw",
     "errors",
+    "fit",
     "patches",
     "photometry",
     "precomputed",

@@ -53,7 +53,8 @@ def _scene_options(args: argparse.Namespace) -> list[str]:
 
     for spec in registry.models():
         for p in spec.parameters:
-            if p.cli and getattr(args, p.name, None) is not None and p.name not in names:
+            own_option = p.name in getattr(args, "_model_shared", ())  # e.g. the terrain's --albedo
+            if p.cli and not own_option and getattr(args, p.name, None) is not None and p.name not in names:
                 names.append(p.name)
     return names
 
@@ -103,7 +104,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     from ..sky import registry
 
     add_model_options(s, [m for m in registry.names() if m != "bruneton"], default=None, flag="--sky",
-                      dest="model_sky", shown_default="preetham")
+                      dest="model_sky", shown_default="preetham", shared=("albedo",))
     s.description = (f"--turbidity is the sky's and the haze's turbidity; with a sky that has none (cie*, perez) it "
                      f"is the haze's alone (1.65 to 11, default {DEFAULT_HAZE_TURBIDITY}).")
     s.add_argument("--aerial", choices=["analytic", "numeric", "constant", "ward-larson", "none"], default=None,
@@ -124,7 +125,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     c.add_argument("--dem-spacing", type=float_in(1e-3, 1e6), default=None, metavar="M",
                    help="sample spacing of the elevation model [m] (GeoTIFF: default from the file)")
     c.add_argument("--albedo", type=float_in(0.0, 1.0), default=0.2, metavar="RHO",
-                   help="Lambertian albedo of the terrain")
+                   help="Lambertian albedo of the terrain (and of the ground in sky models that take one, such as "
+                   "hosek-wilkie)")
     c.add_argument("--camera-x", type=float_in(-_MAX_CAMERA_XY, _MAX_CAMERA_XY), default=None, metavar="M",
                    help="camera east coordinate [m], within +-1e7 (default on the built-in landscape: 12000 for "
                    "figure 7 and custom panels, -26000 for figure 8; the centre of a DEM)")

@@ -14,7 +14,7 @@ from .common import (
 )
 from .sky_options import add_model_options, build_sky_from_args
 
-_MODELS = ["cie", "cie-overcast", "cie-clear", "perez", "preetham"]
+_MODELS = ["cie", "cie-overcast", "cie-clear", "perez", "preetham", "hosek-wilkie"]
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

@@ -43,11 +43,14 @@ def _specs(models: Iterable[str]):
 
 
 def add_model_options(parser, models: list[str] | None = None, default: str | None = "preetham",
-                      *, flag: str = "--model", dest: str = "model", shown_default: str | None = None) -> None:
+                      *, flag: str = "--model", dest: str = "model", shown_default: str | None = None,
+                      shared: tuple[str, ...] = ()) -> None:
     """``--model`` (one of ``models``, default: every registered model) and those models' parameters.
 
     ``parser`` is a parser or an argument group; ``flag`` and ``dest`` name the model option (the demo calls it
-    ``--sky``, since its ``--model`` chooses the atmosphere).
+    ``--sky``, since its ``--model`` chooses the atmosphere). ``shared`` names parameters the command already has
+    as options of its own (the demo's ``albedo``, the terrain's): no option is added for them, and their value
+    goes to the models that take them.
     """
     from ..sky import registry
 
@@ -62,7 +65,7 @@ def add_model_options(parser, models: list[str] | None = None, default: str | No
     by_flag: dict[str, list[tuple[str, Any]]] = {}
     for spec in specs:
         for p in spec.parameters:
-            if p.cli:
+            if p.cli and p.name not in shared:
                 by_flag.setdefault(p.cli_flag, []).append((spec.name, p))
     for cli_flag, entries in by_flag.items():
         first = entries[0][1]
@@ -81,7 +84,7 @@ def add_model_options(parser, models: list[str] | None = None, default: str | No
             kwargs["type"] = _PARSERS.get(first.kind, str)
             kwargs["metavar"] = _metavar(first)
         group.add_argument(cli_flag, **kwargs)
-    parser.set_defaults(_models=names, _model_dest=dest, _model_flag=flag)
+    parser.set_defaults(_models=names, _model_dest=dest, _model_flag=flag, _model_shared=tuple(shared))
 
 
 def model_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -95,6 +98,10 @@ def model_options(args: argparse.Namespace) -> dict[str, Any]:
     for other in _specs(args._models):
         for p in other.parameters:
             if not p.cli or getattr(args, p.name, None) is None:
+                continue
+            if p.name in args._model_shared:  # the command's own option, passed on where the model takes it
+                if p.name in own:
+                    given[p.name] = own[p.name].check(getattr(args, p.name), spec.name)
                 continue
             if p.name not in own:
                 raise InvalidParameterError(f"{p.cli_flag}: does not apply to {args._model_flag} {chosen}")

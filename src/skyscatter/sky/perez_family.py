@@ -42,9 +42,14 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "HORIZON_COS",
+    "HOSEK_WILKIE_OFFSET",
+    "HOSEK_WILKIE_PARAMETER_ORDER",
     "cie_parameters",
     "extended_perez",
     "extended_perez_scalar",
+    "hosek_wilkie_f",
+    "hosek_wilkie_f_jacobian",
+    "hosek_wilkie_f_scalar",
     "kittler_parameters",
     "perez_f",
     "perez_parameters_from_abcde",
@@ -52,6 +57,14 @@ __all__ = [
 
 #: Floor of cos(theta) in the gradation of the classic Perez-family models (Radiance perezlum.cal).
 HORIZON_COS = 0.01
+#: Offset added to cos(theta) in Hosek & Wilkie's gradation (their Eq. 9 as the v1.4a reference code has it).
+HOSEK_WILKIE_OFFSET = 0.01
+#: The order of the nine parameters in Hosek & Wilkie's datasets and in ``hosek_wilkie_f``'s last axis: the
+#: paper's A-I with I (the zenith term) stored before H (the aerosol anisotropy), exactly as the authors'
+#: reference code reads them (``configuration[7]`` multiplies sqrt(cos theta), ``configuration[8]`` is H).
+HOSEK_WILKIE_PARAMETER_ORDER = ("A", "B", "C", "D", "E", "F", "G", "I", "H")
+# index into (A..G, I, H) for each alphabetical parameter A..I
+_HW_TO_ALPHABETICAL = np.array([0, 1, 2, 3, 4, 5, 6, 8, 7])
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -60,11 +73,12 @@ def extended_perez_scalar(cos_theta, gamma, cos_g, a, b, c, d, e, f, g, h, i, of
 
     ``offset`` 0 applies the 0.01 floor of the classic models; > 0 adds it to cos theta (Hosek-Wilkie).
     """
-    ct = max(cos_theta, 0.0)
+    ct = min(max(cos_theta, 0.0), 1.0)
     denominator = ct + offset if offset > 0.0 else max(ct, HORIZON_COS)
     indicatrix = c + d * math.exp(e * gamma) + f * cos_g * cos_g
-    if g != 0.0:  # Hosek-Wilkie's aureole term; zero for the classic models (saves a pow per direction)
-        indicatrix += g * (1.0 + cos_g * cos_g) / (1.0 + h * h - 2.0 * h * cos_g) ** 1.5
+    if g != 0.0:  # Hosek-Wilkie's aureole term; zero for the classic models (saves a root per direction)
+        q = 1.0 + h * h - 2.0 * h * cos_g
+        indicatrix += g * (1.0 + cos_g * cos_g) / (q * math.sqrt(q))  # q^1.5, equal to pow(q, 1.5) to rounding
     if i != 0.0:
         indicatrix += i * math.sqrt(ct)
     return (1.0 + a * math.exp(b / denominator)) * indicatrix
@@ -136,3 +150,77 @@ def kittler_parameters() -> NDArray[np.float64]:
     """CIE 1973 clear sky (Kittler; Preetham 1999 Eq. 1): ``(1 - exp(-0.32 / cos theta))
     (0.91 + 10 exp(-3 gamma) + 0.45 cos^2 gamma)`` as extended parameters."""
     return np.array([-1.0, -0.32, 0.91, 10.0, -3.0, 0.45, 0.0, 0.0, 0.0])
+
+
+# ------------------------------------------------------------------------------------------ Hosek & Wilkie 2012
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def hosek_wilkie_f_scalar(cos_theta, gamma, a, b, c, d, e, f, g, i, h):  # pragma: no cover - compiled
+    """Hosek & Wilkie's F for one direction, parameters in their stored order A..G, I, H (for compiled loops)."""
+    return extended_perez_scalar(cos_theta, gamma, math.cos(gamma), a, b, c, d, e, f, g, h, i, HOSEK_WILKIE_OFFSET)
+
+
+def hosek_wilkie_f(cos_theta: ArrayLike, gamma: ArrayLike, params: ArrayLike) -> NDArray[np.float64]:
+    """Extended Perez distribution of Hosek & Wilkie 2012 (Eq. 9 with the anisotropy term chi of Eq. 10).
+
+    ``F = (1 + A exp(B / (cos theta + 0.01))) (C + D exp(E gamma) + F cos^2 gamma + G chi(H, gamma)
+    + I sqrt(cos theta))``: the module's kernel with the offset 0.01 of the reference code
+    (``ArHosekSkyModel_GetRadianceInternal``, v1.4a). The result is relative: the model's radiance is this times
+    the per-band radiance scale L_M (Eq. 11).
+
+    Parameters
+    ----------
+    cos_theta : array_like
+        Cosine of the view zenith angle; clipped to [0, 1] (the form is defined on the upper hemisphere only:
+        sqrt(cos theta) is NaN below, and ``cos theta + 0.01`` passes through 0 at 90.6 deg), so a direction
+        below the horizon gets the horizon value; sky models return zero there.
+    gamma : array_like
+        Angle between the view direction and the sun [rad], 0 to pi.
+    params : array_like, shape (..., 9)
+        A, B, C, D, E, F, G, I, H (:data:`HOSEK_WILKIE_PARAMETER_ORDER`), broadcast against the angles.
+    """
+    p = np.asarray(params, dtype=np.float64)
+    if p.shape[-1:] != (9,):
+        raise ValueError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
+    return extended_perez(cos_theta, gamma, p[..., _HW_TO_ALPHABETICAL], offset=HOSEK_WILKIE_OFFSET)
+
+
+def hosek_wilkie_f_jacobian(cos_theta: ArrayLike, gamma: ArrayLike, params: ArrayLike) -> NDArray[np.float64]:
+    """Partial derivatives of :func:`hosek_wilkie_f` with respect to its nine parameters, shape (..., 9).
+
+    Same arguments and broadcasting as :func:`hosek_wilkie_f`; the last axis follows the parameter order
+    A, B, C, D, E, F, G, I, H. With gradation ``Q = 1 + A exp(B / (cos theta + 0.01))`` and
+    ``S = C + D exp(E gamma) + F cos^2 gamma + G chi + I sqrt(cos theta)``: dF/dA = exp(...) S,
+    dF/dB = A exp(...) S / (cos theta + 0.01), dF/dC = Q, dF/dD = Q exp(E gamma), dF/dE = Q D gamma exp(E gamma),
+    dF/dF = Q cos^2 gamma, dF/dG = Q chi, dF/dI = Q sqrt(cos theta),
+    dF/dH = -3 Q G (1 + cos^2 gamma) (H - cos gamma) / (1 + H^2 - 2 H cos gamma)^(5/2).
+    """
+    p = np.asarray(params, dtype=np.float64)
+    if p.shape[-1:] != (9,):
+        raise ValueError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
+    a, b, c, d, e, f, g, i, h = (p[..., k] for k in range(9))
+    ct = np.clip(np.asarray(cos_theta, dtype=np.float64), 0.0, 1.0)
+    gam = np.asarray(gamma, dtype=np.float64)
+    cg = np.cos(gam)
+    cg2 = cg * cg
+    q = 1.0 + h * h - 2.0 * h * cg
+    chi = (1.0 + cg2) / (q * np.sqrt(q))
+    grad_exp = np.exp(b / (ct + HOSEK_WILKIE_OFFSET))
+    ray = np.exp(e * gam)
+    sq = np.sqrt(ct)
+    big_q = 1.0 + a * grad_exp
+    s = c + d * ray + f * cg2 + g * chi + i * sq
+    parts = [
+        grad_exp * s,
+        a * grad_exp * s / (ct + HOSEK_WILKIE_OFFSET),
+        big_q,
+        big_q * ray,
+        big_q * d * gam * ray,
+        big_q * cg2,
+        big_q * chi,
+        big_q * sq,
+        -3.0 * big_q * g * (1.0 + cg2) * (h - cg) / (q * q * np.sqrt(q)),
+    ]
+    shape = np.broadcast_shapes(*(x.shape for x in parts))
+    return np.stack([np.broadcast_to(x, shape) for x in parts], axis=-1)

@@ -58,9 +58,10 @@ class Parameter:
         Value used when the parameter is not given (None: optional, the model decides).
     help : str
         One line for documentation and ``--help``.
-    kind : {"float", "int", "bool", "choice", "atmosphere"}
-        Value type. ``"atmosphere"`` is an :class:`~skyscatter.atmosphere.AtmosphereParameters` (serialised with
-        its own ``to_dict``).
+    kind : {"float", "int", "bool", "choice", "atmosphere", "object"}
+        Value type. ``"atmosphere"`` is an :class:`~skyscatter.atmosphere.AtmosphereParameters` or precomputed
+        tables (serialised through the parameters' ``to_dict``); ``"object"`` a skyscatter object with
+        ``to_dict`` / ``from_dict`` (such as a fitted dataset).
     low, high : float or None
         Inclusive valid range of numeric values (None: unbounded on that side).
     choices : tuple
@@ -144,6 +145,11 @@ class Parameter:
             return None
         if self.kind == "atmosphere":
             return _encode_atmosphere(value)
+        if self.kind == "object":
+            if not hasattr(value, "to_dict"):
+                raise InvalidParameterError(f"{self.name}: a {type(value).__name__} cannot be described as data")
+            cls = type(value)
+            return {"class": f"{cls.__module__}:{cls.__qualname__}", "data": value.to_dict()}
         if self.kind == "float":
             return float(value)
         if self.kind == "int":
@@ -152,8 +158,13 @@ class Parameter:
 
     def decode(self, value: Any) -> Any:
         """Inverse of :meth:`encode`."""
-        if value is None or self.kind != "atmosphere":
+        if value is None or self.kind not in ("atmosphere", "object"):
             return value
+        if self.kind == "object":
+            if not isinstance(value, Mapping) or not str(value.get("class", "")).startswith("skyscatter."):
+                raise InvalidParameterError(f"{self.name}: expected an encoded skyscatter object")
+            module, _, name = value["class"].partition(":")
+            return getattr(importlib.import_module(module), name).from_dict(value["data"])
         return _decode_atmosphere(self.name, value)
 
 
@@ -416,6 +427,21 @@ register(ModelSpec(
         Parameter("guards", "", True, "apply Radiance gendaylit's guards on epsilon, delta and the sun zenith",
                   kind="bool", cli=False),
     ),
+))
+register(ModelSpec(
+    name="hosek-wilkie",
+    factory="skyscatter.sky.hosek_wilkie:HosekWilkieSky",
+    summary="Hosek & Wilkie 2012 spectral clear sky (320-720 nm) with the 2013 solar disc",
+    citation="Hosek & Wilkie (2012), An Analytic Model for Full Spectral Sky-Dome Radiance, ACM TOG 31(4):95, "
+             "doi:10.1145/2185520.2185591; Hosek & Wilkie (2013), Adding a Solar-Radiance Function to the "
+             "Hosek-Wilkie Skylight Model, IEEE CG&A 33(3):44-52, doi:10.1109/MCG.2013.18",
+    parameters=(
+        Parameter("turbidity", "1", 3.0, "turbidity of the published model", low=1.0, high=10.0),
+        Parameter("albedo", "1", 0.1, "ground albedo, the same at every wavelength", low=0.0, high=1.0),
+        Parameter("dataset", "", None, "fitted coefficients (skyscatter.fit) instead of the published ones",
+                  kind="object", cli=False),
+    ),
+    spectral=True,
 ))
 register(ModelSpec(
     name="bruneton",
