@@ -132,24 +132,49 @@ def _piece_columns(r2, b, a, c, rb, layers, nlay, out):
 
 
 @_jit
-def column_along(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp):
-    """March along ``p + t d`` for ``0 <= t <= t_end`` [m] until the optical depth ``k . col`` reaches ``target``.
+def _invert_in_piece(r2, b, a, c, rem, dtau, target, k0, k1, k2, rb, layers, nlay, tmp):
+    """Distance ``s`` in ``[a, c]`` where the optical depth from ``a`` reaches ``rem`` (``dtau`` over the whole
+    piece); Newton on the Gauss-Legendre integral with a bisection safeguard. ``tmp`` gets the columns over
+    ``[a, s]``."""
+    lo = a
+    hi = c
+    s = a + (c - a) * (rem / dtau if dtau > 0.0 else 0.5)
+    for _ in range(60):
+        _piece_columns(r2, b, a, s, rb, layers, nlay, tmp)
+        f = k0 * tmp[0] + k1 * tmp[1] + k2 * tmp[2] - rem
+        if f > 0.0:
+            hi = s
+        else:
+            lo = s
+        if abs(f) <= 1e-12 * target + 1e-300 or hi - lo <= 1e-9 * (1.0 + s):
+            break
+        rr = math.sqrt(max(r2 + 2.0 * b * s + s * s, 0.0))
+        d0, d1, d2 = _densities(rr, rb, layers, nlay)
+        deriv = k0 * d0 + k1 * d1 + k2 * d2
+        s_new = s - f / deriv if deriv > 0.0 else 0.5 * (lo + hi)
+        if not (lo < s_new < hi):
+            s_new = 0.5 * (lo + hi)
+        s = s_new
+    return s
 
-    ``cols`` (3,) receives the columns [m] of the three components from ``t = 0`` to the returned distance;
-    ``tmp`` is a (3,) work array. Returns ``(t, reached)``; with ``target = inf`` it returns ``(t_end, False)``
-    and the total columns.
-    """
+
+@_jit
+def _march(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec):
+    """:func:`column_along`; also records, per piece ``k``, its end ``t``, the cumulative optical depth and the
+    cumulative columns in ``rec[k, 0:5]`` (``rec`` has at least ``2 len(edges) + 2`` rows). Returns
+    ``(t, reached, n_pieces)``."""
     cols[0] = 0.0
     cols[1] = 0.0
     cols[2] = 0.0
     if t_end <= 0.0:
-        return 0.0, False
+        return 0.0, False, 0
     r2 = px * px + py * py + pz * pz
     r = math.sqrt(r2)
     b = px * dx + py * dy + pz * dz
     ne = edges.shape[0]
     tau = 0.0
     a = 0.0
+    npc = 0
     # crossings in increasing t: inward crossings of the spheres below r (descending radius), then outward ones
     i_in = ne - 1
     while i_in >= 0 and edges[i_in] >= r:
@@ -191,37 +216,68 @@ def column_along(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, l
         _piece_columns(r2, b, a, c, rb, layers, nlay, tmp)
         dtau = k0 * tmp[0] + k1 * tmp[1] + k2 * tmp[2]
         if tau + dtau >= target:
-            rem = target - tau
-            lo = a
-            hi = c
-            s = a + (c - a) * (rem / dtau if dtau > 0.0 else 0.5)
-            for _ in range(40):
-                _piece_columns(r2, b, a, s, rb, layers, nlay, tmp)
-                f = k0 * tmp[0] + k1 * tmp[1] + k2 * tmp[2] - rem
-                if f > 0.0:
-                    hi = s
-                else:
-                    lo = s
-                if abs(f) <= 1e-12 * target + 1e-300 or hi - lo <= 1e-9 * (1.0 + s):
-                    break
-                rr = math.sqrt(max(r2 + 2.0 * b * s + s * s, 0.0))
-                d0, d1, d2 = _densities(rr, rb, layers, nlay)
-                deriv = k0 * d0 + k1 * d1 + k2 * d2
-                s_new = s - f / deriv if deriv > 0.0 else 0.5 * (lo + hi)
-                if not (lo < s_new < hi):
-                    s_new = 0.5 * (lo + hi)
-                s = s_new
+            s = _invert_in_piece(r2, b, a, c, target - tau, dtau, target, k0, k1, k2, rb, layers, nlay, tmp)
             cols[0] += tmp[0]
             cols[1] += tmp[1]
             cols[2] += tmp[2]
-            return s, True
+            return s, True, npc
         tau += dtau
         cols[0] += tmp[0]
         cols[1] += tmp[1]
         cols[2] += tmp[2]
+        rec[npc, 0] = c
+        rec[npc, 1] = tau
+        rec[npc, 2] = cols[0]
+        rec[npc, 3] = cols[1]
+        rec[npc, 4] = cols[2]
+        npc += 1
         if c >= t_end:
-            return t_end, False
+            return t_end, False, npc
         a = c
+
+
+@_jit
+def column_along(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp):
+    """March along ``p + t d`` for ``0 <= t <= t_end`` [m] until the optical depth ``k . col`` reaches ``target``.
+
+    ``cols`` (3,) receives the columns [m] of the three components from ``t = 0`` to the returned distance;
+    ``tmp`` is a (3,) work array. Returns ``(t, reached)``; with ``target = inf`` it returns ``(t_end, False)``
+    and the total columns.
+    """
+    rec = np.empty((2 * edges.shape[0] + 2, 5))
+    t, reached, _ = _march(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp,
+                           rec)
+    return t, reached
+
+
+@_jit
+def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, layers, nlay, rec, npc, cols, tmp):
+    """Collision at hero optical depth ``target`` on a ray already marched to its end (pieces in ``rec``), without
+    integrating it again: the same pieces, cumulative sums and inversion as :func:`_march`."""
+    r2 = px * px + py * py + pz * pz
+    b = px * dx + py * dy + pz * dz
+    a = 0.0
+    tau = 0.0
+    c0 = 0.0
+    c1 = 0.0
+    c2 = 0.0
+    for k in range(npc):
+        if rec[k, 1] >= target:
+            s = _invert_in_piece(r2, b, a, rec[k, 0], target - tau, rec[k, 1] - tau, target, k0, k1, k2, rb, layers,
+                                 nlay, tmp)
+            cols[0] = c0 + tmp[0]
+            cols[1] = c1 + tmp[1]
+            cols[2] = c2 + tmp[2]
+            return s, True
+        a = rec[k, 0]
+        tau = rec[k, 1]
+        c0 = rec[k, 2]
+        c1 = rec[k, 3]
+        c2 = rec[k, 4]
+    cols[0] = c0
+    cols[1] = c1
+    cols[2] = c2
+    return t_end, False
 
 
 @_jit
@@ -273,6 +329,7 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
     sr = np.empty(n)
     sm = np.empty(n)
     stt = np.empty(n)
+    rec = np.empty((2 * edges.shape[0] + 2, 5))
     sx, sy, sz = sun[0], sun[1], sun[2]
     for j in range(ndir):
         d0x, d0y, d0z = dirs[j, 0], dirs[j, 1], dirs[j, 2]
@@ -303,21 +360,21 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                     collided = False
                     forced = first and not ground
                     if forced:
-                        column_along(px, py, pz, dx, dy, dz, t_end, np.inf, kh0, kh1, kh2, rb, edges, layers,
-                                     nlay, tot, tmp)
+                        _, _, npc = _march(px, py, pz, dx, dy, dz, t_end, np.inf, kh0, kh1, kh2, rb, edges,
+                                           layers, nlay, tot, tmp, rec)
                         tau_tot = kh0 * tot[0] + kh1 * tot[1] + kh2 * tot[2]
                         if tau_tot <= 0.0:
                             break
                         u = next_uniform(st)
                         target = -math.log1p(u * math.expm1(-tau_tot))
-                        t, reached = column_along(px, py, pz, dx, dy, dz, t_end, target, kh0, kh1, kh2, rb,
-                                                  edges, layers, nlay, cols, tmp)
+                        t, reached = _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, kh0, kh1, kh2, rb,
+                                                         layers, nlay, rec, npc, cols, tmp)
                         collided = True
                     else:
                         u = next_uniform(st)
                         target = -math.log1p(-u)
-                        t, reached = column_along(px, py, pz, dx, dy, dz, t_end, target, kh0, kh1, kh2, rb,
-                                                  edges, layers, nlay, cols, tmp)
+                        t, reached, _ = _march(px, py, pz, dx, dy, dz, t_end, target, kh0, kh1, kh2, rb, edges,
+                                               layers, nlay, cols, tmp, rec)
                         if reached:
                             collided = True
                         elif not ground:
@@ -344,8 +401,8 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                         wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
                         te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
                         if not blocked:
-                            column_along(px, py, pz, wx, wy, wz, te, np.inf, 0.0, 0.0, 0.0, rb, edges, layers,
-                                         nlay, tot, tmp)
+                            _march(px, py, pz, wx, wy, wz, te, np.inf, 0.0, 0.0, 0.0, rb, edges, layers, nlay, tot,
+                                   tmp, rec)
                             mu = wx * dx + wy * dy + wz * dz
                             pr = rayleigh_phase_value(mu)
                             pm = aerosol_phase(kind, mu, g)
@@ -386,8 +443,8 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                         cs = wx * nx + wy * ny + wz * nz
                         if cs > 0.0:
                             te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
-                            column_along(px, py, pz, wx, wy, wz, te, np.inf, 0.0, 0.0, 0.0, rb, edges, layers,
-                                         nlay, tot, tmp)
+                            _march(px, py, pz, wx, wy, wz, te, np.inf, 0.0, 0.0, 0.0, rb, edges, layers, nlay, tot,
+                                   tmp, rec)
                             for i in range(n):
                                 tr = math.exp(-(coef[i, 0] * tot[0] + coef[i, 1] * tot[1] + coef[i, 2] * tot[2]))
                                 contrib[i] += f[i] * albedo[i] / math.pi * cs * esun[i] * tr
