@@ -14,6 +14,10 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import InvalidDirectionError, InvalidParameterError
 
 __all__ = [
+    "LUMINOUS_SOLAR_CONSTANT",
+    "MAX_EXTRATERRESTRIAL_ILLUMINANCE",
+    "MAX_EXTRATERRESTRIAL_IRRADIANCE",
+    "MAX_SKY_LUMINANCE",
     "direction_from_angles",
     "angles_from_direction",
     "angle_between",
@@ -22,6 +26,23 @@ __all__ = [
     "fisheye_directions",
     "pinhole_directions",
 ]
+
+#: Physical upper bounds of daylight inputs (used to refuse impossible values with the reason).
+#: Largest ratio of the extraterrestrial irradiance to its mean, at perihelion: (1 / (1 - e))^2 with the
+#: orbital eccentricity e = 0.0167 (Spencer 1971's factor peaks at 1.0344 on 3 January).
+PERIHELION_FACTOR = 1.0344
+#: Extraterrestrial normal irradiance at perihelion [W m^-2]: the solar constant 1367 W m^-2 (WRC value that
+#: Perez et al. 1990 and Radiance use; the measured TSI is 1360.8, Kopp & Lean 2011,
+#: doi:10.1029/2010GL045777) times PERIHELION_FACTOR. No direct or diffuse irradiance at the ground exceeds it.
+MAX_EXTRATERRESTRIAL_IRRADIANCE = 1367.0 * PERIHELION_FACTOR
+#: Luminous solar constant [lx] (Darula, Kittler & Gueymard 2005, Solar Energy 79, 559-565,
+#: doi:10.1016/j.solener.2005.01.004): extraterrestrial normal illuminance at the mean Sun-Earth distance.
+LUMINOUS_SOLAR_CONSTANT = 133_800.0
+#: Extraterrestrial normal illuminance at perihelion [lx]: no sun or sky illuminance at the ground exceeds it.
+MAX_EXTRATERRESTRIAL_ILLUMINANCE = LUMINOUS_SOLAR_CONSTANT * PERIHELION_FACTOR
+#: Luminance of the solar disc outside the atmosphere [cd m^-2]: MAX_EXTRATERRESTRIAL_ILLUMINANCE over the
+#: disc's solid angle at perihelion (6.80e-5 sr x 1.0344). No part of the sky is brighter.
+MAX_SKY_LUMINANCE = MAX_EXTRATERRESTRIAL_ILLUMINANCE / (6.80e-5 * PERIHELION_FACTOR)
 
 
 def direction_from_angles(zenith: ArrayLike, azimuth: ArrayLike) -> NDArray[np.float64]:
@@ -84,9 +105,16 @@ def as_directions(directions: ArrayLike, *, normalise: bool = True) -> NDArray[n
     InvalidDirectionError
         If the last axis is not of length 3, or a vector contains NaN/inf or has zero length.
     """
-    d = np.asarray(directions)
-    if not np.issubdtype(d.dtype, np.floating):
-        d = d.astype(float)
+    try:
+        d = np.asarray(directions)
+        if not np.issubdtype(d.dtype, np.floating):
+            if d.dtype.kind not in "biu":
+                raise ValueError(f"got values of type {d.dtype}")
+            d = d.astype(float)
+    except (ValueError, TypeError) as exc:  # ragged lists, strings, objects
+        raise InvalidDirectionError(
+            f"directions must be numbers in an array of shape (..., 3) (x east, y north, z up): {exc}"
+        ) from None
     if d.ndim == 0 or d.shape[-1] != 3:
         raise InvalidDirectionError(
             f"directions must be an array of shape (..., 3) (x east, y north, z up); got shape {d.shape}"
@@ -101,7 +129,9 @@ def as_directions(directions: ArrayLike, *, normalise: bool = True) -> NDArray[n
 
 
 def _check_size(name: str, value: int) -> int:
-    if int(value) != value or value < 1:
+    if isinstance(value, (bool, str, bytes)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InvalidParameterError(f"{name} must be a positive whole number of pixels; got {value!r}")
+    if not np.isfinite(value) or int(value) != value or value < 1:
         raise InvalidParameterError(f"{name} must be a positive whole number of pixels; got {value!r}")
     return int(value)
 

@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 from .conventions import direction_from_angles
 from .epw import EPWData, EPWLocation, read_epw
 from .errors import FileFormatError, InvalidParameterError
-from .fileio import atomic_path
+from .fileio import atomic_path, atomic_paths
 from .patches import PatchScheme, patch_scheme
 
 __all__ = ["NORMALISATION_NODES", "SkyMatrix", "perez_patch_luminance", "skymatrix"]
@@ -175,49 +175,66 @@ class SkyMatrix:
         g = self.scheme
         return self.luminance @ (g.solid_angles * np.sin(g.centre_altitude))
 
+    def save(self, npz_path: str | os.PathLike[str], csv_path: str | os.PathLike[str] | None = None) -> list[Path]:
+        """Write the ``.npz`` and, if given, the CSV together: both files appear, or neither does."""
+        targets = [Path(npz_path)] + ([Path(csv_path)] if csv_path is not None else [])
+        if targets[0].suffix.lower() != ".npz":
+            raise InvalidParameterError(f"{targets[0]}: the matrix file must end in .npz")
+        with atomic_paths(*targets) as temps:
+            self._write_npz(temps[0])
+            if csv_path is not None:
+                self._write_csv(temps[1])
+        return targets
+
     def save_npz(self, path: str | os.PathLike[str]) -> Path:
         """Write a compressed ``.npz`` (atomically); returns the path. Keys are listed in ``docs/standard_skies.md``."""
         target = Path(path)
-        g = self.scheme
         with atomic_path(target) as tmp:
-            with open(tmp, "wb") as fh:
-                np.savez_compressed(
-                    fh,
-                    luminance=self.luminance.astype(np.float32),
-                    times=np.asarray([t.isoformat() for t in self.times]),
-                    sun_zenith=self.sun_zenith,
-                    sun_azimuth=self.sun_azimuth,
-                    epsilon=self.epsilon,
-                    delta=self.delta,
-                    diffuse_illuminance=self.diffuse_illuminance,
-                    sun_illuminance_normal=self.sun_illuminance_normal,
-                    patch_zenith=g.centre_zenith,
-                    patch_azimuth=g.azimuth_centre,
-                    patch_solid_angle=g.solid_angles,
-                    scheme=np.array(g.name),
-                    include_sun=np.array(self.include_sun),
-                    samples=np.array(self.samples),
-                    latitude=np.array(self.location.latitude),
-                    longitude=np.array(self.location.longitude),
-                    units=np.array("luminance cd m^-2; angles rad; illuminance lx"),
-                )
+            self._write_npz(tmp)
         return target
 
+    def _write_npz(self, tmp: Path) -> None:
+        g = self.scheme
+        with open(tmp, "wb") as fh:
+            np.savez_compressed(
+                fh,
+                luminance=self.luminance.astype(np.float32),
+                times=np.asarray([t.isoformat() for t in self.times]),
+                sun_zenith=self.sun_zenith,
+                sun_azimuth=self.sun_azimuth,
+                epsilon=self.epsilon,
+                delta=self.delta,
+                diffuse_illuminance=self.diffuse_illuminance,
+                sun_illuminance_normal=self.sun_illuminance_normal,
+                patch_zenith=g.centre_zenith,
+                patch_azimuth=g.azimuth_centre,
+                patch_solid_angle=g.solid_angles,
+                scheme=np.array(g.name),
+                include_sun=np.array(self.include_sun),
+                samples=np.array(self.samples),
+                latitude=np.array(self.location.latitude),
+                longitude=np.array(self.location.longitude),
+                units=np.array("luminance cd m^-2; angles rad; illuminance lx"),
+            )
+
     def save_csv(self, path: str | os.PathLike[str]) -> Path:
-        """Write a CSV (atomically): a ``time`` column (ISO 8601, mid-hour) and one column per patch [cd m^-2]."""
+        """Write a CSV (atomically): a ``time`` column (ISO 8601, mid-record) and one column per patch [cd m^-2]."""
         target = Path(path)
+        with atomic_path(target) as tmp:
+            self._write_csv(tmp)
+        return target
+
+    def _write_csv(self, tmp: Path) -> None:
         header = "time," + ",".join(f"patch_{i}" for i in range(self.scheme.n_patches))
         stamps = [t.isoformat() for t in self.times]
         zero_row = ",".join(["0"] * self.scheme.n_patches)
-        with atomic_path(target) as tmp:
-            with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
-                fh.write(header + "\n")
-                for stamp, row in zip(stamps, self.luminance, strict=True):
-                    if not row.any():
-                        fh.write(f"{stamp},{zero_row}\n")
-                    else:
-                        fh.write(stamp + "," + ",".join(f"{v:.6g}" for v in row.tolist()) + "\n")
-        return target
+        with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(header + "\n")
+            for stamp, row in zip(stamps, self.luminance, strict=True):
+                if not row.any():
+                    fh.write(f"{stamp},{zero_row}\n")
+                else:
+                    fh.write(stamp + "," + ",".join(f"{v:.6g}" for v in row.tolist()) + "\n")
 
 
 def _check_scheme(scheme: str | PatchScheme) -> PatchScheme:
@@ -246,6 +263,7 @@ def skymatrix(
     samples: int = 3,
     chunk_hours: int = 512,
     progress: bool = False,
+    timestep: str = "records",
 ) -> SkyMatrix:
     """Hourly Perez sky luminance over sky patches for a year of weather (the job of Radiance's gendaymtx).
 
@@ -263,6 +281,11 @@ def skymatrix(
         Hours computed per vectorised step (memory vs. progress granularity).
     progress : bool
         Show a tqdm progress bar over the hours (advances per chunk).
+    timestep : {"records", "hourly"}
+        For a sub-hourly file (N records per hour declared in its DATA PERIODS line): "records" (default) gives
+        one row per record, the sun at the middle of the record's own interval (as gendaymtx gives one row per
+        time step of its input); "hourly" averages the records of each hour first (:meth:`EPWData.hourly`)
+        and gives one row per hour. Hourly files give one row per hour either way.
 
     Returns
     -------
@@ -283,10 +306,14 @@ def skymatrix(
         raise InvalidParameterError(f"samples must be a whole number in [1, 16]; got {samples!r}")
     if isinstance(chunk_hours, bool) or int(chunk_hours) != chunk_hours or chunk_hours < 1:
         raise InvalidParameterError(f"chunk_hours must be a whole number >= 1; got {chunk_hours!r}")
+    if timestep not in ("records", "hourly"):
+        raise InvalidParameterError(f"timestep must be 'records' or 'hourly'; got {timestep!r}")
     epw = epw_path if isinstance(epw_path, EPWData) else read_epw(epw_path)
+    if timestep == "hourly":
+        epw = epw.hourly()
     _check_irradiance(epw)
     loc = epw.location
-    times = epw.times(offset_hours=-0.5)
+    times = epw.times()  # middle of each record's interval
     pos = sun_position(loc.latitude, loc.longitude, times, altitude=loc.elevation)
     zen = np.asarray(pos.zenith, dtype=float)
     azi = np.asarray(pos.azimuth, dtype=float)

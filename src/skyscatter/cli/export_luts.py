@@ -39,8 +39,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..precomputed import PrecomputedAtmosphere
     from ..precomputed.cache import cached_atmosphere
+    import os
+
+    from ..errors import OutputError
     from .precompute import atmosphere_from_args, one_line_warnings
 
+    # The output folder first: refuse it before a table build that can take a minute.
+    if args.out_dir.exists() and not args.out_dir.is_dir():
+        raise OutputError(f"--out-dir {args.out_dir}: is a file, not a folder")
+    try:
+        args.out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"--out-dir {args.out_dir}: cannot create the folder: {exc.strerror or exc}") from None
+    if not os.access(args.out_dir, os.W_OK | os.X_OK):
+        raise OutputError(f"--out-dir {args.out_dir}: folder is not writable")
     if args.source is not None:
         atm = PrecomputedAtmosphere.load(args.source)
     else:

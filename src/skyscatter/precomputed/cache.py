@@ -21,7 +21,7 @@ from ..errors import FileFormatError, OutputError
 from .parameters import AtmosphereParameters
 from .tables import PrecomputedAtmosphere, TableSizes, _as_wavelengths, cache_key
 
-__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "cached_atmosphere", "clear_memory_cache",
+__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "check_cache_dir", "cached_atmosphere", "clear_memory_cache",
            "load_or_compute"]
 
 _MEMORY: dict[str, PrecomputedAtmosphere] = {}
@@ -35,6 +35,24 @@ def cache_dir() -> Path:
     """The cache folder: ``$SKYSCATTER_CACHE_DIR`` if set, else ``~/.cache/skyscatter``."""
     env = os.environ.get("SKYSCATTER_CACHE_DIR")
     return Path(env).expanduser() if env else Path.home() / ".cache" / "skyscatter"
+
+
+def check_cache_dir() -> Path:
+    """The cache folder, created if missing; :class:`~skyscatter.errors.OutputError` if it cannot be written.
+
+    The message names the folder, says what is wrong and how to choose another (``SKYSCATTER_CACHE_DIR``).
+    """
+    folder = cache_dir()
+    hint = "set SKYSCATTER_CACHE_DIR to a writable folder"
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"the table cache {folder} is not a folder; {hint}")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create the table cache folder {folder}: {exc.strerror or exc}; {hint}") from None
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OutputError(f"the table cache folder {folder} is not writable; {hint}")
+    return folder
 
 
 def cache_path(key: str) -> Path:
@@ -60,11 +78,14 @@ def cached_atmosphere(params: AtmosphereParameters | None = None, *, orders: int
 
 def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int = 4,
                     wavelengths: ArrayLike | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
-                    progress: bool | None = None, force: bool = False) -> tuple[PrecomputedAtmosphere, bool]:
+                    progress: bool | None = None, force: bool = False,
+                    require_saved: bool = False) -> tuple[PrecomputedAtmosphere, bool]:
     """Like :func:`cached_atmosphere`, also saying whether the tables were computed: ``(tables, computed)``.
 
     With ``force`` the tables are recomputed even if cached; the cache file is replaced only once the new
-    tables are written (atomically), so an interrupted run keeps the old, valid file.
+    tables are written (atomically), so an interrupted run keeps the old, valid file. With ``require_saved``
+    (the caller asked for the cache file itself, as ``skyscatter precompute`` does) an unusable cache folder
+    is an :class:`~skyscatter.errors.OutputError`, raised before any computation, instead of a warning.
     """
     params = AtmosphereParameters() if params is None else params
     wl = _as_wavelengths(wavelengths)
@@ -74,6 +95,8 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
     if hit is not None:
         return hit, False
     path = cache_path(key)
+    if require_saved:
+        check_cache_dir()
     atm = None
     if path.exists() and not force:
         try:
@@ -87,6 +110,10 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
             path.parent.mkdir(parents=True, exist_ok=True)
             atm.save(path)
         except (OSError, OutputError) as exc:
-            warnings.warn(f"could not write the table cache {path}: {exc}", RuntimeWarning, stacklevel=3)
+            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+            if require_saved:
+                raise OutputError(f"could not write the table cache {path}: {reason}") from None
+            warnings.warn(f"could not write the table cache {path}: {reason}; the tables are used without "
+                          "being cached", RuntimeWarning, stacklevel=3)
     _MEMORY[key] = atm
     return atm, computed

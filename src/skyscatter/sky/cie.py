@@ -195,6 +195,7 @@ def _check_scale(zenith_luminance, diffuse_illuminance) -> tuple[float | None, f
             raise InvalidParameterError(f"{name} must be a number [{unit}]; got {value!r}") from None
         if not (np.isfinite(v) and v >= 0.0):
             raise InvalidParameterError(f"{name} must be a finite number >= 0 [{unit}]; got {v}")
+        _check_upper(name, v, unit)
         out.append(v)
     return out[0], out[1]
 
@@ -206,7 +207,25 @@ def _check_sun_illuminance(value) -> float:
         raise InvalidParameterError(f"sun_illuminance_normal must be a number [lx]; got {value!r}") from None
     if not (np.isfinite(v) and v >= 0.0):
         raise InvalidParameterError(f"sun_illuminance_normal must be a finite number >= 0 [lx]; got {v}")
+    _check_upper("sun_illuminance_normal", v, "lx")
     return v
+
+
+def _check_upper(name: str, value: float, unit: str) -> None:
+    """Refuse a scale above its physical limit (:mod:`skyscatter.conventions`), saying which."""
+    from ..conventions import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_SKY_LUMINANCE
+
+    if unit == "lx" and value > MAX_EXTRATERRESTRIAL_ILLUMINANCE:
+        raise InvalidParameterError(
+            f"{name} {value:g} lx exceeds the extraterrestrial solar illuminance at perihelion, "
+            f"{MAX_EXTRATERRESTRIAL_ILLUMINANCE:.0f} lx (luminous solar constant 133.8 klx, Darula et al. 2005), "
+            "which no daylight at the ground exceeds"
+        )
+    if unit == "cd m^-2" and value > MAX_SKY_LUMINANCE:
+        raise InvalidParameterError(
+            f"{name} {value:g} cd m^-2 exceeds the luminance of the solar disc outside the atmosphere, "
+            f"{MAX_SKY_LUMINANCE:.3g} cd m^-2, which no part of the sky exceeds"
+        )
 
 
 class LuminanceSunMixin:

@@ -20,6 +20,7 @@ __all__ = [
     "HDR_SCALE",
     "LUMINOUS_EFFICACY",
     "cie_cmfs",
+    "gamut_map_srgb",
     "integration_weights",
     "linear_srgb_to_xyz",
     "spectrum_to_luminance",
@@ -144,3 +145,38 @@ def linear_srgb_to_xyz(rgb: ArrayLike) -> NDArray[np.floating]:
     rgb = np.asarray(rgb)
     dtype = rgb.dtype if rgb.dtype == np.float32 else np.float64
     return (rgb @ _SRGB_TO_XYZ.T).astype(dtype, copy=False)
+
+
+#: Luminance row of the sRGB -> XYZ matrix: Y of linear sRGB (R, G, B).
+_SRGB_LUMINANCE = _SRGB_TO_XYZ[1]
+
+
+def gamut_map_srgb(rgb: ArrayLike) -> NDArray[np.floating]:
+    """Bring linear sRGB colours outside the sRGB gamut inside it, keeping their luminance (..., 3).
+
+    A colour with a negative component (a spectrum more saturated than the sRGB primaries, such as the deep
+    red of the solar disc at sunset) is desaturated towards the D65 white of the same luminance,
+    ``c' = Y + t (c - Y)`` with ``Y`` its luminance (the Y row of the IEC 61966-2-1 matrix, whose white
+    (1, 1, 1) has Y = 1) and the largest ``t`` in [0, 1] that makes every component >= 0. In-gamut colours
+    are returned unchanged; a colour with ``Y <= 0`` (not a physical light) becomes black. Luminance and
+    dominant hue are kept; only saturation that sRGB cannot show is lost. float32 input stays float32.
+    """
+    c = np.asarray(rgb)
+    dtype = c.dtype if c.dtype == np.float32 else np.float64
+    c = c.astype(np.float64, copy=False)
+    if c.shape[-1:] != (3,):
+        raise InvalidParameterError(f"linear sRGB colours need a last axis of 3; got shape {c.shape}")
+    low = c.min(axis=-1)
+    if not np.any(low < 0):
+        return c.astype(dtype, copy=False)
+    y = c @ _SRGB_LUMINANCE
+    out = c.copy()
+    bad = low < 0
+    yb, lb = y[bad], low[bad]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(yb > 0, yb / (yb - lb), 0.0)  # component y + t (low - y) = 0
+    t = np.clip(t, 0.0, 1.0)
+    mapped = np.maximum(yb[:, None] + t[:, None] * (c[bad] - yb[:, None]), 0.0)
+    mapped[yb <= 0] = 0.0
+    out[bad] = mapped
+    return out.astype(dtype, copy=False)
