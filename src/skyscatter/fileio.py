@@ -55,9 +55,16 @@ def check_output_path(path: str | os.PathLike[str], *, option: str | None = None
         raise OutputError(f"cannot write {where}{path}: folder {folder} does not exist")
     if not folder.is_dir():
         raise OutputError(f"cannot write {where}{path}: {folder} is not a folder")
-    if not os.access(folder, os.W_OK | os.X_OK):
+    if not _accessible(folder):
         raise OutputError(f"cannot write {where}{path}: folder {folder} is not writable")
     return target
+
+
+def _accessible(folder: Path) -> bool:
+    """Whether this process may create files in ``folder`` (effective ids and capabilities, where supported)."""
+    if os.access in os.supports_effective_ids:
+        return os.access(folder, os.W_OK | os.X_OK, effective_ids=True)
+    return os.access(folder, os.W_OK | os.X_OK)
 
 
 def _pid_alive(pid: int) -> bool:

@@ -155,9 +155,9 @@ def gamut_map_srgb(rgb: ArrayLike) -> NDArray[np.floating]:
     """Bring linear sRGB colours outside the sRGB gamut inside it, keeping their luminance (..., 3).
 
     A colour with a negative component (a spectrum more saturated than the sRGB primaries, such as the deep
-    red of the solar disc at sunset) is desaturated towards the D65 white of the same luminance,
-    ``c' = Y + t (c - Y)`` with ``Y`` its luminance (the Y row of the IEC 61966-2-1 matrix, whose white
-    (1, 1, 1) has Y = 1) and the largest ``t`` in [0, 1] that makes every component >= 0. In-gamut colours
+    red of the solar disc at sunset) is desaturated towards the D65 grey of the same luminance,
+    ``c' = g + t (c - g)`` with ``g = Y / Y_white`` (``Y`` its luminance by the IEC 61966-2-1 matrix, ``Y_white``
+    that of (1, 1, 1)) and the largest ``t`` in [0, 1] that makes every component >= 0. In-gamut colours
     are returned unchanged; a colour with ``Y <= 0`` (not a physical light) becomes black. Luminance and
     dominant hue are kept; only saturation that sRGB cannot show is lost. float32 input stays float32.
     """
@@ -172,11 +172,12 @@ def gamut_map_srgb(rgb: ArrayLike) -> NDArray[np.floating]:
     y = c @ _SRGB_LUMINANCE
     out = c.copy()
     bad = low < 0
-    yb, lb = y[bad], low[bad]
+    # the grey (g, g, g) of the same luminance; the white (1, 1, 1) has Y = sum of the row (1 to 4 digits)
+    g, lb = y[bad] / _SRGB_LUMINANCE.sum(), low[bad]
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(yb > 0, yb / (yb - lb), 0.0)  # component y + t (low - y) = 0
+        t = np.where(g > 0, g / (g - lb), 0.0)  # the lowest component g + t (low - g) becomes 0
     t = np.clip(t, 0.0, 1.0)
-    mapped = np.maximum(yb[:, None] + t[:, None] * (c[bad] - yb[:, None]), 0.0)
-    mapped[yb <= 0] = 0.0
+    mapped = np.maximum(g[:, None] + t[:, None] * (c[bad] - g[:, None]), 0.0)
+    mapped[g <= 0] = 0.0
     out[bad] = mapped
     return out.astype(dtype, copy=False)
