@@ -189,12 +189,8 @@ class LuminanceOnlySky(SkyModel):
 
 
 def _daylight_xy(cct: float) -> tuple[float, float]:
-    """CIE daylight-locus chromaticity for a correlated colour temperature [K] (CIE 15:2004, via colour-science)."""
-    if not 4000.0 <= cct <= 25000.0:
-        raise InvalidParameterError(f"daylight CCT must be within 4000-25000 K; got {cct}")
-    from ..spectral._colour import colour_module
+    """CIE daylight-locus chromaticity for a correlated colour temperature [K] (CIE 015:2004 Eqs. 3.3-3.4)."""
+    from ..spectral import daylight_chromaticity
 
-    CCT_to_xy_CIE_D = colour_module("colour.temperature").CCT_to_xy_CIE_D  # noqa: N806
-
-    x, y = CCT_to_xy_CIE_D(float(cct))
+    x, y = daylight_chromaticity(float(cct))
     return float(x), float(y)

@@ -1,14 +1,12 @@
 """CIE 1931 colorimetry of spectra and the linear sRGB conversion.
 
-The colour-matching functions are the CIE 1931 2-degree standard observer tabulated by colour-science
-(1 nm, 360-830 nm), linearly interpolated to the caller's wavelengths and zero outside that range.
+The colour-matching functions are the CIE 1931 2-degree standard observer (CIE 018:2019; 1 nm, 360-830 nm,
+shipped as ``skyscatter/data/cie1931_2deg_cmfs.csv``, generated from colour-science's table), linearly interpolated to the caller's wavelengths and zero outside that range.
 Photometric quantities use K_m = 683 lm/W, so ``Y`` of a spectral radiance [W m^-2 sr^-1 nm^-1] is a
 luminance [cd m^-2] and of a spectral irradiance an illuminance [lx].
 """
 
 from __future__ import annotations
-
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -47,14 +45,10 @@ _XYZ_TO_SRGB = np.array(
 _SRGB_TO_XYZ = np.linalg.inv(_XYZ_TO_SRGB)
 
 
-@lru_cache(maxsize=1)
 def _cmfs_table() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    from ._colour import colour_module
+    from ._colour import cie_table
 
-    colour = colour_module()  # imported lazily: colour-science takes about 2 s to import
-
-    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-    return np.asarray(cmfs.wavelengths, dtype=float), np.asarray(cmfs.values, dtype=float)
+    return cie_table("cie1931_2deg_cmfs")
 
 
 def cie_cmfs(wavelengths: ArrayLike) -> NDArray[np.float64]:
