@@ -142,9 +142,10 @@ def equirect_directions(width: int, height: int | None = None) -> NDArray[np.flo
     Row 0 is the zenith, the middle of the image the horizon, the last row the nadir. The image is a
     panorama seen from inside the sphere: the centre column looks north and azimuth grows to the right, so
     column ``u`` in [0, 1) (left to right, pixel centres) has azimuth ``phi = 2 pi (u - 1/2)`` measured from
-    north towards east: east at u = 3/4, west at u = 1/4, south at both edges. This is the layout Blender's
-    Environment Texture and Mitsuba's ``envmap`` read; Blender puts the image centre on its -X axis, so rotate
-    the mapping about Z to bring north where the scene wants it.
+    north towards east: east at u = 3/4, west at u = 1/4, south at both edges (skyscatter's layout).
+    Renderers put the image centre elsewhere (Blender on +X, Mitsuba with the Z-up ``rotate(x, 90)`` on -Y);
+    :func:`skyscatter.render.sky_image` writes maps for each with its ``layout`` argument
+    (docs/conventions.md, "Image layouts").
 
     Parameters
     ----------
