@@ -157,7 +157,8 @@ def test_skymatrix_rows_match_the_perez_sky_class(epw_file):
         np.testing.assert_allclose(m.luminance[h], patch_luminance(sky, "tregenza", samples=3), rtol=1e-3)
 
 
-def test_skymatrix_sun_goes_into_its_patch(epw_file):
+def test_skymatrix_sun_spread_over_the_four_nearest_patches(epw_file):
+    """Issue 12: the sun is spread as gendaymtx's AddDirect does (4 nearest centres, w = 1 / (1.002 - cos))."""
     sky_only = skyscatter.skymatrix(epw_file, scheme="reinhart2", samples=1)
     with_sun = skyscatter.skymatrix(epw_file, scheme="reinhart2", samples=1, include_sun=True)
     g = patch_scheme("reinhart2")
@@ -167,12 +168,19 @@ def test_skymatrix_sun_goes_into_its_patch(epw_file):
     assert sunny.sum() > 10
     np.testing.assert_allclose((diff * g.solid_angles).sum(axis=1)[sunny], with_sun.sun_illuminance_normal[sunny],
                                rtol=1e-12)
-    assert np.all(np.count_nonzero(diff[sunny], axis=1) == 1)
-    h = int(np.flatnonzero(sunny & (with_sun.sun_zenith < 1.2))[0])
-    el = math.pi / 2 - with_sun.sun_zenith[h]
-    sun = np.array([math.cos(el) * math.sin(with_sun.sun_azimuth[h]), math.cos(el) * math.cos(with_sun.sun_azimuth[h]),
-                    math.sin(el)])
-    assert int(np.flatnonzero(diff[h])[0]) == int(g.patch_index(sun))
+    assert np.all(np.count_nonzero(diff[sunny], axis=1) == 4)
+    centres = g.centre_directions.reshape(-1, 3)
+    for h in np.flatnonzero(sunny & (with_sun.sun_zenith < 1.4)):
+        z = max(with_sun.sun_zenith[h], math.radians(3.0))
+        el, az = math.pi / 2 - z, with_sun.sun_azimuth[h]
+        sun = np.array([math.cos(el) * math.sin(az), math.cos(el) * math.cos(az), math.sin(el)])
+        dots = centres @ sun
+        nearest = np.argsort(-dots)[:4]
+        assert set(np.flatnonzero(diff[h])) == set(nearest)
+        w = 1 / (1.002 - dots[nearest])
+        share = diff[h, nearest] * g.solid_angles[nearest] / with_sun.sun_illuminance_normal[h]
+        np.testing.assert_allclose(share, w / w.sum(), rtol=1e-12)
+        assert int(g.patch_index(sun)) in set(nearest)  # the patch containing the sun gets a share
 
 
 def test_save_npz_and_csv(epw_file, tmp_path):

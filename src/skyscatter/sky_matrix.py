@@ -17,9 +17,8 @@ The job Radiance's ``gendaymtx`` does, vectorised over hours:
 Hours without diffuse light (D_h = 0) give a row of zeros. Hours with diffuse light but the sun below the
 horizon at mid-hour (sunrise or sunset inside the hour) are modelled with the sun on the horizon at its
 azimuth, as gendaymtx does. With ``include_sun`` the direct normal illuminance of the sun (Perez 1990 direct
-efficacy) is added to the patch that contains the sun as ``E_sun / Omega_patch`` (a sun below the horizon at
-mid-hour goes to the horizon patch at its azimuth); gendaymtx instead spreads it over the 4 nearest patch
-centres.
+efficacy) is spread over the 4 patches nearest to the sun, weighted by proximity, as gendaymtx does
+(:func:`add_sun_to_patches`, which states the rule and its source).
 
 The result is a :class:`SkyMatrix`: ``luminance`` [cd m^-2] of shape (hours, patches), with the sun angles, the
 Perez parameters and the patch geometry, savable as ``.npz`` and ``.csv``.
@@ -41,7 +40,7 @@ from .errors import FileFormatError, InvalidParameterError
 from .fileio import atomic_path, atomic_paths
 from .patches import PatchScheme, patch_scheme
 
-__all__ = ["NORMALISATION_NODES", "SkyMatrix", "perez_patch_luminance", "skymatrix"]
+__all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches", "perez_patch_luminance", "skymatrix"]
 
 #: Gauss-Legendre nodes (zenith, azimuth) of the per-hour normalisation integral.
 NORMALISATION_NODES = (48, 96)
@@ -237,6 +236,55 @@ class SkyMatrix:
                     fh.write(stamp + "," + ",".join(f"{v:.6g}" for v in row.tolist()) + "\n")
 
 
+#: Number of patches the sun is spread over (Radiance gendaymtx's NSUNPATCH).
+SUN_PATCHES = 4
+
+
+def add_sun_to_patches(
+    luminance: NDArray[np.float64],
+    rows: NDArray[np.int64],
+    sun_directions: NDArray[np.float64],
+    sun_illuminance: NDArray[np.float64],
+    scheme: PatchScheme,
+    *,
+    n_patches: int = SUN_PATCHES,
+    chunk: int = 2048,
+) -> None:
+    """Add the direct sun to the ``n_patches`` sky patches nearest to it, as Radiance's gendaymtx does.
+
+    The rule of gendaymtx (``AddDirect`` in Radiance's ``src/gen/gendaymtx.c``, G. Ward, NREL/Radiance on
+    GitHub): take the ``NSUNPATCH = 4`` patches whose centre directions ``p`` have the largest ``p . s`` with the
+    sun direction ``s``; weight each by ``w = 1 / (1.002 - p . s)`` (so a sun on a patch centre puts most of its
+    light there); add ``E_sun w / (sum(w) Omega_p)`` to the patch luminance. The sun's normal illuminance is
+    conserved: ``sum_p dL_p Omega_p = E_sun``. (gendaymtx's weights use the centres of its own patch list; ours
+    are the same Tregenza/Reinhart centres without its ground patch.)
+
+    Parameters
+    ----------
+    luminance : ndarray, shape (n_hours, n_patches)
+        Patch luminance [cd m^-2], updated in place.
+    rows : ndarray of int
+        Rows of ``luminance`` that get a sun.
+    sun_directions : ndarray, shape (len(rows), 3)
+        Unit vectors to the sun (ENU).
+    sun_illuminance : ndarray, shape (len(rows),)
+        Direct normal illuminance of the sun [lx].
+    scheme : PatchScheme
+    n_patches : int
+        Patches per sun (gendaymtx: 4).
+    """
+    centres = scheme.centre_directions.reshape(-1, 3)
+    k = int(min(n_patches, centres.shape[0]))
+    for start in range(0, rows.size, chunk):
+        sl = slice(start, start + chunk)
+        dots = sun_directions[sl] @ centres.T
+        near = np.argpartition(-dots, k - 1, axis=1)[:, :k]
+        d = np.take_along_axis(dots, near, axis=1)
+        w = 1.0 / (1.002 - d)
+        w /= w.sum(axis=1, keepdims=True)
+        luminance[rows[sl, None], near] += sun_illuminance[sl, None] * w / scheme.solid_angles[near]
+
+
 def _check_scheme(scheme: str | PatchScheme) -> PatchScheme:
     return scheme if isinstance(scheme, PatchScheme) else patch_scheme(scheme)
 
@@ -274,7 +322,8 @@ def skymatrix(
     scheme : str or PatchScheme
         "tregenza" (= "reinhart1", 145 patches), "reinhart2" (577, default) or "reinhart4" (2305).
     include_sun : bool
-        Add the direct sun to the patch that contains it (default False: sky only).
+        Add the direct sun, spread over the 4 nearest patches as gendaymtx does (:func:`add_sun_to_patches`)
+        (default False: sky only).
     samples : int
         Equal-area cells per patch side for the patch mean (default 3; 1 samples the patch centre only).
     chunk_hours : int
@@ -298,7 +347,7 @@ def skymatrix(
     InvalidParameterError
         Unknown scheme or bad options.
     """
-    from .sky.perez import perez_parameters
+    from .sky.perez import MIN_SUN_ZENITH, perez_parameters
     from .sun.position import sun_position
 
     geom = _check_scheme(scheme)
@@ -361,10 +410,10 @@ def skymatrix(
     if include_sun:
         sunny = np.flatnonzero(e_sun > 0.0)
         if sunny.size:
-            # A sun exactly on the horizon is kept just above it so it falls into a sky patch.
-            sdir = direction_from_angles(np.minimum(zen[sunny], np.pi / 2 - 1e-9), azi[sunny])
-            patch = geom.patch_index(sdir)
-            lum[sunny, patch] += e_sun[sunny] / geom.solid_angles[patch]
+            # The sun the sky model uses: altitude at most 87 deg (gendaymtx limits it the same way before adding
+            # the sun), a sun below the horizon at mid-record put on the horizon at its azimuth.
+            model_zenith = np.clip(zen[sunny], MIN_SUN_ZENITH, np.pi / 2)
+            add_sun_to_patches(lum, sunny, direction_from_angles(model_zenith, azi[sunny]), e_sun[sunny], geom)
     return SkyMatrix(
         luminance=lum,
         times=times,

@@ -32,7 +32,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--csv", type=output_path, default=None, metavar="PATH",
                    help="also write a CSV: a time column (ISO 8601, mid-hour) and one luminance column per patch")
     p.add_argument("--include-sun", action="store_true",
-                   help="add the direct sun to the patch that contains it (E_sun / patch solid angle)")
+                   help="add the direct sun, spread over the 4 nearest patches weighted by proximity as gendaymtx does")
     p.add_argument("--samples", type=positive_int, default=3, metavar="N",
                    help="average each patch over N x N equal-area cells (1: patch centre only, as gendaymtx)")
     p.add_argument("--timestep", choices=["records", "hourly"], default="records",
