@@ -281,29 +281,11 @@ def read_epw(path: str | os.PathLike[str]) -> EPWData:
         if len(fields) != N_FIELDS:
             raise _fail(p, line_no, f"a data record has {N_FIELDS} comma-separated fields; found {len(fields)}")
         rows.append(fields)
-    n = len(rows)
-    ints = np.empty((n, 5), dtype=np.int64)
-    values = np.empty((n, len(_FIELDS)))
-    names = ("year", "month", "day", "hour", "minute")
-    for r, (fields, (line_no, _)) in enumerate(zip(rows, body, strict=True)):
-        for k in range(5):
-            v = _number(p, line_no, names[k], fields[k])
-            if not v.is_integer():
-                raise _fail(p, line_no, f"{names[k]} must be a whole number; got {fields[k].strip()!r}")
-            if k == 0 and not YEAR_RANGE[0] <= v <= YEAR_RANGE[1]:
-                raise _fail(p, line_no, f"year {fields[k].strip()} is outside {YEAR_RANGE[0]}-{YEAR_RANGE[1]}, "
-                            "the range of the time stamps used for the sun position")
-            if k == 4 and not 0 <= v <= 60:
-                raise _fail(p, line_no, f"minute {fields[k].strip()} is outside 0-60")
-            ints[r, k] = int(v)
-        for k, (idx, name, unit, low, high, missing) in enumerate(_FIELDS):
-            v = _number(p, line_no, name, fields[idx])
-            if missing is not None and v == missing:
-                v = np.nan
-            elif not low <= v <= high:
-                raise _fail(p, line_no, f"{name} {v:g} {unit} is outside the EPW range [{low:g}, {high:g}]")
-            values[r, k] = v
     line_numbers = np.array([b[0] for b in body], dtype=np.int64)
+    parsed = _parse_fast(rows)
+    if parsed is None:  # something is wrong: the field-by-field reader finds it and names the line
+        parsed = _parse_checked(p, rows, line_numbers)
+    ints, values = parsed
     year, month, day, hour, minute = (ints[:, k] for k in range(5))
     _check_dates(p, year, month, day, hour, line_numbers)
     step = _check_steps(p, year, month, day, hour, minute, line_numbers, per_hour)
@@ -323,6 +305,57 @@ def read_epw(path: str | os.PathLike[str]) -> EPWData:
         records_per_hour=per_hour,
         step=step,
     )
+
+
+_INT_COLUMNS = (0, 1, 2, 3, 4)  # year, month, day, hour, minute
+_VALUE_COLUMNS = tuple(f[0] for f in _FIELDS)
+
+
+def _parse_fast(rows: list[list[str]]):
+    """(ints (n, 5), values (n, len(_FIELDS))) converted in bulk, or None if any field needs a closer look."""
+    try:
+        raw = np.array([[r[k] for k in _INT_COLUMNS + _VALUE_COLUMNS] for r in rows], dtype=float)
+    except ValueError:
+        return None
+    ints_f, values = raw[:, :5], raw[:, 5:]
+    if not (np.all(np.isfinite(raw)) and np.all(ints_f == np.round(ints_f))
+            and np.all((ints_f[:, 0] >= YEAR_RANGE[0]) & (ints_f[:, 0] <= YEAR_RANGE[1]))
+            and np.all((ints_f[:, 4] >= 0) & (ints_f[:, 4] <= 60))):
+        return None
+    for k, (_, _, _, low, high, missing) in enumerate(_FIELDS):
+        col = values[:, k]
+        is_missing = col == missing if missing is not None else np.zeros(col.shape, dtype=bool)
+        if np.any(~is_missing & ((col < low) | (col > high))):
+            return None
+        col[is_missing] = np.nan
+    return ints_f.astype(np.int64), values
+
+
+def _parse_checked(p: Path, rows: list[list[str]], line_numbers) -> tuple[NDArray, NDArray]:
+    """Field by field, raising :class:`FileFormatError` at the first bad field with its line."""
+    n = len(rows)
+    ints = np.empty((n, 5), dtype=np.int64)
+    values = np.empty((n, len(_FIELDS)))
+    names = ("year", "month", "day", "hour", "minute")
+    for r, (fields, line_no) in enumerate(zip(rows, line_numbers.tolist(), strict=True)):
+        for k in range(5):
+            v = _number(p, line_no, names[k], fields[k])
+            if not v.is_integer():
+                raise _fail(p, line_no, f"{names[k]} must be a whole number; got {fields[k].strip()!r}")
+            if k == 0 and not YEAR_RANGE[0] <= v <= YEAR_RANGE[1]:
+                raise _fail(p, line_no, f"year {fields[k].strip()} is outside {YEAR_RANGE[0]}-{YEAR_RANGE[1]}, "
+                            "the range of the time stamps used for the sun position")
+            if k == 4 and not 0 <= v <= 60:
+                raise _fail(p, line_no, f"minute {fields[k].strip()} is outside 0-60")
+            ints[r, k] = int(v)
+        for k, (idx, name, unit, low, high, missing) in enumerate(_FIELDS):
+            v = _number(p, line_no, name, fields[idx])
+            if missing is not None and v == missing:
+                v = np.nan
+            elif not low <= v <= high:
+                raise _fail(p, line_no, f"{name} {v:g} {unit} is outside the EPW range [{low:g}, {high:g}]")
+            values[r, k] = v
+    return ints, values
 
 
 def _check_steps(path: Path, year, month, day, hour, minute, line_numbers, per_hour: int) -> NDArray[np.int64]:
