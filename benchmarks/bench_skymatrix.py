@@ -27,8 +27,8 @@ import argparse
 import os
 import shutil
 import statistics
-import sys
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path

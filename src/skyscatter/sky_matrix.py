@@ -40,7 +40,8 @@ from .errors import FileFormatError, InvalidParameterError
 from .fileio import atomic_path, atomic_paths
 from .patches import PatchScheme, patch_scheme
 
-__all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches", "perez_patch_luminance", "skymatrix"]
+__all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches", "perez_patch_luminance",
+           "skymatrix"]
 
 #: Gauss-Legendre nodes (zenith, azimuth) of the per-hour normalisation integral.
 NORMALISATION_NODES = (48, 96)

@@ -37,11 +37,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..precomputed import PrecomputedAtmosphere
-    from ..precomputed.cache import cached_atmosphere
     import os
 
     from ..errors import OutputError
+    from ..precomputed import PrecomputedAtmosphere
+    from ..precomputed.cache import cached_atmosphere
     from .precompute import atmosphere_from_args, one_line_warnings
 
     # The output folder first: refuse it before a table build that can take a minute.

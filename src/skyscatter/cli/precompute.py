@@ -8,7 +8,6 @@ import re
 import sys
 import time
 import warnings
-from pathlib import Path
 
 from ..errors import InvalidParameterError
 from .common import HELP_FORMATTER, float_in, output_path, positive_int
@@ -132,11 +131,9 @@ def one_line_warnings():
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..precomputed import PrecomputedAtmosphere
-    from ..precomputed.cache import load_or_compute
-
     from ..fileio import check_output_path
-    from ..precomputed.cache import check_cache_dir
+    from ..precomputed import PrecomputedAtmosphere
+    from ..precomputed.cache import check_cache_dir, load_or_compute
 
     params, sizes = atmosphere_from_args(args)
     if args.out is not None and args.out.suffix != ".npz":

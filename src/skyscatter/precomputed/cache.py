@@ -21,7 +21,8 @@ from ..errors import FileFormatError, OutputError
 from .parameters import AtmosphereParameters
 from .tables import PrecomputedAtmosphere, TableSizes, _as_wavelengths, cache_key
 
-__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "check_cache_dir", "cached_atmosphere", "clear_memory_cache",
+__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "check_cache_dir",
+           "cached_atmosphere", "clear_memory_cache",
            "load_or_compute"]
 
 _MEMORY: dict[str, PrecomputedAtmosphere] = {}

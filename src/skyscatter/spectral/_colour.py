@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import importlib
 import warnings
-from functools import lru_cache
+from functools import cache
 from importlib import resources
 from types import ModuleType
 
@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from ..errors import FileFormatError
 
 
-@lru_cache(maxsize=None)
+@cache
 def cie_table(name: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(wavelengths [nm], values (n, k)) of the shipped CIE table ``skyscatter/data/<name>.csv``.
 

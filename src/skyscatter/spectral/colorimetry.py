@@ -1,7 +1,8 @@
 """CIE 1931 colorimetry of spectra and the linear sRGB conversion.
 
 The colour-matching functions are the CIE 1931 2-degree standard observer (CIE 018:2019; 1 nm, 360-830 nm,
-shipped as ``skyscatter/data/cie1931_2deg_cmfs.csv``, generated from colour-science's table), linearly interpolated to the caller's wavelengths and zero outside that range.
+shipped as ``skyscatter/data/cie1931_2deg_cmfs.csv``, generated from colour-science's table), linearly
+interpolated to the caller's wavelengths and zero outside that range.
 Photometric quantities use K_m = 683 lm/W, so ``Y`` of a spectral radiance [W m^-2 sr^-1 nm^-1] is a
 luminance [cd m^-2] and of a spectral irradiance an illuminance [lx].
 """
