@@ -14,7 +14,6 @@ import contextlib
 import importlib
 import signal
 import sys
-import warnings
 from collections.abc import Iterator, Sequence
 
 from .. import __version__
@@ -71,8 +70,7 @@ class Terminated(KeyboardInterrupt):
 def _cli_environment() -> Iterator[None]:
     """One-line warnings and SIGTERM as an exception, for the duration of a command."""
 
-    def one_line(message, category, filename, lineno, file=None, line=None):
-        print(f"skyscatter: warning: {message}", file=sys.stderr if file is None else file)
+    from .common import one_line_warnings
 
     def on_sigterm(signum, frame):
         raise Terminated()
@@ -81,8 +79,7 @@ def _cli_environment() -> Iterator[None]:
     with contextlib.suppress(ValueError):  # not the main thread: leave signals alone
         previous = signal.signal(signal.SIGTERM, on_sigterm)
     try:
-        with warnings.catch_warnings():
-            warnings.showwarning = one_line
+        with one_line_warnings():
             yield
     finally:
         if previous is not None:

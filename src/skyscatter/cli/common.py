@@ -3,13 +3,29 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime as dt
 import math
+import sys
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
 
 from ..errors import InvalidParameterError
 
 HELP_FORMATTER = argparse.ArgumentDefaultsHelpFormatter
+
+
+@contextlib.contextmanager
+def one_line_warnings() -> Iterator[None]:
+    """Print warnings raised inside the block as one line each, ``skyscatter: warning: <message>``, on stderr."""
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"skyscatter: warning: {message}", file=sys.stderr if file is None else file)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield
 
 
 def positive_int(text: str) -> int:

@@ -42,7 +42,8 @@ def run(args: argparse.Namespace) -> int:
     from ..errors import OutputError
     from ..precomputed import PrecomputedAtmosphere
     from ..precomputed.cache import cached_atmosphere
-    from .precompute import atmosphere_from_args, one_line_warnings
+    from .common import one_line_warnings
+    from .precompute import atmosphere_from_args
 
     # The output folder first: refuse it before a table build that can take a minute.
     if args.out_dir.exists() and not args.out_dir.is_dir():

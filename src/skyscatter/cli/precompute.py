@@ -3,14 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import re
 import sys
 import time
-import warnings
 
 from ..errors import InvalidParameterError
-from .common import HELP_FORMATTER, float_in, output_path, positive_int
+from .common import HELP_FORMATTER, float_in, one_line_warnings, output_path, positive_int
 
 
 def _sizes(n: int, name: str):
@@ -122,14 +120,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-@contextlib.contextmanager
-def one_line_warnings():
-    """Print warnings raised inside the block as one line, ``warning: <message>``, on stderr."""
-    with warnings.catch_warnings():
-        warnings.showwarning = lambda message, category, *a, **k: print(f"warning: {message}", file=sys.stderr)
-        yield
-
-
 def run(args: argparse.Namespace) -> int:
     from ..fileio import check_output_path
     from ..precomputed import PrecomputedAtmosphere
@@ -148,8 +138,9 @@ def run(args: argparse.Namespace) -> int:
         from ..precomputed.cache import cache_path
 
         # --force recomputes first and then replaces the file atomically: an interrupted run keeps the old one.
-        atm, computed = load_or_compute(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
-                                        progress=progress, force=args.force, require_saved=True)
+        with one_line_warnings():
+            atm, computed = load_or_compute(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
+                                            progress=progress, force=args.force, require_saved=True)
         target = cache_path(atm.cache_key)
     else:
         atm = PrecomputedAtmosphere.compute(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,

@@ -9,6 +9,11 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+# Submodules named like the function they define are imported here, so that the package attribute is the
+# function (importing a submodule later would otherwise leave the module object under that name).
+from .sky_image import pixel_solid_angles, sky_image  # noqa: F401
+from .tonemap import tonemap  # noqa: F401
+
 # public name -> module that defines it
 _LAZY = {
     "PinholeCamera": "skyscatter.render.camera",
@@ -19,14 +24,11 @@ _LAZY = {
     "write_png": "skyscatter.render.image_io",
     "RenderResult": "skyscatter.render.scene",
     "Scene": "skyscatter.render.scene",
-    "pixel_solid_angles": "skyscatter.render.sky_image",
-    "sky_image": "skyscatter.render.sky_image",
     "Terrain": "skyscatter.render.terrain",
     "default_terrain": "skyscatter.render.terrain",
-    "tonemap": "skyscatter.render.tonemap",
 }
 
-__all__ = sorted(_LAZY)
+__all__ = sorted([*_LAZY, "pixel_solid_angles", "sky_image", "tonemap"])
 
 
 def __getattr__(name: str) -> Any:

@@ -398,7 +398,7 @@ def _read_npy_heights(p: Path) -> NDArray:
         raise FileFormatError(f"{p}: not a NumPy .npy file ({exc})") from None
     if dtype.hasobject or dtype.kind not in "biuf":
         raise FileFormatError(
-            f"{p}: an elevation model holds real numbers (heights [m]); this .npy holds {dtype} values"
+            f"{p}: an elevation model holds real-valued heights [m]; this .npy holds {dtype} values"
         )
     n = int(np.prod(shape, dtype=object)) if shape else 1
     if n > MAX_DEM_SAMPLES:
