@@ -224,7 +224,7 @@ def _parse_location(path: Path, text: str) -> EPWLocation:
 
 
 def read_epw(path: str | os.PathLike[str]) -> EPWData:
-    """Read an hourly EPW weather file.
+    """Read an EPW weather file (hourly or sub-hourly, as its DATA PERIODS line declares).
 
     Parameters
     ----------
