@@ -18,6 +18,7 @@ __all__ = [
     "MAX_EXTRATERRESTRIAL_ILLUMINANCE",
     "MAX_EXTRATERRESTRIAL_IRRADIANCE",
     "MAX_SKY_LUMINANCE",
+    "check_daylight_limit",
     "direction_from_angles",
     "angles_from_direction",
     "angle_between",
@@ -43,6 +44,32 @@ MAX_EXTRATERRESTRIAL_ILLUMINANCE = LUMINOUS_SOLAR_CONSTANT * PERIHELION_FACTOR
 #: Luminance of the solar disc outside the atmosphere [cd m^-2]: MAX_EXTRATERRESTRIAL_ILLUMINANCE over the
 #: disc's solid angle at perihelion (6.80e-5 sr x 1.0344). No part of the sky is brighter.
 MAX_SKY_LUMINANCE = MAX_EXTRATERRESTRIAL_ILLUMINANCE / (6.80e-5 * PERIHELION_FACTOR)
+
+
+def check_daylight_limit(name: str, value: float, unit: str) -> None:
+    """Refuse a daylight input above its physical limit, naming the limit and its source.
+
+    ``unit`` chooses the limit: "W m^-2" (irradiance, :data:`MAX_EXTRATERRESTRIAL_IRRADIANCE`), "lx"
+    (illuminance, :data:`MAX_EXTRATERRESTRIAL_ILLUMINANCE`) or "cd m^-2" (sky luminance,
+    :data:`MAX_SKY_LUMINANCE`); other units are not checked.
+
+    Raises
+    ------
+    InvalidParameterError
+    """
+    limits = {
+        "W m^-2": (MAX_EXTRATERRESTRIAL_IRRADIANCE, "the extraterrestrial solar irradiance at perihelion",
+                   "1367 W m^-2 x 1.0344", "irradiance at the ground"),
+        "lx": (MAX_EXTRATERRESTRIAL_ILLUMINANCE, "the extraterrestrial solar illuminance at perihelion",
+               "luminous solar constant 133.8 klx, Darula et al. 2005", "illuminance at the ground"),
+        "cd m^-2": (MAX_SKY_LUMINANCE, "the luminance of the solar disc outside the atmosphere",
+                    "133.8 klx x 1.0344 over 6.8e-5 sr", "part of the sky"),
+    }
+    if unit in limits and value > limits[unit][0]:
+        limit, what, source, nothing = limits[unit]
+        raise InvalidParameterError(
+            f"{name} {value:g} {unit} exceeds {what}, {limit:.4g} {unit} ({source}), which no {nothing} exceeds"
+        )
 
 
 def direction_from_angles(zenith: ArrayLike, azimuth: ArrayLike) -> NDArray[np.float64]:

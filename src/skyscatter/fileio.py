@@ -21,7 +21,7 @@ from pathlib import Path
 
 from .errors import OutputError
 
-__all__ = ["atomic_path", "atomic_paths", "check_output_path", "remove_stale_temporaries"]
+__all__ = ["atomic_path", "atomic_paths", "check_output_path", "ensure_output_folder", "remove_stale_temporaries"]
 
 # .<target name>.<pid>.<token>.<tmp|old><suffix>
 _TEMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.(?P<token>[0-9a-f]{12})\.(?P<kind>tmp|old)(?P<suffix>\.[^.]*)?$")
@@ -58,6 +58,28 @@ def check_output_path(path: str | os.PathLike[str], *, option: str | None = None
     if not _accessible(folder):
         raise OutputError(f"cannot write {where}{path}: folder {folder} is not writable")
     return target
+
+
+def ensure_output_folder(path: str | os.PathLike[str], *, what: str = "output folder", hint: str = "") -> Path:
+    """Create the folder ``path`` (and its parents) if missing; refuse a file or a folder that cannot be written.
+
+    ``what`` names it in messages (e.g. ``"--out-dir"``), ``hint`` is appended (e.g. how to choose another).
+
+    Raises
+    ------
+    OutputError
+    """
+    folder = Path(path)
+    tail = f"; {hint}" if hint else ""
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"{what} {folder}: is a file, not a folder{tail}")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"{what} {folder}: cannot create the folder: {exc.strerror or exc}{tail}") from None
+    if not _accessible(folder):
+        raise OutputError(f"{what} {folder}: folder is not writable{tail}")
+    return folder
 
 
 def _accessible(folder: Path) -> bool:

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -242,16 +241,9 @@ def _panels(args: argparse.Namespace, figure: str) -> list[_Panel]:
 
 def _check_out_dir(out_dir: Path) -> None:
     """Create the output folder if missing (as ``export-luts`` does); refuse a file or a read-only folder."""
-    from ..errors import OutputError
+    from ..fileio import ensure_output_folder
 
-    if out_dir.exists() and not out_dir.is_dir():
-        raise OutputError(f"--out-dir {out_dir}: is a file, not a folder")
-    try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"--out-dir {out_dir}: cannot create the folder: {exc.strerror or exc}") from None
-    if not os.access(out_dir, os.W_OK | os.X_OK):
-        raise OutputError(f"--out-dir {out_dir}: folder is not writable")
+    ensure_output_folder(out_dir, what="--out-dir")
 
 
 def _targets(out_dir: Path, panels: list[_Panel], figure: str) -> list[Path]:

@@ -37,23 +37,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import os
-
-    from ..errors import OutputError
+    from ..fileio import ensure_output_folder
     from ..precomputed import PrecomputedAtmosphere
     from ..precomputed.cache import cached_atmosphere
     from .common import one_line_warnings
     from .precompute import atmosphere_from_args
 
     # The output folder first: refuse it before a table build that can take a minute.
-    if args.out_dir.exists() and not args.out_dir.is_dir():
-        raise OutputError(f"--out-dir {args.out_dir}: is a file, not a folder")
-    try:
-        args.out_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"--out-dir {args.out_dir}: cannot create the folder: {exc.strerror or exc}") from None
-    if not os.access(args.out_dir, os.W_OK | os.X_OK):
-        raise OutputError(f"--out-dir {args.out_dir}: folder is not writable")
+    ensure_output_folder(args.out_dir, what="--out-dir")
     if args.source is not None:
         atm = PrecomputedAtmosphere.load(args.source)
     else:

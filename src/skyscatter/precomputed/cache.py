@@ -43,17 +43,10 @@ def check_cache_dir() -> Path:
 
     The message names the folder, says what is wrong and how to choose another (``SKYSCATTER_CACHE_DIR``).
     """
-    folder = cache_dir()
-    hint = "set SKYSCATTER_CACHE_DIR to a writable folder"
-    if folder.exists() and not folder.is_dir():
-        raise OutputError(f"the table cache {folder} is not a folder; {hint}")
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"cannot create the table cache folder {folder}: {exc.strerror or exc}; {hint}") from None
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise OutputError(f"the table cache folder {folder} is not writable; {hint}")
-    return folder
+    from ..fileio import ensure_output_folder
+
+    return ensure_output_folder(cache_dir(), what="the table cache folder",
+                                hint="set SKYSCATTER_CACHE_DIR to a writable folder")
 
 
 def cache_path(key: str) -> Path:

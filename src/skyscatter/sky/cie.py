@@ -212,20 +212,10 @@ def _check_sun_illuminance(value) -> float:
 
 
 def _check_upper(name: str, value: float, unit: str) -> None:
-    """Refuse a scale above its physical limit (:mod:`skyscatter.conventions`), saying which."""
-    from ..conventions import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_SKY_LUMINANCE
+    """Refuse a scale above its physical limit (:func:`skyscatter.conventions.check_daylight_limit`)."""
+    from ..conventions import check_daylight_limit
 
-    if unit == "lx" and value > MAX_EXTRATERRESTRIAL_ILLUMINANCE:
-        raise InvalidParameterError(
-            f"{name} {value:g} lx exceeds the extraterrestrial solar illuminance at perihelion, "
-            f"{MAX_EXTRATERRESTRIAL_ILLUMINANCE:.0f} lx (luminous solar constant 133.8 klx, Darula et al. 2005), "
-            "which no daylight at the ground exceeds"
-        )
-    if unit == "cd m^-2" and value > MAX_SKY_LUMINANCE:
-        raise InvalidParameterError(
-            f"{name} {value:g} cd m^-2 exceeds the luminance of the solar disc outside the atmosphere, "
-            f"{MAX_SKY_LUMINANCE:.3g} cd m^-2, which no part of the sky exceeds"
-        )
+    check_daylight_limit(name, value, unit)
 
 
 class LuminanceSunMixin:

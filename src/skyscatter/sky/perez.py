@@ -367,20 +367,9 @@ def _finite(name: str, value, unit: str, *, low: float | None = None, strict_low
     if low is not None and (v <= low if strict_low else v < low):
         rel = ">" if strict_low else ">="
         raise InvalidParameterError(f"{name} must be {rel} {low:g} [{unit}]; got {v:g}")
-    from ..conventions import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_EXTRATERRESTRIAL_IRRADIANCE
+    from ..conventions import check_daylight_limit
 
-    if unit == "W m^-2" and v > MAX_EXTRATERRESTRIAL_IRRADIANCE:
-        raise InvalidParameterError(
-            f"{name} {v:g} W m^-2 exceeds the extraterrestrial solar irradiance at perihelion, "
-            f"{MAX_EXTRATERRESTRIAL_IRRADIANCE:.0f} W m^-2 (1367 W m^-2 x 1.0344), which no irradiance at the "
-            "ground exceeds"
-        )
-    if unit == "lx" and v > MAX_EXTRATERRESTRIAL_ILLUMINANCE:
-        raise InvalidParameterError(
-            f"{name} {v:g} lx exceeds the extraterrestrial solar illuminance at perihelion, "
-            f"{MAX_EXTRATERRESTRIAL_ILLUMINANCE:.0f} lx (luminous solar constant 133.8 klx, Darula et al. 2005), "
-            "which no illuminance at the ground exceeds"
-        )
+    check_daylight_limit(name, v, unit)
     return v
 
 
