@@ -10,14 +10,25 @@ and compares the matrices: gendaymtx's visible radiance [W sr^-1 m^-2] times 179
 efficacy; its output RGB carries the sky colour (0.96, 1.004, 1.118), whose Radiance luminance weight is 1)
 against skyscatter's luminance [cd m^-2], patch by patch (gendaymtx's ground patch 0 dropped).
 
-Run:  /work/venv/bin/python benchmarks/bench_skymatrix.py [--hours 8760] [--keep DIR]
+and, side by side (alternating runs, medians; issue 12's target is "faster than gendaymtx"):
+
+* the API ``skyscatter.skymatrix(epw, scheme="reinhart2", samples=1)`` (patch centres, as gendaymtx) in this
+  process, warm;
+* the command line ``skyscatter skymatrix EPW --patches reinhart2 --samples 1 --out m.npz`` (a new process:
+  imports, reading, computing and writing the file included), and
+* ``gendaymtx -m 2 -s -O0 -of EPW > file`` (a new process, writing its binary matrix).
+
+Run:  /work/venv/bin/python benchmarks/bench_skymatrix.py [--hours 8760] [--keep DIR] [--repeat 5]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
+import statistics
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -92,10 +103,41 @@ def run_gendaymtx(epw: Path, mf: int) -> tuple[np.ndarray, float]:
     return np.transpose(data, (1, 0, 2)), elapsed
 
 
+def side_by_side(epw: Path, work: Path, repeat: int) -> None:
+    """Alternate API, CLI and gendaymtx runs; print medians and the ratios to gendaymtx."""
+    import pyradiance
+
+    import skyscatter
+
+    exe = Path(pyradiance.BINPATH) / "gendaymtx"
+    env = dict(os.environ)
+    cli = [sys.executable, "-m", "skyscatter", "skymatrix", str(epw), "--patches", "reinhart2", "--samples", "1",
+           "--out", str(work / "cli.npz"), "--no-progress"]
+    subprocess.run(cli, check=True, capture_output=True, env=env)  # warm caches
+    t_api, t_cli, t_gen = [], [], []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        skyscatter.skymatrix(epw, scheme="reinhart2", samples=1)
+        t_api.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        subprocess.run(cli, check=True, capture_output=True, env=env)
+        t_cli.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        with open(work / "gendaymtx.bin", "wb") as fh:
+            subprocess.run([str(exe), "-m", "2", "-s", "-O0", "-of", str(epw)], stdout=fh, check=True)
+        t_gen.append(time.perf_counter() - t0)
+    api, cli_t, gen = (statistics.median(x) for x in (t_api, t_cli, t_gen))
+    print(f"side by side, {repeat} alternating runs (medians; patch centres, reinhart2):")
+    print(f"  API  skyscatter.skymatrix(samples=1)          : {api:6.2f} s  ratio to gendaymtx {api / gen:.2f}")
+    print(f"  CLI  skyscatter skymatrix --samples 1 --out   : {cli_t:6.2f} s  ratio to gendaymtx {cli_t / gen:.2f}")
+    print(f"  gendaymtx -m 2 -s -O0 -of > file             : {gen:6.2f} s")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--hours", type=int, default=8760)
     ap.add_argument("--keep", type=Path, default=None, help="folder to keep the EPW and matrices in")
+    ap.add_argument("--repeat", type=int, default=5, help="alternating runs of the side-by-side timing")
     args = ap.parse_args()
     import skyscatter
     from skyscatter.patches import patch_scheme
@@ -136,6 +178,7 @@ def main() -> None:
                   f"max |.| {100 * np.max(np.abs(err)):.3f} %")
         if rad is None:
             return
+        side_by_side(epw, work, args.repeat)
         print(f"gendaymtx -m 2 -s                               : {t_rad:6.2f} s")
         print(f"time ratio skyscatter/gendaymtx                 : {t_ours / t_rad:6.2f} "
               f"(centres {t_centre / t_rad:.2f})")

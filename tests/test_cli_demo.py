@@ -79,7 +79,7 @@ def test_custom_panel_from_dem(tmp_path, capsys):
         (lambda d: ["--camera-altitude", "-200"], "below the terrain surface"),
         (lambda d: ["--width", "0"], "whole number > 0"),
         (lambda d: ["--height", "-3"], "whole number > 0"),
-        (lambda d: ["--out-dir", str(d / "missing")], "does not exist"),
+        (lambda d: ["--out-dir", str(d / "nan.npy")], "is a file, not a folder"),
         (lambda d: ["--figure", "7", "--turbidity", "4"], "--figure custom"),
         (lambda d: ["--turbidity", "20"], "turbidity"),
         (lambda d: ["--lat", "40"], "together"),

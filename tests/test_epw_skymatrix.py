@@ -91,7 +91,18 @@ def _edit_first(old, new):
         (lambda h, r: (["LOCATION,A,B,C"] + h[1:], r), r"line 1: LOCATION needs 10 fields"),
         (lambda h, r: ([h[0].replace("48.14", "95.0")] + h[1:], r), r"line 1: latitude 95 deg is outside"),
         (lambda h, r: ([h[0].replace("11.58", "east")] + h[1:], r), r"line 1: longitude 'east' is not a number"),
-        (lambda h, r: (h[:7] + ["DATA PERIODS,1,4,Data,Sunday, 6/20,6/21"], r), r"line 8: only hourly EPW files"),
+        (lambda h, r: (h[:7] + ["DATA PERIODS,1,4,Data,Sunday, 6/20,6/21"], r),
+         r"line 9: 2023-06-20 hour 1 holds 1 record\(s\), but the DATA PERIODS header \(line 8\) declares 4"),
+        (lambda h, r: (h[:7] + ["DATA PERIODS,1,7,Data,Sunday, 6/20,6/21"], r), r"line 8: .*7 records per hour"),
+        # issue 12, item 1: the same hour twice, and a 4-per-hour file whose header declares 1
+        (lambda h, r: (h, r[:6] + [r[5]] + r[6:]), r"line 15: 2023-06-20 hour 6 holds 2 records, but .* declares 1"),
+        (lambda h, r: (h, r + [r[3]]), r"line 57: 2023-06-20 hour 4 appears again \(first at line 12\)"),
+        (lambda h, r: (h, [x for x in r[:3] for _ in range(4)] + r[3:]), r"line 10: 2023-06-20 hour 1 holds 4"),
+        # issue 12, item 7: years outside the time stamps' range
+        (_edit_first("2023,6,20,1,", "0,6,20,1,"), r"line 9: year 0 is outside 1678-2261"),
+        (_edit_first("2023,6,20,1,", "-5,6,20,1,"), r"line 9: year -5 is outside"),
+        (_edit_first("2023,6,20,1,", "99999,6,20,1,"), r"line 9: year 99999 is outside"),
+        (_edit_first("2023,6,20,1,", "1e20,6,20,1,"), r"line 9: year 1e20 is outside"),
         (lambda h, r: (h, r[:5] + [r[5] + ",7"] + r[6:]), r"line 14: a data record has 35 .* found 36"),
         (lambda h, r: (h, r[:3] + [",".join(r[3].split(",")[:-2])] + r[4:]), r"line 12: .*found 33"),
         (lambda h, r: (h, r[:2] + [r[2].replace(",18.0,", ",hot,", 1)] + r[3:]), r"line 11: dry bulb .*'hot' is not"),
@@ -146,7 +157,8 @@ def test_skymatrix_rows_match_the_perez_sky_class(epw_file):
         np.testing.assert_allclose(m.luminance[h], patch_luminance(sky, "tregenza", samples=3), rtol=1e-3)
 
 
-def test_skymatrix_sun_goes_into_its_patch(epw_file):
+def test_skymatrix_sun_spread_over_the_four_nearest_patches(epw_file):
+    """Issue 12: the sun is spread as gendaymtx's AddDirect does (4 nearest centres, w = 1 / (1.002 - cos))."""
     sky_only = skyscatter.skymatrix(epw_file, scheme="reinhart2", samples=1)
     with_sun = skyscatter.skymatrix(epw_file, scheme="reinhart2", samples=1, include_sun=True)
     g = patch_scheme("reinhart2")
@@ -156,12 +168,19 @@ def test_skymatrix_sun_goes_into_its_patch(epw_file):
     assert sunny.sum() > 10
     np.testing.assert_allclose((diff * g.solid_angles).sum(axis=1)[sunny], with_sun.sun_illuminance_normal[sunny],
                                rtol=1e-12)
-    assert np.all(np.count_nonzero(diff[sunny], axis=1) == 1)
-    h = int(np.flatnonzero(sunny & (with_sun.sun_zenith < 1.2))[0])
-    el = math.pi / 2 - with_sun.sun_zenith[h]
-    sun = np.array([math.cos(el) * math.sin(with_sun.sun_azimuth[h]), math.cos(el) * math.cos(with_sun.sun_azimuth[h]),
-                    math.sin(el)])
-    assert int(np.flatnonzero(diff[h])[0]) == int(g.patch_index(sun))
+    assert np.all(np.count_nonzero(diff[sunny], axis=1) == 4)
+    centres = g.centre_directions.reshape(-1, 3)
+    for h in np.flatnonzero(sunny & (with_sun.sun_zenith < 1.4)):
+        z = max(with_sun.sun_zenith[h], math.radians(3.0))
+        el, az = math.pi / 2 - z, with_sun.sun_azimuth[h]
+        sun = np.array([math.cos(el) * math.sin(az), math.cos(el) * math.cos(az), math.sin(el)])
+        dots = centres @ sun
+        nearest = np.argsort(-dots)[:4]
+        assert set(np.flatnonzero(diff[h])) == set(nearest)
+        w = 1 / (1.002 - dots[nearest])
+        share = diff[h, nearest] * g.solid_angles[nearest] / with_sun.sun_illuminance_normal[h]
+        np.testing.assert_allclose(share, w / w.sum(), rtol=1e-12)
+        assert int(g.patch_index(sun)) in set(nearest)  # the patch containing the sun gets a share
 
 
 def test_save_npz_and_csv(epw_file, tmp_path):
@@ -191,3 +210,36 @@ def test_progress_bar(epw_file, capsys):
 def test_bad_options(epw_file, kwargs):
     with pytest.raises(InvalidParameterError):
         skyscatter.skymatrix(epw_file, **kwargs)
+
+
+def subhourly_records(n):
+    """The two days of day_records() with n records per hour (minutes 60/n .. 60), same irradiance each."""
+    rows = []
+    for line in day_records():
+        f = line.split(",")
+        for k in range(n):
+            g = list(f)
+            g[4] = str((k + 1) * 60 // n)
+            rows.append(",".join(g))
+    return rows
+
+
+def test_subhourly_file_one_row_per_record_or_hourly(tmp_path, epw_file):
+    """Issue 12, item 1: a declared 4-per-hour file is read with each record's own interval; hourly() averages."""
+    header = HEADER[:7] + ["DATA PERIODS,1,4,Data,Sunday, 6/20,6/21"]
+    path = _write(tmp_path, header + subhourly_records(4))
+    epw = read_epw(path)
+    assert len(epw) == 4 * 48 and epw.records_per_hour == 4
+    t = epw.times()
+    # the k-th record of the hour ending at 1:00 covers [0:15 k, 0:15 (k + 1)]; stamps at the middles
+    assert [x.strftime("%H:%M:%S") for x in t[:5]] == ["00:07:30", "00:22:30", "00:37:30", "00:52:30", "01:07:30"]
+    assert len(set(t)) == len(t)
+    hourly = epw.hourly()
+    ref = read_epw(epw_file)
+    assert len(hourly) == 48 and list(hourly.times()) == list(ref.times())
+    np.testing.assert_array_equal(hourly.direct_normal_irradiance, ref.direct_normal_irradiance)
+    m = skyscatter.skymatrix(path, scheme="tregenza", samples=1)
+    assert m.shape == (4 * 48, 145) and len(set(m.times)) == 4 * 48
+    mh = skyscatter.skymatrix(path, scheme="tregenza", samples=1, timestep="hourly")
+    mr = skyscatter.skymatrix(epw_file, scheme="tregenza", samples=1)
+    np.testing.assert_allclose(mh.luminance, mr.luminance, rtol=1e-12)

@@ -166,7 +166,7 @@ def test_npy_loader_errors(tmp_path):
         Terrain.load(tmp_path / "nan.npy", spacing=10.0)
     with pytest.raises(FileFormatError, match="2-D"):
         Terrain.load(tmp_path / "flat.npy", spacing=10.0)
-    with pytest.raises(FileFormatError, match="cannot read"):
+    with pytest.raises(FileFormatError, match="not a NumPy .npy file"):
         Terrain.load(tmp_path / "junk.npy", spacing=10.0)
     with pytest.raises(FileFormatError, match="spacing"):
         Terrain.load(tmp_path / "flat.npy")

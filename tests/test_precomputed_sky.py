@@ -249,7 +249,7 @@ def test_cli_precompute_rebuilds_a_corrupt_cache(monkeypatch, tmp_path, capsys):
     out, err = capsys.readouterr()
     assert "already cached" not in out and "order 2 multiple" in out and f"wrote {path}" in out
     lines = [line for line in err.splitlines() if line.strip()]
-    assert len(lines) == 1 and lines[0].startswith("warning: rebuilding cached atmosphere tables")
+    assert len(lines) == 1 and lines[0].startswith("skyscatter: warning: rebuilding cached atmosphere tables")
     assert PrecomputedAtmosphere.load(path).orders == 2
     # --force recomputes (timings printed) over the valid file
     clear_memory_cache()

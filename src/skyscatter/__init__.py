@@ -15,6 +15,11 @@ from typing import Any
 
 __version__ = "0.1.0"
 
+# Before any compiled kernel is defined: a read-only install with an unwritable HOME still gets a numba cache.
+from .fileio import ensure_numba_cache as _ensure_numba_cache  # noqa: E402
+
+_ensure_numba_cache(__path__[0])
+
 # public name -> module that defines it
 _LAZY = {
     "sun_position": "skyscatter.sun.position",

@@ -10,10 +10,18 @@ Data fields used here (1-based field numbers of the dictionary): 1 year, 2 month
 hour *ending* at that local standard time), 5 minute, 7 dry bulb [deg C], 8 dew point [deg C],
 14 global horizontal, 15 direct normal, 16 diffuse horizontal radiation [Wh m^-2, the hour's mean irradiance
 in W m^-2]. Missing-value codes of the dictionary: 9999 for radiation, 99.9 for dew point (kept as NaN; the
-sky models then use their default dew point). Only hourly files (1 record per hour) are supported.
+sky models then use their default dew point).
+
+Time steps: the DATA PERIODS header line declares the number of records per hour N (field 2; 1, 2, 3, 4, 5, 6,
+10, 12, 15, 20, 30 or 60, a divisor of 60). Every hour of the file must then hold exactly N records, one after
+the other with increasing minutes, and no hour may appear twice; the k-th record (k = 0 .. N-1) of the hour
+ending at ``hour`` covers ``[hour - 1 + k / N, hour - 1 + (k + 1) / N]`` h local standard time (EnergyPlus
+orders sub-hourly records within the hour that way). Radiation fields of a sub-hourly record are means over
+its own interval. :meth:`EPWData.hourly` averages a sub-hourly file to hours.
 
 Every error names the file and the line: a malformed header, a record with the wrong number of fields, a field
-that is not a number, a date that does not exist, or a value outside the dictionary's range.
+that is not a number, a date that does not exist, a year outside the range the time stamps support, a
+repeated time, an hour with more or fewer records than declared, or a value outside the dictionary's range.
 """
 
 from __future__ import annotations
@@ -32,6 +40,10 @@ __all__ = ["N_FIELDS", "EPWLocation", "EPWData", "read_epw"]
 
 #: Number of fields in an EPW data record.
 N_FIELDS = 35
+#: Years the time stamps can hold (pandas nanosecond timestamps, used for the sun position).
+YEAR_RANGE = (1678, 2261)
+#: Record counts per hour a DATA PERIODS line may declare (divisors of 60 minutes).
+RECORDS_PER_HOUR = (1, 2, 3, 4, 5, 6, 10, 12, 15, 20, 30, 60)
 _HEADER_KEYS = (
     "LOCATION",
     "DESIGN CONDITIONS",
@@ -84,7 +96,7 @@ class EPWLocation:
 
 @dataclass(frozen=True, eq=False)
 class EPWData:
-    """Hourly records of an EPW file (arrays of shape (n_hours,)).
+    """Records of an EPW file (arrays of shape (n_records,)).
 
     Attributes
     ----------
@@ -92,6 +104,10 @@ class EPWData:
     location : EPWLocation
     year, month, day, hour : ndarray of int
         As in the file; ``hour`` 1-24 ends the record's hour (local standard time).
+    records_per_hour : int
+        N, from the DATA PERIODS header (1 for an hourly file).
+    step : ndarray of int
+        Position 0 .. N-1 of each record within its hour (all 0 in an hourly file).
     dry_bulb, dew_point : ndarray
         [deg C]; NaN where the file marks the value missing.
     global_horizontal_irradiance, direct_normal_irradiance, diffuse_horizontal_irradiance : ndarray
@@ -112,21 +128,53 @@ class EPWData:
     direct_normal_irradiance: NDArray[np.float64]
     diffuse_horizontal_irradiance: NDArray[np.float64]
     line_numbers: NDArray[np.int64]
+    records_per_hour: int = 1
+    step: NDArray[np.int64] | None = None
 
     def __len__(self) -> int:
         return int(self.hour.size)
 
-    def times(self, *, offset_hours: float = -0.5):
+    def _step(self) -> NDArray[np.int64]:
+        return np.zeros_like(self.hour) if self.step is None else self.step
+
+    def times(self, *, offset_hours: float | None = None):
         """Time stamps of the records, tz-aware ``pandas.DatetimeIndex`` in the file's standard time.
 
-        ``offset_hours`` is added to the end of each record's hour: -0.5 (default) gives the middle of the
-        hour the values average over, 0 the time printed in the file.
+        ``offset_hours`` is added to the end of each record's interval (``hour - 1 + (k + 1) / N`` h): the
+        default, half a record (-0.5 h in an hourly file), gives the middle of the interval the values average
+        over; 0 gives the end of the interval (the time printed in an hourly file).
         """
         import pandas as pd
 
+        n = self.records_per_hour
+        offset = -0.5 / n if offset_hours is None else offset_hours
         base = pd.to_datetime({"year": self.year, "month": self.month, "day": self.day})
-        stamps = base + pd.to_timedelta(self.hour + offset_hours, unit="h")
+        end = self.hour - 1 + (self._step() + 1) / n
+        stamps = base + pd.to_timedelta(end + offset, unit="h")
         return pd.DatetimeIndex(stamps).tz_localize(self.location.tzinfo)
+
+    def hourly(self) -> EPWData:
+        """The records averaged to hours (a sub-hourly file); an hourly file is returned as it is.
+
+        Temperatures and irradiances are the means of the hour's N records (NaN if any of them is missing);
+        each hour keeps the line number of its first record.
+        """
+        n = self.records_per_hour
+        if n == 1:
+            return self
+
+        def mean(a):
+            return a.reshape(-1, n).mean(axis=1)
+
+        first = slice(0, None, n)
+        return EPWData(
+            path=self.path, location=self.location, year=self.year[first], month=self.month[first],
+            day=self.day[first], hour=self.hour[first], dry_bulb=mean(self.dry_bulb),
+            dew_point=mean(self.dew_point), global_horizontal_irradiance=mean(self.global_horizontal_irradiance),
+            direct_normal_irradiance=mean(self.direct_normal_irradiance),
+            diffuse_horizontal_irradiance=mean(self.diffuse_horizontal_irradiance),
+            line_numbers=self.line_numbers[first], records_per_hour=1, step=None,
+        )
 
     @property
     def day_of_year(self) -> NDArray[np.int64]:
@@ -176,7 +224,7 @@ def _parse_location(path: Path, text: str) -> EPWLocation:
 
 
 def read_epw(path: str | os.PathLike[str]) -> EPWData:
-    """Read an hourly EPW weather file.
+    """Read an EPW weather file (hourly or sub-hourly, as its DATA PERIODS line declares).
 
     Parameters
     ----------
@@ -216,10 +264,13 @@ def read_epw(path: str | os.PathLike[str]) -> EPWData:
             raise _fail(p, i + 1, f"header line {i + 1} should start with {key!r}; found {lines[i][:40]!r}")
     location = _parse_location(p, lines[0])
     periods = [s.strip() for s in lines[7].split(",")]
+    per_hour = 1
     if len(periods) > 2 and periods[2]:
-        per_hour = _number(p, 8, "records per hour", periods[2])
-        if per_hour != 1:
-            raise _fail(p, 8, f"only hourly EPW files are supported (1 record per hour); this one has {per_hour:g}")
+        value = _number(p, 8, "records per hour", periods[2])
+        if value not in RECORDS_PER_HOUR:
+            raise _fail(p, 8, f"DATA PERIODS declares {value:g} records per hour; EPW allows "
+                        + ", ".join(map(str, RECORDS_PER_HOUR)) + " (divisors of 60 minutes)")
+        per_hour = int(value)
     first = len(_HEADER_KEYS)
     body = [(n + 1, line) for n, line in enumerate(lines[first:], start=first) if line.strip()]
     if not body:
@@ -230,26 +281,14 @@ def read_epw(path: str | os.PathLike[str]) -> EPWData:
         if len(fields) != N_FIELDS:
             raise _fail(p, line_no, f"a data record has {N_FIELDS} comma-separated fields; found {len(fields)}")
         rows.append(fields)
-    n = len(rows)
-    ints = np.empty((n, 4), dtype=np.int64)
-    values = np.empty((n, len(_FIELDS)))
-    names = ("year", "month", "day", "hour")
-    for r, (fields, (line_no, _)) in enumerate(zip(rows, body, strict=True)):
-        for k in range(4):
-            v = _number(p, line_no, names[k], fields[k])
-            if not v.is_integer():
-                raise _fail(p, line_no, f"{names[k]} must be a whole number; got {fields[k].strip()!r}")
-            ints[r, k] = int(v)
-        for k, (idx, name, unit, low, high, missing) in enumerate(_FIELDS):
-            v = _number(p, line_no, name, fields[idx])
-            if missing is not None and v == missing:
-                v = np.nan
-            elif not low <= v <= high:
-                raise _fail(p, line_no, f"{name} {v:g} {unit} is outside the EPW range [{low:g}, {high:g}]")
-            values[r, k] = v
     line_numbers = np.array([b[0] for b in body], dtype=np.int64)
-    year, month, day, hour = (ints[:, k] for k in range(4))
+    parsed = _parse_fast(rows)
+    if parsed is None:  # something is wrong: the field-by-field reader finds it and names the line
+        parsed = _parse_checked(p, rows, line_numbers)
+    ints, values = parsed
+    year, month, day, hour, minute = (ints[:, k] for k in range(5))
     _check_dates(p, year, month, day, hour, line_numbers)
+    step = _check_steps(p, year, month, day, hour, minute, line_numbers, per_hour)
     return EPWData(
         path=p,
         location=location,
@@ -263,7 +302,109 @@ def read_epw(path: str | os.PathLike[str]) -> EPWData:
         direct_normal_irradiance=values[:, 3],
         diffuse_horizontal_irradiance=values[:, 4],
         line_numbers=line_numbers,
+        records_per_hour=per_hour,
+        step=step,
     )
+
+
+_INT_COLUMNS = (0, 1, 2, 3, 4)  # year, month, day, hour, minute
+_VALUE_COLUMNS = tuple(f[0] for f in _FIELDS)
+
+
+def _parse_fast(rows: list[list[str]]):
+    """(ints (n, 5), values (n, len(_FIELDS))) converted in bulk, or None if any field needs a closer look."""
+    try:
+        raw = np.array([[r[k] for k in _INT_COLUMNS + _VALUE_COLUMNS] for r in rows], dtype=float)
+    except ValueError:
+        return None
+    ints_f, values = raw[:, :5], raw[:, 5:]
+    if not (np.all(np.isfinite(raw)) and np.all(ints_f == np.round(ints_f))
+            and np.all((ints_f[:, 0] >= YEAR_RANGE[0]) & (ints_f[:, 0] <= YEAR_RANGE[1]))
+            and np.all((ints_f[:, 4] >= 0) & (ints_f[:, 4] <= 60))):
+        return None
+    for k, (_, _, _, low, high, missing) in enumerate(_FIELDS):
+        col = values[:, k]
+        is_missing = col == missing if missing is not None else np.zeros(col.shape, dtype=bool)
+        if np.any(~is_missing & ((col < low) | (col > high))):
+            return None
+        col[is_missing] = np.nan
+    return ints_f.astype(np.int64), values
+
+
+def _parse_checked(p: Path, rows: list[list[str]], line_numbers) -> tuple[NDArray, NDArray]:
+    """Field by field, raising :class:`FileFormatError` at the first bad field with its line."""
+    n = len(rows)
+    ints = np.empty((n, 5), dtype=np.int64)
+    values = np.empty((n, len(_FIELDS)))
+    names = ("year", "month", "day", "hour", "minute")
+    for r, (fields, line_no) in enumerate(zip(rows, line_numbers.tolist(), strict=True)):
+        for k in range(5):
+            v = _number(p, line_no, names[k], fields[k])
+            if not v.is_integer():
+                raise _fail(p, line_no, f"{names[k]} must be a whole number; got {fields[k].strip()!r}")
+            if k == 0 and not YEAR_RANGE[0] <= v <= YEAR_RANGE[1]:
+                raise _fail(p, line_no, f"year {fields[k].strip()} is outside {YEAR_RANGE[0]}-{YEAR_RANGE[1]}, "
+                            "the range of the time stamps used for the sun position")
+            if k == 4 and not 0 <= v <= 60:
+                raise _fail(p, line_no, f"minute {fields[k].strip()} is outside 0-60")
+            ints[r, k] = int(v)
+        for k, (idx, name, unit, low, high, missing) in enumerate(_FIELDS):
+            v = _number(p, line_no, name, fields[idx])
+            if missing is not None and v == missing:
+                v = np.nan
+            elif not low <= v <= high:
+                raise _fail(p, line_no, f"{name} {v:g} {unit} is outside the EPW range [{low:g}, {high:g}]")
+            values[r, k] = v
+    return ints, values
+
+
+def _check_steps(path: Path, year, month, day, hour, minute, line_numbers, per_hour: int) -> NDArray[np.int64]:
+    """Position of each record within its hour; refuse repeated times and hours with the wrong record count.
+
+    Records of one hour must follow each other (N of them, minutes increasing) and no hour may come back later
+    in the file.
+    """
+    key = ((year * 13 + month) * 32 + day) * 25 + hour
+    new = np.ones(key.size, dtype=bool)
+    new[1:] = key[1:] != key[:-1]
+    starts = np.flatnonzero(new)
+    counts = np.diff(np.append(starts, key.size))
+    # an hour that comes back after other hours
+    _, first_index = np.unique(key[starts], return_index=True)
+    if first_index.size != starts.size:
+        seen: dict[int, int] = {}
+        for s in starts:
+            k = int(key[s])
+            if k in seen:
+                raise _fail(path, int(line_numbers[s]), f"{_stamp(year, month, day, hour, s)} appears again "
+                            f"(first at line {int(line_numbers[seen[k]])}); every hour may appear once")
+            seen[k] = s
+    bad = np.flatnonzero(counts != per_hour)
+    if bad.size:
+        s, c = int(starts[bad[0]]), int(counts[bad[0]])
+        if c > per_hour:
+            line = int(line_numbers[s + per_hour])
+            what = (f"holds {c} records, but the DATA PERIODS header (line 8) declares {per_hour} per hour; "
+                    + ("repeated hour, or a sub-hourly file whose header says 1 record per hour" if per_hour == 1
+                       else "fix the header or the records"))
+        else:
+            line = int(line_numbers[s])
+            what = f"holds {c} record(s), but the DATA PERIODS header (line 8) declares {per_hour} per hour"
+        raise _fail(path, line, f"{_stamp(year, month, day, hour, s)} {what}")
+    step = np.arange(key.size) - np.repeat(starts, counts)
+    if per_hour > 1:
+        later = np.ones(key.size, dtype=bool)
+        later[starts] = False
+        bad = later & (np.diff(minute, prepend=minute[0]) <= 0)
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            raise _fail(path, int(line_numbers[i]), f"minute {minute[i]} does not follow minute {minute[i - 1]} "
+                        "of the same hour; the records of an hour must be in time order")
+    return step.astype(np.int64)
+
+
+def _stamp(year, month, day, hour, i) -> str:
+    return f"{year[i]:04d}-{month[i]:02d}-{day[i]:02d} hour {hour[i]}"
 
 
 def _check_dates(path: Path, year, month, day, hour, line_numbers) -> None:

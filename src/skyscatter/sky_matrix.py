@@ -17,9 +17,8 @@ The job Radiance's ``gendaymtx`` does, vectorised over hours:
 Hours without diffuse light (D_h = 0) give a row of zeros. Hours with diffuse light but the sun below the
 horizon at mid-hour (sunrise or sunset inside the hour) are modelled with the sun on the horizon at its
 azimuth, as gendaymtx does. With ``include_sun`` the direct normal illuminance of the sun (Perez 1990 direct
-efficacy) is added to the patch that contains the sun as ``E_sun / Omega_patch`` (a sun below the horizon at
-mid-hour goes to the horizon patch at its azimuth); gendaymtx instead spreads it over the 4 nearest patch
-centres.
+efficacy) is spread over the 4 patches nearest to the sun, weighted by proximity, as gendaymtx does
+(:func:`add_sun_to_patches`, which states the rule and its source).
 
 The result is a :class:`SkyMatrix`: ``luminance`` [cd m^-2] of shape (hours, patches), with the sun angles, the
 Perez parameters and the patch geometry, savable as ``.npz`` and ``.csv``.
@@ -38,27 +37,30 @@ from numpy.typing import NDArray
 from .conventions import direction_from_angles
 from .epw import EPWData, EPWLocation, read_epw
 from .errors import FileFormatError, InvalidParameterError
-from .fileio import atomic_path
+from .fileio import atomic_path, atomic_paths
 from .patches import PatchScheme, patch_scheme
-from .sky.perez_family import extended_perez_scalar
+from .sky.perez_family import gradation_scalar, indicatrix_scalar
 
-__all__ = ["NORMALISATION_NODES", "SkyMatrix", "perez_patch_luminance", "skymatrix"]
+__all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches", "perez_patch_luminance",
+           "skymatrix"]
 
 #: Gauss-Legendre nodes (zenith, azimuth) of the per-hour normalisation integral.
 NORMALISATION_NODES = (48, 96)
 
 
-@numba.njit(cache=True, inline="always")
-def _perez_f(a, b, c, d, e, cos_theta, cos_gamma):  # pragma: no cover - compiled
-    """Perez 1993 F through the shared kernel, negative values clipped (PerezSky's guards)."""
-    cg = min(1.0, max(-1.0, cos_gamma))
-    return max(extended_perez_scalar(cos_theta, np.arccos(cg), cg, a, b, 1.0, c, d, e, 0.0, 0.0, 0.0, 0.0), 0.0)
+@numba.njit(cache=True, parallel=True, nogil=True)
+def _kernel(coeffs, sun, scale, qdirs, qweights, q_row, sdirs, s_row, row_cos, n_sub, out):  # pragma: no cover
+    """Per hour: normalise the Perez sky to D_v with the quadrature, then average it over each patch's samples.
 
-
-@numba.njit(cache=True, parallel=True)
-def _kernel(coeffs, sun, scale, qdirs, qweights, sdirs, n_sub, out):  # pragma: no cover - compiled
+    The Perez function (Perez et al. 1993, Eq. 1) ``max(0, (1 + a exp(b / max(cos theta, 0.01)))(1 + c
+    exp(d gamma) + e cos^2 gamma))`` (the one horizon rule of :mod:`skyscatter.sky.perez_family`) is the product of
+    the shared kernel's gradation, tabulated per hour over the distinct zenith angles of the quadrature nodes and
+    samples (``row_cos``; ``q_row``/``s_row`` index it), and its indicatrix per direction: one exponential per
+    direction instead of two.
+    """
     n_hours = coeffs.shape[0]
     n_patch = out.shape[1]
+    n_rows = row_cos.shape[0]
     for h in numba.prange(n_hours):
         if scale[h] <= 0.0:
             for p in range(n_patch):
@@ -66,10 +68,15 @@ def _kernel(coeffs, sun, scale, qdirs, qweights, sdirs, n_sub, out):  # pragma: 
             continue
         a, b, c, d, e = coeffs[h, 0], coeffs[h, 1], coeffs[h, 2], coeffs[h, 3], coeffs[h, 4]
         sx, sy, sz = sun[h, 0], sun[h, 1], sun[h, 2]
+        grad = np.empty(n_rows)
+        for u in range(n_rows):
+            grad[u] = gradation_scalar(row_cos[u], a, b, 0.0)
         total = 0.0
         for k in range(qdirs.shape[0]):
-            cg = qdirs[k, 0] * sx + qdirs[k, 1] * sy + qdirs[k, 2] * sz
-            total += qweights[k] * _perez_f(a, b, c, d, e, qdirs[k, 2], cg)
+            cg = min(1.0, max(-1.0, qdirs[k, 0] * sx + qdirs[k, 1] * sy + qdirs[k, 2] * sz))
+            f = grad[q_row[k]] * indicatrix_scalar(1.0, np.arccos(cg), cg, 1.0, c, d, e, 0.0, 0.0, 0.0)
+            if f > 0.0:
+                total += qweights[k] * f
         if total <= 0.0:  # no positive luminance anywhere: uniform sky (as PerezSky and gendaymtx)
             for p in range(n_patch):
                 out[h, p] = scale[h] / np.pi
@@ -80,8 +87,10 @@ def _kernel(coeffs, sun, scale, qdirs, qweights, sdirs, n_sub, out):  # pragma: 
             base = p * n_sub
             for s in range(n_sub):
                 k = base + s
-                cg = sdirs[k, 0] * sx + sdirs[k, 1] * sy + sdirs[k, 2] * sz
-                acc += _perez_f(a, b, c, d, e, sdirs[k, 2], cg)
+                cg = min(1.0, max(-1.0, sdirs[k, 0] * sx + sdirs[k, 1] * sy + sdirs[k, 2] * sz))
+                f = grad[s_row[k]] * indicatrix_scalar(1.0, np.arccos(cg), cg, 1.0, c, d, e, 0.0, 0.0, 0.0)
+                if f > 0.0:
+                    acc += f
             out[h, p] = norm * acc / n_sub
 
 
@@ -116,14 +125,23 @@ def perez_patch_luminance(
         sdirs = scheme.sample_directions(samples).reshape(-1, 3)
     n_sub = sdirs.shape[0] // scheme.n_patches
     coeffs = np.ascontiguousarray(coefficients, dtype=np.float64).reshape(-1, 5)
+    qd = np.ascontiguousarray(qd, dtype=np.float64).reshape(-1, 3)
+    sdirs = np.ascontiguousarray(sdirs, dtype=np.float64)
+    # distinct zenith cosines of nodes and samples (rows of the grids), for the per-hour gradation table
+    row_cos, inverse = np.unique(np.concatenate([qd[:, 2], sdirs[:, 2]]), return_inverse=True)
+    q_row = np.ascontiguousarray(inverse[: qd.shape[0]], dtype=np.int64)
+    s_row = np.ascontiguousarray(inverse[qd.shape[0]:], dtype=np.int64)
     out = np.empty((coeffs.shape[0], scheme.n_patches))
     _kernel(
         coeffs,
         np.ascontiguousarray(model_sun, dtype=np.float64).reshape(-1, 3),
         np.ascontiguousarray(diffuse_illuminance, dtype=np.float64).reshape(-1),
-        np.ascontiguousarray(qd),
-        np.ascontiguousarray(qw),
-        np.ascontiguousarray(sdirs),
+        qd,
+        np.ascontiguousarray(qw, dtype=np.float64).reshape(-1),
+        q_row,
+        sdirs,
+        s_row,
+        np.ascontiguousarray(row_cos),
         n_sub,
         out,
     )
@@ -175,49 +193,116 @@ class SkyMatrix:
         g = self.scheme
         return self.luminance @ (g.solid_angles * np.sin(g.centre_altitude))
 
+    def save(self, npz_path: str | os.PathLike[str], csv_path: str | os.PathLike[str] | None = None) -> list[Path]:
+        """Write the ``.npz`` and, if given, the CSV together: both files appear, or neither does."""
+        targets = [Path(npz_path)] + ([Path(csv_path)] if csv_path is not None else [])
+        if targets[0].suffix.lower() != ".npz":
+            raise InvalidParameterError(f"{targets[0]}: the matrix file must end in .npz")
+        with atomic_paths(*targets) as temps:
+            self._write_npz(temps[0])
+            if csv_path is not None:
+                self._write_csv(temps[1])
+        return targets
+
     def save_npz(self, path: str | os.PathLike[str]) -> Path:
-        """Write a compressed ``.npz`` (atomically); returns the path. Keys are listed in ``docs/standard_skies.md``."""
+        """Write an ``.npz`` (uncompressed, atomically: fast to write and read; 20 MB for a Reinhart MF 2 year);
+        returns the path. Keys are listed in ``docs/standard_skies.md``."""
         target = Path(path)
-        g = self.scheme
         with atomic_path(target) as tmp:
-            with open(tmp, "wb") as fh:
-                np.savez_compressed(
-                    fh,
-                    luminance=self.luminance.astype(np.float32),
-                    times=np.asarray([t.isoformat() for t in self.times]),
-                    sun_zenith=self.sun_zenith,
-                    sun_azimuth=self.sun_azimuth,
-                    epsilon=self.epsilon,
-                    delta=self.delta,
-                    diffuse_illuminance=self.diffuse_illuminance,
-                    sun_illuminance_normal=self.sun_illuminance_normal,
-                    patch_zenith=g.centre_zenith,
-                    patch_azimuth=g.azimuth_centre,
-                    patch_solid_angle=g.solid_angles,
-                    scheme=np.array(g.name),
-                    include_sun=np.array(self.include_sun),
-                    samples=np.array(self.samples),
-                    latitude=np.array(self.location.latitude),
-                    longitude=np.array(self.location.longitude),
-                    units=np.array("luminance cd m^-2; angles rad; illuminance lx"),
-                )
+            self._write_npz(tmp)
         return target
 
+    def _write_npz(self, tmp: Path) -> None:
+        g = self.scheme
+        with open(tmp, "wb") as fh:
+            np.savez(
+                fh,
+                luminance=self.luminance.astype(np.float32),
+                times=np.asarray([t.isoformat() for t in self.times]),
+                sun_zenith=self.sun_zenith,
+                sun_azimuth=self.sun_azimuth,
+                epsilon=self.epsilon,
+                delta=self.delta,
+                diffuse_illuminance=self.diffuse_illuminance,
+                sun_illuminance_normal=self.sun_illuminance_normal,
+                patch_zenith=g.centre_zenith,
+                patch_azimuth=g.azimuth_centre,
+                patch_solid_angle=g.solid_angles,
+                scheme=np.array(g.name),
+                include_sun=np.array(self.include_sun),
+                samples=np.array(self.samples),
+                latitude=np.array(self.location.latitude),
+                longitude=np.array(self.location.longitude),
+                units=np.array("luminance cd m^-2; angles rad; illuminance lx"),
+            )
+
     def save_csv(self, path: str | os.PathLike[str]) -> Path:
-        """Write a CSV (atomically): a ``time`` column (ISO 8601, mid-hour) and one column per patch [cd m^-2]."""
+        """Write a CSV (atomically): a ``time`` column (ISO 8601, mid-record) and one column per patch [cd m^-2]."""
         target = Path(path)
+        with atomic_path(target) as tmp:
+            self._write_csv(tmp)
+        return target
+
+    def _write_csv(self, tmp: Path) -> None:
         header = "time," + ",".join(f"patch_{i}" for i in range(self.scheme.n_patches))
         stamps = [t.isoformat() for t in self.times]
         zero_row = ",".join(["0"] * self.scheme.n_patches)
-        with atomic_path(target) as tmp:
-            with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
-                fh.write(header + "\n")
-                for stamp, row in zip(stamps, self.luminance, strict=True):
-                    if not row.any():
-                        fh.write(f"{stamp},{zero_row}\n")
-                    else:
-                        fh.write(stamp + "," + ",".join(f"{v:.6g}" for v in row.tolist()) + "\n")
-        return target
+        with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(header + "\n")
+            for stamp, row in zip(stamps, self.luminance, strict=True):
+                if not row.any():
+                    fh.write(f"{stamp},{zero_row}\n")
+                else:
+                    fh.write(stamp + "," + ",".join(f"{v:.6g}" for v in row.tolist()) + "\n")
+
+
+#: Number of patches the sun is spread over (Radiance gendaymtx's NSUNPATCH).
+SUN_PATCHES = 4
+
+
+def add_sun_to_patches(
+    luminance: NDArray[np.float64],
+    rows: NDArray[np.int64],
+    sun_directions: NDArray[np.float64],
+    sun_illuminance: NDArray[np.float64],
+    scheme: PatchScheme,
+    *,
+    n_patches: int = SUN_PATCHES,
+    chunk: int = 2048,
+) -> None:
+    """Add the direct sun to the ``n_patches`` sky patches nearest to it, as Radiance's gendaymtx does.
+
+    The rule of gendaymtx (``AddDirect`` in Radiance's ``src/gen/gendaymtx.c``, G. Ward, NREL/Radiance on
+    GitHub): take the ``NSUNPATCH = 4`` patches whose centre directions ``p`` have the largest ``p . s`` with the
+    sun direction ``s``; weight each by ``w = 1 / (1.002 - p . s)`` (so a sun on a patch centre puts most of its
+    light there); add ``E_sun w / (sum(w) Omega_p)`` to the patch luminance. The sun's normal illuminance is
+    conserved: ``sum_p dL_p Omega_p = E_sun``. (gendaymtx's weights use the centres of its own patch list; ours
+    are the same Tregenza/Reinhart centres without its ground patch.)
+
+    Parameters
+    ----------
+    luminance : ndarray, shape (n_hours, n_patches)
+        Patch luminance [cd m^-2], updated in place.
+    rows : ndarray of int
+        Rows of ``luminance`` that get a sun.
+    sun_directions : ndarray, shape (len(rows), 3)
+        Unit vectors to the sun (ENU).
+    sun_illuminance : ndarray, shape (len(rows),)
+        Direct normal illuminance of the sun [lx].
+    scheme : PatchScheme
+    n_patches : int
+        Patches per sun (gendaymtx: 4).
+    """
+    centres = scheme.centre_directions.reshape(-1, 3)
+    k = int(min(n_patches, centres.shape[0]))
+    for start in range(0, rows.size, chunk):
+        sl = slice(start, start + chunk)
+        dots = sun_directions[sl] @ centres.T
+        near = np.argpartition(-dots, k - 1, axis=1)[:, :k]
+        d = np.take_along_axis(dots, near, axis=1)
+        w = 1.0 / (1.002 - d)
+        w /= w.sum(axis=1, keepdims=True)
+        luminance[rows[sl, None], near] += sun_illuminance[sl, None] * w / scheme.solid_angles[near]
 
 
 def _check_scheme(scheme: str | PatchScheme) -> PatchScheme:
@@ -246,6 +331,7 @@ def skymatrix(
     samples: int = 3,
     chunk_hours: int = 512,
     progress: bool = False,
+    timestep: str = "records",
 ) -> SkyMatrix:
     """Hourly Perez sky luminance over sky patches for a year of weather (the job of Radiance's gendaymtx).
 
@@ -256,13 +342,19 @@ def skymatrix(
     scheme : str or PatchScheme
         "tregenza" (= "reinhart1", 145 patches), "reinhart2" (577, default) or "reinhart4" (2305).
     include_sun : bool
-        Add the direct sun to the patch that contains it (default False: sky only).
+        Add the direct sun, spread over the 4 nearest patches as gendaymtx does (:func:`add_sun_to_patches`)
+        (default False: sky only).
     samples : int
         Equal-area cells per patch side for the patch mean (default 3; 1 samples the patch centre only).
     chunk_hours : int
         Hours computed per vectorised step (memory vs. progress granularity).
     progress : bool
         Show a tqdm progress bar over the hours (advances per chunk).
+    timestep : {"records", "hourly"}
+        For a sub-hourly file (N records per hour declared in its DATA PERIODS line): "records" (default) gives
+        one row per record, the sun at the middle of the record's own interval (as gendaymtx gives one row per
+        time step of its input); "hourly" averages the records of each hour first (:meth:`EPWData.hourly`)
+        and gives one row per hour. Hourly files give one row per hour either way.
 
     Returns
     -------
@@ -275,7 +367,7 @@ def skymatrix(
     InvalidParameterError
         Unknown scheme or bad options.
     """
-    from .sky.perez import perez_parameters
+    from .sky.perez import MIN_SUN_ZENITH, perez_parameters
     from .sun.position import sun_position
 
     geom = _check_scheme(scheme)
@@ -283,10 +375,14 @@ def skymatrix(
         raise InvalidParameterError(f"samples must be a whole number in [1, 16]; got {samples!r}")
     if isinstance(chunk_hours, bool) or int(chunk_hours) != chunk_hours or chunk_hours < 1:
         raise InvalidParameterError(f"chunk_hours must be a whole number >= 1; got {chunk_hours!r}")
+    if timestep not in ("records", "hourly"):
+        raise InvalidParameterError(f"timestep must be 'records' or 'hourly'; got {timestep!r}")
     epw = epw_path if isinstance(epw_path, EPWData) else read_epw(epw_path)
+    if timestep == "hourly":
+        epw = epw.hourly()
     _check_irradiance(epw)
     loc = epw.location
-    times = epw.times(offset_hours=-0.5)
+    times = epw.times()  # middle of each record's interval
     pos = sun_position(loc.latitude, loc.longitude, times, altitude=loc.elevation)
     zen = np.asarray(pos.zenith, dtype=float)
     azi = np.asarray(pos.azimuth, dtype=float)
@@ -334,10 +430,10 @@ def skymatrix(
     if include_sun:
         sunny = np.flatnonzero(e_sun > 0.0)
         if sunny.size:
-            # A sun exactly on the horizon is kept just above it so it falls into a sky patch.
-            sdir = direction_from_angles(np.minimum(zen[sunny], np.pi / 2 - 1e-9), azi[sunny])
-            patch = geom.patch_index(sdir)
-            lum[sunny, patch] += e_sun[sunny] / geom.solid_angles[patch]
+            # The sun the sky model uses: altitude at most 87 deg (gendaymtx limits it the same way before adding
+            # the sun), a sun below the horizon at mid-record put on the horizon at its azimuth.
+            model_zenith = np.clip(zen[sunny], MIN_SUN_ZENITH, np.pi / 2)
+            add_sun_to_patches(lum, sunny, direction_from_angles(model_zenith, azi[sunny]), e_sun[sunny], geom)
     return SkyMatrix(
         luminance=lum,
         times=times,

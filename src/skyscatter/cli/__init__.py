@@ -1,15 +1,20 @@
 """The ``skyscatter`` command line. One module per subcommand, each with ``register(subparsers)``.
 
 Errors a user can cause (bad values, unreadable or unwritable files) print one line on stderr and exit with
-status 2; nothing is partly written.
+status 2; nothing is partly written. Warnings print as one line each. SIGINT and SIGTERM stop the command
+cleanly (temporary files removed; exit status 130 and 143). Every option that takes a value accepts one that
+starts with '-' (``--turbidity -inf``, ``--time -2000-01-01T00:00Z``), so the value's own check says what is
+wrong with it.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import signal
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 from .. import __version__
 from ..errors import SkyscatterError
@@ -29,6 +34,58 @@ class OneLineParser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
+    def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
+        """Join ``--option -value`` into ``--option=-value`` for options taking one value, so that argparse
+        does not take a value starting with '-' (a negative number, ``-inf``, a date before year 0) for an
+        option. A following token that is itself one of this parser's options is left alone."""
+        if args is None:
+            args = sys.argv[1:]
+        return super().parse_known_args(self._join_dash_values(list(args)), namespace)
+
+    def _join_dash_values(self, args: list[str]) -> list[str]:
+        takes_one = {s for a in self._actions if a.option_strings and a.nargs is None for s in a.option_strings}
+        known = set(self._option_string_actions)
+        out: list[str] = []
+        i = 0
+        while i < len(args):
+            tok = args[i]
+            if tok == "--":
+                out.extend(args[i:])
+                break
+            nxt = args[i + 1] if i + 1 < len(args) else None
+            if (tok in takes_one and nxt is not None and nxt.startswith("-") and nxt != "--"
+                    and nxt.split("=", 1)[0] not in known):
+                out.append(f"{tok}={nxt}")
+                i += 2
+                continue
+            out.append(tok)
+            i += 1
+        return out
+
+
+class Terminated(KeyboardInterrupt):
+    """Raised in the main thread on SIGTERM so that ``finally`` blocks and temporary-file cleanup run."""
+
+
+@contextlib.contextmanager
+def _cli_environment() -> Iterator[None]:
+    """One-line warnings and SIGTERM as an exception, for the duration of a command."""
+
+    from .common import one_line_warnings
+
+    def on_sigterm(signum, frame):
+        raise Terminated()
+
+    previous = None
+    with contextlib.suppress(ValueError):  # not the main thread: leave signals alone
+        previous = signal.signal(signal.SIGTERM, on_sigterm)
+    try:
+        with one_line_warnings():
+            yield
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
 
 def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(
@@ -46,6 +103,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``skyscatter`` command; returns the exit status."""
+    with _cli_environment():
+        return _main(argv)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -67,6 +129,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"skyscatter {args.command}: error: not enough memory; use a smaller image or table size",
               file=sys.stderr)
         return 2
+    except Terminated:
+        print(f"skyscatter {args.command}: terminated", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print(f"skyscatter {args.command}: interrupted", file=sys.stderr)
         return 130

@@ -3,13 +3,29 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime as dt
 import math
+import sys
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
 
 from ..errors import InvalidParameterError
 
 HELP_FORMATTER = argparse.ArgumentDefaultsHelpFormatter
+
+
+@contextlib.contextmanager
+def one_line_warnings() -> Iterator[None]:
+    """Print warnings raised inside the block as one line each, ``skyscatter: warning: <message>``, on stderr."""
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"skyscatter: warning: {message}", file=sys.stderr if file is None else file)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield
 
 
 def positive_int(text: str) -> int:
@@ -21,6 +37,13 @@ def positive_int(text: str) -> int:
     if value <= 0:
         raise argparse.ArgumentTypeError(f"expected a whole number > 0, got {value}")
     return value
+
+
+def output_path(text: str) -> Path:
+    """argparse type: a path to write; an empty string is refused (it would mean the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an output path must name a file; got an empty string")
+    return Path(text)
 
 
 def finite_float(text: str) -> float:
@@ -48,6 +71,10 @@ def float_in(low: float, high: float):
 
 def aware_datetime(text: str) -> dt.datetime:
     """argparse type: an ISO 8601 date-time with a UTC offset, e.g. ``2024-06-21T09:30+02:00`` or ``...Z``."""
+    if text.strip().startswith("-"):
+        raise argparse.ArgumentTypeError(
+            f"time {text!r}: years before 1 are not supported (ISO 8601 dates here run from 0001 to 9999)"
+        )
     try:
         value = dt.datetime.fromisoformat(text.replace("Z", "+00:00").replace("z", "+00:00"))
     except ValueError:
@@ -106,9 +133,9 @@ def sun_angles_from_args(args: argparse.Namespace, *, apparent: bool = True) -> 
 def add_image_output_options(parser: argparse.ArgumentParser, *, default_out: str) -> None:
     """--out (EXR), --png (preview, default beside the EXR) and --exposure."""
     g = parser.add_argument_group("output")
-    g.add_argument("--out", type=Path, default=Path(default_out), metavar="PATH",
+    g.add_argument("--out", type=output_path, default=Path(default_out), metavar="PATH",
                    help="HDR output, OpenEXR float32 linear sRGB, Y = luminance / 683")
-    g.add_argument("--png", type=Path, default=None, metavar="PATH",
+    g.add_argument("--png", type=output_path, default=None, metavar="PATH",
                    help="tone-mapped preview PNG (default: the --out path with .png)")
     g.add_argument("--exposure", type=float_in(-30.0, 30.0), default=None, metavar="EV",
                    help="preview exposure compensation [EV stops]; default: automatic (scene key)")
@@ -116,21 +143,26 @@ def add_image_output_options(parser: argparse.ArgumentParser, *, default_out: st
 
 def png_path(args: argparse.Namespace) -> Path:
     """The preview path: --png, or --out with the suffix .png."""
-    return args.png if args.png is not None else args.out.with_suffix(".png")
+    if args.png is not None:
+        return args.png
+    if not args.out.name:
+        from ..errors import OutputError
+
+        raise OutputError(f"--out {str(args.out)!r}: an output path must name a file")
+    return args.out.with_suffix(".png")
 
 
 def check_output_paths(args: argparse.Namespace) -> None:
-    """Refuse bad --out/--png paths before any work: wrong suffix, same file, or a missing folder."""
-    from ..errors import OutputError
+    """Refuse bad --out/--png paths before any work: empty, a folder, wrong suffix, same file, missing or
+    read-only folder (:func:`skyscatter.fileio.check_output_path`)."""
+    from ..fileio import check_output_path
 
+    check_output_path(args.out, option="--out")
     png = png_path(args)
     if args.out.suffix.lower() != ".exr":
         raise InvalidParameterError(f"--out {args.out}: the HDR output must be an OpenEXR file ending in .exr")
+    check_output_path(png, option="--png")
     if png.suffix.lower() != ".png":
         raise InvalidParameterError(f"--png {png}: the preview must end in .png")
     if args.out.resolve() == png.resolve():
         raise InvalidParameterError("--out and --png must be different files")
-    for path in (args.out, png):
-        folder = path.parent if str(path.parent) else Path(".")
-        if not folder.is_dir():
-            raise OutputError(f"cannot write {path}: folder {folder} does not exist")

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -87,7 +87,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--figure", choices=["all", "7", "8", "custom"], default=None,
                    help="which figure to render (default: all, or custom when a scene option is given)")
     p.add_argument("--out-dir", type=Path, default=Path("."), metavar="DIR",
-                   help="existing folder for the output files")
+                   help="folder for the output files (created if missing)")
     g = p.add_argument_group("image")
     g.add_argument("--width", type=positive_int, default=640, metavar="PX", help="width of each panel [px]")
     g.add_argument("--height", type=positive_int, default=360, metavar="PX", help="height of each panel [px]")
@@ -96,7 +96,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "applied by default")
     g.add_argument("--no-sun-disc", dest="sun_disc", action="store_false",
                    help="leave out the solar disc (drawn by default)")
-    g.add_argument("--exposure", type=finite_float, default=None, metavar="EV",
+    g.add_argument("--exposure", type=float_in(-30.0, 30.0), default=None, metavar="EV",
                    help="PNG exposure compensation [EV stops] on top of the automatic exposure (default 0)")
     g.add_argument("--wavelength-step", type=float_in(1.0, 50.0), default=10.0, metavar="NM",
                    help="spacing of the spectral samples over 380-780 nm [nm]")
@@ -264,12 +264,10 @@ def _panels(args: argparse.Namespace, figure: str) -> list[_Panel]:
 
 
 def _check_out_dir(out_dir: Path) -> None:
-    from ..errors import OutputError
+    """Create the output folder if missing (as ``export-luts`` does); refuse a file or a read-only folder."""
+    from ..fileio import ensure_output_folder
 
-    if not out_dir.is_dir():
-        raise OutputError(f"output folder {out_dir} does not exist; create it first")
-    if not os.access(out_dir, os.W_OK | os.X_OK):
-        raise OutputError(f"output folder {out_dir} is not writable")
+    ensure_output_folder(out_dir, what="--out-dir")
 
 
 def _targets(out_dir: Path, panels: list[_Panel], figure: str) -> list[Path]:
@@ -282,87 +280,19 @@ def _targets(out_dir: Path, panels: list[_Panel], figure: str) -> list[Path]:
 
 def _check_targets(targets: list[Path]) -> None:
     """Refuse, before any rendering, targets that cannot be replaced by a regular file."""
-    from ..errors import OutputError
+    from ..fileio import check_output_path
 
     for target in targets:
-        if target.suffix.lower() not in (".exr", ".png"):  # pragma: no cover - names are built above
-            raise OutputError(f"cannot write {target}: unknown image format {target.suffix!r}")
-        if not target.parent.is_dir():
-            raise OutputError(f"cannot write {target}: folder {target.parent} does not exist")
-        if target.is_dir():
-            raise OutputError(f"cannot write {target}: a folder of that name exists; move it or use --out-dir")
-        if target.exists() and not target.is_file():
-            raise OutputError(f"cannot write {target}: it exists and is not a regular file")
+        check_output_path(target)
 
 
 def _write_all(jobs: list[tuple[Path, Any]]) -> None:
-    """Write every (target, writer) pair, all or none.
+    """Write every (target, writer) pair, all or none (:func:`skyscatter.fileio.atomic_paths`)."""
+    from ..fileio import atomic_paths
 
-    Each writer fills a temporary file beside its target. Only when all are written are they renamed into
-    place; an existing target is first moved aside, so that if a rename fails the targets renamed so far are
-    restored (or removed, if they did not exist before) and the folder is left as it was. Errors name the
-    target, not the temporary file.
-    """
-    import contextlib
-    import tempfile
-
-    from ..errors import OutputError
-
-    umask = os.umask(0)
-    os.umask(umask)
-
-    def scratch(target: Path, tag: str) -> Path:
-        try:
-            fd, name = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=f".{tag}{target.suffix}",
-                                        dir=target.parent)
-        except OSError as exc:
-            raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from exc
-        os.close(fd)
-        return Path(name)
-
-    temps: list[tuple[Path, Path]] = []
-    done: list[tuple[Path, Path | None]] = []  # (target, its moved-aside previous version or None)
-    try:
-        for target, writer in jobs:
-            tmp = scratch(target, "tmp")
-            temps.append((target, tmp))
-            os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; give what a plain open() would
-            try:
-                writer(tmp)
-            except OSError as exc:
-                raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from exc
-        for target, tmp in temps:
-            backup = None
-            moved = False
-            try:
-                if target.exists():
-                    backup = scratch(target, "old")
-                    os.replace(target, backup)
-                    moved = True
-                os.replace(tmp, target)
-            except OSError as exc:
-                with contextlib.suppress(OSError):
-                    if moved:  # put the previous version back
-                        os.replace(backup, target)
-                    elif backup is not None:
-                        backup.unlink()
-                raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from exc
-            done.append((target, backup))
-    except BaseException:
-        for target, backup in reversed(done):  # undo the renames of this run
-            with contextlib.suppress(OSError):
-                if backup is not None:
-                    os.replace(backup, target)
-                else:
-                    target.unlink()
-        for _, tmp in temps:
-            with contextlib.suppress(OSError):
-                tmp.unlink()
-        raise
-    for _, backup in done:
-        if backup is not None:
-            with contextlib.suppress(OSError):
-                backup.unlink()
+    with atomic_paths(*(target for target, _ in jobs)) as temps:
+        for (_, writer), tmp in zip(jobs, temps, strict=True):
+            writer(tmp)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -387,14 +317,16 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidParameterError(f"{', '.join(given)}: scene options apply to --figure custom only")
     if args.dem_spacing is not None and args.dem is None:
         raise InvalidParameterError("--dem-spacing needs --dem")
-    _check_out_dir(args.out_dir)
+    if args.out_dir.exists() and not args.out_dir.is_dir():
+        from ..errors import OutputError
+
+        raise OutputError(f"--out-dir {args.out_dir}: is a file, not a folder")
 
     terrain = Terrain.load(args.dem, spacing=args.dem_spacing) if args.dem is not None else default_terrain()
     wavelengths = wavelength_grid(380.0, 780.0, args.wavelength_step)
 
     panels = _panels(args, figure)
     targets = _targets(args.out_dir, panels, figure)
-    _check_targets(targets)
     scenes = []
     for panel in panels:  # build (and validate) every scene before rendering anything
         if terrain.wrap:
@@ -420,6 +352,11 @@ def run(args: argparse.Namespace) -> int:
         scenes.append(Scene(panel.sky, terrain=terrain, camera=camera, aerial=panel.aerial, albedo=args.albedo,
                             sun_disc=args.sun_disc, wavelengths=wavelengths))
 
+    _check_out_dir(args.out_dir)
+    _check_targets(targets)
+    if not sys.stderr.isatty():  # a bar on a terminal, else one line saying what is going on
+        print(f"skyscatter demo: rendering {len(panels)} panel(s) of {args.width} x {args.height} "
+              "(a first run also compiles the numerical kernels, about a minute)", file=sys.stderr, flush=True)
     images = []
     t0 = time.perf_counter()
     with tqdm(total=len(panels) * args.height, unit="row", desc="skyscatter demo", disable=None) as bar:

@@ -37,10 +37,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..fileio import ensure_output_folder
     from ..precomputed import PrecomputedAtmosphere
     from ..precomputed.cache import cached_atmosphere
-    from .precompute import atmosphere_from_args, one_line_warnings
+    from .common import one_line_warnings
+    from .precompute import atmosphere_from_args
 
+    # The output folder first: refuse it before a table build that can take a minute.
+    ensure_output_folder(args.out_dir, what="--out-dir")
     if args.source is not None:
         atm = PrecomputedAtmosphere.load(args.source)
     else:

@@ -3,15 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import re
 import sys
 import time
-import warnings
-from pathlib import Path
 
 from ..errors import InvalidParameterError
-from .common import HELP_FORMATTER, float_in, positive_int
+from .common import HELP_FORMATTER, float_in, one_line_warnings, output_path, positive_int
 
 
 def _sizes(n: int, name: str):
@@ -29,20 +26,30 @@ def _sizes(n: int, name: str):
 
 
 def _wavelengths(text: str) -> list[float]:
-    """'680,550,440' or a range 'START:STOP:STEP' [nm] (inclusive)."""
+    """'680,550,440' or a range 'START:STOP:STEP' [nm] (inclusive) of positive wavelengths."""
+    import math
+
     t = text.strip()
     try:
         if ":" in t:
             start, stop, step = (float(v) for v in t.split(":"))
-            if step <= 0 or stop < start:
+            if not step > 0 or stop < start or (stop - start) / step > 10_000:
                 raise ValueError
             n = int(round((stop - start) / step)) + 1
-            return [start + i * step for i in range(n)]
-        return [float(v) for v in t.split(",") if v.strip()]
+            values = [start + i * step for i in range(n)]
+        else:
+            values = [float(v) for v in t.split(",") if v.strip()]
+        if not values:
+            raise ValueError
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"wavelengths: expected a list like 680,550,440 or a range like 380:780:10 [nm], got {text!r}"
         ) from None
+    bad = [v for v in values if not (math.isfinite(v) and v > 0)]
+    if bad:
+        raise argparse.ArgumentTypeError(f"wavelengths: {bad[0]:g} nm is not a wavelength; they must be positive "
+                                         "[nm] (the tables' solar spectrum covers 280-1100 nm)")
+    return values
 
 
 def add_atmosphere_options(p: argparse.ArgumentParser) -> None:
@@ -107,30 +114,25 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         ),
         formatter_class=HELP_FORMATTER,
     )
-    p.add_argument("--out", type=Path, default=None, metavar="FILE.npz",
+    p.add_argument("--out", type=output_path, default=None, metavar="FILE.npz",
                    help="write the tables to this .npz file instead of the cache")
     p.add_argument("--force", action="store_true", help="recompute even if the cache already holds the tables")
     add_atmosphere_options(p)
     p.set_defaults(func=run)
 
 
-@contextlib.contextmanager
-def one_line_warnings():
-    """Print warnings raised inside the block as one line, ``warning: <message>``, on stderr."""
-    with warnings.catch_warnings():
-        warnings.showwarning = lambda message, category, *a, **k: print(f"warning: {message}", file=sys.stderr)
-        yield
-
-
 def run(args: argparse.Namespace) -> int:
+    from ..fileio import check_output_path
     from ..precomputed import PrecomputedAtmosphere
-    from ..precomputed.cache import load_or_compute
+    from ..precomputed.cache import check_cache_dir, load_or_compute
 
     params, sizes = atmosphere_from_args(args)
     if args.out is not None and args.out.suffix != ".npz":
         raise InvalidParameterError(f"--out must name an .npz file; got {args.out}")
-    if args.out is not None and not args.out.parent.is_dir() and str(args.out.parent):
-        raise InvalidParameterError(f"--out: folder {args.out.parent} does not exist")
+    if args.out is not None:
+        check_output_path(args.out, option="--out")
+    else:
+        check_cache_dir()  # the user asked for the cache file: refuse an unusable cache before computing
     progress = not args.no_progress and sys.stderr.isatty()
     t0 = time.perf_counter()
     if args.out is None:
@@ -139,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
         # --force recomputes first and then replaces the file atomically: an interrupted run keeps the old one.
         with one_line_warnings():
             atm, computed = load_or_compute(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
-                                            progress=progress, force=args.force)
+                                            progress=progress, force=args.force, require_saved=True)
         target = cache_path(atm.cache_key)
     else:
         atm = PrecomputedAtmosphere.compute(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,

@@ -36,6 +36,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="equirect: full-sphere lat-long map, north at the centre; fisheye: equidistant upper "
                    "hemisphere, zenith at the centre, north up, east left; pinhole: a camera (see --heading, "
                    "--pitch, --fov)")
+    g.add_argument("--layout", choices=["skyscatter", "blender", "mitsuba"], default="skyscatter",
+                   help="equirect: which way round to write the map so that the sun lands where skyscatter says "
+                   "in a Z-up scene with north = +Y, east = +X. skyscatter: north at the centre column; blender: "
+                   "for a World Environment Texture with the default mapping; mitsuba: for an envmap with "
+                   "to_world = rotate([1, 0, 0], 90) (docs/conventions.md)")
     g.add_argument("--width", type=positive_int, default=1024, metavar="PX", help="image width [px]")
     g.add_argument("--height", type=positive_int, default=None, metavar="PX",
                    help="image height [px] (default: width/2 equirect, width fisheye, 3/4 width pinhole)")
@@ -56,8 +61,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..errors import InvalidParameterError
     from ..render import sky_image, write_exr_and_png
+
     check_output_paths(args)
+    if args.layout != "skyscatter" and args.projection != "equirect":
+        raise InvalidParameterError(f"--layout {args.layout} applies to --projection equirect only")
     # The precomputed atmosphere ignores refraction, so it wants the geometric sun (docs/bruneton.md).
     zenith, azimuth = sun_angles_from_args(args, apparent=args.model != "bruneton")
     model = build_sky_from_args(args, zenith, azimuth)
@@ -72,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
         fov=math.radians(args.fov),
         sun_disc=args.sun_disc,
         ground_albedo=args.ground_albedo,
+        layout=args.layout,
     )
     elapsed = time.perf_counter() - t0
     out, png = write_exr_and_png(args.out, png_path(args), image, exposure_ev=args.exposure, key=0.45)

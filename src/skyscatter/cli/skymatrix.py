@@ -6,7 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
-from .common import HELP_FORMATTER, positive_int
+from .common import HELP_FORMATTER, output_path, positive_int
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -34,41 +34,48 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    + "; ".join(f"{m}: {registry.get(m).summary}" for m in weather_models))
     p.add_argument("--patches", choices=list(SCHEMES), default="reinhart2",
                    help="patch scheme: tregenza = reinhart1 (145 patches), reinhart2 (577), reinhart4 (2305)")
-    p.add_argument("--out", type=Path, default=Path("skymatrix.npz"), metavar="PATH",
+    p.add_argument("--out", type=output_path, default=Path("skymatrix.npz"), metavar="PATH",
                    help="output .npz: luminance [cd m^-2] (hours x patches, float32), times, sun angles [rad], "
                    "Perez epsilon/delta, diffuse and sun illuminance [lx], patch zenith/azimuth [rad] and solid "
                    "angle [sr]")
-    p.add_argument("--csv", type=Path, default=None, metavar="PATH",
+    p.add_argument("--csv", type=output_path, default=None, metavar="PATH",
                    help="also write a CSV: a time column (ISO 8601, mid-hour) and one luminance column per patch")
     p.add_argument("--include-sun", action="store_true",
-                   help="add the direct sun to the patch that contains it (E_sun / patch solid angle)")
+                   help="add the direct sun, spread over the 4 nearest patches weighted by proximity as gendaymtx does")
     p.add_argument("--samples", type=positive_int, default=3, metavar="N",
                    help="average each patch over N x N equal-area cells (1: patch centre only, as gendaymtx)")
-    p.add_argument("--no-progress", dest="progress", action="store_false", help="hide the progress bar")
+    p.add_argument("--timestep", choices=["records", "hourly"], default="records",
+                   help="sub-hourly files (N records per hour declared in the DATA PERIODS header): records = one "
+                   "row per record, the sun at the middle of each record's interval (as gendaymtx, one row per "
+                   "input time step); hourly = average each hour's records first, one row per hour")
+    p.add_argument("--no-progress", dest="progress", action="store_false",
+                   help="hide the progress bar (shown only when stderr is a terminal)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    import sys
+
     import numpy as np
 
-    from ..errors import InvalidParameterError, OutputError
+    from ..errors import InvalidParameterError
+    from ..fileio import check_output_path
     from ..sky_matrix import skymatrix
 
     if args.out.suffix.lower() != ".npz":
         raise InvalidParameterError(f"--out must end in .npz; got {args.out}")
-    for target in (args.out, args.csv):
-        if target is not None and not (target.parent if str(target.parent) else Path(".")).is_dir():
-            raise OutputError(f"cannot write {target}: folder {target.parent} does not exist")
+    check_output_path(args.out, option="--out")
+    if args.csv is not None:
+        check_output_path(args.csv, option="--csv")
+        if args.csv.resolve() == args.out.resolve():
+            raise InvalidParameterError("--out and --csv must be different files")
     if args.samples > 16:
         raise InvalidParameterError(f"--samples must be at most 16; got {args.samples}")
     t0 = time.perf_counter()
     matrix = skymatrix(args.epw, scheme=args.patches, include_sun=args.include_sun, samples=args.samples,
-                       progress=args.progress)
+                       progress=args.progress and sys.stderr.isatty(), timestep=args.timestep)
     elapsed = time.perf_counter() - t0
-    out = matrix.save_npz(args.out)
-    written = [str(out)]
-    if args.csv is not None:
-        written.append(str(matrix.save_csv(args.csv)))
+    written = [str(t) for t in matrix.save(args.out, args.csv)]
     hours, patches = matrix.shape
     lit = int(np.count_nonzero(matrix.diffuse_illuminance > 0))
     loc = matrix.location

@@ -21,8 +21,8 @@ from ..errors import FileFormatError, InvalidParameterError, OutputError
 from .parameters import AtmosphereParameters
 from .tables import PrecomputedAtmosphere, TableSizes, _as_wavelengths, cache_key
 
-__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "cached_atmosphere", "clear_memory_cache",
-           "load_or_compute", "resolve_atmosphere"]
+__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "cached_atmosphere", "check_cache_dir",
+           "clear_memory_cache", "load_or_compute", "resolve_atmosphere"]
 
 _MEMORY: dict[str, PrecomputedAtmosphere] = {}
 
@@ -35,6 +35,17 @@ def cache_dir() -> Path:
     """The cache folder: ``$SKYSCATTER_CACHE_DIR`` if set, else ``~/.cache/skyscatter``."""
     env = os.environ.get("SKYSCATTER_CACHE_DIR")
     return Path(env).expanduser() if env else Path.home() / ".cache" / "skyscatter"
+
+
+def check_cache_dir() -> Path:
+    """The cache folder, created if missing; :class:`~skyscatter.errors.OutputError` if it cannot be written.
+
+    The message names the folder, says what is wrong and how to choose another (``SKYSCATTER_CACHE_DIR``).
+    """
+    from ..fileio import ensure_output_folder
+
+    return ensure_output_folder(cache_dir(), what="the table cache folder",
+                                hint="set SKYSCATTER_CACHE_DIR to a writable folder")
 
 
 def cache_path(key: str) -> Path:
@@ -60,11 +71,14 @@ def cached_atmosphere(params: AtmosphereParameters | None = None, *, orders: int
 
 def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int = 4,
                     wavelengths: ArrayLike | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
-                    progress: bool | None = None, force: bool = False) -> tuple[PrecomputedAtmosphere, bool]:
+                    progress: bool | None = None, force: bool = False,
+                    require_saved: bool = False) -> tuple[PrecomputedAtmosphere, bool]:
     """Like :func:`cached_atmosphere`, also saying whether the tables were computed: ``(tables, computed)``.
 
     With ``force`` the tables are recomputed even if cached; the cache file is replaced only once the new
-    tables are written (atomically), so an interrupted run keeps the old, valid file.
+    tables are written (atomically), so an interrupted run keeps the old, valid file. With ``require_saved``
+    (the caller asked for the cache file itself, as ``skyscatter precompute`` does) an unusable cache folder
+    is an :class:`~skyscatter.errors.OutputError`, raised before any computation, instead of a warning.
     """
     params = AtmosphereParameters() if params is None else params
     wl = _as_wavelengths(wavelengths)
@@ -74,6 +88,8 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
     if hit is not None:
         return hit, False
     path = cache_path(key)
+    if require_saved:
+        check_cache_dir()
     atm = None
     if path.exists() and not force:
         try:
@@ -87,7 +103,11 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
             path.parent.mkdir(parents=True, exist_ok=True)
             atm.save(path)
         except (OSError, OutputError) as exc:
-            warnings.warn(f"could not write the table cache {path}: {exc}", RuntimeWarning, stacklevel=3)
+            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+            if require_saved:
+                raise OutputError(f"could not write the table cache {path}: {reason}") from None
+            warnings.warn(f"could not write the table cache {path}: {reason}; the tables are used without "
+                          "being cached", RuntimeWarning, stacklevel=3)
     _MEMORY[key] = atm
     return atm, computed
 

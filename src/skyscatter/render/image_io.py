@@ -1,7 +1,11 @@
 """Reading and writing images: OpenEXR (linear HDR, float32) and PNG (tone-mapped 8-bit sRGB).
 
 Both writers are atomic (:func:`skyscatter.fileio.atomic_path`): an error or interruption leaves no partial
-file. HDR images hold linear sRGB (D65) with Y = luminance [cd m^-2] / 683 (``skyscatter.spectral.HDR_SCALE``).
+file, and :func:`write_exr_and_png` writes both files or neither. HDR images hold linear sRGB (D65) with
+Y = luminance [cd m^-2] / 683 (``skyscatter.spectral.HDR_SCALE``). Colours outside the sRGB gamut are mapped
+into it before writing (:func:`skyscatter.spectral.gamut_map_srgb`: same luminance, desaturated towards
+white), so an EXR file never holds a negative value; its header states the sRGB primaries and D65 white
+(``chromaticities``). See docs/conventions.md.
 """
 
 from __future__ import annotations
@@ -13,14 +17,24 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FileFormatError, InvalidParameterError
-from ..fileio import atomic_path
+from ..fileio import atomic_path, atomic_paths, check_output_path
+from ..spectral import gamut_map_srgb
 from .tonemap import tonemap
 
 __all__ = ["read_exr", "write_exr", "write_exr_and_png", "write_png"]
 
 
+#: Chromaticities (x, y) of the red, green, blue primaries and white of the files (IEC 61966-2-1 sRGB, D65).
+SRGB_CHROMATICITIES = (0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290)
+
+
 def _check_rgb(rgb: ArrayLike) -> NDArray:
-    a = np.asarray(rgb)
+    try:
+        a = np.asarray(rgb)
+    except ValueError as exc:  # ragged nested lists
+        raise InvalidParameterError(f"an image must be a numeric array of shape (H, W, 3): {exc}") from None
+    if a.dtype.kind not in "biuf":
+        raise InvalidParameterError(f"an image must hold numbers; got an array of {a.dtype}")
     if a.ndim != 3 or a.shape[2] != 3 or a.shape[0] == 0 or a.shape[1] == 0:
         raise InvalidParameterError(f"an image must have shape (H, W, 3) with H, W > 0; got {a.shape}")
     return a
@@ -29,10 +43,12 @@ def _check_rgb(rgb: ArrayLike) -> NDArray:
 def write_exr(path: str | os.PathLike[str], rgb: ArrayLike) -> Path:
     """Write a linear RGB image (H, W, 3) as a float32 OpenEXR file (ZIP compression), atomically.
 
-    Non-finite values are refused (:class:`~skyscatter.errors.InvalidParameterError`) rather than written.
+    Non-finite values are refused (:class:`~skyscatter.errors.InvalidParameterError`) rather than written;
+    colours outside the sRGB gamut are mapped into it (:func:`skyscatter.spectral.gamut_map_srgb`), so the file
+    holds no negative value.
     """
+    target = check_output_path(_check_suffix(path, ".exr"))
     a = _exr_pixels(rgb)
-    target = _check_suffix(path, ".exr")
     with atomic_path(target) as tmp:
         _save_exr(tmp, a)
     return target
@@ -49,13 +65,14 @@ def _exr_pixels(rgb: ArrayLike) -> NDArray[np.float32]:
     a = np.ascontiguousarray(_check_rgb(rgb), dtype=np.float32)
     if not np.all(np.isfinite(a)):
         raise InvalidParameterError("image contains NaN or infinite values; refusing to write it")
-    return a
+    return np.ascontiguousarray(gamut_map_srgb(a), dtype=np.float32)
 
 
 def _save_exr(path: Path, pixels: NDArray[np.float32]) -> None:
     import OpenEXR
 
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
+              "chromaticities": SRGB_CHROMATICITIES}
     OpenEXR.File(header, {"RGB": pixels}).write(str(path))
 
 
@@ -78,13 +95,13 @@ def write_exr_and_png(
     See :func:`write_exr` and :func:`write_png` for the formats; ``exposure_ev`` and ``key`` go to the tone
     mapper. The two paths must differ and end in ``.exr`` and ``.png``.
     """
-    exr = _check_suffix(exr_path, ".exr")
-    png = _check_suffix(png_path, ".png")
+    exr = check_output_path(_check_suffix(exr_path, ".exr"))
+    png = check_output_path(_check_suffix(png_path, ".png"))
     if exr.resolve() == png.resolve():
         raise InvalidParameterError(f"the HDR and PNG outputs must be different files; both are {exr}")
     pixels = _exr_pixels(rgb)
     display = tonemap(pixels, exposure_ev=exposure_ev, key=key)
-    with atomic_path(exr) as tmp_exr, atomic_path(png) as tmp_png:
+    with atomic_paths(exr, png) as (tmp_exr, tmp_png):
         _save_exr(tmp_exr, pixels)
         _save_png(tmp_png, display)
     return exr, png
@@ -133,11 +150,11 @@ def write_png(
     tonemapped : bool
         The input is already display-referred sRGB in [0, 1]; write it as is.
     """
+    target = check_output_path(_check_suffix(path, ".png"))
     a = _check_rgb(rgb)
     display = np.clip(np.asarray(a, dtype=float), 0, 1) if tonemapped else tonemap(
         a, exposure_ev=exposure_ev, auto=auto_exposure, key=key
     )
-    target = _check_suffix(path, ".png")
     with atomic_path(target) as tmp:
         _save_png(tmp, display)
     return target

@@ -15,6 +15,15 @@ from ..spectral import HDR_SCALE, REFERENCE_WAVELENGTHS, spectrum_to_xyz, xyz_to
 __all__ = ["pixel_solid_angles", "sky_image"]
 
 Projection = Literal["equirect", "fisheye", "pinhole"]
+Layout = Literal["skyscatter", "blender", "mitsuba"]
+
+#: Column (fraction of the width, 0 = left edge) that looks north in each equirectangular layout; azimuth
+#: always grows to the right (north -> east), row 0 is the zenith. With north = +Y, east = +X in a Z-up scene:
+#: "skyscatter": north at the centre (the panorama convention); "blender": north at 1/4, what Blender's
+#: Environment Texture with its default mapping puts on +Y (it puts the image centre on +X);
+#: "mitsuba": north at the left/right edge, what Mitsuba's ``envmap`` puts on +Y with the usual Z-up
+#: ``to_world = rotate([1, 0, 0], 90)`` (it puts the image centre on -Y). See docs/conventions.md.
+LAYOUT_NORTH_COLUMN = {"skyscatter": 0.5, "blender": 0.25, "mitsuba": 0.0}
 # XYZ of 1 cd m^-2 at the D65 white point (x, y) = (0.31271, 0.32902): the ground is shown as a neutral grey.
 _D65_XYZ = np.array([0.31271 / 0.32902, 1.0, (1.0 - 0.31271 - 0.32902) / 0.32902])
 
@@ -23,14 +32,37 @@ _D65_XYZ = np.array([0.31271 / 0.32902, 1.0, (1.0 - 0.31271 - 0.32902) / 0.32902
 MAX_PIXELS = 64 * 1024 * 1024
 
 
-def _directions(projection: str, width: int, height: int | None, heading: float, pitch: float, fov: float):
+def _equirect_layout(width: int, height: int | None, layout: str) -> NDArray[np.float64]:
+    """Pixel directions of an equirectangular map in ``layout`` (:data:`LAYOUT_NORTH_COLUMN`)."""
+    d = equirect_directions(width, height)
+    shift = 2.0 * np.pi * (0.5 - LAYOUT_NORTH_COLUMN[layout])  # azimuth added to the skyscatter layout's
+    if shift == 0.0:
+        return d
+    c, s = np.cos(shift), np.sin(shift)
+    # azimuth phi -> phi + shift (from north towards east): (x, y) = sin(theta) (sin phi, cos phi)
+    x = d[..., 0] * c + d[..., 1] * s
+    y = d[..., 1] * c - d[..., 0] * s
+    return np.stack([x, y, d[..., 2]], axis=-1)
+
+
+def _directions(projection: str, width: int, height: int | None, heading: float, pitch: float, fov: float,
+                layout: str = "skyscatter"):
+    for name, value in (("width", width), ("height", height)):
+        if value is None and name == "height":
+            continue
+        if isinstance(value, (bool, str, bytes)) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise InvalidParameterError(f"{name} must be a whole number of pixels >= 1; got {value!r}")
+    if layout not in LAYOUT_NORTH_COLUMN:
+        raise InvalidParameterError(f"layout must be one of {sorted(LAYOUT_NORTH_COLUMN)}; got {layout!r}")
+    if layout != "skyscatter" and projection != "equirect":
+        raise InvalidParameterError(f"layout {layout!r} applies to equirect maps only (projection {projection!r})")
     h = height if height is not None else (width // 2 if projection == "equirect" else width)
     if width * max(h, 1) > MAX_PIXELS:
         raise InvalidParameterError(
             f"image of {width} x {h} px exceeds the {MAX_PIXELS // 2**20} Mpx that sky_image renders at once"
         )
     if projection == "equirect":
-        d = equirect_directions(width, height)
+        d = _equirect_layout(width, height, layout)
         return d, np.ones(d.shape[:2], dtype=bool)
     if projection == "fisheye":
         if height is not None and height != width:
@@ -85,6 +117,7 @@ def sky_image(
     sun_disc: bool = True,
     ground_albedo: float | None = 0.2,
     dtype: type = np.float32,
+    layout: Layout = "skyscatter",
 ) -> NDArray:
     """Render a sky model to a linear HDR image (H, W, 3) in skyscatter's scale (Y = luminance / 683).
 
@@ -114,6 +147,11 @@ def sky_image(
         (sun included). None leaves the ground black. Default 0.2.
     dtype : numpy dtype
         float32 (default, as stored in EXR files) or float64.
+    layout : {"skyscatter", "blender", "mitsuba"}
+        Equirect only: which column looks north (:data:`LAYOUT_NORTH_COLUMN`), so that a renderer loading the
+        map with its default (Blender: World Environment Texture, default mapping) or conventional (Mitsuba:
+        ``envmap`` with ``to_world = rotate([1, 0, 0], 90)``) set-up puts the sun where skyscatter says in a
+        Z-up scene with north = +Y and east = +X. Default "skyscatter": north at the centre.
 
     Returns
     -------
@@ -122,9 +160,10 @@ def sky_image(
     if not isinstance(model, SkyModel):
         raise InvalidParameterError(
             f"sky_image needs a sky model (skyscatter.sky.SkyModel); got {type(model).__name__}")
-    if ground_albedo is not None and not (np.isfinite(ground_albedo) and 0.0 <= ground_albedo <= 1.0):
+    if ground_albedo is not None and not (isinstance(ground_albedo, (int, float, np.integer, np.floating))
+                                          and np.isfinite(ground_albedo) and 0.0 <= ground_albedo <= 1.0):
         raise InvalidParameterError(f"ground_albedo must be in [0, 1] or None; got {ground_albedo!r}")
-    directions, inside = _directions(projection, width, height, heading, pitch, fov)
+    directions, inside = _directions(projection, width, height, heading, pitch, fov, layout)
     xyz = np.asarray(model.xyz(directions), dtype=float)
     below = directions[..., 2] < 0.0
     if not model.renders_ground:

@@ -230,10 +230,7 @@ class Terrain:
         if not p.is_file():
             raise FileFormatError(f"elevation model {p} does not exist")
         if suffix == ".npy":
-            try:
-                raster = np.load(p, allow_pickle=False)
-            except (ValueError, OSError) as exc:
-                raise FileFormatError(f"cannot read {p} as a NumPy .npy array: {exc}") from exc
+            raster = _read_npy_heights(p)
             if spacing is None:
                 raise FileFormatError(f"{p}: a .npy elevation model carries no sample spacing; pass spacing [m]")
         elif suffix in (".tif", ".tiff"):
@@ -384,3 +381,32 @@ def _read_geotiff(path: Path) -> tuple[NDArray[np.float64], float | None, str | 
         # Pixel scale in degrees (geographic) or an earth-centred frame: not a ground spacing in metres.
         spacing = None
     return raster, spacing, _NON_METRIC_MODEL_TYPES.get(model_type)
+
+
+#: Largest elevation model read [samples] (8192 x 8192: 0.5 GB as float64; the renderer needs a few copies).
+MAX_DEM_SAMPLES = 8192 * 8192
+
+
+def _read_npy_heights(p: Path) -> NDArray:
+    """Read a .npy height grid, checking its header (format, dtype, size) before loading any data."""
+    try:
+        with open(p, "rb") as fh:
+            version = np.lib.format.read_magic(fh)
+            read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+            shape, _, dtype = read(fh)
+    except (ValueError, OSError, EOFError) as exc:
+        raise FileFormatError(f"{p}: not a NumPy .npy file ({exc})") from None
+    if dtype.hasobject or dtype.kind not in "biuf":
+        raise FileFormatError(
+            f"{p}: an elevation model holds real-valued heights [m]; this .npy holds {dtype} values"
+        )
+    n = int(np.prod(shape, dtype=object)) if shape else 1
+    if n > MAX_DEM_SAMPLES:
+        raise FileFormatError(
+            f"{p}: elevation model of {' x '.join(map(str, shape))} samples is larger than the "
+            f"{MAX_DEM_SAMPLES:,} samples (8192 x 8192) supported; crop or resample it"
+        )
+    try:
+        return np.load(p, allow_pickle=False)
+    except (ValueError, OSError, EOFError) as exc:
+        raise FileFormatError(f"{p}: cannot read the .npy data ({exc})") from None

@@ -43,12 +43,12 @@ def log_average_luminance(rgb: ArrayLike) -> float:
 
 
 def srgb_encode(linear: ArrayLike) -> NDArray[np.float64]:
-    """sRGB transfer function (IEC 61966-2-1) of linear values in [0, 1]."""
-    from ..spectral._colour import colour_module
+    """sRGB transfer function (IEC 61966-2-1:1999, the inverse EOTF) of linear values, clipped to [0, 1].
 
-    eotf_inverse_sRGB = colour_module("colour.models").eotf_inverse_sRGB  # noqa: N806
-
-    return np.asarray(eotf_inverse_sRGB(np.clip(np.asarray(linear, dtype=float), 0.0, 1.0)), dtype=float)
+    ``V = 12.92 L`` for ``L <= 0.0031308``, else ``1.055 L^(1/2.4) - 0.055``.
+    """
+    lin = np.clip(np.asarray(linear, dtype=float), 0.0, 1.0)
+    return np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * np.power(lin, 1.0 / 2.4) - 0.055)
 
 
 def tonemap(

@@ -54,14 +54,6 @@ __all__ = [
     "solar_disc_solid_angle",
 ]
 
-#: Largest physical direct or diffuse irradiance [W m^-2]: the extraterrestrial normal irradiance at perihelion,
-#: 1367 W m^-2 times Spencer's (1971) largest eccentricity factor 1.0335 (on 3 January), rounded up.
-MAX_IRRADIANCE = 1413.0
-#: Largest physical illuminance [lx]: the extraterrestrial normal solar illuminance at perihelion, about
-#: 133.8 klx at the mean distance (CIE) times 1.0335, rounded up.
-MAX_ILLUMINANCE = 1.4e5
-
-
 def check_sun_angles(sun_zenith: float, sun_azimuth: float, *, allow_below_horizon: bool) -> tuple[float, float]:
     """Validate sun angles [rad]; return them as floats (azimuth wrapped into [0, 2 pi)).
 
@@ -303,12 +295,8 @@ class LuminanceOnlySky(SkyModel):
 
 
 def _daylight_xy(cct: float) -> tuple[float, float]:
-    """CIE daylight-locus chromaticity for a correlated colour temperature [K] (CIE 15:2004, via colour-science)."""
-    if not 4000.0 <= cct <= 25000.0:
-        raise InvalidParameterError(f"daylight CCT must be within 4000-25000 K; got {cct}")
-    from ..spectral._colour import colour_module
+    """CIE daylight-locus chromaticity for a correlated colour temperature [K] (CIE 015:2004 Eqs. 3.3-3.4)."""
+    from ..spectral import daylight_chromaticity
 
-    CCT_to_xy_CIE_D = colour_module("colour.temperature").CCT_to_xy_CIE_D  # noqa: N806
-
-    x, y = CCT_to_xy_CIE_D(float(cct))
+    x, y = daylight_chromaticity(float(cct))
     return float(x), float(y)

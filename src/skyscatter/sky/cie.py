@@ -41,7 +41,7 @@ from ..atmosphere.tables import load_table
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
 from ..spectral import as_wavelengths
-from .base import MAX_ILLUMINANCE, LuminanceOnlySky, SolarDisc, SunSkyMixin, check_sun_angles
+from .base import LuminanceOnlySky, SolarDisc, SunSkyMixin, check_sun_angles
 from .perez_family import cie_parameters, extended_perez, kittler_parameters
 
 __all__ = [
@@ -190,9 +190,7 @@ def _check_scale(zenith_luminance, diffuse_illuminance) -> tuple[float | None, f
             raise InvalidParameterError(f"{name} must be a number [{unit}]; got {value!r}") from None
         if not (np.isfinite(v) and v >= 0.0):
             raise InvalidParameterError(f"{name} must be a finite number >= 0 [{unit}]; got {v}")
-        if name == "diffuse_illuminance" and v > MAX_ILLUMINANCE:
-            raise InvalidParameterError(f"{name} must be at most {MAX_ILLUMINANCE:g} lx (the extraterrestrial solar "
-                                        f"illuminance at perihelion); got {v:g}")
+        _check_upper(name, v, unit)
         out.append(v)
     return out[0], out[1]
 
@@ -204,10 +202,15 @@ def _check_sun_illuminance(value) -> float:
         raise InvalidParameterError(f"sun_illuminance_normal must be a number [lx]; got {value!r}") from None
     if not (np.isfinite(v) and v >= 0.0):
         raise InvalidParameterError(f"sun_illuminance_normal must be a finite number >= 0 [lx]; got {v}")
-    if v > MAX_ILLUMINANCE:
-        raise InvalidParameterError(f"sun_illuminance_normal must be at most {MAX_ILLUMINANCE:g} lx (the "
-                                    f"extraterrestrial solar illuminance at perihelion); got {v:g}")
+    _check_upper("sun_illuminance_normal", v, "lx")
     return v
+
+
+def _check_upper(name: str, value: float, unit: str) -> None:
+    """Refuse a scale above its physical limit (:func:`skyscatter.conventions.check_daylight_limit`)."""
+    from ..conventions import check_daylight_limit
+
+    check_daylight_limit(name, value, unit)
 
 
 class LuminanceSunMixin:

@@ -199,9 +199,12 @@ class PreethamSky(SunSkyMixin, SkyModel):
         return self._zenith["Y"]
 
     def _xyY(self, directions: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:  # noqa: N802
-        d = np.asarray(directions)
-        if d.ndim == 0 or d.shape[-1] != 3:
-            as_directions(d)  # raises the standard shape error
+        try:
+            d = np.asarray(directions)
+        except ValueError:  # ragged lists
+            d = as_directions(directions)  # raises the standard error
+        if d.ndim == 0 or d.shape[-1] != 3 or d.dtype.kind not in "biuf":
+            as_directions(d)  # raises the standard shape or type error
         flat = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
         coefficients = np.stack([self._coefficients[k] for k in ("x", "y", "Y")])
         scale = np.array([self._zenith[k] / self._norm[k] for k in ("x", "y", "Y")])

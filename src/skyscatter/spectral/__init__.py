@@ -4,6 +4,7 @@ from .colorimetry import (
     HDR_SCALE,
     LUMINOUS_EFFICACY,
     cie_cmfs,
+    gamut_map_srgb,
     integration_weights,
     linear_srgb_to_xyz,
     spectrum_to_luminance,
@@ -12,7 +13,7 @@ from .colorimetry import (
     xyz_to_chromaticity,
     xyz_to_linear_srgb,
 )
-from .daylight import daylight_basis, daylight_coefficients, daylight_spectrum
+from .daylight import daylight_basis, daylight_chromaticity, daylight_coefficients, daylight_spectrum
 from .grid import DEFAULT_WAVELENGTHS, REFERENCE_WAVELENGTHS, as_wavelengths, wavelength_grid
 
 __all__ = [
@@ -23,8 +24,10 @@ __all__ = [
     "as_wavelengths",
     "cie_cmfs",
     "daylight_basis",
+    "daylight_chromaticity",
     "daylight_coefficients",
     "daylight_spectrum",
+    "gamut_map_srgb",
     "integration_weights",
     "linear_srgb_to_xyz",
     "spectrum_to_luminance",

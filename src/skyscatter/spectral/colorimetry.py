@@ -1,14 +1,13 @@
 """CIE 1931 colorimetry of spectra and the linear sRGB conversion.
 
-The colour-matching functions are the CIE 1931 2-degree standard observer tabulated by colour-science
-(1 nm, 360-830 nm), linearly interpolated to the caller's wavelengths and zero outside that range.
+The colour-matching functions are the CIE 1931 2-degree standard observer (CIE 018:2019; 1 nm, 360-830 nm,
+shipped as ``skyscatter/data/cie1931_2deg_cmfs.csv``, generated from colour-science's table), linearly
+interpolated to the caller's wavelengths and zero outside that range.
 Photometric quantities use K_m = 683 lm/W, so ``Y`` of a spectral radiance [W m^-2 sr^-1 nm^-1] is a
 luminance [cd m^-2] and of a spectral irradiance an illuminance [lx].
 """
 
 from __future__ import annotations
-
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,6 +19,7 @@ __all__ = [
     "HDR_SCALE",
     "LUMINOUS_EFFICACY",
     "cie_cmfs",
+    "gamut_map_srgb",
     "integration_weights",
     "linear_srgb_to_xyz",
     "spectrum_to_luminance",
@@ -46,14 +46,10 @@ _XYZ_TO_SRGB = np.array(
 _SRGB_TO_XYZ = np.linalg.inv(_XYZ_TO_SRGB)
 
 
-@lru_cache(maxsize=1)
 def _cmfs_table() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    from ._colour import colour_module
+    from ._colour import cie_table
 
-    colour = colour_module()  # imported lazily: colour-science takes about 2 s to import
-
-    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-    return np.asarray(cmfs.wavelengths, dtype=float), np.asarray(cmfs.values, dtype=float)
+    return cie_table("cie1931_2deg_cmfs")
 
 
 def cie_cmfs(wavelengths: ArrayLike) -> NDArray[np.float64]:
@@ -144,3 +140,39 @@ def linear_srgb_to_xyz(rgb: ArrayLike) -> NDArray[np.floating]:
     rgb = np.asarray(rgb)
     dtype = rgb.dtype if rgb.dtype == np.float32 else np.float64
     return (rgb @ _SRGB_TO_XYZ.T).astype(dtype, copy=False)
+
+
+#: Luminance row of the sRGB -> XYZ matrix: Y of linear sRGB (R, G, B).
+_SRGB_LUMINANCE = _SRGB_TO_XYZ[1]
+
+
+def gamut_map_srgb(rgb: ArrayLike) -> NDArray[np.floating]:
+    """Bring linear sRGB colours outside the sRGB gamut inside it, keeping their luminance (..., 3).
+
+    A colour with a negative component (a spectrum more saturated than the sRGB primaries, such as the deep
+    red of the solar disc at sunset) is desaturated towards the D65 grey of the same luminance,
+    ``c' = g + t (c - g)`` with ``g = Y / Y_white`` (``Y`` its luminance by the IEC 61966-2-1 matrix, ``Y_white``
+    that of (1, 1, 1)) and the largest ``t`` in [0, 1] that makes every component >= 0. In-gamut colours
+    are returned unchanged; a colour with ``Y <= 0`` (not a physical light) becomes black. Luminance and
+    dominant hue are kept; only saturation that sRGB cannot show is lost. float32 input stays float32.
+    """
+    c = np.asarray(rgb)
+    dtype = c.dtype if c.dtype == np.float32 else np.float64
+    c = c.astype(np.float64, copy=False)
+    if c.shape[-1:] != (3,):
+        raise InvalidParameterError(f"linear sRGB colours need a last axis of 3; got shape {c.shape}")
+    low = c.min(axis=-1)
+    if not np.any(low < 0):
+        return c.astype(dtype, copy=False)
+    y = c @ _SRGB_LUMINANCE
+    out = c.copy()
+    bad = low < 0
+    # the grey (g, g, g) of the same luminance; the white (1, 1, 1) has Y = sum of the row (1 to 4 digits)
+    g, lb = y[bad] / _SRGB_LUMINANCE.sum(), low[bad]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(g > 0, g / (g - lb), 0.0)  # the lowest component g + t (low - g) becomes 0
+    t = np.clip(t, 0.0, 1.0)
+    mapped = np.maximum(g[:, None] + t[:, None] * (c[bad] - g[:, None]), 0.0)
+    mapped[g <= 0] = 0.0
+    out[bad] = mapped
+    return out.astype(dtype, copy=False)

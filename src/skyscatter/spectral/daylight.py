@@ -1,31 +1,45 @@
 """CIE daylight spectra from chromaticity (Preetham et al. 1999, Appendix A.5; Wyszecki & Stiles 1982).
 
-``S_D(lambda) = S0(lambda) + M1 S1(lambda) + M2 S2(lambda)`` with the CIE daylight basis S0, S1, S2 as
-tabulated by colour-science (CIE 15, 5 nm, 300-830 nm) and ``M1``, ``M2`` from the chromaticity (x, y)
-(Preetham 1999 A.5, the CIE formula).
+``S_D(lambda) = S0(lambda) + M1 S1(lambda) + M2 S2(lambda)`` with the CIE daylight basis S0, S1, S2 (CIE
+015:2004 Table T.2, 5 nm, 300-830 nm; shipped as ``skyscatter/data/cie_daylight_basis.csv``, generated from
+colour-science's table) and ``M1``, ``M2`` from the chromaticity (x, y) (Preetham 1999 A.5, the CIE formula).
+The daylight locus for a correlated colour temperature is CIE 015:2004 Eqs. 3.3-3.4.
 """
 
 from __future__ import annotations
-
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .grid import as_wavelengths
 
-__all__ = ["daylight_basis", "daylight_coefficients", "daylight_spectrum"]
+__all__ = ["daylight_basis", "daylight_chromaticity", "daylight_coefficients", "daylight_spectrum"]
 
 
-@lru_cache(maxsize=1)
 def _basis_table() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    from ._colour import colour_module
+    from ._colour import cie_table
 
-    basis = colour_module("colour.colorimetry").SDS_BASIS_FUNCTIONS_CIE_ILLUMINANT_D_SERIES
+    return cie_table("cie_daylight_basis")
 
-    wl = np.asarray(basis["S0"].wavelengths, dtype=float)
-    values = np.stack([np.asarray(basis[k].values, dtype=float) for k in ("S0", "S1", "S2")], axis=-1)
-    return wl, values
+
+def daylight_chromaticity(cct: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """CIE daylight-locus chromaticity (x_D, y_D) for a correlated colour temperature [K], 4000-25000 K.
+
+    CIE 015:2004 Eq. 3.3: ``x_D = -4.6070e9/T^3 + 2.9678e6/T^2 + 0.09911e3/T + 0.244063`` for
+    4000 <= T <= 7000 K, ``x_D = -2.0064e9/T^3 + 1.9018e6/T^2 + 0.24748e3/T + 0.237040`` above; Eq. 3.4:
+    ``y_D = -3.000 x_D^2 + 2.870 x_D - 0.275``.
+    """
+    from ..errors import InvalidParameterError
+
+    t = np.asarray(cct, dtype=float)
+    if not np.all(np.isfinite(t) & (t >= 4000.0) & (t <= 25000.0)):
+        raise InvalidParameterError(f"daylight CCT must be within 4000-25000 K (CIE 015:2004); got {cct!r}")
+    x = np.where(
+        t <= 7000.0,
+        -4.6070e9 / t**3 + 2.9678e6 / t**2 + 0.09911e3 / t + 0.244063,
+        -2.0064e9 / t**3 + 1.9018e6 / t**2 + 0.24748e3 / t + 0.237040,
+    )
+    return x, -3.000 * x**2 + 2.870 * x - 0.275
 
 
 def daylight_basis(wavelengths: ArrayLike) -> NDArray[np.float64]:
