@@ -379,16 +379,17 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         self.dataset = dataset
         if dataset is None:
             data = _published()
-            self._spectral = data.spectral
+            self._bands = data.spectral.wavelengths
             self._params, self._radiance = data.spectral.configuration(self.sun_elevation, turbidity, albedo)
             self._xyz_config = data.xyz.configuration(self.sun_elevation, turbidity, albedo)
             self._rgb_config = data.rgb.configuration(self.sun_elevation, turbidity, albedo)
         else:
             if not isinstance(dataset, HosekWilkieDataset):
                 raise InvalidParameterError(f"dataset must be a HosekWilkieDataset; got {type(dataset).__name__}")
-            self._spectral = dataset
+            self._bands = dataset.wavelengths
             t = turbidity if dataset.turbidities.size > 1 else None
             a = albedo if dataset.albedos.size > 1 else None
+            self.turbidity, self.albedo = t, a  # None: not an axis of this dataset
             self._params, self._radiance = dataset.configuration(self.sun_elevation, t, a)
             self.has_sun = False
             self.sun_angular_radius = SOLAR_RADIUS
@@ -434,7 +435,7 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         outside them and below the horizon (see the class notes).
         """
         wl = as_wavelengths(wavelengths)
-        weights = _band_interpolation(wl, self._spectral.wavelengths)
+        weights = _band_interpolation(wl, self._bands)
         used = np.nonzero(np.any(weights != 0.0, axis=0))[0]
         if used.size == 0:
             d = as_directions(directions)
