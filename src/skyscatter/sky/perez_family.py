@@ -17,6 +17,8 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import InvalidParameterError
+
 __all__ = ["HOSEK_WILKIE_PARAMETER_ORDER", "hosek_wilkie_f", "hosek_wilkie_f_jacobian", "hosek_wilkie_f_scalar"]
 
 #: The order of the nine parameters in the published datasets and in ``hosek_wilkie_f``'s last axis: the
@@ -57,7 +59,7 @@ def hosek_wilkie_f(cos_theta: ArrayLike, gamma: ArrayLike, params: ArrayLike) ->
     """
     p = np.asarray(params, dtype=np.float64)
     if p.shape[-1:] != (9,):
-        raise ValueError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
+        raise InvalidParameterError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
     return _hosek_wilkie_ufunc(
         np.asarray(cos_theta, dtype=np.float64), np.asarray(gamma, dtype=np.float64), *(p[..., k] for k in range(9))
     )
@@ -75,7 +77,7 @@ def hosek_wilkie_f_jacobian(cos_theta: ArrayLike, gamma: ArrayLike, params: Arra
     """
     p = np.asarray(params, dtype=np.float64)
     if p.shape[-1:] != (9,):
-        raise ValueError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
+        raise InvalidParameterError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
     a, b, c, d, e, f, g, i, h = (p[..., k] for k in range(9))
     ct = np.clip(np.asarray(cos_theta, dtype=np.float64), 0.0, 1.0)
     gam = np.asarray(gamma, dtype=np.float64)
