@@ -40,6 +40,8 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import InvalidParameterError
+
 __all__ = [
     "HORIZON_COS",
     "HOSEK_WILKIE_OFFSET",
@@ -130,7 +132,7 @@ def extended_perez(cos_theta: ArrayLike, gamma: ArrayLike, parameters: ArrayLike
     """
     p = np.asarray(parameters, dtype=float)
     if p.shape[-1:] != (9,):
-        raise ValueError(f"parameters must have a last axis of 9 (A..I); got shape {p.shape}")
+        raise InvalidParameterError(f"parameters must have a last axis of 9 (A..I); got shape {p.shape}")
     return _extended_perez_ufunc(np.asarray(cos_theta, dtype=float), np.asarray(gamma, dtype=float),
                                  *(p[..., k] for k in range(9)), float(offset))
 
@@ -199,7 +201,7 @@ def hosek_wilkie_f(cos_theta: ArrayLike, gamma: ArrayLike, params: ArrayLike) ->
     """
     p = np.asarray(params, dtype=np.float64)
     if p.shape[-1:] != (9,):
-        raise ValueError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
+        raise InvalidParameterError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
     return extended_perez(cos_theta, gamma, p[..., _HW_TO_ALPHABETICAL], offset=HOSEK_WILKIE_OFFSET)
 
 
@@ -215,7 +217,7 @@ def hosek_wilkie_f_jacobian(cos_theta: ArrayLike, gamma: ArrayLike, params: Arra
     """
     p = np.asarray(params, dtype=np.float64)
     if p.shape[-1:] != (9,):
-        raise ValueError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
+        raise InvalidParameterError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
     a, b, c, d, e, f, g, i, h = (p[..., k] for k in range(9))
     ct = np.clip(np.asarray(cos_theta, dtype=np.float64), 0.0, 1.0)
     gam = np.asarray(gamma, dtype=np.float64)
