@@ -4,8 +4,8 @@ One setting sizes every pool: ``$SKYSCATTER_NUM_THREADS`` (read once, at first u
 :func:`set_num_threads`. It caps numba's parallel kernels (``numba.set_num_threads``; set before numba starts,
 it also sizes numba's pool through ``NUMBA_NUM_THREADS``), the BLAS/OpenMP pools numpy and scipy use (through
 threadpoolctl: the least-squares fits otherwise oversubscribe the cores) and the thread pools of the
-precomputation (:mod:`skyscatter.precomputed.parallel`). Dask workers that each run one skyscatter task set it to 1 so that
-tasks do not oversubscribe the cores.
+precomputation (:mod:`skyscatter.precomputed.parallel`). Dask workers that each run one skyscatter task set it
+to 1 so that tasks do not oversubscribe the cores.
 
 Progress bars follow one rule too: library calls are silent unless the caller passes ``progress=True``; the
 command line turns them on (on a terminal; one summary line otherwise).
