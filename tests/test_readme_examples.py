@@ -4,8 +4,8 @@ The commands are read from README.md itself, so the test follows the README. Eac
 folder (so output folders such as ``renders`` do not exist beforehand), with ``weather.epw`` copied from
 tests/data (a two-day EPW). Commands with image-size options run with the sizes below appended (argparse
 keeps the last value), which changes only the pixel count (or the Monte Carlo sample count), not the command:
-the README gives the run time of the full size. Commands that need the Bruneton tables at their default size (built once per session into the
-test cache, about a minute) are marked slow.
+the README gives the run time of the full size. Commands that need the Bruneton tables at their default size
+(built once per session into the test cache, about a minute) are marked slow.
 """
 
 from __future__ import annotations
