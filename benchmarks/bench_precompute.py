@@ -71,7 +71,7 @@ def main() -> int:
 
     from skyscatter.precomputed import PrecomputedAtmosphere
     from skyscatter.precomputed.parallel import n_threads
-    from skyscatter.precomputed.views import camera_view
+    from skyscatter.render.bruneton import camera_view
 
     threads = n_threads()
     print(f"machine: {os.cpu_count()} CPUs, {threads} worker threads; python {sys.version.split()[0]}")

@@ -523,3 +523,27 @@ def test_sun_share_of_s0_integrates_to_the_total_coefficients(evening_sky):
     b1, b2 = _betas(3.0)
     np.testing.assert_allclose(total1, b1, rtol=0.01)
     np.testing.assert_allclose(total2, b2, rtol=0.01)
+
+
+def test_models_share_the_ray_origin_protocol(evening_sky, rng):
+    """Every model is an AerialPerspective; evaluate_rays from origins (x, y, h) equals evaluate(d, s, h) (the
+    flat atmosphere of these models depends on the height only), and the default sky radiance is the sky's."""
+    from skyscatter.aerial import AerialPerspective, as_aerial_perspective
+
+    d = direction_from_angles(rng.uniform(1.4, 1.7, 12), rng.uniform(0, 6, 12))
+    s = rng.uniform(100.0, 20_000.0, 12)
+    h = rng.uniform(0.0, 2000.0, 12)
+    origins = np.column_stack([rng.uniform(-1e4, 1e4, 12), rng.uniform(-1e4, 1e4, 12), h])
+    for model in (PreethamAerialPerspective(evening_sky), ConstantDensityAerialPerspective(evening_sky),
+                  WardLarsonAerialPerspective(evening_sky)):
+        assert isinstance(model, AerialPerspective) and as_aerial_perspective(model) is model
+        tau, l_in = model.evaluate_rays(origins, d, s, REFERENCE_WAVELENGTHS)
+        tau2, l_in2 = model.evaluate(d, s, h, REFERENCE_WAVELENGTHS)
+        np.testing.assert_array_equal(tau, tau2)
+        np.testing.assert_array_equal(l_in, l_in2)
+        np.testing.assert_array_equal(model.sky_radiance(origins, d, REFERENCE_WAVELENGTHS),
+                                      evening_sky.spectral_radiance(d, REFERENCE_WAVELENGTHS))
+    with pytest.raises(InvalidParameterError, match="aerial must be"):
+        as_aerial_perspective(object())
+    with pytest.raises(InvalidParameterError, match="origins"):
+        PreethamAerialPerspective(evening_sky).evaluate_rays([0.0, np.nan, 10.0], d, s)

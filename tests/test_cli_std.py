@@ -62,12 +62,13 @@ def test_illuminance_perez_from_irradiance(capsys):
     [
         (["--model", "cie-overcast", "--epsilon", "3"], "--epsilon: does not apply to --model cie-overcast"),
         (["--model", "perez", "--epsilon", "3"], "epsilon and delta must be given together"),
-        (["--model", "perez"], "PerezSky needs the sky condition"),
+        (["--model", "perez", "--dni", "1e6", "--dhi", "1e6"], "0 to 1413 W m^-2"),
         (["--model", "cie-overcast", "--include-sun"], "has no sun"),
         (["--model", "cie", "--zenith-luminance", "5", "--diffuse-illuminance", "5"], "not both"),
         (["--tilted", "200", "0"], "tilt must be within 0-180"),
-        (["--model", "cie", "--sky-type", "16"], "invalid choice"),
-        (["--model", "perez", "--day-of-year", "400", "--epsilon", "2", "--delta", "0.2"], "1-366"),
+        (["--model", "cie", "--sky-type", "16"], "sky_type must be 1 to 15"),
+        (["--model", "perez", "--day-of-year", "400", "--epsilon", "2", "--delta", "0.2"],
+         "day_of_year must be 1 to 366"),
     ],
 )
 def test_illuminance_errors_are_one_line(capsys, args, message):

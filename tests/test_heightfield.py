@@ -278,3 +278,22 @@ def test_complex_boolean_and_absurd_heights_are_refused(tmp_path):
         Terrain(np.full((3, 3), 1e300), 10.0)
     with pytest.raises(InvalidParameterError, match="spacing"):
         Terrain(np.zeros((3, 3)), None)
+
+
+def test_public_single_ray_kernel_agrees_with_the_tracer(rng):
+    """trace_ray (the public numba kernel, fed trace_arguments) gives the same distances as intersect()."""
+    from skyscatter.aerial.base import ShadowCaster
+    from skyscatter.render.heightfield import trace_ray
+
+    terrain = Terrain(rng.uniform(0.0, 300.0, (32, 32)), 25.0, wrap=True)
+    tracer = HeightfieldTracer(terrain)
+    assert isinstance(tracer, ShadowCaster)
+    origins = np.column_stack([rng.uniform(0.0, 800.0, 50), rng.uniform(0.0, 800.0, 50), np.full(50, 400.0)])
+    d = direction_from_angles(rng.uniform(1.65, 2.5, 50), rng.uniform(0.0, 6.28, 50))
+    expected = tracer.intersect(origins, d)
+    got = [trace_ray(*tracer.trace_arguments, *o, *v, 0.0, tracer.max_distance)
+           for o, v in zip(origins, d, strict=True)]
+    # intersect() first moves periodic origins into the first period (x0 + mod(x - x0, period)), which may
+    # change the last bit of a coordinate: equal to rounding.
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=0)
+    assert np.sum(np.isfinite(expected)) > 40

@@ -201,7 +201,12 @@ def test_guard_delta_floor_in_bins_2_to_5():
     raw = perez_coefficients(2.0, 0.05, 0.5, delta_floor=False)
     assert raw[1] > 0  # why the floor exists: exp(b / cos theta) then diverges at the horizon
     near_horizon = math.cos(math.radians(89.99))
-    assert abs(float(perez_relative_luminance(near_horizon, 0.5, raw, guards=False))) > 1e6
+    # Under the one horizon rule (cos theta floored at 0.01, Radiance perezlum.cal) the raw form stays finite but is
+    # far out of scale: (1 + a e^(b/0.01)) (1 + c e^(d gamma) + e cos^2 gamma) = -1.1e4 for these coefficients.
+    a, b, c, d, e = raw
+    expected = (1 + a * math.exp(b / 0.01)) * (1 + c * math.exp(d * 0.5) + e * math.cos(0.5) ** 2)
+    assert expected < -1e4
+    assert float(perez_relative_luminance(near_horizon, math.cos(0.5), raw, guards=False)) == pytest.approx(expected)
     guarded = sky.relative_luminance(direction_from_angles(math.radians(89.99), math.pi))
     assert 0 <= float(guarded) < 10
     assert not (perez_coefficients(1.02, 0.05, 0.5) == perez_coefficients(1.02, 0.2, 0.5)).all()  # bin 1: no floor
@@ -243,8 +248,10 @@ def test_horizon_cos_floor():
 @pytest.mark.parametrize(
     "kwargs,err",
     [
-        ({}, InvalidParameterError),
         ({"epsilon": 2.0}, InvalidParameterError),
+        ({"direct_normal_irradiance": 1414.0, "diffuse_horizontal_irradiance": 50.0}, InvalidParameterError),
+        ({"direct_normal_irradiance": 500.0, "diffuse_horizontal_irradiance": 1e6}, InvalidParameterError),
+        ({"epsilon": 2.0, "delta": 0.1, "diffuse_illuminance": 1e308}, InvalidParameterError),
         ({"epsilon": 0.9, "delta": 0.1}, InvalidParameterError),
         ({"epsilon": 2.0, "delta": -0.1}, InvalidParameterError),
         ({"epsilon": 2.0, "delta": 0.1, "direct_normal_irradiance": 100.0}, InvalidParameterError),
@@ -280,3 +287,13 @@ def test_delta_zero_raises_no_numpy_warnings():
         warnings.simplefilter("error")
         sky = PerezSky(0.8, 1.0, epsilon=3.0, delta=0.0)
     assert sky.guards_applied
+
+
+def test_default_sky_condition_is_a_documented_clear_sky():
+    """With no sky condition the registry's "defaults" contract needs a sky: epsilon 6.5, delta 0.15 (bin 8)."""
+    from skyscatter.sky.perez import DEFAULT_DELTA, DEFAULT_EPSILON
+
+    sky = PerezSky(0.5, 0.0)
+    assert (sky.epsilon, sky.delta, sky.epsilon_bin) == (DEFAULT_EPSILON, DEFAULT_DELTA, 8)
+    same = PerezSky(0.5, 0.0, epsilon=6.5, delta=0.15)
+    assert sky.coefficients == same.coefficients

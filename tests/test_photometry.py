@@ -9,14 +9,13 @@ from skyscatter import photometry
 from skyscatter.conventions import direction_from_angles
 from skyscatter.errors import InvalidParameterError
 from skyscatter.patches import patch_scheme
+from skyscatter.sky.base import LuminanceOnlySky
 from skyscatter.sky.cie import CIEOvercastSky, CIEStandardSky
 from skyscatter.sky.perez import PerezSky
 
 
-class UniformSky:
+class UniformSky(LuminanceOnlySky):
     """A sky of constant luminance L above the horizon."""
-
-    has_sun = False
 
     def __init__(self, value):
         self.value = value

@@ -12,12 +12,12 @@ import math
 import numpy as np
 import pytest
 
+from skyscatter.aerial.bruneton import BrunetonAerialPerspective, aerial_perspective, transmittance_matrix
 from skyscatter.errors import InvalidParameterError
-from skyscatter.precomputed import BrunetonSky, PrecomputedAtmosphere
-from skyscatter.precomputed.aerial import aerial_perspective
-from skyscatter.precomputed.landscape import BrunetonAerialPerspective, shadow_lengths, transmittance_matrix
+from skyscatter.precomputed import BrunetonSky, PrecomputedAtmosphere  # the old path of BrunetonSky (alias)
 from skyscatter.render.camera import PinholeCamera
 from skyscatter.render.heightfield import HeightfieldTracer
+from skyscatter.render.shafts import shadow_lengths
 from skyscatter.render.terrain import Terrain
 
 SIZES = dict(transmittance_mu=256, transmittance_r=64, irradiance_mu_s=16, irradiance_r=8, scattering_r=8,
@@ -201,7 +201,7 @@ def test_light_shafts_eq18_sky_rays(atm, ridge):
 
 def test_render_with_bruneton_provider(atm, ridge):
     """A 64 x 36 render: finite, non-negative, and the shafts darken the haze (never brighten it)."""
-    from skyscatter.cli.demo_bruneton import bruneton_scene
+    from skyscatter.render.bruneton import bruneton_scene
 
     cam = PinholeCamera.from_degrees((900.0, 0.0, 60.0), 270.0, 3.0, 70.0)
     sun_zenith, sun_azimuth = math.pi / 2 - SUN_ELEVATION, math.radians(270.0)

@@ -9,9 +9,9 @@ import pytest
 
 from skyscatter.errors import InvalidParameterError, SunBelowHorizonError
 from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
-from skyscatter.precomputed.sky import BrunetonSky
-from skyscatter.precomputed.views import camera_view, fisheye_view, preview_png
+from skyscatter.render.bruneton import camera_view, fisheye_view, preview_png
 from skyscatter.sky.base import SkyModel
+from skyscatter.sky.bruneton import BrunetonSky
 from test_precomputed_reference import small_earth
 
 R = AtmosphereParameters().bottom_radius
@@ -295,7 +295,7 @@ def test_cli_export_from_a_junk_file(monkeypatch, tmp_path):
 
 def test_renderer_entry_points(atm):
     """The module-level functions for landscape renderers match the methods (Eqs. 16-18)."""
-    from skyscatter.precomputed import aerial
+    from skyscatter.aerial import bruneton as aerial
 
     sun = np.array([0.0, 0.6, 0.8])
     cam = np.array([0.0, 0.0, R + 50.0])

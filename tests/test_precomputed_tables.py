@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
+from skyscatter.atmosphere.phase import aerosol_phase_kind
 from skyscatter.errors import FileFormatError, InvalidParameterError
 from skyscatter.precomputed import (
     AtmosphereParameters,
@@ -131,7 +132,8 @@ def _density_of(field, params, sizes, first=False, n_theta=16):
     out = np.zeros_like(field)
     n_r, _, n_s, _ = sizes.scattering_shape
     parallel_for(kernels.scattering_density_kernel, n_r * n_s, t, field, field, first, e, np.zeros(1),
-                 params.rayleigh_scattering_at(wl), params.mie_scattering_at(wl), params.mie_phase_g, prof, counts,
+                 params.rayleigh_scattering_at(wl), params.mie_scattering_at(wl), params.mie_phase_g,
+                 aerosol_phase_kind(params.mie_phase_function), prof, counts,
                  params.bottom_radius, params.top_radius, params.mu_s_min, n_theta, out)
     return out
 

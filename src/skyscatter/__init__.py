@@ -1,8 +1,9 @@
 """skyscatter: physically based daylight.
 
-Sun position, spectral sunlight, sky models (Preetham 1999, CIE, Perez 1993, Bruneton & Neyret 2008),
-aerial perspective and sky/landscape images. Frame, units and colour conventions are in
-``docs/conventions.md``: ENU directions, radians, nm, SI radiometric units, cd m^-2.
+Sun position, spectral sunlight, sky models (Preetham 1999, CIE, Perez 1993, Hosek & Wilkie 2012, Bruneton &
+Neyret 2008), fitting of the Hosek-Wilkie form to any atmosphere, aerial perspective and sky/landscape images.
+Frame, units and colour conventions are in ``docs/conventions.md``: ENU directions, radians, nm, SI radiometric
+units, cd m^-2.
 
 Public names are imported lazily so ``import skyscatter`` stays fast.
 """
@@ -27,8 +28,9 @@ _LAZY = {
     "CIEClearSky": "skyscatter.sky.cie",
     "CIEStandardSky": "skyscatter.sky.cie",
     "PerezSky": "skyscatter.sky.perez",
+    "HosekWilkieSky": "skyscatter.sky.hosek_wilkie",
     "skymatrix": "skyscatter.sky_matrix",
-    "BrunetonSky": "skyscatter.precomputed.sky",
+    "BrunetonSky": "skyscatter.sky.bruneton",
 }
 _SUBMODULES = {
     "aerial",
@@ -36,6 +38,7 @@ _SUBMODULES = {
     "conventions",
     "epw",
     "errors",
+    "fit",
     "patches",
     "photometry",
     "precomputed",

@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 from .conventions import direction_from_angles
 from .errors import InvalidParameterError
 from .patches import patch_luminance, patch_scheme
+from .sky.base import SkyModel
 
 __all__ = [
     "DEFAULT_NODES",
@@ -147,31 +148,33 @@ def plane_integral(
     return float(values @ w)
 
 
-def sun_normal_illuminance(sky) -> float:
+def sun_normal_illuminance(sky: SkyModel) -> float:
     """Illuminance [lx] of the solar disc on a plane facing the sun (0 for models without a sun).
 
-    Uses the model's ``sun_illuminance_normal`` [lx] where it has one (the luminance-only CIE and Perez skies);
-    otherwise the disc luminance ``sun_xyz()[1]`` [cd m^-2] times ``sun_solid_angle`` [sr] (a small uniform
-    disc), as for :class:`~skyscatter.PreethamSky`.
+    The disc-averaged luminance [cd m^-2] times the disc's solid angle [sr] (``sky.sun.illuminance_normal()``);
+    for the luminance-only CIE and Perez skies that is their ``sun_illuminance_normal`` by construction.
     """
-    if not getattr(sky, "has_sun", False):
-        return 0.0
-    value = getattr(sky, "sun_illuminance_normal", None)
-    if value is not None:
-        return float(value)
-    return float(np.asarray(sky.sun_xyz(), dtype=float)[1] * sky.sun_solid_angle)
+    sun = _model(sky).sun
+    return 0.0 if sun is None else sun.illuminance_normal()
 
 
-def _sun_term(sky, normal: NDArray[np.float64]) -> float:
-    if not getattr(sky, "has_sun", False):
+def _sun_term(sky: SkyModel, normal: NDArray[np.float64]) -> float:
+    sun = _model(sky).sun
+    if sun is None:
         raise InvalidParameterError(f"include_sun=True needs a model with a sun; {type(sky).__name__} has none")
-    s = np.asarray(sky.sun_direction, dtype=float)
+    s = np.asarray(sun.direction, dtype=float)
     if s[2] <= 0.0:
         return 0.0
-    return sun_normal_illuminance(sky) * max(0.0, float(normal @ s))
+    return sun.illuminance_normal() * max(0.0, float(normal @ s))
 
 
-def sun_plane_illuminance(sky, tilt: float, azimuth: float) -> float:
+def _model(sky: SkyModel) -> SkyModel:
+    if not isinstance(sky, SkyModel):
+        raise InvalidParameterError(f"expected a sky model (skyscatter.sky.SkyModel); got {type(sky).__name__}")
+    return sky
+
+
+def sun_plane_illuminance(sky: SkyModel, tilt: float, azimuth: float) -> float:
     """Direct-sun illuminance [lx] on a plane: ``E_sun,n max(0, n . s)``, 0 with the sun below the horizon.
 
     ``tilt`` [rad, 0-pi] and ``azimuth`` [rad] as in :func:`tilted_illuminance`; the model must have a sun.
@@ -182,7 +185,7 @@ def sun_plane_illuminance(sky, tilt: float, azimuth: float) -> float:
 
 
 def tilted_illuminance(
-    sky,
+    sky: SkyModel,
     tilt: float,
     azimuth: float,
     *,
@@ -207,13 +210,14 @@ def tilted_illuminance(
     nodes : (int, int)
         Quadrature nodes, see :func:`plane_quadrature`.
     """
-    value = plane_integral(sky.luminance, tilt, azimuth, nodes=nodes)
+    value = plane_integral(_model(sky).luminance, tilt, azimuth, nodes=nodes)
     if include_sun:
         value += _sun_term(sky, _plane_normal(float(tilt), float(azimuth)))
     return value
 
 
-def horizontal_illuminance(sky, *, include_sun: bool = False, nodes: tuple[int, int] = DEFAULT_NODES) -> float:
+def horizontal_illuminance(sky: SkyModel, *, include_sun: bool = False,
+                           nodes: tuple[int, int] = DEFAULT_NODES) -> float:
     """Horizontal illuminance [lx]: diffuse from the sky, or global with ``include_sun=True``.
 
     ``E_h = integral L(theta, phi) cos(theta) dOmega`` over the upper hemisphere; a uniform sky of luminance L
@@ -222,13 +226,13 @@ def horizontal_illuminance(sky, *, include_sun: bool = False, nodes: tuple[int, 
     return tilted_illuminance(sky, 0.0, 0.0, include_sun=include_sun, nodes=nodes)
 
 
-def global_horizontal_illuminance(sky, *, nodes: tuple[int, int] = DEFAULT_NODES) -> float:
+def global_horizontal_illuminance(sky: SkyModel, *, nodes: tuple[int, int] = DEFAULT_NODES) -> float:
     """Global horizontal illuminance [lx]: sky plus sun (same as ``horizontal_illuminance(include_sun=True)``)."""
     return horizontal_illuminance(sky, include_sun=True, nodes=nodes)
 
 
 def vertical_illuminance(
-    sky, azimuth: float, *, include_sun: bool = False, nodes: tuple[int, int] = DEFAULT_NODES
+    sky: SkyModel, azimuth: float, *, include_sun: bool = False, nodes: tuple[int, int] = DEFAULT_NODES
 ) -> float:
     """Illuminance [lx] on a vertical plane facing ``azimuth`` [rad, from north towards east], sky only or + sun.
 

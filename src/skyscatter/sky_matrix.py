@@ -39,6 +39,7 @@ from .epw import EPWData, EPWLocation, read_epw
 from .errors import FileFormatError, InvalidParameterError
 from .fileio import atomic_path, atomic_paths
 from .patches import PatchScheme, patch_scheme
+from .sky.perez_family import extended_perez_scalar
 
 __all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches", "perez_patch_luminance",
            "skymatrix"]
@@ -47,18 +48,17 @@ __all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patche
 NORMALISATION_NODES = (48, 96)
 
 
-@numba.njit(cache=True, parallel=True, nogil=True)
-def _kernel(coeffs, sun, scale, qdirs, qweights, q_row, sdirs, s_row, row_cos, n_sub, out):  # pragma: no cover
-    """Per hour: normalise the Perez sky to D_v with the quadrature, then average it over each patch's samples.
+@numba.njit(cache=True, inline="always")
+def _perez_f(a, b, c, d, e, cos_theta, cos_gamma):  # pragma: no cover - compiled
+    """Perez 1993 F through the shared kernel, negative values clipped (PerezSky's guards)."""
+    cg = min(1.0, max(-1.0, cos_gamma))
+    return max(extended_perez_scalar(cos_theta, np.arccos(cg), cg, a, b, 1.0, c, d, e, 0.0, 0.0, 0.0, 0.0), 0.0)
 
-    The Perez function (Perez et al. 1993, Eq. 1) ``max(0, (1 + a exp(b / max(cos theta, 0.01)))(1 + c
-    exp(d gamma) + e cos^2 gamma))`` (cos theta floor of Radiance's perezlum.cal) is evaluated with its gradation
-    factor taken from a per-hour table over the distinct zenith angles of the quadrature nodes and samples
-    (``row_cos``; ``q_row``/``s_row`` index it): one exponential per direction instead of two.
-    """
+
+@numba.njit(cache=True, parallel=True)
+def _kernel(coeffs, sun, scale, qdirs, qweights, sdirs, n_sub, out):  # pragma: no cover - compiled
     n_hours = coeffs.shape[0]
     n_patch = out.shape[1]
-    n_rows = row_cos.shape[0]
     for h in numba.prange(n_hours):
         if scale[h] <= 0.0:
             for p in range(n_patch):
@@ -66,15 +66,10 @@ def _kernel(coeffs, sun, scale, qdirs, qweights, q_row, sdirs, s_row, row_cos, n
             continue
         a, b, c, d, e = coeffs[h, 0], coeffs[h, 1], coeffs[h, 2], coeffs[h, 3], coeffs[h, 4]
         sx, sy, sz = sun[h, 0], sun[h, 1], sun[h, 2]
-        grad = np.empty(n_rows)
-        for u in range(n_rows):
-            grad[u] = 1.0 + a * np.exp(b / max(row_cos[u], 0.01))
         total = 0.0
         for k in range(qdirs.shape[0]):
-            cg = min(1.0, max(-1.0, qdirs[k, 0] * sx + qdirs[k, 1] * sy + qdirs[k, 2] * sz))
-            f = grad[q_row[k]] * (1.0 + c * np.exp(d * np.arccos(cg)) + e * cg * cg)
-            if f > 0.0:
-                total += qweights[k] * f
+            cg = qdirs[k, 0] * sx + qdirs[k, 1] * sy + qdirs[k, 2] * sz
+            total += qweights[k] * _perez_f(a, b, c, d, e, qdirs[k, 2], cg)
         if total <= 0.0:  # no positive luminance anywhere: uniform sky (as PerezSky and gendaymtx)
             for p in range(n_patch):
                 out[h, p] = scale[h] / np.pi
@@ -85,10 +80,8 @@ def _kernel(coeffs, sun, scale, qdirs, qweights, q_row, sdirs, s_row, row_cos, n
             base = p * n_sub
             for s in range(n_sub):
                 k = base + s
-                cg = min(1.0, max(-1.0, sdirs[k, 0] * sx + sdirs[k, 1] * sy + sdirs[k, 2] * sz))
-                f = grad[s_row[k]] * (1.0 + c * np.exp(d * np.arccos(cg)) + e * cg * cg)
-                if f > 0.0:
-                    acc += f
+                cg = sdirs[k, 0] * sx + sdirs[k, 1] * sy + sdirs[k, 2] * sz
+                acc += _perez_f(a, b, c, d, e, sdirs[k, 2], cg)
             out[h, p] = norm * acc / n_sub
 
 
@@ -123,23 +116,14 @@ def perez_patch_luminance(
         sdirs = scheme.sample_directions(samples).reshape(-1, 3)
     n_sub = sdirs.shape[0] // scheme.n_patches
     coeffs = np.ascontiguousarray(coefficients, dtype=np.float64).reshape(-1, 5)
-    qd = np.ascontiguousarray(qd, dtype=np.float64).reshape(-1, 3)
-    sdirs = np.ascontiguousarray(sdirs, dtype=np.float64)
-    # distinct zenith cosines of nodes and samples (rows of the grids), for the per-hour gradation table
-    row_cos, inverse = np.unique(np.concatenate([qd[:, 2], sdirs[:, 2]]), return_inverse=True)
-    q_row = np.ascontiguousarray(inverse[: qd.shape[0]], dtype=np.int64)
-    s_row = np.ascontiguousarray(inverse[qd.shape[0]:], dtype=np.int64)
     out = np.empty((coeffs.shape[0], scheme.n_patches))
     _kernel(
         coeffs,
         np.ascontiguousarray(model_sun, dtype=np.float64).reshape(-1, 3),
         np.ascontiguousarray(diffuse_illuminance, dtype=np.float64).reshape(-1),
-        qd,
-        np.ascontiguousarray(qw, dtype=np.float64).reshape(-1),
-        q_row,
-        sdirs,
-        s_row,
-        np.ascontiguousarray(row_cos),
+        np.ascontiguousarray(qd),
+        np.ascontiguousarray(qw),
+        np.ascontiguousarray(sdirs),
         n_sub,
         out,
     )

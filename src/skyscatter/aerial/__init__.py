@@ -9,11 +9,15 @@
 * :class:`WardLarsonAerialPerspective` -- the direction-independent "ambient" model the paper compares
   against in Figure 8.
 
-All follow the :class:`AerialPerspective` protocol, so :class:`skyscatter.render.Scene` accepts any of them
-(or another provider with the same two methods).
+* :class:`skyscatter.aerial.bruneton.BrunetonAerialPerspective` -- from the precomputed tables of Bruneton &
+  Neyret (2008), with light shafts from a :class:`ShadowCaster` (imported from its module, which loads the
+  tables' machinery).
+
+All derive from :class:`AerialPerspective` (:mod:`skyscatter.aerial.base`: rays with origins), so
+:class:`skyscatter.render.Scene` accepts any of them.
 """
 
-from .base import AerialPerspective
+from .base import AerialPerspective, ShadowCaster, as_aerial_perspective
 from .constant_density import ConstantDensityAerialPerspective
 from .integrals import ALPHA_HAZE, ALPHA_MOLECULES, effective_length, extinction, in_scattering_integrals
 from .preetham import PreethamAerialPerspective
@@ -28,7 +32,9 @@ __all__ = [
     "ConstantDensityAerialPerspective",
     "PreethamAerialPerspective",
     "ScatteringTable",
+    "ShadowCaster",
     "WardLarsonAerialPerspective",
+    "as_aerial_perspective",
     "effective_length",
     "extinction",
     "hemisphere_quadrature",

@@ -18,6 +18,9 @@ skies the sky's share is included by default.
 Here the "constant" density is the one at the observer's height, ``beta_i = beta_i^0 exp(-alpha_i h0)`` with
 the A.4 decay constants, so the model agrees with :class:`PreethamAerialPerspective` for horizontal rays
 (test_aerial.py checks this).
+
+Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
+doi:10.1145/311535.311545.
 """
 
 from __future__ import annotations
@@ -27,7 +30,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..atmosphere import mie_total_scattering, rayleigh_total_scattering
 from ..errors import InvalidParameterError
-from .base import check_path
+from ..sky.base import SkyModel
+from .base import AerialPerspective, check_path, check_rays
 from .integrals import ALPHA_HAZE, ALPHA_MOLECULES
 from .preetham import resolve_turbidity
 from .scattering import ScatteringTable
@@ -35,7 +39,7 @@ from .scattering import ScatteringTable
 __all__ = ["ConstantDensityAerialPerspective"]
 
 
-class ConstantDensityAerialPerspective:
+class ConstantDensityAerialPerspective(AerialPerspective):
     """Aerial perspective with the density at the observer's height all along the ray.
 
     Parameters
@@ -57,14 +61,14 @@ class ConstantDensityAerialPerspective:
         would be scattered towards the viewer).
     """
 
-    def __init__(self, sky, *, turbidity: float | None = None, include_sky: bool | None = None,
+    def __init__(self, sky: SkyModel, *, turbidity: float | None = None, include_sky: bool | None = None,
                  alpha_haze: float = ALPHA_HAZE, alpha_molecules: float = ALPHA_MOLECULES) -> None:
         for name, value in (("alpha_haze", alpha_haze), ("alpha_molecules", alpha_molecules)):
             if not (isinstance(value, int | float | np.number) and np.isfinite(value) and value > 0):
                 raise InvalidParameterError(f"{name} must be a positive decay constant [m^-1]; got {value!r}")
         self.sky = sky
         self.turbidity = resolve_turbidity(sky, turbidity)
-        sunny = bool(getattr(sky, "has_sun", False)) and hasattr(sky, "sun_spectral_radiance")
+        sunny = sky.sun is not None
         if include_sky is None:
             include_sky = not sunny
         elif not include_sky and not sunny:
@@ -92,15 +96,12 @@ class ConstantDensityAerialPerspective:
         b1, b2 = self._coefficients(h, wl)
         return np.exp(-(b1 + b2) * s[..., None])
 
-    def inscattered(self, directions: ArrayLike, distances: ArrayLike, observer_height: ArrayLike,
-                    wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
-        """In-scattered radiance [W m^-2 sr^-1 nm^-1], shape (..., n_wavelengths)."""
-        return self.evaluate(directions, distances, observer_height, wavelengths)[1]
-
-    def evaluate(self, directions: ArrayLike, distances: ArrayLike, observer_height: ArrayLike,
-                 wavelengths: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """(tau, L_in), each (..., n_wavelengths)."""
-        d, s, h, wl = check_path(directions, distances, observer_height, wavelengths)
+    def evaluate_rays(self, origins: ArrayLike, directions: ArrayLike, distances: ArrayLike,
+                      wavelengths: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(tau, L_in [W m^-2 sr^-1 nm^-1]) of paths from ``origins`` (ENU [m]; only their height ``z``
+        matters), each (..., n_wavelengths)."""
+        o, d, s, wl = check_rays(origins, directions, distances, wavelengths)
+        h = o[..., 2]
         key = tuple(wl.tolist())
         if key not in self._tables:
             self._tables[key] = ScatteringTable(self.sky, self.turbidity, wl, include_sky=self.include_sky)

@@ -5,6 +5,9 @@
 (:class:`~skyscatter.aerial.scattering.ScatteringTable`) and I from :mod:`skyscatter.aerial.integrals`.
 Scattering coefficients: Rayleigh for molecules and Mie with the Table 1/Table 2 data for haze (A.3), via
 :mod:`skyscatter.atmosphere`.
+
+Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
+doi:10.1145/311535.311545.
 """
 
 from __future__ import annotations
@@ -14,7 +17,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..atmosphere import mie_total_scattering, rayleigh_total_scattering
 from ..errors import InvalidParameterError
-from .base import check_path
+from ..sky.base import SkyModel
+from .base import AerialPerspective, check_path, check_rays
 from .integrals import ALPHA_HAZE, ALPHA_MOLECULES, extinction, in_scattering_integrals
 from .scattering import ScatteringTable
 
@@ -23,10 +27,10 @@ __all__ = ["PreethamAerialPerspective", "resolve_turbidity"]
 _METHODS = {"analytic": "analytic", "numeric": "quadrature"}
 
 
-def resolve_turbidity(sky, turbidity: float | None) -> float:
+def resolve_turbidity(sky: SkyModel, turbidity: float | None) -> float:
     """The haze turbidity: ``turbidity`` if given, else ``sky.turbidity``; raises if neither exists."""
     if turbidity is None:
-        turbidity = getattr(sky, "turbidity", None)
+        turbidity = sky.turbidity
         if turbidity is None:
             raise InvalidParameterError(
                 f"{type(sky).__name__} has no turbidity; pass turbidity= (T >= 1) for the haze of the aerial "
@@ -41,7 +45,7 @@ def resolve_turbidity(sky, turbidity: float | None) -> float:
     return t
 
 
-class PreethamAerialPerspective:
+class PreethamAerialPerspective(AerialPerspective):
     """Preetham et al. 1999 aerial perspective for a sky (and its sun).
 
     Parameters
@@ -69,7 +73,7 @@ class PreethamAerialPerspective:
     built per wavelength grid on first use and cached on the instance.
     """
 
-    def __init__(self, sky, *, method: str = "analytic", turbidity: float | None = None,
+    def __init__(self, sky: SkyModel, *, method: str = "analytic", turbidity: float | None = None,
                  segments: int | str = "auto", include_sun: bool = True, include_sky: bool = True,
                  alpha_haze: float = ALPHA_HAZE, alpha_molecules: float = ALPHA_MOLECULES) -> None:
         if method not in _METHODS:
@@ -128,14 +132,6 @@ class PreethamAerialPerspective:
         b1, b2 = self.scattering_coefficients(wl)
         return extinction(d[..., 2], s, h, b1, b2, alpha_haze=self.alpha_haze, alpha_molecules=self.alpha_molecules)
 
-    def inscattered(self, directions: ArrayLike, distances: ArrayLike, observer_height: ArrayLike,
-                    wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
-        """In-scattered spectral radiance L_in [W m^-2 sr^-1 nm^-1] (Eq. 8), shape (..., n_wavelengths).
-
-        Parameters as in :meth:`transmittance`.
-        """
-        return self.evaluate(directions, distances, observer_height, wavelengths)[1]
-
     def integrals(self, directions: ArrayLike, distances: ArrayLike, observer_height: ArrayLike,
                   wavelengths: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(I_1, I_2) [m] of Eq. 8 with this model's method, each (..., n_wavelengths)."""
@@ -145,10 +141,13 @@ class PreethamAerialPerspective:
                                        alpha_haze=self.alpha_haze, alpha_molecules=self.alpha_molecules,
                                        segments=self.segments)
 
-    def evaluate(self, directions: ArrayLike, distances: ArrayLike, observer_height: ArrayLike,
-                 wavelengths: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """(tau, L_in) together, each (..., n_wavelengths); parameters as in :meth:`transmittance`."""
-        d, s, h, wl = check_path(directions, distances, observer_height, wavelengths)
+    def evaluate_rays(self, origins: ArrayLike, directions: ArrayLike, distances: ArrayLike,
+                      wavelengths: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Extinction tau (Eq. 7) and in-scattered spectral radiance L_in [W m^-2 sr^-1 nm^-1] (Eq. 8) of
+        paths from ``origins`` (ENU [m]; the flat atmosphere depends on their height ``z`` only), each
+        (..., n_wavelengths); other parameters as in :meth:`transmittance`."""
+        o, d, s, wl = check_rays(origins, directions, distances, wavelengths)
+        h = o[..., 2]
         b1, b2 = self.scattering_coefficients(wl)
         i1, i2, tau = in_scattering_integrals(d[..., 2], s, h, b1, b2, method=_METHODS[self.method],
                                               alpha_haze=self.alpha_haze, alpha_molecules=self.alpha_molecules,

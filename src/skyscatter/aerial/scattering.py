@@ -17,6 +17,9 @@ looking towards the sun is forward scattering.
 The angular coefficients are :func:`skyscatter.atmosphere.rayleigh_angular_scattering` and
 :func:`skyscatter.atmosphere.mie_angular_scattering` (A.3 with Table 1 eta), tabulated once on a 0.25-degree
 grid of scattering angles and interpolated linearly inside the integration kernel.
+
+Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
+doi:10.1145/311535.311545.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..atmosphere import mie_angular_scattering, rayleigh_angular_scattering
 from ..conventions import as_directions, direction_from_angles
 from ..errors import InvalidParameterError
+from ..sky.base import SkyModel
 from ..spectral import as_wavelengths
 
 __all__ = ["ScatteringTable", "hemisphere_quadrature"]
@@ -88,8 +92,8 @@ class ScatteringTable:
     Parameters
     ----------
     sky : SkyModel
-        The sky (its ``spectral_radiance``) and, if ``sky.has_sun``, its sun (``sun_direction``,
-        ``sun_spectral_radiance``, ``sun_solid_angle``).
+        The sky (its ``spectral_radiance``) and its solar disc ``sky.sun`` (direction and spectral irradiance),
+        if it has one.
     turbidity : float
         Turbidity T of the haze whose angular scattering coefficient is used [-].
     wavelengths : array_like, optional
@@ -103,8 +107,8 @@ class ScatteringTable:
         Steps [deg] of the (view zenith, relative azimuth) table of the sky term.
     """
 
-    def __init__(self, sky, turbidity: float, wavelengths: ArrayLike | None = None, *, include_sun: bool = True,
-                 include_sky: bool = True, sky_samples: tuple[int, int] = (32, 64),
+    def __init__(self, sky: SkyModel, turbidity: float, wavelengths: ArrayLike | None = None, *,
+                 include_sun: bool = True, include_sky: bool = True, sky_samples: tuple[int, int] = (32, 64),
                  grid_step_deg: tuple[float, float] = (3.0, 5.0)) -> None:
         self.wavelengths = as_wavelengths(wavelengths)
         wl = self.wavelengths
@@ -115,14 +119,16 @@ class ScatteringTable:
         # -- sun: E_sun beta(gamma) on the gamma grid -------------------------------------------------------
         self.sun_direction = None
         self._sun1 = self._sun2 = None
-        if include_sun and getattr(sky, "has_sun", False) and hasattr(sky, "sun_spectral_radiance"):
-            e_sun = np.asarray(sky.sun_spectral_radiance(wl), dtype=float) * float(sky.sun_solid_angle)
+        sun = sky.sun
+        if include_sun and sun is not None:
+            e_sun = np.asarray(sun.spectral_irradiance_normal(wl), dtype=float)
             if np.any(e_sun > 0):
-                self.sun_direction = np.asarray(sky.sun_direction, dtype=float)
+                self.sun_direction = np.asarray(sun.direction, dtype=float)
                 self._sun1 = self._mie * e_sun
                 self._sun2 = self._ray * e_sun
-        self.sun_azimuth = float(np.arctan2(self.sun_direction[0], self.sun_direction[1])) \
-            if self.sun_direction is not None else float(getattr(sky, "sun_azimuth", 0.0) or 0.0)
+        # The sky table is laid out in azimuth relative to the sun's vertical plane (north without a sun).
+        axis = None if sun is None else np.asarray(sun.direction, dtype=float)
+        self.sun_azimuth = 0.0 if axis is None else float(np.arctan2(axis[0], axis[1]))
         # -- sky: (theta_view, phi_rel) table ---------------------------------------------------------------
         dt, dp = (math.radians(v) for v in grid_step_deg)
         self._theta = np.linspace(0.0, np.pi, int(round(np.pi / dt)) + 1)

@@ -11,6 +11,9 @@ attenuation factor." So, with tau_1 the extinction of a 1 km horizontal path at 
 the same in every direction (the "ambient" in-scattering of the Radiance system). :class:`ConstantColourSky`
 gives the matching sky: a luminance distribution (e.g. the CIE clear sky) with one relative spectrum (e.g. the
 zenith's) everywhere.
+
+Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
+doi:10.1145/311535.311545.
 """
 
 from __future__ import annotations
@@ -20,9 +23,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..atmosphere import mie_total_scattering, rayleigh_total_scattering
 from ..errors import InvalidParameterError
-from ..sky.base import SkyModel
-from ..spectral import REFERENCE_WAVELENGTHS, as_wavelengths, spectrum_to_luminance
-from .base import check_path
+from ..sky.base import SkyModel, SolarDisc
+from ..spectral import REFERENCE_WAVELENGTHS, as_wavelengths, spectrum_to_luminance, spectrum_to_xyz
+from .base import AerialPerspective, check_path, check_rays
 from .integrals import ALPHA_HAZE, ALPHA_MOLECULES
 from .preetham import resolve_turbidity
 
@@ -31,7 +34,7 @@ __all__ = ["ConstantColourSky", "WardLarsonAerialPerspective"]
 _ZENITH = np.array([0.0, 0.0, 1.0])
 
 
-class WardLarsonAerialPerspective:
+class WardLarsonAerialPerspective(AerialPerspective):
     """Direction-independent ("ambient") aerial perspective of Preetham et al. 1999, Sec. 5 / Figure 8.
 
     Parameters
@@ -44,7 +47,7 @@ class WardLarsonAerialPerspective:
         The distance [m] at which the extinction is exact (1 km in the paper).
     """
 
-    def __init__(self, sky, *, turbidity: float | None = None, reference_distance: float = 1000.0) -> None:
+    def __init__(self, sky: SkyModel, *, turbidity: float | None = None, reference_distance: float = 1000.0) -> None:
         if not (np.isfinite(reference_distance) and reference_distance > 0):
             raise InvalidParameterError(f"reference_distance must be a positive length [m]; got {reference_distance!r}")
         self.sky = sky
@@ -66,15 +69,12 @@ class WardLarsonAerialPerspective:
         _, s, h, wl = check_path(directions, distances, observer_height, wavelengths)
         return self._tau(s, h, wl)
 
-    def inscattered(self, directions: ArrayLike, distances: ArrayLike, observer_height: ArrayLike,
-                    wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
-        """``L_zenith (1 - tau)`` [W m^-2 sr^-1 nm^-1], shape (..., n_wavelengths)."""
-        return self.evaluate(directions, distances, observer_height, wavelengths)[1]
-
-    def evaluate(self, directions: ArrayLike, distances: ArrayLike, observer_height: ArrayLike,
-                 wavelengths: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """(tau, L_in), each (..., n_wavelengths)."""
-        _, s, h, wl = check_path(directions, distances, observer_height, wavelengths)
+    def evaluate_rays(self, origins: ArrayLike, directions: ArrayLike, distances: ArrayLike,
+                      wavelengths: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(tau, ``L_zenith (1 - tau)`` [W m^-2 sr^-1 nm^-1]) of paths from ``origins`` (ENU [m]; only their
+        height ``z`` matters), each (..., n_wavelengths)."""
+        o, _, s, wl = check_rays(origins, directions, distances, wavelengths)
+        h = o[..., 2]
         tau = self._tau(s, h, wl)
         zenith = np.asarray(self.sky.spectral_radiance(_ZENITH, wl), dtype=float)
         return tau, zenith * (1.0 - tau)
@@ -107,10 +107,7 @@ class ConstantColourSky(SkyModel):
         unit = np.interp(REFERENCE_WAVELENGTHS, wl, sp, left=0.0, right=0.0)
         self._scale = 1.0 / float(spectrum_to_luminance(unit, REFERENCE_WAVELENGTHS))
         self._spectrum = sp * self._scale  # 1 cd m^-2
-        self.has_sun = bool(getattr(luminance_sky, "has_sun", False))
-        for name in ("sun_zenith", "sun_azimuth", "sun_angular_radius", "turbidity"):
-            if hasattr(luminance_sky, name):
-                setattr(self, name, getattr(luminance_sky, name))
+        self.turbidity = luminance_sky.turbidity
 
     def __repr__(self) -> str:
         return f"ConstantColourSky({self.luminance_sky!r})"
@@ -120,12 +117,23 @@ class ConstantColourSky(SkyModel):
         return np.interp(wl, self._wl, self._spectrum, left=0.0, right=0.0)
 
     @property
-    def sun_direction(self):
-        return getattr(self.luminance_sky, "sun_direction", None)
+    def sun(self) -> SolarDisc | None:
+        """The luminance sky's solar disc (direction, size) with this sky's spectrum; None without a sun."""
+        disc = self.luminance_sky.sun
+        if disc is None:
+            return None
+        return SolarDisc(direction=disc.direction, angular_radius=disc.angular_radius,
+                         spectral_radiance=self.sun_spectral_radiance, xyz=self.sun_xyz)
+
+    @property
+    def sun_direction(self) -> NDArray[np.float64] | None:
+        return self.luminance_sky.sun_direction
 
     @property
     def sun_solid_angle(self) -> float:
-        return float(self.luminance_sky.sun_solid_angle)
+        """Solid angle [sr] of the solar disc (0 without a sun)."""
+        disc = self.luminance_sky.sun
+        return 0.0 if disc is None else disc.solid_angle
 
     def luminance(self, directions: ArrayLike) -> NDArray[np.float64]:
         return np.asarray(self.luminance_sky.luminance(directions), dtype=float)
@@ -135,8 +143,12 @@ class ConstantColourSky(SkyModel):
 
     def sun_spectral_radiance(self, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
         """Solar disc radiance [W m^-2 sr^-1 nm^-1]: the luminance sky's disc luminance times the spectrum."""
-        if not self.has_sun:
+        disc = self.luminance_sky.sun
+        if disc is None:
             return np.zeros_like(as_wavelengths(wavelengths))
-        lum = spectrum_to_luminance(self.luminance_sky.sun_spectral_radiance(REFERENCE_WAVELENGTHS),
-                                    REFERENCE_WAVELENGTHS)
+        lum = spectrum_to_luminance(disc.spectral_radiance(REFERENCE_WAVELENGTHS), REFERENCE_WAVELENGTHS)
         return float(lum) * self._relative(wavelengths)
+
+    def sun_xyz(self) -> NDArray[np.float64]:
+        """CIE XYZ [cd m^-2] of the solar disc (zeros without a sun)."""
+        return spectrum_to_xyz(self.sun_spectral_radiance(REFERENCE_WAVELENGTHS), REFERENCE_WAVELENGTHS)

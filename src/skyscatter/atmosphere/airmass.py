@@ -1,6 +1,9 @@
-"""Relative optical air mass, Preetham, Shirley & Smits (1999) A.1 (Kasten 1966 form, via Iqbal 1983).
+"""Relative optical air mass, Preetham, Shirley & Smits (1999) A.1, doi:10.1145/311535.311545.
 
     m(theta_s) = 1 / (cos theta_s + 0.15 (93.885 - theta_s[deg])^-1.253)
+
+the form of Kasten (1966), "A new table and approximation formula for the relative optical air mass", Arch.
+Met. Geoph. Biokl. B 14, 206, doi:10.1007/BF02248840, as quoted by Iqbal (1983).
 """
 
 from __future__ import annotations
@@ -10,10 +13,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 
-__all__ = ["relative_optical_mass"]
+__all__ = ["relative_optical_mass", "relative_optical_mass_kasten1966"]
 
 
-def relative_optical_mass(zenith: ArrayLike) -> NDArray[np.float64] | float:
+def relative_optical_mass_kasten1966(zenith: ArrayLike) -> NDArray[np.float64] | float:
     """Relative optical mass m [-] of the path to a source at ``zenith`` (Preetham 1999, A.1).
 
     1 at the zenith, about 38 at the horizon; the formula is defined up to the horizon here.
@@ -34,3 +37,7 @@ def relative_optical_mass(zenith: ArrayLike) -> NDArray[np.float64] | float:
     z = np.clip(z, 0.0, np.pi / 2)
     m = 1.0 / (np.cos(z) + 0.15 * (93.885 - np.degrees(z)) ** -1.253)
     return float(m) if m.ndim == 0 else m
+
+
+#: Former name of :func:`relative_optical_mass_kasten1966` (kept as an alias).
+relative_optical_mass = relative_optical_mass_kasten1966

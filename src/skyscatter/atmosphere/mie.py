@@ -1,4 +1,4 @@
-"""Mie scattering by haze, Preetham, Shirley & Smits (1999) Appendix A.3, Tables 1 and 2.
+"""Mie scattering by haze, Preetham, Shirley & Smits (1999) Appendix A.3, Tables 1 and 2, doi:10.1145/311535.311545.
 
 For a Junge size distribution with exponent v = 4 (the paper's sky model):
 
@@ -15,8 +15,8 @@ is McCartney's (1976, Eq. 6-30) for a Junge distribution dN/dlog10(r) = c r^-v, 
 in cgs units, cm^(v-3) (number density per cm^3, radius in cm). Converting c to SI multiplies it by
 0.01^(v-3). The authors' own implementation that accompanied the paper (B. Smits, 1999, ``RiSunSky.C``,
 ``CreateConstants``) applies exactly this factor ("unit correction for c") to both the total and the angular
-coefficient. skyscatter does the same: beta_p(550 nm, T = 2) = 7.9e-5 m^-1. Independent checks (see
-tests/test_atmosphere.py): the Angstrom relation of A.1 (beta = 0.04608 T - 0.04586, alpha = 1.3) gives an
+coefficient. skyscatter does the same: beta_p(550 nm, T = 2) = 7.9e-5 m^-1. Independent checks (in the
+test suite): the Angstrom relation of A.1 (beta = 0.04608 T - 0.04586, alpha = 1.3) gives an
 aerosol optical depth of 0.101 at 550 nm for T = 2, i.e. a sea-level coefficient of 8.4e-5 m^-1 for the
 paper's haze scale height of 1.2 km (alpha_haze = 0.8333 km^-1, A.4); the turbidity definition
 T = (t_m + t_h) / t_m with the Rayleigh coefficient and an 8.8 km molecular scale height (A.4) gives

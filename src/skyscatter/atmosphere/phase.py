@@ -1,17 +1,85 @@
-"""Scattering phase functions [sr^-1], each normalised to 1 over the sphere.
+"""Scattering phase functions [sr^-1], each normalised to 1 over the sphere, and their sampling.
 
-All take ``cos_theta``, the cosine of the scattering angle (0 = forward scattering), as an array of any shape
-and return an array of the same shape.
+The one description of the phase functions in skyscatter; every model (the Preetham aerial perspective, the
+precomputed Bruneton tables, the path tracer) uses this module.
+
+* Rayleigh: ``3 / (16 pi) (1 + mu^2)`` (Preetham, Shirley & Smits 1999, A.3, doi:10.1145/311535.311545;
+  Bruneton & Neyret 2008, Eq. 2, doi:10.1111/j.1467-8659.2008.01245.x).
+* Henyey & Greenstein (1941), doi:10.1086/144246: ``(1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^(3/2))``.
+* Cornette & Shanks (1992), doi:10.1364/AO.31.003152 (the Mie phase of Bruneton & Neyret 2008, Eq. 4):
+  ``3 (1 - g^2) (1 + mu^2) / (8 pi (2 + g^2) (1 + g^2 - 2 g mu)^(3/2))``.
+
+``mu`` is the cosine of the scattering angle (1 = forward scattering). The numpy functions take ``cos_theta``
+of any shape and return that shape. Each formula is written once, as a plain arithmetic function that numpy
+evaluates on arrays and numba compiles for scalars: the jitted scalar versions (``rayleigh_phase_scalar(mu)``,
+``henyey_greenstein_scalar(mu, g)``, ``cornette_shanks_scalar(mu, g)`` and ``aerosol_phase_scalar(mu, g,
+kind)`` with ``kind`` from :func:`aerosol_phase_kind`) compile these same functions and are attributes of
+this module built on first access (in :mod:`._phase_numba`), so importing :mod:`skyscatter.atmosphere` does
+not import numba.
+
+Sampling (cosines of the scattering angle; the azimuth about the incident direction is uniform):
+
+* Rayleigh: exact inverse CDF. ``F(mu) = (mu^3 + 3 mu + 4) / 8``; the one real root of the cubic is
+  ``mu = w - 1 / w`` with ``w = cbrt(z + sqrt(z^2 + 1))``, ``z = 4 u - 2`` (Cardano; as in Frisvad 2011,
+  "Importance sampling the Rayleigh phase function", J. Opt. Soc. Am. A 28, 2436, doi:10.1364/JOSAA.28.002436).
+* Henyey-Greenstein: exact inverse CDF ``mu = (1 + g^2 - ((1 - g^2) / (1 - g + 2 g u))^2) / (2 g)``
+  (from integrating the density; uniform ``mu = 2 u - 1`` for ``g = 0``).
+* Cornette-Shanks: exact rejection sampling from Henyey-Greenstein with the same ``g``. The ratio of the
+  densities is ``p_CS / p_HG = 3 (1 + mu^2) / (2 (2 + g^2))`` <= ``3 / (2 + g^2)``, so a Henyey-Greenstein
+  sample is accepted with probability ``(1 + mu^2) / 2``; the acceptance rate is ``(2 + g^2) / 3 >= 2/3``.
 """
 
 from __future__ import annotations
+
+import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 
-__all__ = ["cornette_shanks", "henyey_greenstein", "rayleigh_phase"]
+__all__ = [
+    "AEROSOL_PHASE_FUNCTIONS",
+    "aerosol_phase",
+    "aerosol_phase_kind",
+    "cornette_shanks",
+    "henyey_greenstein",
+    "henyey_greenstein_inverse_cdf",
+    "rayleigh_inverse_cdf",
+    "rayleigh_phase",
+    "sample_aerosol_phase",
+    "sample_cornette_shanks",
+    "sample_henyey_greenstein",
+    "sample_rayleigh",
+]
+
+#: Names of the aerosol (Mie) phase functions, in the order of their integer ``kind`` for the numba kernels.
+AEROSOL_PHASE_FUNCTIONS = ("cornette-shanks", "henyey-greenstein")
+
+_FOUR_PI = 4.0 * math.pi
+#: Smallest value of ``1 + g^2 - 2 g mu`` used (keeps the forward peak finite for |g| -> 1 in float64).
+_MIN_DENOMINATOR = 1e-12
+
+
+# ------------------------------------------------------------------ the formulas (numpy arrays and numba scalars)
+
+
+def _rayleigh_formula(mu):
+    return 3.0 / (16.0 * math.pi) * (1.0 + mu * mu)
+
+
+def _henyey_greenstein_formula(mu, g):
+    den = np.maximum(1.0 + g * g - 2.0 * g * mu, _MIN_DENOMINATOR)
+    return (1.0 - g * g) / (_FOUR_PI * den * np.sqrt(den))
+
+
+def _cornette_shanks_formula(mu, g):
+    den = np.maximum(1.0 + g * g - 2.0 * g * mu, _MIN_DENOMINATOR)
+    return 3.0 * (1.0 - g * g) * (1.0 + mu * mu) / (8.0 * math.pi * (2.0 + g * g) * den * np.sqrt(den))
+
+
+# ------------------------------------------------------------------ validation
 
 
 def _cos(cos_theta: ArrayLike) -> NDArray[np.float64]:
@@ -22,26 +90,41 @@ def _cos(cos_theta: ArrayLike) -> NDArray[np.float64]:
 
 
 def _asymmetry(g: float) -> float:
-    g = float(g)
+    try:
+        g = float(g)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"asymmetry parameter g must be a number in (-1, 1); got {g!r}") from None
     if not -1.0 < g < 1.0:
         raise InvalidParameterError(f"asymmetry parameter g must be in (-1, 1); got {g}")
     return g
 
 
+def aerosol_phase_kind(name: str) -> int:
+    """Integer code of an aerosol phase-function name for the numba kernels (index in
+    :data:`AEROSOL_PHASE_FUNCTIONS`); raises InvalidParameterError for an unknown name."""
+    try:
+        return AEROSOL_PHASE_FUNCTIONS.index(name)
+    except ValueError:
+        raise InvalidParameterError(
+            f"aerosol phase function must be one of {', '.join(AEROSOL_PHASE_FUNCTIONS)}; got {name!r}"
+        ) from None
+
+
+# ------------------------------------------------------------------ densities
+
+
 def rayleigh_phase(cos_theta: ArrayLike) -> NDArray[np.float64]:
     """Rayleigh phase function ``3 / (16 pi) (1 + cos^2 theta)`` [sr^-1].
 
-    Preetham (1999) A.3 (the angular/total ratio of the molecular coefficients); course notes (Preetham,
-    "Modeling Skylight and Aerial Perspective"), f_air. Depolarisation is ignored in the angular shape, as in
-    the paper.
+    Preetham (1999) A.3 (the angular/total ratio of the molecular coefficients); Bruneton & Neyret (2008),
+    Eq. 2. Depolarisation is ignored in the angular shape, as in both papers.
 
     Parameters
     ----------
     cos_theta : array_like
         Cosine of the scattering angle [-].
     """
-    mu = _cos(cos_theta)
-    return 3.0 / (16.0 * np.pi) * (1.0 + mu * mu)
+    return _rayleigh_formula(_cos(cos_theta))
 
 
 def henyey_greenstein(cos_theta: ArrayLike, g: float) -> NDArray[np.float64]:
@@ -57,9 +140,7 @@ def henyey_greenstein(cos_theta: ArrayLike, g: float) -> NDArray[np.float64]:
     g : float
         Asymmetry parameter (mean cosine) in (-1, 1) [-]; positive values scatter forwards.
     """
-    mu = _cos(cos_theta)
-    g = _asymmetry(g)
-    return (1.0 - g * g) / (4.0 * np.pi * (1.0 + g * g - 2.0 * g * mu) ** 1.5)
+    return _henyey_greenstein_formula(_cos(cos_theta), _asymmetry(g))
 
 
 def cornette_shanks(cos_theta: ArrayLike, g: float) -> NDArray[np.float64]:
@@ -72,11 +153,145 @@ def cornette_shanks(cos_theta: ArrayLike, g: float) -> NDArray[np.float64]:
     cos_theta : array_like
         Cosine of the scattering angle [-].
     g : float
-        Asymmetry parameter in (-1, 1) [-] (Bruneton's default 0.8).
+        Asymmetry parameter in (-1, 1) [-] (Bruneton's default 0.8). Its mean cosine is not ``g`` but
+        ``3 g (4 + g^2) / (5 (2 + g^2))`` (Cornette & Shanks 1992).
     """
-    mu = _cos(cos_theta)
+    return _cornette_shanks_formula(_cos(cos_theta), _asymmetry(g))
+
+
+def aerosol_phase(cos_theta: ArrayLike, g: float, kind: str = "cornette-shanks") -> NDArray[np.float64]:
+    """The aerosol phase function named ``kind`` (one of :data:`AEROSOL_PHASE_FUNCTIONS`) [sr^-1]."""
+    if aerosol_phase_kind(kind) == 1:
+        return henyey_greenstein(cos_theta, g)
+    return cornette_shanks(cos_theta, g)
+
+
+# ------------------------------------------------------------------ sampling
+
+
+def _uniform(u: ArrayLike) -> NDArray[np.float64]:
+    x = np.asarray(u, dtype=float)
+    if np.any(~np.isfinite(x)) or np.any(x < 0.0) or np.any(x > 1.0):
+        raise InvalidParameterError("u must be uniform random numbers in [0, 1]")
+    return x
+
+
+def _rng(rng: Any) -> np.random.Generator:
+    if isinstance(rng, np.random.Generator):
+        return rng
+    return np.random.default_rng(rng)
+
+
+def _size(size: Any) -> tuple[int, ...]:
+    shape = (size,) if isinstance(size, (int, np.integer)) else tuple(size)
+    if any(isinstance(s, bool) or int(s) != s or s < 0 for s in shape):
+        raise InvalidParameterError(f"size must be a whole number >= 0 or a shape of them; got {size!r}")
+    return tuple(int(s) for s in shape)
+
+
+def rayleigh_inverse_cdf(u: ArrayLike) -> NDArray[np.float64]:
+    """Cosine of the scattering angle with CDF ``u`` under the Rayleigh phase function (module docstring).
+
+    Parameters
+    ----------
+    u : array_like
+        Uniform numbers in [0, 1] [-].
+
+    Returns
+    -------
+    ndarray, shape of ``u``
+        ``mu`` in [-1, 1] [-].
+    """
+    z = 4.0 * _uniform(u) - 2.0
+    # w = cbrt(z + sqrt(z^2 + 1)) > 0; for z < 0 use 1 / cbrt(-z + sqrt(z^2 + 1)) to avoid cancellation.
+    s = np.sqrt(z * z + 1.0)
+    w = np.where(z >= 0.0, np.cbrt(z + s), 1.0 / np.cbrt(s - z))
+    return np.clip(w - 1.0 / w, -1.0, 1.0)
+
+
+def henyey_greenstein_inverse_cdf(u: ArrayLike, g: float) -> NDArray[np.float64]:
+    """Cosine of the scattering angle with CDF ``u`` under the Henyey-Greenstein phase function.
+
+    Parameters
+    ----------
+    u : array_like
+        Uniform numbers in [0, 1] [-].
+    g : float
+        Asymmetry parameter in (-1, 1) [-].
+
+    Returns
+    -------
+    ndarray, shape of ``u``
+        ``mu`` in [-1, 1] [-]. For ``|g| < 1e-6`` the density is uniform to within ``3 |g| < 3e-6``
+        (relative) and ``mu = 2 u - 1`` is used.
+    """
+    x = _uniform(u)
     g = _asymmetry(g)
-    return (
-        3.0 * (1.0 - g * g) * (1.0 + mu * mu)
-        / (8.0 * np.pi * (2.0 + g * g) * (1.0 + g * g - 2.0 * g * mu) ** 1.5)
-    )
+    if abs(g) < 1e-6:
+        return 2.0 * x - 1.0
+    t = (1.0 - g * g) / (1.0 - g + 2.0 * g * x)
+    return np.clip((1.0 + g * g - t * t) / (2.0 * g), -1.0, 1.0)
+
+
+def sample_rayleigh(size: int | tuple[int, ...], rng: Any = None) -> NDArray[np.float64]:
+    """``size`` cosines of the scattering angle distributed as the Rayleigh phase function.
+
+    Parameters
+    ----------
+    size : int or tuple of int
+        Number (shape) of samples.
+    rng : numpy.random.Generator or seed, optional
+        Source of random numbers.
+    """
+    return rayleigh_inverse_cdf(_rng(rng).random(_size(size)))
+
+
+def sample_henyey_greenstein(size: int | tuple[int, ...], g: float, rng: Any = None) -> NDArray[np.float64]:
+    """``size`` cosines of the scattering angle distributed as Henyey-Greenstein with asymmetry ``g`` [-]."""
+    g = _asymmetry(g)
+    return henyey_greenstein_inverse_cdf(_rng(rng).random(_size(size)), g)
+
+
+def sample_cornette_shanks(size: int | tuple[int, ...], g: float, rng: Any = None) -> NDArray[np.float64]:
+    """``size`` cosines of the scattering angle distributed as Cornette-Shanks with parameter ``g`` [-].
+
+    Exact rejection sampling from Henyey-Greenstein with the same ``g`` (module docstring): each candidate
+    ``mu`` is kept with probability ``(1 + mu^2) / 2``; on average ``3 / (2 + g^2)`` candidates per sample.
+    """
+    g = _asymmetry(g)
+    gen = _rng(rng)
+    shape = _size(size)
+    n = math.prod(shape)
+    out = np.empty(n)
+    filled = 0
+    while filled < n:
+        want = n - filled
+        batch = int(want * 1.6) + 16
+        mu = henyey_greenstein_inverse_cdf(gen.random(batch), g)
+        keep = mu[2.0 * gen.random(batch) < 1.0 + mu * mu][:want]
+        out[filled:filled + keep.size] = keep
+        filled += keep.size
+    return out.reshape(shape)
+
+
+def sample_aerosol_phase(size: int | tuple[int, ...], g: float, kind: str = "cornette-shanks",
+                         rng: Any = None) -> NDArray[np.float64]:
+    """Samples of the aerosol phase function named ``kind`` (see :func:`aerosol_phase`)."""
+    if aerosol_phase_kind(kind) == 1:
+        return sample_henyey_greenstein(size, g, rng)
+    return sample_cornette_shanks(size, g, rng)
+
+
+# ------------------------------------------------------------------ numba scalar versions (built on first use)
+
+_SCALARS = ("rayleigh_phase_scalar", "henyey_greenstein_scalar", "cornette_shanks_scalar", "aerosol_phase_scalar")
+
+
+def __getattr__(name: str) -> Any:
+    if name in _SCALARS:
+        from . import _phase_numba
+
+        value = getattr(_phase_numba, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,5 +1,8 @@
 """Published data tables shipped as CSV files in ``skyscatter/data`` (each file's header names its source).
 
+The one loader of the package's data files (Preetham's tables, the CIE sky types, the Perez coefficients, the
+ASTM G173 solar spectrum, the Serdyuchenko ozone cross-sections).
+
 Tables are read once with :mod:`importlib.resources` and cached; the returned arrays are read-only so a
 caller cannot corrupt the cache.
 """

@@ -1,5 +1,9 @@
 """Turbidity relations: Angstrom coefficients (Preetham 1999, A.1) and the meteorological range (Sec. 2.1).
 
+Preetham, Shirley & Smits (1999), "A Practical Analytic Model for Daylight", doi:10.1145/311535.311545. The
+Angstrom beta of A.1 is written once here (:func:`angstrom_beta`) and used by the Preetham sunlight and by
+:meth:`skyscatter.atmosphere.AtmosphereParameters.from_turbidity`.
+
 Turbidity T is the ratio of the vertical optical thickness of the haze-plus-molecule atmosphere to that of the
 molecules alone, T = (t_m + t_h) / t_m (Preetham 1999, Sec. 2.1, after McCartney 1976), taken at 550 nm.
 

@@ -20,7 +20,8 @@ from .. import __version__
 from ..errors import SkyscatterError
 
 # Subcommand modules in the order ``--help`` lists them.
-_COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo", "precompute", "export_luts"]
+_COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo", "precompute", "export_luts", "reference",
+             "fit_hosek_wilkie"]
 
 
 class OneLineParser(argparse.ArgumentParser):

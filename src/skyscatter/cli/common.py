@@ -166,24 +166,3 @@ def check_output_paths(args: argparse.Namespace) -> None:
         raise InvalidParameterError(f"--png {png}: the preview must end in .png")
     if args.out.resolve() == png.resolve():
         raise InvalidParameterError("--out and --png must be different files")
-
-
-_OPTION_FLAGS = {
-    "direct_normal_irradiance": "--dni",
-    "diffuse_horizontal_irradiance": "--dhi",
-    "sun_illuminance_normal": "--sun-illuminance",
-}
-
-
-def select_model_options(args: argparse.Namespace, table: dict[str, set[str]]) -> dict:
-    """The keyword options of ``args.model`` (from ``table``: model -> option names), None ones dropped.
-
-    Raises InvalidParameterError naming any option given that belongs only to other models.
-    """
-    allowed = table[args.model]
-    every = set().union(*table.values())
-    wrong = sorted(k for k in every - allowed if getattr(args, k, None) is not None)
-    if wrong:
-        flags = ", ".join(_OPTION_FLAGS.get(k, "--" + k.replace("_", "-")) for k in wrong)
-        raise InvalidParameterError(f"{flags}: does not apply to --model {args.model}")
-    return {k: getattr(args, k) for k in allowed if getattr(args, k, None) is not None}

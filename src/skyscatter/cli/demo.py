@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from .common import HELP_FORMATTER, add_sun_options, finite_float, float_in, positive_int, sun_angles_from_args
+from .sky_options import add_model_options, build_sky_from_args
 
 #: (elevation, azimuth) [deg] of the sun in the figure panels.
 MORNING_SUN = (25.0, 120.0)
@@ -38,7 +39,24 @@ FIG8_CAMERA_XY = (-26_000.0, -16_000.0)
 _MAX_CAMERA_XY = 1e7
 _MAX_CAMERA_Z = 1e5
 
-_SCENE_OPTIONS = ("sky", "turbidity", "sun_elevation", "sun_azimuth", "lat", "lon", "time", "aerial", "model")
+_SCENE_OPTIONS = ("sun_elevation", "sun_azimuth", "lat", "lon", "time", "aerial", "model")
+#: Default turbidity of the haze for skies that have none of their own (the CIE and Perez skies).
+DEFAULT_HAZE_TURBIDITY = 2.5
+
+
+def _scene_options(args: argparse.Namespace) -> list[str]:
+    """Names of the scene options given: the fixed ones and every sky-model parameter from the registry."""
+    names = [k for k in _SCENE_OPTIONS if getattr(args, k, None) is not None]
+    if getattr(args, "sky_given", False):
+        names.insert(0, "sky")
+    from ..sky import registry
+
+    for spec in registry.models():
+        for p in spec.parameters:
+            own_option = p.name in getattr(args, "_model_shared", ())  # e.g. the terrain's --albedo
+            if p.cli and not own_option and getattr(args, p.name, None) is not None and p.name not in names:
+                names.append(p.name)
+    return names
 
 
 class _HelpFormatter(HELP_FORMATTER):
@@ -83,12 +101,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     g.add_argument("--wavelength-step", type=float_in(1.0, 50.0), default=10.0, metavar="NM",
                    help="spacing of the spectral samples over 380-780 nm [nm]")
     s = p.add_argument_group("custom scene (any of these renders one custom panel)")
-    s.add_argument("--sky", choices=["preetham", "cie-clear", "cie-overcast"], default=None,
-                   help="sky model: preetham (Preetham 1999, spectral); cie-clear (CIE 1973 clear sky with the "
-                   "Preetham zenith colour and sun); cie-overcast (CIE overcast, D65 colour, no sun) "
-                   "(default preetham)")
-    s.add_argument("--turbidity", type=float_in(1.65, 11.0), default=None, metavar="T",
-                   help="turbidity of the sky and of the haze, 1.65 to 11 (default 2.5)")
+    from ..sky import registry
+
+    add_model_options(s, [m for m in registry.names() if m != "bruneton"], default=None, flag="--sky",
+                      dest="model_sky", shown_default="preetham", shared=("albedo",))
+    s.description = (f"--turbidity is the sky's and the haze's turbidity; with a sky that has none (cie*, perez) it "
+                     f"is the haze's alone (1.65 to 11, default {DEFAULT_HAZE_TURBIDITY}).")
     s.add_argument("--aerial", choices=["analytic", "numeric", "constant", "ward-larson", "none"], default=None,
                    help="aerial perspective: analytic (Preetham 1999 closed form), numeric (quadrature), "
                    "constant (constant density; lit by the sun only, or by the sky for the sunless cie-overcast "
@@ -97,7 +115,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="atmosphere model: preetham (the sky and aerial perspective above); bruneton (precomputed "
                    "multiple scattering of Bruneton & Neyret 2008 with the Earth defaults, cached after the "
                    "first run (about 30 s): sky, sunlight, aerial perspective, and light shafts from the "
-                   "mountains' shadow; --sky, --turbidity and --aerial do not apply) (default preetham)")
+                   "mountains' shadow; --sky, its parameters and --aerial do not apply) (default preetham: the "
+                   "sky chosen by --sky)")
     add_sun_options(p, default_elevation=EVENING_SUN[0], default_azimuth=EVENING_SUN[1])
     c = p.add_argument_group("camera and terrain")
     c.add_argument("--dem", type=Path, default=None, metavar="PATH",
@@ -106,7 +125,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     c.add_argument("--dem-spacing", type=float_in(1e-3, 1e6), default=None, metavar="M",
                    help="sample spacing of the elevation model [m] (GeoTIFF: default from the file)")
     c.add_argument("--albedo", type=float_in(0.0, 1.0), default=0.2, metavar="RHO",
-                   help="Lambertian albedo of the terrain")
+                   help="Lambertian albedo of the terrain (and of the ground in sky models that take one, such as "
+                   "hosek-wilkie)")
     c.add_argument("--camera-x", type=float_in(-_MAX_CAMERA_XY, _MAX_CAMERA_XY), default=None, metavar="M",
                    help="camera east coordinate [m], within +-1e7 (default on the built-in landscape: 12000 for "
                    "figure 7 and custom panels, -26000 for figure 8; the centre of a DEM)")
@@ -217,23 +237,27 @@ def _panels(args: argparse.Namespace, figure: str) -> list[_Panel]:
         elevation, az = 90.0 - math.degrees(zenith), math.degrees(azimuth)
         if args.model == "bruneton":
             from ..errors import InvalidParameterError
-            from .demo_bruneton import bruneton_panel_title
 
-            for opt in ("sky", "turbidity", "aerial"):
-                if getattr(args, opt) is not None:
-                    raise InvalidParameterError(f"--{opt} does not apply to --model bruneton (the precomputed "
+            for opt in _scene_options(args):
+                if opt in ("sky", "aerial") or opt not in _SCENE_OPTIONS:
+                    flag = "--" + opt.replace("_", "-")
+                    raise InvalidParameterError(f"{flag} does not apply to --model bruneton (the precomputed "
                                                 "atmosphere gives the sky and the aerial perspective)")
-            panels.append(_Panel("landscape", bruneton_panel_title(zenith, azimuth), None, None, WEST,
-                                 bruneton_sun=(zenith, azimuth)))
+            title = (f"bruneton (precomputed, light shafts), sun {elevation:.1f} deg at {az:.1f} deg")
+            panels.append(_Panel("landscape", title, None, None, WEST, bruneton_sun=(zenith, azimuth)))
             return panels
-        t = 2.5 if args.turbidity is None else args.turbidity
-        model = args.sky or "preetham"
-        if model == "cie-overcast":
-            sky = _overcast()
-        else:
-            sky = _preetham(t, elevation, az)
-            if model == "cie-clear":
-                sky = _cie_clear_like(sky)
+        from ..sky import registry
+
+        model = args.model_sky = args.model_sky or "preetham"
+        haze = None
+        if not any(p.name == "turbidity" for p in registry.get(model).parameters):
+            # --turbidity is the haze's alone for skies without one (checked as the Preetham range)
+            haze = getattr(args, "turbidity", None)
+            if haze is not None:
+                registry.get("preetham").parameter("turbidity").check(haze, "haze")
+                del args.turbidity
+        sky = build_sky_from_args(args, zenith, azimuth)
+        t = sky.turbidity if sky.turbidity is not None else (haze or DEFAULT_HAZE_TURBIDITY)
         panels.append(_Panel("landscape", f"{model}, T = {t:g}, sun {elevation:.1f} deg at {az:.1f} deg", sky,
                              _aerial(args.aerial or "analytic", sky, t), WEST))
     return panels
@@ -285,10 +309,11 @@ def run(args: argparse.Namespace) -> int:
     from ..render.tonemap import tonemap
     from ..spectral import wavelength_grid
 
-    scene_given = any(getattr(args, k) is not None for k in _SCENE_OPTIONS)
+    args.sky_given = getattr(args, "model_sky", None) is not None
+    scene_given = bool(_scene_options(args))
     figure = args.figure or ("custom" if scene_given else "all")
     if figure != "custom" and scene_given:
-        given = [("--" + k.replace("_", "-")) for k in _SCENE_OPTIONS if getattr(args, k) is not None]
+        given = [("--" + k.replace("_", "-")) for k in _scene_options(args)]
         raise InvalidParameterError(f"{', '.join(given)}: scene options apply to --figure custom only")
     if args.dem_spacing is not None and args.dem is None:
         raise InvalidParameterError("--dem-spacing needs --dem")
@@ -319,7 +344,7 @@ def run(args: argparse.Namespace) -> int:
         heading = panel.heading if args.heading is None else args.heading
         camera = PinholeCamera.from_degrees((x, y, z), heading, args.pitch, args.fov)
         if panel.bruneton_sun is not None:
-            from .demo_bruneton import bruneton_scene
+            from ..render.bruneton import bruneton_scene
 
             scenes.append(bruneton_scene(terrain, camera, *panel.bruneton_sun, albedo=args.albedo,
                                          sun_disc=args.sun_disc, wavelengths=wavelengths))

@@ -14,7 +14,7 @@ from .common import (
 )
 from .sky_options import add_model_options, build_sky_from_args
 
-_MODELS = ["cie", "cie-overcast", "cie-clear", "perez", "preetham"]
+_MODELS = ["cie", "cie-overcast", "cie-clear", "perez", "preetham", "hosek-wilkie"]
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
 
     zenith, azimuth = sun_angles_from_args(args)
     model = build_sky_from_args(args, zenith, azimuth)
-    if args.include_sun and not getattr(model, "has_sun", False):
+    if args.include_sun and model.sun is None:
         raise InvalidParameterError(f"--include-sun: --model {args.model} has no sun")
     planes = [("horizontal", 0.0, 0.0)]
     planes += [(f"vertical facing {a % 360:g} deg", 90.0, a) for a in args.vertical]

@@ -54,7 +54,8 @@ def _wavelengths(text: str) -> list[float]:
 
 def add_atmosphere_options(p: argparse.ArgumentParser) -> None:
     """Options describing the atmosphere and the tables (shared with ``export-luts``)."""
-    g = p.add_argument_group("atmosphere", "Earth defaults of Bruneton & Neyret / the seeds README unless changed.")
+    g = p.add_argument_group("atmosphere", "The Earth defaults of Bruneton & Neyret 2008 (as in Bruneton's 2017 "
+                          "implementation) unless changed.")
     g.add_argument("--turbidity", type=float_in(1.0, 20.0), default=None, metavar="T",
                    help="aerosols from turbidity (Preetham 1999 A.1: Angstrom alpha 1.3, beta 0.04608 T - 0.04586)"
                         " instead of the default (vertical aerosol optical depth 0.0053, alpha 0)")

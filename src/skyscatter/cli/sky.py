@@ -21,8 +21,6 @@ from .sky_options import add_model_options, build_sky_from_args
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    from ..sky.registry import SKY_MODELS
-
     p = subparsers.add_parser(
         "sky",
         help="render a sky model to EXR + PNG",
@@ -31,7 +29,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "writes sky.exr and sky.png: a clear (T = 2.5) mid-morning sky, sun 35 deg high in the south-east.",
         formatter_class=HELP_FORMATTER,
     )
-    add_model_options(p, list(SKY_MODELS), default="preetham")
+    add_model_options(p, default="preetham")
     add_sun_options(p)
     g = p.add_argument_group("image")
     g.add_argument("--projection", choices=["equirect", "fisheye", "pinhole"], default="equirect",

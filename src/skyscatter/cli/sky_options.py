@@ -1,81 +1,120 @@
-"""Sky-model options shared by the commands that build a sky (``sky``, ``illuminance``)."""
+"""Sky-model options of the commands that build a sky (``sky``, ``illuminance``, ``demo``), made from the registry.
+
+Every ``--model`` choice and every model option comes from the specs in :mod:`skyscatter.sky.registry`: the flag,
+unit, default and valid range of each parameter are declared there once. A flag shared by several models (such as
+``--turbidity``) is one option whose help lists each model's default; a value is checked against the range of the
+model actually chosen, before any work.
+"""
 
 from __future__ import annotations
 
 import argparse
+from collections.abc import Iterable
+from typing import Any
 
-from .common import finite_float, float_in, select_model_options
-
-#: Options each model takes (a model refuses options meant for another).
-MODEL_OPTIONS: dict[str, set[str]] = {
-    "preetham": {"turbidity"},
-    "preetham-overcast": {"turbidity"},
-    "cie": {"sky_type", "zenith_luminance", "diffuse_illuminance", "sun_illuminance_normal"},
-    "cie-overcast": {"zenith_luminance", "diffuse_illuminance"},
-    "cie-clear": {"zenith_luminance", "diffuse_illuminance", "sun_illuminance_normal"},
-    "perez": {"epsilon", "delta", "diffuse_illuminance", "direct_normal_irradiance",
-              "diffuse_horizontal_irradiance", "day_of_year", "dew_point"},
-    "bruneton": {"altitude"},
-}
+from ..errors import InvalidParameterError
+from .common import finite_float
 
 
-def _day_of_year(text: str) -> int:
+def _parse_int(text: str) -> int:
     try:
-        value = int(text)
+        value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole day number 1-366, got {text!r}") from None
-    if not 1 <= value <= 366:
-        raise argparse.ArgumentTypeError(f"expected a day number 1-366, got {value}")
-    return value
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not value.is_integer():
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}")
+    return int(value)
 
 
-# dest -> (flag, argparse keywords)
-_OPTIONS: dict[str, tuple[str, dict]] = {
-    "turbidity": ("--turbidity", dict(type=finite_float, metavar="T",
-                  help="preetham: turbidity, 1.65 to 11 (default 2.5, a clear sky); preetham-overcast: 1.65 to 11, "
-                  "blended into the CIE overcast sky from T = 6 to 10 (default 8)")),
-    "sky_type": ("--sky-type", dict(type=int, choices=range(1, 16), metavar="N",
-                 help="cie: CIE 2003 standard sky type 1-15 (default 12, the CIE clear sky)")),
-    "zenith_luminance": ("--zenith-luminance", dict(type=finite_float, metavar="CD_M2",
-                         help="cie*: zenith luminance [cd m^-2] (default: scale to 10000 lx diffuse)")),
-    "diffuse_illuminance": ("--diffuse-illuminance", dict(type=finite_float, metavar="LX",
-                            help="cie*, perez: horizontal diffuse illuminance [lx] to scale the sky to")),
-    "sun_illuminance_normal": ("--sun-illuminance", dict(type=float_in(0, 2e5), metavar="LX",
-                               help="cie, cie-clear: direct normal illuminance of the sun [lx] (default 0: the CIE "
-                               "distributions describe the sky only, so no sun disc or direct light)")),
-    "epsilon": ("--epsilon", dict(type=finite_float, help="perez: sky clearness epsilon, >= 1")),
-    "delta": ("--delta", dict(type=finite_float, help="perez: sky brightness delta, >= 0")),
-    "direct_normal_irradiance": ("--dni", dict(type=finite_float, metavar="W_M2",
-                                 help="perez: direct normal irradiance [W m^-2] (with --dhi, instead of "
-                                 "--epsilon/--delta)")),
-    "diffuse_horizontal_irradiance": ("--dhi", dict(type=finite_float, metavar="W_M2",
-                                      help="perez: diffuse horizontal irradiance [W m^-2]")),
-    "day_of_year": ("--day-of-year", dict(type=_day_of_year, metavar="DAY",
-                    help="perez: day of the year 1-366 for the Sun-Earth distance (default: mean distance)")),
-    "dew_point": ("--dew-point", dict(type=float_in(-90, 60), metavar="DEG_C",
-                  help="perez: surface dew point [deg C] for the luminous efficacies (default 11)")),
-    "altitude": ("--altitude", dict(type=float_in(0.0, 1e8), metavar="M",
-                 help="bruneton: observer altitude above sea level [m], from the ground to orbit (default 0)")),
-}
+_PARSERS = {"float": finite_float, "int": _parse_int}
 
 
-def add_model_options(parser: argparse.ArgumentParser, models: list[str], default: str) -> None:
-    """``--model`` (one of ``models``) and the options of those models, in one argument group."""
-    from ..sky.registry import SKY_MODELS
+def _metavar(p) -> str:
+    """Metavar from the unit (``cd m^-2`` -> ``CD_M2``), or the name for dimensionless parameters."""
+    if p.unit in ("1", ""):
+        return p.name.upper()
+    return p.unit.replace("^-", "").replace("^", "").replace(" ", "_").upper()
 
-    parser.add_argument("--model", choices=models, default=default,
-                        help="sky model: " + "; ".join(f"{k}: {SKY_MODELS[k]}" for k in models))
-    group = parser.add_argument_group("model parameters (each applies to the models named)")
-    used = set().union(*(MODEL_OPTIONS[m] for m in models))
-    for dest, (flag, kwargs) in _OPTIONS.items():
-        if dest in used:
-            group.add_argument(flag, dest=dest, default=None, **kwargs)
-    parser.set_defaults(_models=models)
+
+def _specs(models: Iterable[str]):
+    from ..sky import registry
+
+    return [registry.get(m) for m in models]
+
+
+def add_model_options(parser, models: list[str] | None = None, default: str | None = "preetham",
+                      *, flag: str = "--model", dest: str = "model", shown_default: str | None = None,
+                      shared: tuple[str, ...] = ()) -> None:
+    """``--model`` (one of ``models``, default: every registered model) and those models' parameters.
+
+    ``parser`` is a parser or an argument group; ``flag`` and ``dest`` name the model option (the demo calls it
+    ``--sky``, since its ``--model`` chooses the atmosphere). ``shared`` names parameters the command already has
+    as options of its own (the demo's ``albedo``, the terrain's): no option is added for them, and their value
+    goes to the models that take them.
+    """
+    from ..sky import registry
+
+    names = list(models) if models is not None else registry.names()
+    specs = _specs(names)
+    parser.add_argument(flag, dest=dest, choices=names, default=default,
+                        help=f"sky model (default {shown_default or default}): "
+                        + "; ".join(f"{s.name}: {s.summary}" for s in specs))
+    # an argument group (the demo's scene options) takes the parameters itself: groups do not nest
+    nested = isinstance(parser, argparse.ArgumentParser)
+    group = parser.add_argument_group("model parameters (each applies to the models named)") if nested else parser
+    by_flag: dict[str, list[tuple[str, Any]]] = {}
+    for spec in specs:
+        for p in spec.parameters:
+            if p.cli and p.name not in shared:
+                by_flag.setdefault(p.cli_flag, []).append((spec.name, p))
+    for cli_flag, entries in by_flag.items():
+        first = entries[0][1]
+        texts: dict[str, list[str]] = {}  # one text per distinct description, listing the models it applies to
+        for model, p in entries:
+            shown = p.default if isinstance(p.default, (int, float)) and not isinstance(p.default, bool) else None
+            unit = "" if p.unit in ("1", "") else f" [{p.unit}]"
+            text = f"{p.help}{unit}: {p.range_text(with_unit=False)}" + (
+                f" (default {shown:g})" if shown is not None else "")
+            texts.setdefault(text, []).append(model)
+        kwargs: dict[str, Any] = dict(dest=first.name, default=argparse.SUPPRESS,
+                                      help="; ".join(f"{', '.join(m)}: {t}" for t, m in texts.items()))
+        if first.kind == "choice":
+            kwargs["choices"] = list(first.choices)
+        else:
+            kwargs["type"] = _PARSERS.get(first.kind, str)
+            kwargs["metavar"] = _metavar(first)
+        group.add_argument(cli_flag, **kwargs)
+    parser.set_defaults(_models=names, _model_dest=dest, _model_flag=flag, _model_shared=tuple(shared))
+
+
+def model_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The parameters given for ``args.model``, range-checked; an option of another model is refused."""
+    from ..sky import registry
+
+    chosen = getattr(args, args._model_dest)
+    spec = registry.get(chosen)
+    own = {p.name: p for p in spec.parameters if p.cli}
+    given: dict[str, Any] = {}
+    for other in _specs(args._models):
+        for p in other.parameters:
+            if not p.cli or getattr(args, p.name, None) is None:
+                continue
+            if p.name in args._model_shared:  # the command's own option, passed on where the model takes it
+                if p.name in own:
+                    given[p.name] = own[p.name].check(getattr(args, p.name), spec.name)
+                continue
+            if p.name not in own:
+                raise InvalidParameterError(f"{p.cli_flag}: does not apply to {args._model_flag} {chosen}")
+            value = getattr(args, p.name)
+            try:
+                given[p.name] = own[p.name].check(value, spec.name)
+            except InvalidParameterError as exc:
+                raise InvalidParameterError(f"{p.cli_flag} {value}: {str(exc).split(': ', 1)[-1]}") from None
+    return given
 
 
 def build_sky_from_args(args: argparse.Namespace, sun_zenith: float, sun_azimuth: float):
     """The sky model chosen by ``--model`` with its options, for a sun at (zenith, azimuth) [rad]."""
-    from ..sky.registry import build_sky
+    from ..sky import registry
 
-    table = {m: MODEL_OPTIONS[m] for m in args._models}
-    return build_sky(args.model, sun_zenith, sun_azimuth, **select_model_options(args, table))
+    return registry.build(getattr(args, args._model_dest), sun_zenith, sun_azimuth, **model_options(args))

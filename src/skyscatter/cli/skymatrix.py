@@ -22,8 +22,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "Example: skyscatter skymatrix weather.epw --patches reinhart2 --out matrix.npz --csv matrix.csv",
         formatter_class=HELP_FORMATTER,
     )
+    from ..patches import SCHEMES
+    from ..sky import registry
+
+    # Sky models an hour of weather data defines: those taking direct normal and diffuse horizontal irradiance.
+    needed = {"direct_normal_irradiance", "diffuse_horizontal_irradiance"}
+    weather_models = [s.name for s in registry.models() if needed <= {q.name for q in s.parameters}]
     p.add_argument("epw", type=Path, help="hourly EnergyPlus weather file (.epw)")
-    p.add_argument("--patches", choices=["tregenza", "reinhart1", "reinhart2", "reinhart4"], default="reinhart2",
+    p.add_argument("--model", choices=weather_models, default="perez",
+                   help="sky model of every hour, from its direct normal and diffuse horizontal irradiance: "
+                   + "; ".join(f"{m}: {registry.get(m).summary}" for m in weather_models))
+    p.add_argument("--patches", choices=list(SCHEMES), default="reinhart2",
                    help="patch scheme: tregenza = reinhart1 (145 patches), reinhart2 (577), reinhart4 (2305)")
     p.add_argument("--out", type=output_path, default=Path("skymatrix.npz"), metavar="PATH",
                    help="output .npz: luminance [cd m^-2] (hours x patches, float32), times, sun angles [rad], "

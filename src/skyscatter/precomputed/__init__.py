@@ -4,10 +4,17 @@
 * :class:`PrecomputedAtmosphere` - tables from :meth:`~PrecomputedAtmosphere.compute` (Algorithm 4.1) and
   the rendering functions (sky radiance, aerial perspective, light shafts, irradiance, sun).
 * :func:`cached_atmosphere` - the same, cached on disk keyed by a hash of everything that affects the tables.
-* :class:`skyscatter.BrunetonSky` (in :mod:`.sky`) - the sky protocol for an observer at any altitude.
+* :func:`resolve_atmosphere` - tables for an argument that is tables, parameters or None.
+
+The sky model built on the tables is :class:`skyscatter.sky.bruneton.BrunetonSky` (also ``skyscatter.BrunetonSky``);
+the aerial perspective from the tables is in :mod:`skyscatter.aerial.bruneton`, camera views and the landscape
+with light shafts in :mod:`skyscatter.render.bruneton`.
 """
 
-from .cache import CacheRebuildWarning, cache_dir, cached_atmosphere
+import importlib
+from typing import Any
+
+from .cache import CacheRebuildWarning, cache_dir, cached_atmosphere, resolve_atmosphere
 from .parameters import (
     AtmosphereParameters,
     DensityLayer,
@@ -17,7 +24,6 @@ from .parameters import (
     TabulatedSpectrum,
     rayleigh_scattering_physical,
 )
-from .sky import BrunetonSky
 from .tables import DEFAULT_TABLE_WAVELENGTHS, PrecomputedAtmosphere, TableSizes
 
 __all__ = [
@@ -35,4 +41,14 @@ __all__ = [
     "cache_dir",
     "cached_atmosphere",
     "rayleigh_scattering_physical",
+    "resolve_atmosphere",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    # Backwards-compatibility alias: BrunetonSky moved to skyscatter.sky.bruneton (one module per sky model in
+    # skyscatter.sky); ``from skyscatter.precomputed import BrunetonSky`` keeps working. Imported lazily by name
+    # because the sky layer sits above this one (skyscatter.sky.bruneton imports this package).
+    if name == "BrunetonSky":
+        return importlib.import_module("skyscatter.sky.bruneton").BrunetonSky
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

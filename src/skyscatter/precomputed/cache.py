@@ -17,13 +17,12 @@ from pathlib import Path
 
 from numpy.typing import ArrayLike
 
-from ..errors import FileFormatError, OutputError
+from ..errors import FileFormatError, InvalidParameterError, OutputError
 from .parameters import AtmosphereParameters
 from .tables import PrecomputedAtmosphere, TableSizes, _as_wavelengths, cache_key
 
-__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "check_cache_dir",
-           "cached_atmosphere", "clear_memory_cache",
-           "load_or_compute"]
+__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "cached_atmosphere", "check_cache_dir",
+           "clear_memory_cache", "load_or_compute", "resolve_atmosphere"]
 
 _MEMORY: dict[str, PrecomputedAtmosphere] = {}
 
@@ -111,3 +110,22 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
                           "being cached", RuntimeWarning, stacklevel=3)
     _MEMORY[key] = atm
     return atm, computed
+
+
+def resolve_atmosphere(atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None) -> PrecomputedAtmosphere:
+    """Tables for an argument that may be tables, parameters or None (the Earth defaults).
+
+    Tables are returned as they are; parameters (or None) get their tables from :func:`cached_atmosphere`.
+
+    Raises
+    ------
+    InvalidParameterError
+        Anything else.
+    """
+    if isinstance(atmosphere, PrecomputedAtmosphere):
+        return atmosphere
+    if atmosphere is None or isinstance(atmosphere, AtmosphereParameters):
+        return cached_atmosphere(atmosphere)
+    raise InvalidParameterError(
+        f"atmosphere must be a PrecomputedAtmosphere, AtmosphereParameters or None; got {type(atmosphere).__name__}"
+    )

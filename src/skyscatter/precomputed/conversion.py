@@ -24,6 +24,9 @@ The tables hold spectral radiance at a few wavelengths ``lambda_k``. Two rules t
   that sample triple uses the piecewise-linear interpolant in ``x`` held constant beyond the end samples
   instead, which is a convex combination of the samples and so never negative (:class:`ColourConversion`).
   Both rules are linear, so the choice costs one extra small matrix product per sample.
+
+Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
+doi:10.1111/j.1467-8659.2008.01245.x.
 """
 
 from __future__ import annotations

@@ -17,6 +17,9 @@ decreasing wavelength, so the default tables are R = 680 nm, G = 550 nm, B = 440
   channel of ``C_M`` in A; the other Mie channels follow from the proportionality rule of Sec. 4.
 * ``atmosphere.json`` - sizes, coordinate mappings, constants, per-channel coefficients, the radiance formula
   and the matrix from channels to CIE XYZ.
+
+Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
+doi:10.1111/j.1467-8659.2008.01245.x.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..atmosphere.phase import rayleigh_phase
 from ..errors import OutputError
 from ..fileio import atomic_path
 
@@ -96,7 +100,7 @@ def export_tables(atm: PrecomputedAtmosphere, folder: Path) -> Path:
     nu = np.zeros(sizes.scattering_shape)
     p = atm.parameters
     parallel_for(texel_nu_kernel, n_r * n_mu, p.bottom_radius, p.top_radius, p.mu_s_min, nu)
-    phase_r = (3.0 / (16.0 * np.pi) * (1.0 + nu * nu))[..., None]
+    phase_r = rayleigh_phase(np.clip(nu, -1.0, 1.0))[..., None]
     combined = t["single_rayleigh"] + t["multiple"] / phase_r
     scat = packed(combined)
     mie = packed(t["single_mie"])
@@ -129,6 +133,7 @@ def export_tables(atm: PrecomputedAtmosphere, folder: Path) -> Path:
             "mu_s_min": p.mu_s_min,
             "sun_angular_radius": p.sun_angular_radius,
             "mie_phase_g": p.mie_phase_g,
+            "mie_phase_function": p.mie_phase_function,
             "solar_irradiance": [float(v) for v in p.solar_irradiance_at(wl)],
             "rayleigh_scattering": [float(v) for v in p.rayleigh_scattering_at(wl)],
             "mie_scattering": [float(v) for v in p.mie_scattering_at(wl)],

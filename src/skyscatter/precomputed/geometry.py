@@ -27,6 +27,9 @@ Mappings (Sec. 4, "Parameterization", with the distance-based forms of Bruneton'
   paper's ``(1 - exp(-3 mu_s - 0.6)) / (1 - exp(-3.6))`` but ending exactly at the chosen ``mu_s_min``.
 * ``x_nu = (1 + nu) / 2`` (the paper's ``u_nu``).
 * Irradiance table: ``x_r = (r - R_g) / (R_t - R_g)``, ``x_mu_s = (1 + mu_s) / 2``.
+
+Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
+doi:10.1111/j.1467-8659.2008.01245.x.
 """
 
 from __future__ import annotations
@@ -44,7 +47,6 @@ __all__ = [
     "irradiance_params",
     "lerp_index",
     "ray_hits_ground",
-    "scattering_coords",
     "scattering_params",
     "transmittance_coord",
     "transmittance_params",
@@ -221,17 +223,6 @@ def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float
 def scattering_mu_s_coord(mu_s: float, bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> float:
     """Index position of ``mu_s`` in the scattering tables (0 at ``mu_s_min``, n - 1 at the zenith)."""
     return scattering_mu_s_coord_a(mu_s, bottom, top, _mu_s_a(mu_s_min, bottom, top), n_mu_s)
-
-
-@_jit
-def scattering_coords(r: float, mu: float, mu_s: float, nu: float, hits_ground: bool, bottom: float, top: float,
-                      mu_s_min: float, n_r: int, n_mu: int, n_mu_s: int,
-                      n_nu: int) -> tuple[float, float, float, float]:
-    """Index positions (p_r, p_mu, p_mu_s, p_nu) of a ray in the 4D scattering tables."""
-    p_r, p_mu = scattering_r_mu_coord(r, mu, hits_ground, bottom, top, n_r, n_mu)
-    p_mu_s = scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_mu_s)
-    p_nu = clamp(0.5 * (nu + 1.0), 0.0, 1.0) * (n_nu - 1)
-    return p_r, p_mu, p_mu_s, p_nu
 
 
 @_jit

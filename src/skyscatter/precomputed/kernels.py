@@ -17,6 +17,9 @@ Tables are float32 arrays with a trailing wavelength axis; sums are accumulated 
 Ray integrals use product integration (:func:`.sampling.exp_segment_weights`): exact when the scattering
 coefficient is exponential between two samples and the rest of the integrand linear, which keeps 50 samples
 accurate for the 1.2 km aerosol layer on vertical rays where the plain trapezoidal rule is 8 % off.
+
+Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
+doi:10.1111/j.1467-8659.2008.01245.x.
 """
 
 from __future__ import annotations
@@ -41,11 +44,11 @@ from .geometry import (
     transmittance_params,
 )
 from .sampling import (
+    aerosol_phase,
     density_at,
     exp_segment_weights,
     irradiance_lookup,
     lookup4_cell,
-    mie_phase,
     r_mu_cell,
     rayleigh_phase,
     scattering_lookup,
@@ -187,16 +190,13 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _mie_row(vx, vy, vz, om, dom, g, p_m):
-    """Cornette-Shanks phase between one view direction and every quadrature direction; returns its integral."""
-    k_m = 3.0 / (8.0 * PI) * (1.0 - g * g) / (2.0 + g * g)
-    one_g2 = 1.0 + g * g
-    two_g = 2.0 * g
+def _mie_row(vx, vy, vz, om, dom, g, mie_kind, p_m):
+    """Aerosol phase (``mie_kind``, :func:`skyscatter.atmosphere.phase.aerosol_phase_kind`) between one view
+    direction and every quadrature direction; returns its integral."""
     n_m = 0.0
     for w in range(om.shape[0]):
         c = vx * om[w, 0] + vy * om[w, 1] + vz * om[w, 2]
-        den = max(one_g2 - two_g * c, 1e-12)
-        pm = k_m * (1.0 + c * c) / (den * math.sqrt(den))
+        pm = aerosol_phase(c, g, mie_kind)
         p_m[w] = pm
         n_m += pm * dom[w]
     return n_m
@@ -235,7 +235,7 @@ def sphere_quadrature(n_theta, hemisphere):
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance, albedo, beta_r, beta_m, g,
-                              profiles, counts, bottom, top, mu_s_min, n_theta, out, start, stop):
+                              mie_kind, profiles, counts, bottom, top, mu_s_min, n_theta, out, start, stop):
     """Scattering density J (Eq. 7) of one order into ``out`` (n_r, n_mu, n_mu_s, n_nu, n_wl) float32, for
     flat (r, mu_s) indices ``start..stop``.
 
@@ -283,7 +283,8 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 buf[k] = 0.0
             if first:
                 scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, rayleigh_phase(nu_w), buf)
-                scattering_lookup(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, mie_phase(nu_w, g), buf)
+                scattering_lookup(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min,
+                                  aerosol_phase(nu_w, g, mie_kind), buf)
             else:
                 scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, 1.0, buf)
             if hits:
@@ -319,7 +320,7 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 sphi = math.sqrt(max(1.0 - cphi * cphi, 0.0))
                 vx = st * cphi
                 vy = st * sphi
-                norm_m = _mie_row(vx, vy, mu, om, dom, g, p_m)
+                norm_m = _mie_row(vx, vy, mu, om, dom, g, mie_kind, p_m)
                 norm_r = w0 + _quadratic_form(w2, vx, vy, mu)
                 for k in range(n_l):
                     acc_r = m0[k] + _quadratic_form(m2[k], vx, vy, mu)
@@ -332,7 +333,7 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
 
 
 @_kjit
-def indirect_irradiance_kernel(s_a, s_b, first, g, bottom, top, mu_s_min, n_theta, out, start, stop):
+def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, bottom, top, mu_s_min, n_theta, out, start, stop):
     """Irradiance on a horizontal surface from one order of sky radiance (Eq. 15) into ``out`` (n_r, n_mu_s,
     n_wl).
 
@@ -358,7 +359,7 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, bottom, top, mu_s_min, n_thet
                 scattering_lookup(s_a, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min,
                                   scale * rayleigh_phase(nu_w), acc)
                 scattering_lookup(s_b, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min,
-                                  scale * mie_phase(nu_w, g), acc)
+                                  scale * aerosol_phase(nu_w, g, mie_kind), acc)
             else:
                 scattering_lookup(s_a, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min, scale, acc)
         for k in range(n_l):

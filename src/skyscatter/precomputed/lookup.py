@@ -12,6 +12,9 @@ direction per ray; they return spectral quantities at the table wavelengths.
 * :func:`irradiance_kernel` - sun and sky irradiance on a surface of any normal (Eq. 14's ambient occlusion
   ``(1 + n.n_bar) / 2`` for the sky part).
 * :func:`sun_kernel` - transmittance to the sun (times the visible fraction of its disc) from any position.
+
+Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
+doi:10.1111/j.1467-8659.2008.01245.x.
 """
 
 from __future__ import annotations
@@ -23,9 +26,9 @@ import numpy as np
 
 from .geometry import clamp, distance_to_bottom, distance_to_boundary, ray_hits_ground
 from .sampling import (
+    aerosol_phase,
     irradiance_lookup,
     lookup4_cell,
-    mie_phase,
     mu_s_nu_cell,
     r_mu_cell,
     rayleigh_phase,
@@ -87,7 +90,7 @@ def _sun_cos_factor(mu, alpha):
 
 @_kjit
 def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, bottom, top,
-               mu_s_min, g, alpha, include_ground, rad_out, tr_out, start, stop):
+               mu_s_min, g, mie_kind, alpha, include_ground, rad_out, tr_out, start, stop):
     """Radiance [W m^-2 sr^-1 nm^-1] and transmittance along rays ``start..stop``; see the module docstring.
 
     Writes ``rad_out`` and ``tr_out`` (n_rays, n_wavelengths), which the caller initialises to 0 and 1
@@ -112,7 +115,7 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
         nu = clamp(vx * sx + vy * sy + vz * sz, -1.0, 1.0)
         hits = ray_hits_ground(rc, mu, bottom)
         p_r = rayleigh_phase(nu)
-        p_m = mie_phase(nu, g)
+        p_m = aerosol_phase(nu, g, mie_kind)
         l_sh = shadow[q]
         if l_sh > 0.0:
             # Eq. 18: the first l_sh metres are in shadow; inscatter starts at xs = x + l v.
@@ -170,8 +173,8 @@ def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits,
 
 
 @_kjit
-def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, g, tr_out,
-                  in_out, start, stop):
+def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, g, mie_kind,
+                  tr_out, in_out, start, stop):
     """Transmittance and inscattered radiance between cameras and points (Eqs. 16-17), rays ``start..stop``.
 
     Writes ``tr_out`` (initialised to 1) and ``in_out`` (initialised to 0), each (n_rays, n_wavelengths).
@@ -211,7 +214,7 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
         if d_lit <= 0.0:
             continue
         p_r = rayleigh_phase(nu)
-        p_m = mie_phase(nu, g)
+        p_m = aerosol_phase(nu, g, mie_kind)
         mu_h = -math.sqrt(max(1.0 - (bottom / rc) ** 2, 0.0))
         if abs(mu - mu_h) < HORIZON_EPSILON:
             # Blend the rays just above and below the horizon: the two halves of the table disagree there.

@@ -8,28 +8,20 @@ compilation of the whole model is paid once per installation (``cache=True``).
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
 
+from ..runtime import num_threads
+
 __all__ = ["n_threads", "parallel_for"]
 
 
 def n_threads() -> int:
-    """Worker threads: ``$SKYSCATTER_NUM_THREADS`` if set, else the CPUs this process may use."""
-    env = os.environ.get("SKYSCATTER_NUM_THREADS")
-    if env:
-        try:
-            return max(1, int(env))
-        except ValueError:
-            pass
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not on Linux
-        return max(1, os.cpu_count() or 1)
+    """Worker threads: the process-wide setting of :func:`skyscatter.runtime.num_threads`."""
+    return num_threads()
 
 
 def parallel_for(kernel: Callable[..., Any], n: int, *args: Any, grain: int = 1) -> None:

@@ -1,8 +1,11 @@
-"""Interpolated reads of the precomputed tables and the phase functions (numba scalar functions).
+"""Interpolated reads of the precomputed tables (numba scalar functions).
 
 Shared by the precomputation kernels (:mod:`.kernels`) and the rendering kernels (:mod:`.lookup`). Every
 function writes its per-wavelength result into a caller-provided ``out`` array so that inner loops do not
 allocate.
+
+Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
+doi:10.1111/j.1467-8659.2008.01245.x.
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ import math
 
 import numba
 
+from ..atmosphere.phase import aerosol_phase_scalar, cornette_shanks_scalar, rayleigh_phase_scalar
 from .geometry import (
     clamp,
     irradiance_coord,
@@ -25,21 +29,11 @@ _jit = numba.njit(cache=True, fastmath=False)
 PI = math.pi
 
 
-@_jit
-def rayleigh_phase(nu: float) -> float:
-    """Rayleigh phase function [sr^-1] (Bruneton & Neyret 2008, Eq. 2): ``3 / (16 pi) (1 + nu^2)``."""
-    return 3.0 / (16.0 * PI) * (1.0 + nu * nu)
-
-
-@_jit
-def mie_phase(nu: float, g: float) -> float:
-    """Cornette-Shanks phase function [sr^-1] (Bruneton & Neyret 2008, Eq. 4).
-
-    ``3 / (8 pi) (1 - g^2) (1 + nu^2) / ((2 + g^2) (1 + g^2 - 2 g nu)^(3/2))``.
-    """
-    k = 3.0 / (8.0 * PI) * (1.0 - g * g) / (2.0 + g * g)
-    den = max(1.0 + g * g - 2.0 * g * nu, 1e-12)
-    return k * (1.0 + nu * nu) / (den * math.sqrt(den))
+#: The phase functions of :mod:`skyscatter.atmosphere.phase` as numba scalars: Rayleigh (Bruneton & Neyret
+#: 2008, Eq. 2), Cornette-Shanks (Eq. 4, the default aerosol phase) and the aerosol phase of a given kind.
+rayleigh_phase = rayleigh_phase_scalar
+mie_phase = cornette_shanks_scalar
+aerosol_phase = aerosol_phase_scalar
 
 
 @_jit

@@ -18,6 +18,9 @@ by ``P_R`` of the looked-up ``nu`` do not cancel, which skews multiple scatterin
 (measured against DISORT, ``docs/bruneton.md``). The packed ``C*`` is still produced by :meth:`export`.
 Tables are float32 with a trailing wavelength axis: transmittance (n_r, n_mu), irradiance (n_r, n_mu_s),
 scattering (n_r, n_mu, n_mu_s, n_nu).
+
+Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
+doi:10.1111/j.1467-8659.2008.01245.x.
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..atmosphere.phase import aerosol_phase_kind
 from ..errors import FileFormatError, InvalidDirectionError, InvalidParameterError
 from ..fileio import atomic_path
 from .parameters import AtmosphereParameters
@@ -167,9 +171,13 @@ def cache_key(params: AtmosphereParameters, orders: int, wavelengths: NDArray[np
     """SHA-256 (hex) of the parameters, orders, wavelengths, sizes, library version and table format."""
     from .. import __version__
 
+    described = params.to_dict()
+    if described.get("mie_phase_function") == "cornette-shanks":
+        # the phase function the tables had before the field existed: keep the keys of existing caches
+        del described["mie_phase_function"]
     blob = json.dumps(
         {
-            "params": params.to_dict(),
+            "params": described,
             "orders": int(orders),
             "wavelengths": [float(w) for w in wavelengths],
             "sizes": dataclasses.asdict(sizes),
@@ -304,6 +312,7 @@ class PrecomputedAtmosphere:
             raise InvalidParameterError(f"chunk_size must be a whole number >= 1; got {chunk_size!r}")
         bottom, top, mu_s_min = params.bottom_radius, params.top_radius, params.mu_s_min
         alpha, g = params.sun_angular_radius, params.mie_phase_g
+        mie_kind = aerosol_phase_kind(params.mie_phase_function)
         profiles, counts = _profiles(params)
         beta_r = params.rayleigh_scattering_at(wl)
         beta_m_ext = params.mie_extinction_at(wl)
@@ -358,12 +367,12 @@ class PrecomputedAtmosphere:
                     t0 = time.perf_counter()
                     dens = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
                     parallel_for(kernels.scattering_density_kernel, n_r * n_s, t_c, prev_a, prev_b, first, e_prev,
-                                 albedo[ch], beta_r[ch], beta_m[ch], g, profiles, counts, bottom, top, mu_s_min,
-                                 sz.density_sphere_samples, dens)
+                                 albedo[ch], beta_r[ch], beta_m[ch], g, mie_kind, profiles, counts, bottom, top,
+                                 mu_s_min, sz.density_sphere_samples, dens)
                     t1 = time.perf_counter()
                     d_irr = np.zeros((*sz.irradiance_shape, nc), dtype=np.float32)
                     parallel_for(kernels.indirect_irradiance_kernel, sz.irradiance_r * sz.irradiance_mu_s, prev_a,
-                                 prev_b, first, g, bottom, top, mu_s_min, sz.irradiance_sphere_samples, d_irr,
+                                 prev_b, first, g, mie_kind, bottom, top, mu_s_min, sz.irradiance_sphere_samples, d_irr,
                                  grain=16)
                     irr_c += d_irr
                     t2 = time.perf_counter()
@@ -442,6 +451,11 @@ class PrecomputedAtmosphere:
 
     # ------------------------------------------------------------------ lookups
 
+    @property
+    def _mie_kind(self) -> int:
+        """Integer code of the aerosol phase function for the numba kernels."""
+        return aerosol_phase_kind(self.parameters.mie_phase_function)
+
     def _geometry(self) -> tuple[float, float, float]:
         p = self.parameters
         return p.bottom_radius, p.top_radius, p.mu_s_min
@@ -515,7 +529,8 @@ class PrecomputedAtmosphere:
         parallel_for(sky_kernel, n, pos, dirs, sun, sh, self.tables["transmittance"],
                      self.tables["single_rayleigh"], self.tables["single_mie"], self.tables["multiple"],
                      self.tables["irradiance"], self._albedo, self._solar, bottom, top,
-                     mu_s_min, self.parameters.mie_phase_g, self.parameters.sun_angular_radius, include_ground, rad, tr,
+                     mu_s_min, self.parameters.mie_phase_g, self._mie_kind, self.parameters.sun_angular_radius,
+                     include_ground, rad, tr,
                      grain=2048)
         return rad, tr
 
@@ -584,8 +599,8 @@ class PrecomputedAtmosphere:
         s = np.zeros((n, self.wavelengths.size))
         tab = self.tables
         parallel_for(aerial_kernel, n, cam, pts, sun, sh, tab["transmittance"], tab["single_rayleigh"],
-                     tab["single_mie"], tab["multiple"], bottom, top, mu_s_min, self.parameters.mie_phase_g, t, s,
-                     grain=2048)
+                     tab["single_mie"], tab["multiple"], bottom, top, mu_s_min, self.parameters.mie_phase_g,
+                     self._mie_kind, t, s, grain=2048)
         return t.reshape(*shape, -1), s.reshape(*shape, -1)
 
     def sun_transmittance(self, positions: ArrayLike, sun_direction: ArrayLike) -> NDArray[np.float64]:
@@ -602,7 +617,7 @@ class PrecomputedAtmosphere:
 
     def sun_radiance(self, positions: ArrayLike, sun_direction: ArrayLike) -> NDArray[np.float64]:
         """Mean spectral radiance of the solar disc [W m^-2 sr^-1 nm^-1] seen from ``positions`` (Eq. 9)."""
-        from ..sky.base import solar_disc_solid_angle
+        from ..sun.disc import solar_disc_solid_angle
 
         omega = solar_disc_solid_angle(self.parameters.sun_angular_radius)
         return self.sun_transmittance(positions, sun_direction) * (self._solar / omega)

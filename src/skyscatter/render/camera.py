@@ -113,7 +113,3 @@ class PinholeCamera:
         if int(width) != width or width < 1:
             raise InvalidParameterError(f"width must be a positive whole number of pixels; got {width!r}")
         return 2.0 * math.atan(math.tan(self.fov / 2.0) / width)
-
-    def with_position(self, position: ArrayLike) -> PinholeCamera:
-        """The same orientation at another position [m]."""
-        return PinholeCamera(tuple(np.asarray(position, dtype=float)), self.heading, self.pitch, self.fov)

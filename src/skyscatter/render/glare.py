@@ -32,6 +32,9 @@ Discretisation choices (documented here because they decide the energy balance):
   inscribed disc against the closed form. The discrete kernel then sums to 1 to within the sub-sampling
   error, which :func:`glare_kernel` reports (tests require < 1e-3); it is finally rescaled to sum to exactly
   1, so the convolution conserves the image's energy apart from light the PSF sends beyond the image border.
+
+Reference: Spencer, Shirley, Zimmerman & Greenberg (1995), Physically-based glare effects for digital images,
+SIGGRAPH 95, doi:10.1145/218380.218466.
 """
 
 from __future__ import annotations

@@ -8,6 +8,10 @@ walk over the cells of the blocks the ray may touch. Periodic terrains are walke
 coordinates (indices wrap); a finite grid is surrounded by a flat plain at ``Terrain.base_height``.
 
 Distances are along unit directions, in metres.
+
+Public tracer API: :class:`HeightfieldTracer` (``intersect``, ``occluded``, ``shadow_lengths``) for arrays of
+rays, and :func:`trace_ray`, the numba-compiled single-ray kernel, for other compiled loops (it takes
+:attr:`HeightfieldTracer.trace_arguments` followed by the ray), as :mod:`skyscatter.render.shafts` does.
 """
 
 from __future__ import annotations
@@ -18,11 +22,12 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..aerial.base import DEFAULT_REFINE, DEFAULT_SHADOW_SAMPLES, ShadowCaster
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
 from .terrain import Terrain
 
-__all__ = ["HeightfieldTracer", "DEFAULT_MAX_DISTANCE"]
+__all__ = ["DEFAULT_MAX_DISTANCE", "HeightfieldTracer", "trace_ray"]
 
 #: Longest ray [m] followed over a periodic terrain (beyond it a near-horizontal ray counts as a miss).
 DEFAULT_MAX_DISTANCE = 500_000.0
@@ -215,9 +220,29 @@ def _walk_grid(h, bmax, wrap, block, gx, gy, oz, dgx, dgy, dz, ta, tb):
             return _INF
 
 
-@numba.njit(cache=True)
-def _trace(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax, ox, oy, oz, dx, dy, dz, tmin, tmax):
-    """Distance [m] to the first surface point along one ray, or inf."""
+@numba.njit(cache=True, nogil=True)
+def trace_ray(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax, ox, oy, oz, dx, dy, dz, tmin, tmax):
+    """Distance [m] along one ray to the first point of the terrain surface, or ``inf`` (numba-compiled).
+
+    Parameters
+    ----------
+    h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax
+        The terrain as the tracer holds it: :attr:`HeightfieldTracer.trace_arguments` (heights [m], the
+        highest height of each skip block [m], periodic or not, block size [cells], sample spacing [m], grid
+        origin [m], the plain's height [m] and the lowest and highest height anywhere [m]).
+    ox, oy, oz : float
+        Ray origin [m, ENU].
+    dx, dy, dz : float
+        Unit ray direction (ENU).
+    tmin, tmax : float
+        Search interval [m] along the ray.
+
+    Returns
+    -------
+    float
+        Distance [m] of the first hit in [tmin, tmax], or ``inf`` when the ray misses. Callable from other
+        numba functions (nopython mode) and from Python.
+    """
     ta = tmin
     tb = tmax
     # Clip to the slab hmin <= z <= hmax that holds all terrain.
@@ -277,7 +302,7 @@ def _trace_many(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax, origins
     stride = 0 if origins.shape[0] == 1 else 1
     for i in numba.prange(n):
         k = i * stride
-        out[i] = _trace(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax,
+        out[i] = trace_ray(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax,
                         origins[k, 0], origins[k, 1], origins[k, 2], dirs[i, 0], dirs[i, 1], dirs[i, 2],
                         tmin, tmax)
 
@@ -314,8 +339,10 @@ def _choose_block(terrain: Terrain, block: int | None) -> int:
     return 1  # pragma: no cover
 
 
-class HeightfieldTracer:
+class HeightfieldTracer(ShadowCaster):
     """Exact ray casting against a :class:`~skyscatter.render.terrain.Terrain` (bilinear cells).
+
+    Also the terrain's :class:`~skyscatter.aerial.base.ShadowCaster` for light shafts (:meth:`shadow_lengths`).
 
     Parameters
     ----------
@@ -336,6 +363,14 @@ class HeightfieldTracer:
         self.max_distance = float(max_distance)
         self._bmax = _block_maxima(terrain, self.block)
         self._hmin, self._hmax = terrain.height_range
+
+    @property
+    def trace_arguments(self) -> tuple:
+        """The leading arguments of :func:`trace_ray` for this terrain: ``(heights, block_maxima, wrap, block,
+        spacing, x0, y0, base_height, lowest, highest)`` (arrays [m], booleans, cells, metres)."""
+        t = self.terrain
+        return (t.heights, self._bmax, t.wrap, self.block, t.spacing, t.origin[0], t.origin[1],
+                float(t.base_height), self._hmin, self._hmax)
 
     def _run(self, origins: ArrayLike, directions: ArrayLike, t_min: float, t_max: float | None) -> NDArray:
         d = as_directions(directions)
@@ -363,8 +398,7 @@ class HeightfieldTracer:
             )
         t_max = self.max_distance if t_max is None else float(t_max)
         out = np.empty(d2.shape[0])
-        _trace_many(t.heights, self._bmax, t.wrap, self.block, t.spacing, t.origin[0], t.origin[1],
-                    float(t.base_height), self._hmin, self._hmax, o2, d2, float(t_min), t_max, out)
+        _trace_many(*self.trace_arguments, o2, d2, float(t_min), t_max, out)
         return out.reshape(shape)
 
     def intersect(self, origins: ArrayLike, directions: ArrayLike, *, t_min: float = 0.0,
@@ -392,3 +426,11 @@ class HeightfieldTracer:
         if t_min is None:
             t_min = 1e-3 * self.terrain.spacing
         return np.isfinite(self._run(origins, directions, t_min, t_max))
+
+    def shadow_lengths(self, origins: ArrayLike, directions: ArrayLike, distances: ArrayLike,
+                       sun_direction: ArrayLike, *, samples: int = DEFAULT_SHADOW_SAMPLES,
+                       refine: int = DEFAULT_REFINE) -> NDArray[np.float64]:
+        """Length [m] of each ray that lies in the terrain's shadow: :func:`skyscatter.render.shafts.shadow_lengths`."""
+        from .shafts import shadow_lengths
+
+        return shadow_lengths(self, origins, directions, distances, sun_direction, samples=samples, refine=refine)

@@ -34,10 +34,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..aerial.base import AerialPerspective, PathFunctions, as_aerial_perspective
 from ..aerial.scattering import hemisphere_quadrature
 from ..conventions import direction_from_angles
 from ..errors import InvalidParameterError
-from ..sky.base import SUN_ANGULAR_RADIUS
+from ..sky.base import SkyModel
 from ..spectral import HDR_SCALE, as_wavelengths, spectrum_to_xyz, xyz_to_linear_srgb
 from .camera import PinholeCamera
 from .heightfield import HeightfieldTracer
@@ -109,10 +110,13 @@ class Scene:
         Default: the built-in procedural mountains (:func:`~skyscatter.render.terrain.default_terrain`).
     camera : PinholeCamera, optional
         Default: :func:`default_camera` for the terrain.
-    aerial : aerial-perspective model, "preetham" or None
-        Any object with ``transmittance``/``inscattered`` (see :mod:`skyscatter.aerial.base`); ``"preetham"``
-        (default) builds :class:`~skyscatter.aerial.PreethamAerialPerspective` for the sky with
-        ``turbidity``; None renders without air between camera and terrain.
+    aerial : AerialPerspective, "preetham" or None
+        An aerial-perspective model (:class:`skyscatter.aerial.base.AerialPerspective`; objects with the
+        original ``transmittance``/``inscattered`` pair are wrapped by
+        :func:`~skyscatter.aerial.base.as_aerial_perspective`); ``"preetham"`` (default) builds
+        :class:`~skyscatter.aerial.PreethamAerialPerspective` for the sky with ``turbidity``; None renders
+        without air between camera and terrain. Rays that miss the terrain see ``aerial.sky_radiance`` (the sky
+        itself unless the model changes it, e.g. light shafts).
     turbidity : float, optional
         Haze turbidity for the default aerial perspective (default ``sky.turbidity``).
     albedo : float or array_like
@@ -125,12 +129,16 @@ class Scene:
     Raises
     ------
     InvalidParameterError
-        Albedo outside [0, 1], or a camera at or below the terrain surface.
+        A sky that is not a SkyModel, an aerial argument that is not a model, albedo outside [0, 1], or a
+        camera at or below the terrain surface.
     """
 
-    def __init__(self, sky, *, terrain: Terrain | None = None, camera: PinholeCamera | None = None,
-                 aerial="preetham", turbidity: float | None = None, albedo: float | ArrayLike = 0.2,
+    def __init__(self, sky: SkyModel, *, terrain: Terrain | None = None, camera: PinholeCamera | None = None,
+                 aerial: AerialPerspective | PathFunctions | str | None = "preetham",
+                 turbidity: float | None = None, albedo: float | ArrayLike = 0.2,
                  sun_disc: bool = True, wavelengths: ArrayLike | None = None) -> None:
+        if not isinstance(sky, SkyModel):
+            raise InvalidParameterError(f"Scene needs a sky model (skyscatter.sky.SkyModel); got {type(sky).__name__}")
         self.sky = sky
         self.terrain = default_terrain() if terrain is None else terrain
         self.camera = default_camera(self.terrain) if camera is None else camera
@@ -148,9 +156,7 @@ class Scene:
             from ..aerial.preetham import PreethamAerialPerspective
 
             aerial = PreethamAerialPerspective(sky, turbidity=turbidity)
-        elif aerial is not None and not (hasattr(aerial, "transmittance") and hasattr(aerial, "inscattered")):
-            raise InvalidParameterError("aerial must provide transmittance(...) and inscattered(...)")
-        self.aerial = aerial
+        self.aerial: AerialPerspective | None = None if aerial is None else as_aerial_perspective(aerial)
         self.sun_disc = bool(sun_disc)
         self._check_camera()
         self._tracer: HeightfieldTracer | None = None
@@ -175,11 +181,11 @@ class Scene:
     def _sun(self) -> tuple[NDArray[np.float64] | None, NDArray[np.float64]]:
         """Sun direction (or None) and the sun's spectral irradiance at normal incidence [W m^-2 nm^-1]."""
         wl = self.wavelengths
-        sky = self.sky
-        if not getattr(sky, "has_sun", False) or not hasattr(sky, "sun_spectral_radiance"):
+        sun = self.sky.sun
+        if sun is None:
             return None, np.zeros_like(wl)
-        d = np.asarray(sky.sun_direction, dtype=float)
-        e = np.asarray(sky.sun_spectral_radiance(wl), dtype=float) * float(sky.sun_solid_angle)
+        d = np.asarray(sun.direction, dtype=float)
+        e = np.asarray(sun.spectral_irradiance_normal(wl), dtype=float)
         if d[2] <= 0 or not np.any(e > 0):
             return None, np.zeros_like(wl)
         return d, e
@@ -236,9 +242,11 @@ class Scene:
         e_h = e_sky_h + (e_sun * sun_dir[2] if sun_dir is not None else 0.0)
         rho = self.albedo
         sun_disc_radiance = None
-        sun_radius = float(getattr(self.sky, "sun_angular_radius", SUN_ANGULAR_RADIUS))
+        sun_radius = 0.0
         if self.sun_disc and sun_dir is not None:
-            sun_disc_radiance = np.asarray(self.sky.sun_spectral_radiance(wl), dtype=float)
+            disc = self.sky.sun  # not None: _sun() found a sun above the horizon
+            sun_radius = float(disc.angular_radius)
+            sun_disc_radiance = np.asarray(disc.spectral_radiance(wl), dtype=float)
         cmf_xyz = _xyz_matrix(wl)
         pixel = cam.pixel_angle(width)
         rgb = np.empty((height, width, 3), dtype=np.float64)
@@ -271,7 +279,7 @@ class Scene:
             t2 = time.perf_counter()
             timings["shading"] += t2 - t1
             if self.aerial is not None and pos.shape[0]:
-                tau, l_in = _evaluate(self.aerial, d[hit], t[hit], origin, wl)
+                tau, l_in = self.aerial.evaluate_rays(origin, d[hit], t[hit], wl)
                 l0 = l0 * tau + l_in
             spec[hit] = l0
             t3 = time.perf_counter()
@@ -279,16 +287,17 @@ class Scene:
             miss = ~hit
             if np.any(miss):
                 dm = d[miss]
-                if hasattr(self.aerial, "sky_radiance"):
-                    # Light shafts in the sky (Bruneton & Neyret 2008, Eq. 18) need the camera position.
-                    sky_l = np.asarray(self.aerial.sky_radiance(origin, dm, wl), dtype=float)
+                if self.aerial is not None:
+                    # The sky as the model sees it from the camera (e.g. light shafts, Bruneton & Neyret 2008,
+                    # Eq. 18); by default the sky's own radiance.
+                    sky_l = np.asarray(self.aerial.sky_radiance(origin, dm, wl, sky=self.sky), dtype=float)
                 else:
                     sky_l = np.asarray(self.sky.spectral_radiance(dm, wl), dtype=float)
                 below = dm[:, 2] < 0
                 if self.aerial is not None and np.any(below):
                     # A periodic terrain followed to the tracer's range without a hit: the whole path's haze.
-                    _, haze = _evaluate(self.aerial, dm[below], np.full(int(below.sum()), tracer.max_distance),
-                                        origin, wl)
+                    _, haze = self.aerial.evaluate_rays(origin, dm[below], np.full(int(below.sum()),
+                                                                                    tracer.max_distance), wl)
                     sky_l[below] = haze
                 if sun_disc_radiance is not None:
                     cover = _sun_coverage(cam, rr.reshape(-1)[miss], cc.reshape(-1)[miss], width, height,
@@ -324,15 +333,6 @@ def _pixel_count(name: str, value) -> int:
     if not ok:
         raise InvalidParameterError(f"image {name} must be a positive whole number of pixels; got {value!r}")
     return int(value)
-
-
-def _evaluate(aerial, d, s, origin, wl):
-    if hasattr(aerial, "evaluate_rays"):  # providers that need the camera position (terrain light shafts)
-        return aerial.evaluate_rays(origin, d, s, wl)
-    h = origin[2]
-    if hasattr(aerial, "evaluate"):
-        return aerial.evaluate(d, s, h, wl)
-    return aerial.transmittance(d, s, h, wl), aerial.inscattered(d, s, h, wl)
 
 
 def _xyz_matrix(wl: NDArray[np.float64]) -> NDArray[np.float64]:

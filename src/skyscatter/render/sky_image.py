@@ -9,8 +9,8 @@ from numpy.typing import NDArray
 
 from ..conventions import equirect_directions, fisheye_directions, pinhole_directions
 from ..errors import InvalidParameterError
-from ..sky.base import SkyModel
-from ..spectral import HDR_SCALE, xyz_to_linear_srgb
+from ..sky.base import SkyModel, SolarDisc
+from ..spectral import HDR_SCALE, REFERENCE_WAVELENGTHS, spectrum_to_xyz, xyz_to_linear_srgb
 
 __all__ = ["pixel_solid_angles", "sky_image"]
 
@@ -157,11 +157,9 @@ def sky_image(
     -------
     ndarray, shape (H, W, 3)
     """
-    if not (callable(getattr(model, "xyz", None)) and hasattr(model, "renders_ground")):
+    if not isinstance(model, SkyModel):
         raise InvalidParameterError(
-            f"model must be a sky model (skyscatter.sky.base.SkyModel, answering xyz(directions)); "
-            f"got {type(model).__name__}"
-        )
+            f"sky_image needs a sky model (skyscatter.sky.SkyModel); got {type(model).__name__}")
     if ground_albedo is not None and not (isinstance(ground_albedo, (int, float, np.integer, np.floating))
                                           and np.isfinite(ground_albedo) and 0.0 <= ground_albedo <= 1.0):
         raise InvalidParameterError(f"ground_albedo must be in [0, 1] or None; got {ground_albedo!r}")
@@ -172,30 +170,36 @@ def sky_image(
         if ground_albedo is not None and np.any(below & inside):
             from ..photometry import horizontal_illuminance
 
-            e_v = float(horizontal_illuminance(model, include_sun=getattr(model, "has_sun", False)))
+            e_v = float(horizontal_illuminance(model, include_sun=model.sun is not None))
             xyz[below] = ground_albedo * e_v / np.pi * _D65_XYZ
         else:
             xyz[below] = 0.0
-    if sun_disc and getattr(model, "has_sun", False):
-        _add_sun(xyz, directions, model, projection, width, height, fov)
+    if sun_disc and model.sun is not None:
+        _add_sun(xyz, directions, model.sun, model.renders_ground, projection, width, height, fov)
     xyz[~inside] = 0.0
     return (xyz_to_linear_srgb(xyz) * HDR_SCALE).astype(dtype)
 
 
-def _add_sun(xyz, directions, model, projection, width, height, fov) -> None:
-    sun = model.sun_direction
-    if not model.renders_ground and sun[2] < -np.sin(model.sun_angular_radius):
+def _add_sun(xyz, directions, sun: SolarDisc, renders_ground: bool, projection, width, height, fov) -> None:
+    """Draw the solar disc where pixels resolve it (limb-darkened where the model has it), else splat its flux."""
+    s = sun.direction
+    if not renders_ground and not sun.above_horizon:
         return
-    cos_r = np.cos(model.sun_angular_radius)
-    dots = directions @ sun
+    cos_r = np.cos(sun.angular_radius)
+    dots = directions @ s
     disc = dots >= cos_r
-    sun_xyz = np.asarray(model.sun_xyz(), dtype=float)
+    sun_xyz = np.asarray(sun.xyz(), dtype=float)
     if np.any(disc):
-        xyz[disc] += sun_xyz
+        if sun.limb_darkening is None:
+            xyz[disc] += sun_xyz
+        else:
+            r = np.arccos(np.clip(dots[disc], -1.0, 1.0)) / sun.angular_radius
+            spectra = sun.spectral_radiance(REFERENCE_WAVELENGTHS) * sun.limb_darkening(r, REFERENCE_WAVELENGTHS)
+            xyz[disc] += spectrum_to_xyz(spectra, REFERENCE_WAVELENGTHS)
         return
     idx = np.unravel_index(np.argmax(dots), dots.shape)
     # Only splat if the sun actually falls within this pixel's footprint (it may be outside a pinhole view).
     omega = pixel_solid_angles(projection, width, height, fov=fov)[idx]
     pixel_radius = np.sqrt(omega / np.pi)
-    if np.arccos(min(1.0, dots[idx])) <= pixel_radius + model.sun_angular_radius:
-        xyz[idx] += sun_xyz * min(1.0, model.sun_solid_angle / omega)
+    if np.arccos(min(1.0, dots[idx])) <= pixel_radius + sun.angular_radius:
+        xyz[idx] += sun_xyz * min(1.0, sun.solid_angle / omega)

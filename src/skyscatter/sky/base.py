@@ -1,14 +1,21 @@
-"""The sky-model protocol every skyscatter sky answers (see ``docs/conventions.md``).
+"""The sky-model protocol every skyscatter sky answers (see ``docs/conventions.md`` and ``docs/architecture.md``).
 
 A sky model maps view directions (unit ENU vectors, shape (..., 3)) to
 
 * ``spectral_radiance(directions, wavelengths)`` [W m^-2 sr^-1 nm^-1], shape (..., n_wavelengths);
 * ``xyz(directions)``: CIE 1931 XYZ [cd m^-2], shape (..., 3);
-* ``luminance(directions)`` [cd m^-2], shape (...).
+* ``luminance(directions)`` [cd m^-2], shape (...);
+* ``rgb(directions)``: linear sRGB in the HDR scale (Y = luminance / 683).
 
-Sun-aware models also describe the solar disc separately from the sky: ``sun_direction``,
-``sun_solid_angle`` [sr], ``sun_spectral_radiance(wavelengths)`` and ``sun_xyz()``. The sky functions never
-include the disc, so integrating a sky over the hemisphere gives diffuse quantities only.
+and declares, so that callers never probe it with ``hasattr``:
+
+* ``sun``: the solar disc as a :class:`SolarDisc` (direction, angular radius, spectral radiance, XYZ, limb
+  darkening where the model has it), or None for models without a sun. The sky functions never include the
+  disc, so integrating a sky over the hemisphere gives diffuse quantities only.
+* ``renders_ground``: True when the model returns radiance for directions that hit the ground.
+* ``turbidity``: the Linke-style turbidity the analytic aerial perspective (Preetham 1999, Sec. 4) needs, or None.
+* ``model_name``, ``model_parameters()``, ``to_dict()``: the model's registry entry and its parameters, so that
+  :func:`skyscatter.sky.registry.from_dict` rebuilds it (pickling goes the same way).
 
 Luminance-only models (CIE, Perez) derive from :class:`LuminanceOnlySky`: their spectra are the luminance
 times one fixed relative spectrum (a CIE daylight illuminant at a stated correlated colour temperature).
@@ -17,7 +24,10 @@ times one fixed relative spectrum (a CIE daylight illuminant at a stated correla
 from __future__ import annotations
 
 import abc
+from collections.abc import Callable
+from dataclasses import dataclass
 from functools import cached_property
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -32,21 +42,27 @@ from ..spectral import (
     xyz_to_linear_srgb,
 )
 
+# Re-exported: the solar disc's size is defined in the sun layer (skyscatter.sun.disc).
+from ..sun.disc import SUN_ANGULAR_RADIUS, solar_disc_solid_angle
+
 __all__ = [
     "LuminanceOnlySky",
     "SkyModel",
+    "SolarDisc",
     "SUN_ANGULAR_RADIUS",
     "check_sun_angles",
     "solar_disc_solid_angle",
 ]
 
-#: Mean angular radius of the solar disc seen from the Earth [rad] (Bruneton's 2017 default, 0.2679 deg).
-SUN_ANGULAR_RADIUS = 0.004675
-
-
-def solar_disc_solid_angle(angular_radius: float = SUN_ANGULAR_RADIUS) -> float:
-    """Solid angle [sr] of a disc of the given angular radius [rad]: ``2 pi (1 - cos r)`` (6.87e-5 sr for the sun)."""
-    return float(2.0 * np.pi * (1.0 - np.cos(angular_radius)))
+#: Largest physical direct or diffuse irradiance [W m^-2]: the extraterrestrial normal irradiance at perihelion,
+#: 1367 W m^-2 times Spencer's (1971) largest eccentricity factor 1.0335 (on 3 January), rounded up.
+MAX_IRRADIANCE = 1413.0
+#: Largest physical illuminance [lx]: the extraterrestrial normal solar illuminance at perihelion, about
+#: 133.8 klx at the mean distance (CIE) times 1.0335, rounded up.
+MAX_ILLUMINANCE = 1.4e5
+#: Largest physical sky luminance [cd m^-2]: the solar disc outside the atmosphere, MAX_ILLUMINANCE over the
+#: disc's solid angle at perihelion (6.80e-5 sr x 1.0335); no part of the sky is brighter.
+MAX_SKY_LUMINANCE = MAX_ILLUMINANCE / (6.80e-5 * 1.0335)
 
 
 def check_sun_angles(sun_zenith: float, sun_azimuth: float, *, allow_below_horizon: bool) -> tuple[float, float]:
@@ -72,11 +88,73 @@ def check_sun_angles(sun_zenith: float, sun_azimuth: float, *, allow_below_horiz
     return zen, float(np.mod(azi, 2.0 * np.pi))
 
 
+@dataclass(frozen=True, eq=False)
+class SolarDisc:
+    """The solar disc of a sky model, reported separately from the sky (the protocol's ``sky.sun``).
+
+    Attributes
+    ----------
+    direction : ndarray, shape (3,)
+        Unit ENU vector towards the centre of the disc.
+    angular_radius : float
+        Angular radius of the disc [rad].
+    spectral_radiance : callable
+        ``spectral_radiance(wavelengths [nm]) -> (n,)``: radiance averaged over the disc [W m^-2 sr^-1 nm^-1].
+    xyz : callable
+        ``xyz() -> (3,)``: CIE 1931 XYZ of the disc-averaged radiance [cd m^-2].
+    limb_darkening : callable or None
+        ``limb_darkening(r, wavelengths [nm]) -> (..., n)``: radiance at relative radius ``r`` in [0, 1] of the
+        disc divided by the disc average (so its area-weighted mean is 1); None for a uniform disc.
+    normal_illuminance : float or None
+        The illuminance [lx] on a plane facing the sun where the model defines the disc by it (the CIE and Perez
+        skies); None: disc-averaged luminance times solid angle.
+    """
+
+    direction: NDArray[np.float64]
+    angular_radius: float
+    spectral_radiance: Callable[[ArrayLike], NDArray[np.float64]]
+    xyz: Callable[[], NDArray[np.float64]]
+    limb_darkening: Callable[[ArrayLike, ArrayLike], NDArray[np.float64]] | None = None
+    normal_illuminance: float | None = None
+
+    @property
+    def solid_angle(self) -> float:
+        """Solid angle of the disc [sr]: ``2 pi (1 - cos r)``."""
+        return solar_disc_solid_angle(self.angular_radius)
+
+    def luminance(self) -> float:
+        """Disc-averaged luminance [cd m^-2]."""
+        return float(np.asarray(self.xyz(), dtype=float)[1])
+
+    def illuminance_normal(self) -> float:
+        """Illuminance [lx] on a plane facing the sun: disc-averaged luminance times solid angle."""
+        if self.normal_illuminance is not None:
+            return self.normal_illuminance
+        return self.luminance() * self.solid_angle
+
+    def spectral_irradiance_normal(self, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Spectral irradiance [W m^-2 nm^-1] on a plane facing the sun."""
+        return np.asarray(self.spectral_radiance(as_wavelengths(wavelengths)), dtype=float) * self.solid_angle
+
+    @property
+    def above_horizon(self) -> bool:
+        """True while any part of the disc is above the horizon."""
+        return bool(self.direction[2] > -np.sin(self.angular_radius))
+
+
 class SkyModel(abc.ABC):
     """Abstract sky: radiance as a function of view direction. Subclasses implement ``spectral_radiance``.
 
-    Directions below the horizon (z < 0) return zero unless a model documents otherwise.
+    Directions below the horizon (z < 0) return zero unless a model documents otherwise (``renders_ground``).
     """
+
+    #: Registry name of the model (:mod:`skyscatter.sky.registry`); None for unregistered helper skies.
+    model_name: ClassVar[str | None] = None
+    #: True for models that return radiance for directions that hit the ground (e.g. a precomputed
+    #: atmosphere seen from altitude); sky images then do not paint their own ground.
+    renders_ground: ClassVar[bool] = False
+    #: Linke-style turbidity for the analytic aerial perspective (Preetham 1999 Sec. 4); None if the model has none.
+    turbidity: float | None = None
 
     @abc.abstractmethod
     def spectral_radiance(self, directions: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
@@ -102,16 +180,46 @@ class SkyModel(abc.ABC):
         """Linear sRGB in skyscatter's HDR scale (Y = luminance / 683, see ``HDR_SCALE``), shape (..., 3)."""
         return xyz_to_linear_srgb(self.xyz(directions)) * HDR_SCALE
 
-    #: True for models that return radiance for directions that hit the ground (e.g. a precomputed
-    #: atmosphere seen from altitude); sky images then do not paint their own ground.
-    renders_ground: bool = False
-    # Sun-aware models override these.
-    has_sun: bool = False
+    # -- the sun -------------------------------------------------------------------------------------------
+    @property
+    def sun(self) -> SolarDisc | None:
+        """The solar disc (reported separately from the sky), or None for models without a sun."""
+        return None
+
+    @property
+    def has_sun(self) -> bool:
+        """True when the model has a solar disc (``sun`` is not None)."""
+        return self.sun is not None
 
     @property
     def sun_direction(self) -> NDArray[np.float64] | None:
         """Unit ENU vector towards the sun centre, or None for models without a sun."""
         return None
+
+    # -- registry and serialisation ------------------------------------------------------------------------
+    def model_parameters(self) -> dict[str, Any]:
+        """The keyword arguments that rebuild this sky with the registry (sun angles excluded)."""
+        return dict(getattr(self, "_model_parameters", {}))
+
+    def _remember(self, **parameters: Any) -> None:
+        """Record the constructor's parameters for :meth:`model_parameters` (called by subclasses' ``__init__``)."""
+        self._model_parameters = parameters
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-able description: model name, sun angles [rad] and parameters (see ``registry.from_dict``)."""
+        from .registry import to_dict
+
+        return to_dict(self)
+
+    def __reduce_ex__(self, protocol: Any) -> Any:
+        # Registered skies pickle as their description and are rebuilt on unpickling, so that Dask workers get
+        # the same sky without shipping caches or compiled kernels (a precomputed atmosphere is re-read from
+        # the table cache). Unregistered helper skies pickle as ordinary objects.
+        if self.model_name is not None:
+            from .registry import from_dict
+
+            return (from_dict, (self.to_dict(),))
+        return super().__reduce_ex__(protocol)
 
 
 class SunSkyMixin:
@@ -119,8 +227,21 @@ class SunSkyMixin:
 
     sun_zenith: float
     sun_azimuth: float
-    has_sun = True
     sun_angular_radius: float = SUN_ANGULAR_RADIUS
+
+    @property
+    def sun(self) -> SolarDisc:
+        """The solar disc: the model's ``sun_spectral_radiance`` and ``sun_xyz`` at ``sun_direction``."""
+        return SolarDisc(
+            direction=self.sun_direction,
+            angular_radius=self.sun_angular_radius,
+            spectral_radiance=self.sun_spectral_radiance,  # type: ignore[attr-defined]
+            xyz=self.sun_xyz,
+            limb_darkening=self.sun_limb_darkening,
+        )
+
+    #: Relative radiance across the disc (see :class:`SolarDisc`); None: a uniform disc.
+    sun_limb_darkening: Callable[[ArrayLike, ArrayLike], NDArray[np.float64]] | None = None
 
     @cached_property
     def sun_direction(self) -> NDArray[np.float64]:
@@ -146,10 +267,6 @@ class SunSkyMixin:
         s = self.sun_direction
         cross = np.linalg.norm(np.cross(d, s), axis=-1)
         return np.arctan2(cross, d @ s)
-
-    def _cos_gamma(self, d: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Cosine of the angle between unit directions ``d`` (..., 3) and the sun."""
-        return np.clip(d @ self.sun_direction, -1.0, 1.0)
 
 
 class LuminanceOnlySky(SkyModel):

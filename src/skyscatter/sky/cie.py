@@ -23,11 +23,15 @@ Spectra: these are luminance-only models; their spectrum is the CIE daylight ill
 6504 K, D65) scaled to the luminance. The distributions describe the sky without the sun: the solar disc has
 the illuminance ``sun_illuminance_normal`` [lx] (default 0; set it to add a sun to images and to
 ``horizontal_illuminance(..., include_sun=True)``). Directions below the horizon have zero luminance.
+
+Reference: CIE S 011/E:2003 = ISO 15469:2004 (no DOI); Kittler (1967) as CIE 22-1973; Moon & Spencer (1942), Illum.
+Eng. 37:707-726.
 """
 
 from __future__ import annotations
 
 import abc
+import dataclasses
 from functools import cached_property
 
 import numpy as np
@@ -37,7 +41,8 @@ from ..atmosphere.tables import load_table
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
 from ..spectral import as_wavelengths
-from .base import LuminanceOnlySky, SunSkyMixin, check_sun_angles
+from .base import MAX_ILLUMINANCE, MAX_SKY_LUMINANCE, LuminanceOnlySky, SolarDisc, SunSkyMixin, check_sun_angles
+from .perez_family import cie_parameters, extended_perez, kittler_parameters
 
 __all__ = [
     "DEFAULT_DIFFUSE_ILLUMINANCE",
@@ -76,8 +81,6 @@ SKY_TYPE_DESCRIPTIONS = {
     15: "white-blue turbid sky with broad solar corona",
 }
 
-# Floor on cos(zenith) inside exp(b / cos Z): b < 0 for every CIE type, so the term is already 0 there.
-_TINY_COS = 1e-12
 
 
 def cie_sky_parameters(sky_type: int) -> tuple[float, float, float, float, float]:
@@ -114,8 +117,8 @@ def cie_gradation(cos_zenith: ArrayLike, a: float, b: float) -> NDArray[np.float
     a, b : float
         Gradation parameters (b < 0 for all 15 standard types).
     """
-    c = np.clip(np.asarray(cos_zenith, dtype=float), _TINY_COS, 1.0)
-    return 1.0 + a * np.exp(b / c)
+    return extended_perez(np.clip(np.asarray(cos_zenith, dtype=float), 0.0, 1.0), 0.0,
+                          np.array([a, b, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
 
 
 def cie_indicatrix(chi: ArrayLike, c: float, d: float, e: float) -> NDArray[np.float64]:
@@ -126,8 +129,7 @@ def cie_indicatrix(chi: ArrayLike, c: float, d: float, e: float) -> NDArray[np.f
     chi : array_like
         Angular distance between the sky element and the sun [rad].
     """
-    chi = np.asarray(chi, dtype=float)
-    return 1.0 + c * (np.exp(d * chi) - np.exp(d * np.pi / 2)) + e * np.cos(chi) ** 2
+    return extended_perez(1.0, chi, cie_parameters(0.0, 0.0, c, d, e))
 
 
 def cie_standard_relative_luminance(
@@ -146,20 +148,14 @@ def cie_standard_relative_luminance(
     sun_zenith : float
         Solar zenith angle Z_s [rad] (the zenith's distance from the sun).
     """
-    a, b, c, d, e = cie_sky_parameters(sky_type)
-    num = cie_indicatrix(chi, c, d, e) * cie_gradation(cos_zenith, a, b)
-    den = cie_indicatrix(sun_zenith, c, d, e) * cie_gradation(1.0, a, b)
-    return num / den
+    k = cie_parameters(*cie_sky_parameters(sky_type))
+    return extended_perez(np.clip(np.asarray(cos_zenith, dtype=float), 0.0, 1.0), chi, k) / extended_perez(
+        1.0, sun_zenith, k)
 
 
 def overcast_relative_luminance(cos_zenith: ArrayLike) -> NDArray[np.float64]:
     """Moon & Spencer / CIE overcast sky ``L / L_z = (1 + 2 cos theta) / 3`` (Preetham et al. 1999, Eq. 2)."""
     return (1.0 + 2.0 * np.asarray(cos_zenith, dtype=float)) / 3.0
-
-
-def _kittler_indicatrix(gamma: ArrayLike) -> NDArray[np.float64]:
-    gamma = np.asarray(gamma, dtype=float)
-    return 0.91 + 10.0 * np.exp(-3.0 * gamma) + 0.45 * np.cos(gamma) ** 2
 
 
 def kittler_clear_relative_luminance(
@@ -170,10 +166,9 @@ def kittler_clear_relative_luminance(
     ``(0.91 + 10 exp(-3 gamma) + 0.45 cos^2 gamma)(1 - exp(-0.32 / cos theta))`` divided by the same at the
     zenith (gamma = Z_s, theta = 0); ``1 - exp(-0.32 / cos theta)`` tends to 1 at the horizon.
     """
-    c = np.clip(np.asarray(cos_zenith, dtype=float), _TINY_COS, 1.0)
-    num = _kittler_indicatrix(gamma) * (1.0 - np.exp(-0.32 / c))
-    den = _kittler_indicatrix(sun_zenith) * (1.0 - np.exp(-0.32))
-    return num / den
+    k = kittler_parameters()
+    return extended_perez(np.clip(np.asarray(cos_zenith, dtype=float), 0.0, 1.0), gamma, k) / extended_perez(
+        1.0, sun_zenith, k)
 
 
 def _check_scale(zenith_luminance, diffuse_illuminance) -> tuple[float | None, float | None]:
@@ -195,7 +190,12 @@ def _check_scale(zenith_luminance, diffuse_illuminance) -> tuple[float | None, f
             raise InvalidParameterError(f"{name} must be a number [{unit}]; got {value!r}") from None
         if not (np.isfinite(v) and v >= 0.0):
             raise InvalidParameterError(f"{name} must be a finite number >= 0 [{unit}]; got {v}")
-        _check_upper(name, v, unit)
+        if name == "zenith_luminance" and v > MAX_SKY_LUMINANCE:
+            raise InvalidParameterError(f"{name} must be at most {MAX_SKY_LUMINANCE:.3g} cd m^-2 (the luminance of "
+                                        f"the solar disc outside the atmosphere, brighter than any sky); got {v:g}")
+        if name == "diffuse_illuminance" and v > MAX_ILLUMINANCE:
+            raise InvalidParameterError(f"{name} must be at most {MAX_ILLUMINANCE:g} lx (the extraterrestrial solar "
+                                        f"illuminance at perihelion); got {v:g}")
         out.append(v)
     return out[0], out[1]
 
@@ -207,15 +207,10 @@ def _check_sun_illuminance(value) -> float:
         raise InvalidParameterError(f"sun_illuminance_normal must be a number [lx]; got {value!r}") from None
     if not (np.isfinite(v) and v >= 0.0):
         raise InvalidParameterError(f"sun_illuminance_normal must be a finite number >= 0 [lx]; got {v}")
-    _check_upper("sun_illuminance_normal", v, "lx")
+    if v > MAX_ILLUMINANCE:
+        raise InvalidParameterError(f"sun_illuminance_normal must be at most {MAX_ILLUMINANCE:g} lx (the "
+                                    f"extraterrestrial solar illuminance at perihelion); got {v:g}")
     return v
-
-
-def _check_upper(name: str, value: float, unit: str) -> None:
-    """Refuse a scale above its physical limit (:func:`skyscatter.conventions.check_daylight_limit`)."""
-    from ..conventions import check_daylight_limit
-
-    check_daylight_limit(name, value, unit)
 
 
 class LuminanceSunMixin:
@@ -226,6 +221,13 @@ class LuminanceSunMixin:
     """
 
     sun_illuminance_normal: float | None = 0.0
+
+    @property
+    def sun(self) -> SolarDisc:
+        """The uniform solar disc that carries ``sun_illuminance_normal`` [lx] (0 once the sun has set)."""
+        disc = SunSkyMixin.sun.fget(self)  # type: ignore[attr-defined]
+        given = float(self.sun_illuminance_normal or 0.0) if self.sun_luminance() > 0 else 0.0
+        return dataclasses.replace(disc, normal_illuminance=given)
 
     def sun_luminance(self) -> float:
         """Luminance of the solar disc [cd m^-2] (0 when the sun's illuminance is unknown or the sun is set)."""
@@ -267,8 +269,10 @@ class _ScaledCIESky(LuminanceOnlySky):
 
         return plane_integral(self.relative_luminance)
 
-    def _set_scale(self, zenith_luminance, diffuse_illuminance) -> None:
+    def _set_scale(self, zenith_luminance, diffuse_illuminance, **parameters) -> None:
+        """Set L_z from the given scale and record the model's parameters (``parameters``: the others)."""
         lz, dv = _check_scale(zenith_luminance, diffuse_illuminance)
+        self._remember(**parameters, zenith_luminance=lz, diffuse_illuminance=None if lz is not None else dv)
         if lz is None:
             dv = DEFAULT_DIFFUSE_ILLUMINANCE if dv is None else dv
             lz = dv / self.relative_diffuse_illuminance()
@@ -297,6 +301,8 @@ class CIEOvercastSky(_ScaledCIESky):
 
     The sky has no sun (``has_sun`` is False). Spectra: CIE D65 scaled to the luminance.
     """
+
+    model_name = "cie-overcast"
 
     def __init__(self, *, zenith_luminance: float | None = None, diffuse_illuminance: float | None = None) -> None:
         self._set_scale(zenith_luminance, diffuse_illuminance)
@@ -329,6 +335,8 @@ class CIEClearSky(LuminanceSunMixin, SunSkyMixin, _ScaledCIESky):
         Direct normal illuminance of the sun [lx] for the solar disc (default 0: the formula is the sky only).
     """
 
+    model_name = "cie-clear"
+
     def __init__(
         self,
         sun_zenith: float,
@@ -340,7 +348,7 @@ class CIEClearSky(LuminanceSunMixin, SunSkyMixin, _ScaledCIESky):
     ) -> None:
         self.sun_zenith, self.sun_azimuth = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=False)
         self.sun_illuminance_normal = _check_sun_illuminance(sun_illuminance_normal)
-        self._set_scale(zenith_luminance, diffuse_illuminance)
+        self._set_scale(zenith_luminance, diffuse_illuminance, sun_illuminance_normal=self.sun_illuminance_normal)
 
     def __repr__(self) -> str:
         return (
@@ -377,6 +385,8 @@ class CIEStandardSky(LuminanceSunMixin, SunSkyMixin, _ScaledCIESky):
         Direct normal illuminance of the sun [lx] for the solar disc (default 0: the standard is the sky only).
     """
 
+    model_name = "cie"
+
     def __init__(
         self,
         sky_type: int,
@@ -391,9 +401,10 @@ class CIEStandardSky(LuminanceSunMixin, SunSkyMixin, _ScaledCIESky):
         self.parameters = cie_sky_parameters(self.sky_type)
         self.sun_zenith, self.sun_azimuth = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=False)
         self.sun_illuminance_normal = _check_sun_illuminance(sun_illuminance_normal)
-        a, b, c, d, e = self.parameters
-        self._norm = float(cie_indicatrix(self.sun_zenith, c, d, e) * cie_gradation(1.0, a, b))
-        self._set_scale(zenith_luminance, diffuse_illuminance)
+        self._extended = cie_parameters(*self.parameters)
+        self._norm = float(extended_perez(1.0, self.sun_zenith, self._extended))
+        self._set_scale(zenith_luminance, diffuse_illuminance, sky_type=self.sky_type,
+                        sun_illuminance_normal=self.sun_illuminance_normal)
 
     def __repr__(self) -> str:
         return (
@@ -407,8 +418,5 @@ class CIEStandardSky(LuminanceSunMixin, SunSkyMixin, _ScaledCIESky):
         return SKY_TYPE_DESCRIPTIONS[self.sky_type]
 
     def _relative(self, d: NDArray[np.float64]) -> NDArray[np.float64]:
-        a, b, c, dd, e = self.parameters
-        chi = self._gamma(d)
-        num = cie_indicatrix(chi, c, dd, e) * cie_gradation(np.clip(d[..., 2], 0.0, 1.0), a, b)
-        return num / self._norm
+        return extended_perez(np.clip(d[..., 2], 0.0, 1.0), self._gamma(d), self._extended) / self._norm
 

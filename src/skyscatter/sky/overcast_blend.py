@@ -13,6 +13,9 @@ The overcast part takes the Preetham zenith luminance L_z = Y_z(T, theta_s) (A.2
 not change with w. Its spectrum is flat (equal energy per nm, CIE illuminant E) scaled to its luminance; the sky's
 spectrum and XYZ are the same blend of the two parts. The solar disc is Preetham's sunlight times (1 - w): the
 sun fades behind the overcast. Valid turbidities are those of :class:`~skyscatter.PreethamSky` (1.65 to 11).
+
+Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
+doi:10.1145/311535.311545.
 """
 
 from __future__ import annotations
@@ -52,6 +55,8 @@ class PreethamOvercastBlendSky(SunSkyMixin, SkyModel):
         Turbidities where the overcast weight starts rising from 0 and reaches 1 (default 6 and 10).
     """
 
+    model_name = "preetham-overcast"
+
     def __init__(
         self,
         turbidity: float,
@@ -62,6 +67,7 @@ class PreethamOvercastBlendSky(SunSkyMixin, SkyModel):
         blend_end: float = 10.0,
     ) -> None:
         self.clear = PreethamSky(turbidity, sun_zenith, sun_azimuth)
+        self._remember(turbidity=self.clear.turbidity, blend_start=float(blend_start), blend_end=float(blend_end))
         self.turbidity = self.clear.turbidity
         self.sun_zenith, self.sun_azimuth = self.clear.sun_zenith, self.clear.sun_azimuth
         self.weight = overcast_weight(self.turbidity, float(blend_start), float(blend_end))

@@ -36,6 +36,9 @@ Guards (on by default, ``guards=False`` turns them off; each is what Radiance's 
   uniform (gendaymtx's last resort), noted in ``guards_applied``.
 
 Spectra: CIE D65 scaled to the luminance (``cct`` = 6504 K). Directions below the horizon are 0.
+
+Reference: Perez, Seals & Michalsky (1993), Solar Energy 50(3):235-245, doi:10.1016/0038-092X(93)90017-I; Perez et
+al. (1990), Solar Energy 44(5):271-289, doi:10.1016/0038-092X(90)90055-H.
 """
 
 from __future__ import annotations
@@ -47,8 +50,9 @@ from ..atmosphere.airmass import relative_optical_mass
 from ..atmosphere.tables import load_table
 from ..conventions import as_directions, direction_from_angles
 from ..errors import InvalidParameterError
-from .base import LuminanceOnlySky, SunSkyMixin, check_sun_angles
+from .base import MAX_ILLUMINANCE, MAX_IRRADIANCE, LuminanceOnlySky, SunSkyMixin, check_sun_angles
 from .cie import LuminanceSunMixin
+from .perez_family import perez_f
 
 __all__ = [
     "DEFAULT_DEW_POINT",
@@ -88,8 +92,9 @@ DELTA_FLOOR_BINS_2_5 = 0.2
 MIN_SUN_ZENITH = float(np.radians(3.0))
 #: Dew point [deg C] used when none is given: W = exp(0.07 * 11 - 0.075) = 2.0 cm (gendaylit's default W).
 DEFAULT_DEW_POINT = 11.0
-# cos(theta) floor inside exp(b / cos theta) (Radiance perezlum.cal).
-_HORIZON_COS = 0.01
+#: Sky condition when none is given: a clear sky of the clearest bin (epsilon > 6.2), typical brightness.
+DEFAULT_EPSILON = 6.5
+DEFAULT_DELTA = 0.15
 _COEFFS = "abcde"
 
 
@@ -254,15 +259,11 @@ def perez_relative_luminance(
     coefficients : array_like, shape (..., 5)
         (a, b, c, d, e) from :func:`perez_coefficients`, broadcast against the angles' shape.
     guards : bool
-        Floor cos(theta) at 0.01 in the gradation and clip negative F to 0 (default).
+        Clip negative F to 0 (default). The gradation's cos(theta) is floored at 0.01 either way (the one horizon
+        rule of :mod:`skyscatter.sky.perez_family`, as Radiance's perezlum.cal).
     """
-    k = np.asarray(coefficients, dtype=float)
-    a, b, c, d, e = (k[..., i] for i in range(5))
-    ct = np.asarray(cos_theta, dtype=float)
-    cg = np.clip(np.asarray(cos_gamma, dtype=float), -1.0, 1.0)
-    ct = np.maximum(ct, _HORIZON_COS) if guards else np.maximum(ct, 1e-12)
-    with np.errstate(over="ignore", invalid="ignore"):  # b > 0 without guards: exp overflows to inf
-        f = (1.0 + a * np.exp(b / ct)) * (1.0 + c * np.exp(d * np.arccos(cg)) + e * cg * cg)
+    gamma = np.arccos(np.clip(np.asarray(cos_gamma, dtype=float), -1.0, 1.0))
+    f = perez_f(cos_theta, gamma, coefficients)
     return np.maximum(f, 0.0) if guards else f
 
 
@@ -357,7 +358,8 @@ def perez_parameters(
     )
 
 
-def _finite(name: str, value, unit: str, *, low: float | None = None, strict_low: bool = False) -> float:
+def _finite(name: str, value, unit: str, *, low: float | None = None, strict_low: bool = False,
+            high: float | None = None, why: str = "") -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -367,10 +369,12 @@ def _finite(name: str, value, unit: str, *, low: float | None = None, strict_low
     if low is not None and (v <= low if strict_low else v < low):
         rel = ">" if strict_low else ">="
         raise InvalidParameterError(f"{name} must be {rel} {low:g} [{unit}]; got {v:g}")
-    from ..conventions import check_daylight_limit
-
-    check_daylight_limit(name, v, unit)
+    if high is not None and v > high:
+        raise InvalidParameterError(f"{name} must be at most {high:g} [{unit}]{why}; got {v:g}")
     return v
+
+
+_ABOVE_SUN = " (the extraterrestrial solar value at perihelion)"
 
 
 class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
@@ -385,7 +389,8 @@ class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
     epsilon : float, optional
         Sky clearness, >= 1 (1: overcast; above about 6: clear).
     delta : float, optional
-        Sky brightness, >= 0 (typically 0.05-0.5).
+        Sky brightness, >= 0 (typically 0.05-0.5). With neither (epsilon, delta) nor the irradiances, the sky
+        is a clear one of the clearest bin: ``DEFAULT_EPSILON`` = 6.5 and ``DEFAULT_DELTA`` = 0.15.
     diffuse_illuminance : float, optional
         Horizontal diffuse illuminance D_v [lx]; default: from the irradiance (or from delta) with the Perez
         1990 diffuse luminous efficacy.
@@ -413,6 +418,8 @@ class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
     guards_applied : list of str
         Which guards changed an input.
     """
+
+    model_name = "perez"
 
     def __init__(
         self,
@@ -444,29 +451,28 @@ class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
                     "direct_normal_irradiance and diffuse_horizontal_irradiance [W m^-2] must be given together"
                 )
             kwargs["direct_normal_irradiance"] = _finite(
-                "direct_normal_irradiance", direct_normal_irradiance, "W m^-2", low=0.0
-            )
+                "direct_normal_irradiance", direct_normal_irradiance, "W m^-2", low=0.0, high=MAX_IRRADIANCE,
+                why=_ABOVE_SUN)
             kwargs["diffuse_horizontal_irradiance"] = _finite(
-                "diffuse_horizontal_irradiance", diffuse_horizontal_irradiance, "W m^-2", low=0.0, strict_low=True
-            )
+                "diffuse_horizontal_irradiance", diffuse_horizontal_irradiance, "W m^-2", low=0.0, strict_low=True,
+                high=MAX_IRRADIANCE, why=_ABOVE_SUN)
         elif by_parameters:
             if epsilon is None or delta is None:
                 raise InvalidParameterError("epsilon and delta must be given together")
             kwargs["epsilon"] = _finite("epsilon (sky clearness)", epsilon, "-", low=1.0)
             kwargs["delta"] = _finite("delta (sky brightness)", delta, "-", low=0.0, strict_low=not guards)
         else:
-            raise InvalidParameterError(
-                "PerezSky needs the sky condition: epsilon and delta, or direct_normal_irradiance and "
-                "diffuse_horizontal_irradiance [W m^-2]"
-            )
+            kwargs["epsilon"], kwargs["delta"] = DEFAULT_EPSILON, DEFAULT_DELTA
         if diffuse_illuminance is not None:
-            kwargs["diffuse_illuminance"] = _finite("diffuse_illuminance", diffuse_illuminance, "lx", low=0.0)
+            kwargs["diffuse_illuminance"] = _finite("diffuse_illuminance", diffuse_illuminance, "lx", low=0.0,
+                                                high=MAX_ILLUMINANCE, why=_ABOVE_SUN)
         if day_of_year is not None:
             doy = _finite("day_of_year", day_of_year, "day", low=1.0)
             if doy > 366 or not doy.is_integer():
                 raise InvalidParameterError(f"day_of_year must be a whole number 1-366; got {day_of_year!r}")
             day_of_year = int(doy)
-        self.dew_point = _finite("dew_point", dew_point, "deg C", low=-90.0)
+        self.dew_point = _finite("dew_point", dew_point, "deg C", low=-90.0, high=60.0,
+                                 why=" (the range of surface dew points on Earth)")
         self.guards = bool(guards)
         p = perez_parameters(
             self.sun_zenith, day_of_year=day_of_year, dew_point=self.dew_point, guards=self.guards, **kwargs
@@ -486,6 +492,7 @@ class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
             if 1.065 < float(p.epsilon) < 2.8 and float(p.delta) < DELTA_FLOOR_BINS_2_5:
                 notes.append(f"delta {float(p.delta):.4g} raised to 0.2 for the coefficients (bins 2-5)")
         self.guards_applied = notes
+        self._remember(**kwargs, day_of_year=day_of_year, dew_point=self.dew_point, guards=self.guards)
         self.day_of_year = day_of_year
         self.epsilon = float(p.epsilon)
         self.delta = float(p.delta)

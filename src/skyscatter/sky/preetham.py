@@ -9,6 +9,9 @@ with the distribution coefficients linear in turbidity T and the zenith values Y
 Appendix A.2 (zenith chromaticity matrices with the published 5-digit values, see ``shared/seeds/README.md``).
 Spectra are reconstructed from (x, y) with the CIE daylight basis (A.5) and scaled to the model's luminance.
 The sun is the A.1 spectral sunlight (:func:`skyscatter.sun.sunlight.sun_spectral_radiance`).
+
+Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
+doi:10.1145/311535.311545.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from ..spectral import (
     xyY_to_xyz,
 )
 from .base import SkyModel, SunSkyMixin, check_sun_angles
+from .perez_family import extended_perez_scalar, perez_f
 
 __all__ = [
     "MAX_TURBIDITY",
@@ -44,7 +48,7 @@ __all__ = [
 ]
 
 #: Smallest turbidity for which the published coefficients keep F(0, theta_s) > 0 for Y: below about 1.64
-#: ``1 + A_Y exp(B_Y)`` changes sign and the luminance turns negative (seeds README, errata).
+#: ``1 + A_Y exp(B_Y)`` changes sign and the luminance turns negative (a known limit of the published fit).
 MIN_TURBIDITY = 1.65
 #: Largest turbidity for which Y_z stays positive with the sun on the horizon: ``-0.2155 T + 2.4192 > 0``
 #: needs T < 11.226 (A.2).
@@ -75,8 +79,6 @@ _ZENITH_Y = np.array(
         [0.15346, -0.26756, 0.06670, 0.26688],
     ]
 )
-# Smallest cos(theta) used in exp(B / cos theta): B < 0 in the valid range, so the term vanishes at the horizon.
-_MIN_COS = 1e-6
 
 
 def preetham_coefficients(turbidity: float) -> dict[str, NDArray[np.float64]]:
@@ -117,27 +119,6 @@ def preetham_zenith_values(turbidity: float, sun_zenith: float) -> tuple[float, 
     return float(y_z), float(tv @ _ZENITH_X @ sv), float(tv @ _ZENITH_Y @ sv)
 
 
-def perez_f(cos_theta: ArrayLike, gamma: ArrayLike, coefficients: ArrayLike) -> NDArray[np.float64]:
-    """Perez et al. 1993 luminance distribution in Preetham's form (Preetham 1999, Eq. 3).
-
-    ``F = (1 + A exp(B / cos theta)) (1 + C exp(D gamma) + E cos^2 gamma)``.
-
-    Parameters
-    ----------
-    cos_theta : array_like
-        Cosine of the view zenith angle; clamped to >= 1e-6 so the horizon gives the finite limit.
-    gamma : array_like
-        Angle between the view direction and the sun [rad].
-    coefficients : array_like, shape (5,)
-        A, B, C, D, E.
-    """
-    a, b, c, d, e = np.asarray(coefficients, dtype=float)
-    cos_theta = np.maximum(np.asarray(cos_theta, dtype=float), _MIN_COS)
-    gamma = np.asarray(gamma, dtype=float)
-    cos_g = np.cos(gamma)
-    return (1.0 + a * np.exp(b / cos_theta)) * (1.0 + c * np.exp(d * gamma) + e * cos_g * cos_g)
-
-
 class PreethamSky(SunSkyMixin, SkyModel):
     """The Preetham et al. 1999 analytic clear-sky model (Sec. 3, Appendix A.2 and A.5) with its sun (A.1).
 
@@ -168,6 +149,8 @@ class PreethamSky(SunSkyMixin, SkyModel):
     some wavelengths; those values are clipped to zero.
     """
 
+    model_name = "preetham"
+
     def __init__(
         self,
         turbidity: float,
@@ -184,6 +167,7 @@ class PreethamSky(SunSkyMixin, SkyModel):
             raise InvalidParameterError(f"below_horizon must be 'zero' or 'horizon'; got {below_horizon!r}")
         self.below_horizon = below_horizon
         self.strict = strict
+        self._remember(turbidity=t, below_horizon=below_horizon, strict=strict)
         self._coefficients = preetham_coefficients(t)
         y_z, x_z, yc_z = preetham_zenith_values(t, self.sun_zenith)
         self._zenith = {"Y": y_z * 1000.0, "x": x_z, "y": yc_z}
@@ -291,7 +275,7 @@ def _preetham_kernel(d, sun, coefficients, scale, horizon_mode, clip_negative, o
     """x, y, Y of the Preetham sky for unit-normalised copies of ``d`` (n, 3); returns the number of bad rows.
 
     One fused pass over the directions (Perez form, Eq. 3, for the three channels) instead of many numpy
-    temporaries; it evaluates exactly :func:`perez_f` per channel.
+    temporaries; it evaluates the shared Perez-family kernel (:mod:`skyscatter.sky.perez_family`) per channel.
     """
     n = d.shape[0]
     bad = 0
@@ -323,15 +307,10 @@ def _preetham_kernel(d, sun, coefficients, scale, horizon_mode, clip_negative, o
             below = False
         cos_gamma = min(1.0, max(-1.0, dx * sun[0] + dy * sun[1] + dz * sun[2]))
         gamma = np.arccos(cos_gamma)
-        inv_cos = 1.0 / max(dz, _MIN_COS)
         for c in range(3):
-            a = coefficients[c, 0]
-            b = coefficients[c, 1]
-            cc = coefficients[c, 2]
-            dd = coefficients[c, 3]
-            e = coefficients[c, 4]
-            f = (1.0 + a * np.exp(b * inv_cos)) * (1.0 + cc * np.exp(dd * gamma) + e * cos_gamma * cos_gamma)
-            out[c, i] = scale[c] * f
+            k = coefficients[c]
+            out[c, i] = scale[c] * extended_perez_scalar(dz, gamma, cos_gamma, k[0], k[1], 1.0, k[2], k[3], k[4],
+                                                         0.0, 0.0, 0.0, 0.0)
         if clip_negative and out[2, i] < 0.0:
             out[2, i] = 0.0
         if below:

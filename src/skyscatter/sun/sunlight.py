@@ -29,6 +29,9 @@ per-band differences are those of the two extraterrestrial spectra (tests/test_s
 
 Sun at or below the horizon (zenith >= pi/2): the transmittances and radiances are zero (the disc centre is
 not visible; the optical-mass formula is not used beyond the horizon).
+
+Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
+doi:10.1145/311535.311545.
 """
 
 from __future__ import annotations
@@ -41,9 +44,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..atmosphere.airmass import relative_optical_mass
 from ..atmosphere.tables import load_table, tabulated
-from ..atmosphere.turbidity import ANGSTROM_ALPHA
+from ..atmosphere.turbidity import ANGSTROM_ALPHA, angstrom_beta
 from ..errors import InvalidParameterError
 from ..spectral import as_wavelengths
+from .disc import solar_disc_solid_angle
 
 __all__ = [
     "DEFAULT_OZONE",
@@ -188,7 +192,7 @@ def transmittances(
     """
     z, wl, m, up, (t, l_ozone, w) = _prepare(sun_zenith, wavelengths, turbidity, ozone, water_vapour)
     lam = wl / 1000.0  # um
-    beta = 0.04608 * t - 0.04586
+    beta = angstrom_beta(t)
     k_o, k_g, k_wa = (_coefficient(c, wl) for c in ("k_o", "k_g", "k_wa"))
     kgm = k_g * m
     kwm = k_wa * w * m
@@ -216,7 +220,7 @@ def _prepare(sun_zenith, wavelengths, turbidity, ozone, water_vapour):
 def _total_optical_depth(m, wl, t, l_ozone, w):
     """Sum of the five A.1 exponents, -ln(product of transmittances), shape (..., n)."""
     lam = wl / 1000.0
-    beta = 0.04608 * t - 0.04586
+    beta = angstrom_beta(t)
     linear = 0.008735 * lam**-4.08 + beta * lam**-ANGSTROM_ALPHA + _coefficient("k_o", wl) * l_ozone
     depth = m * linear
     # the two saturating absorption terms only where their coefficient is non-zero (a few bands)
@@ -272,13 +276,11 @@ def sun_direct_normal_irradiance(
     """Direct normal spectral irradiance of the sun [W m^-2 nm^-1], shape (..., n).
 
     :func:`sun_spectral_radiance` times the solid angle of the solar disc,
-    :func:`skyscatter.sky.base.solar_disc_solid_angle` (6.87e-5 sr). The authors' implementation pairs
+    :func:`skyscatter.sun.disc.solar_disc_solid_angle` (6.87e-5 sr). The authors' implementation pairs
     Table 2 with a 6.744e-5 sr disc (1.39e6 km seen from 1.5e8 km), so the extraterrestrial irradiance
     obtained here is 1.8 % above theirs (1.97 instead of 1.94 W m^-2 nm^-1 at 500 nm). Parameters as in
     :func:`sun_spectral_radiance`.
     """
-    from ..sky.base import solar_disc_solid_angle
-
     return sun_spectral_radiance(
         sun_zenith, turbidity, wavelengths, ozone=ozone, water_vapour=water_vapour
     ) * solar_disc_solid_angle()

@@ -1,4 +1,7 @@
-"""The precomputed atmosphere as a skyscatter sky model: :class:`BrunetonSky`.
+"""The precomputed atmosphere of Bruneton & Neyret (2008) as a skyscatter sky model: :class:`BrunetonSky`.
+
+Bruneton, E., Neyret, F. (2008). Precomputed Atmospheric Scattering. Computer Graphics Forum 27(4),
+1079-1086, doi:10.1111/j.1467-8659.2008.01245.x. The tables come from :mod:`skyscatter.precomputed`.
 
 The observer stands at ``altitude`` above the planet's surface; the local East-North-Up frame is the
 planet-centred frame with the observer on its +z axis. Directions that meet the planet return the ground
@@ -17,24 +20,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..conventions import as_directions
 from ..errors import InvalidParameterError, SunBelowHorizonError
-from ..sky.base import SkyModel, SunSkyMixin, check_sun_angles
+from ..precomputed import AtmosphereParameters, PrecomputedAtmosphere
+from ..precomputed.cache import resolve_atmosphere
 from ..spectral import DEFAULT_WAVELENGTHS, as_wavelengths
-from .parameters import AtmosphereParameters
-from .tables import PrecomputedAtmosphere
+from .base import SkyModel, SunSkyMixin, check_sun_angles
 
 __all__ = ["BrunetonSky"]
 
+#: Highest observer altitude accepted [m] (10^5 km).
+MAX_ALTITUDE = 1.0e8
 
-def _resolve_atmosphere(atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None) -> PrecomputedAtmosphere:
-    if isinstance(atmosphere, PrecomputedAtmosphere):
-        return atmosphere
-    if atmosphere is None or isinstance(atmosphere, AtmosphereParameters):
-        from .cache import cached_atmosphere
-
-        return cached_atmosphere(atmosphere)
-    raise InvalidParameterError(
-        f"atmosphere must be a PrecomputedAtmosphere, AtmosphereParameters or None; got {type(atmosphere).__name__}"
-    )
 
 
 class BrunetonSky(SunSkyMixin, SkyModel):
@@ -63,6 +58,9 @@ class BrunetonSky(SunSkyMixin, SkyModel):
     integration for 15 or more wavelengths).
     """
 
+    model_name = "bruneton"
+
+    model_name = "bruneton"
     renders_ground = True
 
     def __init__(self, sun_zenith: float, sun_azimuth: float, *, altitude: float = 0.0,
@@ -74,7 +72,10 @@ class BrunetonSky(SunSkyMixin, SkyModel):
             raise InvalidParameterError(f"altitude must be a number [m]; got {altitude!r}") from None
         if not (math.isfinite(alt) and alt >= 0.0):
             raise InvalidParameterError(f"altitude must be finite and >= 0 m; got {altitude!r}")
-        atm = _resolve_atmosphere(atmosphere)
+        if alt > MAX_ALTITUDE:
+            raise InvalidParameterError(f"altitude must be at most {MAX_ALTITUDE:g} m (a quarter of the way to the "
+                                        f"Moon; the tables resolve nothing finer there); got {altitude!r}")
+        atm = resolve_atmosphere(atmosphere)
         limit = atm.parameters.max_sun_zenith
         top_altitude = atm.parameters.top_radius - atm.parameters.bottom_radius
         # Inside the atmosphere every lookup starts at the observer, with the observer's sun zenith: beyond
@@ -94,6 +95,8 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         self.altitude = alt
         self.atmosphere = atm
         self.sun_angular_radius = atm.parameters.sun_angular_radius
+        self._remember(altitude=alt, atmosphere=atmosphere)
+        self._remember(altitude=alt, atmosphere=atmosphere)
 
     def __repr__(self) -> str:
         return (f"BrunetonSky(sun_zenith={self.sun_zenith:.6g}, sun_azimuth={self.sun_azimuth:.6g}, "

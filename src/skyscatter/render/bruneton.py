@@ -1,6 +1,12 @@
-"""Camera views of the precomputed atmosphere from any position: the ground, an aircraft, orbit.
+"""Images of the precomputed atmosphere (Bruneton & Neyret 2008, doi:10.1111/j.1467-8659.2008.01245.x).
 
-The camera sits at ``altitude`` [m] above the point of the planet on the +z axis of the planet-centred frame,
+* :func:`camera_view`, :func:`fisheye_view` - the sky (and planet) from any position: the ground, an
+  aircraft, orbit; :func:`preview_png` to look at them.
+* :func:`bruneton_scene` - the landscape renderer (:class:`~skyscatter.render.Scene`) with the sky, the
+  sunlight on the terrain and the aerial perspective all from the tables, and light shafts from the terrain's
+  shadow (Eqs. 17-18; :mod:`skyscatter.aerial.bruneton`, :mod:`skyscatter.render.shafts`).
+
+Views: the camera sits at ``altitude`` [m] above the point of the planet on the +z axis of the planet-centred frame,
 whose axes are that point's East-North-Up frame; ``heading``, ``pitch`` and ``fov`` follow
 :func:`skyscatter.conventions.pinhole_directions`. Images are (H, W, 3) CIE XYZ [cd m^-2] or linear sRGB in
 skyscatter's HDR scale (``Y = luminance / 683``, :data:`skyscatter.spectral.HDR_SCALE`), with the solar disc
@@ -15,13 +21,20 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..aerial.base import DEFAULT_REFINE, DEFAULT_SHADOW_SAMPLES
+from ..aerial.bruneton import BrunetonAerialPerspective
 from ..conventions import as_directions, direction_from_angles, fisheye_directions, pinhole_directions
 from ..errors import InvalidParameterError
 from ..fileio import atomic_path
+from ..precomputed import AtmosphereParameters, PrecomputedAtmosphere
+from ..sky.bruneton import BrunetonSky
 from ..spectral import HDR_SCALE, xyz_to_linear_srgb
-from .tables import PrecomputedAtmosphere
+from .camera import PinholeCamera
+from .heightfield import HeightfieldTracer
+from .scene import Scene
+from .terrain import Terrain
 
-__all__ = ["camera_view", "fisheye_view", "preview_png", "render_directions"]
+__all__ = ["bruneton_scene", "camera_view", "fisheye_view", "preview_png", "render_directions"]
 
 _OUTPUTS = ("rgb", "xyz", "spectral")
 
@@ -113,3 +126,48 @@ def preview_png(image: ArrayLike, path: str | Path, *, exposure: float | None = 
     with atomic_path(target) as tmp:
         img.save(tmp, format="PNG")
     return target
+
+
+def bruneton_scene(terrain: Terrain, camera: PinholeCamera, sun_zenith: float, sun_azimuth: float, *,
+                   atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None = None, albedo: float = 0.2,
+                   sun_disc: bool = True, wavelengths: ArrayLike | None = None, shafts: bool = True,
+                   samples: int | None = None, refine: int | None = None) -> Scene:
+    """A :class:`~skyscatter.render.Scene` lit and hazed by the precomputed atmosphere.
+
+    Parameters
+    ----------
+    terrain : Terrain
+        The heightfield (heights above sea level [m]).
+    camera : PinholeCamera
+        The camera (ENU position [m]).
+    sun_zenith, sun_azimuth : float
+        Sun angles [rad] (azimuth from north towards east); the sun may be below the horizon down to the
+        atmosphere's ``max_sun_zenith`` (then there are no terrain shadows, only the Earth's).
+    atmosphere : PrecomputedAtmosphere or AtmosphereParameters, optional
+        Tables (default: the cached Earth tables, computed once, about 20 s).
+    albedo : float
+        Lambertian albedo of the terrain [-].
+    sun_disc : bool
+        Draw the solar disc.
+    wavelengths : array_like, optional
+        Wavelengths [nm] of the renderer (default 380-780 nm every 10 nm).
+    shafts : bool
+        Light shafts from the terrain's shadow (Eqs. 17-18); False gives Eq. 16 only.
+    samples, refine : int, optional
+        Ray-marching steps and boundary bisections of the shadow-length estimate (defaults of
+        :func:`skyscatter.render.shafts.shadow_lengths`).
+
+    Returns
+    -------
+    Scene
+    """
+    x, y, z = (float(v) for v in camera.position)
+    sky = BrunetonSky(sun_zenith, sun_azimuth, altitude=max(z, 0.0), atmosphere=atmosphere)
+    tracer = HeightfieldTracer(terrain) if shafts else None
+    aerial = BrunetonAerialPerspective(
+        sky, terrain=tracer, camera_xy=(x, y),
+        samples=DEFAULT_SHADOW_SAMPLES if samples is None else samples,
+        refine=DEFAULT_REFINE if refine is None else refine,
+    )
+    return Scene(sky, terrain=terrain, camera=camera, aerial=aerial, albedo=albedo, sun_disc=sun_disc,
+                 wavelengths=wavelengths)

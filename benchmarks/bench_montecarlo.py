@@ -1,0 +1,87 @@
+"""Benchmark of the Monte Carlo reference (skyscatter.montecarlo), printed as a small report.
+
+1. Paths per second per core: one thread (synchronous scheduler), Earth defaults, sun elevation 20 deg, the
+   11 wavelengths below sharing each path; CPU time of the process and wall time.
+2. The reference of the issue: 1000 equal-area sky directions x 11 wavelengths, Earth defaults, sun elevation
+   20 deg, with the paths per direction chosen from a pilot run so that the median relative standard error is
+   <= 1 %; wall time on the threaded scheduler (all cores).
+3. The same job on a dask.distributed LocalCluster with 2 worker processes (1 thread each) against the threaded
+   scheduler, and a check that both give bit-identical radiances.
+
+Wavelengths: 11 from 360 to 760 nm (40 nm steps). The issue asks for 320-720 nm, but the ozone cross-sections
+of the Earth defaults (Serdyuchenko et al. 2014) start at 360 nm and the medium refuses wavelengths outside its
+spectra. Usage: ``python benchmarks/bench_montecarlo.py [--directions N] [--target 0.01] [--no-cluster]``.
+Run on an otherwise idle machine: other processes on the cores inflate every figure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+
+import numpy as np
+
+from skyscatter.montecarlo import sky_radiance
+from skyscatter.montecarlo.dataset import equal_area_directions
+from skyscatter.precomputed import AtmosphereParameters
+
+WAVELENGTHS = np.arange(360.0, 761.0, 40.0)
+SUN_ZENITH = math.radians(90.0 - 20.0)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--directions", type=int, default=1000)
+    ap.add_argument("--target", type=float, default=0.01, help="median relative standard error")
+    ap.add_argument("--no-cluster", action="store_true")
+    args = ap.parse_args()
+    atm = AtmosphereParameters()
+    dirs = equal_area_directions(args.directions)
+    cores = len(os.sched_getaffinity(0))
+    load = os.getloadavg()[0]
+    print(f"machine: {cores} cores, load average {load:.1f} at start (shared machine: figures are lower bounds)")
+    sky_radiance(atm, dirs[:2], WAVELENGTHS, sun_zenith=SUN_ZENITH, samples=8, scheduler="synchronous")  # compile
+
+    # 1. paths per second per core
+    sub = dirs[:: max(1, args.directions // 50)]
+    c0 = time.process_time()
+    pilot = sky_radiance(atm, sub, WAVELENGTHS, sun_zenith=SUN_ZENITH, samples=512, scheduler="synchronous", seed=1)
+    cpu = time.process_time() - c0
+    n_paths = sub.shape[0] * pilot.samples
+    print(f"1. {n_paths} paths ({WAVELENGTHS.size} wavelengths each), one thread: {n_paths / cpu:,.0f} paths per "
+          f"CPU-second ({n_paths / pilot.seconds:,.0f} per wall-second; wall {pilot.seconds:.1f} s, CPU {cpu:.1f} s)")
+    med = float(np.median(pilot.relative_stderr))
+    samples = int(math.ceil(pilot.samples * (med / args.target) ** 2 * 1.1 / 512) * 512)
+    print(f"   pilot median relative stderr {med:.4f} at {pilot.samples} paths -> {samples} paths per direction "
+          f"for {args.target:.2%}")
+
+    # 2. the reference job, threaded
+    res = sky_radiance(atm, dirs, WAVELENGTHS, sun_zenith=SUN_ZENITH, samples=samples, seed=7)
+    rel = res.relative_stderr
+    print(f"2. {dirs.shape[0]} directions x {WAVELENGTHS.size} wavelengths, {res.samples} paths each, threaded "
+          f"scheduler: wall {res.seconds:.1f} s; median relative stderr {np.median(rel):.4f} (per wavelength "
+          f"{', '.join(f'{w:.0f}:{m:.3f}' for w, m in zip(WAVELENGTHS, np.median(rel, 0), strict=True))}), "
+          f"95th percentile {np.percentile(rel, 95):.4f}")
+
+    # 3. LocalCluster with 2 worker processes
+    if not args.no_cluster:
+        from distributed import Client, LocalCluster
+
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                          silence_logs=50) as cluster, Client(cluster) as client:
+            t0 = time.perf_counter()
+            client.run(lambda: sky_radiance(atm, dirs[:1], WAVELENGTHS, sun_zenith=SUN_ZENITH, samples=8,
+                                            scheduler="synchronous"))  # load the numba cache on the workers
+            warm = time.perf_counter() - t0
+            res2 = sky_radiance(atm, dirs, WAVELENGTHS, sun_zenith=SUN_ZENITH, samples=samples, seed=7,
+                                scheduler=client)
+        same = bool(np.array_equal(res2.radiance, res.radiance) and np.array_equal(res2.stderr, res.stderr))
+        print(f"3. LocalCluster 2 processes x 1 thread: wall {res2.seconds:.1f} s (worker warm-up {warm:.1f} s) vs "
+              f"threaded {res.seconds:.1f} s; bit-identical: {same}")
+    print(f"load average at the end {os.getloadavg()[0]:.1f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,88 @@
+"""``skyscatter fit-hosek-wilkie``: fit the Hosek-Wilkie sky form to the precomputed atmosphere, write a dataset."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+from ..errors import InvalidParameterError
+from .common import HELP_FORMATTER, float_in, positive_int
+
+
+def _wavelength_list(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a list like 440,550,680 [nm], got {text!r}") from None
+    if not values or any(not (300.0 <= v <= 1000.0) for v in values) or values != sorted(set(values)):
+        raise argparse.ArgumentTypeError(f"expected increasing wavelengths in 300-1000 nm, got {text!r}")
+    return values
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "fit-hosek-wilkie",
+        help="fit the Hosek-Wilkie sky form to the precomputed atmosphere and write a dataset (.npz)",
+        description=(
+            "Sample the precomputed multiple-scattering sky (Bruneton & Neyret 2008; tables from the cache, built "
+            "the first time, about 30 s) at several sun elevations and fit the Hosek & Wilkie 2012 form (nine "
+            "parameters and a radiance scale, quintic Bezier curves in the cube root of the sun elevation) at each "
+            "wavelength by least squares. The dataset file is read by HosekWilkieSky(..., dataset="
+            "HosekWilkieDataset.load(path)). Example: skyscatter fit-hosek-wilkie --turbidity 3 --out t3.npz"
+        ),
+        formatter_class=HELP_FORMATTER,
+    )
+    p.add_argument("--out", type=Path, required=True, metavar="FILE.npz", help="dataset file to write")
+    g = p.add_argument_group("atmosphere", "Earth defaults of the precomputed atmosphere unless changed.")
+    g.add_argument("--turbidity", type=float_in(1.0, 20.0), default=None, metavar="T",
+                   help="aerosols from turbidity (Preetham 1999 A.1: Angstrom alpha 1.3, beta 0.04608 T - 0.04586)"
+                        " instead of the default (vertical aerosol optical depth 0.0053, alpha 0)")
+    g.add_argument("--ground-albedo", type=float_in(0.0, 1.0), default=0.1, metavar="A",
+                   help="ground albedo (Lambertian, same at every wavelength)")
+    f = p.add_argument_group("fit")
+    f.add_argument("--fit-wavelengths", type=_wavelength_list, default=[440.0, 550.0, 680.0], metavar="LIST",
+                   help="wavelengths to fit [nm], e.g. 440,550,680")
+    f.add_argument("--elevations", type=positive_int, default=16, metavar="N",
+                   help="number of sun elevations sampled, even in (elevation / 90 deg)^(1/3), at least 6")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..fit import fit_hosek_wilkie, fit_sun_elevations
+    from ..precomputed import AtmosphereParameters
+    from ..precomputed.cache import load_or_compute
+
+    if args.out.suffix != ".npz":
+        raise InvalidParameterError(f"--out must name an .npz file; got {args.out}")
+    if str(args.out.parent) and not args.out.parent.is_dir():
+        raise InvalidParameterError(f"--out: folder {args.out.parent} does not exist")
+    if args.elevations < 6:
+        raise InvalidParameterError(f"--elevations must be at least 6 (one per control point); got {args.elevations}")
+    changes = dict(ground_albedo=args.ground_albedo)
+    if args.turbidity is not None:
+        params = AtmosphereParameters.from_turbidity(args.turbidity, **changes)
+    else:
+        params = AtmosphereParameters(**changes)
+    t0 = time.perf_counter()
+    atm, _ = load_or_compute(params, progress=sys.stderr.isatty())
+    from ..precomputed.sky import BrunetonSky
+
+    def make(zenith: float, azimuth: float):
+        return BrunetonSky(zenith, azimuth, atmosphere=atm)
+
+    ds = fit_hosek_wilkie(make, args.fit_wavelengths, sun_elevations=fit_sun_elevations(args.elevations),
+                          provenance={"atmosphere": json.loads(params.canonical_json())})
+    ds.save(args.out)
+    rms = ds.provenance["fit"]["rms_relative_error_at_samples"]
+    print(f"fitted {len(args.fit_wavelengths)} wavelengths at {args.elevations} sun elevations in "
+          f"{time.perf_counter() - t0:.1f} s")
+    for w, row in zip(args.fit_wavelengths, rms, strict=True):
+        worst = max(row)
+        print(f"  {w:g} nm: RMS relative error at the samples {100 * math.fsum(row) / len(row):.2f} % mean, "
+              f"{100 * worst:.2f} % worst")
+    print(f"wrote {args.out}")
+    return 0

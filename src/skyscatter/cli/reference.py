@@ -1,0 +1,109 @@
+"""``skyscatter reference``: a Monte Carlo sky-radiance reference grid written to Zarr (resumable)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+from .common import HELP_FORMATTER, float_in, positive_int
+
+
+def _float_list(name: str, unit: str):
+    def parse(text: str) -> list[float]:
+        t = text.strip()
+        try:
+            if ":" in t:
+                start, stop, step = (float(v) for v in t.split(":"))
+                if not step > 0:
+                    raise ValueError
+                n = int(math.floor(abs(stop - start) / step + 1e-9)) + 1
+                sign = 1.0 if stop >= start else -1.0
+                values = [start + sign * i * step for i in range(n)]
+            else:
+                values = [float(v) for v in t.split(",") if v.strip()]
+            if not values or not all(math.isfinite(v) for v in values):
+                raise ValueError
+            return values
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"{name}: expected a list like 1,2,3 or a range START:STOP:STEP [{unit}], got {text!r}"
+            ) from None
+
+    return parse
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "reference",
+        help="Monte Carlo sky radiance reference grid (sun x aerosol x albedo x wavelength x directions) to Zarr",
+        description=(
+            "Trace the spectral Monte Carlo reference (all orders of scattering in the spherical atmosphere, "
+            "docs/montecarlo.md) for every sun elevation x aerosol amount x ground albedo, over an equal-area set "
+            "of sky directions, and write radiance, standard error and the transmitted solar disc to a Zarr store "
+            "(an xarray Dataset with the job as attributes). Re-running the same command resumes: cells already "
+            "written are skipped. A store holding a different job is refused."
+        ),
+        formatter_class=HELP_FORMATTER,
+    )
+    p.add_argument("output", type=Path, metavar="STORE.zarr", help="Zarr store to create or resume")
+    p.add_argument("--sun-elevation", type=_float_list("sun elevation", "deg"), default="60,30,10,0,-3,-6",
+                   metavar="DEG", help="sun elevations [deg], list or START:STOP:STEP")
+    aer = p.add_mutually_exclusive_group()
+    aer.add_argument("--turbidity", type=_float_list("turbidity", "1-20"), default=None, metavar="T",
+                     help="turbidities (Preetham 1999 A.1 Angstrom beta, alpha 1.3); 2.5 when neither --turbidity nor "
+                          "--aod is given")
+    aer.add_argument("--aod", type=_float_list("aerosol optical depth", "at 550 nm"), default=None, metavar="TAU",
+                     help="vertical aerosol optical depths at 550 nm (Angstrom alpha 0 of the Earth defaults)")
+    p.add_argument("--albedo", type=_float_list("albedo", "0-1"), default="0.1", metavar="A",
+                   help="ground albedos (Lambertian, grey)")
+    p.add_argument("--wavelengths", type=_float_list("wavelengths", "nm"), default="380:780:40", metavar="NM",
+                   help="wavelengths [nm] (ozone cross-sections cover 360-830 nm)")
+    p.add_argument("--directions", type=positive_int, default=200, metavar="N",
+                   help="number of equal-area sky directions over the upper hemisphere (spherical Fibonacci)")
+    p.add_argument("--samples", type=positive_int, default=4096, metavar="N", help="paths per direction")
+    p.add_argument("--seed", type=int, default=0, metavar="N", help="random seed (results depend only on it)")
+    p.add_argument("--altitude", type=float_in(0.0, 1e8), default=0.0, metavar="M", help="observer altitude [m]")
+    p.add_argument("--phase", choices=("cornette-shanks", "henyey-greenstein"), default="cornette-shanks",
+                   help="aerosol phase function")
+    p.add_argument("--scheduler", default=None, metavar="ADDR",
+                   help="'synchronous', or a dask.distributed scheduler address (tcp://host:8786); "
+                        "default: local threads")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..montecarlo.dataset import equal_area_directions, reference
+
+    bar = None
+
+    def progress(done: int, total: int) -> None:
+        nonlocal bar
+        if args.no_progress:
+            return
+        if bar is None:
+            from tqdm import tqdm
+
+            bar = tqdm(total=total, unit="task", file=sys.stderr, dynamic_ncols=True,
+                       bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} tasks [{elapsed}<{remaining}]")
+        bar.n = done
+        bar.refresh()
+
+    turbidity = args.turbidity if args.turbidity is not None or args.aod is not None else [2.5]
+    t0 = time.perf_counter()
+    try:
+        ds = reference(args.output, sun_elevations=[math.radians(e) for e in args.sun_elevation],
+                       turbidities=turbidity, aerosol_optical_depths=args.aod, albedos=args.albedo,
+                       wavelengths=args.wavelengths, directions=equal_area_directions(args.directions),
+                       samples=args.samples, seed=args.seed, altitude=args.altitude, phase=args.phase,
+                       scheduler=args.scheduler, progress=progress)
+    finally:
+        if bar is not None:
+            bar.close()
+    cells = int(ds["done"].sum())
+    print(f"wrote {args.output}: {cells} cells x {ds.sizes['direction']} directions x {ds.sizes['wavelength']} "
+          f"wavelengths ({time.perf_counter() - t0:.1f} s)")
+    return 0

@@ -1,0 +1,453 @@
+"""Monte Carlo sky radiance on Dask: validation, medium packing, task graph, reduction.
+
+A job is (medium, directions, wavelengths, sun, observer altitude, samples, seed). It is cut into fixed *batches*
+of paths (``batch_size`` paths, a function of ``samples`` only) and fixed *wavelength groups* (consecutive
+wavelengths sharing paths, at most ``group_size``), and every (direction, group, batch) draws from its own
+counter-based random stream (:mod:`.rng`). Tasks bundle direction blocks x groups x runs of batches; each returns
+per-batch sums, and the final reduction adds the batches of the whole job in one fixed order. The result therefore
+depends on the seed and the job only, not on the task sizes, the scheduler or the number of workers.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..atmosphere.phase_sampling import PHASE_KINDS
+from ..conventions import direction_from_angles
+from ..errors import InvalidDirectionError, InvalidParameterError
+from ..precomputed import AtmosphereParameters
+from . import kernels
+
+__all__ = ["MonteCarloResult", "Medium", "prepare_medium", "sky_radiance", "solar_disc_radiance"]
+
+#: Largest number of wavelengths that share one path (hero-wavelength group).
+DEFAULT_GROUP_SIZE = 16
+#: Largest number of paths in one batch (the unit of the random streams and of the reduction).
+MAX_BATCH_SIZE = 512
+
+
+@dataclass(frozen=True)
+class MonteCarloResult:
+    """Result of :func:`sky_radiance`.
+
+    Attributes
+    ----------
+    radiance : ndarray, shape (N, n_wavelengths)
+        Sky spectral radiance without the directly transmitted sun [W m^-2 sr^-1 nm^-1].
+    stderr : ndarray, shape (N, n_wavelengths)
+        Standard error of ``radiance`` (sample standard deviation / sqrt(samples)) [W m^-2 sr^-1 nm^-1].
+    samples : int
+        Paths per direction (each path serves every wavelength of its group).
+    seconds : float
+        Wall-clock time of the computation [s].
+    wavelengths : ndarray (n_wavelengths,) [nm]; directions : ndarray (N, 3) unit ENU vectors.
+    """
+
+    radiance: NDArray[np.float64]
+    stderr: NDArray[np.float64]
+    samples: int
+    seconds: float
+    wavelengths: NDArray[np.float64]
+    directions: NDArray[np.float64]
+
+    @property
+    def relative_stderr(self) -> NDArray[np.float64]:
+        """stderr / radiance (inf where the radiance is 0)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(self.radiance > 0, self.stderr / self.radiance, np.inf)
+
+
+@dataclass(frozen=True)
+class Medium:
+    """The atmosphere packed for the kernels at a set of wavelengths (all SI, see ``kernels.trace_block``)."""
+
+    bottom_radius: float
+    top_radius: float
+    edges: NDArray[np.float64]
+    layers: NDArray[np.float64]
+    nlay: NDArray[np.int64]
+    coef: NDArray[np.float64]
+    mie_ssa: float
+    g: float
+    kind: int
+    albedo: NDArray[np.float64]
+    esun: NDArray[np.float64]
+    sun_angular_radius: float
+
+    def subset(self, index: NDArray[np.int64]) -> Medium:
+        """The same medium at a subset of its wavelengths."""
+        return Medium(self.bottom_radius, self.top_radius, self.edges, self.layers, self.nlay,
+                      np.ascontiguousarray(self.coef[index]), self.mie_ssa, self.g, self.kind,
+                      np.ascontiguousarray(self.albedo[index]), np.ascontiguousarray(self.esun[index]),
+                      self.sun_angular_radius)
+
+
+def quadrature_edges(atmosphere: AtmosphereParameters) -> NDArray[np.float64]:
+    """Radii [m] of the quadrature shells: layer boundaries, zeros of linear layers, and two scale heights apart
+    for each exponential layer (up to 12 scale heights), strictly inside the atmosphere.
+
+    4-point Gauss-Legendre over a piece spanning two scale heights of ``exp`` integrates it to a relative error
+    of ``2^9 (4!)^4 / (9 (8!)^3) ~ 3e-7`` (Abramowitz & Stegun 25.4.30); the tests check columns against
+    adaptive quadrature."""
+    top = atmosphere.thickness
+    alts: list[float] = []
+    for prof in (atmosphere.rayleigh_density, atmosphere.mie_density, atmosphere.ozone_density):
+        start = 0.0
+        for k, lay in enumerate(prof.layers):
+            last = k == len(prof.layers) - 1
+            end = top if last else start + lay.width
+            if not last:
+                alts.append(end)
+            if lay.exp_term != 0.0 and lay.exp_scale != 0.0:
+                scale = 1.0 / abs(lay.exp_scale)
+                alts.extend(np.arange(start + 2 * scale, min(end, start + 12 * scale), 2 * scale).tolist())
+            if lay.linear_term != 0.0:
+                z = -lay.constant_term / lay.linear_term
+                if start < z < end:
+                    alts.append(z)
+            start = end
+    a = np.unique(np.round(np.array([x for x in alts if 1.0 < x < top - 1.0]), 3))
+    if a.size > 1:
+        keep = np.concatenate([[True], np.diff(a) > 1.0])
+        a = a[keep]
+    return atmosphere.bottom_radius + a
+
+
+def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.float64],
+                   phase: str = "cornette-shanks") -> Medium:
+    """Pack ``atmosphere`` for the kernels at ``wavelengths`` [nm]; ``phase`` names the aerosol phase function."""
+    if not isinstance(atmosphere, AtmosphereParameters):
+        raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(atmosphere).__name__}")
+    if phase not in PHASE_KINDS:
+        raise InvalidParameterError(f"phase must be one of {', '.join(PHASE_KINDS)}; got {phase!r}")
+    atmosphere.check_wavelengths(wavelengths)
+    profiles = (atmosphere.rayleigh_density, atmosphere.mie_density, atmosphere.ozone_density)
+    arrs = [pr.as_array() for pr in profiles]
+    nmax = max(a.shape[0] for a in arrs)
+    layers = np.zeros((3, nmax, 5))
+    for c, a in enumerate(arrs):
+        layers[c, : a.shape[0]] = a
+    coef = np.stack([atmosphere.rayleigh_scattering_at(wavelengths), atmosphere.mie_extinction_at(wavelengths),
+                     atmosphere.ozone_absorption_at(wavelengths)], axis=-1)
+    return Medium(
+        atmosphere.bottom_radius, atmosphere.top_radius, quadrature_edges(atmosphere), layers,
+        np.array([a.shape[0] for a in arrs], dtype=np.int64), np.ascontiguousarray(coef, dtype=float),
+        atmosphere.mie_single_scattering_albedo, atmosphere.mie_phase_g, PHASE_KINDS[phase],
+        np.ascontiguousarray(atmosphere.ground_albedo_at(wavelengths), dtype=float),
+        np.ascontiguousarray(atmosphere.solar_irradiance_at(wavelengths), dtype=float),
+        atmosphere.sun_angular_radius,
+    )
+
+
+# --------------------------------------------------------------------------------------------- validation
+
+
+def check_directions(directions: ArrayLike) -> NDArray[np.float64]:
+    """Unit (N, 3) directions from ``(..., 3)`` input; refuses non-finite and zero-length vectors."""
+    d = np.asarray(directions, dtype=float)
+    if d.ndim == 0 or d.shape[-1] != 3:
+        raise InvalidDirectionError(f"directions must have shape (..., 3); got {d.shape}")
+    d = d.reshape(-1, 3)
+    if d.shape[0] == 0:
+        raise InvalidDirectionError("no directions given")
+    if not np.all(np.isfinite(d)):
+        raise InvalidDirectionError("directions contain NaN or infinite components")
+    n = np.linalg.norm(d, axis=-1)
+    if np.any(n <= 1e-12):
+        raise InvalidDirectionError("directions contain zero-length vectors")
+    return np.ascontiguousarray(d / n[:, None])
+
+
+def check_wavelengths(wavelengths: ArrayLike) -> NDArray[np.float64]:
+    wl = np.atleast_1d(np.asarray(wavelengths, dtype=float))
+    if wl.ndim != 1 or wl.size == 0:
+        raise InvalidParameterError("wavelengths must be a non-empty 1-D array [nm]")
+    if not np.all(np.isfinite(wl)) or np.any(wl <= 0):
+        raise InvalidParameterError("wavelengths must be finite and > 0 nm")
+    return wl
+
+
+def _check_scalar(name: str, value: Any, lo: float, hi: float, unit: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a number [{unit}]; got {value!r}") from None
+    if not (math.isfinite(v) and lo <= v <= hi):
+        raise InvalidParameterError(f"{name} must be in [{lo:g}, {hi:g}] {unit}; got {value!r}")
+    return v
+
+
+def _check_samples(samples: Any) -> int:
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
+        raise InvalidParameterError(f"samples must be an integer >= 1; got {samples!r}")
+    return int(samples)
+
+
+def batch_layout(samples: int) -> tuple[int, int]:
+    """(batch_size, n_batches) for a number of paths per direction; the samples used are their product."""
+    bs = min(samples, MAX_BATCH_SIZE)
+    return bs, -(-samples // bs)
+
+
+def wavelength_groups(n: int, group_size: int = DEFAULT_GROUP_SIZE) -> list[NDArray[np.int64]]:
+    """Consecutive wavelength indices that share paths (even split into groups of at most ``group_size``)."""
+    if group_size < 1:
+        raise InvalidParameterError(f"group_size must be >= 1; got {group_size}")
+    k = -(-n // group_size)
+    return [np.asarray(g, dtype=np.int64) for g in np.array_split(np.arange(n), k)]
+
+
+# --------------------------------------------------------------------------------------------- tasks
+
+
+def _run_task(medium: Medium, r_obs: float, sun: NDArray[np.float64], dirs: NDArray[np.float64],
+              dir_index: NDArray[np.int64], group: int, wl_index: NDArray[np.int64], batch0: int, n_batches: int,
+              batch_size: int, seed: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """One task: per-batch sums and sums of squares, each (n_dirs, n_group_wavelengths, n_batches)."""
+    m = medium.subset(wl_index)
+    n = dirs.shape[0]
+    sums = np.zeros((n, wl_index.size, n_batches))
+    sumsq = np.zeros_like(sums)
+    kernels.trace_block(r_obs, dirs, dir_index, sun, math.cos(m.sun_angular_radius), m.bottom_radius,
+                        m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.mie_ssa, m.g, m.kind, m.albedo, m.esun,
+                        seed, group, batch0, n_batches, batch_size, sums, sumsq)
+    return sums, sumsq
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """Coordinates of one task of a job."""
+
+    dir_slice: slice
+    group: int
+    batch0: int
+    n_batches: int
+
+
+def plan_tasks(n_dirs: int, n_groups: int, n_batches: int, batch_size: int, *,
+               directions_per_task: int | None = None, batches_per_task: int | None = None) -> list[TaskSpec]:
+    """Cut a job into tasks (direction blocks x wavelength groups x runs of batches); any cut gives the same result."""
+    dpt = directions_per_task or min(n_dirs, 32)
+    if batches_per_task is None:
+        batches_per_task = max(1, 32768 // (batch_size * dpt))
+    bpt = max(1, min(int(batches_per_task), n_batches))
+    out = []
+    for d0 in range(0, n_dirs, dpt):
+        for g in range(n_groups):
+            for b0 in range(0, n_batches, bpt):
+                out.append(TaskSpec(slice(d0, min(n_dirs, d0 + dpt)), g, b0, min(bpt, n_batches - b0)))
+    return out
+
+
+def _resolve_scheduler(scheduler: Any) -> tuple[str, Any]:
+    """("local", dask scheduler name) or ("distributed", Client)."""
+    if scheduler is None or scheduler == "threads" or scheduler == "threaded":
+        return "local", "threads"
+    if scheduler in ("synchronous", "sync"):
+        return "local", "sync"
+    if isinstance(scheduler, str):
+        try:
+            from distributed import Client
+        except ImportError:  # pragma: no cover
+            raise InvalidParameterError("a scheduler address needs the 'distributed' package") from None
+        if "://" not in scheduler and ":" not in scheduler:
+            raise InvalidParameterError(
+                "scheduler must be None (threads), 'synchronous', a dask.distributed Client or a scheduler address "
+                f"such as 'tcp://host:8786'; got {scheduler!r}"
+            )
+        try:
+            return "distributed", Client(scheduler, timeout="10s")
+        except (OSError, ValueError, TimeoutError) as exc:
+            raise InvalidParameterError(f"cannot connect to the dask scheduler at {scheduler!r}: {exc}") from None
+    try:
+        from distributed import Client
+    except ImportError:  # pragma: no cover
+        Client = None  # noqa: N806
+    if Client is not None and isinstance(scheduler, Client):
+        return "distributed", scheduler
+    raise InvalidParameterError(
+        "scheduler must be None (threads), 'synchronous', a dask.distributed Client or its address; "
+        f"got {scheduler!r}"
+    )
+
+
+def execute(fn: Callable[..., Any], calls: list[tuple], scheduler: Any = None,
+            progress: Callable[[int, int], None] | None = None, on_result: Callable[[int, Any], None] | None = None
+            ) -> list[Any]:
+    """Run ``fn(*args)`` for each tuple of ``calls`` as dask tasks; return the results in order.
+
+    ``progress(done, total)`` is called as tasks finish; ``on_result(i, result)`` as each result arrives (in
+    completion order on a cluster, in order otherwise).
+    """
+    import dask
+
+    kind, sched = _resolve_scheduler(scheduler)
+    total = len(calls)
+    if kind == "distributed":
+        from distributed import as_completed
+
+        client = sched
+        futures = [client.submit(fn, *args, pure=False) for args in calls]
+        index = {f.key: i for i, f in enumerate(futures)}
+        results: list[Any] = [None] * total
+        done = 0
+        for fut in as_completed(futures):
+            i = index[fut.key]
+            results[i] = fut.result()
+            done += 1
+            if on_result is not None:
+                on_result(i, results[i])
+            if progress is not None:
+                progress(done, total)
+        if isinstance(scheduler, str):
+            client.close()
+        return results
+    delayed = [dask.delayed(fn, pure=False)(*args) for args in calls]
+    if progress is None and on_result is None:
+        return list(dask.compute(*delayed, scheduler=sched))
+    # run in chunks so that progress and partial results arrive while the job runs
+    from dask.callbacks import Callback
+
+    counter = {"n": 0}
+    keys = {d.key for d in delayed}
+
+    class _Progress(Callback):
+        def _posttask(self, key, result, dsk, state, worker_id):  # noqa: D401
+            if key in keys:
+                counter["n"] += 1
+                if progress is not None:
+                    progress(counter["n"], total)
+
+    out: list[Any] = []
+    chunk = max(1, 4 * (dask.config.get("num_workers", None) or _cpu_count()))
+    with _Progress():
+        for s in range(0, total, chunk):
+            res = dask.compute(*delayed[s: s + chunk], scheduler=sched)
+            for k, r in enumerate(res):
+                if on_result is not None:
+                    on_result(s + k, r)
+            out.extend(res)
+    return out
+
+
+def _cpu_count() -> int:
+    import os
+
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+# --------------------------------------------------------------------------------------------- public API
+
+
+def _observer_radius(atmosphere: AtmosphereParameters, altitude: float) -> float:
+    alt = _check_scalar("altitude", altitude, -math.inf, math.inf, "m")
+    if alt < 0.0:
+        raise InvalidParameterError(f"the observer is inside the planet (altitude {alt:g} m < 0)")
+    return atmosphere.bottom_radius + alt
+
+
+def _sun_vector(sun_zenith: float, sun_azimuth: float) -> NDArray[np.float64]:
+    zen = _check_scalar("sun_zenith", sun_zenith, 0.0, math.pi, "rad")
+    azi = _check_scalar("sun_azimuth", sun_azimuth, -math.inf, math.inf, "rad")
+    return np.ascontiguousarray(direction_from_angles(zen, azi), dtype=float)
+
+
+def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavelengths: ArrayLike, *,
+                 sun_zenith: float, sun_azimuth: float = 0.0, altitude: float = 0.0, samples: int = 4096,
+                 seed: int = 0, scheduler: Any = None, phase: str = "cornette-shanks",
+                 group_size: int = DEFAULT_GROUP_SIZE, directions_per_task: int | None = None,
+                 batches_per_task: int | None = None, progress: Callable[[int, int], None] | None = None
+                 ) -> MonteCarloResult:
+    """Monte Carlo spectral sky radiance (all orders of scattering, without the directly transmitted sun).
+
+    Parameters
+    ----------
+    atmosphere : AtmosphereParameters
+        The medium (spherical shells, ground albedo, solar spectrum and disc radius).
+    directions : array_like, shape (..., 3)
+        View directions (ENU at the observer; need not be unit length, must be finite and non-zero).
+    wavelengths : array_like, shape (n,)
+        [nm], inside the spectra of ``atmosphere``.
+    sun_zenith, sun_azimuth : float
+        Sun position at the observer [rad] (azimuth from north towards east); any zenith in [0, pi].
+    altitude : float
+        Observer altitude above the ground [m], >= 0 (above the top of the atmosphere is allowed).
+    samples : int
+        Paths per direction (rounded up to whole batches of at most 512; the result says how many ran).
+    seed : int
+        Seed of the counter-based random streams; equal seeds give bit-identical results on any scheduler.
+    scheduler : None, "synchronous", dask.distributed.Client or str
+        None runs dask's threaded scheduler (the numba kernels release the GIL); "synchronous" runs in this
+        thread; a Client or a scheduler address runs the tasks on that cluster.
+    phase : {"cornette-shanks", "henyey-greenstein"}
+        Aerosol phase function (asymmetry ``atmosphere.mie_phase_g``).
+    group_size : int
+        Wavelengths sharing one path (hero-wavelength sampling); part of the job (changes the random numbers).
+    directions_per_task, batches_per_task : int, optional
+        Task sizes (do not change the result).
+    progress : callable(done, total), optional
+        Called as tasks finish.
+    """
+    t_start = time.perf_counter()
+    dirs = check_directions(directions)
+    wl = check_wavelengths(wavelengths)
+    n_samples = _check_samples(samples)
+    sun = _sun_vector(sun_zenith, sun_azimuth)
+    r_obs = _observer_radius(atmosphere, altitude)
+    seed = int(seed)
+    if seed < 0:
+        raise InvalidParameterError(f"seed must be >= 0; got {seed}")
+    medium = prepare_medium(atmosphere, wl, phase)
+    batch_size, n_batches = batch_layout(n_samples)
+    groups = wavelength_groups(wl.size, group_size)
+    specs = plan_tasks(dirs.shape[0], len(groups), n_batches, batch_size,
+                       directions_per_task=directions_per_task, batches_per_task=batches_per_task)
+    index = np.arange(dirs.shape[0], dtype=np.int64)
+    calls = [(medium, r_obs, sun, dirs[s.dir_slice], index[s.dir_slice], s.group, groups[s.group], s.batch0,
+              s.n_batches, batch_size, seed) for s in specs]
+    results = execute(_run_task, calls, scheduler, progress)
+    sums = np.zeros((dirs.shape[0], wl.size, n_batches))
+    sumsq = np.zeros_like(sums)
+    for s, (a, b) in zip(specs, results, strict=True):
+        gi = groups[s.group]
+        sums[s.dir_slice, gi[0]: gi[-1] + 1, s.batch0: s.batch0 + s.n_batches] = a
+        sumsq[s.dir_slice, gi[0]: gi[-1] + 1, s.batch0: s.batch0 + s.n_batches] = b
+    radiance, stderr = reduce_batches(sums, sumsq, batch_size * n_batches)
+    return MonteCarloResult(radiance, stderr, batch_size * n_batches, time.perf_counter() - t_start, wl, dirs)
+
+
+def reduce_batches(sums: NDArray[np.float64], sumsq: NDArray[np.float64], n: int
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Mean and standard error from per-batch sums (last axis), added in one fixed order."""
+    s = np.sum(sums, axis=-1)
+    s2 = np.sum(sumsq, axis=-1)
+    mean = s / n
+    var = np.maximum(s2 / n - mean * mean, 0.0) * (n / max(n - 1, 1))
+    return mean, np.sqrt(var / n)
+
+
+def solar_disc_radiance(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, *, sun_zenith: float,
+                        altitude: float = 0.0, n_radial: int = 8, n_angular: int = 16) -> NDArray[np.float64]:
+    """Directly transmitted solar radiance, averaged over the solar disc [W m^-2 sr^-1 nm^-1], shape (n,).
+
+    ``E_sun(lambda) / Omega_sun * mean_disc T(lambda)``: the transmittance ``T`` of the straight path from the
+    observer to each point of a uniform disc of the parameters' angular radius (no limb darkening, as in the
+    parameters), by deterministic quadrature over the disc (``n_radial`` x ``n_angular`` points equal in solid
+    angle). Points below the planet's limb contribute 0. This is what :func:`sky_radiance` leaves out.
+    """
+    wl = check_wavelengths(wavelengths)
+    sun = _sun_vector(sun_zenith, 0.0)
+    r_obs = _observer_radius(atmosphere, altitude)
+    m = prepare_medium(atmosphere, wl)
+    out = np.zeros(wl.size)
+    kernels.disc_transmittance(r_obs, sun, m.sun_angular_radius, m.bottom_radius, m.top_radius, m.edges,
+                               m.layers, m.nlay, m.coef, int(n_radial), int(n_angular), out)
+    omega = 2.0 * math.pi * (1.0 - math.cos(m.sun_angular_radius))
+    return m.esun / omega * out

@@ -1,0 +1,100 @@
+"""The Zarr reference front end (skyscatter.montecarlo.dataset) and the ``skyscatter reference`` command."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("xarray")
+pytest.importorskip("zarr")
+
+from skyscatter.cli import main  # noqa: E402
+from skyscatter.errors import InvalidParameterError, OutputError  # noqa: E402
+from skyscatter.montecarlo import sky_radiance  # noqa: E402
+from skyscatter.montecarlo.dataset import equal_area_directions, reference  # noqa: E402
+from skyscatter.precomputed import AtmosphereParameters  # noqa: E402
+
+JOB = dict(sun_elevations=np.radians([40.0, -2.0]), turbidities=[2.0, 5.0], albedos=[0.2], wavelengths=[450.0, 600.0],
+           directions=equal_area_directions(3), samples=48, seed=2, scheduler="synchronous")
+
+
+def test_equal_area_directions():
+    d = equal_area_directions(2000)
+    assert np.allclose(np.linalg.norm(d, axis=-1), 1) and np.all(d[:, 2] > 0)
+    # equal area: the fraction with cos(zenith) > 0.5 is one half of the hemisphere's points
+    assert abs(np.mean(d[:, 2] > 0.5) - 0.5) < 1e-3
+
+
+def test_reference_is_resumable_and_equals_direct_calls(tmp_path):
+    store = tmp_path / "ref.zarr"
+
+    class Stop(Exception):
+        pass
+
+    calls = []
+
+    def interrupt(done, total):
+        calls.append(done)
+        if done == 2:  # the second cell's task: its cell is not marked done
+            raise Stop
+
+    with pytest.raises(Stop):
+        reference(store, **JOB, progress=interrupt)
+    import xarray as xr
+
+    partial = xr.open_zarr(store, consolidated=False)
+    assert int(partial["done"].sum()) == 1
+    seen = []
+    ds = reference(store, **JOB, progress=lambda d, t: seen.append((d, t)))
+    assert seen[-1] == (3, 3)  # only the 3 remaining cells ran
+    assert bool(ds["done"].all())
+    assert ds.attrs["seed"] == 2 and "atmosphere" in ds.attrs["job"]
+    # every cell equals a direct call with the same seed
+    atm = AtmosphereParameters().replace(ground_albedo=0.2, mie_angstrom_alpha=1.3,
+                                         mie_angstrom_beta=0.04608 * 5.0 - 0.04586)
+    direct = sky_radiance(atm, JOB["directions"], JOB["wavelengths"], sun_zenith=math.radians(92.0), samples=48,
+                          seed=2)
+    np.testing.assert_array_equal(ds["radiance"].values[1, 1, 0], direct.radiance)
+    np.testing.assert_array_equal(ds["stderr"].values[1, 1, 0], direct.stderr)
+    assert np.all(np.isfinite(ds["solar_disc"].values))
+
+
+def test_reference_refuses_a_store_of_another_job(tmp_path):
+    store = tmp_path / "ref.zarr"
+    small = {**JOB, "sun_elevations": [0.5], "turbidities": [2.0]}
+    reference(store, **small)
+    before = sorted(p.name for p in store.rglob("*"))
+    with pytest.raises(OutputError, match="different reference job"):
+        reference(store, **{**small, "seed": 3})
+    with pytest.raises(OutputError, match="different reference job"):
+        reference(store, **{**small, "albedos": [0.3]})
+    assert sorted(p.name for p in store.rglob("*")) == before
+    (tmp_path / "junk.zarr").mkdir()
+    (tmp_path / "junk.zarr" / "x").write_text("x")
+    with pytest.raises(OutputError):
+        reference(tmp_path / "junk.zarr", **small)
+
+
+@pytest.mark.parametrize("change", [dict(turbidities=[0.5]), dict(albedos=[1.5]), dict(sun_elevations=[2.0]),
+                                    dict(wavelengths=[300.0]), dict(samples=0), dict(aerosol_optical_depths=[0.1])])
+def test_reference_bad_input(tmp_path, change):
+    with pytest.raises(InvalidParameterError):
+        reference(tmp_path / "x.zarr", **{**JOB, **change})
+    assert not (tmp_path / "x.zarr").exists()
+
+
+def test_cli_reference(tmp_path, capsys):
+    store = tmp_path / "cli.zarr"
+    args = ["reference", str(store), "--sun-elevation", "30", "--directions", "2", "--samples", "32",
+            "--wavelengths", "500,600", "--no-progress", "--scheduler", "synchronous"]
+    assert main(args) == 0
+    assert "1 cells x 2 directions x 2 wavelengths" in capsys.readouterr().out
+    assert main(args) == 0  # resume: nothing to do
+    assert main([*args, "--seed", "5"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "different reference job" in err[0]
+    assert main(["reference", str(tmp_path / "b.zarr"), "--wavelengths", "100", "--no-progress"]) == 2
+    assert main(["reference", str(tmp_path / "b.zarr"), "--albedo", "x"]) == 2
+    assert main(["reference", str(tmp_path / "b.zarr"), "--turbidity", "2", "--aod", "0.1"]) == 2
