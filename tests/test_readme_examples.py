@@ -5,7 +5,7 @@ folder (so output folders such as ``renders`` do not exist beforehand), with ``w
 tests/data (a two-day EPW). Commands with image-size options run with the sizes below appended (argparse
 keeps the last value), which changes only the pixel count, not the command: the README gives the run time of
 the full size. Commands that need the Bruneton tables at their default size (built once per session into the
-test cache, about a minute) are marked slow.
+test cache, about a minute) and the Monte Carlo reference are marked slow.
 """
 
 from __future__ import annotations
@@ -20,7 +20,10 @@ import pytest
 from skyscatter.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-SMALL = {"demo": ["--width", "32", "--height", "18"], "sky": ["--width", "64"]}
+SMALL = {"demo": ["--width", "32", "--height", "18"], "sky": ["--width", "64"],
+         # the Monte Carlo reference: a few paths, directions, one sun and two wavelengths (same command otherwise)
+         "reference": ["--samples", "8", "--directions", "4", "--sun-elevation", "30", "--wavelengths", "500,560",
+                       "--no-progress"]}
 
 
 def readme_commands() -> list[str]:
@@ -36,7 +39,7 @@ def readme_commands() -> list[str]:
 
 
 def _needs_tables(args: list[str]) -> bool:
-    return args[0] in ("precompute", "export-luts") or "bruneton" in args
+    return args[0] in ("precompute", "export-luts", "reference") or "bruneton" in args
 
 
 @pytest.mark.parametrize(
