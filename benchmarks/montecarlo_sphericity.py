@@ -36,9 +36,10 @@ def main() -> None:
             out = []
             for radius in (6.36e6, 6.36e9):
                 atm = AtmosphereParameters(bottom_radius=radius, top_radius=radius + 60e3, ozone_column=0.0,
-                                           mie_angstrom_beta=beta, ground_albedo=0.1, solar_irradiance=1.0)
+                                           mie_angstrom_beta=beta, ground_albedo=0.1, solar_irradiance=1.0,
+                                           mie_phase_function="henyey-greenstein")
                 out.append(sky_radiance(atm, dirs, [500.0], sun_zenith=math.radians(sz), samples=args.samples,
-                                        seed=3, phase="henyey-greenstein"))
+                                        seed=3))
             e, f = out
             rel = 100 * (e.radiance[:, 0] / f.radiance[:, 0] - 1)
             err = 100 * np.hypot(e.stderr[:, 0] / e.radiance[:, 0], f.stderr[:, 0] / f.radiance[:, 0])

@@ -150,6 +150,22 @@ def test_cornette_shanks_mean_cosine():
         assert m == pytest.approx(g, rel=1e-8)
 
 
+def test_cornette_shanks_over_henyey_greenstein_weight():
+    """p_CS / p_HG = 3 (1 + mu^2) / (2 (2 + g^2)), bounded by [3 / (2 (2 + g^2)), 3 / (2 + g^2)] (attained at mu = 0
+    and mu = +-1); checked against the two phase functions, which are tested against their integrals above."""
+    mu = np.linspace(-1.0, 1.0, 201)
+    for g in (-0.6, 0.0, 0.8, 0.95):
+        w = phase_module.cornette_shanks_hg_weight(mu, g)
+        np.testing.assert_allclose(w * henyey_greenstein(mu, g), cornette_shanks(mu, g), rtol=1e-13)
+        lo, hi = 3 / (2 * (2 + g * g)), 3 / (2 + g * g)
+        assert np.all(w >= lo * (1 - 1e-15)) and np.all(w <= hi * (1 + 1e-15))
+        assert w[100] == pytest.approx(lo, rel=1e-15) and w[0] == pytest.approx(hi, rel=1e-15)
+    with pytest.raises(InvalidParameterError):
+        phase_module.cornette_shanks_hg_weight(0.5, 1.0)
+    with pytest.raises(InvalidParameterError):
+        phase_module.cornette_shanks_hg_weight(1.5, 0.8)
+
+
 def _rayleigh_cdf(mu):
     return (mu**3 + 3 * mu + 4) / 8
 

@@ -7,6 +7,7 @@ rounding only (the same double-precision formula), so the tolerance is 1e-11 rel
 
 from __future__ import annotations
 
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -75,7 +76,11 @@ def test_published_data_layout_and_spot_values():
 
 
 def test_truncated_or_foreign_data_file_raises(tmp_path):
-    good = dict(np.load(Path(load_published_data.__code__.co_filename).parents[1] / "data" / "hosek_wilkie_2013.npz"))
+    packaged = resources.files("skyscatter.data").joinpath("hosek_wilkie_2013.npz")
+    with packaged.open("rb") as fh:
+        raw = fh.read()
+    (tmp_path / "good.npz").write_bytes(raw)
+    good = dict(np.load(tmp_path / "good.npz"))
     bad = dict(good)
     bad["solar_polynomials"] = bad["solar_polynomials"][:, :, :44]
     np.savez(tmp_path / "shape.npz", **bad)
@@ -85,7 +90,6 @@ def test_truncated_or_foreign_data_file_raises(tmp_path):
     np.savez(tmp_path / "missing.npz", **bad)
     with pytest.raises(FileFormatError, match="lacks limb_darkening"):
         load_published_data(tmp_path / "missing.npz")
-    raw = (Path(load_published_data.__code__.co_filename).parents[1] / "data" / "hosek_wilkie_2013.npz").read_bytes()
     (tmp_path / "trunc.npz").write_bytes(raw[: len(raw) // 2])
     with pytest.raises(FileFormatError):
         load_published_data(tmp_path / "trunc.npz")
@@ -159,6 +163,11 @@ def test_parameter_order_i_before_h():
     p = np.zeros(9)
     p[0], p[1], p[2] = 2.0, -1.0, 1.0
     np.testing.assert_allclose(hosek_wilkie_f(cos_t, gamma, p), 1 + 2 * np.exp(-1 / (cos_t + 0.01)), rtol=1e-15)
+
+
+def test_kernel_rejects_a_wrong_parameter_axis():
+    with pytest.raises(InvalidParameterError, match="length 9"):
+        hosek_wilkie_f(0.5, 0.5, np.zeros(8))
 
 
 def test_kernel_broadcasts_over_parameter_sets():

@@ -11,62 +11,99 @@ import math
 import numpy as np
 import pytest
 
+from skyscatter.atmosphere import AtmosphereParameters
 from skyscatter.atmosphere import phase as phase_np
-from skyscatter.atmosphere.phase_sampling import (
-    cornette_shanks_phase,
-    henyey_greenstein_phase,
-    rayleigh_phase_value,
-    rotate_to_frame,
-    sample_mu,
-)
 from skyscatter.errors import InvalidDirectionError, InvalidParameterError
 from skyscatter.montecarlo import sky_radiance
 from skyscatter.montecarlo.rng import uniforms
-from skyscatter.precomputed import AtmosphereParameters
 
 EARTH = AtmosphereParameters()
 DIRS = np.array([[0.0, 0.0, 1.0], [0.0, 0.7, 0.7], [0.5, -0.5, 0.3]])
 
 
 # ----------------------------------------------------------------------------------------------- phase functions
+# The kernels call the numba scalar functions of skyscatter.atmosphere.phase; these tests call the same compiled
+# functions one value at a time (the numpy versions are tested in test_atmosphere_medium.py).
+
+
+def _numba_samples(kind: str, u: np.ndarray, g: float = 0.0) -> np.ndarray:
+    """``mu`` from the numba inverse CDF the kernels use, one call per uniform number."""
+    if kind == "rayleigh":
+        f = phase_np.rayleigh_inverse_cdf_scalar
+        return np.array([f(float(x)) for x in u])
+    f = phase_np.henyey_greenstein_inverse_cdf_scalar
+    return np.array([f(float(x), float(g)) for x in u])
 
 
 @pytest.mark.parametrize("mu", [-1.0, -0.3, 0.0, 0.5, 0.99, 1.0])
 def test_numba_phase_functions_equal_the_numpy_ones(mu):
     """Same formulas as skyscatter.atmosphere.phase (Rayleigh; HG 1941; Cornette-Shanks 1992 Eq. 8)."""
-    assert rayleigh_phase_value(mu) == pytest.approx(float(phase_np.rayleigh_phase(mu)), rel=1e-14)
-    assert henyey_greenstein_phase(mu, 0.8) == pytest.approx(float(phase_np.henyey_greenstein(mu, 0.8)), rel=1e-14)
-    assert cornette_shanks_phase(mu, 0.8) == pytest.approx(float(phase_np.cornette_shanks(mu, 0.8)), rel=1e-14)
+    assert phase_np.rayleigh_phase_scalar(mu) == pytest.approx(float(phase_np.rayleigh_phase(mu)), rel=1e-14)
+    assert phase_np.henyey_greenstein_scalar(mu, 0.8) == pytest.approx(float(phase_np.henyey_greenstein(mu, 0.8)),
+                                                                       rel=1e-14)
+    assert phase_np.cornette_shanks_scalar(mu, 0.8) == pytest.approx(float(phase_np.cornette_shanks(mu, 0.8)),
+                                                                     rel=1e-14)
+    # the kernels sample a Cornette-Shanks aerosol as HG and weight the path by p_CS / p_HG
+    assert (phase_np.henyey_greenstein_scalar(mu, 0.8) * float(phase_np.cornette_shanks_hg_weight(mu, 0.8))
+            == pytest.approx(phase_np.cornette_shanks_scalar(mu, 0.8), rel=1e-14))
+
+
+def test_aerosol_kinds_of_the_kernels():
+    """The integer kinds the driver passes to the kernels: 0 Cornette-Shanks, 1 Henyey-Greenstein."""
+    from skyscatter.montecarlo.driver import prepare_medium
+
+    for name, kind in (("cornette-shanks", 0), ("henyey-greenstein", 1)):
+        assert phase_np.aerosol_phase_kind(name) == kind
+        assert prepare_medium(EARTH.replace(mie_phase_function=name), np.array([550.0])).kind == kind
+    assert phase_np.aerosol_phase_scalar(0.3, 0.8, 0) == phase_np.cornette_shanks_scalar(0.3, 0.8)
+    assert phase_np.aerosol_phase_scalar(0.3, 0.8, 1) == phase_np.henyey_greenstein_scalar(0.3, 0.8)
 
 
 @pytest.mark.parametrize("kind, g", [("rayleigh", 0.0), ("henyey-greenstein", 0.8), ("henyey-greenstein", -0.4),
                                      ("henyey-greenstein", 0.0)])
 def test_phase_samplers_follow_their_density(kind, g):
-    """Histogram of 2e5 samples of mu against the integral of the phase function over each of 20 bins
-    (chi-square with 19 degrees of freedom below its 99.9 % quantile, 43.8)."""
+    """Histogram of 2e5 samples of mu from the numba inverse CDFs against the integral of the phase function
+    over each of 20 bins (chi-square with 19 degrees of freedom below its 99.9 % quantile, 43.8)."""
     from scipy.integrate import quad
 
     rng = np.random.default_rng(1)
     n = 200_000
-    mu = sample_mu(kind, rng.random(n), g)
+    mu = _numba_samples(kind, rng.random(n), g)
     edges = np.linspace(-1, 1, 21)
     counts, _ = np.histogram(mu, edges)
-    pdf = (lambda m: 2 * math.pi * rayleigh_phase_value(m)) if kind == "rayleigh" else (
-        lambda m: 2 * math.pi * henyey_greenstein_phase(m, g))
+    pdf = (lambda m: 2 * math.pi * phase_np.rayleigh_phase_scalar(m)) if kind == "rayleigh" else (
+        lambda m: 2 * math.pi * phase_np.henyey_greenstein_scalar(m, g))
     expect = np.array([quad(pdf, a, b)[0] for a, b in zip(edges[:-1], edges[1:], strict=True)]) * n
     chi2 = np.sum((counts - expect) ** 2 / expect)
     assert chi2 < 43.8, chi2
 
 
-def test_rotate_to_frame_gives_the_requested_angle():
+def test_numba_inverse_cdfs_equal_the_numpy_ones():
+    """One formula for numpy and numba: the compiled inverse CDFs agree with the validated numpy functions (to
+    1e-15: numpy's and LLVM's cbrt may differ in the last bit) and are increasing in u."""
+    u = np.concatenate([[0.0, 0.25, 0.5, 1.0], np.random.default_rng(3).random(2000)])
+    np.testing.assert_allclose(_numba_samples("rayleigh", u), phase_np.rayleigh_inverse_cdf(u), rtol=0, atol=2e-15)
+    for g in (-0.4, 0.0, 0.8):
+        np.testing.assert_array_equal(_numba_samples("henyey-greenstein", u, g),
+                                      phase_np.henyey_greenstein_inverse_cdf(u, g))
+    s = np.sort(u)
+    for kind, g in (("rayleigh", 0.0), ("henyey-greenstein", 0.0), ("henyey-greenstein", 0.8)):
+        assert np.all(np.diff(_numba_samples(kind, s, g)) >= 0)
+    assert phase_np.rayleigh_inverse_cdf_scalar(0.0) == -1.0 and phase_np.rayleigh_inverse_cdf_scalar(1.0) == 1.0
+
+
+def test_direction_about_axis_gives_the_requested_angle():
     rng = np.random.default_rng(2)
     for _ in range(200):
         d = rng.normal(size=3)
         d /= np.linalg.norm(d)
         mu, phi = rng.uniform(-1, 1), rng.uniform(0, 2 * math.pi)
-        o = np.array(rotate_to_frame(*d, mu, phi))
+        o = np.array(phase_np.direction_about_axis(*d, mu, phi))
         assert abs(np.linalg.norm(o) - 1) < 1e-12
         assert abs(o @ d - mu) < 1e-12
+    # the axis straight down (the branch of Duff et al.'s basis for z < 0) and a right angle to it
+    o = np.array(phase_np.direction_about_axis(0.0, 0.0, -1.0, 0.0, 0.3))
+    assert abs(o[2]) < 1e-15 and abs(np.linalg.norm(o) - 1) < 1e-15
 
 
 # ----------------------------------------------------------------------------------------------- RNG
@@ -161,7 +198,7 @@ def test_bad_directions(dirs):
 @pytest.mark.parametrize("kw", [
     dict(samples=0), dict(samples=-3), dict(samples=2.5), dict(wavelengths=[100.0]), dict(wavelengths=[2000.0]),
     dict(wavelengths=[np.nan]), dict(wavelengths=[]), dict(altitude=-1.0), dict(altitude=np.nan),
-    dict(sun_zenith=4.0), dict(sun_zenith=np.nan), dict(phase="mie"), dict(seed=-1), dict(scheduler="bogus"),
+    dict(sun_zenith=4.0), dict(sun_zenith=np.nan), dict(seed=-1), dict(scheduler="bogus"),
     dict(scheduler=3),
 ])
 def test_bad_input(kw):
@@ -193,3 +230,22 @@ def test_montecarlo_sky_model_answers_the_protocol():
     assert np.allclose(sky.sun_direction @ [0, 0, 1], math.cos(math.radians(40.0)))
     with pytest.raises(InvalidParameterError):
         MonteCarloSky(0.5, samples=0)
+
+
+def test_aerosol_phase_function_comes_from_the_atmosphere():
+    """sky_radiance and MonteCarloSky take the aerosol phase function from AtmosphereParameters.mie_phase_function
+    (no separate argument); it survives the sky's to_dict/from_dict round trip."""
+    from skyscatter.sky.montecarlo import MonteCarloSky
+    from skyscatter.sky.registry import from_dict
+
+    hg = EARTH.replace(mie_phase_function="henyey-greenstein")
+    kw = dict(sun_zenith=0.7, samples=64, seed=3, scheduler="synchronous")
+    a = sky_radiance(hg, DIRS, [550.0], **kw).radiance
+    b = sky_radiance(EARTH, DIRS, [550.0], **kw).radiance
+    assert not np.any(a == b)
+    sky = MonteCarloSky(0.7, atmosphere=hg, samples=64, seed=3, scheduler="synchronous")
+    np.testing.assert_array_equal(sky.spectral_radiance(DIRS, [550.0]), a)
+    again = from_dict(sky.to_dict())
+    assert again.atmosphere.mie_phase_function == "henyey-greenstein"
+    with pytest.raises(TypeError):
+        sky_radiance(EARTH, DIRS, [550.0], phase="henyey-greenstein", **kw)

@@ -10,11 +10,11 @@ import pytest
 pytest.importorskip("xarray")
 pytest.importorskip("zarr")
 
+from skyscatter.atmosphere import AtmosphereParameters  # noqa: E402
 from skyscatter.cli import main  # noqa: E402
 from skyscatter.errors import InvalidParameterError, OutputError  # noqa: E402
 from skyscatter.montecarlo import sky_radiance  # noqa: E402
 from skyscatter.montecarlo.dataset import equal_area_directions, reference  # noqa: E402
-from skyscatter.precomputed import AtmosphereParameters  # noqa: E402
 
 JOB = dict(sun_elevations=np.radians([40.0, -2.0]), turbidities=[2.0, 5.0], albedos=[0.2], wavelengths=[450.0, 600.0],
            directions=equal_area_directions(3), samples=48, seed=2, scheduler="synchronous")
@@ -95,6 +95,15 @@ def test_cli_reference(tmp_path, capsys):
     assert main([*args, "--seed", "5"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "different reference job" in err[0]
+    # --phase sets the atmosphere's aerosol phase function, which is part of the job
+    assert main([*args, "--phase", "henyey-greenstein"]) == 2
+    assert "different reference job" in capsys.readouterr().err
+    hg = tmp_path / "hg.zarr"
+    assert main([*args[:1], str(hg), *args[2:], "--phase", "henyey-greenstein"]) == 0
+    import xarray as xr
+
+    assert xr.open_zarr(hg, consolidated=False).attrs["mie_phase_function"] == "henyey-greenstein"
+    assert xr.open_zarr(store, consolidated=False).attrs["mie_phase_function"] == "cornette-shanks"
     assert main(["reference", str(tmp_path / "b.zarr"), "--wavelengths", "100", "--no-progress"]) == 2
     assert main(["reference", str(tmp_path / "b.zarr"), "--albedo", "x"]) == 2
     assert main(["reference", str(tmp_path / "b.zarr"), "--turbidity", "2", "--aod", "0.1"]) == 2

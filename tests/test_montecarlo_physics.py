@@ -19,9 +19,9 @@ import math
 import numpy as np
 import pytest
 
+from skyscatter.atmosphere import AtmosphereParameters, DensityProfile
 from skyscatter.montecarlo import kernels, sky_radiance, solar_disc_radiance
 from skyscatter.montecarlo.driver import prepare_medium
-from skyscatter.precomputed import AtmosphereParameters, DensityProfile
 
 EARTH = AtmosphereParameters()
 
@@ -140,8 +140,9 @@ def _cornette_shanks_moments(g: float, nmom: int) -> np.ndarray:
 
 
 def _disort_principal_plane(p: AtmosphereParameters, wl: float, sun_zen_deg: float, albedo: float,
-                            view_zen_deg: np.ndarray, phase: str = "henyey-greenstein") -> np.ndarray:
-    """DISORT downwelling radiance at the ground for unit beam flux, (n_view, 2): towards the sun, away."""
+                            view_zen_deg: np.ndarray) -> np.ndarray:
+    """DISORT downwelling radiance at the ground for unit beam flux, (n_view, 2): towards the sun, away; the
+    aerosol phase moments are those of ``p.mie_phase_function``."""
     disort = pytest.importorskip("disortpp")
     edges = np.concatenate([np.linspace(0.0, 6000.0, 31), np.linspace(7000.0, 60000.0, 54)])[::-1]
     n = edges.size - 1
@@ -172,7 +173,10 @@ def _disort_principal_plane(p: AtmosphereParameters, wl: float, sun_zen_deg: flo
     cfg.single_scat_albedo = list((tau_r + tau_ms) / dtau)
     ray = np.zeros(nmom + 1)
     ray[0], ray[2] = 1.0, 0.1
-    hg = g ** np.arange(nmom + 1) if phase == "henyey-greenstein" else _cornette_shanks_moments(g, nmom)
+    if p.mie_phase_function == "henyey-greenstein":
+        hg = g ** np.arange(nmom + 1)
+    else:
+        hg = _cornette_shanks_moments(g, nmom)
     mom = [list((tau_r[i] * ray + tau_ms[i] * hg) / (tau_r[i] + tau_ms[i])) for i in range(n)]
     cfg.phase_function_moments = mom
     cfg.tau_user = [float(dtau.sum())]
@@ -207,7 +211,7 @@ def test_plane_parallel_limit_against_disort(aerosol, albedo, sun_zen_deg):
     """Principal-plane sky radiance at the ground, 500 nm: Monte Carlo (planet radius 6.36e9 m) vs DISORT
     (32 streams, Nakajima-Tanaka intensity correction), within 3 standard errors plus PLANE_PARALLEL_ALLOWANCE.
     Aerosol: Angstrom beta 0.1, alpha 0, H = 1.2 km, single-scattering albedo 0.9, Henyey-Greenstein g = 0.8."""
-    p = _flat(ground_albedo=albedo, mie_angstrom_beta=0.1 if aerosol else 0.0)
+    p = _flat(ground_albedo=albedo, mie_angstrom_beta=0.1 if aerosol else 0.0, mie_phase_function="henyey-greenstein")
     view = np.array([0.0, 20.0, 40.0, 60.0, 80.0])
     ref = _disort_principal_plane(p, 500.0, sun_zen_deg, albedo, view)
     dirs, refs = [], []
@@ -217,8 +221,7 @@ def test_plane_parallel_limit_against_disort(aerosol, albedo, sun_zen_deg):
                 continue
             dirs.append([0.0, side * math.sin(z), math.cos(z)])
             refs.append(ref[i, j])
-    res = sky_radiance(p, np.array(dirs), [500.0], sun_zenith=math.radians(sun_zen_deg), samples=3072,
-                       phase="henyey-greenstein", seed=11)
+    res = sky_radiance(p, np.array(dirs), [500.0], sun_zenith=math.radians(sun_zen_deg), samples=3072, seed=11)
     mc, se, refs = res.radiance[:, 0], res.stderr[:, 0], np.array(refs)
     tol = 3 * se + PLANE_PARALLEL_ALLOWANCE * refs
     assert np.all(np.abs(mc - refs) <= tol), np.c_[mc, refs, (mc - refs) / se]
@@ -229,8 +232,9 @@ def test_plane_parallel_limit_against_disort_cornette_shanks(sun_zen_deg):
     """As above with the Cornette-Shanks aerosol phase (the tables' phase, sampled as HG and reweighted): DISORT
     gets its Legendre moments by quadrature; aerosol tau 0.1, g 0.8, ground albedo 0.1."""
     p = _flat(ground_albedo=0.1, mie_angstrom_beta=0.1)
+    assert p.mie_phase_function == "cornette-shanks"
     view = np.array([0.0, 20.0, 40.0, 60.0, 80.0])
-    ref = _disort_principal_plane(p, 500.0, sun_zen_deg, 0.1, view, phase="cornette-shanks")
+    ref = _disort_principal_plane(p, 500.0, sun_zen_deg, 0.1, view)
     dirs = np.array([[0.0, s * math.sin(z), math.cos(z)] for z in np.radians(view) for s in (1.0, -1.0)])
     refs = np.array([ref[i, j] for i in range(view.size) for j in range(2)])
     res = sky_radiance(p, dirs, [500.0], sun_zenith=math.radians(sun_zen_deg), samples=3072, seed=13)
@@ -241,7 +245,7 @@ def test_plane_parallel_limit_against_disort_cornette_shanks(sun_zen_deg):
 # ----------------------------------------------------------------------------------------------- energy
 
 
-def _upward_flux_at_top(p, sun_zen, samples, seed=5, phase="cornette-shanks"):
+def _upward_flux_at_top(p, sun_zen, samples, seed=5):
     """Reflected flux through the top of the atmosphere per unit incident flux, for a flat (huge) planet:
     integral of L cos over the upward hemisphere, by a Gauss-Legendre x uniform-azimuth quadrature of MC radiances
     seen from just above the atmosphere."""
@@ -258,7 +262,7 @@ def _upward_flux_at_top(p, sun_zen, samples, seed=5, phase="cornette-shanks"):
             dirs.append([s * math.sin(ph), s * math.cos(ph), -m])  # looking down from the top
             weights.append(wm * m * 2 * math.pi / n_phi)
     res = sky_radiance(p, np.array(dirs), [500.0], sun_zenith=sun_zen, altitude=p.thickness + 1.0,
-                       samples=samples, seed=seed, phase=phase)
+                       samples=samples, seed=seed)
     weights = np.array(weights)
     flux = weights @ res.radiance[:, 0]
     err = math.sqrt(np.sum((weights * res.stderr[:, 0]) ** 2))
@@ -282,7 +286,7 @@ def test_energy_budget_closes_with_absorption():
     disort = pytest.importorskip("disortpp")
     p = _flat(ground_albedo=0.0, mie_angstrom_beta=0.2, mie_single_scattering_albedo=0.8)
     sun_zen = math.radians(30.0)
-    ratio, err = _upward_flux_at_top(p, sun_zen, samples=512, phase="henyey-greenstein")
+    ratio, err = _upward_flux_at_top(p.replace(mie_phase_function="henyey-greenstein"), sun_zen, samples=512)
     # DISORT (Henyey-Greenstein moments g^l, as the Monte Carlo phase here) upward flux at the top for unit beam flux
     br = float(p.rayleigh_scattering_at([500.0])[0])
     be = float(p.mie_extinction_at([500.0])[0])

@@ -69,7 +69,9 @@ def test_sample_cells_inside_their_patch():
 
 
 def test_patch_luminance_uniform_and_centre():
-    class Sky:
+    from skyscatter.sky.base import LuminanceOnlySky
+
+    class Sky(LuminanceOnlySky):
         def luminance(self, d):
             return 100.0 + 50.0 * np.asarray(d)[..., 2]
 

@@ -249,7 +249,7 @@ def test_horizon_cos_floor():
     "kwargs,err",
     [
         ({"epsilon": 2.0}, InvalidParameterError),
-        ({"direct_normal_irradiance": 1414.0, "diffuse_horizontal_irradiance": 50.0}, InvalidParameterError),
+        ({"direct_normal_irradiance": 1415.0, "diffuse_horizontal_irradiance": 50.0}, InvalidParameterError),
         ({"direct_normal_irradiance": 500.0, "diffuse_horizontal_irradiance": 1e6}, InvalidParameterError),
         ({"epsilon": 2.0, "delta": 0.1, "diffuse_illuminance": 1e308}, InvalidParameterError),
         ({"epsilon": 0.9, "delta": 0.1}, InvalidParameterError),

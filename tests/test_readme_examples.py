@@ -3,9 +3,9 @@
 The commands are read from README.md itself, so the test follows the README. Each runs in a fresh, empty
 folder (so output folders such as ``renders`` do not exist beforehand), with ``weather.epw`` copied from
 tests/data (a two-day EPW). Commands with image-size options run with the sizes below appended (argparse
-keeps the last value), which changes only the pixel count, not the command: the README gives the run time of
-the full size. Commands that need the Bruneton tables at their default size (built once per session into the
-test cache, about a minute) and the Monte Carlo reference are marked slow.
+keeps the last value), which changes only the pixel count (or the Monte Carlo sample count), not the command:
+the README gives the run time of the full size. Commands that need the Bruneton tables at their default size
+(built once per session into the test cache, about a minute) are marked slow.
 """
 
 from __future__ import annotations
@@ -20,10 +20,7 @@ import pytest
 from skyscatter.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-SMALL = {"demo": ["--width", "32", "--height", "18"], "sky": ["--width", "64"],
-         # the Monte Carlo reference: a few paths, directions, one sun and two wavelengths (same command otherwise)
-         "reference": ["--samples", "8", "--directions", "4", "--sun-elevation", "30", "--wavelengths", "500,560",
-                       "--no-progress"]}
+SMALL = {"demo": ["--width", "32", "--height", "18"], "sky": ["--width", "64"], "reference": ["--samples", "16"]}
 
 
 def readme_commands() -> list[str]:

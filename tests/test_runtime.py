@@ -73,3 +73,14 @@ def test_atomic_files_get_umask_permissions_and_never_change_the_umask(tmp_path)
         assert not list(tmp_path.glob(".*tmp*"))
     finally:
         os.umask(old)
+
+
+def test_set_num_threads_caps_the_blas_pools():
+    from threadpoolctl import threadpool_info
+
+    before = runtime.num_threads()
+    try:
+        runtime.set_num_threads(1)
+        assert all(pool["num_threads"] == 1 for pool in threadpool_info())
+    finally:
+        runtime.set_num_threads(before)

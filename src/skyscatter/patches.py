@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .conventions import as_directions, direction_from_angles
 from .errors import InvalidParameterError
+from .sky.base import SkyModel
 
 __all__ = ["SCHEMES", "TREGENZA_BAND_COUNTS", "PatchScheme", "patch_luminance", "patch_scheme"]
 
@@ -159,13 +160,13 @@ def patch_scheme(name: str) -> PatchScheme:
     return scheme
 
 
-def patch_luminance(sky, scheme: str | PatchScheme, *, samples: int = 4) -> NDArray[np.float64]:
+def patch_luminance(sky: SkyModel, scheme: str | PatchScheme, *, samples: int = 4) -> NDArray[np.float64]:
     """Mean sky luminance [cd m^-2] over every patch of a scheme, shape (n_patches,).
 
     Parameters
     ----------
     sky : SkyModel
-        Any object with ``luminance(directions)`` [cd m^-2]; the solar disc is not included.
+        Any sky model (its ``luminance(directions)`` [cd m^-2]); the solar disc is not included.
     scheme : str or PatchScheme
         "tregenza" (= "reinhart1", 145 patches), "reinhart2" (577) or "reinhart4" (2305).
     samples : int
@@ -180,6 +181,8 @@ def patch_luminance(sky, scheme: str | PatchScheme, *, samples: int = 4) -> NDAr
         zenith cap last). ``sum(L * solid_angles * sin(centre_altitude))`` approximates the horizontal
         illuminance of the sky [lx].
     """
+    if not isinstance(sky, SkyModel):
+        raise InvalidParameterError(f"expected a sky model (skyscatter.sky.SkyModel); got {type(sky).__name__}")
     geom = scheme if isinstance(scheme, PatchScheme) else patch_scheme(scheme)
     s = _check_samples(samples)
     if s == 1:

@@ -2,9 +2,10 @@
 
 One setting sizes every pool: ``$SKYSCATTER_NUM_THREADS`` (read once, at first use) or
 :func:`set_num_threads`. It caps numba's parallel kernels (``numba.set_num_threads``; set before numba starts,
-it also sizes numba's pool through ``NUMBA_NUM_THREADS``) and the thread pools of the precomputation
-(:mod:`skyscatter.precomputed.parallel`). Dask workers that each run one skyscatter task set it to 1 so that
-tasks do not oversubscribe the cores.
+it also sizes numba's pool through ``NUMBA_NUM_THREADS``), the BLAS/OpenMP pools numpy and scipy use (through
+threadpoolctl: the least-squares fits otherwise oversubscribe the cores) and the thread pools of the
+precomputation (:mod:`skyscatter.precomputed.parallel`). Dask workers that each run one skyscatter task set it
+to 1 so that tasks do not oversubscribe the cores.
 
 Progress bars follow one rule too: library calls are silent unless the caller passes ``progress=True``; the
 command line turns them on (on a terminal; one summary line otherwise).
@@ -65,6 +66,9 @@ def set_num_threads(n: int) -> None:
 
 
 def _apply_to_numba(n: int) -> None:
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=n)  # BLAS and OpenMP pools of numpy/scipy, process-wide
     if "numba" not in sys.modules:
         # numba sizes its pool from this variable when it starts; later launches are capped by set_num_threads.
         os.environ["NUMBA_NUM_THREADS"] = str(max(n, 1))

@@ -39,7 +39,7 @@ from .epw import EPWData, EPWLocation, read_epw
 from .errors import FileFormatError, InvalidParameterError
 from .fileio import atomic_path, atomic_paths
 from .patches import PatchScheme, patch_scheme
-from .sky.perez_family import extended_perez_scalar
+from .sky.perez_family import gradation_scalar, indicatrix_scalar
 
 __all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches", "perez_patch_luminance",
            "skymatrix"]
@@ -48,15 +48,16 @@ __all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patche
 NORMALISATION_NODES = (48, 96)
 
 
-@numba.njit(cache=True, inline="always")
-def _perez_f(a, b, c, d, e, cos_theta, cos_gamma):  # pragma: no cover - compiled
-    """Perez 1993 F through the shared kernel, negative values clipped (PerezSky's guards)."""
-    cg = min(1.0, max(-1.0, cos_gamma))
-    return max(extended_perez_scalar(cos_theta, np.arccos(cg), cg, a, b, 1.0, c, d, e, 0.0, 0.0, 0.0, 0.0), 0.0)
+@numba.njit(cache=True, parallel=True, nogil=True)
+def _kernel(coeffs, sun, scale, qdirs, qweights, q_row, sdirs, s_row, row_cos, n_sub, out):  # pragma: no cover
+    """Per hour: normalise the Perez sky to D_v with the quadrature, then average it over each patch's samples.
 
-
-@numba.njit(cache=True, parallel=True)
-def _kernel(coeffs, sun, scale, qdirs, qweights, sdirs, n_sub, out):  # pragma: no cover - compiled
+    The Perez function (Perez et al. 1993, Eq. 1) ``max(0, (1 + a exp(b / max(cos theta, 0.01)))(1 + c
+    exp(d gamma) + e cos^2 gamma))`` (the one horizon rule of :mod:`skyscatter.sky.perez_family`) is the product of
+    the shared kernel's gradation, tabulated per hour over the distinct zenith angles of the quadrature nodes and
+    samples (``row_cos``; ``q_row``/``s_row`` index it), and its indicatrix per direction: one exponential per
+    direction instead of two.
+    """
     n_hours = coeffs.shape[0]
     n_patch = out.shape[1]
     for h in numba.prange(n_hours):
@@ -66,10 +67,15 @@ def _kernel(coeffs, sun, scale, qdirs, qweights, sdirs, n_sub, out):  # pragma: 
             continue
         a, b, c, d, e = coeffs[h, 0], coeffs[h, 1], coeffs[h, 2], coeffs[h, 3], coeffs[h, 4]
         sx, sy, sz = sun[h, 0], sun[h, 1], sun[h, 2]
+        grad = np.empty(n_rows)
+        for u in range(n_rows):
+            grad[u] = gradation_scalar(row_cos[u], a, b, 0.0)
         total = 0.0
         for k in range(qdirs.shape[0]):
-            cg = qdirs[k, 0] * sx + qdirs[k, 1] * sy + qdirs[k, 2] * sz
-            total += qweights[k] * _perez_f(a, b, c, d, e, qdirs[k, 2], cg)
+            cg = min(1.0, max(-1.0, qdirs[k, 0] * sx + qdirs[k, 1] * sy + qdirs[k, 2] * sz))
+            f = grad[q_row[k]] * indicatrix_scalar(1.0, np.arccos(cg), cg, 1.0, c, d, e, 0.0, 0.0, 0.0)
+            if f > 0.0:
+                total += qweights[k] * f
         if total <= 0.0:  # no positive luminance anywhere: uniform sky (as PerezSky and gendaymtx)
             for p in range(n_patch):
                 out[h, p] = scale[h] / np.pi
@@ -80,8 +86,10 @@ def _kernel(coeffs, sun, scale, qdirs, qweights, sdirs, n_sub, out):  # pragma: 
             base = p * n_sub
             for s in range(n_sub):
                 k = base + s
-                cg = sdirs[k, 0] * sx + sdirs[k, 1] * sy + sdirs[k, 2] * sz
-                acc += _perez_f(a, b, c, d, e, sdirs[k, 2], cg)
+                cg = min(1.0, max(-1.0, sdirs[k, 0] * sx + sdirs[k, 1] * sy + sdirs[k, 2] * sz))
+                f = grad[s_row[k]] * indicatrix_scalar(1.0, np.arccos(cg), cg, 1.0, c, d, e, 0.0, 0.0, 0.0)
+                if f > 0.0:
+                    acc += f
             out[h, p] = norm * acc / n_sub
 
 

@@ -1,10 +1,13 @@
-"""numba-compiled scalar versions of the phase functions of :mod:`.phase` (the same formula functions).
+"""numba-compiled scalar versions of the phase functions of :mod:`.phase` and their sampling (the same formula
+functions), and the direction about an axis used to turn a sampled cosine into a direction.
 
-Imported on first access of ``skyscatter.atmosphere.phase.<name>_scalar`` so that importing the atmosphere
-package does not import numba.
+Imported on first access of ``skyscatter.atmosphere.phase.<name>`` (``*_scalar``, ``direction_about_axis``) so
+that importing the atmosphere package does not import numba.
 """
 
 from __future__ import annotations
+
+import math
 
 import numba
 
@@ -18,6 +21,12 @@ rayleigh_phase_scalar = _jit(phase._rayleigh_formula)
 henyey_greenstein_scalar = _jit(phase._henyey_greenstein_formula)
 #: ``cornette_shanks_scalar(mu, g)`` [sr^-1], Bruneton & Neyret (2008) Eq. 4.
 cornette_shanks_scalar = _jit(phase._cornette_shanks_formula)
+#: ``rayleigh_inverse_cdf_scalar(u)``: ``mu`` [-] with Rayleigh CDF ``u`` in [0, 1] (Frisvad 2011, Eq. 13;
+#: :func:`.phase.rayleigh_inverse_cdf` without its validation).
+rayleigh_inverse_cdf_scalar = _jit(phase._rayleigh_inverse_cdf_formula)
+#: ``henyey_greenstein_inverse_cdf_scalar(u, g)``: ``mu`` [-] with Henyey-Greenstein CDF ``u`` in [0, 1]
+#: (:func:`.phase.henyey_greenstein_inverse_cdf` without its validation).
+henyey_greenstein_inverse_cdf_scalar = _jit(phase._henyey_greenstein_inverse_cdf_formula)
 
 _HENYEY_GREENSTEIN = phase.AEROSOL_PHASE_FUNCTIONS.index("henyey-greenstein")
 
@@ -28,3 +37,29 @@ def aerosol_phase_scalar(mu, g, kind):
     if kind == _HENYEY_GREENSTEIN:
         return henyey_greenstein_scalar(mu, g)
     return cornette_shanks_scalar(mu, g)
+
+
+@_jit
+def direction_about_axis(ax, ay, az, mu, phi):
+    """Unit vector at angle ``acos(mu)`` from the unit vector ``(ax, ay, az)`` and at azimuth ``phi`` [rad] about it.
+
+    The azimuth is measured from the first vector of the branchless orthonormal basis of Duff, Burgess,
+    Christensen, Hery, Kensler, Liani & Villemin (2017), "Building an orthonormal basis, revisited", J. Comput.
+    Graph. Tech. 6(1), 1-8, Listing 3 (https://jcgt.org/published/0006/01/01/): a fixed, continuous-almost-
+    everywhere choice, so that ``phi`` uniform in [0, 2 pi) gives directions uniform in azimuth about the axis.
+    ``mu`` in [-1, 1] [-]. Returns the three components (renormalised against rounding).
+    """
+    sign = 1.0 if az >= 0.0 else -1.0
+    a = -1.0 / (sign + az)
+    b = ax * ay * a
+    # t1, t2 and the axis form a right-handed orthonormal basis (Duff et al. 2017, Listing 3)
+    t1x, t1y, t1z = 1.0 + sign * ax * ax * a, sign * b, -sign * ax
+    t2x, t2y, t2z = b, sign + ay * ay * a, -ay
+    st = math.sqrt(max(0.0, 1.0 - mu * mu))
+    c = st * math.cos(phi)
+    s = st * math.sin(phi)
+    ox = c * t1x + s * t2x + mu * ax
+    oy = c * t1y + s * t2y + mu * ay
+    oz = c * t1z + s * t2z + mu * az
+    n = 1.0 / math.sqrt(ox * ox + oy * oy + oz * oz)
+    return ox * n, oy * n, oz * n

@@ -11,22 +11,37 @@ precomputed Bruneton tables, the path tracer) uses this module.
 
 ``mu`` is the cosine of the scattering angle (1 = forward scattering). The numpy functions take ``cos_theta``
 of any shape and return that shape. Each formula is written once, as a plain arithmetic function that numpy
-evaluates on arrays and numba compiles for scalars: the jitted scalar versions (``rayleigh_phase_scalar(mu)``,
-``henyey_greenstein_scalar(mu, g)``, ``cornette_shanks_scalar(mu, g)`` and ``aerosol_phase_scalar(mu, g,
-kind)`` with ``kind`` from :func:`aerosol_phase_kind`) compile these same functions and are attributes of
-this module built on first access (in :mod:`._phase_numba`), so importing :mod:`skyscatter.atmosphere` does
-not import numba.
+evaluates on arrays and numba compiles for scalars. The jitted scalar versions are attributes of this module
+built on first access (in :mod:`._phase_numba`), so importing :mod:`skyscatter.atmosphere` does not import
+numba:
+
+* densities ``rayleigh_phase_scalar(mu)``, ``henyey_greenstein_scalar(mu, g)``, ``cornette_shanks_scalar(mu,
+  g)`` and ``aerosol_phase_scalar(mu, g, kind)`` with ``kind`` from :func:`aerosol_phase_kind`;
+* inverse CDFs ``rayleigh_inverse_cdf_scalar(u)`` and ``henyey_greenstein_inverse_cdf_scalar(u, g)`` (the
+  same formulas as :func:`rayleigh_inverse_cdf` and :func:`henyey_greenstein_inverse_cdf`, without their
+  validation);
+* ``direction_about_axis(ax, ay, az, mu, phi)``: the unit vector at angle ``acos(mu)`` from a unit axis and at
+  azimuth ``phi`` about it, in the orthonormal basis of Duff et al. (2017), "Building an orthonormal basis,
+  revisited", J. Comput. Graph. Tech. 6(1), 1-8 (https://jcgt.org/published/0006/01/01/), Listing 3.
 
 Sampling (cosines of the scattering angle; the azimuth about the incident direction is uniform):
 
-* Rayleigh: exact inverse CDF. ``F(mu) = (mu^3 + 3 mu + 4) / 8``; the one real root of the cubic is
-  ``mu = w - 1 / w`` with ``w = cbrt(z + sqrt(z^2 + 1))``, ``z = 4 u - 2`` (Cardano; as in Frisvad 2011,
-  "Importance sampling the Rayleigh phase function", J. Opt. Soc. Am. A 28, 2436, doi:10.1364/JOSAA.28.002436).
+* Rayleigh: exact inverse CDF. ``F(mu) = (mu^3 + 3 mu + 4) / 8``; the one real root of the cubic
+  ``mu^3 + 3 mu - z = 0``, ``z = 4 u - 2``, is ``mu = a - 1 / a`` with ``a = cbrt(z + sqrt(z^2 + 1))``
+  (Cardano; Frisvad 2011, "Importance sampling the Rayleigh phase function", J. Opt. Soc. Am. A 28, 2436,
+  doi:10.1364/JOSAA.28.002436, Eq. 13 without depolarisation). The root is odd in ``z``; it is evaluated as
+  ``sign(z) (a - 1 / a)`` with ``a = cbrt(|z| + sqrt(z^2 + 1))``, a sum of positive terms (no cancellation), so
+  ``u = 0`` and ``u = 1`` give exactly -1 and 1 and ``F(mu(u)) - u`` stays within a few 1e-16.
 * Henyey-Greenstein: exact inverse CDF ``mu = (1 + g^2 - ((1 - g^2) / (1 - g + 2 g u))^2) / (2 g)``
-  (from integrating the density; uniform ``mu = 2 u - 1`` for ``g = 0``).
-* Cornette-Shanks: exact rejection sampling from Henyey-Greenstein with the same ``g``. The ratio of the
-  densities is ``p_CS / p_HG = 3 (1 + mu^2) / (2 (2 + g^2))`` <= ``3 / (2 + g^2)``, so a Henyey-Greenstein
-  sample is accepted with probability ``(1 + mu^2) / 2``; the acceptance rate is ``(2 + g^2) / 3 >= 2/3``.
+  (from integrating the density; Witt 1977, "Multiple scattering in reflection nebulae I", ApJS 35, 1-6,
+  Eq. 7); its limit for ``g -> 0``, ``mu = 2 u - 1``, is used for ``|g| < 1e-6``. Both are increasing in ``u``.
+* Cornette-Shanks: from Henyey-Greenstein with the same ``g`` and the weight
+  :func:`cornette_shanks_hg_weight` ``w(mu) = p_CS / p_HG = 3 (1 + mu^2) / (2 (2 + g^2))``, which lies in
+  ``[3 / (2 (2 + g^2)), 3 / (2 + g^2)]`` (0.57-1.14 for g = 0.8; the bound is reached at ``mu = 0`` and
+  ``mu = +-1``). :func:`sample_cornette_shanks` samples it exactly by rejection (a Henyey-Greenstein sample is
+  accepted with probability ``w(mu) / max w = (1 + mu^2) / 2``; acceptance rate ``(2 + g^2) / 3 >= 2/3``); a path
+  tracer may instead keep every sample and multiply its weight by ``w``, which is what the Monte Carlo
+  reference does (:mod:`skyscatter.montecarlo.kernels`).
 """
 
 from __future__ import annotations
@@ -44,6 +59,7 @@ __all__ = [
     "aerosol_phase",
     "aerosol_phase_kind",
     "cornette_shanks",
+    "cornette_shanks_hg_weight",
     "henyey_greenstein",
     "henyey_greenstein_inverse_cdf",
     "rayleigh_inverse_cdf",
@@ -60,6 +76,8 @@ AEROSOL_PHASE_FUNCTIONS = ("cornette-shanks", "henyey-greenstein")
 _FOUR_PI = 4.0 * math.pi
 #: Smallest value of ``1 + g^2 - 2 g mu`` used (keeps the forward peak finite for |g| -> 1 in float64).
 _MIN_DENOMINATOR = 1e-12
+#: Below this |g| the Henyey-Greenstein density is uniform to 3 |g| (relative) and sampled as ``mu = 2 u - 1``.
+_ISOTROPIC_G = 1e-6
 
 
 # ------------------------------------------------------------------ the formulas (numpy arrays and numba scalars)
@@ -77,6 +95,24 @@ def _henyey_greenstein_formula(mu, g):
 def _cornette_shanks_formula(mu, g):
     den = np.maximum(1.0 + g * g - 2.0 * g * mu, _MIN_DENOMINATOR)
     return 3.0 * (1.0 - g * g) * (1.0 + mu * mu) / (8.0 * math.pi * (2.0 + g * g) * den * np.sqrt(den))
+
+
+def _cornette_shanks_hg_weight_formula(mu, g):
+    return 3.0 * (1.0 + mu * mu) / (2.0 * (2.0 + g * g))
+
+
+def _rayleigh_inverse_cdf_formula(u):
+    # Cardano's root of mu^3 + 3 mu - z = 0, odd in z: sign(z) (a - 1/a), a = cbrt(|z| + sqrt(z^2 + 1)) >= 1
+    z = 4.0 * u - 2.0
+    a = np.cbrt(np.abs(z) + np.sqrt(z * z + 1.0))
+    return np.minimum(np.maximum(np.copysign(a - 1.0 / a, z), -1.0), 1.0)
+
+
+def _henyey_greenstein_inverse_cdf_formula(u, g):
+    if abs(g) < _ISOTROPIC_G:
+        return 2.0 * u - 1.0
+    t = (1.0 - g * g) / (1.0 - g + 2.0 * g * u)
+    return np.minimum(np.maximum((1.0 + g * g - t * t) / (2.0 * g), -1.0), 1.0)
 
 
 # ------------------------------------------------------------------ validation
@@ -159,6 +195,26 @@ def cornette_shanks(cos_theta: ArrayLike, g: float) -> NDArray[np.float64]:
     return _cornette_shanks_formula(_cos(cos_theta), _asymmetry(g))
 
 
+def cornette_shanks_hg_weight(cos_theta: ArrayLike, g: float) -> NDArray[np.float64]:
+    """Ratio of the Cornette-Shanks to the Henyey-Greenstein phase function of the same ``g`` [-].
+
+    ``p_CS / p_HG = 3 (1 + cos^2 theta) / (2 (2 + g^2))``: the two phase functions (Cornette & Shanks 1992;
+    Henyey & Greenstein 1941) share the factor ``(1 - g^2) / (1 + g^2 - 2 g cos theta)^(3/2)``. The weight lies
+    in ``[3 / (2 (2 + g^2)), 3 / (2 + g^2)]``, the smallest value at ``cos theta = 0`` and the largest at
+    ``cos theta = +-1`` (0.57-1.14 for g = 0.8, 0.75-1.5 for g = 0). Weighting Henyey-Greenstein samples by it
+    gives Cornette-Shanks expectations with a weight bounded by ``3 / (2 + g^2) <= 1.5``; divided by that bound
+    it is the acceptance probability of :func:`sample_cornette_shanks`.
+
+    Parameters
+    ----------
+    cos_theta : array_like
+        Cosine of the scattering angle [-].
+    g : float
+        Asymmetry parameter in (-1, 1) [-].
+    """
+    return _cornette_shanks_hg_weight_formula(_cos(cos_theta), _asymmetry(g))
+
+
 def aerosol_phase(cos_theta: ArrayLike, g: float, kind: str = "cornette-shanks") -> NDArray[np.float64]:
     """The aerosol phase function named ``kind`` (one of :data:`AEROSOL_PHASE_FUNCTIONS`) [sr^-1]."""
     if aerosol_phase_kind(kind) == 1:
@@ -202,11 +258,7 @@ def rayleigh_inverse_cdf(u: ArrayLike) -> NDArray[np.float64]:
     ndarray, shape of ``u``
         ``mu`` in [-1, 1] [-].
     """
-    z = 4.0 * _uniform(u) - 2.0
-    # w = cbrt(z + sqrt(z^2 + 1)) > 0; for z < 0 use 1 / cbrt(-z + sqrt(z^2 + 1)) to avoid cancellation.
-    s = np.sqrt(z * z + 1.0)
-    w = np.where(z >= 0.0, np.cbrt(z + s), 1.0 / np.cbrt(s - z))
-    return np.clip(w - 1.0 / w, -1.0, 1.0)
+    return _rayleigh_inverse_cdf_formula(_uniform(u))
 
 
 def henyey_greenstein_inverse_cdf(u: ArrayLike, g: float) -> NDArray[np.float64]:
@@ -222,15 +274,10 @@ def henyey_greenstein_inverse_cdf(u: ArrayLike, g: float) -> NDArray[np.float64]
     Returns
     -------
     ndarray, shape of ``u``
-        ``mu`` in [-1, 1] [-]. For ``|g| < 1e-6`` the density is uniform to within ``3 |g| < 3e-6``
-        (relative) and ``mu = 2 u - 1`` is used.
+        ``mu`` in [-1, 1] [-], increasing in ``u``. For ``|g| < 1e-6`` the density is uniform to within
+        ``3 |g| < 3e-6`` (relative) and ``mu = 2 u - 1`` is used.
     """
-    x = _uniform(u)
-    g = _asymmetry(g)
-    if abs(g) < 1e-6:
-        return 2.0 * x - 1.0
-    t = (1.0 - g * g) / (1.0 - g + 2.0 * g * x)
-    return np.clip((1.0 + g * g - t * t) / (2.0 * g), -1.0, 1.0)
+    return _henyey_greenstein_inverse_cdf_formula(_uniform(u), _asymmetry(g))
 
 
 def sample_rayleigh(size: int | tuple[int, ...], rng: Any = None) -> NDArray[np.float64]:
@@ -256,9 +303,11 @@ def sample_cornette_shanks(size: int | tuple[int, ...], g: float, rng: Any = Non
     """``size`` cosines of the scattering angle distributed as Cornette-Shanks with parameter ``g`` [-].
 
     Exact rejection sampling from Henyey-Greenstein with the same ``g`` (module docstring): each candidate
-    ``mu`` is kept with probability ``(1 + mu^2) / 2``; on average ``3 / (2 + g^2)`` candidates per sample.
+    ``mu`` is kept with probability ``w(mu) / (3 / (2 + g^2)) = (1 + mu^2) / 2``, ``w`` the bounded weight
+    :func:`cornette_shanks_hg_weight`; on average ``3 / (2 + g^2)`` candidates per sample.
     """
     g = _asymmetry(g)
+    bound = _cornette_shanks_hg_weight_formula(1.0, g)  # the largest weight, 3 / (2 + g^2), at mu = +-1
     gen = _rng(rng)
     shape = _size(size)
     n = math.prod(shape)
@@ -267,8 +316,8 @@ def sample_cornette_shanks(size: int | tuple[int, ...], g: float, rng: Any = Non
     while filled < n:
         want = n - filled
         batch = int(want * 1.6) + 16
-        mu = henyey_greenstein_inverse_cdf(gen.random(batch), g)
-        keep = mu[2.0 * gen.random(batch) < 1.0 + mu * mu][:want]
+        mu = _henyey_greenstein_inverse_cdf_formula(gen.random(batch), g)
+        keep = mu[bound * gen.random(batch) < _cornette_shanks_hg_weight_formula(mu, g)][:want]
         out[filled:filled + keep.size] = keep
         filled += keep.size
     return out.reshape(shape)
@@ -284,7 +333,8 @@ def sample_aerosol_phase(size: int | tuple[int, ...], g: float, kind: str = "cor
 
 # ------------------------------------------------------------------ numba scalar versions (built on first use)
 
-_SCALARS = ("rayleigh_phase_scalar", "henyey_greenstein_scalar", "cornette_shanks_scalar", "aerosol_phase_scalar")
+_SCALARS = ("rayleigh_phase_scalar", "henyey_greenstein_scalar", "cornette_shanks_scalar", "aerosol_phase_scalar",
+            "rayleigh_inverse_cdf_scalar", "henyey_greenstein_inverse_cdf_scalar", "direction_about_axis")
 
 
 def __getattr__(name: str) -> Any:

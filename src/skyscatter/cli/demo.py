@@ -19,10 +19,13 @@ import math
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .common import HELP_FORMATTER, add_sun_options, finite_float, float_in, positive_int, sun_angles_from_args
 from .sky_options import add_model_options, build_sky_from_args
+
+if TYPE_CHECKING:
+    from ..sky.base import SkyModel
 
 #: (elevation, azimuth) [deg] of the sun in the figure panels.
 MORNING_SUN = (25.0, 120.0)
@@ -196,7 +199,7 @@ def _overcast():
     return CIEOvercastSky()
 
 
-def _aerial(kind: str, sky, turbidity: float):
+def _aerial(kind: str, sky: SkyModel, turbidity: float):
     from ..aerial import (
         ConstantDensityAerialPerspective,
         PreethamAerialPerspective,

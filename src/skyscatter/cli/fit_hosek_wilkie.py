@@ -78,7 +78,8 @@ def run(args: argparse.Namespace) -> int:
                           provenance={"atmosphere": json.loads(params.canonical_json())})
     ds.save(args.out)
     rms = ds.provenance["fit"]["rms_relative_error_at_samples"]
-    print(f"fitted {len(args.fit_wavelengths)} wavelengths at {args.elevations} sun elevations in "
+    n_wl = len(args.fit_wavelengths)
+    print(f"fitted {n_wl} wavelength{'s' if n_wl > 1 else ''} at {args.elevations} sun elevations in "
           f"{time.perf_counter() - t0:.1f} s")
     for w, row in zip(args.fit_wavelengths, rms, strict=True):
         worst = max(row)

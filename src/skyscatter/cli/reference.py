@@ -8,6 +8,7 @@ import sys
 import time
 from pathlib import Path
 
+from ..atmosphere.phase import AEROSOL_PHASE_FUNCTIONS
 from .common import HELP_FORMATTER, float_in, positive_int
 
 
@@ -66,8 +67,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--samples", type=positive_int, default=4096, metavar="N", help="paths per direction")
     p.add_argument("--seed", type=int, default=0, metavar="N", help="random seed (results depend only on it)")
     p.add_argument("--altitude", type=float_in(0.0, 1e8), default=0.0, metavar="M", help="observer altitude [m]")
-    p.add_argument("--phase", choices=("cornette-shanks", "henyey-greenstein"), default="cornette-shanks",
-                   help="aerosol phase function")
+    p.add_argument("--phase", choices=AEROSOL_PHASE_FUNCTIONS, default="cornette-shanks",
+                   help="aerosol phase function (asymmetry g = 0.8)")
     p.add_argument("--scheduler", default=None, metavar="ADDR",
                    help="'synchronous', or a dask.distributed scheduler address (tcp://host:8786); "
                         "default: local threads")
@@ -76,6 +77,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..atmosphere import AtmosphereParameters
     from ..montecarlo.dataset import equal_area_directions, reference
 
     bar = None
@@ -98,8 +100,8 @@ def run(args: argparse.Namespace) -> int:
         ds = reference(args.output, sun_elevations=[math.radians(e) for e in args.sun_elevation],
                        turbidities=turbidity, aerosol_optical_depths=args.aod, albedos=args.albedo,
                        wavelengths=args.wavelengths, directions=equal_area_directions(args.directions),
-                       samples=args.samples, seed=args.seed, altitude=args.altitude, phase=args.phase,
-                       scheduler=args.scheduler, progress=progress)
+                       atmosphere=AtmosphereParameters(mie_phase_function=args.phase), samples=args.samples,
+                       seed=args.seed, altitude=args.altitude, scheduler=args.scheduler, progress=progress)
     finally:
         if bar is not None:
             bar.close()

@@ -1,7 +1,7 @@
 """Spectral Monte Carlo reference for the spherical atmosphere: a brute-force path tracer run on Dask.
 
 ``sky_radiance(atmosphere, directions, wavelengths, sun_zenith=...)`` traces backward paths from the observer
-through the shells of an :class:`~skyscatter.precomputed.AtmosphereParameters` medium (all orders of scattering,
+through the shells of an :class:`~skyscatter.atmosphere.AtmosphereParameters` medium (all orders of scattering,
 Lambertian ground, the sun as a disc), with next-event estimation to the sun, a forced first collision,
 Russian roulette and hero-wavelength spectral MIS (Wilkie et al. 2014, doi:10.1111/cgf.12419). Results depend
 only on the seed. See ``docs/montecarlo.md`` for the method and its validation.

@@ -16,7 +16,8 @@ direction_xyz      direction, xyz                                   unit ENU vec
 
 Each cell is one Zarr chunk of every variable. A cell is written first and only then marked ``done``, so an
 interrupted run loses nothing written and a re-run skips the cells already done. The store's attributes hold the
-job description (atmosphere, axes, directions, samples, seed, phase, version) and its SHA-256; a store that holds
+job description (atmosphere with its aerosol phase function, axes, directions, samples, seed, version) and its
+SHA-256; a store that holds
 a different job is refused rather than overwritten.
 """
 
@@ -36,8 +37,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
+from ..atmosphere import AtmosphereParameters
 from ..errors import InvalidParameterError, OutputError
-from ..precomputed import AtmosphereParameters
 from .driver import (
     DEFAULT_GROUP_SIZE,
     batch_layout,
@@ -80,7 +81,6 @@ class ReferenceJob:
     samples: int
     seed: int
     altitude: float
-    phase: str
     group_size: int
 
     def cell_atmosphere(self, k: int, m: int) -> AtmosphereParameters:
@@ -107,7 +107,6 @@ class ReferenceJob:
             "samples": self.samples,
             "seed": self.seed,
             "altitude_m": self.altitude,
-            "phase": self.phase,
             "group_size": self.group_size,
             "method": "skyscatter.montecarlo (docs/montecarlo.md)",
         }
@@ -136,8 +135,7 @@ def _axis(name: str, values: ArrayLike, lo: float, hi: float, unit: str) -> NDAr
 def make_job(*, sun_elevations: ArrayLike, albedos: ArrayLike, wavelengths: ArrayLike, directions: ArrayLike,
              turbidities: ArrayLike | None = None, aerosol_optical_depths: ArrayLike | None = None,
              atmosphere: AtmosphereParameters | None = None, samples: int = 4096, seed: int = 0,
-             altitude: float = 0.0, phase: str = "cornette-shanks", group_size: int = DEFAULT_GROUP_SIZE
-             ) -> ReferenceJob:
+             altitude: float = 0.0, group_size: int = DEFAULT_GROUP_SIZE) -> ReferenceJob:
     """Validate the inputs of a reference job (see :func:`reference`)."""
     atm = AtmosphereParameters() if atmosphere is None else atmosphere
     if (turbidities is None) == (aerosol_optical_depths is None):
@@ -151,7 +149,7 @@ def make_job(*, sun_elevations: ArrayLike, albedos: ArrayLike, wavelengths: Arra
         raise InvalidParameterError(f"samples must be an integer >= 1; got {samples!r}")
     job = ReferenceJob(atm, _axis("sun elevations", sun_elevations, -math.pi / 2, math.pi / 2, "rad"), kind, aer,
                        _axis("albedos", albedos, 0.0, 1.0, ""), wl, check_directions(directions), int(samples),
-                       int(seed), float(altitude), phase, int(group_size))
+                       int(seed), float(altitude), int(group_size))
     # validate every cell's medium and the spectra once, before anything is written
     for k in range(aer.size):
         job.cell_atmosphere(k, 0).check_wavelengths(wl)
@@ -208,7 +206,7 @@ def _open_or_create(store: Path, job: ReferenceJob):
             "job": json.dumps(job.description(), sort_keys=True),
             "samples": job.samples,
             "seed": job.seed,
-            "phase": job.phase,
+            "mie_phase_function": job.atmosphere.mie_phase_function,
             "altitude_m": job.altitude,
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "conventions": "ENU frame (x east, y north, z up); azimuth from north towards east",
@@ -229,8 +227,8 @@ def _open_or_create(store: Path, job: ReferenceJob):
 def reference(store: str | os.PathLike[str], *, sun_elevations: ArrayLike, albedos: ArrayLike,
               wavelengths: ArrayLike, directions: ArrayLike, turbidities: ArrayLike | None = None,
               aerosol_optical_depths: ArrayLike | None = None, atmosphere: AtmosphereParameters | None = None,
-              samples: int = 4096, seed: int = 0, altitude: float = 0.0, phase: str = "cornette-shanks",
-              group_size: int = DEFAULT_GROUP_SIZE, scheduler: Any = None,
+              samples: int = 4096, seed: int = 0, altitude: float = 0.0, group_size: int = DEFAULT_GROUP_SIZE,
+              scheduler: Any = None,
               progress: Callable[[int, int], None] | None = None):
     """Compute (or resume) a reference grid and write it to the Zarr ``store``; return the xarray Dataset.
 
@@ -250,15 +248,16 @@ def reference(store: str | os.PathLike[str], *, sun_elevations: ArrayLike, albed
         Exactly one: Linke-style turbidity (Preetham 1999 Angstrom beta, alpha 1.3) or vertical aerosol optical
         depth at 550 nm (with the base atmosphere's Angstrom alpha).
     atmosphere : AtmosphereParameters, optional
-        Base medium (Earth defaults); aerosol and albedo are replaced per cell.
-    samples, seed, altitude, phase, group_size, scheduler
+        Base medium (Earth defaults); aerosol and albedo are replaced per cell. Its ``mie_phase_function`` and
+        ``mie_phase_g`` give the aerosol phase function of every cell.
+    samples, seed, altitude, group_size, scheduler
         As :func:`~skyscatter.montecarlo.sky_radiance`.
     progress : callable(done, total), optional
         Task progress over the cells still to compute.
     """
     job = make_job(sun_elevations=sun_elevations, albedos=albedos, wavelengths=wavelengths, directions=directions,
                    turbidities=turbidities, aerosol_optical_depths=aerosol_optical_depths, atmosphere=atmosphere,
-                   samples=samples, seed=seed, altitude=altitude, phase=phase, group_size=group_size)
+                   samples=samples, seed=seed, altitude=altitude, group_size=group_size)
     path = Path(store)
     ds = _open_or_create(path, job)
     done = ds["done"].values.copy()
@@ -275,8 +274,8 @@ def reference(store: str | os.PathLike[str], *, sun_elevations: ArrayLike, albed
                 progress(c * per_cell + d, total)
 
         res = sky_radiance(atm, job.directions, job.wavelengths, sun_zenith=zen, altitude=job.altitude,
-                           samples=job.samples, seed=job.seed, scheduler=scheduler, phase=job.phase,
-                           group_size=job.group_size, progress=cell_progress)
+                           samples=job.samples, seed=job.seed, scheduler=scheduler, group_size=job.group_size,
+                           progress=cell_progress)
         disc = solar_disc_radiance(atm, job.wavelengths, sun_zenith=zen, altitude=job.altitude)
         _write_cell(path, ds, (i, k, m), res.radiance, res.stderr, disc)
     import xarray as xr

@@ -19,10 +19,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..atmosphere.phase_sampling import PHASE_KINDS
+from ..atmosphere import AtmosphereParameters
+from ..atmosphere.phase import aerosol_phase_kind
 from ..conventions import direction_from_angles
 from ..errors import InvalidDirectionError, InvalidParameterError
-from ..precomputed import AtmosphereParameters
 from . import kernels
 
 __all__ = ["MonteCarloResult", "Medium", "prepare_medium", "sky_radiance", "solar_disc_radiance"]
@@ -120,13 +120,11 @@ def quadrature_edges(atmosphere: AtmosphereParameters) -> NDArray[np.float64]:
     return atmosphere.bottom_radius + a
 
 
-def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.float64],
-                   phase: str = "cornette-shanks") -> Medium:
-    """Pack ``atmosphere`` for the kernels at ``wavelengths`` [nm]; ``phase`` names the aerosol phase function."""
+def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.float64]) -> Medium:
+    """Pack ``atmosphere`` for the kernels at ``wavelengths`` [nm] (the aerosol phase function is the
+    atmosphere's ``mie_phase_function`` with ``mie_phase_g``)."""
     if not isinstance(atmosphere, AtmosphereParameters):
         raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(atmosphere).__name__}")
-    if phase not in PHASE_KINDS:
-        raise InvalidParameterError(f"phase must be one of {', '.join(PHASE_KINDS)}; got {phase!r}")
     atmosphere.check_wavelengths(wavelengths)
     profiles = (atmosphere.rayleigh_density, atmosphere.mie_density, atmosphere.ozone_density)
     arrs = [pr.as_array() for pr in profiles]
@@ -139,7 +137,8 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
     return Medium(
         atmosphere.bottom_radius, atmosphere.top_radius, quadrature_edges(atmosphere), layers,
         np.array([a.shape[0] for a in arrs], dtype=np.int64), np.ascontiguousarray(coef, dtype=float),
-        atmosphere.mie_single_scattering_albedo, atmosphere.mie_phase_g, PHASE_KINDS[phase],
+        atmosphere.mie_single_scattering_albedo, atmosphere.mie_phase_g,
+        aerosol_phase_kind(atmosphere.mie_phase_function),
         np.ascontiguousarray(atmosphere.ground_albedo_at(wavelengths), dtype=float),
         np.ascontiguousarray(atmosphere.solar_irradiance_at(wavelengths), dtype=float),
         atmosphere.sun_angular_radius,
@@ -361,16 +360,16 @@ def _sun_vector(sun_zenith: float, sun_azimuth: float) -> NDArray[np.float64]:
 
 def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavelengths: ArrayLike, *,
                  sun_zenith: float, sun_azimuth: float = 0.0, altitude: float = 0.0, samples: int = 4096,
-                 seed: int = 0, scheduler: Any = None, phase: str = "cornette-shanks",
-                 group_size: int = DEFAULT_GROUP_SIZE, directions_per_task: int | None = None,
-                 batches_per_task: int | None = None, progress: Callable[[int, int], None] | None = None
-                 ) -> MonteCarloResult:
+                 seed: int = 0, scheduler: Any = None, group_size: int = DEFAULT_GROUP_SIZE,
+                 directions_per_task: int | None = None, batches_per_task: int | None = None,
+                 progress: Callable[[int, int], None] | None = None) -> MonteCarloResult:
     """Monte Carlo spectral sky radiance (all orders of scattering, without the directly transmitted sun).
 
     Parameters
     ----------
     atmosphere : AtmosphereParameters
-        The medium (spherical shells, ground albedo, solar spectrum and disc radius).
+        The medium (spherical shells, ground albedo, solar spectrum and disc radius, the aerosol phase function
+        ``mie_phase_function`` with asymmetry ``mie_phase_g``).
     directions : array_like, shape (..., 3)
         View directions (ENU at the observer; need not be unit length, must be finite and non-zero).
     wavelengths : array_like, shape (n,)
@@ -386,8 +385,6 @@ def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavele
     scheduler : None, "synchronous", dask.distributed.Client or str
         None runs dask's threaded scheduler (the numba kernels release the GIL); "synchronous" runs in this
         thread; a Client or a scheduler address runs the tasks on that cluster.
-    phase : {"cornette-shanks", "henyey-greenstein"}
-        Aerosol phase function (asymmetry ``atmosphere.mie_phase_g``).
     group_size : int
         Wavelengths sharing one path (hero-wavelength sampling); part of the job (changes the random numbers).
     directions_per_task, batches_per_task : int, optional
@@ -404,7 +401,7 @@ def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavele
     seed = int(seed)
     if seed < 0:
         raise InvalidParameterError(f"seed must be >= 0; got {seed}")
-    medium = prepare_medium(atmosphere, wl, phase)
+    medium = prepare_medium(atmosphere, wl)
     batch_size, n_batches = batch_layout(n_samples)
     groups = wavelength_groups(wl.size, group_size)
     specs = plan_tasks(dirs.shape[0], len(groups), n_batches, batch_size,

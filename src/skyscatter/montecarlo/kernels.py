@@ -6,7 +6,7 @@ frame of the observer is the global frame (x east, y north, z up). The atmospher
 ``p + t d`` meets the sphere of radius ``R`` where ``t = -b -+ sqrt(b^2 - (r^2 - R^2))``, ``b = p . d``.
 
 Optical depth. The medium is three components (Rayleigh, aerosol, ozone) whose densities are the
-:class:`~skyscatter.precomputed.parameters.DensityProfile` layers ``max(0, a exp(s h) + l h + c)``. Along a ray the
+:class:`~skyscatter.atmosphere.DensityProfile` layers ``max(0, a exp(s h) + l h + c)``. Along a ray the
 column ``int rho(h(t)) dt`` is integrated piecewise: the ray is cut where it crosses the spheres of a set of
 "quadrature shells" (every layer boundary, every zero of a linear layer and altitudes one scale height apart for
 each exponential layer, two scale heights apart), and each piece is integrated by 4-point Gauss-Legendre
@@ -31,8 +31,12 @@ Estimator (backward paths from the observer; Veach 1997, PhD thesis, Stanford, C
   planet blocks it), phase function or ``albedo / pi * cos``. The sun is reached only by NEE, so the sky radiance
   never contains the directly transmitted sun (reported separately, :func:`disc_transmittance`);
 * absorption (aerosol single-scattering albedo, ozone) enters as a weight, never as termination;
-* scattering direction: Rayleigh or aerosol lobe chosen by their scattering coefficients, sampled by
-  :mod:`skyscatter.atmosphere.phase_sampling`; Lambertian ground: cosine-weighted hemisphere;
+* scattering direction: Rayleigh or aerosol lobe chosen by their scattering coefficients, the cosine drawn by
+  the exact inverse CDFs of :mod:`skyscatter.atmosphere.phase` (Rayleigh; Henyey-Greenstein for both aerosol
+  phase functions: a Cornette-Shanks aerosol is sampled as Henyey-Greenstein of the same ``g``, and its density
+  enters the path weight, i.e. the weight ``cornette_shanks_hg_weight`` in ``[3 / (2 (2 + g^2)), 3 / (2 + g^2)]``),
+  the direction built about the current one by ``direction_about_axis`` (Duff et al. 2017); Lambertian ground:
+  cosine-weighted hemisphere;
 * Russian roulette (Arvo & Kirk 1990) from the second vertex when the largest weight falls below 0.5, survival
   probability ``w_max / 0.5``; a hard cap of 1000 vertices (never reached in the tests).
 
@@ -52,13 +56,13 @@ import math
 import numba
 import numpy as np
 
-from ..atmosphere.phase_sampling import (
-    aerosol_phase,
-    aerosol_phase_pdf,
-    rayleigh_phase_value,
-    rotate_to_frame,
-    sample_henyey_greenstein,
-    sample_rayleigh,
+from ..atmosphere.phase import (
+    aerosol_phase_scalar,
+    direction_about_axis,
+    henyey_greenstein_inverse_cdf_scalar,
+    henyey_greenstein_scalar,
+    rayleigh_inverse_cdf_scalar,
+    rayleigh_phase_scalar,
 )
 from .rng import next_uniform, sample_state, stream_key
 
@@ -284,7 +288,7 @@ def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, l
 def _sun_sample(sx, sy, sz, cos_max, u1, u2):
     """Direction uniform in solid angle over the cone of half-angle ``acos(cos_max)`` about the sun."""
     mu = 1.0 - u1 * (1.0 - cos_max)
-    return rotate_to_frame(sx, sy, sz, mu, 2.0 * math.pi * u2)
+    return direction_about_axis(sx, sy, sz, mu, 2.0 * math.pi * u2)
 
 
 @_jit
@@ -312,7 +316,8 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
     rb, rt : planet and top-of-atmosphere radii [m]. edges : sorted radii [m] of the quadrature shells (rb < . < rt).
     layers : (3, L, 5) density layers of Rayleigh, aerosol, ozone; nlay : (3,) int64 layer counts.
     coef : (n_wl, 3) Rayleigh scattering, aerosol extinction, ozone absorption at relative density 1 [m^-1].
-    mie_ssa : aerosol single-scattering albedo; g, kind : aerosol phase asymmetry and code.
+    mie_ssa : aerosol single-scattering albedo; g, kind : aerosol phase asymmetry and code
+    (:func:`skyscatter.atmosphere.phase.aerosol_phase_kind`: 0 Cornette-Shanks, 1 Henyey-Greenstein).
     albedo : (n_wl,) ground albedo; esun : (n_wl,) solar irradiance [W m^-2 nm^-1].
     seed, group, batch0 : RNG counters (batch numbers batch0 .. batch0 + n_batches - 1).
     sums, sumsq : (n, n_wl, n_batches) outputs: per batch, sum and sum of squares of the per-path radiance.
@@ -404,8 +409,8 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                             _march(px, py, pz, wx, wy, wz, te, np.inf, 0.0, 0.0, 0.0, rb, edges, layers, nlay, tot,
                                    tmp, rec)
                             mu = wx * dx + wy * dy + wz * dz
-                            pr = rayleigh_phase_value(mu)
-                            pm = aerosol_phase(kind, mu, g)
+                            pr = rayleigh_phase_scalar(mu)
+                            pm = aerosol_phase_scalar(mu, g, kind)
                             for i in range(n):
                                 tr = math.exp(-(coef[i, 0] * tot[0] + coef[i, 1] * tot[1] + coef[i, 2] * tot[2]))
                                 contrib[i] += f[i] * (sr[i] * pr + sm[i] * pm) * esun[i] * tr
@@ -413,13 +418,13 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                         ssh = sr[hero] + sm[hero]
                         qh = sr[hero] / ssh if ssh > 0.0 else 1.0
                         if next_uniform(st) < qh:
-                            mu = sample_rayleigh(next_uniform(st))
+                            mu = rayleigh_inverse_cdf_scalar(next_uniform(st))
                         else:
-                            mu = sample_henyey_greenstein(next_uniform(st), g)
-                        dx, dy, dz = rotate_to_frame(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
-                        pr = rayleigh_phase_value(mu)
-                        pm = aerosol_phase(kind, mu, g)
-                        ph = aerosol_phase_pdf(kind, mu, g)
+                            mu = henyey_greenstein_inverse_cdf_scalar(next_uniform(st), g)
+                        dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
+                        pr = rayleigh_phase_scalar(mu)
+                        pm = aerosol_phase_scalar(mu, g, kind)
+                        ph = henyey_greenstein_scalar(mu, g)  # the aerosol lobe is sampled as HG for both kinds
                         for i in range(n):
                             ss = sr[i] + sm[i]
                             q = sr[i] / ss if ss > 0.0 else 1.0
@@ -451,7 +456,7 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                         # cosine-weighted hemisphere: weight albedo
                         u1 = next_uniform(st)
                         mu = math.sqrt(u1)
-                        dx, dy, dz = rotate_to_frame(nx, ny, nz, mu, 2.0 * math.pi * next_uniform(st))
+                        dx, dy, dz = direction_about_axis(nx, ny, nz, mu, 2.0 * math.pi * next_uniform(st))
                         for i in range(n):
                             f[i] *= albedo[i]
                     first = False

@@ -54,17 +54,6 @@ __all__ = [
     "solar_disc_solid_angle",
 ]
 
-#: Largest physical direct or diffuse irradiance [W m^-2]: the extraterrestrial normal irradiance at perihelion,
-#: 1367 W m^-2 times Spencer's (1971) largest eccentricity factor 1.0335 (on 3 January), rounded up.
-MAX_IRRADIANCE = 1413.0
-#: Largest physical illuminance [lx]: the extraterrestrial normal solar illuminance at perihelion, about
-#: 133.8 klx at the mean distance (CIE) times 1.0335, rounded up.
-MAX_ILLUMINANCE = 1.4e5
-#: Largest physical sky luminance [cd m^-2]: the solar disc outside the atmosphere, MAX_ILLUMINANCE over the
-#: disc's solid angle at perihelion (6.80e-5 sr x 1.0335); no part of the sky is brighter.
-MAX_SKY_LUMINANCE = MAX_ILLUMINANCE / (6.80e-5 * 1.0335)
-
-
 def check_sun_angles(sun_zenith: float, sun_azimuth: float, *, allow_below_horizon: bool) -> tuple[float, float]:
     """Validate sun angles [rad]; return them as floats (azimuth wrapped into [0, 2 pi)).
 

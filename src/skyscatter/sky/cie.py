@@ -41,7 +41,7 @@ from ..atmosphere.tables import load_table
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
 from ..spectral import as_wavelengths
-from .base import MAX_ILLUMINANCE, MAX_SKY_LUMINANCE, LuminanceOnlySky, SolarDisc, SunSkyMixin, check_sun_angles
+from .base import LuminanceOnlySky, SolarDisc, SunSkyMixin, check_sun_angles
 from .perez_family import cie_parameters, extended_perez, kittler_parameters
 
 __all__ = [
@@ -190,12 +190,7 @@ def _check_scale(zenith_luminance, diffuse_illuminance) -> tuple[float | None, f
             raise InvalidParameterError(f"{name} must be a number [{unit}]; got {value!r}") from None
         if not (np.isfinite(v) and v >= 0.0):
             raise InvalidParameterError(f"{name} must be a finite number >= 0 [{unit}]; got {v}")
-        if name == "zenith_luminance" and v > MAX_SKY_LUMINANCE:
-            raise InvalidParameterError(f"{name} must be at most {MAX_SKY_LUMINANCE:.3g} cd m^-2 (the luminance of "
-                                        f"the solar disc outside the atmosphere, brighter than any sky); got {v:g}")
-        if name == "diffuse_illuminance" and v > MAX_ILLUMINANCE:
-            raise InvalidParameterError(f"{name} must be at most {MAX_ILLUMINANCE:g} lx (the extraterrestrial solar "
-                                        f"illuminance at perihelion); got {v:g}")
+        _check_upper(name, v, unit)
         out.append(v)
     return out[0], out[1]
 
@@ -207,9 +202,7 @@ def _check_sun_illuminance(value) -> float:
         raise InvalidParameterError(f"sun_illuminance_normal must be a number [lx]; got {value!r}") from None
     if not (np.isfinite(v) and v >= 0.0):
         raise InvalidParameterError(f"sun_illuminance_normal must be a finite number >= 0 [lx]; got {v}")
-    if v > MAX_ILLUMINANCE:
-        raise InvalidParameterError(f"sun_illuminance_normal must be at most {MAX_ILLUMINANCE:g} lx (the "
-                                    f"extraterrestrial solar illuminance at perihelion); got {v:g}")
+    _check_upper("sun_illuminance_normal", v, "lx")
     return v
 
 

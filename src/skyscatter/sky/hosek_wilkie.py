@@ -38,6 +38,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
@@ -204,6 +205,21 @@ class HosekWilkieDataset:
         return v
 
     # -- files ------------------------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-able data (nested lists of floats; exact round trip through :meth:`from_dict`)."""
+        return {"wavelengths": self.wavelengths.tolist(), "params": self.params.tolist(),
+                "radiance": self.radiance.tolist(), "albedos": self.albedos.tolist(),
+                "turbidities": self.turbidities.tolist(), "provenance": dict(self.provenance)}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> HosekWilkieDataset:
+        """Inverse of :meth:`to_dict`; FileFormatError for missing or malformed entries."""
+        try:
+            return cls(**{k: data[k] for k in ("wavelengths", "params", "radiance", "albedos", "turbidities")},
+                       provenance=dict(data.get("provenance", {})))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise FileFormatError(f"Hosek-Wilkie dataset description is incomplete or malformed: {exc}") from None
+
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the dataset to ``path`` (.npz, written atomically) with its provenance as JSON."""
         with atomic_path(path) as tmp, open(tmp, "wb") as fh:
@@ -381,16 +397,17 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         self.dataset = dataset
         if dataset is None:
             data = _published()
-            self._spectral = data.spectral
+            self._bands = data.spectral.wavelengths
             self._params, self._radiance = data.spectral.configuration(self.sun_elevation, turbidity, albedo)
             self._xyz_config = data.xyz.configuration(self.sun_elevation, turbidity, albedo)
             self._rgb_config = data.rgb.configuration(self.sun_elevation, turbidity, albedo)
         else:
             if not isinstance(dataset, HosekWilkieDataset):
                 raise InvalidParameterError(f"dataset must be a HosekWilkieDataset; got {type(dataset).__name__}")
-            self._spectral = dataset
+            self._bands = dataset.wavelengths
             t = turbidity if dataset.turbidities.size > 1 else None
             a = albedo if dataset.albedos.size > 1 else None
+            self.turbidity, self.albedo = t, a  # None: not an axis of this dataset
             self._params, self._radiance = dataset.configuration(self.sun_elevation, t, a)
         self._remember(turbidity=self.turbidity, albedo=self.albedo, dataset=dataset)
 
@@ -440,7 +457,7 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         outside them and below the horizon (see the class notes).
         """
         wl = as_wavelengths(wavelengths)
-        weights = _band_interpolation(wl, self._spectral.wavelengths)
+        weights = _band_interpolation(wl, self._bands)
         used = np.nonzero(np.any(weights != 0.0, axis=0))[0]
         if used.size == 0:
             d = as_directions(directions)
@@ -559,6 +576,24 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         wl = as_wavelengths(wavelengths)
         centre = self._solar_centre(np.array(self.sun_elevation), wl)
         return centre * (self._limb_coefficients(wl) @ _mean_mu_powers())
+
+    def sun_limb_darkening(self, r: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Radiance across the disc over its average, at relative radius ``r`` in [0, 1], shape (..., n_wl).
+
+        Hosek & Wilkie 2013: ``sum_k c_k mu^k`` with ``mu = sqrt(1 - sin^2(r R) / sin^2 R)`` (R the disc radius),
+        divided by its solid-angle mean so that :meth:`sun_spectral_radiance` times this is
+        :meth:`solar_radiance` at that point of a disc centred at the sun's elevation. 0 outside the disc.
+        """
+        self._require_sun()
+        wl = as_wavelengths(wavelengths)
+        rr = np.clip(np.asarray(r, dtype=float), 0.0, None)
+        mu = np.sqrt(np.maximum(1.0 - np.sin(rr * SOLAR_RADIUS) ** 2 / np.sin(SOLAR_RADIUS) ** 2, 0.0))[..., None]
+        c = self._limb_coefficients(wl)
+        mean = c @ _mean_mu_powers()
+        darkening = c[:, 0] + mu * (c[:, 1] + mu * (c[:, 2] + mu * (c[:, 3] + mu * (c[:, 4] + mu * c[:, 5]))))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out = np.where(mean > 0, darkening / np.where(mean > 0, mean, 1.0), 0.0)
+        return np.where(rr[..., None] <= 1.0, out, 0.0)
 
     def sun_xyz(self) -> NDArray[np.float64]:
         """CIE XYZ [cd m^-2] of the disc-averaged sun, integrated from its spectrum over 320-720 nm."""

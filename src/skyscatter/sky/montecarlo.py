@@ -16,9 +16,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..atmosphere import AtmosphereParameters
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
-from ..precomputed import AtmosphereParameters
 from ..spectral import DEFAULT_WAVELENGTHS, as_wavelengths
 from .base import SkyModel, SunSkyMixin, check_sun_angles
 
@@ -33,15 +33,15 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
     sun_zenith, sun_azimuth : float
         Sun position at the observer [rad]; any zenith in [0, pi] (twilight and night included).
     atmosphere : AtmosphereParameters, optional
-        The medium (default: the Earth defaults of :class:`~skyscatter.precomputed.AtmosphereParameters`).
+        The medium (default: the Earth defaults of :class:`~skyscatter.atmosphere.AtmosphereParameters`); its
+        ``mie_phase_function`` ("cornette-shanks" or "henyey-greenstein") and ``mie_phase_g`` give the aerosol
+        phase function.
     altitude : float
         Observer altitude [m], >= 0.
     samples : int
         Paths per direction (default 1024: about 2-3 % standard error in the visible for a clear sky).
     seed : int
         Seed of the random streams (default 0).
-    phase : {"cornette-shanks", "henyey-greenstein"}
-        Aerosol phase function.
     scheduler : optional
         Dask scheduler for :func:`~skyscatter.montecarlo.sky_radiance` (None = local threads).
 
@@ -55,8 +55,7 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
     renders_ground = True
 
     def __init__(self, sun_zenith: float, sun_azimuth: float = 0.0, *, atmosphere: AtmosphereParameters | None = None,
-                 altitude: float = 0.0, samples: int = 1024, seed: int = 0, phase: str = "cornette-shanks",
-                 scheduler: Any = None) -> None:
+                 altitude: float = 0.0, samples: int = 1024, seed: int = 0, scheduler: Any = None) -> None:
         zen, azi = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=True)
         atm = AtmosphereParameters() if atmosphere is None else atmosphere
         if not isinstance(atm, AtmosphereParameters):
@@ -77,10 +76,9 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
         self.altitude = alt
         self.samples = int(samples)
         self.seed = int(seed)
-        self.phase = phase
         self.scheduler = scheduler
         self.sun_angular_radius = atm.sun_angular_radius
-        self._remember(altitude=alt, samples=self.samples, seed=self.seed, phase=phase, atmosphere=atmosphere)
+        self._remember(altitude=alt, samples=self.samples, seed=self.seed, atmosphere=atmosphere)
 
     def __repr__(self) -> str:
         return (f"MonteCarloSky(sun_zenith={self.sun_zenith:.6g}, sun_azimuth={self.sun_azimuth:.6g}, "
@@ -96,7 +94,7 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
         shape = d.shape[:-1]
         res = sky_radiance(self.atmosphere, d.reshape(-1, 3), wl, sun_zenith=self.sun_zenith,
                            sun_azimuth=self.sun_azimuth, altitude=self.altitude, samples=self.samples,
-                           seed=self.seed, scheduler=self.scheduler, phase=self.phase)
+                           seed=self.seed, scheduler=self.scheduler)
         return res.radiance.reshape(*shape, wl.size), res.stderr.reshape(*shape, wl.size)
 
     def spectral_radiance(self, directions: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:

@@ -50,7 +50,7 @@ from ..atmosphere.airmass import relative_optical_mass
 from ..atmosphere.tables import load_table
 from ..conventions import as_directions, direction_from_angles
 from ..errors import InvalidParameterError
-from .base import MAX_ILLUMINANCE, MAX_IRRADIANCE, LuminanceOnlySky, SunSkyMixin, check_sun_angles
+from .base import LuminanceOnlySky, SunSkyMixin, check_sun_angles
 from .cie import LuminanceSunMixin
 from .perez_family import perez_f
 
@@ -371,10 +371,11 @@ def _finite(name: str, value, unit: str, *, low: float | None = None, strict_low
         raise InvalidParameterError(f"{name} must be {rel} {low:g} [{unit}]; got {v:g}")
     if high is not None and v > high:
         raise InvalidParameterError(f"{name} must be at most {high:g} [{unit}]{why}; got {v:g}")
+    from ..conventions import check_daylight_limit
+
+    check_daylight_limit(name, v, unit)
     return v
 
-
-_ABOVE_SUN = " (the extraterrestrial solar value at perihelion)"
 
 
 class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
@@ -451,11 +452,9 @@ class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
                     "direct_normal_irradiance and diffuse_horizontal_irradiance [W m^-2] must be given together"
                 )
             kwargs["direct_normal_irradiance"] = _finite(
-                "direct_normal_irradiance", direct_normal_irradiance, "W m^-2", low=0.0, high=MAX_IRRADIANCE,
-                why=_ABOVE_SUN)
+                "direct_normal_irradiance", direct_normal_irradiance, "W m^-2", low=0.0)
             kwargs["diffuse_horizontal_irradiance"] = _finite(
-                "diffuse_horizontal_irradiance", diffuse_horizontal_irradiance, "W m^-2", low=0.0, strict_low=True,
-                high=MAX_IRRADIANCE, why=_ABOVE_SUN)
+                "diffuse_horizontal_irradiance", diffuse_horizontal_irradiance, "W m^-2", low=0.0, strict_low=True)
         elif by_parameters:
             if epsilon is None or delta is None:
                 raise InvalidParameterError("epsilon and delta must be given together")
@@ -464,8 +463,7 @@ class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
         else:
             kwargs["epsilon"], kwargs["delta"] = DEFAULT_EPSILON, DEFAULT_DELTA
         if diffuse_illuminance is not None:
-            kwargs["diffuse_illuminance"] = _finite("diffuse_illuminance", diffuse_illuminance, "lx", low=0.0,
-                                                high=MAX_ILLUMINANCE, why=_ABOVE_SUN)
+            kwargs["diffuse_illuminance"] = _finite("diffuse_illuminance", diffuse_illuminance, "lx", low=0.0)
         if day_of_year is not None:
             doy = _finite("day_of_year", day_of_year, "day", low=1.0)
             if doy > 366 or not doy.is_integer():

@@ -40,6 +40,8 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import InvalidParameterError
+
 __all__ = [
     "HORIZON_COS",
     "HOSEK_WILKIE_OFFSET",
@@ -47,6 +49,8 @@ __all__ = [
     "cie_parameters",
     "extended_perez",
     "extended_perez_scalar",
+    "gradation_scalar",
+    "indicatrix_scalar",
     "hosek_wilkie_f",
     "hosek_wilkie_f_jacobian",
     "hosek_wilkie_f_scalar",
@@ -68,20 +72,35 @@ _HW_TO_ALPHABETICAL = np.array([0, 1, 2, 3, 4, 5, 6, 8, 7])
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def gradation_scalar(cos_theta, a, b, offset):  # pragma: no cover - compiled
+    """The gradation ``1 + A exp(B / d)``, ``d = max(cos theta, 0.01)`` (offset 0) or ``cos theta + offset``."""
+    ct = min(max(cos_theta, 0.0), 1.0)
+    denominator = ct + offset if offset > 0.0 else max(ct, HORIZON_COS)
+    return 1.0 + a * math.exp(b / denominator)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def indicatrix_scalar(cos_theta, gamma, cos_g, c, d, e, f, g, h, i):  # pragma: no cover - compiled
+    """The indicatrix ``C + D exp(E gamma) + F cos^2 gamma + G chi(H, gamma) + I sqrt(cos theta)``."""
+    value = c + d * math.exp(e * gamma) + f * cos_g * cos_g
+    if g != 0.0:  # Hosek-Wilkie's aureole term; zero for the classic models (saves a root per direction)
+        q = 1.0 + h * h - 2.0 * h * cos_g
+        value += g * (1.0 + cos_g * cos_g) / (q * math.sqrt(q))  # q^1.5, equal to pow(q, 1.5) to rounding
+    if i != 0.0:
+        value += i * math.sqrt(min(max(cos_theta, 0.0), 1.0))
+    return value
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def extended_perez_scalar(cos_theta, gamma, cos_g, a, b, c, d, e, f, g, h, i, offset):  # pragma: no cover
     """F(theta, gamma) for one direction, given gamma [rad] and its cosine (callers usually have both).
 
-    ``offset`` 0 applies the 0.01 floor of the classic models; > 0 adds it to cos theta (Hosek-Wilkie).
+    ``offset`` 0 applies the 0.01 floor of the classic models; > 0 adds it to cos theta (Hosek-Wilkie). Kernels
+    that evaluate many directions of one sky may combine :func:`gradation_scalar` (per zenith angle) and
+    :func:`indicatrix_scalar` (per angle from the sun) themselves: F is their product.
     """
-    ct = min(max(cos_theta, 0.0), 1.0)
-    denominator = ct + offset if offset > 0.0 else max(ct, HORIZON_COS)
-    indicatrix = c + d * math.exp(e * gamma) + f * cos_g * cos_g
-    if g != 0.0:  # Hosek-Wilkie's aureole term; zero for the classic models (saves a root per direction)
-        q = 1.0 + h * h - 2.0 * h * cos_g
-        indicatrix += g * (1.0 + cos_g * cos_g) / (q * math.sqrt(q))  # q^1.5, equal to pow(q, 1.5) to rounding
-    if i != 0.0:
-        indicatrix += i * math.sqrt(ct)
-    return (1.0 + a * math.exp(b / denominator)) * indicatrix
+    return gradation_scalar(cos_theta, a, b, offset) * indicatrix_scalar(cos_theta, gamma, cos_g, c, d, e, f, g, h,
+                                                                         i)
 
 
 def _from_gamma(cos_theta, gamma, a, b, c, d, e, f, g, h, i, offset):  # pragma: no cover - compiled
@@ -113,7 +132,7 @@ def extended_perez(cos_theta: ArrayLike, gamma: ArrayLike, parameters: ArrayLike
     """
     p = np.asarray(parameters, dtype=float)
     if p.shape[-1:] != (9,):
-        raise ValueError(f"parameters must have a last axis of 9 (A..I); got shape {p.shape}")
+        raise InvalidParameterError(f"parameters must have a last axis of 9 (A..I); got shape {p.shape}")
     return _extended_perez_ufunc(np.asarray(cos_theta, dtype=float), np.asarray(gamma, dtype=float),
                                  *(p[..., k] for k in range(9)), float(offset))
 
@@ -182,7 +201,7 @@ def hosek_wilkie_f(cos_theta: ArrayLike, gamma: ArrayLike, params: ArrayLike) ->
     """
     p = np.asarray(params, dtype=np.float64)
     if p.shape[-1:] != (9,):
-        raise ValueError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
+        raise InvalidParameterError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
     return extended_perez(cos_theta, gamma, p[..., _HW_TO_ALPHABETICAL], offset=HOSEK_WILKIE_OFFSET)
 
 
@@ -198,7 +217,7 @@ def hosek_wilkie_f_jacobian(cos_theta: ArrayLike, gamma: ArrayLike, params: Arra
     """
     p = np.asarray(params, dtype=np.float64)
     if p.shape[-1:] != (9,):
-        raise ValueError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
+        raise InvalidParameterError(f"params must have a last axis of length 9 (A..I); got shape {p.shape}")
     a, b, c, d, e, f, g, i, h = (p[..., k] for k in range(9))
     ct = np.clip(np.asarray(cos_theta, dtype=np.float64), 0.0, 1.0)
     gam = np.asarray(gamma, dtype=np.float64)

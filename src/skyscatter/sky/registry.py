@@ -22,6 +22,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from ..conventions import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_EXTRATERRESTRIAL_IRRADIANCE
 from ..errors import InvalidParameterError
 
 if TYPE_CHECKING:
@@ -70,6 +71,8 @@ class Parameter:
         Command-line flag; default ``--name-with-dashes``. ``cli=False`` keeps the parameter out of the CLI.
     low_open : bool
         True when ``low`` itself is excluded (the value must be greater than ``low``).
+    why : str
+        Where the range comes from (a physical limit, the publication's validity), quoted in error messages.
     """
 
     name: str
@@ -83,6 +86,7 @@ class Parameter:
     flag: str | None = None
     cli: bool = True
     low_open: bool = False
+    why: str = ""
 
     @property
     def cli_flag(self) -> str:
@@ -127,7 +131,8 @@ class Parameter:
             below = self.low is not None and (number <= self.low if self.low_open else number < self.low)
             outside = below or (self.high is not None and number > self.high)
             if ranges and outside:
-                raise InvalidParameterError(f"{where} must be {self.range_text()}; got {value!r}")
+                reason = f" ({self.why})" if self.why else ""
+                raise InvalidParameterError(f"{where} must be {self.range_text()}{reason}; got {value!r}")
             return number
         if self.kind == "bool":
             if not isinstance(value, bool):
@@ -341,17 +346,18 @@ def to_dict(sky: SkyModel) -> dict[str, Any]:
 
 # ------------------------------------------------------------------------------------------ the built-in models
 
+_SUN_LIMIT = "the extraterrestrial solar value at perihelion, which nothing at the ground exceeds"
 _TURBIDITY_HELP = "atmospheric turbidity T (haze + molecules over molecules alone)"
 _SCALE = (
     Parameter("zenith_luminance", "cd m^-2", None, "zenith luminance (default: 10000 lx diffuse)",
               low=0.0),
     Parameter("diffuse_illuminance", "lx", None, "horizontal diffuse illuminance to scale the sky to", low=0.0,
-              high=1.4e5),
+              high=MAX_EXTRATERRESTRIAL_ILLUMINANCE, why=_SUN_LIMIT),
 )
 _SUN_ILLUMINANCE = Parameter(
     "sun_illuminance_normal", "lx", 0.0,
     "direct normal illuminance of the solar disc (0: the distribution describes the sky only)",
-    low=0.0, high=1.4e5, flag="--sun-illuminance",
+    low=0.0, high=MAX_EXTRATERRESTRIAL_ILLUMINANCE, why=_SUN_LIMIT, flag="--sun-illuminance",
 )
 
 register(ModelSpec(
@@ -418,9 +424,9 @@ register(ModelSpec(
         _SCALE[1],
         Parameter("direct_normal_irradiance", "W m^-2", None,
                   "direct normal irradiance (with --dhi, instead of --epsilon/--delta); at most the solar constant",
-                  low=0.0, high=1413.0, flag="--dni"),
+                  low=0.0, high=MAX_EXTRATERRESTRIAL_IRRADIANCE, why=_SUN_LIMIT, flag="--dni"),
         Parameter("diffuse_horizontal_irradiance", "W m^-2", None, "diffuse horizontal irradiance", low=0.0,
-                  high=1413.0, flag="--dhi", low_open=True),
+                  high=MAX_EXTRATERRESTRIAL_IRRADIANCE, why=_SUN_LIMIT, flag="--dhi", low_open=True),
         Parameter("day_of_year", "1", None, "day of the year for the Sun-Earth distance (default: mean distance)",
                   kind="int", low=1, high=366),
         Parameter("dew_point", "deg C", 11.0, "surface dew point for the luminous efficacies", low=-90.0, high=60.0),
@@ -470,8 +476,6 @@ register(ModelSpec(
         Parameter("samples", "1", 1024, "paths per direction (the standard error falls as 1/sqrt(samples))",
                   kind="int", low=1, high=1e8),
         Parameter("seed", "1", 0, "seed of the counter-based random streams", kind="int", low=0, high=2**63 - 1),
-        Parameter("phase", "", "cornette-shanks", "aerosol phase function", kind="choice",
-                  choices=("cornette-shanks", "henyey-greenstein"), cli=False),
         Parameter("atmosphere", "", None, "the medium (AtmosphereParameters; default: the Earth defaults)",
                   kind="atmosphere", cli=False),
     ),
