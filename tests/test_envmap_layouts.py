@@ -8,8 +8,6 @@ in a scene with north = +Y, east = +X, up = +Z. Blender is checked by tools/chec
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -23,54 +21,40 @@ from skyscatter.sky.preetham import PreethamSky
 SUNS = [(35.0, 120.0), (20.0, 300.0), (60.0, 10.0)]  # (elevation, azimuth) [deg]
 
 
-_PROBE = """
-import sys
-import mitsuba as mi
-mi.set_variant("scalar_rgb")
-t = mi.ScalarTransform4f()
-to_world = t.rotate([1, 0, 0], 90)
-if sys.argv[2] == "turned":
-    to_world = t.rotate([0, 0, 1], 180) @ to_world
-emitter = mi.load_dict({"type": "envmap", "filename": sys.argv[1], "to_world": to_world})
-it, si = mi.Interaction3f(), mi.SurfaceInteraction3f()
-best, best_d, n = -1.0, None, 64
-for i in range(n):
-    for j in range(n):
-        ds, _ = emitter.sample_direction(it, mi.Point2f((i + 0.5) / n, (j + 0.5) / n))
-        d = [ds.d[0], ds.d[1], ds.d[2]]
-        si.wi = mi.Vector3f(-d[0], -d[1], -d[2])
-        rgb = emitter.eval(si)
-        y = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
-        if y > best:
-            best, best_d = y, d
-print(*best_d)
-"""
-
-
-def brightest_direction_in_mitsuba(exr_path, to_world: str = "x90") -> np.ndarray:
+def brightest_direction_in_mitsuba(exr_path, to_world) -> np.ndarray:
     """World direction of the brightest point of an envmap, as Mitsuba evaluates it.
 
-    ``to_world``: "x90" is ``rotate([1, 0, 0], 90)``, "turned" is ``rotate([0, 0, 1], 180) @ rotate([1, 0, 0], 90)``.
     Candidate directions come from Mitsuba's own importance sampling of the map (64 x 64 stratified samples),
     which concentrates on the brightest pixels; each is evaluated with ``eval`` and the largest luminance wins.
-    Run in a separate process: Mitsuba keeps process-wide state (the variant and its plugins) that other tests
-    rely on.
     """
-    pytest.importorskip("mitsuba")
-    proc = subprocess.run([sys.executable, "-c", _PROBE, str(exr_path), to_world], capture_output=True, text=True,
-                          timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    return np.array([float(v) for v in proc.stdout.split()])
+    mi = pytest.importorskip("mitsuba")
+    mi.set_variant("scalar_rgb")
+    emitter = mi.load_dict({"type": "envmap", "filename": str(exr_path), "to_world": to_world})
+    it = mi.Interaction3f()
+    si = mi.SurfaceInteraction3f()
+    best, best_d = -1.0, None
+    n = 64
+    for i in range(n):
+        for j in range(n):
+            ds, _ = emitter.sample_direction(it, mi.Point2f((i + 0.5) / n, (j + 0.5) / n))
+            d = np.array([ds.d[0], ds.d[1], ds.d[2]])
+            si.wi = mi.Vector3f(*(-d))
+            rgb = emitter.eval(si)
+            y = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
+            if y > best:
+                best, best_d = y, d
+    return best_d
 
 
 @pytest.mark.parametrize("elevation,azimuth", SUNS)
 def test_mitsuba_layout_puts_the_sun_where_skyscatter_says(tmp_path, capsys, elevation, azimuth):
-    pytest.importorskip("mitsuba")
+    mi = pytest.importorskip("mitsuba")
     out = tmp_path / "sky.exr"
     code = main(["sky", "--layout", "mitsuba", "--width", "512", "--sun-elevation", str(elevation),
                  "--sun-azimuth", str(azimuth), "--out", str(out)])
     assert code == 0, capsys.readouterr().err
-    d = brightest_direction_in_mitsuba(out, "x90")
+    mi.set_variant("scalar_rgb")
+    d = brightest_direction_in_mitsuba(out, mi.ScalarTransform4f().rotate([1, 0, 0], 90))
     sun = direction_from_angles(math.radians(90 - elevation), math.radians(azimuth))
     # the sun lies in one pixel of 360/512 = 0.7 deg; Mitsuba's bilinear lookup peaks within a pixel of it
     assert math.degrees(math.acos(min(1.0, float(d @ sun)))) < 1.0
@@ -79,16 +63,18 @@ def test_mitsuba_layout_puts_the_sun_where_skyscatter_says(tmp_path, capsys, ele
 def test_skyscatter_layout_in_mitsuba_needs_the_extra_half_turn(tmp_path):
     """The default layout (north at the centre) read with rotate(x, 90) alone puts the sun 180 deg off in
     azimuth, as the issue reports; rotate(z, 180) @ rotate(x, 90) fixes it: the two layouts differ by that."""
-    pytest.importorskip("mitsuba")
+    mi = pytest.importorskip("mitsuba")
     from skyscatter.render import write_exr
 
     sky = PreethamSky(2.5, math.radians(55.0), math.radians(120.0))
     write_exr(tmp_path / "s.exr", sky_image(sky, width=512))
+    mi.set_variant("scalar_rgb")
+    t = mi.ScalarTransform4f()
     sun = sky.sun_direction
-    d = brightest_direction_in_mitsuba(tmp_path / "s.exr", "x90")
+    d = brightest_direction_in_mitsuba(tmp_path / "s.exr", t.rotate([1, 0, 0], 90))
     turned = np.array([-sun[0], -sun[1], sun[2]])  # the sun turned 180 deg about the zenith
     assert math.degrees(math.acos(min(1.0, float(d @ turned)))) < 1.0
-    d = brightest_direction_in_mitsuba(tmp_path / "s.exr", "turned")
+    d = brightest_direction_in_mitsuba(tmp_path / "s.exr", t.rotate([0, 0, 1], 180) @ t.rotate([1, 0, 0], 90))
     assert math.degrees(math.acos(min(1.0, float(d @ sun)))) < 1.0
 
 

@@ -36,7 +36,7 @@ def readme_commands() -> list[str]:
 
 
 def _needs_tables(args: list[str]) -> bool:
-    return args[0] in ("precompute", "export-luts", "reference") or "bruneton" in args
+    return args[0] in ("precompute", "export-luts") or "bruneton" in args
 
 
 @pytest.mark.parametrize(

@@ -14,6 +14,11 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import InvalidDirectionError, InvalidParameterError
 
 __all__ = [
+    "LUMINOUS_SOLAR_CONSTANT",
+    "MAX_EXTRATERRESTRIAL_ILLUMINANCE",
+    "MAX_EXTRATERRESTRIAL_IRRADIANCE",
+    "MAX_SKY_LUMINANCE",
+    "check_daylight_limit",
     "direction_from_angles",
     "angles_from_direction",
     "angle_between",
@@ -22,6 +27,50 @@ __all__ = [
     "fisheye_directions",
     "pinhole_directions",
 ]
+
+#: Physical upper bounds of daylight inputs (used to refuse impossible values with the reason).
+#: Largest ratio of the extraterrestrial irradiance to its mean, at perihelion: (1 / (1 - e))^2 with the
+#: orbital eccentricity e = 0.0167 (Spencer 1971's factor peaks at 1.0344 on 3 January).
+PERIHELION_FACTOR = 1.0344
+#: Extraterrestrial normal irradiance at perihelion [W m^-2]: the solar constant 1367 W m^-2 (WRC value that
+#: Perez et al. 1990 and Radiance use; the measured TSI is 1360.8, Kopp & Lean 2011,
+#: doi:10.1029/2010GL045777) times PERIHELION_FACTOR. No direct or diffuse irradiance at the ground exceeds it.
+MAX_EXTRATERRESTRIAL_IRRADIANCE = 1367.0 * PERIHELION_FACTOR
+#: Luminous solar constant [lx] (Darula, Kittler & Gueymard 2005, Solar Energy 79, 559-565,
+#: doi:10.1016/j.solener.2005.01.004): extraterrestrial normal illuminance at the mean Sun-Earth distance.
+LUMINOUS_SOLAR_CONSTANT = 133_800.0
+#: Extraterrestrial normal illuminance at perihelion [lx]: no sun or sky illuminance at the ground exceeds it.
+MAX_EXTRATERRESTRIAL_ILLUMINANCE = LUMINOUS_SOLAR_CONSTANT * PERIHELION_FACTOR
+#: Luminance of the solar disc outside the atmosphere [cd m^-2]: MAX_EXTRATERRESTRIAL_ILLUMINANCE over the
+#: disc's solid angle at perihelion (6.80e-5 sr x 1.0344). No part of the sky is brighter.
+MAX_SKY_LUMINANCE = MAX_EXTRATERRESTRIAL_ILLUMINANCE / (6.80e-5 * PERIHELION_FACTOR)
+
+
+def check_daylight_limit(name: str, value: float, unit: str) -> None:
+    """Refuse a daylight input above its physical limit, naming the limit and its source.
+
+    ``unit`` chooses the limit: "W m^-2" (irradiance, :data:`MAX_EXTRATERRESTRIAL_IRRADIANCE`), "lx"
+    (illuminance, :data:`MAX_EXTRATERRESTRIAL_ILLUMINANCE`) or "cd m^-2" (sky luminance,
+    :data:`MAX_SKY_LUMINANCE`); other units are not checked.
+
+    Raises
+    ------
+    InvalidParameterError
+    """
+    limits = {
+        "W m^-2": (MAX_EXTRATERRESTRIAL_IRRADIANCE, "the extraterrestrial solar irradiance at perihelion",
+                   "1367 W m^-2 x 1.0344", "irradiance at the ground"),
+        "lx": (MAX_EXTRATERRESTRIAL_ILLUMINANCE, "the extraterrestrial solar illuminance at perihelion",
+               "luminous solar constant 133.8 klx, Darula et al. 2005", "illuminance at the ground"),
+        "cd m^-2": (MAX_SKY_LUMINANCE, "the luminance of the solar disc outside the atmosphere",
+                    "133.8 klx x 1.0344 over 6.8e-5 sr", "part of the sky"),
+    }
+    if unit in limits and value > limits[unit][0]:
+        limit, what, source, nothing = limits[unit]
+        raise InvalidParameterError(
+            f"{name} {value:g} {unit} exceeds {what}, {limit:.4g} {unit} ({source}), which no {nothing} exceeds"
+        )
+
 
 def direction_from_angles(zenith: ArrayLike, azimuth: ArrayLike) -> NDArray[np.float64]:
     """Unit ENU direction(s) from zenith and azimuth angles.

@@ -60,6 +60,7 @@ def _kernel(coeffs, sun, scale, qdirs, qweights, q_row, sdirs, s_row, row_cos, n
     """
     n_hours = coeffs.shape[0]
     n_patch = out.shape[1]
+    n_rows = row_cos.shape[0]
     for h in numba.prange(n_hours):
         if scale[h] <= 0.0:
             for p in range(n_patch):
@@ -124,14 +125,23 @@ def perez_patch_luminance(
         sdirs = scheme.sample_directions(samples).reshape(-1, 3)
     n_sub = sdirs.shape[0] // scheme.n_patches
     coeffs = np.ascontiguousarray(coefficients, dtype=np.float64).reshape(-1, 5)
+    qd = np.ascontiguousarray(qd, dtype=np.float64).reshape(-1, 3)
+    sdirs = np.ascontiguousarray(sdirs, dtype=np.float64)
+    # distinct zenith cosines of nodes and samples (rows of the grids), for the per-hour gradation table
+    row_cos, inverse = np.unique(np.concatenate([qd[:, 2], sdirs[:, 2]]), return_inverse=True)
+    q_row = np.ascontiguousarray(inverse[: qd.shape[0]], dtype=np.int64)
+    s_row = np.ascontiguousarray(inverse[qd.shape[0]:], dtype=np.int64)
     out = np.empty((coeffs.shape[0], scheme.n_patches))
     _kernel(
         coeffs,
         np.ascontiguousarray(model_sun, dtype=np.float64).reshape(-1, 3),
         np.ascontiguousarray(diffuse_illuminance, dtype=np.float64).reshape(-1),
-        np.ascontiguousarray(qd),
-        np.ascontiguousarray(qw),
-        np.ascontiguousarray(sdirs),
+        qd,
+        np.ascontiguousarray(qw, dtype=np.float64).reshape(-1),
+        q_row,
+        sdirs,
+        s_row,
+        np.ascontiguousarray(row_cos),
         n_sub,
         out,
     )

@@ -206,6 +206,13 @@ def _check_sun_illuminance(value) -> float:
     return v
 
 
+def _check_upper(name: str, value: float, unit: str) -> None:
+    """Refuse a scale above its physical limit (:func:`skyscatter.conventions.check_daylight_limit`)."""
+    from ..conventions import check_daylight_limit
+
+    check_daylight_limit(name, value, unit)
+
+
 class LuminanceSunMixin:
     """Solar disc of a luminance-only sky from its normal illuminance ``sun_illuminance_normal`` [lx].
 
