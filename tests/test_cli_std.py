@@ -62,13 +62,13 @@ def test_illuminance_perez_from_irradiance(capsys):
     [
         (["--model", "cie-overcast", "--epsilon", "3"], "--epsilon: does not apply to --model cie-overcast"),
         (["--model", "perez", "--epsilon", "3"], "epsilon and delta must be given together"),
-        (["--model", "perez", "--dni", "1e6", "--dhi", "1e6"], "extraterrestrial solar value at perihelion"),
+        (["--model", "perez", "--dni", "1e6", "--dhi", "1e6"], "exceeds the extraterrestrial solar irradiance"),
         (["--model", "cie-overcast", "--include-sun"], "has no sun"),
         (["--model", "cie", "--zenith-luminance", "5", "--diffuse-illuminance", "5"], "not both"),
         (["--tilted", "200", "0"], "tilt must be within 0-180"),
-        (["--model", "cie", "--sky-type", "16"], "sky_type must be 1 to 15"),
+        (["--model", "cie", "--sky-type", "16"], "sky_type 16 is outside 1 to 15"),
         (["--model", "perez", "--day-of-year", "400", "--epsilon", "2", "--delta", "0.2"],
-         "day_of_year must be 1 to 366"),
+         "day_of_year 400 is outside 1 to 366"),
     ],
 )
 def test_illuminance_errors_are_one_line(capsys, args, message):

@@ -371,7 +371,7 @@ def test_cli_sky_and_illuminance(tmp_path, capsys):
     assert main(["illuminance", "--model", "hosek-wilkie", "--sun-elevation", "30", "--json"]) == 0
     capsys.readouterr()
     assert main(["sky", "--model", "hosek-wilkie", "--albedo", "1.5", "--out", str(out)]) == 2
-    assert "--albedo 1.5: albedo must be 0 to 1" in capsys.readouterr().err
+    assert "--albedo 1.5: albedo 1.5 is outside 0 to 1" in capsys.readouterr().err
     assert main(["illuminance", "--model", "hosek-wilkie", "--turbidity", "0.5"]) == 2
     err = capsys.readouterr().err
-    assert "turbidity must be 1 to 10" in err and len(err.strip().splitlines()) == 1
+    assert "turbidity 0.5 is outside 1 to 10" in err and len(err.strip().splitlines()) == 1

@@ -22,7 +22,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ..conventions import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_EXTRATERRESTRIAL_IRRADIANCE
+from ..conventions import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_EXTRATERRESTRIAL_IRRADIANCE, check_daylight_limit
 from ..errors import InvalidParameterError
 
 if TYPE_CHECKING:
@@ -131,8 +131,11 @@ class Parameter:
             below = self.low is not None and (number <= self.low if self.low_open else number < self.low)
             outside = below or (self.high is not None and number > self.high)
             if ranges and outside:
+                if self.high is not None and number > self.high:
+                    check_daylight_limit(self.name, number, self.unit)  # the physical limit, named with its source
                 reason = f" ({self.why})" if self.why else ""
-                raise InvalidParameterError(f"{where} must be {self.range_text()}{reason}; got {value!r}")
+                unit = "" if self.unit in ("1", "") else f" {self.unit}"
+                raise InvalidParameterError(f"{where} {number:g}{unit} is outside {self.range_text()}{reason}")
             return number
         if self.kind == "bool":
             if not isinstance(value, bool):
