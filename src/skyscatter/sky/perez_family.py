@@ -34,6 +34,7 @@ the Preetham sky's and the sky matrix's) and a broadcasting ufunc built from the
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numba
@@ -107,10 +108,14 @@ def _from_gamma(cos_theta, gamma, a, b, c, d, e, f, g, h, i, offset):  # pragma:
     return extended_perez_scalar(cos_theta, gamma, math.cos(gamma), a, b, c, d, e, f, g, h, i, offset)
 
 
-_extended_perez_ufunc = numba.vectorize(
-    ["float64(float64, float64, float64, float64, float64, float64, float64, float64, float64, float64, float64, "
-     "float64)"], nopython=True, cache=True,
-)(_from_gamma)
+@functools.cache
+def _extended_perez_ufunc():
+    # Built on first use: a vectorize with a signature compiles when it is created, and numba's first
+    # compilation (about 0.5 s) should not be paid by every import of the sky package (CLI latency).
+    return numba.vectorize(
+        ["float64(float64, float64, float64, float64, float64, float64, float64, float64, float64, float64, "
+         "float64, float64)"], nopython=True, cache=True,
+    )(_from_gamma)
 
 
 def extended_perez(cos_theta: ArrayLike, gamma: ArrayLike, parameters: ArrayLike, *, offset: float = 0.0
@@ -133,8 +138,8 @@ def extended_perez(cos_theta: ArrayLike, gamma: ArrayLike, parameters: ArrayLike
     p = np.asarray(parameters, dtype=float)
     if p.shape[-1:] != (9,):
         raise InvalidParameterError(f"parameters must have a last axis of 9 (A..I); got shape {p.shape}")
-    return _extended_perez_ufunc(np.asarray(cos_theta, dtype=float), np.asarray(gamma, dtype=float),
-                                 *(p[..., k] for k in range(9)), float(offset))
+    return _extended_perez_ufunc()(np.asarray(cos_theta, dtype=float), np.asarray(gamma, dtype=float),
+                                   *(p[..., k] for k in range(9)), float(offset))
 
 
 def perez_parameters_from_abcde(coefficients: ArrayLike) -> NDArray[np.float64]:
