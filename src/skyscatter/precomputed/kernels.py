@@ -59,6 +59,15 @@ _kjit = numba.njit(cache=True, nogil=True, fastmath=False)
 
 
 @numba.njit(cache=True, nogil=True)
+def mu_s_texels(bottom, top, mu_s_min, n_mu_s):
+    """``mu_s`` of every texel of the 4D tables (each found by bisection, so computed once per kernel call)."""
+    out = np.empty(n_mu_s)
+    for i in range(n_mu_s):
+        out[i] = scattering_mu_s_param(i, bottom, top, mu_s_min, n_mu_s)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
 def ray_sample_distance(i, n_samples, d_end, mu, hits_ground):
     """Distance [m] of sample ``i`` of ``n_samples`` steps along a ray of length ``d_end``: quadratic spacing,
     dense at the ray's lower end where the aerosols are (the start for rays going up, the end for rays that meet
@@ -122,12 +131,13 @@ def direct_irradiance_kernel(transmittance, bottom, top, alpha, out, start, stop
 def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
     """The (clamped) view-sun cosine of every texel of the 4D tables, into ``out`` (n_r, n_mu, n_mu_s, n_nu)."""
     n_r, n_mu, n_mu_s, n_nu = out.shape
+    mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_mu_s)
     for idx in range(start, stop):
         i_r = idx // n_mu
         i_mu = idx % n_mu
         _, mu, _ = scattering_r_mu_params(i_r, i_mu, bottom, top, n_r, n_mu)
         for i_s in range(n_mu_s):
-            mu_s = scattering_mu_s_param(i_s, bottom, top, mu_s_min, n_mu_s)
+            mu_s = mu_s_tab[i_s]
             for i_n in range(n_nu):
                 out[i_r, i_mu, i_s, i_n] = scattering_nu_param(i_n, mu, mu_s, n_nu)
 
@@ -155,6 +165,7 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
     t_sun = np.empty(n_l)
     acc_r = np.empty(n_l)
     acc_m = np.empty(n_l)
+    mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_mu_s)
     for idx in range(start, stop):
         i_r = idx // n_mu
         i_mu = idx % n_mu
@@ -187,7 +198,7 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
                 w_m[i, k] += ca * fa
                 w_m[i + 1, k] += cb * fb
         for i_s in range(n_mu_s):
-            mu_s = scattering_mu_s_param(i_s, bottom, top, mu_s_min, n_mu_s)
+            mu_s = mu_s_tab[i_s]
             for i_n in range(n_nu):
                 nu = scattering_nu_param(i_n, mu, mu_s, n_nu)
                 for k in range(n_l):
@@ -288,11 +299,12 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 w2[a, b] += om[w, a] * om[w, b] * dom[w]
     m0 = np.zeros(n_l)
     m2 = np.zeros((n_l, 3, 3))
+    mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_s)
     for idx in range(start, stop):
         i_r = idx // n_s
         i_s = idx % n_s
         r, _, _ = scattering_r_mu_params(i_r, n_mu // 2, bottom, top, n_r, n_mu)
-        mu_s = scattering_mu_s_param(i_s, bottom, top, mu_s_min, n_s)
+        mu_s = mu_s_tab[i_s]
         sx = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
         for w in range(n_om):
             wx = om[w, 0]
@@ -410,6 +422,7 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     acc = np.empty(n_l)
     big_a = mu_s_limit_a(mu_s_min, bottom, top)
     theta_max = math.acos(mu_s_min)
+    mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_s)
     for idx in range(start, stop):
         i_r = idx // n_mu
         i_mu = idx % n_mu
@@ -443,7 +456,7 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
                 q[i, k] += ca * t_view[i, k]
                 q[i + 1, k] += cb * t_view[i + 1, k]
         for i_s in range(n_s):
-            mu_s = scattering_mu_s_param(i_s, bottom, top, mu_s_min, n_s)
+            mu_s = mu_s_tab[i_s]
             for i_n in range(n_n):
                 nu = scattering_nu_param(i_n, mu, mu_s, n_n)
                 for k in range(n_l):
