@@ -97,13 +97,30 @@ def test_scattering_mapping_round_trip_and_bounds():
 
 
 def test_mu_s_mapping_is_denser_near_the_horizon():
-    """Like the paper's u_mu_s, the texels crowd near mu_s = 0 rather than near the zenith."""
+    """Like the paper's u_mu_s, the texels crowd near mu_s = 0 (steps in the sun's zenith angle 3x finer there
+    than at the zenith), but no cell spans more than 7 deg of sun zenith angle: the 2017 mapping alone left 0-42
+    deg in one cell of 32, too coarse for the forward-peaked aerosol multiple scattering (docs/bruneton.md)."""
     n = 32
     mus = np.array([g.scattering_mu_s_param(i, BOTTOM, TOP, MU_S_MIN, n) for i in range(n)])
     assert np.all(np.diff(mus) > 0)
-    steps = np.diff(mus)
+    steps = -np.diff(np.degrees(np.arccos(mus)))
     near_horizon = steps[np.argmin(np.abs(mus[:-1]))]
     assert near_horizon < steps[-1] / 3
+    assert steps.max() < 7.0
+
+
+def test_sky_mu_mapping_has_no_wide_cell_at_the_zenith():
+    """The sky half of the mu axis: dense at the horizon (< 0.3 deg steps at the ground with 64 texels per
+    half) and no step wider than 3.2 deg anywhere (2 x 98 deg / 63 at 60 km); the distance mapping alone gave
+    0-36 deg in one cell."""
+    n_r, n_mu = 32, 128
+    for i_r in (0, 5, 31):
+        mus = np.array([g.scattering_r_mu_params(i_r, i, BOTTOM, TOP, n_r, n_mu)[1] for i in range(64, 128)])
+        ang = np.degrees(np.arccos(mus))
+        assert np.all(np.diff(ang) > 0)
+        assert np.diff(ang).max() < 3.2
+        if i_r == 0:
+            assert np.diff(ang)[-1] < 0.3
 
 
 def test_irradiance_mapping_round_trip():

@@ -13,9 +13,9 @@ import numpy as np
 
 from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
 
-#: Table sizes of the shared test atmosphere (a 16th of the default 4D table).
+#: Table sizes of the shared test atmosphere (an eighth of the default 4D table).
 SMALL_SIZES = dict(transmittance_mu=128, transmittance_r=32, irradiance_mu_s=32, irradiance_r=8, scattering_r=16,
-                   scattering_mu=64, scattering_mu_s=16, scattering_nu=8)
+                   scattering_mu=64, scattering_mu_s=32, scattering_nu=8)
 
 
 @cache

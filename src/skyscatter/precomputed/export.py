@@ -52,13 +52,15 @@ _MAPPINGS = {
     "scattering.x_r": "rho / H",
     "scattering.x_mu": "rays that meet the ground: index (1 - (d - d_min) / (d_max - d_min)) * (n_mu / 2 - 1), "
                        "d = distance to the ground, "
-                       "d_min = r - bottom_radius, d_max = rho; other rays: index n_mu / 2 + (d - d_min) / "
-                       "(d_max - d_min) * (n_mu / 2 - 1), d = distance to the top, d_min = top_radius - r, "
-                       "d_max = rho + H; never interpolate across the two halves",
-    "scattering.x_mu_s": "max(1 - a / A, 0) / (1 + a), a = (d - d_min) / (d_max - d_min), d = distance from the "
+                       "d_min = r - bottom_radius, d_max = rho; other rays: index n_mu / 2 + x * (n_mu / 2 - 1), "
+                       "x = ((d - d_min) / (d_max - d_min) + theta / theta_h) / 2, d = distance to the top, "
+                       "d_min = top_radius - r, d_max = rho + H, theta = acos(mu), theta_h = acos(-rho / r); "
+                       "never interpolate across the two halves",
+    "scattering.x_mu_s": "(max(1 - a / A, 0) / (1 + a) + 1 - acos(mu_s) / acos(mu_s_min)) / 2, "
+                         "a = (d - d_min) / (d_max - d_min), d = distance from the "
                          "ground to the top along mu_s, d_min = top_radius - bottom_radius, d_max = H, "
                          "A = a at mu_s_min",
-    "scattering.x_nu": "(nu + 1) / 2",
+    "scattering.x_nu": "1 - phi / pi, cos(phi) = (nu - mu mu_s) / sqrt((1 - mu^2) (1 - mu_s^2)) (view-sun azimuth)",
     "radiance": "L = C* * P_R(nu) + C_M * P_M(nu) (paper), or without the C* bias at clamped texels "
                 "L = S_R * P_R(nu) + C_M * P_M(nu) + S_multiple; P_R = 3 / (16 pi) (1 + nu^2); "
                 "P_M = 3 / (8 pi) (1 - g^2) (1 + nu^2) / ((2 + g^2) (1 + g^2 - 2 g nu)^1.5)",

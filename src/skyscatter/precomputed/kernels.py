@@ -36,10 +36,11 @@ from .geometry import (
     irradiance_params,
     lerp_index,
     mu_s_limit_a,
-    nu_range,
     ray_hits_ground,
     scattering_mu_s_coord_a,
     scattering_mu_s_param,
+    scattering_nu_coord,
+    scattering_nu_param,
     scattering_r_mu_params,
     transmittance_params,
 )
@@ -58,6 +59,30 @@ from .sampling import (
 )
 
 _kjit = numba.njit(cache=True, nogil=True, fastmath=False)
+
+
+@numba.njit(cache=True, nogil=True)
+def mu_s_texels(bottom, top, mu_s_min, n_mu_s):
+    """``mu_s`` of every texel of the 4D tables (each found by bisection, so computed once per kernel call)."""
+    out = np.empty(n_mu_s)
+    for i in range(n_mu_s):
+        out[i] = scattering_mu_s_param(i, bottom, top, mu_s_min, n_mu_s)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def ray_sample_distance(i, n_samples, d_end, mu, hits_ground):
+    """Distance [m] of sample ``i`` of ``n_samples`` steps along a ray of length ``d_end``: quadratic spacing,
+    dense at the ray's lower end where the aerosols are (the start for rays going up, the end for rays that meet
+    the ground), uniform for other downward rays. With uniform steps a 70 deg slant path through an aerosol
+    optical depth of 0.5 had one of 50 steps per scale height and its radiance came out 5-30 % high against
+    DISORT (issue 11)."""
+    u = i / n_samples
+    if hits_ground:
+        return d_end * (1.0 - (1.0 - u) * (1.0 - u))
+    if mu >= 0.0:
+        return d_end * u * u
+    return d_end * u
 
 PI = math.pi
 
@@ -109,15 +134,15 @@ def direct_irradiance_kernel(transmittance, bottom, top, alpha, out, start, stop
 def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
     """The (clamped) view-sun cosine of every texel of the 4D tables, into ``out`` (n_r, n_mu, n_mu_s, n_nu)."""
     n_r, n_mu, n_mu_s, n_nu = out.shape
+    mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_mu_s)
     for idx in range(start, stop):
         i_r = idx // n_mu
         i_mu = idx % n_mu
         _, mu, _ = scattering_r_mu_params(i_r, i_mu, bottom, top, n_r, n_mu)
         for i_s in range(n_mu_s):
-            mu_s = scattering_mu_s_param(i_s, bottom, top, mu_s_min, n_mu_s)
-            lo, hi = nu_range(mu, mu_s)
+            mu_s = mu_s_tab[i_s]
             for i_n in range(n_nu):
-                out[i_r, i_mu, i_s, i_n] = clamp(2.0 * i_n / (n_nu - 1) - 1.0, lo, hi)
+                out[i_r, i_mu, i_s, i_n] = scattering_nu_param(i_n, mu, mu_s, n_nu)
 
 
 @_kjit
@@ -138,11 +163,12 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
     rho_m = np.empty(n_pts)
     t_view = np.empty((n_pts, n_l))
     tmp = np.empty(n_l)
-    w_r = np.empty(n_pts)
-    w_m = np.empty(n_pts)
+    w_r = np.empty((n_pts, n_l))
+    w_m = np.empty((n_pts, n_l))
     t_sun = np.empty(n_l)
     acc_r = np.empty(n_l)
     acc_m = np.empty(n_l)
+    mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_mu_s)
     for idx in range(start, stop):
         i_r = idx // n_mu
         i_mu = idx % n_mu
@@ -150,40 +176,45 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
         d_end = distance_to_boundary(r, mu, hits, bottom, top)
         if d_end <= 0.0:
             continue
-        dx = d_end / n_samples
         for i in range(n_pts):
-            d = i * dx
+            d = ray_sample_distance(i, n_samples, d_end, mu, hits)
             dist[i] = d
             rad[i] = clamp(math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0)), bottom, top)
             rho_r[i] = density_at(profiles[0], counts[0], rad[i] - bottom)
             rho_m[i] = density_at(profiles[1], counts[1], rad[i] - bottom)
             transmittance_segment(transmittance, r, mu, d, hits, bottom, top, t_view[i], tmp)
+        # Product integration with density x view transmittance as the exponential factor: at large optical
+        # depths the transmittance is far from linear over a step (aerosol optical depth 0.5 seen 70 deg from the
+        # zenith falls to 0.4 within the first of 50 steps).
         w_r[:] = 0.0
         w_m[:] = 0.0
         for i in range(n_samples):
-            ca, cb = exp_segment_weights(rho_r[i], rho_r[i + 1], dx)
-            w_r[i] += ca * rho_r[i]
-            w_r[i + 1] += cb * rho_r[i + 1]
-            ca, cb = exp_segment_weights(rho_m[i], rho_m[i + 1], dx)
-            w_m[i] += ca * rho_m[i]
-            w_m[i + 1] += cb * rho_m[i + 1]
+            for k in range(n_l):
+                fa = rho_r[i] * t_view[i, k]
+                fb = rho_r[i + 1] * t_view[i + 1, k]
+                ca, cb = exp_segment_weights(fa, fb, dist[i + 1] - dist[i])
+                w_r[i, k] += ca * fa
+                w_r[i + 1, k] += cb * fb
+                fa = rho_m[i] * t_view[i, k]
+                fb = rho_m[i + 1] * t_view[i + 1, k]
+                ca, cb = exp_segment_weights(fa, fb, dist[i + 1] - dist[i])
+                w_m[i, k] += ca * fa
+                w_m[i + 1, k] += cb * fb
         for i_s in range(n_mu_s):
-            mu_s = scattering_mu_s_param(i_s, bottom, top, mu_s_min, n_mu_s)
-            lo, hi = nu_range(mu, mu_s)
+            mu_s = mu_s_tab[i_s]
             for i_n in range(n_nu):
-                nu = clamp(2.0 * i_n / (n_nu - 1) - 1.0, lo, hi)
+                nu = scattering_nu_param(i_n, mu, mu_s, n_nu)
                 for k in range(n_l):
                     acc_r[k] = 0.0
                     acc_m[k] = 0.0
                 for i in range(n_pts):
-                    if w_r[i] == 0.0 and w_m[i] == 0.0:
+                    if rho_r[i] == 0.0 and rho_m[i] == 0.0:
                         continue
                     mu_s_i = clamp((r * mu_s + dist[i] * nu) / rad[i], -1.0, 1.0)
                     transmittance_to_sun(transmittance, rad[i], mu_s_i, bottom, top, alpha, t_sun)
                     for k in range(n_l):
-                        t = t_view[i, k] * t_sun[k]
-                        acc_r[k] += w_r[i] * t
-                        acc_m[k] += w_m[i] * t
+                        acc_r[k] += w_r[i, k] * t_sun[k]
+                        acc_m[k] += w_m[i, k] * t_sun[k]
                 for k in range(n_l):
                     ray[i_r, i_mu, i_s, i_n, k] = acc_r[k]
                     mie[i_r, i_mu, i_s, i_n, k] = acc_m[k]
@@ -268,11 +299,12 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 w2[a, b] += om[w, a] * om[w, b] * dom[w]
     m0 = np.zeros(n_l)
     m2 = np.zeros((n_l, 3, 3))
+    mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_s)
     for idx in range(start, stop):
         i_r = idx // n_s
         i_s = idx % n_s
         r, _, _ = scattering_r_mu_params(i_r, n_mu // 2, bottom, top, n_r, n_mu)
-        mu_s = scattering_mu_s_param(i_s, bottom, top, mu_s_min, n_s)
+        mu_s = mu_s_tab[i_s]
         sx = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
         for w in range(n_om):
             wx = om[w, 0]
@@ -310,9 +342,8 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
         for i_mu in range(n_mu):
             _, mu, _ = scattering_r_mu_params(i_r, i_mu, bottom, top, n_r, n_mu)
             st = math.sqrt(max(1.0 - mu * mu, 0.0))
-            lo, hi = nu_range(mu, mu_s)
             for i_n in range(n_n):
-                nu = clamp(2.0 * i_n / (n_n - 1) - 1.0, lo, hi)
+                nu = scattering_nu_param(i_n, mu, mu_s, n_n)
                 if st * sx > 1e-12:
                     cphi = clamp((nu - mu * mu_s) / (st * sx), -1.0, 1.0)
                 else:
@@ -383,6 +414,7 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     cell_wr = np.empty(n_pts)
     cell_imu = np.empty(n_pts, dtype=np.int64)
     cell_wmu = np.empty(n_pts)
+    mu_ray = np.empty(n_pts)
     t_view = np.empty((n_pts, n_l))
     beta = np.empty((n_pts, n_l))
     tmp = np.empty(n_l)
@@ -390,6 +422,8 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     val = np.empty(n_l)
     acc = np.empty(n_l)
     big_a = mu_s_limit_a(mu_s_min, bottom, top)
+    theta_max = math.acos(mu_s_min)
+    mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_s)
     for idx in range(start, stop):
         i_r = idx // n_mu
         i_mu = idx % n_mu
@@ -397,13 +431,13 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
         d_end = distance_to_boundary(r, mu, hits, bottom, top)
         if d_end <= 0.0:
             continue
-        dx = d_end / n_samples
         for i in range(n_pts):
-            d = i * dx
+            d = ray_sample_distance(i, n_samples, d_end, mu, hits)
             dist[i] = d
             r_i = clamp(math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0)), bottom, top)
             rad[i] = r_i
             mu_i = clamp((r * mu + d) / r_i, -1.0, 1.0)
+            mu_ray[i] = mu_i
             a, b, c, e = r_mu_cell(r_i, mu_i, hits, bottom, top, n_r, n_mu)
             cell_ir[i] = a
             cell_wr[i] = b
@@ -417,23 +451,25 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
         q[:] = 0.0
         for i in range(n_samples):
             for k in range(n_l):
-                ca, cb = exp_segment_weights(beta[i, k], beta[i + 1, k], dx)
+                # scattering coefficient x view transmittance as the exponential factor (see single scattering)
+                ca, cb = exp_segment_weights(beta[i, k] * t_view[i, k], beta[i + 1, k] * t_view[i + 1, k],
+                                             dist[i + 1] - dist[i])
                 q[i, k] += ca * t_view[i, k]
                 q[i + 1, k] += cb * t_view[i + 1, k]
         for i_s in range(n_s):
-            mu_s = scattering_mu_s_param(i_s, bottom, top, mu_s_min, n_s)
-            lo, hi = nu_range(mu, mu_s)
+            mu_s = mu_s_tab[i_s]
             for i_n in range(n_n):
-                nu = clamp(2.0 * i_n / (n_n - 1) - 1.0, lo, hi)
-                j_n, w_n = lerp_index(0.5 * (nu + 1.0) * (n_n - 1), 0, n_n - 1)
+                nu = scattering_nu_param(i_n, mu, mu_s, n_n)
                 for k in range(n_l):
                     acc[k] = 0.0
                 for i in range(n_pts):
                     mu_s_i = (r * mu_s + dist[i] * nu) / rad[i]
                     if mu_s_i < mu_s_min:
                         continue
-                    p_s = scattering_mu_s_coord_a(min(mu_s_i, 1.0), bottom, top, big_a, n_s)
+                    mu_s_i = min(mu_s_i, 1.0)
+                    p_s = scattering_mu_s_coord_a(mu_s_i, bottom, top, big_a, theta_max, n_s)
                     j_s, w_s = lerp_index(p_s, 0, n_s - 1)
+                    j_n, w_n = lerp_index(scattering_nu_coord(mu_ray[i], mu_s_i, nu, n_n), 0, n_n - 1)
                     for k in range(n_l):
                         val[k] = 0.0
                     lookup4_cell(density, cell_ir[i], cell_wr[i], cell_imu[i], cell_wmu[i], j_s, w_s, j_n, w_n,

@@ -72,7 +72,7 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r
         return
     n_r, n_mu, n_s, n_n, _ = ray.shape
     i_r, w_r, i_mu, w_mu = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
-    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
+    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
     lookup4_cell(ray, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_r, out)
     lookup4_cell(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_m, out)
     lookup4_cell(mult, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, 1.0, out)

@@ -20,6 +20,7 @@ from .geometry import (
     irradiance_coord,
     lerp_index,
     scattering_mu_s_coord,
+    scattering_nu_coord,
     scattering_r_mu_coord,
     transmittance_coord,
 )
@@ -131,10 +132,10 @@ def r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu):
 
 
 @_jit
-def mu_s_nu_cell(mu_s, nu, bottom, top, mu_s_min, n_mu_s, n_nu):
-    """Interpolation cell (i_mu_s, w_mu_s, i_nu, w_nu) in the 4D tables."""
+def mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_mu_s, n_nu):
+    """Interpolation cell (i_mu_s, w_mu_s, i_nu, w_nu) in the 4D tables (view zenith cosine ``mu``)."""
     p_s = scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_mu_s)
-    p_n = clamp(0.5 * (nu + 1.0), 0.0, 1.0) * (n_nu - 1)
+    p_n = scattering_nu_coord(mu, mu_s, nu, n_nu)
     i_s, w_s = lerp_index(p_s, 0, n_mu_s - 1)
     i_n, w_n = lerp_index(p_n, 0, n_nu - 1)
     return i_s, w_s, i_n, w_n
@@ -170,7 +171,7 @@ def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min
     """``out += scale * S(r, mu, mu_s, nu)`` for a 4D table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths)."""
     n_r, n_mu, n_s, n_n, _ = table.shape
     i_r, w_r, i_mu, w_mu = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
-    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
+    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
     lookup4_cell(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scale, out)
 
 

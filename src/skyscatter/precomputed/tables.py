@@ -50,7 +50,7 @@ __all__ = ["DEFAULT_TABLE_WAVELENGTHS", "FORMAT_VERSION", "PrecomputedAtmosphere
 #: Wavelengths [nm] of the default 3-channel tables (red, green, blue samples of the 2008 paper).
 DEFAULT_TABLE_WAVELENGTHS = (440.0, 550.0, 680.0)
 #: Version of the table layout and algorithm; part of the cache key and checked by :meth:`load`.
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 _TABLE_NAMES = ("transmittance", "irradiance", "single_rayleigh", "single_mie", "multiple")
 
 
@@ -337,6 +337,19 @@ class PrecomputedAtmosphere:
         single_mie = np.zeros((*sz.scattering_shape, nl), dtype=np.float32)
         multiple = np.zeros((*sz.scattering_shape, nl), dtype=np.float32)
         irradiance = np.zeros((*sz.irradiance_shape, nl), dtype=np.float32)
+        n_irr = sz.irradiance_r * sz.irradiance_mu_s
+
+        def single(t_tab, ch, b_m):
+            e_dir = np.zeros((*sz.irradiance_shape, ch.size), dtype=np.float32)
+            kernels.direct_irradiance_kernel(t_tab, bottom, top, alpha, e_dir, 0, n_irr)
+            e_dir *= solar[ch].astype(np.float32)
+            s_r = np.zeros((*sz.scattering_shape, ch.size), dtype=np.float32)
+            s_m = np.zeros((*sz.scattering_shape, ch.size), dtype=np.float32)
+            parallel_for(kernels.single_scattering_kernel, n_r * n_mu, t_tab, bottom, top, mu_s_min, alpha,
+                         profiles, counts, sz.ray_samples, s_r, s_m)
+            s_r *= (solar[ch] * beta_r[ch]).astype(np.float32)
+            s_m *= (solar[ch] * b_m[ch]).astype(np.float32)
+            return e_dir, s_r, s_m
 
         chunks = [np.arange(i, min(i + chunk_size, nl)) for i in range(0, nl, chunk_size)]
         with tqdm(total=orders * len(chunks), desc="scattering orders", unit="order",
@@ -345,17 +358,7 @@ class PrecomputedAtmosphere:
                 t_c = np.ascontiguousarray(transmittance[..., ch])
                 t0 = time.perf_counter()
                 nc = ch.size
-                e_direct = np.zeros((*sz.irradiance_shape, nc), dtype=np.float32)
-                kernels.direct_irradiance_kernel(t_c, bottom, top, alpha, e_direct, 0,
-                                                 sz.irradiance_r * sz.irradiance_mu_s)
-                e_direct *= solar[ch].astype(np.float32)
-                ray_int = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
-                mie_int = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
-                parallel_for(kernels.single_scattering_kernel, n_r * n_mu, t_c, bottom, top, mu_s_min, alpha,
-                             profiles, counts, sz.ray_samples, ray_int, mie_int)
-                ray_int *= (solar[ch] * beta_r[ch]).astype(np.float32)
-                mie_int *= (solar[ch] * beta_m[ch]).astype(np.float32)
-                s1_r, s1_m = ray_int, mie_int
+                e_direct, s1_r, s1_m = single(t_c, ch, beta_m)
                 mult_c = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
                 irr_c = np.zeros((*sz.irradiance_shape, nc), dtype=np.float32)
                 dt = time.perf_counter() - t0
@@ -371,14 +374,13 @@ class PrecomputedAtmosphere:
                                  mu_s_min, sz.density_sphere_samples, dens)
                     t1 = time.perf_counter()
                     d_irr = np.zeros((*sz.irradiance_shape, nc), dtype=np.float32)
-                    parallel_for(kernels.indirect_irradiance_kernel, sz.irradiance_r * sz.irradiance_mu_s, prev_a,
-                                 prev_b, first, g, mie_kind, bottom, top, mu_s_min, sz.irradiance_sphere_samples, d_irr,
-                                 grain=16)
+                    parallel_for(kernels.indirect_irradiance_kernel, n_irr, prev_a, prev_b, first, g, mie_kind,
+                                 bottom, top, mu_s_min, sz.irradiance_sphere_samples, d_irr, grain=16)
                     irr_c += d_irr
                     t2 = time.perf_counter()
                     d_scat = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
-                    parallel_for(kernels.multiple_scattering_kernel, n_r * n_mu, t_c, dens, beta_r[ch], beta_m[ch],
-                                 profiles, counts, bottom, top, mu_s_min, sz.ray_samples, d_scat)
+                    parallel_for(kernels.multiple_scattering_kernel, n_r * n_mu, t_c, dens, beta_r[ch],
+                                 beta_m[ch], profiles, counts, bottom, top, mu_s_min, sz.ray_samples, d_scat)
                     del dens
                     mult_c += d_scat
                     t3 = time.perf_counter()

@@ -260,8 +260,20 @@ class PreethamSky(SunSkyMixin, SkyModel):
             norm = norm.copy()
             norm[odd] = LUMINOUS_EFFICACY * np.maximum(weights[odd] @ ref_basis.T, 0.0) @ ybar
         scale = np.where((Y > 0) & (norm > 0), Y / np.where(norm > 0, norm, 1.0), 0.0)
-        spectrum = weights @ daylight_basis(wl).T
-        return np.maximum(spectrum, 0.0) * scale[..., None]
+        basis_t = np.ascontiguousarray(daylight_basis(wl).T)
+        # In chunks of directions, written in place: one (N, n_wavelengths) output and cache-sized temporaries
+        # (whole-array temporaries made 41 wavelengths at 10^6 directions 7x slower per direction than at 10^5).
+        out = np.empty((*scale.shape, wl.size))
+        w_flat = weights.reshape(-1, 3)
+        s_flat = scale.reshape(-1)
+        o_flat = out.reshape(-1, wl.size)
+        step = max(1, 65536 // max(wl.size, 1))
+        for a in range(0, s_flat.size, step):
+            o = o_flat[a:a + step]
+            np.matmul(w_flat[a:a + step], basis_t, out=o)
+            np.maximum(o, 0.0, out=o)
+            o *= s_flat[a:a + step, None]
+        return out
 
     def sun_spectral_radiance(self, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
         """Spectral radiance of the solar disc at the ground [W m^-2 sr^-1 nm^-1] (A.1, Table 2), shape (n,)."""

@@ -1,0 +1,92 @@
+"""Multiple scattering with aerosols against DISORT (issue 11, item 0).
+
+The precomputed tables (Bruneton & Neyret 2008, doi:10.1111/j.1467-8659.2008.01245.x) against the
+plane-parallel discrete-ordinates solver DISORT (Stamnes et al. 1988, doi:10.1364/AO.27.002502; disortpp) for
+aerosol optical depths 0.05, 0.2 and 0.5 at 550 nm (single-scattering albedo 0.9, Cornette-Shanks g = 0.8,
+scale height 1.2 km), ground albedo 0.1 and 0.8, sun zenith 30 and 70 deg: radiance at the ground along the
+solar principal plane, view zenith 0-70 deg on both sides of the zenith.
+
+Tolerance: 3 % plus a sphericity allowance. DISORT is plane-parallel, the tables are spherical. To first order in
+H / R, the slant optical depth of an exponential layer of scale height H at zenith angle theta is
+``tau sec(theta) (1 - (H / R) tan^2 theta)`` (expand ``h(s) = s cos(theta) + s^2 sin^2(theta) / (2 R)`` in
+``integral exp(-h / H) ds``). The sun's beam and the view path are attenuated by that much less, and the number of
+scatterers along the view path is smaller by the same relative amount, so the relative difference is bounded by
+``(H_R / R) tan^2 theta_v + sum_i tau_i (H_i / R) (sec(theta_s) tan^2 theta_s + sec(theta_v) tan^2 theta_v)``
+(0.95 % + 0.5 % at 70 deg, under 0.1 % at 30 deg).
+
+Before the fix (issue 11) the tables were +17.6 % at the zenith and +44 % 20 deg from it away from the sun for
+optical depth 0.2 and the sun at 30 deg: the ``mu`` and ``mu_s`` table axes each left 36-42 deg around the zenith
+in a single cell, and the clamped ``nu`` texels held values at other view-sun angles than their coordinates,
+across which the forward-peaked multiple scattering of the aerosols was interpolated.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from disort_reference import disort_radiance
+from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
+
+disortpp = pytest.importorskip("disortpp")
+
+#: Table sizes: the default angular resolution (mu 128, mu_s 32, nu 8) on half the radii and smaller 2D tables.
+SIZES = dict(transmittance_mu=128, transmittance_r=32, irradiance_mu_s=32, irradiance_r=8, scattering_r=16,
+             scattering_mu=128, scattering_mu_s=32, scattering_nu=8)
+VIEW_ZENITH = np.radians(np.arange(0.0, 71.0, 10.0))
+SIDES = np.radians([0.0, 180.0])  # towards the sun's azimuth, away from it
+
+
+def _params(aod: float, albedo: float) -> AtmosphereParameters:
+    return AtmosphereParameters(mie_angstrom_alpha=0.0, mie_angstrom_beta=aod, ozone_column=0.0,
+                                ground_albedo=albedo, solar_irradiance=1.0)
+
+
+@pytest.fixture(scope="session")
+def disort_tables():
+    """Tables for every (optical depth, albedo) pair, computed once per session (550 nm only)."""
+    out = {}
+    for aod in (0.05, 0.2, 0.5):
+        for albedo in (0.1, 0.8):
+            out[aod, albedo] = PrecomputedAtmosphere.compute(_params(aod, albedo), orders=6, wavelengths=[550.0],
+                                                             sizes=SIZES, progress=False)
+    return out
+
+
+def sphericity_allowance(params: AtmosphereParameters, sun_zenith: float, view_zenith: np.ndarray) -> np.ndarray:
+    """The first-order plane-parallel vs spherical difference bound of the module docstring."""
+    wl = [550.0]
+    r = params.bottom_radius
+    layers = ((8000.0, params.rayleigh_scattering_at(wl)[0] * 8000.0),
+              (1200.0, params.mie_extinction_at(wl)[0] * 1200.0))
+    t2s = math.tan(sun_zenith) ** 2
+    t2v = np.tan(view_zenith) ** 2
+    out = 8000.0 / r * t2v
+    for h, tau in layers:
+        out = out + tau * h / r * (t2s / math.cos(sun_zenith) + t2v / np.cos(view_zenith))
+    return out
+
+
+#: Known failure (open, issue 11): optical depth 0.5 over a bright ground (albedo 0.8) is low away from the sun on
+#: slant views: measured -0.6 .. -8.5 % (sun 30 deg) and -3.4 .. -10.3 % (sun 70 deg) at view zenith 0-70 deg.
+_OPEN = pytest.mark.xfail(strict=True, reason="AOD 0.5 over albedo 0.8: 3-10 % low away from the sun (open)")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("aod", [0.05, 0.2, pytest.param(0.5, id="0.5")])
+@pytest.mark.parametrize("albedo", [0.1, 0.8])
+@pytest.mark.parametrize("sun_zenith_deg", [30.0, 70.0])
+def test_aerosol_multiple_scattering_against_disort(disort_tables, aod, albedo, sun_zenith_deg, request):
+    if aod == 0.5 and albedo == 0.8:
+        request.applymarker(_OPEN)
+    atm = disort_tables[aod, albedo]
+    p = atm.parameters
+    theta_s = math.radians(sun_zenith_deg)
+    ref = disort_radiance(p, 550.0, theta_s, VIEW_ZENITH, SIDES, n_layers=100, n_streams=32, n_moments=200)
+    sun = np.array([math.sin(theta_s), 0.0, math.cos(theta_s)])
+    tol = 0.03 + sphericity_allowance(p, theta_s, VIEW_ZENITH)
+    for j, side in enumerate((1.0, -1.0)):
+        d = np.stack([side * np.sin(VIEW_ZENITH), np.zeros_like(VIEW_ZENITH), np.cos(VIEW_ZENITH)], axis=-1)
+        ours = atm.sky_radiance([0.0, 0.0, p.bottom_radius], d, sun)[:, 0]
+        err = ours / ref[:, j] - 1.0
+        assert np.all(np.abs(err) < tol), (side, np.round(100 * err, 2), np.round(100 * tol, 2))
