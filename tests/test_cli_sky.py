@@ -106,3 +106,31 @@ def test_preetham_overcast_blend_model(tmp_path, capsys):
                          "--out", str(tmp_path / "b.exr"))
     assert code == 0, err
     assert read_exr(tmp_path / "b.exr").max() > 0
+
+
+def test_bruneton_takes_the_atmosphere_options_and_refuses_mixtures(capsys):
+    """Issue 11 item 5: the atmosphere's options reach --model bruneton; each is checked before any table build."""
+    from skyscatter.cli import main
+
+    for args, message in (
+        (["--model", "bruneton", "--turbidity", "0.5"], "turbidity 0.5 is outside 1 to 20"),
+        (["--model", "bruneton", "--aod", "11"], "aerosol_optical_depth 11 is outside 0 to 10"),
+        (["--model", "bruneton", "--turbidity", "3", "--aod", "0.2"], "either turbidity or aerosol_optical_depth"),
+        (["--model", "bruneton", "--angstrom-alpha", "1"], "angstrom_alpha goes with aerosol_optical_depth"),
+        (["--model", "preetham", "--ozone", "200"], "--ozone: does not apply to --model preetham"),
+    ):
+        assert main(["sky", "--width", "8", *args]) == 2
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_bruneton_medium_options_build_the_atmosphere_they_name():
+    from skyscatter.atmosphere import AtmosphereParameters
+    from skyscatter.sky.bruneton import _medium_from_options
+
+    p = _medium_from_options(None, aerosol_optical_depth=0.2, angstrom_alpha=1.0, albedo=0.3, ozone_column=0.0)
+    # Angstrom's law: tau(550 nm) = beta 0.55^-alpha
+    assert p.mie_angstrom_beta * 0.55 ** -1.0 == pytest.approx(0.2, rel=1e-12)
+    assert (p.ozone_column, float(p.ground_albedo_at([550.0])[0])) == (0.0, 0.3)
+    t = _medium_from_options(AtmosphereParameters(ozone_column=250.0), turbidity=3.0)
+    assert t.mie_angstrom_beta == pytest.approx(0.04608 * 3 - 0.04586) and t.ozone_column == 250.0

@@ -68,7 +68,8 @@ def _random_parameters(spec, rng) -> dict:
     if spec.name in ("cie", "cie-overcast", "cie-clear"):
         out.pop("zenith_luminance", None)  # one of the two scales; the other is drawn
     if spec.name in ("bruneton", "montecarlo"):
-        out["altitude"] = float(rng.uniform(0.0, 1.0e5))  # ground to well above the atmosphere's top
+        # the medium options would build a new atmosphere's tables per sample (a minute each): altitude only
+        out = {"altitude": float(rng.uniform(0.0, 1.0e5))}  # ground to well above the atmosphere's top
     out.update(QUICK.get(spec.name, {}))
     return out
 

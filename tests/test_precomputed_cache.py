@@ -116,3 +116,24 @@ def test_force_keeps_the_old_file_until_the_new_tables_are_written(cache, monkey
     clear_memory_cache()
     again, computed = load_or_compute(orders=1, sizes=TINY)
     assert not computed and again.cache_key == atm.cache_key
+
+
+def test_first_build_says_so_and_a_cached_atmosphere_is_silent(tmp_path, monkeypatch):
+    """Issue 11 item 5: the first use of an uncached atmosphere warns that tables are built once (and how long)."""
+    import warnings
+
+    from skyscatter.precomputed.cache import TableBuildWarning, cached_atmosphere, clear_memory_cache
+
+    monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(tmp_path))
+    clear_memory_cache()
+    small = dict(transmittance_mu=16, transmittance_r=8, irradiance_mu_s=8, irradiance_r=4, scattering_r=4,
+                 scattering_mu=8, scattering_mu_s=8, scattering_nu=4)
+    from skyscatter.atmosphere import AtmosphereParameters
+
+    params = AtmosphereParameters(ozone_column=123.0)
+    with pytest.warns(TableBuildWarning, match="building the precomputed tables for this atmosphere once"):
+        cached_atmosphere(params, orders=1, wavelengths=[550.0], sizes=small)
+    clear_memory_cache()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", TableBuildWarning)
+        cached_atmosphere(params, orders=1, wavelengths=[550.0], sizes=small)  # from the disk cache: no warning

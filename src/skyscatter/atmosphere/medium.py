@@ -288,6 +288,27 @@ class AtmosphereParameters:
     # ------------------------------------------------------------------ constructors
 
     @classmethod
+    def from_aerosol_optical_depth(cls, aerosol_optical_depth: float, angstrom_alpha: float = 1.3,
+                                   **changes: Any) -> AtmosphereParameters:
+        """Earth defaults with a vertical aerosol optical depth ``tau`` at 550 nm and Angstrom exponent ``alpha``.
+
+        Angstrom's law ``tau(lambda) = beta (lambda / 1 um)^-alpha`` (Angstrom 1929, doi:10.1080/20014422.1929.11880498)
+        gives ``beta = tau (0.55)^alpha``; ``tau`` in [0, 10], ``alpha`` in [-1, 4] (default 1.3, Preetham 1999 A.1).
+        """
+        checked = []
+        for name, value, low, high in (("aerosol_optical_depth", aerosol_optical_depth, 0.0, 10.0),
+                                       ("angstrom_alpha", angstrom_alpha, -1.0, 4.0)):
+            try:
+                v = float(value)
+            except (TypeError, ValueError):
+                raise InvalidParameterError(f"{name} must be a number; got {value!r}") from None
+            if not (math.isfinite(v) and low <= v <= high):
+                raise InvalidParameterError(f"{name} must be in [{low:g}, {high:g}]; got {value!r}")
+            checked.append(v)
+        tau, alpha = checked
+        return cls(mie_angstrom_alpha=alpha, mie_angstrom_beta=tau * 0.55**alpha, **changes)
+
+    @classmethod
     def from_turbidity(cls, turbidity: float, **changes: Any) -> AtmosphereParameters:
         """Earth defaults with aerosols from Linke-style turbidity T (Preetham et al. 1999, Appendix A.1).
 

@@ -14,8 +14,6 @@ from .common import (
 )
 from .sky_options import add_model_options, build_sky_from_args
 
-_MODELS = ["cie", "cie-overcast", "cie-clear", "perez", "preetham", "hosek-wilkie"]
-
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
@@ -27,7 +25,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "Example: skyscatter illuminance --model cie --sky-type 12 --sun-elevation 40 --vertical 180 90",
         formatter_class=HELP_FORMATTER,
     )
-    add_model_options(p, _MODELS, default="cie-overcast")
+    from ..sky import registry
+
+    # every registered model but the Monte Carlo reference (the quadrature needs thousands of directions)
+    add_model_options(p, [s.name for s in registry.models() if s.cost != "expensive"], default="cie-overcast")
     add_sun_options(p)
     g = p.add_argument_group("planes")
     g.add_argument("--vertical", type=finite_float, nargs="+", default=[], metavar="AZ_DEG",

@@ -21,10 +21,14 @@ from ..errors import FileFormatError, InvalidParameterError, OutputError
 from .parameters import AtmosphereParameters
 from .tables import PrecomputedAtmosphere, TableSizes, _as_wavelengths, cache_key
 
-__all__ = ["CacheRebuildWarning", "cache_dir", "cache_path", "cached_atmosphere", "check_cache_dir",
-           "clear_memory_cache", "load_or_compute", "resolve_atmosphere"]
+__all__ = ["CacheRebuildWarning", "TableBuildWarning", "cache_dir", "cache_path", "cached_atmosphere",
+           "check_cache_dir", "clear_memory_cache", "load_or_compute", "resolve_atmosphere"]
 
 _MEMORY: dict[str, PrecomputedAtmosphere] = {}
+
+
+class TableBuildWarning(UserWarning):
+    """Emitted when tables must be computed (once per atmosphere): the call then takes tens of seconds."""
 
 
 class CacheRebuildWarning(UserWarning):
@@ -98,6 +102,10 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
             warnings.warn(f"rebuilding cached atmosphere tables: {exc}", CacheRebuildWarning, stacklevel=3)
     computed = atm is None
     if computed:
+        if not progress:  # no progress bar asked for: say once why the call takes a while
+            warnings.warn(f"building the precomputed tables for this atmosphere once ({wl.size} wavelengths, "
+                          f"{orders} orders; typically 30-90 s on 2 cores); they are then cached in {path.parent}",
+                          TableBuildWarning, stacklevel=3)
         atm = PrecomputedAtmosphere.compute(params, orders=orders, wavelengths=wl, sizes=sz, progress=progress)
         try:
             path.parent.mkdir(parents=True, exist_ok=True)

@@ -32,6 +32,39 @@ MAX_ALTITUDE = 1.0e8
 
 
 
+def _medium_from_options(atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None, *,
+                         turbidity: float | None = None, aerosol_optical_depth: float | None = None,
+                         angstrom_alpha: float | None = None, albedo: float | None = None,
+                         ozone_column: float | None = None) -> AtmosphereParameters:
+    """The atmosphere described by the convenience options (on the Earth defaults or on ``atmosphere``)."""
+    if isinstance(atmosphere, PrecomputedAtmosphere):
+        raise InvalidParameterError("give either precomputed tables (atmosphere=...) or the atmosphere's options "
+                                    "(turbidity, aerosol_optical_depth, albedo, ozone_column), not both")
+    if turbidity is not None and aerosol_optical_depth is not None:
+        raise InvalidParameterError("give either turbidity or aerosol_optical_depth, not both")
+    if angstrom_alpha is not None and aerosol_optical_depth is None:
+        raise InvalidParameterError("angstrom_alpha goes with aerosol_optical_depth")
+    for name, value, low, high in (("albedo", albedo, 0.0, 1.0), ("ozone_column", ozone_column, 0.0, 1000.0)):
+        if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value)
+                                      and low <= value <= high):
+            raise InvalidParameterError(f"{name} must be in [{low:g}, {high:g}]; got {value!r}")
+    base = atmosphere if isinstance(atmosphere, AtmosphereParameters) else AtmosphereParameters()
+    changes: dict = {}
+    if albedo is not None:
+        changes["ground_albedo"] = albedo
+    if ozone_column is not None:
+        changes["ozone_column"] = ozone_column
+    if turbidity is not None:
+        aerosol = AtmosphereParameters.from_turbidity(turbidity)
+    elif aerosol_optical_depth is not None:
+        aerosol = AtmosphereParameters.from_aerosol_optical_depth(
+            aerosol_optical_depth, 1.3 if angstrom_alpha is None else angstrom_alpha)
+    else:
+        aerosol = base
+    changes.update(mie_angstrom_alpha=aerosol.mie_angstrom_alpha, mie_angstrom_beta=aerosol.mie_angstrom_beta)
+    return base.replace(**changes)
+
+
 class BrunetonSky(SunSkyMixin, SkyModel):
     """Physically based sky from precomputed multiple scattering (Bruneton & Neyret 2008).
 
@@ -49,7 +82,19 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         the view is from space.
     atmosphere : PrecomputedAtmosphere or AtmosphereParameters, optional
         Precomputed tables, or parameters whose tables are taken from the disk cache (computed the first
-        time, about 20 s); default: the Earth defaults.
+        time, about 30-60 s on 2 cores, with a warning saying so); default: the Earth defaults.
+    turbidity : float, optional
+        Aerosols from turbidity, 1 to 20 (Preetham 1999 A.1: Angstrom alpha 1.3, beta 0.04608 T - 0.04586).
+    aerosol_optical_depth : float, optional
+        Vertical aerosol optical depth at 550 nm, 0 to 10, with ``angstrom_alpha`` (default 1.3); instead of
+        ``turbidity``.
+    albedo : float, optional
+        Ground albedo, 0 to 1 (the Earth defaults: 0.1).
+    ozone_column : float, optional
+        Total ozone [Dobson units], 0 to 1000 (the Earth defaults: 300).
+
+    The medium options change the Earth defaults (or the ``atmosphere`` parameters given); each atmosphere's
+    tables are computed once and cached.
 
     Notes
     -----
@@ -59,13 +104,20 @@ class BrunetonSky(SunSkyMixin, SkyModel):
     """
 
     model_name = "bruneton"
-
-    model_name = "bruneton"
     renders_ground = True
 
     def __init__(self, sun_zenith: float, sun_azimuth: float, *, altitude: float = 0.0,
-                 atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None = None) -> None:
+                 atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None = None,
+                 turbidity: float | None = None, aerosol_optical_depth: float | None = None,
+                 angstrom_alpha: float | None = None, albedo: float | None = None,
+                 ozone_column: float | None = None) -> None:
         zen, azi = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=True)
+        medium = {k: v for k, v in (("turbidity", turbidity), ("aerosol_optical_depth", aerosol_optical_depth),
+                                    ("angstrom_alpha", angstrom_alpha), ("albedo", albedo),
+                                    ("ozone_column", ozone_column)) if v is not None}
+        given_atmosphere = atmosphere
+        if medium:
+            atmosphere = _medium_from_options(atmosphere, **medium)
         try:
             alt = float(altitude)
         except (TypeError, ValueError):
@@ -95,8 +147,7 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         self.altitude = alt
         self.atmosphere = atm
         self.sun_angular_radius = atm.parameters.sun_angular_radius
-        self._remember(altitude=alt, atmosphere=atmosphere)
-        self._remember(altitude=alt, atmosphere=atmosphere)
+        self._remember(altitude=alt, atmosphere=given_atmosphere, **medium)
 
     def __repr__(self) -> str:
         return (f"BrunetonSky(sun_zenith={self.sun_zenith:.6g}, sun_azimuth={self.sun_azimuth:.6g}, "

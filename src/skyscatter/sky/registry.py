@@ -461,6 +461,16 @@ register(ModelSpec(
     parameters=(
         Parameter("altitude", "m", 0.0, "observer altitude above the ground, from the ground to orbit", low=0.0,
                   high=1e8),
+        Parameter("turbidity", "1", None, "aerosols from turbidity (Preetham 1999 A.1; default: the Earth "
+                  "defaults' light aerosol)", low=1.0, high=20.0),
+        Parameter("aerosol_optical_depth", "1", None, "vertical aerosol optical depth at 550 nm (instead of "
+                  "--turbidity)", low=0.0, high=10.0, flag="--aod"),
+        Parameter("angstrom_alpha", "1", None, "Angstrom exponent of the aerosol optical depth (with --aod; "
+                  "default 1.3)", low=-1.0, high=4.0),
+        Parameter("albedo", "1", None, "ground albedo, the same at every wavelength (default 0.1)", low=0.0,
+                  high=1.0),
+        Parameter("ozone_column", "DU", None, "total ozone column (default 300)", low=0.0, high=1000.0,
+                  flag="--ozone"),
         Parameter("atmosphere", "", None, "the atmosphere (AtmosphereParameters or precomputed tables; default: "
                   "the Earth defaults)", kind="atmosphere", cli=False),
     ),
