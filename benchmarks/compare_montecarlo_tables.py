@@ -3,9 +3,9 @@
 For the Earth defaults and a hazy atmosphere (``AtmosphereParameters.from_turbidity(3)``), at the table
 wavelengths (440, 550, 680 nm), sun elevations +60 .. -6 deg and 15 view directions (elevations 2-90 deg at
 azimuths 0, 90 and 180 deg from the sun), it prints a Markdown table of the relative difference
-``tables / MC - 1`` and its Monte Carlo standard error, and draws ``docs/img/montecarlo_vs_tables.png``.
+``tables / MC - 1`` and its Monte Carlo standard error, and draws ``docs/images/montecarlo_vs_tables.png``.
 Table defaults: 4 orders, default sizes (cached on disk). Re-run after a change to the tables:
-``python benchmarks/compare_montecarlo_tables.py [--samples N] [--out docs/img/montecarlo_vs_tables.png]``.
+``python benchmarks/compare_montecarlo_tables.py [--samples N] [--out docs/images/montecarlo_vs_tables.png]``.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ def main() -> None:
     ap.add_argument("--samples", type=int, default=4096, help="paths per direction with the sun above the horizon")
     ap.add_argument("--twilight-samples", type=int, default=32768,
                     help="paths per direction with the sun below the horizon (few paths reach the lit upper air)")
-    ap.add_argument("--out", default="docs/img/montecarlo_vs_tables.png")
+    ap.add_argument("--out", default="docs/images/montecarlo_vs_tables.png")
     ap.add_argument("--json", default=None, help="also write the numbers to this JSON file")
     args = ap.parse_args()
     dirs, labels = directions()
