@@ -40,7 +40,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="equirect: which way round to write the map so that the sun lands where skyscatter says "
                    "in a Z-up scene with north = +Y, east = +X. skyscatter: north at the centre column; blender: "
                    "for a World Environment Texture with the default mapping; mitsuba: for an envmap with "
-                   "to_world = rotate([1, 0, 0], 90) (docs/conventions.md)")
+                   "to_world = rotate([1, 0, 0], 90)")
     g.add_argument("--width", type=positive_int, default=1024, metavar="PX", help="image width [px]")
     g.add_argument("--height", type=positive_int, default=None, metavar="PX",
                    help="image height [px] (default: width/2 equirect, width fisheye, 3/4 width pinhole)")

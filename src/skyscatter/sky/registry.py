@@ -482,8 +482,8 @@ register(ModelSpec(
     name="montecarlo",
     factory="skyscatter.sky.montecarlo:MonteCarloSky",
     summary="spectral Monte Carlo reference: all orders of scattering in the spherical atmosphere (slow)",
-    citation="Brute-force spectral path tracing as in Hosek & Wilkie (2012), Sec. 3, doi:10.1145/2185520.2185591; "
-             "method: skyscatter docs/montecarlo.md",
+    citation="Brute-force spectral path tracing as in Hosek & Wilkie (2012), Sec. 3, doi:10.1145/2185520.2185591, "
+             "with next-event estimation and hero wavelengths (Wilkie et al. 2014, doi:10.1111/cgf.12419)",
     parameters=(
         Parameter("altitude", "m", 0.0, "observer altitude above the ground", low=0.0, high=1e8),
         Parameter("samples", "1", 1024, "paths per direction (the standard error falls as 1/sqrt(samples))",
