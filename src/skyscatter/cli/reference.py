@@ -44,8 +44,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "Trace the spectral Monte Carlo reference (all orders of scattering in the spherical atmosphere, "
             "the method of Hosek & Wilkie 2012, Sec. 3) for every sun elevation x aerosol amount x ground "
             "albedo, over an equal-area set of sky directions, and write radiance, standard error and the "
-            "transmitted solar disc to a Zarr store (an xarray Dataset with the job as attributes). Re-running the same command resumes: cells already "
-            "written are skipped. A store holding a different job is refused."
+            "transmitted solar disc to a Zarr store (an xarray Dataset with the job as attributes). Re-running "
+            "the same command resumes: cells already written are skipped. A store holding a different job is "
+            "refused."
         ),
         formatter_class=HELP_FORMATTER,
     )
