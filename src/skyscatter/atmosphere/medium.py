@@ -306,7 +306,10 @@ class AtmosphereParameters:
                 raise InvalidParameterError(f"{name} must be in [{low:g}, {high:g}]; got {value!r}")
             checked.append(v)
         tau, alpha = checked
-        return cls(mie_angstrom_alpha=alpha, mie_angstrom_beta=tau * 0.55**alpha, **changes)
+        from .turbidity import angstrom_beta_from_optical_depth
+
+        return cls(mie_angstrom_alpha=alpha, mie_angstrom_beta=angstrom_beta_from_optical_depth(tau, alpha),
+                   **changes)
 
     @classmethod
     def from_turbidity(cls, turbidity: float, **changes: Any) -> AtmosphereParameters:

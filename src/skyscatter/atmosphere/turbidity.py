@@ -35,6 +35,7 @@ __all__ = [
     "ANGSTROM_ALPHA",
     "KOSCHMIEDER_CONSTANT",
     "angstrom_beta",
+    "angstrom_beta_from_optical_depth",
     "meteorological_range",
     "turbidity_from_meteorological_range",
 ]
@@ -44,6 +45,16 @@ ANGSTROM_ALPHA = 1.3
 #: ln(1 / 0.02): Koschmieder's constant for the 2 % contrast threshold [-].
 KOSCHMIEDER_CONSTANT = float(np.log(1.0 / 0.02))
 _REFERENCE_WAVELENGTH = 550.0
+
+
+def angstrom_beta_from_optical_depth(optical_depth: float, alpha: float = ANGSTROM_ALPHA,
+                                     wavelength: float = _REFERENCE_WAVELENGTH) -> float:
+    """Angstrom's beta [-] for a vertical aerosol optical depth ``tau`` at ``wavelength`` [nm] (default 550).
+
+    Angstrom's law ``tau(lambda) = beta (lambda / 1 um)^-alpha`` (Angstrom 1929,
+    doi:10.1080/20014422.1929.11880498) inverted: ``beta = tau (lambda / 1 um)^alpha``.
+    """
+    return float(optical_depth) * (float(wavelength) / 1000.0) ** float(alpha)
 
 
 def _turbidity_array(turbidity: ArrayLike) -> NDArray[np.float64]:

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
 from ..atmosphere import AtmosphereParameters
+from ..atmosphere.turbidity import ANGSTROM_ALPHA, angstrom_beta, angstrom_beta_from_optical_depth
 from ..errors import InvalidParameterError, OutputError
 from .driver import (
     DEFAULT_GROUP_SIZE,
@@ -88,10 +89,10 @@ class ReferenceJob:
         a = float(self.aerosol[k])
         if self.aerosol_kind == "turbidity":
             # Preetham et al. 1999, Appendix A.1 (as AtmosphereParameters.from_turbidity)
-            changes = dict(mie_angstrom_alpha=1.3, mie_angstrom_beta=0.04608 * a - 0.04586)
+            changes = dict(mie_angstrom_alpha=ANGSTROM_ALPHA, mie_angstrom_beta=float(angstrom_beta(a)))
         else:
             # vertical aerosol optical depth at 550 nm with the base Angstrom exponent
-            changes = dict(mie_angstrom_beta=a * 0.55 ** self.atmosphere.mie_angstrom_alpha)
+            changes = dict(mie_angstrom_beta=angstrom_beta_from_optical_depth(a, self.atmosphere.mie_angstrom_alpha))
         return self.atmosphere.replace(ground_albedo=float(self.albedos[m]), **changes)
 
     def description(self) -> dict[str, Any]:
