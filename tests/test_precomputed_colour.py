@@ -53,3 +53,25 @@ def test_batches_mix_rules_per_sample():
     both = conv.to_xyz(np.stack([day, dusk]))
     np.testing.assert_allclose(both[0], conv.to_xyz(day))
     np.testing.assert_allclose(both[1], conv.to_xyz(dusk))
+
+
+def test_spectral_mode_reproduces_rho_linear_in_wavelength_and_nothing_outside():
+    # Spectral mode (16 wavelengths, 400-700 nm): rho = L / E_sun linear in lambda is reproduced exactly between
+    # the samples, and nothing is added outside 400-700 nm, so XYZ equals the observer integral of E_sun * rho
+    # over 400-700 nm only, computed here on the 1 nm grid with spectrum_to_xyz.
+    params = AtmosphereParameters()
+    tw = np.arange(400.0, 701.0, 20.0)
+    conv = ColourConversion(tw, params)
+    assert conv.spectral and not conv.guarded
+
+    def rho(wl):
+        return 0.3 - 0.0003 * (np.asarray(wl) - 400.0)
+
+    rad = params.solar_irradiance_at(tw) * rho(tw)
+    inside = FINE[(FINE >= 400.0) & (FINE <= 700.0)]
+    expected = spectrum_to_xyz(params.solar_irradiance_at(inside) * rho(inside), inside)
+    np.testing.assert_allclose(conv.to_xyz(rad), expected, rtol=1e-9)
+    spec = conv.resample(rad, [390.0, 400.0, 455.0, 700.0, 710.0])
+    at = np.array([400.0, 455.0, 700.0])
+    np.testing.assert_allclose(spec[1:4], params.solar_irradiance_at(at) * rho(at), rtol=1e-12)
+    assert spec[0] == 0.0 and spec[4] == 0.0

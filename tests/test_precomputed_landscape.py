@@ -97,9 +97,13 @@ def test_transmittance_at_other_wavelengths(atm):
     cam = np.array([0.0, 0.0, atm.parameters.bottom_radius + 500.0])
     ref, _ = other.aerial_perspective(cam, cam + s[:, None] * d, [0.0, 0.0, 1.0])
     assert np.max(np.abs(tau - ref)) < 3e-3
-    # Exact on the table's own wavelengths.
-    np.testing.assert_allclose(transmittance_matrix(atm.wavelengths, atm.wavelengths, atm.parameters), np.eye(3),
-                               atol=1e-12)
+    # Exact on the table's own wavelengths for every optical depth the medium can produce: tau(lambda) is
+    # beta_R(lambda) L_R + beta_M,ext(lambda) L_M + beta_O3(lambda) L_O3 for path lengths L >= 0.
+    p, own = atm.parameters, atm.wavelengths
+    basis = np.stack([p.rayleigh_scattering_at(own), p.mie_extinction_at(own), p.ozone_absorption_at(own)], axis=-1)
+    depths = basis @ rng.uniform(0.0, 5e4, (3, 10))
+    matrix = transmittance_matrix(own, own, p)
+    np.testing.assert_allclose(matrix @ depths, depths, rtol=1e-9, atol=1e-12)
 
 
 def test_shadow_length_zero_without_occluder():

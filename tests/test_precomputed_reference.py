@@ -20,8 +20,10 @@ SMALL_SIZES = dict(transmittance_mu=128, transmittance_r=32, irradiance_mu_s=32,
 
 @cache
 def small_earth(orders: int = 4) -> PrecomputedAtmosphere:
-    """Earth-default tables at SMALL_SIZES, computed once per test session (in memory only)."""
-    return PrecomputedAtmosphere.compute(AtmosphereParameters(), orders=orders, sizes=SMALL_SIZES, progress=False)
+    """Earth-default tables at SMALL_SIZES and the 3 wavelengths of the seeds' check values (680, 550, 440 nm),
+    computed once per test session (in memory only)."""
+    return PrecomputedAtmosphere.compute(AtmosphereParameters(), orders=orders, sizes=SMALL_SIZES, progress=False,
+                                         wavelengths="rgb")
 
 
 def ray_end(r: float, mu: float, params: AtmosphereParameters) -> tuple[float, bool]:

@@ -25,11 +25,13 @@ def _sizes(n: int, name: str):
     return parse
 
 
-def _wavelengths(text: str) -> list[float]:
-    """'680,550,440' or a range 'START:STOP:STEP' [nm] (inclusive) of positive wavelengths."""
+def _wavelengths(text: str) -> list[float] | str:
+    """'spectral' or 'rgb' (the named sets), '680,550,440' or a range 'START:STOP:STEP' [nm] (inclusive)."""
     import math
 
     t = text.strip()
+    if t in ("spectral", "rgb"):
+        return t
     try:
         if ":" in t:
             start, stop, step = (float(v) for v in t.split(":"))
@@ -70,8 +72,10 @@ def add_atmosphere_options(p: argparse.ArgumentParser) -> None:
     t = p.add_argument_group("tables")
     t.add_argument("--orders", type=positive_int, default=4, metavar="N", help="scattering orders")
     t.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="LIST",
-                   help="wavelengths [nm]: a list '680,550,440' (the default) or a range '380:780:10'; "
-                        "15 or more give the spectral mode (XYZ by integration with the CIE observer)")
+                   help="wavelengths [nm]: 'spectral' (the default: 400:700:20, 16 wavelengths, colour within "
+                        "delta-xy 0.003 of a 41-wavelength computation), 'rgb' (680,550,440: faster, wrong colour "
+                        "at low sun), a list '680,550,440' or a range '380:780:10'; 15 or more give the spectral "
+                        "mode (XYZ by integration with the CIE observer)")
     t.add_argument("--transmittance-size", type=_sizes(2, "transmittance size"), default="256x64", metavar="MUxR",
                    help="transmittance table: view-zenith x radius samples")
     t.add_argument("--irradiance-size", type=_sizes(2, "irradiance size"), default="64x16", metavar="MUSxR",

@@ -63,18 +63,20 @@ def clear_memory_cache() -> None:
 
 
 def cached_atmosphere(params: AtmosphereParameters | None = None, *, orders: int = 4,
-                      wavelengths: ArrayLike | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
+                      wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
                       progress: bool | None = None) -> PrecomputedAtmosphere:
     """Tables for ``params`` from memory, from the disk cache, or computed and then cached.
 
-    Same arguments as :meth:`PrecomputedAtmosphere.compute`. If the cache folder cannot be written the
-    tables are still returned (with a warning).
+    Same arguments as :meth:`PrecomputedAtmosphere.compute` (default wavelengths: the 16 of the spectral mode;
+    ``wavelengths="rgb"`` for the 3-wavelength mode; the wavelengths are part of the cache key, so tables cached
+    under other defaults are not reused). If the cache folder cannot be written the tables are still returned
+    (with a warning).
     """
     return load_or_compute(params, orders=orders, wavelengths=wavelengths, sizes=sizes, progress=progress)[0]
 
 
 def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int = 4,
-                    wavelengths: ArrayLike | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
+                    wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
                     progress: bool | None = None, force: bool = False,
                     require_saved: bool = False) -> tuple[PrecomputedAtmosphere, bool]:
     """Like :func:`cached_atmosphere`, also saying whether the tables were computed: ``(tables, computed)``.
@@ -102,7 +104,7 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
             warnings.warn(f"rebuilding cached atmosphere tables: {exc}", CacheRebuildWarning, stacklevel=3)
     computed = atm is None
     if computed:
-        if not progress:  # no progress bar asked for: say once why the call takes a while
+        if progress is None:  # a library call that did not choose: say once why it takes a while
             warnings.warn(f"building the precomputed tables for this atmosphere once ({wl.size} wavelengths, "
                           f"{orders} orders; typically 30-90 s on 2 cores); they are then cached in {path.parent}",
                           TableBuildWarning, stacklevel=3)

@@ -1,29 +1,39 @@
 """From radiance at the table wavelengths to spectra at any wavelength and to CIE XYZ.
 
-The tables hold spectral radiance at a few wavelengths ``lambda_k``. Two rules turn them into colour:
+The tables hold spectral radiance at wavelengths ``lambda_k``. In both modes below the radiance divided by the
+solar irradiance at the top of the atmosphere, ``rho(lambda) = L(lambda) / E_sun(lambda)``, is what is
+interpolated: it is a smooth function of wavelength (scattering efficiency times transmittance), while the
+solar spectrum is not (Fraunhofer lines, a steep blue edge). ``E_sun`` is the 10-nm box-filtered solar
+spectrum used for the tables (:meth:`AtmosphereParameters.solar_irradiance_at`). Spectra are
+``E_sun(lambda) rho(lambda)``; XYZ is their integral with the CIE 1931 observer on a 1 nm grid
+(``683 integral xbar L dlambda``, trapezoid) over 360-830 nm, or over the table range in the spectral mode.
+Every rule is linear in the samples, so XYZ is a 3 x n matrix (:func:`xyz_matrix`), the kind of "radiance to
+luminance" coefficients Bruneton's 2017 rewrite precomputes, derived here from a stated spectral model rather
+than a fit.
 
-* **Spectral mode** (15 or more wavelengths): XYZ is the integral of the sampled spectrum with the CIE 1931
-  observer, ``683 sum_k xbar(lambda_k) L_k w_k`` (trapezoidal weights ``w_k``; :func:`skyscatter.spectral.
-  spectrum_to_xyz`), with no assumption about the spectrum's shape.
-* **Few wavelengths** (the default 3): the radiance divided by the solar irradiance at the top of the
-  atmosphere, ``rho(lambda) = L(lambda) / E_sun(lambda)``, is a smooth function (scattering efficiency times
-  transmittance) while the solar spectrum is not (Fraunhofer lines, a steep blue edge). Both single scattering
-  and transmission depend on wavelength mostly through the Rayleigh coefficient ``beta_R ~ lambda^-4``, so
-  ``rho`` is modelled as a polynomial in ``x = (lambda / 550 nm)^-4`` through the samples: with 3 wavelengths
-  the quadratic through the three ``(x_k, rho_k)`` (a second-order expansion in the Rayleigh optical depth),
-  with 1 or 2 a constant or a line; with 4 to 14 wavelengths ``rho`` is interpolated linearly in ``x`` and
-  held constant beyond the ends. The spectrum ``E_sun(lambda) rho(lambda)`` is integrated with the observer
-  on a 1 nm grid over 360-830 nm. The reconstruction is linear in the samples, so it reduces to a 3 x n
-  matrix, the kind of "radiance to luminance" coefficients Bruneton's 2017 rewrite precomputes, here derived
-  from a stated spectral model rather than a fit. ``E_sun`` is the 10-nm box-filtered solar spectrum used
-  for the tables. Against the spectral mode (41 wavelengths) the luminance agrees within 0.1 % in daylight
-  and 3 % at -6 deg twilight; see ``docs/bruneton.md``.
-* **Guard against negative lobes.** Near a low or set sun ``rho`` falls steeply towards the blue, and the
-  quadratic through three samples can dip below zero between or beyond them (it gave negative Z and an
-  invented violet peak at sunset). Where the quadratic of a sample triple is negative anywhere on 360-830 nm,
-  that sample triple uses the piecewise-linear interpolant in ``x`` held constant beyond the end samples
-  instead, which is a convex combination of the samples and so never negative (:class:`ColourConversion`).
-  Both rules are linear, so the choice costs one extra small matrix product per sample.
+* **Spectral mode** (15 or more wavelengths; the default tables, :data:`.tables.DEFAULT_TABLE_WAVELENGTHS`):
+  ``rho`` is interpolated linearly in ``lambda`` between neighbouring table wavelengths and is **zero outside
+  the table range** ``[min lambda_k, max lambda_k]``: no light is invented beyond the computed wavelengths,
+  and :meth:`ColourConversion.resample` returns exactly the table value at a table wavelength. The default
+  tables span 400-700 nm every 20 nm; what the observer would see outside that range is within the error
+  bounds measured there.
+  Measured against the observer integral of 41 wavelengths (380-780 nm, 10 nm) of the same atmosphere:
+  ``benchmarks/bruneton_colour_error.py`` and ``docs/bruneton.md``.
+* **Few wavelengths** (e.g. the 3-wavelength mode, :data:`.tables.RGB_TABLE_WAVELENGTHS`): both single
+  scattering and transmission depend on wavelength mostly through the Rayleigh coefficient
+  ``beta_R ~ lambda^-4``, so ``rho`` is modelled as a polynomial in ``x = (lambda / 550 nm)^-4`` through the
+  samples: with 3 wavelengths the quadratic through the three ``(x_k, rho_k)`` (a second-order expansion in the
+  Rayleigh optical depth), with 1 or 2 a constant or a line; with 4 to 14 wavelengths ``rho`` is interpolated
+  linearly in ``x`` and held constant beyond the ends, over the whole 360-830 nm. This misses ozone's Chappuis
+  band, which carves the middle of twilight spectra: the 3-wavelength twilight zenith comes out magenta
+  where the spectral mode gives blue (``docs/bruneton.md`` has the measured error by sun elevation).
+* **Guard against negative lobes** (few-wavelength mode). Near a low or set sun ``rho`` falls steeply towards
+  the blue, and the quadratic through three samples can dip below zero between or beyond them (it gave negative
+  Z and an invented violet peak at sunset). Where the quadratic of a sample triple is negative anywhere on
+  360-830 nm, that sample triple uses the piecewise-linear interpolant in ``x`` held constant beyond the end
+  samples instead, which is a convex combination of the samples and so never negative
+  (:class:`ColourConversion`). Both rules are linear, so the choice costs one extra small matrix product per
+  sample.
 
 Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
 doi:10.1111/j.1467-8659.2008.01245.x.
@@ -72,11 +82,39 @@ def reconstruction_matrix(table_wavelengths: ArrayLike, wavelengths: ArrayLike,
                           params: AtmosphereParameters) -> NDArray[np.float64]:
     """Matrix (n_out, n_table) turning radiance at ``table_wavelengths`` into radiance at ``wavelengths`` [nm].
 
-    ``L(lambda) = E_sun(lambda) * rho(lambda)`` with ``rho`` the polynomial (up to 3 samples) or piecewise
-    linear (4 or more) interpolant of ``L_k / E_sun(lambda_k)`` in ``x = (lambda / 550 nm)^-4`` (module
-    docstring). Not clamped: apply ``max(., 0)`` to spectra shown to users.
+    ``L(lambda) = E_sun(lambda) * rho(lambda)`` with ``rho`` interpolating ``L_k / E_sun(lambda_k)`` (module
+    docstring): in the spectral mode (15 or more table wavelengths) linearly in ``lambda`` and zero outside the
+    table range; otherwise the polynomial (up to 3 samples) or piecewise-linear (4 to 14) interpolant in
+    ``x = (lambda / 550 nm)^-4``. Not clamped: apply ``max(., 0)`` to spectra shown to users (only the
+    3-sample polynomial can go negative).
     """
-    return _reconstruction(table_wavelengths, wavelengths, params, piecewise_linear=False)
+    tw = np.asarray(table_wavelengths, dtype=float)
+    if tw.size >= SPECTRAL_MODE_MIN_WAVELENGTHS:
+        return _spectral_reconstruction(tw, np.asarray(wavelengths, dtype=float), params)
+    return _reconstruction(tw, wavelengths, params, piecewise_linear=False)
+
+
+def _solar_ratio(e_out: NDArray[np.float64], basis: NDArray[np.float64],
+                 e_tab: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``E_sun(lambda) * basis / E_sun(lambda_k)``: the interpolation of ``rho`` turned back into radiance."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = np.where(e_tab > 0, 1.0 / e_tab, 0.0)
+    return e_out[:, None] * basis * inv[None, :]
+
+
+def _spectral_reconstruction(tw: NDArray[np.float64], wl: NDArray[np.float64],
+                             params: AtmosphereParameters) -> NDArray[np.float64]:
+    """Spectral mode: ``rho`` linear in ``lambda`` between table wavelengths, zero outside their range."""
+    order = np.argsort(tw)
+    flat = wl.ravel()
+    basis = np.zeros((flat.size, tw.size))
+    basis[:, order] = _hat_basis(tw[order], flat)
+    basis[(flat < tw.min()) | (flat > tw.max())] = 0.0
+    inside = basis.any(axis=1)
+    e_out = np.zeros(flat.size)
+    if np.any(inside):  # the solar spectrum is only needed (and may only be tabulated) inside the range
+        e_out[inside] = params.solar_irradiance_at(flat[inside])
+    return _solar_ratio(e_out, basis, params.solar_irradiance_at(tw))
 
 
 def _reconstruction(table_wavelengths: ArrayLike, wavelengths: ArrayLike, params: AtmosphereParameters, *,
@@ -90,25 +128,27 @@ def _reconstruction(table_wavelengths: ArrayLike, wavelengths: ArrayLike, params
     basis = np.zeros((wl.size, tw.size))
     polynomial = tw.size <= 3 and not piecewise_linear
     basis[:, order] = _lagrange_basis(x_nodes, x) if polynomial else _hat_basis(x_nodes, x)
-    e_out = params.solar_irradiance_at(wl)
-    e_tab = params.solar_irradiance_at(tw)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = np.where(e_tab > 0, 1.0 / e_tab, 0.0)
-    return e_out[:, None] * basis * inv[None, :]
+    return _solar_ratio(params.solar_irradiance_at(wl), basis, params.solar_irradiance_at(tw))
 
 
 def xyz_matrix(table_wavelengths: ArrayLike, params: AtmosphereParameters) -> NDArray[np.float64]:
     """Matrix (3, n_table): ``xyz = M @ L`` gives CIE 1931 XYZ [cd m^-2] of radiance at the table wavelengths.
 
-    Spectral mode (>= 15 wavelengths): observer integration of the samples; otherwise the reconstruction of
-    :func:`reconstruction_matrix` integrated on a 1 nm grid (module docstring).
+    The spectrum of :func:`reconstruction_matrix` (both modes) integrated with the CIE 1931 observer on a 1 nm
+    grid (trapezoid) over 360-830 nm, or in the spectral mode over the table range, where the spectrum is not
+    zero (the grid then also holds the range's ends, so the step to zero outside adds nothing).
     """
     tw = np.asarray(table_wavelengths, dtype=float)
     if tw.size >= SPECTRAL_MODE_MIN_WAVELENGTHS:
-        return (cie_cmfs(tw) * integration_weights(tw)[:, None] * LUMINOUS_EFFICACY).T
-    rec = reconstruction_matrix(tw, _FINE_GRID, params)
-    cmf = cie_cmfs(_FINE_GRID) * integration_weights(_FINE_GRID)[:, None] * LUMINOUS_EFFICACY
-    return cmf.T @ rec
+        lo, hi = tw.min(), tw.max()
+        grid = np.unique(np.concatenate([[lo, hi], _FINE_GRID[(_FINE_GRID > lo) & (_FINE_GRID < hi)]]))
+        return _observer_matrix(grid).T @ reconstruction_matrix(tw, grid, params)
+    return _observer_matrix(_FINE_GRID).T @ reconstruction_matrix(tw, _FINE_GRID, params)
+
+
+def _observer_matrix(grid: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(n_grid, 3): ``683 xbar(lambda) dlambda`` trapezoid weights on ``grid`` [nm] [lm W^-1 nm]."""
+    return cie_cmfs(grid) * integration_weights(grid)[:, None] * LUMINOUS_EFFICACY
 
 
 class ColourConversion:
@@ -128,10 +168,10 @@ class ColourConversion:
         tw = self.table_wavelengths
         self.spectral = tw.size >= SPECTRAL_MODE_MIN_WAVELENGTHS
         self.guarded = 2 <= tw.size <= 3
-        cmf = cie_cmfs(_FINE_GRID) * integration_weights(_FINE_GRID)[:, None] * LUMINOUS_EFFICACY
         self.xyz_polynomial = xyz_matrix(tw, params)
         if self.guarded:
-            self.xyz_linear = cmf.T @ _reconstruction(tw, _FINE_GRID, params, piecewise_linear=True)
+            linear = _reconstruction(tw, _FINE_GRID, params, piecewise_linear=True)
+            self.xyz_linear = _observer_matrix(_FINE_GRID).T @ linear
             # Where the polynomial is evaluated to detect a negative lobe: 5 nm over the observer's range.
             self._check = reconstruction_matrix(tw, _FINE_GRID[::5], params)
 

@@ -45,10 +45,21 @@ from ..errors import FileFormatError, InvalidDirectionError, InvalidParameterErr
 from ..fileio import atomic_path
 from .parameters import AtmosphereParameters
 
-__all__ = ["DEFAULT_TABLE_WAVELENGTHS", "FORMAT_VERSION", "PrecomputedAtmosphere", "TableSizes"]
+__all__ = ["DEFAULT_TABLE_WAVELENGTHS", "FORMAT_VERSION", "NAMED_WAVELENGTHS", "RGB_TABLE_WAVELENGTHS",
+           "PrecomputedAtmosphere", "TableSizes"]
 
-#: Wavelengths [nm] of the default 3-channel tables (red, green, blue samples of the 2008 paper).
-DEFAULT_TABLE_WAVELENGTHS = (440.0, 550.0, 680.0)
+#: Wavelengths [nm] of the default tables: 16 from 400 to 700 nm every 20 nm, the spectral mode (colour by the
+#: CIE observer, :mod:`.conversion`). Chosen by measured colour error per second of precomputation (issue 11,
+#: ``benchmarks/bruneton_colour_error.py``, ``docs/bruneton.md``): within delta-xy 0.005 and 2 % in luminance
+#: of 41 wavelengths (380-780 nm, 10 nm) at sun elevations 90 to -6 deg, sky and ground. The 20 nm spacing, not
+#: the range, sets the error: 20 wavelengths over 380-760 nm were no closer, 14 over 400-660 nm or 11 every
+#: 30 nm failed the bounds.
+DEFAULT_TABLE_WAVELENGTHS = tuple(float(w) for w in range(400, 701, 20))
+#: Wavelengths [nm] of the fast 3-wavelength mode (red, green, blue samples of the 2008 paper): faster to
+#: precompute, colour reconstructed from 3 samples; its measured error is in ``docs/bruneton.md``.
+RGB_TABLE_WAVELENGTHS = (440.0, 550.0, 680.0)
+#: Names accepted for ``wavelengths``: ``"spectral"`` (the default) and ``"rgb"`` (the 3-wavelength mode).
+NAMED_WAVELENGTHS = {"spectral": DEFAULT_TABLE_WAVELENGTHS, "rgb": RGB_TABLE_WAVELENGTHS}
 #: Version of the table layout and algorithm; part of the cache key and checked by :meth:`load`.
 FORMAT_VERSION = 2
 _TABLE_NAMES = ("transmittance", "irradiance", "single_rayleigh", "single_mie", "multiple")
@@ -133,9 +144,17 @@ class TableSizes:
         return self.scattering_r, self.scattering_mu, self.scattering_mu_s, self.scattering_nu
 
 
-def _as_wavelengths(wavelengths: ArrayLike | None) -> NDArray[np.float64]:
+def _as_wavelengths(wavelengths: ArrayLike | str | None) -> NDArray[np.float64]:
     if wavelengths is None:
         return np.array(DEFAULT_TABLE_WAVELENGTHS)
+    if isinstance(wavelengths, str):
+        named = NAMED_WAVELENGTHS.get(wavelengths.strip().lower())
+        if named is None:
+            raise InvalidParameterError(
+                f"wavelengths {wavelengths!r} is not a known set; use one of {sorted(NAMED_WAVELENGTHS)} or a list "
+                "of wavelengths [nm]"
+            )
+        return np.array(named)
     wl = np.atleast_1d(np.asarray(wavelengths, dtype=float)).ravel()
     if wl.size == 0 or not np.all(np.isfinite(wl)) or np.any(wl <= 0):
         raise InvalidParameterError("wavelengths must be a non-empty list of positive finite values [nm]")
@@ -271,7 +290,7 @@ class PrecomputedAtmosphere:
 
     @classmethod
     def compute(cls, params: AtmosphereParameters | None = None, *, orders: int = 4,
-                wavelengths: ArrayLike | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
+                wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
                 progress: bool | None = None, chunk_size: int | None = None) -> PrecomputedAtmosphere:
         """Run Algorithm 4.1 (Bruneton & Neyret 2008) and return the tables.
 
@@ -281,8 +300,11 @@ class PrecomputedAtmosphere:
             The atmosphere (default: Earth, see :class:`AtmosphereParameters`).
         orders : int
             Number of scattering orders (>= 1; default 4).
-        wavelengths : array_like, optional
-            Wavelengths [nm] (default 440, 550, 680). 15 or more give the spectral mode.
+        wavelengths : array_like or str, optional
+            Wavelengths [nm]. Default (or ``"spectral"``): :data:`DEFAULT_TABLE_WAVELENGTHS`, 16 wavelengths
+            400-700 nm, the spectral mode (15 or more wavelengths: colour and spectra interpolated between the
+            table wavelengths, :mod:`.conversion`). ``"rgb"`` (or ``(440, 550, 680)``): the faster 3-wavelength
+            mode, colour rebuilt from 3 samples (less accurate in twilight; ``docs/bruneton.md``).
         sizes : TableSizes or mapping, optional
             Table resolutions (default: 256 x 64, 64 x 16, 32 x 128 x 32 x 8).
         progress : bool, optional

@@ -98,9 +98,13 @@ class BrunetonSky(SunSkyMixin, SkyModel):
 
     Notes
     -----
-    ``spectral_radiance`` reconstructs spectra from the table wavelengths (see
-    :mod:`skyscatter.precomputed.conversion`); ``xyz`` applies the table's XYZ matrix directly (observer
-    integration for 15 or more wavelengths).
+    Tables from parameters have the default wavelengths (16, 400-700 nm: the spectral mode); for the faster
+    3-wavelength mode pass tables from ``cached_atmosphere(params, wavelengths="rgb")``. In the spectral mode
+    ``spectral_radiance`` is the tables' own spectrum: the table radiance at the table wavelengths,
+    ``E_sun(lambda)`` times ``L / E_sun`` interpolated linearly in wavelength between them, and zero outside
+    the table range; ``xyz`` is the CIE 1931 observer integral of that spectrum. With 3 wavelengths both are
+    reconstructed from the three samples by a model of the spectrum's shape (less accurate in twilight). See
+    :mod:`skyscatter.precomputed.conversion` and ``docs/bruneton.md``.
     """
 
     model_name = "bruneton"
@@ -164,7 +168,12 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         return self.atmosphere.sky_radiance(self.position, d, self.sun_direction)
 
     def spectral_radiance(self, directions: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
-        """Spectral radiance [W m^-2 sr^-1 nm^-1] of sky and ground (no solar disc), (..., n_wavelengths)."""
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] of sky and ground (no solar disc), (..., n_wavelengths).
+
+        ``wavelengths`` [nm] default to 380-780 nm every 10 nm. In the spectral mode (the default tables) values
+        between table wavelengths are interpolated (``L / E_sun`` linear in wavelength) and values outside the
+        table range are zero (see the class notes).
+        """
         wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
         return self.atmosphere.resample(self.table_radiance(directions), wl)
 
