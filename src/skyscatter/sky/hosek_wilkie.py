@@ -345,6 +345,21 @@ def _band_interpolation(wl: NDArray[np.float64], bands: NDArray[np.float64]) -> 
     return m
 
 
+def _solar_bands(wl: NDArray[np.float64]) -> list[tuple[int, tuple[int, float]]]:
+    """(index, (lower band, fraction)) of each wavelength in 320-720 nm, by the solar model's rule.
+
+    ``arhosekskymodel_solar_radiance_internal2``: band ``int((w - 320) / 40)``, fraction ``fmod(w, 40) / 40``,
+    the last band (720 nm) taken as band 9 at fraction 1; wavelengths outside 320-720 nm are left out (zero).
+    """
+    out = []
+    for j, w in enumerate(wl):
+        if not 320.0 <= w <= 720.0:
+            continue
+        low, frac = int((w - 320.0) / 40.0), float(np.fmod(w, 40.0) / 40.0)
+        out.append((j, (9, 1.0) if low == 10 else (low, frac)))
+    return out
+
+
 class HosekWilkieSky(SunSkyMixin, SkyModel):
     """Hosek & Wilkie 2012 clear sky (spectral, XYZ and RGB datasets) with the 2013 solar disc.
 
@@ -506,13 +521,7 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
             return c[..., 3] + x * (c[..., 2] + x * (c[..., 1] + x * c[..., 0]))
 
         out = np.zeros((*np.shape(elevation), wl.size))
-        for j, w in enumerate(wl):
-            if not 320.0 <= w <= 720.0:
-                continue
-            wl_low = int((w - 320.0) / 40.0)
-            wl_frac = np.fmod(w, 40.0) / 40.0
-            if wl_low == 10:
-                wl_low, wl_frac = 9, 1.0
+        for j, (wl_low, wl_frac) in _solar_bands(wl):
             lo = (1.0 - wl_frac) * band(wl_low, turb_low) + wl_frac * band(wl_low + 1, turb_low)
             hi = (1.0 - wl_frac) * band(wl_low, turb_low + 1) + wl_frac * band(wl_low + 1, turb_low + 1)
             out[..., j] = (1.0 - turb_frac) * lo + turb_frac * hi
@@ -522,13 +531,7 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         """Limb-darkening coefficients (n_wl, 6), linear in wavelength between bands (zero outside 320-720)."""
         ld = _published().limb_darkening
         out = np.zeros((wl.size, 6))
-        for j, w in enumerate(wl):
-            if not 320.0 <= w <= 720.0:
-                continue
-            wl_low = int((w - 320.0) / 40.0)
-            wl_frac = np.fmod(w, 40.0) / 40.0
-            if wl_low == 10:
-                wl_low, wl_frac = 9, 1.0
+        for j, (wl_low, wl_frac) in _solar_bands(wl):
             out[j] = (1.0 - wl_frac) * ld[wl_low] + wl_frac * ld[wl_low + 1]
         return out
 
