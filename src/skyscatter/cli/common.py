@@ -166,3 +166,30 @@ def check_output_paths(args: argparse.Namespace) -> None:
         raise InvalidParameterError(f"--png {png}: the preview must end in .png")
     if args.out.resolve() == png.resolve():
         raise InvalidParameterError("--out and --png must be different files")
+
+
+def float_list(name: str, unit: str):
+    """argparse type: a comma list ``1,2,3`` or an inclusive range ``START:STOP:STEP`` of finite numbers [unit]."""
+    def parse(text: str) -> list[float]:
+        t = text.strip()
+        try:
+            if ":" in t:
+                start, stop, step = (float(v) for v in t.split(":"))
+                if not step > 0:
+                    raise ValueError
+                if abs(stop - start) / step > 10_000:
+                    raise ValueError
+                n = int(math.floor(abs(stop - start) / step + 1e-9)) + 1
+                sign = 1.0 if stop >= start else -1.0
+                values = [start + sign * i * step for i in range(n)]
+            else:
+                values = [float(v) for v in t.split(",") if v.strip()]
+            if not values or not all(math.isfinite(v) for v in values):
+                raise ValueError
+            return values
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"{name}: expected a list like 1,2,3 or a range START:STOP:STEP [{unit}], got {text!r}"
+            ) from None
+
+    return parse

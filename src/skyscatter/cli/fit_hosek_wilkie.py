@@ -10,14 +10,11 @@ import time
 from pathlib import Path
 
 from ..errors import InvalidParameterError
-from .common import HELP_FORMATTER, float_in, positive_int
+from .common import HELP_FORMATTER, float_in, float_list, positive_int
 
 
 def _wavelength_list(text: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a list like 440,550,680 [nm], got {text!r}") from None
+    values = float_list("fit wavelengths", "nm")(text)
     if not values or any(not (300.0 <= v <= 1000.0) for v in values) or values != sorted(set(values)):
         raise argparse.ArgumentTypeError(f"expected increasing wavelengths in 300-1000 nm, got {text!r}")
     return values

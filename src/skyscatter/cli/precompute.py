@@ -8,7 +8,7 @@ import sys
 import time
 
 from ..errors import InvalidParameterError
-from .common import HELP_FORMATTER, float_in, one_line_warnings, output_path, positive_int
+from .common import HELP_FORMATTER, float_in, float_list, one_line_warnings, output_path, positive_int
 
 
 def _sizes(n: int, name: str):
@@ -27,27 +27,11 @@ def _sizes(n: int, name: str):
 
 def _wavelengths(text: str) -> list[float] | str:
     """'spectral' or 'rgb' (the named sets), '680,550,440' or a range 'START:STOP:STEP' [nm] (inclusive)."""
-    import math
-
     t = text.strip()
     if t in ("spectral", "rgb"):
         return t
-    try:
-        if ":" in t:
-            start, stop, step = (float(v) for v in t.split(":"))
-            if not step > 0 or stop < start or (stop - start) / step > 10_000:
-                raise ValueError
-            n = int(round((stop - start) / step)) + 1
-            values = [start + i * step for i in range(n)]
-        else:
-            values = [float(v) for v in t.split(",") if v.strip()]
-        if not values:
-            raise ValueError
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"wavelengths: expected a list like 680,550,440 or a range like 380:780:10 [nm], got {text!r}"
-        ) from None
-    bad = [v for v in values if not (math.isfinite(v) and v > 0)]
+    values = float_list("wavelengths", "nm")(t)
+    bad = [v for v in values if not v > 0]
     if bad:
         raise argparse.ArgumentTypeError(f"wavelengths: {bad[0]:g} nm is not a wavelength; they must be positive "
                                          "[nm] (the tables' solar spectrum covers 280-1100 nm)")

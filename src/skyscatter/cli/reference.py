@@ -9,31 +9,7 @@ import time
 from pathlib import Path
 
 from ..atmosphere.phase import AEROSOL_PHASE_FUNCTIONS
-from .common import HELP_FORMATTER, float_in, positive_int
-
-
-def _float_list(name: str, unit: str):
-    def parse(text: str) -> list[float]:
-        t = text.strip()
-        try:
-            if ":" in t:
-                start, stop, step = (float(v) for v in t.split(":"))
-                if not step > 0:
-                    raise ValueError
-                n = int(math.floor(abs(stop - start) / step + 1e-9)) + 1
-                sign = 1.0 if stop >= start else -1.0
-                values = [start + sign * i * step for i in range(n)]
-            else:
-                values = [float(v) for v in t.split(",") if v.strip()]
-            if not values or not all(math.isfinite(v) for v in values):
-                raise ValueError
-            return values
-        except ValueError:
-            raise argparse.ArgumentTypeError(
-                f"{name}: expected a list like 1,2,3 or a range START:STOP:STEP [{unit}], got {text!r}"
-            ) from None
-
-    return parse
+from .common import HELP_FORMATTER, float_in, float_list, positive_int
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -51,17 +27,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         formatter_class=HELP_FORMATTER,
     )
     p.add_argument("output", type=Path, metavar="STORE.zarr", help="Zarr store to create or resume")
-    p.add_argument("--sun-elevation", type=_float_list("sun elevation", "deg"), default="60,30,10,0,-3,-6",
+    p.add_argument("--sun-elevation", type=float_list("sun elevation", "deg"), default="60,30,10,0,-3,-6",
                    metavar="DEG", help="sun elevations [deg], list or START:STOP:STEP")
     aer = p.add_mutually_exclusive_group()
-    aer.add_argument("--turbidity", type=_float_list("turbidity", "1-20"), default=None, metavar="T",
+    aer.add_argument("--turbidity", type=float_list("turbidity", "1-20"), default=None, metavar="T",
                      help="turbidities (Preetham 1999 A.1 Angstrom beta, alpha 1.3); 2.5 when neither --turbidity nor "
                           "--aod is given")
-    aer.add_argument("--aod", type=_float_list("aerosol optical depth", "at 550 nm"), default=None, metavar="TAU",
+    aer.add_argument("--aod", type=float_list("aerosol optical depth", "at 550 nm"), default=None, metavar="TAU",
                      help="vertical aerosol optical depths at 550 nm (Angstrom alpha 0 of the Earth defaults)")
-    p.add_argument("--albedo", type=_float_list("albedo", "0-1"), default="0.1", metavar="A",
+    p.add_argument("--albedo", type=float_list("albedo", "0-1"), default="0.1", metavar="A",
                    help="ground albedos (Lambertian, grey)")
-    p.add_argument("--wavelengths", type=_float_list("wavelengths", "nm"), default="380:780:40", metavar="NM",
+    p.add_argument("--wavelengths", type=float_list("wavelengths", "nm"), default="380:780:40", metavar="NM",
                    help="wavelengths [nm] (ozone cross-sections cover 360-830 nm)")
     p.add_argument("--directions", type=positive_int, default=200, metavar="N",
                    help="number of equal-area sky directions over the upper hemisphere (spherical Fibonacci)")
