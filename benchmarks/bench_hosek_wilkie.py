@@ -128,14 +128,26 @@ def llvm(variant: str, n: int) -> None:
             for w in waves:
                 si.wavelengths = w
                 dr.eval(em.eval(si))
+            dr.sync_thread()  # Dr.Jit launches kernels asynchronously: wait for them
     else:
 
         def run():
             dr.eval(em.eval(si))
+            dr.sync_thread()
 
     run()
     name = "11 bands, 3 calls" if variant.endswith("spectral") else "RGB"
     report(f"mitsuba {variant} sunsky eval ({name})", n, *best_of(run, 3))
+    if not variant.endswith("spectral"):
+        def numpy_to_numpy():
+            # What a Python caller pays: directions from numpy in, radiance as numpy out.
+            s2 = dr.zeros(mi.SurfaceInteraction3f, n)
+            s2.wi = mi.Vector3f(np.ascontiguousarray(-d[:, 0]), np.ascontiguousarray(-d[:, 1]),
+                                np.ascontiguousarray(-d[:, 2]))
+            return np.array(em.eval(s2))
+
+        numpy_to_numpy()
+        report(f"mitsuba {variant} sunsky, numpy in -> numpy out ({name})", n, *best_of(numpy_to_numpy, 3))
 
 
 if __name__ == "__main__":

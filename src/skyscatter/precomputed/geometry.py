@@ -185,37 +185,54 @@ def _mu_s_a(mu_s: float, bottom: float, top: float) -> float:
 
 
 @_jit
-def _sky_mu_x(r: float, mu: float, bottom: float, top: float) -> float:
-    """Unit coordinate of a ray that misses the ground: the mean of the 2017 distance mapping
-    ``(d - d_min) / (d_max - d_min)`` (dense at the horizon) and the zenith angle over the horizon's zenith
-    angle (uniform in angle, so the zenith region is not one cell wide)."""
+def horizon_constants(r: float, bottom: float, top: float) -> tuple[float, float, float]:
+    """``(rho, H, theta_h)`` at radius ``r``: distance to the horizon, ``sqrt(R_t^2 - R_g^2)`` and the zenith
+    angle of the horizon [rad] (the constants of the ``mu`` mapping for one radius)."""
     big_h = math.sqrt(top * top - bottom * bottom)
     rho = math.sqrt(max(r * r - bottom * bottom, 0.0))
+    return rho, big_h, math.acos(clamp(-rho / r, -1.0, 1.0))
+
+
+@_jit
+def sky_mu_unit(r: float, mu: float, top: float, rho: float, big_h: float, theta_h: float) -> float:
+    """Unit coordinate of a ray that misses the ground (constants of :func:`horizon_constants`): the mean of the
+    2017 distance mapping ``(d - d_min) / (d_max - d_min)`` (dense at the horizon) and the zenith angle over the
+    horizon's zenith angle (uniform in angle, so the zenith region is not one cell wide)."""
     d = distance_to_top(r, mu, top)
     d_min = top - r
     d_max = rho + big_h
     x_d = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
-    theta_h = math.acos(clamp(-rho / r, -1.0, 1.0))
     x_a = math.acos(clamp(mu, -1.0, 1.0)) / theta_h
     return 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0))
+
+
+@_jit
+def ground_mu_unit(r: float, mu: float, bottom: float, rho: float) -> float:
+    """Unit coordinate of a ray that meets the ground: 1 - (d - d_min) / (d_max - d_min), ``d`` the distance to
+    the ground, ``d_min = r - R_g``, ``d_max = rho`` (0 grazing, 1 straight down)."""
+    d = distance_to_bottom(r, mu, bottom)
+    d_min = r - bottom
+    x = (d - d_min) / (rho - d_min) if rho > d_min else 0.0
+    return 1.0 - clamp(x, 0.0, 1.0)
+
+
+@_jit
+def _sky_mu_x(r: float, mu: float, bottom: float, top: float) -> float:
+    rho, big_h, theta_h = horizon_constants(r, bottom, top)
+    return sky_mu_unit(r, mu, top, rho, big_h, theta_h)
 
 
 @_jit
 def scattering_r_mu_coord(r: float, mu: float, hits_ground: bool, bottom: float, top: float,
                           n_r: int, n_mu: int) -> tuple[float, float]:
     """Index positions (p_r, p_mu) of a view ray in the 4D scattering tables."""
-    big_h = math.sqrt(top * top - bottom * bottom)
-    rho = math.sqrt(max(r * r - bottom * bottom, 0.0))
+    rho, big_h, theta_h = horizon_constants(r, bottom, top)
     p_r = clamp(rho / big_h, 0.0, 1.0) * (n_r - 1)
     half = n_mu // 2
     if hits_ground:
-        d = distance_to_bottom(r, mu, bottom)
-        d_min = r - bottom
-        d_max = rho
-        x = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
-        p_mu = (1.0 - clamp(x, 0.0, 1.0)) * (half - 1)
+        p_mu = ground_mu_unit(r, mu, bottom, rho) * (half - 1)
     else:
-        p_mu = half + _sky_mu_x(r, mu, bottom, top) * (half - 1)
+        p_mu = half + sky_mu_unit(r, mu, top, rho, big_h, theta_h) * (half - 1)
     return p_r, p_mu
 
 

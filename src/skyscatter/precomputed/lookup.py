@@ -7,6 +7,9 @@ direction per ray; they return spectral quantities at the table wavelengths.
   Mie with their phase functions applied here, multiple scattering) and, where the ray meets the
   planet, the ground ``R[L0] + R^[L*]`` (Eqs. 10, 14) seen through the atmosphere (Eq. 16). An optional
   shadowed length at the near end of each ray gives light shafts by Eq. 18.
+* :func:`observer_kernel` - the same radiance from one observer inside the atmosphere, from 2D slices of the
+  4D tables at the observer's radius and sun (:func:`observer_slices`), optionally projected to XYZ: the same
+  values with 4 table reads per ray instead of 16 (and 3 channels instead of 16 for colour).
 * :func:`aerial_kernel` - transmittance and inscattered radiance between a camera and a point (Eq. 16's
   last two terms, ``S|x - T(x, xs) S|xs``), with an optional shadowed length at the far end (Eq. 17).
 * :func:`irradiance_kernel` - sun and sky irradiance on a surface of any normal (Eq. 14's ambient occlusion
@@ -24,13 +27,24 @@ import math
 import numba
 import numpy as np
 
-from .geometry import clamp, distance_to_bottom, distance_to_boundary, ray_hits_ground
+from .geometry import (
+    clamp,
+    distance_to_bottom,
+    distance_to_boundary,
+    ground_mu_unit,
+    horizon_constants,
+    lerp_index,
+    ray_hits_ground,
+    scattering_nu_coord,
+    sky_mu_unit,
+)
 from .sampling import (
     aerosol_phase,
     irradiance_lookup,
     lookup4_cell,
     mu_s_nu_cell,
     r_mu_cell,
+    r_mu_s_cell,
     rayleigh_phase,
     transmittance_segment,
     transmittance_to_sun,
@@ -156,6 +170,110 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
             transmittance_to_top(transmittance, rc, mu, bottom, top, t)
             for k in range(n_l):
                 tr_out[q, k] = t[k]
+
+
+def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, projection):
+    """The 4D inscattering tables at one observer radius ``r`` [m] and sun zenith cosine ``mu_s``: an array
+    (n_mu, n_nu, 3, C) of single Rayleigh, single Mie and multiple scattering over the view axes, each
+    ``table @ projection.T`` (``projection`` (C, n_wavelengths): the identity for spectra, the XYZ matrix for
+    colour).
+
+    Quadrilinear interpolation is linear in each axis, so fixing the ``r`` and ``mu_s`` weights once and
+    interpolating the slice bilinearly in (``mu``, ``nu``) gives the same values as the 4D lookup; and the
+    inscattered radiance is a sum of table values times wavelength-independent phase factors, so projecting the
+    slice first gives the same XYZ as projecting each looked-up spectrum (Bruneton's 2017 rewrite folds its
+    tables to luminance the same way). Zero when ``mu_s < mu_s_min`` (no data below the tables' sun limit).
+    """
+    n_r, n_mu, n_s, n_nu, _ = single_rayleigh.shape
+    proj = np.asarray(projection, dtype=np.float64)
+    out = np.zeros((n_mu, n_nu, 3, proj.shape[0]))
+    if mu_s < mu_s_min:
+        return out
+    i_r, w_r, i_s, w_s = r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_s)
+    for j, table in enumerate((single_rayleigh, single_mie, multiple)):
+        acc = np.zeros((n_mu, n_nu, table.shape[-1]))
+        for a, wa in ((0, 1.0 - w_r), (1, w_r)):
+            for c, wc in ((0, 1.0 - w_s), (1, w_s)):
+                if wa * wc > 0.0:
+                    acc += (wa * wc) * table[i_r + a, :, i_s + c, :, :]
+        out[:, :, j, :] = acc @ proj.T
+    return out
+
+
+@_kjit
+def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, solar, projection, bottom, top,
+                    g, mie_kind, alpha, include_ground, dirs, out, bad, start, stop):
+    """:func:`sky_kernel`'s radiance (no shadows) for rays ``start..stop`` from one ``position`` inside the
+    atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C), initialised to 0).
+
+    Inscattering from :func:`observer_slices` (bilinear in ``mu`` and ``nu``: the same values as the 4D
+    lookup); the ground term, a product of spectra (transmittance times irradiance), is formed per wavelength
+    and then projected with ``projection`` (C, n_wavelengths). ``dirs`` need not be unit vectors; a zero,
+    infinite or NaN one sets ``bad[q]`` and is skipped (the caller raises).
+    """
+    n_l = transmittance.shape[2]
+    n_c = out.shape[1]
+    n_mu, n_n = slices.shape[0], slices.shape[1]
+    half = n_mu // 2
+    t = np.empty(n_l)
+    tmp = np.empty(n_l)
+    e_sky = np.empty(n_l)
+    e_sun = np.empty(n_l)
+    px, py, pz = position[0], position[1], position[2]
+    sx, sy, sz = sun[0], sun[1], sun[2]
+    r = math.sqrt(px * px + py * py + pz * pz)
+    rc = clamp(r, bottom, top)
+    mu_s = clamp((px * sx + py * sy + pz * sz) / r, -1.0, 1.0)
+    rho, big_h, theta_h = horizon_constants(rc, bottom, top)
+    for q in range(start, stop):
+        vx, vy, vz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
+        n2 = vx * vx + vy * vy + vz * vz
+        if not (n2 > 0.0 and n2 < math.inf):
+            bad[q] = True
+            continue
+        inv = 1.0 / math.sqrt(n2)
+        vx *= inv
+        vy *= inv
+        vz *= inv
+        mu = clamp((px * vx + py * vy + pz * vz) / r, -1.0, 1.0)
+        nu = clamp(vx * sx + vy * sy + vz * sz, -1.0, 1.0)
+        hits = ray_hits_ground(rc, mu, bottom)
+        p_r = rayleigh_phase(nu)
+        p_m = aerosol_phase(nu, g, mie_kind)
+        if hits:
+            i_mu, w_mu = lerp_index(ground_mu_unit(rc, mu, bottom, rho) * (half - 1), 0, half - 1)
+        else:
+            i_mu, w_mu = lerp_index(half + sky_mu_unit(rc, mu, top, rho, big_h, theta_h) * (half - 1), half,
+                                    n_mu - 1)
+        i_n, w_n = lerp_index(scattering_nu_coord(mu, mu_s, nu, n_n), 0, n_n - 1)
+        for b in range(2):
+            wb = w_mu if b else 1.0 - w_mu
+            if wb == 0.0:
+                continue
+            for e in range(2):
+                we = wb * (w_n if e else 1.0 - w_n)
+                if we == 0.0:
+                    continue
+                cell = slices[i_mu + b, i_n + e]
+                wr = we * p_r
+                wm = we * p_m
+                for k in range(n_c):
+                    out[q, k] += wr * cell[0, k] + wm * cell[1, k] + we * cell[2, k]
+        if hits and include_ground:
+            d = distance_to_bottom(rc, mu, bottom)
+            transmittance_segment(transmittance, rc, mu, d, True, bottom, top, t, tmp)
+            gx = px + d * vx
+            gy = py + d * vy
+            gz = pz + d * vz
+            gr = math.sqrt(gx * gx + gy * gy + gz * gz)
+            mu_s_g = clamp((gx * sx + gy * sy + gz * sz) / gr, -1.0, 1.0)
+            irradiance_lookup(irradiance, bottom, mu_s_g, bottom, top, e_sky)
+            transmittance_to_top(transmittance, bottom, mu_s_g, bottom, top, e_sun)
+            cf = _sun_cos_factor(mu_s_g, alpha)
+            for j in range(n_l):
+                ground = t[j] * albedo[j] / PI * (solar[j] * e_sun[j] * cf + e_sky[j])
+                for k in range(n_c):
+                    out[q, k] += projection[k, j] * ground
 
 
 @_jit

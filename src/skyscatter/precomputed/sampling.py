@@ -142,6 +142,16 @@ def mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_mu_s, n_nu):
 
 
 @_jit
+def r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_mu_s):
+    """Interpolation cell (i_r, w_r, i_mu_s, w_mu_s) of an observer radius and sun zenith cosine in the 4D
+    tables (the axes that stay fixed for one observer)."""
+    p_r, _ = scattering_r_mu_coord(r, 1.0, False, bottom, top, n_r, 4)
+    i_r, w_r = lerp_index(p_r, 0, n_r - 1)
+    i_s, w_s = lerp_index(scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_mu_s), 0, n_mu_s - 1)
+    return i_r, w_r, i_s, w_s
+
+
+@_jit
 def lookup4_cell(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scale, out):
     """``out += scale * table(cell)``: quadrilinear interpolation of a 4D table (..., n_wavelengths)."""
     n_l = table.shape[4]

@@ -558,6 +558,58 @@ class PrecomputedAtmosphere:
                      grain=2048)
         return rad, tr
 
+    def sky_xyz(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike, *,
+                include_ground: bool = True) -> NDArray[np.float64]:
+        """CIE 1931 XYZ [cd m^-2] of :meth:`sky_radiance` (no light shafts), shape broadcast + (3,).
+
+        In the spectral mode, for one position inside the atmosphere and one sun direction (a sky seen by one
+        observer), the lookups run on 2D slices of the tables projected to XYZ (:func:`.lookup.observer_slices`):
+        the same values as ``to_xyz(sky_radiance(...))`` to rounding, several times faster. Otherwise this is
+        ``to_xyz(sky_radiance(...))`` (with fewer wavelengths the colour rule is not linear in the spectrum: the
+        negative-lobe guard of :mod:`.conversion`).
+        """
+        fast = self._observer(positions, directions, sun_direction, include_ground, xyz=True)
+        if fast is not None:
+            return fast
+        return self.to_xyz(self.sky_radiance(positions, directions, sun_direction, include_ground=include_ground))
+
+    def _observer(self, positions, directions, sun_direction, include_ground, *, xyz):
+        """The observer fast path of :meth:`sky_xyz` / :meth:`sky_radiance`, or None where it does not apply."""
+        pos = np.asarray(positions, dtype=float)
+        sun = np.asarray(sun_direction, dtype=float)
+        if pos.shape != (3,) or sun.shape != (3,) or (xyz and not self.spectral_mode) or not np.any(sun):
+            return None
+        bottom, top, mu_s_min = self._geometry()
+        r = float(np.linalg.norm(pos)) if np.all(np.isfinite(pos)) else math.nan
+        if not (bottom - 1.0 <= r <= top):  # outside: the general kernel moves each ray to the top first
+            return None
+        from .lookup import observer_kernel, observer_slices
+        from .parallel import parallel_for
+
+        try:
+            d = np.asarray(directions)
+        except (ValueError, TypeError):
+            return None
+        if d.dtype.kind not in "fiu" or d.ndim == 0 or d.shape[-1] != 3 or not np.all(np.isfinite(sun)):
+            return None  # the general path says what is wrong
+        shape = d.shape[:-1]
+        dirs = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
+        s = sun / np.linalg.norm(sun)
+        mu_s = float(np.clip(pos @ s / r, -1.0, 1.0))
+        projection = self.xyz_matrix if xyz else np.eye(self.wavelengths.size)
+        slices = observer_slices(self.tables["single_rayleigh"], self.tables["single_mie"], self.tables["multiple"],
+                                 min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, projection)
+        out = np.zeros((dirs.shape[0], projection.shape[0]))
+        bad = np.zeros(dirs.shape[0], dtype=np.bool_)
+        # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
+        parallel_for(observer_kernel, dirs.shape[0], pos, s, slices, self.tables["transmittance"],
+                     self.tables["irradiance"], self._albedo, self._solar, np.ascontiguousarray(projection),
+                     bottom, top, self.parameters.mie_phase_g, self._mie_kind, self.parameters.sun_angular_radius,
+                     bool(include_ground), dirs, out, bad, grain=2048)
+        if bad.any():
+            return None
+        return out.reshape(*shape, projection.shape[0])
+
     def sky_radiance(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike, *,
                      shadow_length: ArrayLike | None = None, include_ground: bool = True,
                      return_transmittance: bool = False):
@@ -584,6 +636,10 @@ class PrecomputedAtmosphere:
         ndarray, shape broadcast + (n_wavelengths,)
             The solar disc is not included (see :meth:`sun_radiance`); rays that miss the atmosphere give 0.
         """
+        if shadow_length is None and not return_transmittance:
+            fast = self._observer(positions, directions, sun_direction, include_ground, xyz=False)
+            if fast is not None:
+                return fast
         shape, pos, dirs, sun, sh = self._broadcast_rays(positions, directions, sun_direction, shadow_length)
         self._check_above_ground(pos)
         rad, t = self._sky(pos, dirs, sun, sh, bool(include_ground))

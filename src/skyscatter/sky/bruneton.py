@@ -18,7 +18,6 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..conventions import as_directions
 from ..errors import InvalidParameterError, SunBelowHorizonError
 from ..precomputed import AtmosphereParameters, PrecomputedAtmosphere
 from ..precomputed.cache import resolve_atmosphere
@@ -164,8 +163,7 @@ class BrunetonSky(SunSkyMixin, SkyModel):
 
     def table_radiance(self, directions: ArrayLike) -> NDArray[np.float64]:
         """Spectral radiance [W m^-2 sr^-1 nm^-1] at the table wavelengths, shape (..., n_table_wavelengths)."""
-        d = as_directions(directions)
-        return self.atmosphere.sky_radiance(self.position, d, self.sun_direction)
+        return self.atmosphere.sky_radiance(self.position, directions, self.sun_direction)
 
     def spectral_radiance(self, directions: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
         """Spectral radiance [W m^-2 sr^-1 nm^-1] of sky and ground (no solar disc), (..., n_wavelengths).
@@ -179,11 +177,11 @@ class BrunetonSky(SunSkyMixin, SkyModel):
 
     def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
         """CIE 1931 XYZ [cd m^-2] of sky and ground in ``directions`` (..., 3)."""
-        return self.atmosphere.to_xyz(self.table_radiance(directions))
+        return self.atmosphere.sky_xyz(self.position, directions, self.sun_direction)
 
     def luminance(self, directions: ArrayLike) -> NDArray[np.float64]:
-        """Luminance [cd m^-2] of sky and ground in ``directions`` (..., 3)."""
-        return self.atmosphere.luminance(self.table_radiance(directions))
+        """Luminance [cd m^-2] of sky and ground in ``directions`` (...)."""
+        return self.xyz(directions)[..., 1]
 
     def aerial_perspective(self, points: ArrayLike, *, shadow_length: ArrayLike | None = None
                            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
