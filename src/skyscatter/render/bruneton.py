@@ -56,23 +56,34 @@ def render_directions(atmosphere: PrecomputedAtmosphere, position: ArrayLike, di
         raise InvalidParameterError(f"output must be one of {_OUTPUTS}; got {output!r}")
     d = as_directions(directions)
     sun = as_directions(sun_direction)
-    rad = atmosphere.sky_radiance(np.asarray(position, dtype=float), d, sun)
+    pos = np.asarray(position, dtype=float)
+    if output != "spectral" and atmosphere.spectral_mode:
+        # XYZ straight from the lookups (linear in the spectrum here): the disc is added in XYZ.
+        xyz = atmosphere.sky_xyz(pos, d, sun)
+        if include_sun:
+            _add_disc(atmosphere, pos, d, sun, xyz, atmosphere.to_xyz(atmosphere.sun_radiance(pos, sun)))
+        return xyz if output == "xyz" else xyz_to_linear_srgb(xyz) * HDR_SCALE
+    rad = atmosphere.sky_radiance(pos, d, sun)
     if include_sun:
-        cos_r = math.cos(atmosphere.parameters.sun_angular_radius)
-        inside = (d @ sun) >= cos_r
-        if np.any(inside):
-            # A direction inside the disc sees the sun only if its ray does not meet the planet first.
-            r0 = np.asarray(position, dtype=float)
-            rmu = d[inside] @ r0
-            blocked = (rmu < 0) & (rmu**2 - r0 @ r0 + atmosphere.parameters.bottom_radius**2 >= 0)
-            sun_rad = atmosphere.sun_radiance(r0, sun)
-            rad[inside] += np.where(blocked[:, None], 0.0, sun_rad[None, :])
+        _add_disc(atmosphere, pos, d, sun, rad, atmosphere.sun_radiance(pos, sun))
     if output == "spectral":
         return rad
     xyz = atmosphere.to_xyz(rad)
     if output == "xyz":
         return xyz
     return xyz_to_linear_srgb(xyz) * HDR_SCALE
+
+
+def _add_disc(atmosphere: PrecomputedAtmosphere, position: NDArray[np.float64], directions: NDArray[np.float64],
+              sun: NDArray[np.float64], image: NDArray[np.float64], disc: NDArray[np.float64]) -> None:
+    """Add the solar disc's value ``disc`` (spectrum or XYZ) to ``image`` on directions inside the disc."""
+    cos_r = math.cos(atmosphere.parameters.sun_angular_radius)
+    inside = (directions @ sun) >= cos_r
+    if np.any(inside):
+        # A direction inside the disc sees the sun only if its ray does not meet the planet first.
+        rmu = directions[inside] @ position
+        blocked = (rmu < 0) & (rmu**2 - position @ position + atmosphere.parameters.bottom_radius**2 >= 0)
+        image[inside] += np.where(blocked[:, None], 0.0, disc[None, :])
 
 
 def _observer(atmosphere: PrecomputedAtmosphere, altitude: float) -> NDArray[np.float64]:
