@@ -190,7 +190,42 @@ def test_help_shows_each_default_once(capsys):
 def test_bruneton_model_refuses_preetham_options(tmp_path, capsys):
     from skyscatter.cli import main
 
-    code = main(["demo", "--model", "bruneton", "--turbidity", "3", "--out-dir", str(tmp_path)])
-    err = capsys.readouterr().err
-    assert code == 2 and "does not apply to --model bruneton" in err and len(err.strip().splitlines()) == 1
+    for extra in (["--aerial", "numeric"], ["--sky", "cie-clear"]):
+        code = main(["demo", "--model", "bruneton", *extra, "--out-dir", str(tmp_path)])
+        err = capsys.readouterr().err
+        assert code == 2 and "does not apply to --model bruneton" in err and len(err.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def _demo_args(*args):
+    import argparse
+
+    from skyscatter.cli import demo
+
+    parser = argparse.ArgumentParser()
+    demo.register(parser.add_subparsers(dest="command"))
+    return demo, parser.parse_args(["demo", *args])
+
+
+def test_bruneton_model_takes_the_atmosphere_options():
+    """Issue 11 item 5: demo --model bruneton takes the precomputed atmosphere's options (turbidity or aerosol
+    optical depth and Angstrom exponent, ozone, table wavelengths), range-checked by the registry's spec."""
+    demo, args = _demo_args("--model", "bruneton", "--aod", "0.3", "--angstrom-alpha", "1.1", "--ozone", "250",
+                            "--wavelengths", "rgb")
+    (panel,) = demo._panels(args, "custom")
+    assert panel.bruneton_medium == {"aerosol_optical_depth": 0.3, "angstrom_alpha": 1.1, "ozone_column": 250.0,
+                                     "wavelengths": "rgb"}
+    demo, args = _demo_args("--model", "bruneton", "--turbidity", "4")
+    assert demo._panels(args, "custom")[0].bruneton_medium == {"turbidity": 4.0}
+
+
+def test_bruneton_atmosphere_options_are_checked(tmp_path, capsys):
+    from skyscatter.cli import main
+
+    for args, message in ((["--model", "bruneton", "--aod", "20"], "--aod 20"),
+                          (["--aod", "0.3"], "--aod applies to --model bruneton"),
+                          (["--model", "bruneton", "--ozone", "-5"], "--ozone -5")):
+        code = main(["demo", *args, "--out-dir", str(tmp_path)])
+        err = capsys.readouterr().err
+        assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
     assert list(tmp_path.iterdir()) == []

@@ -365,3 +365,24 @@ def test_observer_slices_equal_the_4d_lookup(atm, altitude, sun_elevation):
     for bad in ([[0.0, 0.0, 0.0]], [[np.nan, 0.0, 1.0]], [[np.inf, 0.0, 1.0]], [[1.0, 0.0]]):
         with pytest.raises(InvalidDirectionError):
             spectral.sky_xyz(pos, bad, sun)
+
+
+def test_wavelengths_option_chooses_the_tables(atm, monkeypatch):
+    """BrunetonSky(wavelengths="rgb" | "spectral") asks the cache for those tables; not with tables given."""
+    import skyscatter.precomputed.cache as cache
+
+    asked = []
+
+    def fake(params=None, **kwargs):
+        asked.append(kwargs.get("wavelengths"))
+        return atm
+
+    monkeypatch.setattr(cache, "cached_atmosphere", fake)
+    sky = BrunetonSky(0.5, 0.0, wavelengths="rgb", ozone_column=250.0)
+    BrunetonSky(0.5, 0.0)
+    assert asked == ["rgb", None]
+    assert sky.model_parameters()["wavelengths"] == "rgb"
+    with pytest.raises(InvalidParameterError, match="not with precomputed tables"):
+        BrunetonSky(0.5, 0.0, atmosphere=atm, wavelengths="rgb")
+    with pytest.raises(InvalidParameterError, match="'spectral' or 'rgb'"):
+        BrunetonSky(0.5, 0.0, wavelengths="blue")

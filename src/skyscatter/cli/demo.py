@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .common import HELP_FORMATTER, add_sun_options, finite_float, float_in, positive_int, sun_angles_from_args
-from .sky_options import add_model_options, build_sky_from_args
+from .sky_options import add_model_options, add_parameter_options, build_sky_from_args, parameter_values
 
 if TYPE_CHECKING:
     from ..sky.base import SkyModel
@@ -43,6 +43,9 @@ _MAX_CAMERA_XY = 1e7
 _MAX_CAMERA_Z = 1e5
 
 _SCENE_OPTIONS = ("sun_elevation", "sun_azimuth", "lat", "lon", "time", "aerial", "model")
+#: Parameters of the precomputed atmosphere that ``--model bruneton`` takes (``--turbidity`` is shared with the
+#: skies; the ground's albedo is the terrain's ``--albedo``).
+_BRUNETON_OPTIONS = ("turbidity", "aerosol_optical_depth", "angstrom_alpha", "ozone_column", "wavelengths")
 #: Default turbidity of the haze for skies that have none of their own (the CIE and Perez skies).
 DEFAULT_HAZE_TURBIDITY = 2.5
 
@@ -120,6 +123,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "first run (about 30 s): sky, sunlight, aerial perspective, and light shafts from the "
                    "mountains' shadow; --sky, its parameters and --aerial do not apply) (default preetham: the "
                    "sky chosen by --sky)")
+    b = p.add_argument_group("precomputed atmosphere (--model bruneton; --turbidity also applies)",
+                             "The Earth defaults unless changed; each atmosphere's tables are computed once "
+                             "(about 25 s) and cached.")
+    add_parameter_options(b, "bruneton", [n for n in _BRUNETON_OPTIONS if n != "turbidity"])
     add_sun_options(p, default_elevation=EVENING_SUN[0], default_azimuth=EVENING_SUN[1])
     c = p.add_argument_group("camera and terrain")
     c.add_argument("--dem", type=Path, default=None, metavar="PATH",
@@ -162,6 +169,8 @@ class _Panel:
     camera_xy: tuple[float, float] = FIG7_CAMERA_XY
     #: (zenith, azimuth) [rad] of the sun for a Bruneton panel, whose sky depends on the camera's altitude.
     bruneton_sun: tuple[float, float] | None = None
+    #: The precomputed atmosphere's options of a Bruneton panel (BrunetonSky keywords).
+    bruneton_medium: dict[str, Any] | None = None
 
 
 def _preetham(turbidity: float, elevation: float, azimuth: float):
@@ -242,13 +251,22 @@ def _panels(args: argparse.Namespace, figure: str) -> list[_Panel]:
             from ..errors import InvalidParameterError
 
             for opt in _scene_options(args):
-                if opt in ("sky", "aerial") or opt not in _SCENE_OPTIONS:
+                if opt in ("sky", "aerial") or opt not in _SCENE_OPTIONS + _BRUNETON_OPTIONS:
                     flag = "--" + opt.replace("_", "-")
                     raise InvalidParameterError(f"{flag} does not apply to --model bruneton (the precomputed "
                                                 "atmosphere gives the sky and the aerial perspective)")
+            medium = parameter_values(args, "bruneton", _BRUNETON_OPTIONS)
             title = (f"bruneton (precomputed, light shafts), sun {elevation:.1f} deg at {az:.1f} deg")
-            panels.append(_Panel("landscape", title, None, None, WEST, bruneton_sun=(zenith, azimuth)))
+            panels.append(_Panel("landscape", title, None, None, WEST, bruneton_sun=(zenith, azimuth),
+                                 bruneton_medium=medium))
             return panels
+        from ..sky import registry
+
+        for p in registry.get("bruneton").parameters:
+            if p.name in _BRUNETON_OPTIONS and p.name != "turbidity" and getattr(args, p.name, None) is not None:
+                from ..errors import InvalidParameterError
+
+                raise InvalidParameterError(f"{p.cli_flag} applies to --model bruneton (the precomputed atmosphere)")
         from ..sky import registry
 
         model = args.model_sky = args.model_sky or "preetham"
@@ -350,7 +368,8 @@ def run(args: argparse.Namespace) -> int:
             from ..render.bruneton import bruneton_scene
 
             scenes.append(bruneton_scene(terrain, camera, *panel.bruneton_sun, albedo=args.albedo,
-                                         sun_disc=args.sun_disc, wavelengths=wavelengths))
+                                         sun_disc=args.sun_disc, wavelengths=wavelengths,
+                                         **(panel.bruneton_medium or {})))
             continue
         scenes.append(Scene(panel.sky, terrain=terrain, camera=camera, aerial=panel.aerial, albedo=args.albedo,
                             sun_disc=args.sun_disc, wavelengths=wavelengths))

@@ -68,23 +68,53 @@ def add_model_options(parser, models: list[str] | None = None, default: str | No
             if p.cli and p.name not in shared:
                 by_flag.setdefault(p.cli_flag, []).append((spec.name, p))
     for cli_flag, entries in by_flag.items():
-        first = entries[0][1]
-        texts: dict[str, list[str]] = {}  # one text per distinct description, listing the models it applies to
-        for model, p in entries:
-            shown = p.default if isinstance(p.default, (int, float)) and not isinstance(p.default, bool) else None
-            unit = "" if p.unit in ("1", "") else f" [{p.unit}]"
-            text = f"{p.help}{unit}: {p.range_text(with_unit=False)}" + (
-                f" (default {shown:g})" if shown is not None else "")
-            texts.setdefault(text, []).append(model)
-        kwargs: dict[str, Any] = dict(dest=first.name, default=argparse.SUPPRESS,
-                                      help="; ".join(f"{', '.join(m)}: {t}" for t, m in texts.items()))
-        if first.kind == "choice":
-            kwargs["choices"] = list(first.choices)
-        else:
-            kwargs["type"] = _PARSERS.get(first.kind, str)
-            kwargs["metavar"] = _metavar(first)
-        group.add_argument(cli_flag, **kwargs)
+        _add_option(group, cli_flag, entries)
     parser.set_defaults(_models=names, _model_dest=dest, _model_flag=flag, _model_shared=tuple(shared))
+
+
+def _add_option(group, cli_flag: str, entries: list[tuple[str, Any]]) -> None:
+    """One option for a parameter shared by the models in ``entries`` ((model name, Parameter) pairs)."""
+    first = entries[0][1]
+    texts: dict[str, list[str]] = {}  # one text per distinct description, listing the models it applies to
+    for model, p in entries:
+        shown = p.default if isinstance(p.default, (int, float)) and not isinstance(p.default, bool) else None
+        unit = "" if p.unit in ("1", "") else f" [{p.unit}]"
+        text = f"{p.help}{unit}: {p.range_text(with_unit=False)}" + (
+            f" (default {shown:g})" if shown is not None else "")
+        texts.setdefault(text, []).append(model)
+    kwargs: dict[str, Any] = dict(dest=first.name, default=argparse.SUPPRESS,
+                                  help="; ".join(f"{', '.join(m)}: {t}" for t, m in texts.items()))
+    if first.kind == "choice":
+        kwargs["choices"] = list(first.choices)
+    else:
+        kwargs["type"] = _PARSERS.get(first.kind, str)
+        kwargs["metavar"] = _metavar(first)
+    group.add_argument(cli_flag, **kwargs)
+
+
+def add_parameter_options(group, model: str, names: Iterable[str]) -> None:
+    """Options for the parameters ``names`` of one ``model`` alone (the demo's precomputed atmosphere)."""
+    from ..sky import registry
+
+    spec = registry.get(model)
+    for p in spec.parameters:
+        if p.name in names:
+            _add_option(group, p.cli_flag, [(model, p)])
+
+
+def parameter_values(args: argparse.Namespace, model: str, names: Iterable[str]) -> dict[str, Any]:
+    """The values given for the parameters ``names`` of ``model``, checked against its ranges."""
+    from ..sky import registry
+
+    out: dict[str, Any] = {}
+    for p in registry.get(model).parameters:
+        if p.name in names and getattr(args, p.name, None) is not None:
+            value = getattr(args, p.name)
+            try:
+                out[p.name] = p.check(value, model)
+            except InvalidParameterError as exc:
+                raise InvalidParameterError(f"{p.cli_flag} {value}: {str(exc).split(': ', 1)[-1]}") from None
+    return out
 
 
 def model_options(args: argparse.Namespace) -> dict[str, Any]:

@@ -122,20 +122,29 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
     return atm, computed
 
 
-def resolve_atmosphere(atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None) -> PrecomputedAtmosphere:
+def resolve_atmosphere(atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None, *,
+                       wavelengths: str | None = None) -> PrecomputedAtmosphere:
     """Tables for an argument that may be tables, parameters or None (the Earth defaults).
 
-    Tables are returned as they are; parameters (or None) get their tables from :func:`cached_atmosphere`.
+    Tables are returned as they are; parameters (or None) get their tables from :func:`cached_atmosphere`,
+    with ``wavelengths`` ``"spectral"`` (the default) or ``"rgb"``.
 
     Raises
     ------
     InvalidParameterError
-        Anything else.
+        Anything else, or ``wavelengths`` given with tables (which have theirs).
     """
+    if wavelengths not in (None, "spectral", "rgb"):
+        raise InvalidParameterError(f"wavelengths must be 'spectral' or 'rgb'; got {wavelengths!r}")
     if isinstance(atmosphere, PrecomputedAtmosphere):
+        if wavelengths is not None:
+            raise InvalidParameterError("wavelengths goes with atmosphere parameters, not with precomputed tables "
+                                        "(they have their own wavelengths)")
         return atmosphere
     if atmosphere is None or isinstance(atmosphere, AtmosphereParameters):
-        return cached_atmosphere(atmosphere)
+        if wavelengths is None:
+            return cached_atmosphere(atmosphere)
+        return cached_atmosphere(atmosphere, wavelengths=wavelengths)
     raise InvalidParameterError(
         f"atmosphere must be a PrecomputedAtmosphere, AtmosphereParameters or None; got {type(atmosphere).__name__}"
     )

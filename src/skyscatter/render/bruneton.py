@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -142,7 +143,7 @@ def preview_png(image: ArrayLike, path: str | Path, *, exposure: float | None = 
 def bruneton_scene(terrain: Terrain, camera: PinholeCamera, sun_zenith: float, sun_azimuth: float, *,
                    atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None = None, albedo: float = 0.2,
                    sun_disc: bool = True, wavelengths: ArrayLike | None = None, shafts: bool = True,
-                   samples: int | None = None, refine: int | None = None) -> Scene:
+                   samples: int | None = None, refine: int | None = None, **medium: Any) -> Scene:
     """A :class:`~skyscatter.render.Scene` lit and hazed by the precomputed atmosphere.
 
     Parameters
@@ -167,13 +168,17 @@ def bruneton_scene(terrain: Terrain, camera: PinholeCamera, sun_zenith: float, s
     samples, refine : int, optional
         Ray-marching steps and boundary bisections of the shadow-length estimate (defaults of
         :func:`skyscatter.render.shafts.shadow_lengths`).
+    **medium
+        The atmosphere's options of :class:`~skyscatter.sky.bruneton.BrunetonSky` (``turbidity``,
+        ``aerosol_optical_depth``, ``angstrom_alpha``, ``ozone_column``, ``wavelengths`` "spectral"/"rgb"); the
+        atmosphere's ground albedo stays its own (``albedo`` here is the terrain's).
 
     Returns
     -------
     Scene
     """
     x, y, z = (float(v) for v in camera.position)
-    sky = BrunetonSky(sun_zenith, sun_azimuth, altitude=max(z, 0.0), atmosphere=atmosphere)
+    sky = BrunetonSky(sun_zenith, sun_azimuth, altitude=max(z, 0.0), atmosphere=atmosphere, **medium)
     tracer = HeightfieldTracer(terrain) if shafts else None
     aerial = BrunetonAerialPerspective(
         sky, terrain=tracer, camera_xy=(x, y),

@@ -91,6 +91,10 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         Ground albedo, 0 to 1 (the Earth defaults: 0.1).
     ozone_column : float, optional
         Total ozone [Dobson units], 0 to 1000 (the Earth defaults: 300).
+    wavelengths : {"spectral", "rgb"}, optional
+        Wavelengths of tables built from parameters: "spectral" (the default, 16 from 400 to 700 nm, colour
+        within delta-xy 0.003 of a 41-wavelength computation) or "rgb" (3, about 30 % quicker to build, colour
+        wrong at low sun: ``docs/bruneton.md``). Not with precomputed tables, which have their own.
 
     The medium options change the Earth defaults (or the ``atmosphere`` parameters given); each atmosphere's
     tables are computed once and cached.
@@ -113,7 +117,7 @@ class BrunetonSky(SunSkyMixin, SkyModel):
                  atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None = None,
                  turbidity: float | None = None, aerosol_optical_depth: float | None = None,
                  angstrom_alpha: float | None = None, albedo: float | None = None,
-                 ozone_column: float | None = None) -> None:
+                 ozone_column: float | None = None, wavelengths: str | None = None) -> None:
         zen, azi = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=True)
         medium = {k: v for k, v in (("turbidity", turbidity), ("aerosol_optical_depth", aerosol_optical_depth),
                                     ("angstrom_alpha", angstrom_alpha), ("albedo", albedo),
@@ -130,7 +134,7 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         if alt > MAX_ALTITUDE:
             raise InvalidParameterError(f"altitude must be at most {MAX_ALTITUDE:g} m (a quarter of the way to the "
                                         f"Moon; the tables resolve nothing finer there); got {altitude!r}")
-        atm = resolve_atmosphere(atmosphere)
+        atm = resolve_atmosphere(atmosphere, wavelengths=wavelengths)
         limit = atm.parameters.max_sun_zenith
         top_altitude = atm.parameters.top_radius - atm.parameters.bottom_radius
         # Inside the atmosphere every lookup starts at the observer, with the observer's sun zenith: beyond
@@ -150,7 +154,8 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         self.altitude = alt
         self.atmosphere = atm
         self.sun_angular_radius = atm.parameters.sun_angular_radius
-        self._remember(altitude=alt, atmosphere=given_atmosphere, **medium)
+        self._remember(altitude=alt, atmosphere=given_atmosphere, **medium,
+                       **({} if wavelengths is None else {"wavelengths": wavelengths}))
 
     def __repr__(self) -> str:
         return (f"BrunetonSky(sun_zenith={self.sun_zenith:.6g}, sun_azimuth={self.sun_azimuth:.6g}, "

@@ -471,6 +471,8 @@ register(ModelSpec(
                   high=1.0),
         Parameter("ozone_column", "DU", None, "total ozone column (default 300)", low=0.0, high=1000.0,
                   flag="--ozone"),
+        Parameter("wavelengths", "", None, "table wavelengths: spectral (default: 16, 400-700 nm, right colour) "
+                  "or rgb (3: quicker to build, wrong colour at low sun)", kind="choice", choices=("spectral", "rgb")),
         Parameter("atmosphere", "", None, "the atmosphere (AtmosphereParameters or precomputed tables; default: "
                   "the Earth defaults)", kind="atmosphere", cli=False),
     ),

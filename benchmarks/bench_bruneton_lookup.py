@@ -1,0 +1,99 @@
+"""Lookup speed of the precomputed sky (issue 11 item 4), side by side with Mitsuba 3's LLVM Hosek-Wilkie.
+
+Measured in one run on the same 10^6 random upper-hemisphere directions (uniform in cos(zenith), the directions of
+``bench_hosek_wilkie.py``), best of ``--repeat``:
+
+* ``BrunetonSky.luminance`` / ``xyz`` on the default 16-wavelength tables (one observer: 2D table slices folded to
+  XYZ), and on the whole sphere (ground rays add a spectral transmittance and irradiance term each);
+* ``BrunetonSky.spectral_radiance`` at 41 wavelengths for 10^5 and 10^6 directions, with the peak memory of the
+  call (tracemalloc: numpy allocations);
+* a 2048 x 1024 environment map (``sky_image``, equirect, sun disc) and a 1024 x 768 camera view;
+* Mitsuba's ``sunsky`` in ``llvm_ad_rgb`` (child process of ``bench_hosek_wilkie.py``; needs ``DRJIT_LIBLLVM_PATH``
+  pointing at LLVM >= 16, see that file), numpy in and numpy out, and on device arrays.
+
+Usage: ``python benchmarks/bench_bruneton_lookup.py [--repeat N]``. The default tables are built (about 25 s) if
+they are not cached.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import subprocess
+import sys
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+
+
+def best_of(fn, repeat):
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def directions(n: int, sphere: bool = False) -> np.ndarray:
+    from skyscatter.conventions import direction_from_angles
+
+    rng = np.random.default_rng(0)
+    cos_z = rng.uniform(-1.0 if sphere else 0.0, 1.0, n)
+    return direction_from_angles(np.arccos(cos_z), rng.uniform(0, 2 * np.pi, n))
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=5, help="runs per figure (best is reported)")
+    args = ap.parse_args()
+
+    from skyscatter import BrunetonSky
+    from skyscatter.precomputed import cached_atmosphere
+    from skyscatter.render.bruneton import camera_view
+    from skyscatter.render.sky_image import sky_image
+
+    print(f"machine: {platform.machine()}, {os.cpu_count()} CPUs, python {platform.python_version()}, "
+          f"load average {os.getloadavg()[0]:.1f}")
+    atm = cached_atmosphere()
+    sky = BrunetonSky(math.radians(50.0), math.radians(140.0), atmosphere=atm)
+    n = 1_000_000
+    up, sphere = directions(n), directions(n, sphere=True)
+    sky.xyz(up[:1000])
+    for name, d, fn in (("BrunetonSky.luminance, upper hemisphere", up, sky.luminance),
+                        ("BrunetonSky.xyz, upper hemisphere", up, sky.xyz),
+                        ("BrunetonSky.xyz, whole sphere (half ground)", sphere, sky.xyz)):
+        t = best_of(lambda fn=fn, d=d: fn(d), args.repeat)
+        print(f"{name:48s} {n / t / 1e6:6.2f} M dir/s ({t * 1e9 / n:6.1f} ns/dir)")
+    for m in (100_000, 1_000_000):
+        d = up[:m]
+        t = best_of(lambda d=d: sky.spectral_radiance(d), max(1, args.repeat // 2))
+        tracemalloc.start()
+        sky.spectral_radiance(d)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        print(f"BrunetonSky.spectral_radiance, 41 wl, {m:>9d} dirs: {m / t / 1e6:6.2f} M dir/s, "
+              f"peak {peak / 2**20:6.0f} MiB (output {m * 41 * 8 / 2**20:.0f} MiB)")
+    t = best_of(lambda: sky_image(sky, projection="equirect", width=2048), args.repeat)
+    print(f"2048 x 1024 environment map (sky_image, equirect):  {t:.3f} s (target <= 1 s)")
+    t = best_of(lambda: camera_view(atm, math.radians(60), math.radians(180), altitude=1000.0,
+                                    heading=math.radians(180), pitch=math.radians(-10), fov=math.radians(90),
+                                    width=1024, height=768, include_sun=False), args.repeat)
+    print(f"1024 x 768 sky-and-ground camera view:               {t:.3f} s (target < 0.5 s)")
+
+    hw = Path(__file__).with_name("bench_hosek_wilkie.py")
+    run = subprocess.run([sys.executable, str(hw), "llvm_ad_rgb", str(n)], capture_output=True, text=True)
+    lines = [ln for ln in run.stdout.splitlines() if ln.startswith("mitsuba")]
+    if run.returncode == 0 and lines:
+        print(*lines, sep="\n")
+    else:
+        print(f"mitsuba llvm_ad_rgb: not measured (exit {run.returncode}; set DRJIT_LIBLLVM_PATH, see {hw.name})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
