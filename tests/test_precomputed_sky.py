@@ -242,7 +242,8 @@ def test_cli_precompute_rebuilds_a_corrupt_cache(monkeypatch, tmp_path, capsys):
     capsys.readouterr()
     (path,) = cache_dir().glob("*.npz")
     data = bytearray(path.read_bytes())
-    data[len(data) // 2: len(data) // 2 + 64] = bytes(64)
+    mid = len(data) // 2
+    data[mid:mid + 64] = bytes(b ^ 0xFF for b in data[mid:mid + 64])  # always a change (zeros may be there)
     path.write_bytes(bytes(data))
     clear_memory_cache()
     assert _cli(["precompute", *SMALL_CLI], monkeypatch, tmp_path) == 0

@@ -130,8 +130,8 @@ def _density_of(field, params, sizes, first=False, n_theta=16):
     t = np.ones((*sizes.transmittance_shape, 1), dtype=np.float32)
     e = np.zeros((*sizes.irradiance_shape, 1), dtype=np.float32)
     out = np.zeros_like(field)
-    n_r, _, n_s, _ = sizes.scattering_shape
-    parallel_for(kernels.scattering_density_kernel, n_r * n_s, t, field, field, first, e, np.zeros(1),
+    n_r = sizes.scattering_r
+    parallel_for(kernels.scattering_density_kernel, n_r, t, field, field, first, e, np.zeros(1),
                  params.rayleigh_scattering_at(wl), params.mie_scattering_at(wl), params.mie_phase_g,
                  aerosol_phase_kind(params.mie_phase_function), prof, counts,
                  params.bottom_radius, params.top_radius, params.mu_s_min, n_theta, out)

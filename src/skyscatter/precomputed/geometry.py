@@ -55,6 +55,7 @@ __all__ = [
     "irradiance_params",
     "lerp_index",
     "ray_hits_ground",
+    "scattering_nu_azimuth",
     "scattering_nu_coord",
     "scattering_nu_param",
     "scattering_params",
@@ -291,12 +292,17 @@ def scattering_nu_coord(mu: float, mu_s: float, nu: float, n_nu: int) -> float:
 
 
 @_jit
+def scattering_nu_azimuth(i_nu: int, n_nu: int) -> float:
+    """Azimuth ``phi`` [rad] between view and sun of texel index ``i_nu`` (``x_nu = 1 - phi / pi``)."""
+    return math.pi * (1.0 - i_nu / (n_nu - 1))
+
+
+@_jit
 def scattering_nu_param(i_nu: int, mu: float, mu_s: float, n_nu: int) -> float:
     """``nu`` of texel index ``i_nu`` for view and sun zenith cosines ``mu``, ``mu_s``; inverse of
     :func:`scattering_nu_coord`."""
     s = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
-    phi = math.pi * (1.0 - i_nu / (n_nu - 1))
-    return clamp(mu * mu_s + s * math.cos(phi), -1.0, 1.0)
+    return clamp(mu * mu_s + s * math.cos(scattering_nu_azimuth(i_nu, n_nu)), -1.0, 1.0)
 
 
 @_jit

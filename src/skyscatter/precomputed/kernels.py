@@ -39,6 +39,7 @@ from .geometry import (
     ray_hits_ground,
     scattering_mu_s_coord_a,
     scattering_mu_s_param,
+    scattering_nu_azimuth,
     scattering_nu_coord,
     scattering_nu_param,
     scattering_r_mu_params,
@@ -49,7 +50,6 @@ from .sampling import (
     density_at,
     exp_segment_weights,
     irradiance_lookup,
-    lookup4_cell,
     r_mu_cell,
     rayleigh_phase,
     scattering_lookup,
@@ -220,19 +220,6 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
                     mie[i_r, i_mu, i_s, i_n, k] = acc_m[k]
 
 
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _mie_row(vx, vy, vz, om, dom, g, mie_kind, p_m):
-    """Aerosol phase (``mie_kind``, :func:`skyscatter.atmosphere.phase.aerosol_phase_kind`) between one view
-    direction and every quadrature direction; returns its integral."""
-    n_m = 0.0
-    for w in range(om.shape[0]):
-        c = vx * om[w, 0] + vy * om[w, 1] + vz * om[w, 2]
-        pm = aerosol_phase(c, g, mie_kind)
-        p_m[w] = pm
-        n_m += pm * dom[w]
-    return n_m
-
-
 @numba.njit(cache=True)
 def _quadratic_form(m, vx, vy, vz):
     """v^T m v for a symmetric 3 x 3 matrix."""
@@ -268,27 +255,38 @@ def sphere_quadrature(n_theta, hemisphere):
 def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance, albedo, beta_r, beta_m, g,
                               mie_kind, profiles, counts, bottom, top, mu_s_min, n_theta, out, start, stop):
     """Scattering density J (Eq. 7) of one order into ``out`` (n_r, n_mu, n_mu_s, n_nu, n_wl) float32, for
-    flat (r, mu_s) indices ``start..stop``.
+    radius indices ``start..stop``.
 
     The incident radiance is the previous order: ``s_a P_R + s_b P_M`` (single Rayleigh and Mie tables)
     when ``first``, else the table ``s_a`` (multiple scattering, phase included); plus, for directions that
     meet the ground, the ground's reflection of ``ground_irradiance`` (Eqs. 6 and 10, Lambertian ``albedo``).
-    The sphere is sampled with ``n_theta x 2 n_theta`` midpoint directions; for each view direction the
-    phase-function weights are normalised to integrate to one on that grid, so a uniform radiance field is
-    scattered without loss or gain of energy even where the forward Mie peak is under-resolved. The Rayleigh
-    phase is a quadratic in ``v . w``, so its integral is ``3 / (16 pi) (M0 + v^T M2 v)`` with the radiance
-    moments ``M0 = sum L dw`` and ``M2 = sum w w^T L dw``: exact on the grid and without a loop per view.
+    The sphere is sampled with ``n_theta x 2 n_theta`` midpoint directions in a frame whose x axis points to
+    the sun's azimuth; for each view direction the phase-function weights are normalised to integrate to one
+    on that grid, so a uniform radiance field is scattered without loss or gain of energy even where the
+    forward Mie peak is under-resolved. The Rayleigh phase is a quadratic in ``v . w``, so its integral is
+    ``3 / (16 pi) (M0 + v^T M2 v)`` with the radiance moments ``M0 = sum L dw`` and ``M2 = sum w w^T L dw``:
+    exact on the grid and without a loop per view.
+
+    The view direction of texel (mu, nu) in that frame is ``(sin theta cos phi, sin theta sin phi, mu)`` with
+    ``phi`` the texel's view-sun azimuth (:func:`.geometry.scattering_nu_azimuth`), the same for every sun
+    zenith; so the aerosol phase between every texel's view and every quadrature direction is one matrix per
+    radius, and the Mie part of J for all sun zeniths and wavelengths is one matrix product (BLAS) with the
+    quadrature radiance.
     """
     n_r, n_mu, n_s, n_n, n_l = s_a.shape
     om, dom = sphere_quadrature(n_theta, False)
     n_om = om.shape[0]
+    n_v = n_mu * n_n
     inv_pi = 1.0 / PI
-    radiance = np.zeros((n_l, n_om))
+    radiance = np.zeros((n_s * n_l, n_om))
+    phase_m = np.empty((n_om, n_v))
+    view = np.empty((n_v, 3))
+    norm_m = np.empty(n_v)
+    norm_r = np.empty(n_v)
     buf = np.empty(n_l)
     e_buf = np.empty(n_l)
     t_buf = np.empty(n_l)
     tmp = np.empty(n_l)
-    p_m = np.empty(n_om)
     # Moments of the quadrature weights (normalisation of the Rayleigh phase on the grid).
     w0 = 0.0
     w2 = np.zeros((3, 3))
@@ -297,70 +295,74 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
         for a in range(3):
             for b in range(3):
                 w2[a, b] += om[w, a] * om[w, b] * dom[w]
-    m0 = np.zeros(n_l)
-    m2 = np.zeros((n_l, 3, 3))
+    m0 = np.zeros((n_s, n_l))
+    m2 = np.zeros((n_s, n_l, 3, 3))
     mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_s)
-    for idx in range(start, stop):
-        i_r = idx // n_s
-        i_s = idx % n_s
+    for i_r in range(start, stop):
         r, _, _ = scattering_r_mu_params(i_r, n_mu // 2, bottom, top, n_r, n_mu)
-        mu_s = mu_s_tab[i_s]
-        sx = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
-        for w in range(n_om):
-            wx = om[w, 0]
-            wz = om[w, 2]
-            nu_w = clamp(wx * sx + wz * mu_s, -1.0, 1.0)
-            hits = ray_hits_ground(r, wz, bottom)
-            for k in range(n_l):
-                buf[k] = 0.0
-            if first:
-                scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, rayleigh_phase(nu_w), buf)
-                scattering_lookup(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min,
-                                  aerosol_phase(nu_w, g, mie_kind), buf)
-            else:
-                scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, 1.0, buf)
-            if hits:
-                d_g = distance_to_bottom(r, wz, bottom)
-                mu_s_g = clamp((d_g * wx * sx + (r + d_g * wz) * mu_s) / bottom, -1.0, 1.0)
-                irradiance_lookup(ground_irradiance, bottom, mu_s_g, bottom, top, e_buf)
-                transmittance_segment(transmittance, r, wz, d_g, True, bottom, top, t_buf, tmp)
-                for k in range(n_l):
-                    buf[k] += t_buf[k] * albedo[k] * inv_pi * e_buf[k]
-            for k in range(n_l):
-                radiance[k, w] = buf[k] * dom[w]
-        m0[:] = 0.0
-        m2[:] = 0.0
-        for w in range(n_om):
-            for k in range(n_l):
-                lw = radiance[k, w]
-                m0[k] += lw
-                for a in range(3):
-                    for b in range(3):
-                        m2[k, a, b] += om[w, a] * om[w, b] * lw
-        rho_r = density_at(profiles[0], counts[0], r - bottom)
-        rho_m = density_at(profiles[1], counts[1], r - bottom)
         for i_mu in range(n_mu):
             _, mu, _ = scattering_r_mu_params(i_r, i_mu, bottom, top, n_r, n_mu)
             st = math.sqrt(max(1.0 - mu * mu, 0.0))
             for i_n in range(n_n):
-                nu = scattering_nu_param(i_n, mu, mu_s, n_n)
-                if st * sx > 1e-12:
-                    cphi = clamp((nu - mu * mu_s) / (st * sx), -1.0, 1.0)
-                else:
-                    cphi = 1.0
-                sphi = math.sqrt(max(1.0 - cphi * cphi, 0.0))
-                vx = st * cphi
-                vy = st * sphi
-                norm_m = _mie_row(vx, vy, mu, om, dom, g, mie_kind, p_m)
-                norm_r = w0 + _quadratic_form(w2, vx, vy, mu)
+                phi = scattering_nu_azimuth(i_n, n_n)
+                v = i_mu * n_n + i_n
+                vx = st * math.cos(phi)
+                vy = st * math.sin(phi)
+                view[v, 0] = vx
+                view[v, 1] = vy
+                view[v, 2] = mu
+                nm = 0.0
+                for w in range(n_om):
+                    pm = aerosol_phase(vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], g, mie_kind)
+                    phase_m[w, v] = pm
+                    nm += pm * dom[w]
+                norm_m[v] = nm
+                norm_r[v] = w0 + _quadratic_form(w2, vx, vy, mu)
+        m0[:] = 0.0
+        m2[:] = 0.0
+        for i_s in range(n_s):
+            mu_s = mu_s_tab[i_s]
+            sx = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+            for w in range(n_om):
+                wx = om[w, 0]
+                wz = om[w, 2]
+                nu_w = clamp(wx * sx + wz * mu_s, -1.0, 1.0)
+                hits = ray_hits_ground(r, wz, bottom)
                 for k in range(n_l):
-                    acc_r = m0[k] + _quadratic_form(m2[k], vx, vy, mu)
-                    acc_m = 0.0
-                    row = radiance[k]
-                    for w in range(n_om):
-                        acc_m += p_m[w] * row[w]
-                    out[i_r, i_mu, i_s, i_n, k] = (beta_r[k] * rho_r * acc_r / norm_r
-                                                   + beta_m[k] * rho_m * acc_m / norm_m)
+                    buf[k] = 0.0
+                if first:
+                    scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, rayleigh_phase(nu_w),
+                                      buf)
+                    scattering_lookup(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min,
+                                      aerosol_phase(nu_w, g, mie_kind), buf)
+                else:
+                    scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, 1.0, buf)
+                if hits:
+                    d_g = distance_to_bottom(r, wz, bottom)
+                    mu_s_g = clamp((d_g * wx * sx + (r + d_g * wz) * mu_s) / bottom, -1.0, 1.0)
+                    irradiance_lookup(ground_irradiance, bottom, mu_s_g, bottom, top, e_buf)
+                    transmittance_segment(transmittance, r, wz, d_g, True, bottom, top, t_buf, tmp)
+                    for k in range(n_l):
+                        buf[k] += t_buf[k] * albedo[k] * inv_pi * e_buf[k]
+                for k in range(n_l):
+                    lw = buf[k] * dom[w]
+                    radiance[i_s * n_l + k, w] = lw
+                    m0[i_s, k] += lw
+                    for a in range(3):
+                        for b in range(3):
+                            m2[i_s, k, a, b] += om[w, a] * om[w, b] * lw
+        mie = np.dot(radiance, phase_m)  # (n_s n_l, n_v): sum over quadrature directions of L dw P_M
+        rho_r = density_at(profiles[0], counts[0], r - bottom)
+        rho_m = density_at(profiles[1], counts[1], r - bottom)
+        for i_s in range(n_s):
+            for i_mu in range(n_mu):
+                for i_n in range(n_n):
+                    v = i_mu * n_n + i_n
+                    vx, vy, vz = view[v, 0], view[v, 1], view[v, 2]
+                    for k in range(n_l):
+                        acc_r = m0[i_s, k] + _quadratic_form(m2[i_s, k], vx, vy, vz)
+                        out[i_r, i_mu, i_s, i_n, k] = (beta_r[k] * rho_r * acc_r / norm_r[v]
+                                                       + beta_m[k] * rho_m * mie[i_s * n_l + k, v] / norm_m[v])
 
 
 @_kjit
@@ -419,8 +421,9 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     beta = np.empty((n_pts, n_l))
     tmp = np.empty(n_l)
     q = np.empty((n_pts, n_l))
-    val = np.empty(n_l)
-    acc = np.empty(n_l)
+    sl = np.empty((n_s, n_n, n_l))
+    acc = np.empty((n_s, n_n, n_l))
+    nu_tab = np.empty((n_s, n_n))
     big_a = mu_s_limit_a(mu_s_min, bottom, top)
     theta_max = math.acos(mu_s_min)
     mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_s)
@@ -431,6 +434,9 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
         d_end = distance_to_boundary(r, mu, hits, bottom, top)
         if d_end <= 0.0:
             continue
+        for i_s in range(n_s):
+            for i_n in range(n_n):
+                nu_tab[i_s, i_n] = scattering_nu_param(i_n, mu, mu_s_tab[i_s], n_n)
         for i in range(n_pts):
             d = ray_sample_distance(i, n_samples, d_end, mu, hits)
             dist[i] = d
@@ -456,13 +462,26 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
                                              dist[i + 1] - dist[i])
                 q[i, k] += ca * t_view[i, k]
                 q[i + 1, k] += cb * t_view[i + 1, k]
-        for i_s in range(n_s):
-            mu_s = mu_s_tab[i_s]
-            for i_n in range(n_n):
-                nu = scattering_nu_param(i_n, mu, mu_s, n_n)
-                for k in range(n_l):
-                    acc[k] = 0.0
-                for i in range(n_pts):
+        acc[:] = 0.0
+        for i in range(n_pts):
+            # The sample's (r, mu) cell is the same for every sun: interpolate the density over it once, into a
+            # slice over (mu_s, nu); each lookup is then bilinear (the same value as the quadrilinear one).
+            ir, wr, imu, wmu = cell_ir[i], cell_wr[i], cell_imu[i], cell_wmu[i]
+            c00 = (1.0 - wr) * (1.0 - wmu)
+            c01 = (1.0 - wr) * wmu
+            c10 = wr * (1.0 - wmu)
+            c11 = wr * wmu
+            for j_s in range(n_s):
+                for j_n in range(n_n):
+                    for k in range(n_l):
+                        sl[j_s, j_n, k] = (c00 * density[ir, imu, j_s, j_n, k]
+                                           + c01 * density[ir, imu + 1, j_s, j_n, k]
+                                           + c10 * density[ir + 1, imu, j_s, j_n, k]
+                                           + c11 * density[ir + 1, imu + 1, j_s, j_n, k])
+            for i_s in range(n_s):
+                mu_s = mu_s_tab[i_s]
+                for i_n in range(n_n):
+                    nu = nu_tab[i_s, i_n]
                     mu_s_i = (r * mu_s + dist[i] * nu) / rad[i]
                     if mu_s_i < mu_s_min:
                         continue
@@ -470,11 +489,14 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
                     p_s = scattering_mu_s_coord_a(mu_s_i, bottom, top, big_a, theta_max, n_s)
                     j_s, w_s = lerp_index(p_s, 0, n_s - 1)
                     j_n, w_n = lerp_index(scattering_nu_coord(mu_ray[i], mu_s_i, nu, n_n), 0, n_n - 1)
+                    a00 = (1.0 - w_s) * (1.0 - w_n)
+                    a01 = (1.0 - w_s) * w_n
+                    a10 = w_s * (1.0 - w_n)
+                    a11 = w_s * w_n
                     for k in range(n_l):
-                        val[k] = 0.0
-                    lookup4_cell(density, cell_ir[i], cell_wr[i], cell_imu[i], cell_wmu[i], j_s, w_s, j_n, w_n,
-                                 1.0, val)
-                    for k in range(n_l):
-                        acc[k] += q[i, k] * val[k]
+                        acc[i_s, i_n, k] += q[i, k] * (a00 * sl[j_s, j_n, k] + a01 * sl[j_s, j_n + 1, k]
+                                                       + a10 * sl[j_s + 1, j_n, k] + a11 * sl[j_s + 1, j_n + 1, k])
+        for i_s in range(n_s):
+            for i_n in range(n_n):
                 for k in range(n_l):
-                    out[i_r, i_mu, i_s, i_n, k] = acc[k]
+                    out[i_r, i_mu, i_s, i_n, k] = acc[i_s, i_n, k]

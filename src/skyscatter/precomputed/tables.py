@@ -391,7 +391,7 @@ class PrecomputedAtmosphere:
                 for k in range(2, orders + 1):
                     t0 = time.perf_counter()
                     dens = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
-                    parallel_for(kernels.scattering_density_kernel, n_r * n_s, t_c, prev_a, prev_b, first, e_prev,
+                    parallel_for(kernels.scattering_density_kernel, n_r, t_c, prev_a, prev_b, first, e_prev,
                                  albedo[ch], beta_r[ch], beta_m[ch], g, mie_kind, profiles, counts, bottom, top,
                                  mu_s_min, sz.density_sphere_samples, dens)
                     t1 = time.perf_counter()
