@@ -4,7 +4,9 @@ For the Earth defaults and a hazy atmosphere (``AtmosphereParameters.from_turbid
 wavelengths (440, 550, 680 nm), sun elevations +60 .. -6 deg and 15 view directions (elevations 2-90 deg at
 azimuths 0, 90 and 180 deg from the sun), it prints a Markdown table of the relative difference
 ``tables / MC - 1`` and its Monte Carlo standard error, and draws ``docs/images/montecarlo_vs_tables.png``.
-Table defaults: 4 orders, default sizes (cached on disk). Re-run after a change to the tables:
+Tables: the default orders (6 and the geometric tail) and sizes, computed at exactly these three wavelengths
+(``wavelengths="rgb"``: per-wavelength radiance, no colour rule involved; cached on disk). Re-run after a change
+to the tables:
 ``python benchmarks/compare_montecarlo_tables.py [--samples N] [--out docs/images/montecarlo_vs_tables.png]``.
 """
 
@@ -51,7 +53,7 @@ def main() -> None:
     results = {}
     t0 = time.perf_counter()
     for name, params in cases.items():
-        tables = cached_atmosphere(params, progress=False)
+        tables = cached_atmosphere(params, wavelengths="rgb", progress=False)
         pos = np.array([0.0, 0.0, params.bottom_radius])
         for se in SUN_ELEVATIONS:
             zen = math.radians(90.0 - se)
@@ -112,7 +114,8 @@ def main() -> None:
             if col == 0:
                 ax.set_ylabel("tables / MC - 1 at 550 nm [%]")
     axes[0, 2].legend(fontsize=7, ncol=2)
-    fig.suptitle("Precomputed tables (4 orders, default sizes) vs Monte Carlo reference; bars: 2 MC standard errors; "
+    fig.suptitle("Precomputed tables (6 orders + tail, default sizes) vs Monte Carlo reference; bars: 2 MC standard "
+                 "errors; "
                  "points beyond the axes are clipped")
     fig.savefig(args.out, dpi=110)
     print(f"wrote {args.out}")

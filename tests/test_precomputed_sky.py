@@ -106,9 +106,11 @@ def test_earth_shadow_at_dusk(atm):
     * luminance: the shadow band (1-3 deg elevation, ~33 cd/m^2) is less than 0.6 x the brightest sky above it
       (8-20 deg, ~82 cd/m^2, measured ratio 0.41), and the sky darkens again higher up (30 deg < 0.9 x that peak,
       measured 0.81);
-    * colour: the shadow is blue (440/680 nm radiance ratio > 1.5, measured 1.6-1.8), the band above it (the
-      Belt of Venus, lit by reddened sunlight) red (ratio < 0.7, measured 0.55 at 8 deg) and the sky above
-      turns blue again (ratio at 30 deg > 1.5 x the belt's, measured 2.2).
+    * colour: the shadow is blue (440/680 nm radiance ratio > 1.5, measured 2.2 at 2 deg), the band above it (the
+      Belt of Venus, lit by reddened sunlight) red (ratio < 0.8: the Monte Carlo reference gives 0.87 / 0.71 /
+      0.69 +- 0.04 at 8 / 10 / 12 deg, 32768 paths; the tables 0.82 / 0.72 / 0.73) and the sky above turns blue
+      again (ratio at 30 deg > 1.5 x the belt's: MC 1.15 / 0.69 = 1.7, tables 1.20 / 0.72 = 1.7).
+      With 4 orders and no tail of the later orders the belt came out too red (0.55): the bound was 0.7 then.
     A sky without the Earth's shadow (lit down to the horizon) brightens and reddens towards the horizon.
     """
     sky = BrunetonSky(math.radians(93), math.radians(270), atmosphere=atm)
@@ -123,7 +125,7 @@ def test_earth_shadow_at_dusk(atm):
     rad = sky.table_radiance(d)
     blue_red = rad[:, np.argmin(atm.wavelengths)] / rad[:, np.argmax(atm.wavelengths)]
     assert np.all(blue_red[:3] > 1.5)
-    assert blue_red[3:6].min() < 0.7
+    assert blue_red[3:6].min() < 0.8
     assert blue_red[8] > 1.5 * blue_red[3:8].min()
 
 

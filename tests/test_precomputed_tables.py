@@ -125,21 +125,19 @@ def test_vertical_single_scattering_closed_form(earth_single):
 
 
 def _density_of(field, params, sizes, first=False, n_theta=16):
-    prof, counts = _profiles(params)
-    wl = np.array([550.0])
+    """The phase-weighted radiances (Rayleigh, aerosol) of the scattering density kernel for ``field``."""
     t = np.ones((*sizes.transmittance_shape, 1), dtype=np.float32)
     e = np.zeros((*sizes.irradiance_shape, 1), dtype=np.float32)
-    out = np.zeros_like(field)
-    n_r = sizes.scattering_r
-    parallel_for(kernels.scattering_density_kernel, n_r, t, field, field, first, e, np.zeros(1),
-                 params.rayleigh_scattering_at(wl), params.mie_scattering_at(wl), params.mie_phase_g,
-                 aerosol_phase_kind(params.mie_phase_function), prof, counts,
-                 params.bottom_radius, params.top_radius, params.mu_s_min, n_theta, out)
-    return out
+    out_r, out_m = np.zeros_like(field), np.zeros_like(field)
+    parallel_for(kernels.scattering_density_kernel, sizes.scattering_r, t, field, field, first, e, np.zeros(1),
+                 params.mie_phase_g, aerosol_phase_kind(params.mie_phase_function), params.bottom_radius,
+                 params.top_radius, params.mu_s_min, n_theta, out_r, out_m)
+    return out_r, out_m
 
 
 def test_scattering_density_of_uniform_field():
-    """J (Eq. 7) of a uniform radiance L0 is beta_s(r) L0 (energy conservation, 1e-5).
+    """J (Eq. 7) of a uniform radiance L0 is beta_s(r) L0 (energy conservation, 1e-5): both phase-weighted
+    radiances of the kernel (J per unit Rayleigh and per unit aerosol scattering coefficient) equal L0.
 
     The former check with a field linear in nu (which the old nu axis, (1 + nu) / 2 with clamped texels,
     represented exactly) no longer applies: the nu axis is now the view-sun azimuth, and the ground half of the mu
@@ -147,16 +145,10 @@ def test_scattering_density_of_uniform_field():
     direction of downward rays near the ground. The angular integration of a forward-peaked field is checked end
     to end against DISORT in test_precomputed_disort.py."""
     sizes = TableSizes(**TINY)
-    p = EARTH
-    n_r = sizes.scattering_r
-    h = np.array([math.sqrt((math.sqrt(p.top_radius**2 - p.bottom_radius**2) * i / (n_r - 1)) ** 2
-                            + p.bottom_radius**2) - p.bottom_radius for i in range(n_r)])
-    wl = np.array([550.0])
-    b_r = (p.rayleigh_scattering_at(wl) * p.rayleigh_density(h))[:, None, None, None]
-    b_m = (p.mie_scattering_at(wl) * p.mie_density(h))[:, None, None, None]
     uniform = np.full((*sizes.scattering_shape, 1), 2.0, dtype=np.float32)
-    j = _density_of(uniform, p, sizes)[..., 0]
-    np.testing.assert_allclose(j, 2.0 * (b_r + b_m) * np.ones_like(j), rtol=1e-5)
+    j_r, j_m = _density_of(uniform, EARTH, sizes)
+    np.testing.assert_allclose(j_r, 2.0, rtol=1e-5)
+    np.testing.assert_allclose(j_m, 2.0, rtol=1e-5)
 
 
 # ------------------------------------------------------------------------------------------ tables vs integration

@@ -54,7 +54,9 @@ def add_atmosphere_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--max-sun-zenith", type=float_in(102.0, 180.0), default=102.0, metavar="DEG",
                    help="largest sun zenith angle tabulated [deg]; the sky is dark beyond it")
     t = p.add_argument_group("tables")
-    t.add_argument("--orders", type=positive_int, default=4, metavar="N", help="scattering orders")
+    t.add_argument("--orders", type=positive_int, default=6, metavar="N",
+                   help="scattering orders computed one by one; from 3 on the later orders are added as their "
+                        "geometric tail (docs/bruneton.md)")
     t.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="LIST",
                    help="wavelengths [nm]: 'spectral' (the default: 400:700:20, 16 wavelengths, colour within "
                         "delta-xy 0.003 of a 41-wavelength computation), 'rgb' (680,550,440: faster, wrong colour "

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import FileFormatError, InvalidParameterError, OutputError
 from .parameters import AtmosphereParameters
-from .tables import PrecomputedAtmosphere, TableSizes, _as_wavelengths, cache_key
+from .tables import DEFAULT_ORDERS, PrecomputedAtmosphere, TableSizes, _as_wavelengths, cache_key
 
 __all__ = ["CacheRebuildWarning", "TableBuildWarning", "cache_dir", "cache_path", "cached_atmosphere",
            "check_cache_dir", "clear_memory_cache", "load_or_compute", "resolve_atmosphere"]
@@ -62,7 +62,7 @@ def clear_memory_cache() -> None:
     _MEMORY.clear()
 
 
-def cached_atmosphere(params: AtmosphereParameters | None = None, *, orders: int = 4,
+def cached_atmosphere(params: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
                       wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
                       progress: bool | None = None) -> PrecomputedAtmosphere:
     """Tables for ``params`` from memory, from the disk cache, or computed and then cached.
@@ -75,7 +75,7 @@ def cached_atmosphere(params: AtmosphereParameters | None = None, *, orders: int
     return load_or_compute(params, orders=orders, wavelengths=wavelengths, sizes=sizes, progress=progress)[0]
 
 
-def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int = 4,
+def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
                     wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
                     progress: bool | None = None, force: bool = False,
                     require_saved: bool = False) -> tuple[PrecomputedAtmosphere, bool]:

@@ -19,6 +19,17 @@ by ``P_R`` of the looked-up ``nu`` do not cancel, which skews multiple scatterin
 Tables are float32 with a trailing wavelength axis: transmittance (n_r, n_mu), irradiance (n_r, n_mu_s),
 scattering (n_r, n_mu, n_mu_s, n_nu).
 
+Orders. Each order of the radiance field is, after a few orders, close to the previous one times a constant
+``lambda < 1`` (the dominant eigenvalue of the scattering operator with the ground's reflection: successive
+orders settle on its eigenfunction), so the orders after the last computed one ``K`` sum to
+``DS_K lambda / (1 - lambda)``. From ``orders >= 3`` on this tail is added to the scattering and to the irradiance
+table, with ``lambda`` per wavelength the ratio of the sums of the last two orders' tables (at most
+:data:`MAX_ORDER_RATIO`). Measured against 16 orders computed one by one (400 and 550 nm, largest error over
+sky and ground, sun 60 / 10 / -3 deg): Earth defaults, 4 orders without the tail 4.3 / 6.7 / 13.8 %, 6 orders with
+it 0.00 / 0.01 / 0.26 %; turbidity 3 over albedo 0.3, 23 / 34 / 43 % and 0.15 / 0.22 / 2.2 %; against DISORT,
+aerosol optical depth 0.5 over albedo 0.8, 6 orders with the tail are within 0.9 % of 16 orders
+(``docs/bruneton.md``). Four orders are too few for the tail (the shape has not settled: +10 % in that case).
+
 Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
 doi:10.1111/j.1467-8659.2008.01245.x.
 """
@@ -60,8 +71,12 @@ DEFAULT_TABLE_WAVELENGTHS = tuple(float(w) for w in range(400, 701, 20))
 RGB_TABLE_WAVELENGTHS = (440.0, 550.0, 680.0)
 #: Names accepted for ``wavelengths``: ``"spectral"`` (the default) and ``"rgb"`` (the 3-wavelength mode).
 NAMED_WAVELENGTHS = {"spectral": DEFAULT_TABLE_WAVELENGTHS, "rgb": RGB_TABLE_WAVELENGTHS}
+#: Scattering orders computed by default; the rest is the geometric tail (module docstring, "Orders").
+DEFAULT_ORDERS = 6
+#: Largest ratio of successive orders used for the tail (a bound against a noisy estimate: 1 would be infinite).
+MAX_ORDER_RATIO = 0.95
 #: Version of the table layout and algorithm; part of the cache key and checked by :meth:`load`.
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 _TABLE_NAMES = ("transmittance", "irradiance", "single_rayleigh", "single_mie", "multiple")
 
 
@@ -289,7 +304,7 @@ class PrecomputedAtmosphere:
     # ------------------------------------------------------------------ computation
 
     @classmethod
-    def compute(cls, params: AtmosphereParameters | None = None, *, orders: int = 4,
+    def compute(cls, params: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
                 wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
                 progress: bool | None = None, chunk_size: int | None = None) -> PrecomputedAtmosphere:
         """Run Algorithm 4.1 (Bruneton & Neyret 2008) and return the tables.
@@ -299,7 +314,9 @@ class PrecomputedAtmosphere:
         params : AtmosphereParameters, optional
             The atmosphere (default: Earth, see :class:`AtmosphereParameters`).
         orders : int
-            Number of scattering orders (>= 1; default 4).
+            Scattering orders computed one by one (>= 1; default 6); from 3 on, the orders beyond the last are
+            added as their geometric tail (module docstring, "Orders"). Bruneton & Neyret's 4 orders without
+            the tail leave out 4-14 % of the Earth sky's radiance and up to 43 % with haze over a bright ground.
         wavelengths : array_like or str, optional
             Wavelengths [nm]. Default (or ``"spectral"``): :data:`DEFAULT_TABLE_WAVELENGTHS`, 16 wavelengths
             400-700 nm, the spectral mode (15 or more wavelengths: colour and spectra interpolated between the
@@ -311,8 +328,8 @@ class PrecomputedAtmosphere:
             tqdm progress bar per scattering order (default: when stderr is a terminal).
         chunk_size : int, optional
             Wavelengths computed together. Most of the work is geometry shared by all wavelengths of a chunk,
-            so larger chunks are faster; memory grows with them (about 6 x 4 bytes per texel of the 4D tables
-            and wavelength). Default: as many as fit in 512 MB of working tables (20 with the default sizes).
+            so larger chunks are faster; memory grows with them (about 7 x 4 bytes per texel of the 4D tables
+            and wavelength). Default: as many as fit in 512 MB of working tables (17 with the default sizes).
         """
         from tqdm.auto import tqdm
 
@@ -329,7 +346,7 @@ class PrecomputedAtmosphere:
         _check_colour_range(params, wl)
         sz = TableSizes.coerce(sizes)
         if chunk_size is None:
-            chunk_size = max(1, int(512e6 // (24 * math.prod(sz.scattering_shape))))
+            chunk_size = max(1, int(512e6 // (28 * math.prod(sz.scattering_shape))))
         if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
             raise InvalidParameterError(f"chunk_size must be a whole number >= 1; got {chunk_size!r}")
         bottom, top, mu_s_min = params.bottom_radius, params.top_radius, params.mu_s_min
@@ -374,6 +391,7 @@ class PrecomputedAtmosphere:
             return e_dir, s_r, s_m
 
         chunks = [np.arange(i, min(i + chunk_size, nl)) for i in range(0, nl, chunk_size)]
+        tail_ratio = np.zeros(nl)
         with tqdm(total=orders * len(chunks), desc="scattering orders", unit="order",
                   disable=not _progress_enabled(progress), leave=False) as bar:
             for ch in chunks:
@@ -388,12 +406,14 @@ class PrecomputedAtmosphere:
                 bar.set_postfix_str(f"order 1: {dt:.1f} s")
                 bar.update(1)
                 prev_a, prev_b, first, e_prev = s1_r, s1_m, True, e_direct
+                sums: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
                 for k in range(2, orders + 1):
                     t0 = time.perf_counter()
-                    dens = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
+                    dens_r = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
+                    dens_m = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
                     parallel_for(kernels.scattering_density_kernel, n_r, t_c, prev_a, prev_b, first, e_prev,
-                                 albedo[ch], beta_r[ch], beta_m[ch], g, mie_kind, profiles, counts, bottom, top,
-                                 mu_s_min, sz.density_sphere_samples, dens)
+                                 albedo[ch], g, mie_kind, bottom, top, mu_s_min, sz.density_sphere_samples, dens_r,
+                                 dens_m)
                     t1 = time.perf_counter()
                     d_irr = np.zeros((*sz.irradiance_shape, nc), dtype=np.float32)
                     parallel_for(kernels.indirect_irradiance_kernel, n_irr, prev_a, prev_b, first, g, mie_kind,
@@ -401,10 +421,12 @@ class PrecomputedAtmosphere:
                     irr_c += d_irr
                     t2 = time.perf_counter()
                     d_scat = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
-                    parallel_for(kernels.multiple_scattering_kernel, n_r * n_mu, t_c, dens, beta_r[ch],
+                    parallel_for(kernels.multiple_scattering_kernel, n_r * n_mu, t_c, dens_r, dens_m, beta_r[ch],
                                  beta_m[ch], profiles, counts, bottom, top, mu_s_min, sz.ray_samples, d_scat)
-                    del dens
+                    del dens_r, dens_m
                     mult_c += d_scat
+                    sums.append((d_scat.sum(axis=(0, 1, 2, 3), dtype=np.float64),
+                                 d_irr.sum(axis=(0, 1), dtype=np.float64)))
                     t3 = time.perf_counter()
                     for label, dt in ((f"order {k} density", t1 - t0), (f"order {k} irradiance", t2 - t1),
                                       (f"order {k} multiple", t3 - t2)):
@@ -412,11 +434,21 @@ class PrecomputedAtmosphere:
                     bar.set_postfix_str(f"order {k}: {t3 - t0:.1f} s")
                     bar.update(1)
                     prev_a, prev_b, first, e_prev = d_scat, d_scat, False, d_irr
+                if orders >= 3:
+                    # The orders beyond the last: geometric tail (module docstring, "Orders").
+                    for table, last, (now, before) in ((mult_c, d_scat, (sums[-1][0], sums[-2][0])),
+                                                       (irr_c, d_irr, (sums[-1][1], sums[-2][1]))):
+                        ratio = np.clip(np.divide(now, before, out=np.zeros_like(now), where=before > 0), 0.0,
+                                        MAX_ORDER_RATIO)
+                        table += last * (ratio / (1.0 - ratio)).astype(np.float32)
+                        tail_ratio[ch] = np.maximum(tail_ratio[ch], ratio)
                 single_rayleigh[..., ch] = s1_r
                 single_mie[..., ch] = s1_m
                 multiple[..., ch] = mult_c
                 irradiance[..., ch] = irr_c
         timings["total"] = time.perf_counter() - t_start
+        if orders >= 3:
+            timings["tail ratio (largest)"] = float(tail_ratio.max())
         tables = {"transmittance": transmittance, "irradiance": irradiance, "single_rayleigh": single_rayleigh,
                   "single_mie": single_mie, "multiple": multiple}
         return cls(params, wl, sz, orders, tables, timings)
