@@ -1,8 +1,8 @@
 """Colour and luminance error of the Bruneton tables' default wavelengths and of the 3-wavelength mode (issue 11).
 
 The reference is the CIE 1931 observer integral (``skyscatter.spectral.spectrum_to_xyz``, trapezoid on the
-samples) of the same atmosphere computed at 41 wavelengths, 380-780 nm every 10 nm, default table sizes,
-4 orders. The default wavelengths (``DEFAULT_TABLE_WAVELENGTHS``, 400-700 nm every 20 nm) and the 3-wavelength
+samples) of the same atmosphere computed at 41 wavelengths, 380-780 nm every 10 nm, default table sizes and
+orders. The default wavelengths (``DEFAULT_TABLE_WAVELENGTHS``, 400-700 nm every 20 nm) and the 3-wavelength
 mode (``RGB_TABLE_WAVELENGTHS``, 440/550/680 nm) are subsets of that grid. Each wavelength's tables are computed
 independently of the others (chunks share only geometry; ``tests/test_bruneton_colour_default.py`` checks that a
 subset of a computation equals a separate computation), so by default the two are sliced out of the 41-wavelength
