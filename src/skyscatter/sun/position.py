@@ -3,12 +3,12 @@
 Two methods:
 
 ``"spa"`` (default)
-    The NREL Solar Position Algorithm (Reda & Andreas 2004, corrigendum 2007) as implemented by pvlib
-    (``pvlib.spa.solar_position``, the numpy code path of ``pvlib.solarposition.get_solarposition(...,
-    method='nrel_numpy')``); about 0.0003 deg uncertainty over -2000..6000. By default the zenith is the
-    *apparent* topocentric zenith, i.e. corrected for atmospheric refraction with the site's pressure and
-    temperature (``apparent=False`` gives the geometric one); near the horizon they differ by about 0.5 deg.
-    Delta T (TT - UT1) defaults to pvlib's polynomial for the date (``pvlib.spa.calculate_deltat``).
+    The NREL Solar Position Algorithm (Reda & Andreas 2004, corrigendum 2007), in numpy in
+    :mod:`skyscatter.sun.spa` (equal to pvlib's ``pvlib.spa.solar_position`` to 1e-8 deg in the tests); about
+    0.0003 deg uncertainty over -2000..6000. By default the zenith is the *apparent* topocentric zenith, i.e.
+    corrected for atmospheric refraction with the site's pressure and temperature (``apparent=False`` gives the
+    geometric one); near the horizon they differ by about 0.5 deg. Delta T (TT - UT1) defaults to Espenak &
+    Meeus's polynomial for the date (:func:`skyscatter.sun.spa.delta_t_espenak_meeus`, pvlib's rule too).
 
 ``"preetham1999"``
     The approximation of Preetham, Shirley & Smits (1999), Appendix A.6: solar time from the local standard
@@ -156,16 +156,15 @@ def _utc_year_month(unix: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDA
 
 
 def _spa(unix, lat, lon, *, altitude, pressure, temperature, delta_t, apparent):
-    from pvlib import spa
+    from .spa import delta_t_espenak_meeus, spa_solar_position
 
     if delta_t is None:
-        delta_t = spa.calculate_deltat(*_utc_year_month(unix))
-    result = spa.solar_position(
-        unix, np.degrees(lat), np.degrees(lon), altitude, pressure / 100.0, temperature, delta_t, 0.5667
+        delta_t = delta_t_espenak_meeus(*_utc_year_month(unix))
+    apparent_zenith, zenith, azimuth = spa_solar_position(
+        unix, np.degrees(lat), np.degrees(lon), elevation=altitude, pressure=pressure / 100.0,
+        temperature=temperature, delta_t=delta_t, refraction=0.5667,
     )
-    # rows: apparent zenith, zenith, elevation, apparent elevation, azimuth, equation of time [deg, min]
-    zenith = result[0] if apparent else result[1]
-    return np.radians(zenith), np.radians(result[4])
+    return np.radians(apparent_zenith if apparent else zenith), np.radians(azimuth)
 
 
 def _preetham1999(unix, offset, lat, lon):
@@ -215,7 +214,7 @@ def sun_position(
     when : datetime.datetime, pandas.Timestamp, pandas.DatetimeIndex or array_like of datetime
         Timezone-aware time(s). Naive times are refused.
     method : {"spa", "preetham1999"}
-        NREL SPA through pvlib, or the approximation of Preetham et al. (1999) A.6 (module docstring).
+        NREL SPA (:mod:`skyscatter.sun.spa`), or the approximation of Preetham et al. (1999) A.6 (module docstring).
     altitude : float
         Site height above sea level [m] (SPA only).
     pressure : float
@@ -223,7 +222,7 @@ def sun_position(
     temperature : float
         Mean air temperature at the site [deg C], for the refraction correction (SPA only).
     delta_t : float, optional
-        TT - UT1 [s] (SPA only); default: pvlib's estimate for the date.
+        TT - UT1 [s] (SPA only); default: Espenak & Meeus's polynomial for the date (UTC year and month).
     apparent : bool
         SPA only: return the refraction-corrected (apparent) zenith (default) or the geometric one.
 
