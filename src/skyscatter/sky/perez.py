@@ -17,9 +17,9 @@ Sky parameters from irradiance (Perez et al. 1990): clearness (Eq. 1)
 ``delta = D_h m / I_0``, with D_h the diffuse horizontal and I_n the direct normal irradiance [W m^-2], m the
 relative optical air mass (Kasten 1966, :func:`skyscatter.atmosphere.airmass.relative_optical_mass`) and
 I_0 the extraterrestrial normal irradiance (1367 W m^-2 times Spencer's 1971 eccentricity factor,
-:func:`extraterrestrial_irradiance`). Illuminance from irradiance uses the luminous efficacy models of Perez et al. 1990, Table 4
-(``skyscatter/data/perez1990_luminous_efficacy.csv``), with the precipitable water ``W = exp(0.07 T_d -
-0.075)`` [cm] from the surface dew point T_d [deg C] (Eq. 3).
+:func:`extraterrestrial_irradiance`). Illuminance from irradiance uses the luminous efficacy models of
+Perez et al. 1990, Table 4 (``skyscatter/data/perez1990_luminous_efficacy.csv``), with the precipitable water
+``W = exp(0.07 T_d - 0.075)`` [cm] from the surface dew point T_d [deg C] (Eq. 3).
 
 Guards (on by default, ``guards=False`` turns them off; each is what Radiance's gendaylit/gendaymtx apply):
 
