@@ -138,8 +138,11 @@ class SkyMatrix:
     ----------
     luminance : ndarray, shape (n_hours, n_patches)
         Mean patch luminance [cd m^-2] (sky; plus the sun's share if ``include_sun``).
-    times : pandas.DatetimeIndex
-        Middle of each hour, local standard time of the file.
+    unix_time : ndarray, shape (n_hours,)
+        Middle of each hour (record) as Unix time [s since 1970-01-01T00:00 UTC]; :attr:`times` gives them as a
+        pandas ``DatetimeIndex`` in the file's standard time, :meth:`iso_times` as ISO 8601 text.
+    utc_offset_hours : float
+        The file's standard time minus UTC [h].
     sun_zenith, sun_azimuth : ndarray, shape (n_hours,)
         SPA sun position at mid-hour [rad] (azimuth from north towards east).
     epsilon, delta : ndarray
@@ -153,7 +156,8 @@ class SkyMatrix:
     """
 
     luminance: NDArray[np.float64]
-    times: object
+    unix_time: NDArray[np.float64]
+    utc_offset_hours: float
     sun_zenith: NDArray[np.float64]
     sun_azimuth: NDArray[np.float64]
     epsilon: NDArray[np.float64]
@@ -164,6 +168,26 @@ class SkyMatrix:
     location: EPWLocation
     include_sun: bool
     samples: int
+
+    @property
+    def times(self):
+        """Middle of each hour (record): tz-aware ``pandas.DatetimeIndex`` in the file's standard time."""
+        import datetime as dt
+
+        import pandas as pd
+
+        ns = np.round(self.unix_time * 1e3).astype(np.int64) * 1_000_000  # whole milliseconds, exactly
+        tz = dt.timezone(dt.timedelta(hours=self.utc_offset_hours))
+        return pd.DatetimeIndex(ns.astype("datetime64[ns]")).tz_localize("UTC").tz_convert(tz)
+
+    def iso_times(self) -> NDArray[np.str_]:
+        """Middle of each hour (record) as ISO 8601 text in the file's standard time, e.g.
+        ``2023-06-20T00:30:00+01:00`` (to the second: EPW records give whole seconds)."""
+        offset_s = round(self.utc_offset_hours * 3600.0)
+        local = np.round(self.unix_time + offset_s).astype(np.int64).astype("datetime64[s]")
+        sign = "-" if offset_s < 0 else "+"
+        minutes = abs(offset_s) // 60
+        return np.char.add(np.datetime_as_string(local, unit="s"), f"{sign}{minutes // 60:02d}:{minutes % 60:02d}")
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -200,7 +224,7 @@ class SkyMatrix:
             np.savez(
                 fh,
                 luminance=self.luminance.astype(np.float32),
-                times=np.asarray([t.isoformat() for t in self.times]),
+                times=self.iso_times(),
                 sun_zenith=self.sun_zenith,
                 sun_azimuth=self.sun_azimuth,
                 epsilon=self.epsilon,
@@ -227,7 +251,7 @@ class SkyMatrix:
 
     def _write_csv(self, tmp: Path) -> None:
         header = "time," + ",".join(f"patch_{i}" for i in range(self.scheme.n_patches))
-        stamps = [t.isoformat() for t in self.times]
+        stamps = self.iso_times().tolist()
         zero_row = ",".join(["0"] * self.scheme.n_patches)
         with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
             fh.write(header + "\n")
@@ -350,7 +374,7 @@ def skymatrix(
         Unknown scheme or bad options.
     """
     from .sky.perez import MIN_SUN_ZENITH, perez_parameters
-    from .sun.position import sun_position
+    from .sun.position import sun_position_unix
 
     geom = _check_scheme(scheme)
     if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 16:
@@ -364,8 +388,8 @@ def skymatrix(
         epw = epw.hourly()
     _check_irradiance(epw)
     loc = epw.location
-    times = epw.times()  # middle of each record's interval
-    pos = sun_position(loc.latitude, loc.longitude, times, altitude=loc.elevation)
+    unix_time = epw.unix_times()  # middle of each record's interval
+    pos = sun_position_unix(loc.latitude, loc.longitude, unix_time, altitude=loc.elevation)
     zen = np.asarray(pos.zenith, dtype=float)
     azi = np.asarray(pos.azimuth, dtype=float)
     n = len(epw)
@@ -418,7 +442,8 @@ def skymatrix(
             add_sun_to_patches(lum, sunny, direction_from_angles(model_zenith, azi[sunny]), e_sun[sunny], geom)
     return SkyMatrix(
         luminance=lum,
-        times=times,
+        unix_time=unix_time,
+        utc_offset_hours=float(loc.timezone_hours),
         sun_zenith=zen,
         sun_azimuth=azi,
         epsilon=eps,

@@ -45,11 +45,11 @@ import sys
 from typing import Any, NamedTuple
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 
-__all__ = ["SunPosition", "sun_position"]
+__all__ = ["SunPosition", "sun_position", "sun_position_unix"]
 
 _METHODS = ("spa", "preetham1999")
 _NAIVE_HINT = (
@@ -237,12 +237,49 @@ def sun_position(
     InvalidParameterError
         Naive or unreadable times, a site outside the allowed ranges, or an unknown method.
     """
+    unix, offset, shape = _times(when)
+    return _position(latitude, longitude, unix, offset, shape, method=method, altitude=altitude,
+                     pressure=pressure, temperature=temperature, delta_t=delta_t, apparent=apparent)
+
+
+def sun_position_unix(
+    latitude: float,
+    longitude: float,
+    unix_seconds: ArrayLike,
+    *,
+    utc_offset: ArrayLike = 0.0,
+    method: str = "spa",
+    altitude: float = 0.0,
+    pressure: float = 101325.0,
+    temperature: float = 12.0,
+    delta_t: float | None = None,
+    apparent: bool = True,
+) -> SunPosition:
+    """:func:`sun_position` for instants given as Unix time: seconds since 1970-01-01T00:00 UTC.
+
+    For callers that hold many times as numbers (an EPW file's records): no datetime objects and no pandas.
+    ``utc_offset`` [s] (local standard time minus UTC, broadcast against the times) is used by the
+    ``"preetham1999"`` method only (its day of the year is the local one). Other arguments and the result as in
+    :func:`sun_position`; the result has the shape of ``unix_seconds`` (floats for a scalar).
+    """
+    unix = np.asarray(unix_seconds, dtype=float)
+    if not np.all(np.isfinite(unix)):
+        raise InvalidParameterError("unix_seconds must be finite numbers of seconds since 1970-01-01 UTC")
+    offset = np.broadcast_to(np.asarray(utc_offset, dtype=float), unix.shape).reshape(-1)
+    if not np.all(np.isfinite(offset)):
+        raise InvalidParameterError("utc_offset must be finite seconds")
+    return _position(latitude, longitude, unix.reshape(-1), offset, unix.shape if unix.ndim else None,
+                     method=method, altitude=altitude, pressure=pressure, temperature=temperature,
+                     delta_t=delta_t, apparent=apparent)
+
+
+def _position(latitude, longitude, unix, offset, shape, *, method, altitude, pressure, temperature, delta_t,
+              apparent) -> SunPosition:
     if method not in _METHODS:
         raise InvalidParameterError(
             f"unknown sun-position method {method!r}; choose one of {', '.join(_METHODS)}"
         )
     lat, lon = _site(latitude, longitude)
-    unix, offset, shape = _times(when)
     if method == "spa":
         if not np.isfinite(altitude):
             raise InvalidParameterError(f"altitude must be a finite height in m; got {altitude!r}")
