@@ -291,16 +291,14 @@ def read_epw(path: str | os.PathLike[str]) -> EPWData:
     body = [(n + 1, line) for n, line in enumerate(lines[first:], start=first) if line.strip()]
     if not body:
         raise FileFormatError(f"{p}: has no data records after the 8 header lines")
-    rows = []
-    for line_no, line in body:
-        fields = line.split(",")
-        if len(fields) != N_FIELDS:
-            raise _fail(p, line_no, f"a data record has {N_FIELDS} comma-separated fields; found {len(fields)}")
-        rows.append(fields)
+    texts = [b[1] for b in body]
+    if any(t.count(",") != N_FIELDS - 1 for t in texts):
+        line_no, line = next(b for b in body if b[1].count(",") != N_FIELDS - 1)
+        raise _fail(p, line_no, f"a data record has {N_FIELDS} comma-separated fields; found {line.count(',') + 1}")
     line_numbers = np.array([b[0] for b in body], dtype=np.int64)
-    parsed = _parse_fast(rows)
+    parsed = _parse_fast(texts)
     if parsed is None:  # something is wrong: the field-by-field reader finds it and names the line
-        parsed = _parse_checked(p, rows, line_numbers)
+        parsed = _parse_checked(p, [t.split(",") for t in texts], line_numbers)
     ints, values = parsed
     year, month, day, hour, minute = (ints[:, k] for k in range(5))
     _check_dates(p, year, month, day, hour, line_numbers)
@@ -327,13 +325,18 @@ _INT_COLUMNS = (0, 1, 2, 3, 4)  # year, month, day, hour, minute
 _VALUE_COLUMNS = tuple(f[0] for f in _FIELDS)
 
 
-def _parse_fast(rows: list[list[str]]):
-    """(ints (n, 5), values (n, len(_FIELDS))) converted in bulk, or None if any field needs a closer look."""
+def _parse_fast(texts: list[str]):
+    """(ints (n, 5), values (n, len(_FIELDS))) converted in bulk, or None if any field needs a closer look.
+
+    Every record has N_FIELDS fields (checked before): the file's fields are split in one pass and each column
+    needed is a stride of that list.
+    """
+    tokens = ",".join(texts).split(",")
     try:
-        raw = np.array([[r[k] for k in _INT_COLUMNS + _VALUE_COLUMNS] for r in rows], dtype=float)
+        raw = np.array([tokens[k::N_FIELDS] for k in _INT_COLUMNS + _VALUE_COLUMNS], dtype=float).T
     except ValueError:
         return None
-    ints_f, values = raw[:, :5], raw[:, 5:]
+    ints_f, values = raw[:, :5], np.ascontiguousarray(raw[:, 5:])
     if not (np.all(np.isfinite(raw)) and np.all(ints_f == np.round(ints_f))
             and np.all((ints_f[:, 0] >= YEAR_RANGE[0]) & (ints_f[:, 0] <= YEAR_RANGE[1]))
             and np.all((ints_f[:, 4] >= 0) & (ints_f[:, 4] <= 60))):

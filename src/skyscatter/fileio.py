@@ -15,7 +15,6 @@ from __future__ import annotations
 import contextlib
 import os
 import re
-import secrets
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -136,7 +135,7 @@ def _new_temp(target: Path, kind: str) -> Path:
     """Create an empty temporary file beside ``target`` with the permissions ``open()`` would give it."""
     folder = _folder(target)
     for _ in range(100):
-        name = f".{target.name}.{os.getpid()}.{secrets.token_hex(6)}.{kind}{target.suffix}"
+        name = f".{target.name}.{os.getpid()}.{os.urandom(6).hex()}.{kind}{target.suffix}"
         tmp = folder / name
         try:
             # mode 0o666 filtered by the process umask, as a plain open() does; no umask toggling.

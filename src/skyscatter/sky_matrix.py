@@ -5,7 +5,7 @@ The job Radiance's ``gendaymtx`` does, vectorised over hours:
 1. read the EPW file (:func:`skyscatter.epw.read_epw`): site, time zone, hourly direct normal and diffuse
    horizontal irradiance and dew point;
 2. the sun for every hour at the middle of the hour the EPW values average over (file hour - 30 min, local
-   standard time), NREL SPA through :func:`skyscatter.sun.position.sun_position` (apparent zenith, the site
+   standard time), NREL SPA through :func:`skyscatter.sun.position.sun_position_unix` (apparent zenith, the site
    elevation as altitude);
 3. the Perez sky of every hour with :func:`skyscatter.sky.perez.perez_parameters` (clearness and brightness from
    the irradiances, Perez 1990 luminous efficacies with the hour's dew point, all the guards of

@@ -13,116 +13,82 @@
 
 Every function takes wavelengths in nm and angles in radians and returns SI coefficients (m^-1, m^-1 sr^-1,
 sr^-1). Functions of a scattering angle ``theta`` (shape (...)) and wavelengths (shape (n,)) return (..., n).
-Importing this package imports neither numba nor colour-science.
+Importing this package imports neither numba nor colour-science, and its names are imported on first use
+(``import skyscatter.atmosphere.airmass`` alone stays quick).
 """
 
-from .airmass import relative_optical_mass, relative_optical_mass_kasten1966
-from .medium import AtmosphereParameters, DensityLayer, DensityProfile
-from .mie import (
-    JUNGE_EXPONENT,
-    eta_integral_ratio,
-    haze_concentration,
-    mie_angular_scattering,
-    mie_eta,
-    mie_k,
-    mie_phase_function,
-    mie_total_scattering,
-)
-from .phase import (
-    AEROSOL_PHASE_FUNCTIONS,
-    aerosol_phase,
-    cornette_shanks,
-    henyey_greenstein,
-    henyey_greenstein_inverse_cdf,
-    rayleigh_inverse_cdf,
-    rayleigh_phase,
-    sample_aerosol_phase,
-    sample_cornette_shanks,
-    sample_henyey_greenstein,
-    sample_rayleigh,
-)
-from .rayleigh import (
-    AIR_NUMBER_DENSITY,
-    AIR_NUMBER_DENSITY_PREETHAM1999,
-    AIR_REFRACTIVE_INDEX,
-    AIR_REFRACTIVE_INDEX_PREETHAM1999,
-    DEPOLARISATION,
-    STANDARD_AIR_NUMBER_DENSITY,
-    king_factor,
-    rayleigh_angular_scattering,
-    rayleigh_angular_scattering_preetham1999,
-    rayleigh_scattering_bodhaine1999,
-    rayleigh_total_scattering,
-    rayleigh_total_scattering_preetham1999,
-    refractive_index_standard_air,
-)
-from .spectra import (
-    DOBSON_UNIT,
-    PowerLawSpectrum,
-    RayleighPhysicalSpectrum,
-    Spectrum,
-    TabulatedSpectrum,
-    ozone_cross_section_serdyuchenko,
-    rayleigh_scattering_physical,
-    solar_spectrum_astm_g173,
-)
-from .turbidity import (
-    ANGSTROM_ALPHA,
-    KOSCHMIEDER_CONSTANT,
-    angstrom_beta,
-    meteorological_range,
-    turbidity_from_meteorological_range,
-)
+from __future__ import annotations
 
-__all__ = [
-    "AEROSOL_PHASE_FUNCTIONS",
-    "AIR_NUMBER_DENSITY",
-    "AIR_NUMBER_DENSITY_PREETHAM1999",
-    "AIR_REFRACTIVE_INDEX",
-    "AIR_REFRACTIVE_INDEX_PREETHAM1999",
-    "ANGSTROM_ALPHA",
-    "DEPOLARISATION",
-    "DOBSON_UNIT",
-    "JUNGE_EXPONENT",
-    "KOSCHMIEDER_CONSTANT",
-    "STANDARD_AIR_NUMBER_DENSITY",
-    "AtmosphereParameters",
-    "DensityLayer",
-    "DensityProfile",
-    "PowerLawSpectrum",
-    "RayleighPhysicalSpectrum",
-    "Spectrum",
-    "TabulatedSpectrum",
-    "aerosol_phase",
-    "angstrom_beta",
-    "cornette_shanks",
-    "eta_integral_ratio",
-    "haze_concentration",
-    "henyey_greenstein",
-    "henyey_greenstein_inverse_cdf",
-    "king_factor",
-    "meteorological_range",
-    "mie_angular_scattering",
-    "mie_eta",
-    "mie_k",
-    "mie_phase_function",
-    "mie_total_scattering",
-    "ozone_cross_section_serdyuchenko",
-    "rayleigh_angular_scattering",
-    "rayleigh_angular_scattering_preetham1999",
-    "rayleigh_inverse_cdf",
-    "rayleigh_phase",
-    "rayleigh_scattering_bodhaine1999",
-    "rayleigh_scattering_physical",
-    "rayleigh_total_scattering",
-    "rayleigh_total_scattering_preetham1999",
-    "refractive_index_standard_air",
-    "relative_optical_mass",
-    "relative_optical_mass_kasten1966",
-    "sample_aerosol_phase",
-    "sample_cornette_shanks",
-    "sample_henyey_greenstein",
-    "sample_rayleigh",
-    "solar_spectrum_astm_g173",
-    "turbidity_from_meteorological_range",
-]
+import importlib
+from typing import Any
+
+# public name -> submodule that defines it
+_LAZY = {
+    "AEROSOL_PHASE_FUNCTIONS": "phase",
+    "AIR_NUMBER_DENSITY": "rayleigh",
+    "AIR_NUMBER_DENSITY_PREETHAM1999": "rayleigh",
+    "AIR_REFRACTIVE_INDEX": "rayleigh",
+    "AIR_REFRACTIVE_INDEX_PREETHAM1999": "rayleigh",
+    "ANGSTROM_ALPHA": "turbidity",
+    "DEPOLARISATION": "rayleigh",
+    "DOBSON_UNIT": "spectra",
+    "JUNGE_EXPONENT": "mie",
+    "KOSCHMIEDER_CONSTANT": "turbidity",
+    "STANDARD_AIR_NUMBER_DENSITY": "rayleigh",
+    "AtmosphereParameters": "medium",
+    "DensityLayer": "medium",
+    "DensityProfile": "medium",
+    "PowerLawSpectrum": "spectra",
+    "RayleighPhysicalSpectrum": "spectra",
+    "Spectrum": "spectra",
+    "TabulatedSpectrum": "spectra",
+    "aerosol_phase": "phase",
+    "angstrom_beta": "turbidity",
+    "cornette_shanks": "phase",
+    "eta_integral_ratio": "mie",
+    "haze_concentration": "mie",
+    "henyey_greenstein": "phase",
+    "henyey_greenstein_inverse_cdf": "phase",
+    "king_factor": "rayleigh",
+    "meteorological_range": "turbidity",
+    "mie_angular_scattering": "mie",
+    "mie_eta": "mie",
+    "mie_k": "mie",
+    "mie_phase_function": "mie",
+    "mie_total_scattering": "mie",
+    "ozone_cross_section_serdyuchenko": "spectra",
+    "rayleigh_angular_scattering": "rayleigh",
+    "rayleigh_angular_scattering_preetham1999": "rayleigh",
+    "rayleigh_inverse_cdf": "phase",
+    "rayleigh_phase": "phase",
+    "rayleigh_scattering_bodhaine1999": "rayleigh",
+    "rayleigh_scattering_physical": "spectra",
+    "rayleigh_total_scattering": "rayleigh",
+    "rayleigh_total_scattering_preetham1999": "rayleigh",
+    "refractive_index_standard_air": "rayleigh",
+    "relative_optical_mass": "airmass",
+    "relative_optical_mass_kasten1966": "airmass",
+    "sample_aerosol_phase": "phase",
+    "sample_cornette_shanks": "phase",
+    "sample_henyey_greenstein": "phase",
+    "sample_rayleigh": "phase",
+    "solar_spectrum_astm_g173": "spectra",
+    "turbidity_from_meteorological_range": "turbidity",
+}
+_SUBMODULES = ("airmass", "medium", "mie", "phase", "rayleigh", "spectra", "tables", "turbidity")
+
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+        globals()[name] = value
+        return value
+    if name in _SUBMODULES:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*__all__, *_SUBMODULES})

@@ -22,6 +22,8 @@ from ..errors import SkyscatterError
 # Subcommand modules in the order ``--help`` lists them.
 _COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo", "precompute", "export_luts", "reference",
              "fit_hosek_wilkie"]
+# Each module registers one subcommand, named like the module with '-' for '_'.
+_MODULE_OF = {name.replace("_", "-"): name for name in _COMMANDS}
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -87,7 +89,10 @@ def _cli_environment() -> Iterator[None]:
             signal.signal(signal.SIGTERM, previous)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser with every subcommand, or with ``command`` alone (when it names one): a command then imports
+    only its own module and what that needs (issue 12, a quick command line). ``--help``, a missing or an
+    unknown command get the full parser, so that the listing and "invalid choice" name every command."""
     parser = OneLineParser(
         prog="skyscatter",
         description="Physically based daylight: sun position, sky models, sky images and landscapes.",
@@ -95,7 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"skyscatter {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
-    for name in _COMMANDS:
+    for name in [_MODULE_OF[command]] if command in _MODULE_OF else _COMMANDS:
         module = importlib.import_module(f"skyscatter.cli.{name}")
         module.register(sub)
     return parser
@@ -108,9 +113,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    parser = build_parser()
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(args_list[0] if args_list else None)
     try:
-        args = parser.parse_args(argv)
+        args = parser.parse_args(args_list)
     except SystemExit as exc:  # --help, --version and usage errors (already printed)
         return int(exc.code or 0) if not isinstance(exc.code, str) else 2
     if args.command is None:
