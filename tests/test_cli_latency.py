@@ -6,6 +6,7 @@ load makes them unfit for a test); here the causes are checked: which modules a 
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -53,3 +54,19 @@ def test_skymatrix_command_imports_no_heavy_package(tmp_path):
 
 def test_sun_command_imports_no_heavy_package():
     assert _imported_by(["sun", "--lat", "48.1", "--lon", "11.6", "--time", "2024-06-21T12:00+02:00"]) == "0 []"
+
+
+@pytest.mark.parametrize("command,preset,expected", [
+    ("skymatrix", None, "1"),  # small products only: OpenBLAS starts with one thread
+    ("sky", "3", "3"),  # the user's setting is kept
+    ("precompute", None, None),  # other commands keep numpy's default pool
+])
+def test_blas_starts_with_one_thread_for_commands_without_big_linear_algebra(command, preset, expected):
+    env = {k: v for k, v in os.environ.items() if k not in cli._BLAS_THREAD_VARIABLES}
+    if preset is not None:
+        env["OPENBLAS_NUM_THREADS"] = preset
+    code = ("import os, sys; import skyscatter.cli as c; c._one_blas_thread_for(sys.argv[1]); "
+            "print(os.environ.get('OPENBLAS_NUM_THREADS'))")
+    out = subprocess.run([sys.executable, "-c", code, command], env=env, capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == str(expected)

@@ -38,7 +38,6 @@ from .epw import EPWData, EPWLocation, read_epw
 from .errors import FileFormatError, InvalidParameterError
 from .fileio import atomic_path, atomic_paths
 from .patches import PatchScheme, patch_scheme
-from .runtime import num_threads
 from .sky.perez_family import gradation, indicatrix
 
 __all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches", "perez_patch_luminance",
@@ -51,8 +50,6 @@ NORMALISATION_NODES = (48, 96)
 #: Values (skies x directions) per vectorised step of :func:`perez_patch_luminance`: its temporaries stay in the
 #: CPU caches (measured: 4-8x slower per value once they reach a few MB).
 CHUNK_VALUES = 65536
-#: Chunks per task of the thread pool (few enough tasks that handing them out costs little).
-TASK_CHUNKS = 8
 
 
 def _perez_chunk(coeffs, sun, scale, dirs, rows, row_cos, n_q, qweights, n_sub, out) -> None:
@@ -126,26 +123,11 @@ def perez_patch_luminance(
     lit = np.flatnonzero(scale > 0.0)
     step = max(1, CHUNK_VALUES // dirs.shape[0])
 
-    def work(starts: range) -> None:
-        for start in starts:
-            sel = lit[start : start + step]
-            block = np.empty((sel.size, scheme.n_patches))
-            _perez_chunk(coeffs[sel], sun[sel], scale[sel], dirs, rows, row_cos, qd.shape[0], qw, n_sub, block)
-            out[sel] = block
-
-    # numpy releases the GIL in its loops: blocks of chunks go to the threads of skyscatter.runtime (the rows
-    # of a chunk do not depend on the other rows, so the result does not depend on the thread count)
-    per_task = step * TASK_CHUNKS
-    tasks = [range(a, min(a + per_task, lit.size), step) for a in range(0, lit.size, per_task)]
-    threads = min(num_threads(), len(tasks))
-    if threads <= 1:
-        for task in tasks:
-            work(task)
-    else:
-        from concurrent.futures import ThreadPoolExecutor
-
-        with ThreadPoolExecutor(max_workers=threads) as pool:
-            list(pool.map(work, tasks))
+    for start in range(0, lit.size, step):
+        sel = lit[start : start + step]
+        block = np.empty((sel.size, scheme.n_patches))
+        _perez_chunk(coeffs[sel], sun[sel], scale[sel], dirs, rows, row_cos, qd.shape[0], qw, n_sub, block)
+        out[sel] = block
     return out
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import importlib
+import os
 import signal
 import sys
 from collections.abc import Iterator, Sequence
@@ -24,6 +25,22 @@ _COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo", "precompute", "ex
              "fit_hosek_wilkie"]
 # Each module registers one subcommand, named like the module with '-' for '_'.
 _MODULE_OF = {name.replace("_", "-"): name for name in _COMMANDS}
+# Commands whose linear algebra is a few small products: their BLAS pool starts with one thread (below).
+_SMALL_BLAS_COMMANDS = ("sun", "sky", "illuminance", "skymatrix")
+_BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "GOTO_NUM_THREADS")
+
+
+def _one_blas_thread_for(command: str | None) -> None:
+    """Start numpy's BLAS with one thread for a command that only multiplies small matrices.
+
+    OpenBLAS starts a thread per core when numpy is imported and keeps it spinning for a while: about 0.06 s of
+    a two-core machine, more with more cores, all for nothing in these commands (issue 12, a quick command
+    line). Only before numpy is imported and only if the user has set none of the BLAS thread variables;
+    :func:`skyscatter.runtime.set_num_threads` still sizes the pool later if a computation asks for it.
+    """
+    if (command in _SMALL_BLAS_COMMANDS and "numpy" not in sys.modules
+            and not any(v in os.environ for v in _BLAS_THREAD_VARIABLES)):
+        os.environ["OPENBLAS_NUM_THREADS"] = "1"
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -114,7 +131,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _main(argv: Sequence[str] | None) -> int:
     args_list = list(sys.argv[1:] if argv is None else argv)
-    parser = build_parser(args_list[0] if args_list else None)
+    command = args_list[0] if args_list else None
+    _one_blas_thread_for(command)
+    parser = build_parser(command)
     try:
         args = parser.parse_args(args_list)
     except SystemExit as exc:  # --help, --version and usage errors (already printed)

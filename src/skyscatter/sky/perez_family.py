@@ -72,7 +72,8 @@ _HW_TO_ALPHABETICAL = np.array([0, 1, 2, 3, 4, 5, 6, 8, 7])
 
 def _result(*arrays: ArrayLike) -> NDArray[np.float64]:
     """An empty float64 array of the arguments' broadcast shape (the in-place work array of the kernel)."""
-    return np.empty(np.broadcast_shapes(*(np.shape(x) for x in arrays)))
+    shapes = [x.shape if isinstance(x, np.ndarray) else np.shape(x) for x in arrays if not isinstance(x, float)]
+    return np.empty(np.broadcast_shapes(*shapes))
 
 
 def gradation(cos_theta: ArrayLike, a: ArrayLike, b: ArrayLike, offset: float = 0.0) -> NDArray[np.float64]:
