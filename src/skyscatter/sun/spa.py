@@ -178,7 +178,7 @@ def spa_solar_position(
 
 
 #: Instants per vectorised step (the (terms x instants) temporaries stay in the CPU caches).
-_CHUNK = 512
+_CHUNK = 1024
 
 
 def _spa(unix, delta_t, latitude, longitude, elevation, pressure, temperature, refraction):
