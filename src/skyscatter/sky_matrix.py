@@ -52,28 +52,45 @@ NORMALISATION_NODES = (48, 96)
 CHUNK_VALUES = 65536
 
 
-def _perez_chunk(coeffs, sun, scale, dirs, rows, row_cos, n_q, qweights, n_sub, out) -> None:
+def _perez_chunk(coeffs, sun, scale, dirs_t, q_rows, rows, row_cos, qweights, n_sub, out, work) -> None:
     """One block of skies: normalise each Perez sky to D_v with the quadrature, then average over the samples.
 
     The Perez function (Perez et al. 1993, Eq. 1) ``max(0, (1 + a exp(b / max(cos theta, 0.01)))(1 + c
     exp(d gamma) + e cos^2 gamma))`` (the one horizon rule of :mod:`skyscatter.sky.perez_family`) is the product of
-    the shared kernel's gradation, tabulated per sky over the distinct zenith angles of the quadrature nodes and
-    samples (``row_cos``; ``rows`` gives each direction's entry), and its indicatrix per direction: one
-    exponential per direction instead of two. ``dirs`` holds the ``n_q`` quadrature nodes (weights ``qweights``),
-    then ``n_sub`` samples per patch; every sky of the block has ``scale`` (D_v) > 0.
+    the shared kernel's gradation G, tabulated per sky over the distinct zenith angles of the directions
+    (``row_cos``; ``rows`` gives each direction's entry), and its indicatrix I per direction: one exponential
+    per direction instead of two. ``dirs_t`` (3, n) holds the quadrature nodes (weights ``qweights``), then
+    ``n_sub`` samples per patch; every sky of the block has ``scale`` (D_v) > 0. ``work``: a scratch array of at
+    least (n_skies, n).
+
+    When the nodes are rows of equal zenith angle (``q_rows``: the entry of each row, ``qweights`` of shape
+    (rows, nodes per row)) and G > 0 on every row, ``max(0, G I) = G max(0, I)`` and the normalisation is
+    ``sum_r G_r sum_j w_rj max(0, I_rj)``: no per-node gather of G (the same sum, in another order).
     """
+    n_sky = coeffs.shape[0]
     a, b, c, d, e = (coeffs[:, k : k + 1] for k in range(5))
     grad = gradation(row_cos, a, b)  # (n_skies, n_rows)
-    cos_g = sun @ dirs.T
+    cos_g = sun @ dirs_t
     np.clip(cos_g, -1.0, 1.0, out=cos_g)
-    f = indicatrix(1.0, np.arccos(cos_g), cos_g, 1.0, c, d, e)
-    f *= np.take(grad, rows, axis=1)
-    np.maximum(f, 0.0, out=f)
-    total = f[:, :n_q] @ qweights
+    gamma = np.arccos(cos_g)
+    f = indicatrix(1.0, gamma, cos_g, 1.0, c, d, e, out=gamma, work=work[:n_sky])  # in place: no temporaries
+    n_q = qweights.size
+    g_q = grad[:, q_rows] if q_rows is not None else None
+    if g_q is not None and np.all(g_q > 0.0):
+        fq = np.reshape(f[:, :n_q], (n_sky, *qweights.shape), copy=False)  # a view
+        np.maximum(fq, 0.0, out=fq)
+        total = np.einsum("hr,hr->h", g_q, np.einsum("hrj,rj->hr", fq, qweights))
+        fs = f[:, n_q:]
+        fs *= np.take(grad, rows[n_q:], axis=1)
+        np.maximum(fs, 0.0, out=fs)
+    else:
+        f *= np.take(grad, rows, axis=1)
+        np.maximum(f, 0.0, out=f)
+        total = f[:, :n_q] @ qweights.reshape(-1)
     uniform = total <= 0.0  # no positive luminance anywhere: uniform sky (as PerezSky and gendaymtx)
     with np.errstate(divide="ignore", invalid="ignore"):
         norm = np.where(uniform, 0.0, scale / np.where(uniform, 1.0, total))
-    samples = f[:, n_q:].reshape(f.shape[0], -1, n_sub)
+    samples = f[:, n_q:].reshape(n_sky, -1, n_sub)
     acc = samples[..., 0] if n_sub == 1 else samples.sum(axis=-1)
     np.multiply(norm[:, None], acc, out=out)
     if n_sub > 1:
@@ -116,17 +133,22 @@ def perez_patch_luminance(
     scale = np.asarray(diffuse_illuminance, dtype=np.float64).reshape(-1)
     qd = np.asarray(qd, dtype=np.float64).reshape(-1, 3)
     dirs = np.concatenate([qd, np.asarray(sdirs, dtype=np.float64)])
+    dirs_t = np.ascontiguousarray(dirs.T)
     # distinct zenith cosines of nodes and samples, for the per-sky gradation table
     row_cos, rows = np.unique(dirs[:, 2], return_inverse=True)
-    out = np.zeros((coeffs.shape[0], scheme.n_patches))
     qw = np.asarray(qw, dtype=np.float64).reshape(-1)
+    q_rows = None
+    nz, na = NORMALISATION_NODES
+    if qw.size == nz * na and np.all(rows[: qw.size].reshape(nz, na) == rows[: qw.size : na, None]):
+        q_rows, qw = rows[: qw.size : na], qw.reshape(nz, na)  # the horizontal rule: rows of equal zenith angle
+    out = np.zeros((coeffs.shape[0], scheme.n_patches))
     lit = np.flatnonzero(scale > 0.0)
     step = max(1, CHUNK_VALUES // dirs.shape[0])
-
+    work = np.empty((step, dirs.shape[0]))
     for start in range(0, lit.size, step):
         sel = lit[start : start + step]
         block = np.empty((sel.size, scheme.n_patches))
-        _perez_chunk(coeffs[sel], sun[sel], scale[sel], dirs, rows, row_cos, qd.shape[0], qw, n_sub, block)
+        _perez_chunk(coeffs[sel], sun[sel], scale[sel], dirs_t, q_rows, rows, row_cos, qw, n_sub, block, work)
         out[sel] = block
     return out
 

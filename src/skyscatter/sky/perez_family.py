@@ -70,12 +70,6 @@ HOSEK_WILKIE_PARAMETER_ORDER = ("A", "B", "C", "D", "E", "F", "G", "I", "H")
 _HW_TO_ALPHABETICAL = np.array([0, 1, 2, 3, 4, 5, 6, 8, 7])
 
 
-def _result(*arrays: ArrayLike) -> NDArray[np.float64]:
-    """An empty float64 array of the arguments' broadcast shape (the in-place work array of the kernel)."""
-    shapes = [x.shape if isinstance(x, np.ndarray) else np.shape(x) for x in arrays if not isinstance(x, float)]
-    return np.empty(np.broadcast_shapes(*shapes))
-
-
 def gradation(cos_theta: ArrayLike, a: ArrayLike, b: ArrayLike, offset: float = 0.0) -> NDArray[np.float64]:
     """The gradation ``1 + A exp(B / d)``, ``d = max(cos theta, 0.01)`` (offset 0) or ``cos theta + offset``.
 
@@ -88,7 +82,7 @@ def gradation(cos_theta: ArrayLike, a: ArrayLike, b: ArrayLike, offset: float = 
         ct += offset
     else:
         np.maximum(ct, HORIZON_COS, out=ct)
-    out = _result(ct, a, b)
+    out = np.empty(np.broadcast_shapes(ct.shape, np.shape(a), np.shape(b)))
     np.divide(b, ct, out=out)
     np.exp(out, out=out)
     out *= a
@@ -97,21 +91,33 @@ def gradation(cos_theta: ArrayLike, a: ArrayLike, b: ArrayLike, offset: float = 
 
 
 def indicatrix(cos_theta: ArrayLike, gamma: ArrayLike, cos_gamma: ArrayLike, c: ArrayLike, d: ArrayLike,
-               e: ArrayLike, f: ArrayLike, g: ArrayLike = 0.0, h: ArrayLike = 0.0, i: ArrayLike = 0.0
+               e: ArrayLike, f: ArrayLike, g: ArrayLike = 0.0, h: ArrayLike = 0.0, i: ArrayLike = 0.0, *,
+               out: NDArray[np.float64] | None = None, work: NDArray[np.float64] | None = None
                ) -> NDArray[np.float64]:
     """The indicatrix ``C + D exp(E gamma) + F cos^2 gamma + G chi(H, gamma) + I sqrt(cos theta)``.
 
     ``gamma`` [rad] and its cosine are both given (callers have both; computing one from the other costs an
     arccos or a cos per direction). Arguments broadcast. The chi and sqrt terms are left out where G or I is
     0 (the classic models), so a zero G never meets chi's pole at H = 1, gamma = 0.
+
+    ``out`` and ``work``, float64 arrays of the result's shape, receive the result and the cos^2 gamma term;
+    ``out`` may be ``gamma`` itself (read first), ``work`` must be an array of its own. A loop over large blocks
+    of directions passes them and allocates nothing (fresh temporaries of a few hundred kB cost more than the
+    arithmetic here).
     """
-    out = _result(cos_theta, gamma, cos_gamma, c, d, e, f, g, h, i)
+    shapes = [x.shape if isinstance(x, np.ndarray) else np.shape(x)
+              for x in (cos_theta, gamma, cos_gamma, c, d, e, f, g, h, i) if not isinstance(x, float)]
+    shape = np.broadcast_shapes(*shapes)
+    cg = cos_gamma if isinstance(cos_gamma, np.ndarray) else np.asarray(cos_gamma, dtype=np.float64)
+    out = np.empty(shape) if out is None else out
+    work = np.empty(shape) if work is None else work
     np.multiply(e, gamma, out=out)
     np.exp(out, out=out)
     out *= d
     out += c
-    cg = np.asarray(cos_gamma, dtype=np.float64)
-    out += np.multiply(f, cg) * cg
+    np.multiply(f, cg, out=work)
+    work *= cg
+    out += work
     g = np.asarray(g, dtype=np.float64)
     if g.any():  # Hosek-Wilkie's aureole term
         q = 1.0 + h * h - 2.0 * h * cg
