@@ -247,3 +247,52 @@ def test_pandas_series_of_aware_times():
     b = sun_position(math.radians(35.7), math.radians(139.7), index)
     np.testing.assert_allclose(a.zenith, b.zenith, atol=1e-12)
     assert a.azimuth.shape == (4,)
+
+
+@pytest.mark.parametrize("method", ["spa", "preetham1999"])
+def test_sun_position_unix_equals_sun_position(method):
+    """The Unix-time entry point (used by the sky matrix, no datetime objects) gives the same sun."""
+    from skyscatter.sun.position import sun_position_unix
+
+    times = pd.date_range("2024-03-01", periods=300, freq="7h", tz="Asia/Kathmandu")  # UTC+5:45
+    ref = sun_position(math.radians(27.7), math.radians(85.3), times, method=method, altitude=1300.0)
+    unix = np.asarray((times.tz_convert("UTC").tz_localize(None) - pd.Timestamp(0)) / pd.Timedelta(1, "s"))
+    pos = sun_position_unix(math.radians(27.7), math.radians(85.3), unix.reshape(20, 15), method=method,
+                            utc_offset=5.75 * 3600, altitude=1300.0)
+    assert pos.zenith.shape == (20, 15)
+    np.testing.assert_array_equal(pos.zenith.ravel(), ref.zenith)
+    np.testing.assert_array_equal(pos.azimuth.ravel(), ref.azimuth)
+    single = sun_position_unix(math.radians(27.7), math.radians(85.3), unix[3], method=method,
+                               utc_offset=5.75 * 3600, altitude=1300.0)
+    assert isinstance(single.zenith, float) and single.zenith == ref.zenith[3]
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    ({"unix_seconds": [0.0, np.nan]}, "unix_seconds must be finite"),
+    ({"unix_seconds": 0.0, "utc_offset": np.inf}, "utc_offset must be finite"),
+    ({"unix_seconds": 0.0, "method": "nope"}, "unknown sun-position method"),
+])
+def test_sun_position_unix_bad_input(kwargs, match):
+    from skyscatter.sun.position import sun_position_unix
+
+    with pytest.raises(InvalidParameterError, match=match):
+        sun_position_unix(0.5, 0.1, **kwargs)
+
+
+def test_lazy_packages_resolve_every_public_name():
+    """skyscatter.sun and skyscatter.atmosphere import their names on first use (issue 12): every name in
+    __all__ resolves, to the object its submodule defines, and importing the sun's position or the air mass
+    alone does not import the medium or the spectral sunlight."""
+    import importlib
+    import subprocess
+    import sys
+
+    for package in ("skyscatter.sun", "skyscatter.atmosphere"):
+        pkg = importlib.import_module(package)
+        for name in pkg.__all__:
+            module = importlib.import_module(f"{package}.{pkg._LAZY[name]}")
+            assert getattr(pkg, name) is getattr(module, name)
+    code = ("import sys, skyscatter.sun.position, skyscatter.atmosphere.airmass; "
+            "print(sorted(m for m in ('skyscatter.sun.sunlight', 'skyscatter.atmosphere.medium') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
