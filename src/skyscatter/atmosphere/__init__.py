@@ -19,8 +19,7 @@ Importing this package imports neither numba nor colour-science, and its names a
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ..lazy import lazy_namespace
 
 # public name -> submodule that defines it
 _LAZY = {
@@ -80,15 +79,4 @@ _SUBMODULES = ("airmass", "medium", "mie", "phase", "rayleigh", "spectra", "tabl
 __all__ = sorted(_LAZY)
 
 
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        value = getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
-        globals()[name] = value
-        return value
-    if name in _SUBMODULES:
-        return importlib.import_module(f"{__name__}.{name}")
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted({*__all__, *_SUBMODULES})
+__getattr__, __dir__ = lazy_namespace(globals(), _LAZY, _SUBMODULES)
