@@ -134,3 +134,18 @@ def test_bruneton_medium_options_build_the_atmosphere_they_name():
     assert (p.ozone_column, float(p.ground_albedo_at([550.0])[0])) == (0.0, 0.3)
     t = _medium_from_options(AtmosphereParameters(ozone_column=250.0), turbidity=3.0)
     assert t.mie_angstrom_beta == pytest.approx(0.04608 * 3 - 0.04586) and t.ozone_column == 250.0
+
+
+def test_default_sky_command_needs_no_compiled_kernel_nor_heavy_imports(tmp_path):
+    """Issue 12 (a quick command line): the Preetham sky is evaluated with numpy, so the command pays neither
+    numba's import and first-use set-up (about 0.35 s, which also imports scipy.linalg) nor pandas/pvlib/colour."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from skyscatter.cli import main; "
+            f"main(['sky', '--projection', 'fisheye', '--width', '32', '--out', {str(tmp_path / 's.exr')!r}]); "
+            "print(sorted(m for m in ('numba', 'scipy', 'pandas', 'pvlib', 'colour', 'matplotlib', 'dask') "
+            "if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip().splitlines()[-1] == "[]"
+    assert (tmp_path / "s.exr").is_file() and (tmp_path / "s.png").is_file()

@@ -243,3 +243,25 @@ def test_subhourly_file_one_row_per_record_or_hourly(tmp_path, epw_file):
     mh = skyscatter.skymatrix(path, scheme="tregenza", samples=1, timestep="hourly")
     mr = skyscatter.skymatrix(epw_file, scheme="tregenza", samples=1)
     np.testing.assert_allclose(mh.luminance, mr.luminance, rtol=1e-12)
+
+
+@pytest.mark.parametrize("zone,suffix", [(5.75, "+05:45"), (-3.5, "-03:30"), (0.0, "+00:00")])
+def test_time_stamps_without_pandas_equal_the_pandas_ones(tmp_path, zone, suffix):
+    """Issue 12: EPWData.unix_times and SkyMatrix.iso_times (numpy) give the instants and text pandas gives,
+    also for time zones with minutes and west of Greenwich; times() and SkyMatrix.times are those instants."""
+    header = [HEADER[0].replace(",1.0,520.0", f",{zone},520.0")] + HEADER[1:]
+    assert header[0] != HEADER[0]
+    path = tmp_path / "tz.epw"
+    path.write_text("\n".join(header + day_records()) + "\n", encoding="utf-8")
+    epw = read_epw(path)
+    stamps = epw.times()
+    np.testing.assert_array_equal(epw.unix_times(), stamps.asi8 / 1e9)
+    np.testing.assert_array_equal(epw.unix_times(offset_hours=0.0), epw.times(offset_hours=0.0).asi8 / 1e9)
+    m = skyscatter.skymatrix(path, scheme="tregenza", samples=1)
+    assert list(m.iso_times()) == [t.isoformat() for t in stamps]
+    assert m.iso_times()[0].endswith(suffix)
+    assert list(m.times) == list(stamps)
+    import pandas as pd
+
+    dates = pd.to_datetime({"year": epw.year, "month": epw.month, "day": epw.day})
+    np.testing.assert_array_equal(epw.day_of_year, dates.dt.day_of_year)

@@ -165,6 +165,17 @@ def test_parameter_order_i_before_h():
     np.testing.assert_allclose(hosek_wilkie_f(cos_t, gamma, p), 1 + 2 * np.exp(-1 / (cos_t + 0.01)), rtol=1e-15)
 
 
+def test_kernel_leaves_out_the_aureole_term_where_its_weight_is_zero():
+    """A band with G = 0 and H = 1 never meets chi's pole (H = 1, gamma = 0) while another band uses chi."""
+    p = np.zeros((2, 9))
+    p[:, 2] = 1.0  # C
+    p[0, 8] = 1.0  # H = 1, G = 0
+    p[1, 6], p[1, 8] = 1.0, 0.5  # G = 1, H = 0.5
+    out = hosek_wilkie_f(1.0, 0.0, p)
+    np.testing.assert_array_equal(out[0], 1.0)
+    assert out[1] == pytest.approx(1.0 + 2.0 / 0.25**1.5, rel=1e-15)
+
+
 def test_kernel_rejects_a_wrong_parameter_axis():
     with pytest.raises(InvalidParameterError, match="length 9"):
         hosek_wilkie_f(0.5, 0.5, np.zeros(8))

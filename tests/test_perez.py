@@ -240,6 +240,20 @@ def test_guard_uniform_fallback():
     assert sky.zenith_luminance == pytest.approx(sky.diffuse_illuminance / math.pi, rel=1e-12)
 
 
+def test_extraterrestrial_irradiance_equals_pvlib_spencer():
+    """Spencer (1971) eccentricity factor times 1367 W m^-2, against pvlib's implementation of the same series."""
+    from pvlib.irradiance import get_extra_radiation
+
+    from skyscatter.sky.perez import extraterrestrial_irradiance
+
+    doy = np.arange(1, 367)
+    ref = np.asarray(get_extra_radiation(doy.astype(float), solar_constant=1367.0, method="spencer"))
+    np.testing.assert_allclose(extraterrestrial_irradiance(doy), ref, rtol=1e-15)
+    # perihelion in early January at 0.98329 AU: (1 / 0.98329)^2 = 1.0343; Spencer's fit gives 1.0351 there
+    assert extraterrestrial_irradiance(3) == pytest.approx(1367.0 / 0.98329**2, rel=1e-3)
+    assert extraterrestrial_irradiance(None) == 1367.0
+
+
 def test_horizon_cos_floor():
     k = np.array([0.5, 0.1, 0.0, 0.0, 0.0])
     assert float(perez_relative_luminance(0.0, 0.0, k)) == pytest.approx(1 + 0.5 * math.exp(0.1 / 0.01))

@@ -1,4 +1,5 @@
-"""Sun position: NREL SPA through pvlib and the Preetham et al. (1999) A.6 approximation."""
+"""Sun position: NREL SPA (skyscatter.sun.spa, checked against pvlib) and the Preetham et al. (1999) A.6
+approximation."""
 
 from __future__ import annotations
 
@@ -37,6 +38,87 @@ def test_spa_same_instant_in_other_time_zones():
         pos = sun_position(**SPA_SITE, when=when, **SPA_OPTIONS)
         assert pos.zenith == pytest.approx(ref.zenith, abs=1e-12)
         assert pos.azimuth == pytest.approx(ref.azimuth, abs=1e-12)
+
+
+def test_spa_terms_equal_pvlib():
+    """The shipped periodic terms (tools/generate_spa_tables.py) are pvlib's copy of NREL's Tables A4.2-A4.3."""
+    from pvlib import spa as pv
+
+    from skyscatter.sun.spa import _terms
+
+    earth, y, abcd = _terms()
+    for name, (two_a, half_b, half_c, sum_a) in earth.items():
+        ref = getattr(pv, name)
+        np.testing.assert_array_equal(two_a[:, 0] / 2.0, ref[:, 0])
+        np.testing.assert_array_equal(half_b[:, 0] * 2.0, ref[:, 1])
+        np.testing.assert_array_equal(half_c[:, 0] * 2.0, ref[:, 2])
+        assert sum_a == pytest.approx(ref[:, 0].sum(), rel=1e-15)
+    np.testing.assert_array_equal(y, pv.NUTATION_YTERM_ARRAY)
+    np.testing.assert_array_equal(abcd, pv.NUTATION_ABCD_ARRAY)
+
+
+@pytest.mark.parametrize("lat,lon,elev", [(39.7, -105.2, 1830.0), (-33.9, 151.2, 0.0), (78.2, 15.6, 10.0),
+                                          (0.0, 179.9, 3000.0), (-89.0, -179.0, 2800.0)])
+def test_spa_equals_pvlib_implementation(lat, lon, elev):
+    """Our SPA against pvlib's (``pvlib.spa.solar_position``, numpy path), 1780-2223, to 1e-8 deg: both follow
+    Reda & Andreas; the differences are rounding (measured: 2.4e-10 deg in zenith, sun directions 1e-9 deg)."""
+    from pvlib import spa as pv
+
+    from skyscatter.sun.spa import delta_t_espenak_meeus, spa_solar_position
+
+    unix = np.random.default_rng(0).uniform(-6e9, 8e9, 4000)
+    dt_s = delta_t_espenak_meeus(np.floor(1970 + unix / 3.15576e7), 6)
+    ref = pv.solar_position(unix, lat, lon, elev, 1000.0, 15.0, dt_s, 0.5667)
+    app, geo, azi = spa_solar_position(unix, lat, lon, elevation=elev, pressure=1000.0, temperature=15.0,
+                                       delta_t=dt_s)
+    np.testing.assert_allclose(app, ref[0], rtol=0, atol=1e-8)
+    np.testing.assert_allclose(geo, ref[1], rtol=0, atol=1e-8)
+    ours = direction_from_angles(np.radians(geo), np.radians(azi))
+    theirs = direction_from_angles(np.radians(ref[1]), np.radians(ref[4]))
+    assert np.degrees(angle_between(ours, theirs)).max() < 1e-8
+
+
+def test_delta_t_equals_pvlib_polynomials():
+    """Espenak & Meeus (2006) polynomials, every segment, against pvlib's ``calculate_deltat``."""
+    import warnings
+
+    from pvlib import spa as pv
+
+    from skyscatter.sun.spa import delta_t_espenak_meeus
+
+    years = np.arange(-2500.0, 3500.0)
+    months = years % 12 + 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # pvlib warns outside -1999..3000
+        ref = pv.calculate_deltat(years, months)
+    np.testing.assert_allclose(delta_t_espenak_meeus(years, months), ref, rtol=1e-13, atol=1e-9)
+    # measured Delta T (IERS, as tabulated beside the polynomials on NASA's Delta T page): 63.83 s at 2000.0 and
+    # 29.15 s at 1950.0; the polynomials fit the measured series to well under a second there
+    assert delta_t_espenak_meeus(2000, 1) == pytest.approx(63.8, abs=0.5)
+    assert delta_t_espenak_meeus(1950, 1) == pytest.approx(29.1, abs=0.5)
+
+
+def test_tan_half_angle_cos_sin_match_the_c_library():
+    from skyscatter.sun.spa import _cos_sin
+
+    x = np.random.default_rng(3).uniform(-5e4, 5e4, 20000)
+    c, s = _cos_sin(x)
+    np.testing.assert_allclose(c, [math.cos(v) for v in x], rtol=0, atol=2.3e-16)
+    np.testing.assert_allclose(s, [math.sin(v) for v in x], rtol=0, atol=2.3e-16)
+    np.testing.assert_allclose(_cos_sin(np.array([0.0, math.pi, -math.pi / 2])), [[1, -1, 0], [0, 0, -1]],
+                               atol=2.3e-16)
+
+
+def test_sun_position_imports_neither_pvlib_nor_pandas():
+    """Issue 12: the SPA is ours, so a sky matrix from the command line pays neither import (pvlib: about 0.7 s)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, datetime as dt; from skyscatter.sun.position import sun_position; "
+            "sun_position(0.8, 0.2, dt.datetime(2024, 6, 21, 12, tzinfo=dt.timezone.utc)); "
+            "print(sorted(m for m in ('pvlib', 'pandas', 'scipy', 'numba') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
 
 
 def test_geometric_zenith_differs_by_refraction():
@@ -165,3 +247,52 @@ def test_pandas_series_of_aware_times():
     b = sun_position(math.radians(35.7), math.radians(139.7), index)
     np.testing.assert_allclose(a.zenith, b.zenith, atol=1e-12)
     assert a.azimuth.shape == (4,)
+
+
+@pytest.mark.parametrize("method", ["spa", "preetham1999"])
+def test_sun_position_unix_equals_sun_position(method):
+    """The Unix-time entry point (used by the sky matrix, no datetime objects) gives the same sun."""
+    from skyscatter.sun.position import sun_position_unix
+
+    times = pd.date_range("2024-03-01", periods=300, freq="7h", tz="Asia/Kathmandu")  # UTC+5:45
+    ref = sun_position(math.radians(27.7), math.radians(85.3), times, method=method, altitude=1300.0)
+    unix = np.asarray((times.tz_convert("UTC").tz_localize(None) - pd.Timestamp(0)) / pd.Timedelta(1, "s"))
+    pos = sun_position_unix(math.radians(27.7), math.radians(85.3), unix.reshape(20, 15), method=method,
+                            utc_offset=5.75 * 3600, altitude=1300.0)
+    assert pos.zenith.shape == (20, 15)
+    np.testing.assert_array_equal(pos.zenith.ravel(), ref.zenith)
+    np.testing.assert_array_equal(pos.azimuth.ravel(), ref.azimuth)
+    single = sun_position_unix(math.radians(27.7), math.radians(85.3), unix[3], method=method,
+                               utc_offset=5.75 * 3600, altitude=1300.0)
+    assert isinstance(single.zenith, float) and single.zenith == ref.zenith[3]
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    ({"unix_seconds": [0.0, np.nan]}, "unix_seconds must be finite"),
+    ({"unix_seconds": 0.0, "utc_offset": np.inf}, "utc_offset must be finite"),
+    ({"unix_seconds": 0.0, "method": "nope"}, "unknown sun-position method"),
+])
+def test_sun_position_unix_bad_input(kwargs, match):
+    from skyscatter.sun.position import sun_position_unix
+
+    with pytest.raises(InvalidParameterError, match=match):
+        sun_position_unix(0.5, 0.1, **kwargs)
+
+
+def test_lazy_packages_resolve_every_public_name():
+    """skyscatter.sun and skyscatter.atmosphere import their names on first use (issue 12): every name in
+    __all__ resolves, to the object its submodule defines, and importing the sun's position or the air mass
+    alone does not import the medium or the spectral sunlight."""
+    import importlib
+    import subprocess
+    import sys
+
+    for package in ("skyscatter.sun", "skyscatter.atmosphere"):
+        pkg = importlib.import_module(package)
+        for name in pkg.__all__:
+            module = importlib.import_module(f"{package}.{pkg._LAZY[name]}")
+            assert getattr(pkg, name) is getattr(module, name)
+    code = ("import sys, skyscatter.sun.position, skyscatter.atmosphere.airmass; "
+            "print(sorted(m for m in ('skyscatter.sun.sunlight', 'skyscatter.atmosphere.medium') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

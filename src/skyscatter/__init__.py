@@ -10,9 +10,6 @@ Public names are imported lazily so ``import skyscatter`` stays fast.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
-
 __version__ = "0.1.0"
 
 # Before any compiled kernel is defined: a read-only install with an unwritable HOME still gets a numba cache.
@@ -20,17 +17,19 @@ from .fileio import ensure_numba_cache as _ensure_numba_cache  # noqa: E402
 
 _ensure_numba_cache(__path__[0])
 
+from .lazy import lazy_namespace  # noqa: E402
+
 # public name -> module that defines it
 _LAZY = {
-    "sun_position": "skyscatter.sun.position",
-    "PreethamSky": "skyscatter.sky.preetham",
-    "CIEOvercastSky": "skyscatter.sky.cie",
-    "CIEClearSky": "skyscatter.sky.cie",
-    "CIEStandardSky": "skyscatter.sky.cie",
-    "PerezSky": "skyscatter.sky.perez",
-    "HosekWilkieSky": "skyscatter.sky.hosek_wilkie",
-    "skymatrix": "skyscatter.sky_matrix",
-    "BrunetonSky": "skyscatter.sky.bruneton",
+    "sun_position": "sun.position",
+    "PreethamSky": "sky.preetham",
+    "CIEOvercastSky": "sky.cie",
+    "CIEClearSky": "sky.cie",
+    "CIEStandardSky": "sky.cie",
+    "PerezSky": "sky.perez",
+    "HosekWilkieSky": "sky.hosek_wilkie",
+    "skymatrix": "sky_matrix",
+    "BrunetonSky": "sky.bruneton",
 }
 _SUBMODULES = {
     "aerial",
@@ -51,15 +50,4 @@ _SUBMODULES = {
 __all__ = sorted([*_LAZY, *_SUBMODULES, "__version__"])
 
 
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    if name in _SUBMODULES:
-        return importlib.import_module(f"skyscatter.{name}")
-    raise AttributeError(f"module 'skyscatter' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return __all__
+__getattr__, __dir__ = lazy_namespace(globals(), _LAZY, _SUBMODULES)

@@ -137,6 +137,27 @@ class EPWData:
     def _step(self) -> NDArray[np.int64]:
         return np.zeros_like(self.hour) if self.step is None else self.step
 
+    def _local_day_and_hours(self, offset_hours: float | None) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """(local date as days since 1970-01-01, hours after that midnight) of each record's time stamp.
+
+        ``offset_hours`` is added to the end of each record's interval (``hour - 1 + (k + 1) / N`` h): None, half
+        a record (-0.5 h in an hourly file), gives the middle of the interval the values average over.
+        """
+        n = self.records_per_hour
+        offset = -0.5 / n if offset_hours is None else float(offset_hours)
+        months = (self.year - 1970) * 12 + (self.month - 1)
+        days = months.astype("datetime64[M]").astype("datetime64[D]").astype(np.int64) + (self.day - 1)
+        return days, self.hour - 1 + (self._step() + 1) / n + offset
+
+    def unix_times(self, *, offset_hours: float | None = None) -> NDArray[np.float64]:
+        """Time stamps of the records as Unix time [s since 1970-01-01T00:00 UTC] (float64).
+
+        The same instants as :meth:`times` (``offset_hours`` as there), without pandas: what the sun position
+        of a sky matrix needs.
+        """
+        days, hours = self._local_day_and_hours(offset_hours)
+        return days * 86400.0 + hours * 3600.0 - self.location.timezone_hours * 3600.0
+
     def times(self, *, offset_hours: float | None = None):
         """Time stamps of the records, tz-aware ``pandas.DatetimeIndex`` in the file's standard time.
 
@@ -146,12 +167,9 @@ class EPWData:
         """
         import pandas as pd
 
-        n = self.records_per_hour
-        offset = -0.5 / n if offset_hours is None else offset_hours
-        base = pd.to_datetime({"year": self.year, "month": self.month, "day": self.day})
-        end = self.hour - 1 + (self._step() + 1) / n
-        stamps = base + pd.to_timedelta(end + offset, unit="h")
-        return pd.DatetimeIndex(stamps).tz_localize(self.location.tzinfo)
+        days, hours = self._local_day_and_hours(offset_hours)
+        local_ns = days * 86_400_000_000_000 + np.round(hours * 3.6e12).astype(np.int64)
+        return pd.DatetimeIndex(local_ns.astype("datetime64[ns]")).tz_localize(self.location.tzinfo)
 
     def hourly(self) -> EPWData:
         """The records averaged to hours (a sub-hourly file); an hourly file is returned as it is.
@@ -179,10 +197,8 @@ class EPWData:
     @property
     def day_of_year(self) -> NDArray[np.int64]:
         """Day of the year 1-366 of each record (from its year, month and day)."""
-        import pandas as pd
-
-        base = pd.to_datetime({"year": self.year, "month": self.month, "day": self.day})
-        return np.asarray(base.dt.day_of_year, dtype=np.int64)
+        days = self._local_day_and_hours(None)[0].astype("datetime64[D]")
+        return (days - days.astype("datetime64[Y]").astype("datetime64[D]")).astype(np.int64) + 1
 
 
 def _fail(path: Path, line: int, message: str) -> FileFormatError:
@@ -275,16 +291,14 @@ def read_epw(path: str | os.PathLike[str]) -> EPWData:
     body = [(n + 1, line) for n, line in enumerate(lines[first:], start=first) if line.strip()]
     if not body:
         raise FileFormatError(f"{p}: has no data records after the 8 header lines")
-    rows = []
-    for line_no, line in body:
-        fields = line.split(",")
-        if len(fields) != N_FIELDS:
-            raise _fail(p, line_no, f"a data record has {N_FIELDS} comma-separated fields; found {len(fields)}")
-        rows.append(fields)
+    texts = [b[1] for b in body]
+    if any(t.count(",") != N_FIELDS - 1 for t in texts):
+        line_no, line = next(b for b in body if b[1].count(",") != N_FIELDS - 1)
+        raise _fail(p, line_no, f"a data record has {N_FIELDS} comma-separated fields; found {line.count(',') + 1}")
     line_numbers = np.array([b[0] for b in body], dtype=np.int64)
-    parsed = _parse_fast(rows)
+    parsed = _parse_fast(texts)
     if parsed is None:  # something is wrong: the field-by-field reader finds it and names the line
-        parsed = _parse_checked(p, rows, line_numbers)
+        parsed = _parse_checked(p, [t.split(",") for t in texts], line_numbers)
     ints, values = parsed
     year, month, day, hour, minute = (ints[:, k] for k in range(5))
     _check_dates(p, year, month, day, hour, line_numbers)
@@ -311,13 +325,17 @@ _INT_COLUMNS = (0, 1, 2, 3, 4)  # year, month, day, hour, minute
 _VALUE_COLUMNS = tuple(f[0] for f in _FIELDS)
 
 
-def _parse_fast(rows: list[list[str]]):
-    """(ints (n, 5), values (n, len(_FIELDS))) converted in bulk, or None if any field needs a closer look."""
+def _parse_fast(texts: list[str]):
+    """(ints (n, 5), values (n, len(_FIELDS))) converted in bulk, or None if any field needs a closer look.
+
+    Every record has N_FIELDS fields (checked before); numpy's C reader converts the columns needed.
+    """
     try:
-        raw = np.array([[r[k] for k in _INT_COLUMNS + _VALUE_COLUMNS] for r in rows], dtype=float)
+        raw = np.loadtxt(texts, delimiter=",", usecols=_INT_COLUMNS + _VALUE_COLUMNS, dtype=float, comments=None,
+                         ndmin=2)
     except ValueError:
         return None
-    ints_f, values = raw[:, :5], raw[:, 5:]
+    ints_f, values = raw[:, :5], np.ascontiguousarray(raw[:, 5:])
     if not (np.all(np.isfinite(raw)) and np.all(ints_f == np.round(ints_f))
             and np.all((ints_f[:, 0] >= YEAR_RANGE[0]) & (ints_f[:, 0] <= YEAR_RANGE[1]))
             and np.all((ints_f[:, 4] >= 0) & (ints_f[:, 4] <= 60))):

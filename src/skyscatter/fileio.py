@@ -15,7 +15,6 @@ from __future__ import annotations
 import contextlib
 import os
 import re
-import secrets
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -136,7 +135,7 @@ def _new_temp(target: Path, kind: str) -> Path:
     """Create an empty temporary file beside ``target`` with the permissions ``open()`` would give it."""
     folder = _folder(target)
     for _ in range(100):
-        name = f".{target.name}.{os.getpid()}.{secrets.token_hex(6)}.{kind}{target.suffix}"
+        name = f".{target.name}.{os.getpid()}.{os.urandom(6).hex()}.{kind}{target.suffix}"
         tmp = folder / name
         try:
             # mode 0o666 filtered by the process umask, as a plain open() does; no umask toggling.
@@ -245,12 +244,13 @@ class NumbaCacheWarning(UserWarning):
 
 
 def _writable_dir(path: str) -> bool:
-    """Whether ``path`` is (or can be created as) a folder this process can write, tested as numba does."""
-    import tempfile
-
+    """Whether ``path`` is (or can be created as) a folder this process can write, tested as numba does: by
+    creating (and removing) a file in it. Without the tempfile module, whose import costs every command."""
     try:
         os.makedirs(path, exist_ok=True)
-        tempfile.TemporaryFile(dir=path).close()
+        probe = os.path.join(path, f".skyscatter-probe-{os.getpid()}-{os.urandom(6).hex()}")
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        os.unlink(probe)
     except OSError:
         return False
     return True
@@ -281,7 +281,6 @@ def ensure_numba_cache(package_dir: str | os.PathLike[str]) -> str | None:
     is always kept. Returns the folder chosen, or None when nothing needed changing.
     """
     import sys
-    import tempfile
 
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
@@ -290,6 +289,8 @@ def ensure_numba_cache(package_dir: str | os.PathLike[str]) -> str | None:
     user_cache = os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "numba")
     if not user_cache.startswith("~") and _writable_dir(user_cache):
         return None
+    import tempfile
+
     uid = os.getuid() if hasattr(os, "getuid") else 0
     fallback = os.path.join(tempfile.gettempdir(), f"skyscatter-numba-{uid}")
     if not _private_dir(fallback):

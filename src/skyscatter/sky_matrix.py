@@ -5,7 +5,7 @@ The job Radiance's ``gendaymtx`` does, vectorised over hours:
 1. read the EPW file (:func:`skyscatter.epw.read_epw`): site, time zone, hourly direct normal and diffuse
    horizontal irradiance and dew point;
 2. the sun for every hour at the middle of the hour the EPW values average over (file hour - 30 min, local
-   standard time), NREL SPA through :func:`skyscatter.sun.position.sun_position` (apparent zenith, the site
+   standard time), NREL SPA through :func:`skyscatter.sun.position.sun_position_unix` (apparent zenith, the site
    elevation as altitude);
 3. the Perez sky of every hour with :func:`skyscatter.sky.perez.perez_parameters` (clearness and brightness from
    the irradiances, Perez 1990 luminous efficacies with the hour's dew point, all the guards of
@@ -30,7 +30,6 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -39,7 +38,7 @@ from .epw import EPWData, EPWLocation, read_epw
 from .errors import FileFormatError, InvalidParameterError
 from .fileio import atomic_path, atomic_paths
 from .patches import PatchScheme, patch_scheme
-from .sky.perez_family import gradation_scalar, indicatrix_scalar
+from .sky.perez_family import gradation, indicatrix
 
 __all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches", "perez_patch_luminance",
            "skymatrix"]
@@ -48,50 +47,55 @@ __all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patche
 NORMALISATION_NODES = (48, 96)
 
 
-@numba.njit(cache=True, parallel=True, nogil=True)
-def _kernel(coeffs, sun, scale, qdirs, qweights, q_row, sdirs, s_row, row_cos, n_sub, out):  # pragma: no cover
-    """Per hour: normalise the Perez sky to D_v with the quadrature, then average it over each patch's samples.
+#: Values (skies x directions) per vectorised step of :func:`perez_patch_luminance`: its temporaries stay in the
+#: CPU caches (measured: 4-8x slower per value once they reach a few MB).
+CHUNK_VALUES = 65536
+
+
+def _perez_chunk(coeffs, sun, scale, dirs_t, q_rows, rows, row_cos, qweights, n_sub, out, work) -> None:
+    """One block of skies: normalise each Perez sky to D_v with the quadrature, then average over the samples.
 
     The Perez function (Perez et al. 1993, Eq. 1) ``max(0, (1 + a exp(b / max(cos theta, 0.01)))(1 + c
     exp(d gamma) + e cos^2 gamma))`` (the one horizon rule of :mod:`skyscatter.sky.perez_family`) is the product of
-    the shared kernel's gradation, tabulated per hour over the distinct zenith angles of the quadrature nodes and
-    samples (``row_cos``; ``q_row``/``s_row`` index it), and its indicatrix per direction: one exponential per
-    direction instead of two.
+    the shared kernel's gradation G, tabulated per sky over the distinct zenith angles of the directions
+    (``row_cos``; ``rows`` gives each direction's entry), and its indicatrix I per direction: one exponential
+    per direction instead of two. ``dirs_t`` (3, n) holds the quadrature nodes (weights ``qweights``), then
+    ``n_sub`` samples per patch; every sky of the block has ``scale`` (D_v) > 0. ``work``: a scratch array of at
+    least (n_skies, n).
+
+    When the nodes are rows of equal zenith angle (``q_rows``: the entry of each row, ``qweights`` of shape
+    (rows, nodes per row)) and G > 0 on every row, ``max(0, G I) = G max(0, I)`` and the normalisation is
+    ``sum_r G_r sum_j w_rj max(0, I_rj)``: no per-node gather of G (the same sum, in another order).
     """
-    n_hours = coeffs.shape[0]
-    n_patch = out.shape[1]
-    n_rows = row_cos.shape[0]
-    for h in numba.prange(n_hours):
-        if scale[h] <= 0.0:
-            for p in range(n_patch):
-                out[h, p] = 0.0
-            continue
-        a, b, c, d, e = coeffs[h, 0], coeffs[h, 1], coeffs[h, 2], coeffs[h, 3], coeffs[h, 4]
-        sx, sy, sz = sun[h, 0], sun[h, 1], sun[h, 2]
-        grad = np.empty(n_rows)
-        for u in range(n_rows):
-            grad[u] = gradation_scalar(row_cos[u], a, b, 0.0)
-        total = 0.0
-        for k in range(qdirs.shape[0]):
-            cg = min(1.0, max(-1.0, qdirs[k, 0] * sx + qdirs[k, 1] * sy + qdirs[k, 2] * sz))
-            f = grad[q_row[k]] * indicatrix_scalar(1.0, np.arccos(cg), cg, 1.0, c, d, e, 0.0, 0.0, 0.0)
-            if f > 0.0:
-                total += qweights[k] * f
-        if total <= 0.0:  # no positive luminance anywhere: uniform sky (as PerezSky and gendaymtx)
-            for p in range(n_patch):
-                out[h, p] = scale[h] / np.pi
-            continue
-        norm = scale[h] / total
-        for p in range(n_patch):
-            acc = 0.0
-            base = p * n_sub
-            for s in range(n_sub):
-                k = base + s
-                cg = min(1.0, max(-1.0, sdirs[k, 0] * sx + sdirs[k, 1] * sy + sdirs[k, 2] * sz))
-                f = grad[s_row[k]] * indicatrix_scalar(1.0, np.arccos(cg), cg, 1.0, c, d, e, 0.0, 0.0, 0.0)
-                if f > 0.0:
-                    acc += f
-            out[h, p] = norm * acc / n_sub
+    n_sky = coeffs.shape[0]
+    a, b, c, d, e = (coeffs[:, k : k + 1] for k in range(5))
+    grad = gradation(row_cos, a, b)  # (n_skies, n_rows)
+    cos_g = sun @ dirs_t
+    np.clip(cos_g, -1.0, 1.0, out=cos_g)
+    gamma = np.arccos(cos_g)
+    f = indicatrix(1.0, gamma, cos_g, 1.0, c, d, e, out=gamma, work=work[:n_sky])  # in place: no temporaries
+    n_q = qweights.size
+    g_q = grad[:, q_rows] if q_rows is not None else None
+    if g_q is not None and np.all(g_q > 0.0):
+        fq = np.reshape(f[:, :n_q], (n_sky, *qweights.shape), copy=False)  # a view
+        np.maximum(fq, 0.0, out=fq)
+        total = np.einsum("hr,hr->h", g_q, np.einsum("hrj,rj->hr", fq, qweights))
+        fs = f[:, n_q:]
+        fs *= np.take(grad, rows[n_q:], axis=1)
+        np.maximum(fs, 0.0, out=fs)
+    else:
+        f *= np.take(grad, rows, axis=1)
+        np.maximum(f, 0.0, out=f)
+        total = f[:, :n_q] @ qweights.reshape(-1)
+    uniform = total <= 0.0  # no positive luminance anywhere: uniform sky (as PerezSky and gendaymtx)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        norm = np.where(uniform, 0.0, scale / np.where(uniform, 1.0, total))
+    samples = f[:, n_q:].reshape(n_sky, -1, n_sub)
+    acc = samples[..., 0] if n_sub == 1 else samples.sum(axis=-1)
+    np.multiply(norm[:, None], acc, out=out)
+    if n_sub > 1:
+        out /= n_sub
+    out[uniform] = (scale[uniform] / np.pi)[:, None]
 
 
 def perez_patch_luminance(
@@ -124,27 +128,28 @@ def perez_patch_luminance(
     else:
         sdirs = scheme.sample_directions(samples).reshape(-1, 3)
     n_sub = sdirs.shape[0] // scheme.n_patches
-    coeffs = np.ascontiguousarray(coefficients, dtype=np.float64).reshape(-1, 5)
-    qd = np.ascontiguousarray(qd, dtype=np.float64).reshape(-1, 3)
-    sdirs = np.ascontiguousarray(sdirs, dtype=np.float64)
-    # distinct zenith cosines of nodes and samples (rows of the grids), for the per-hour gradation table
-    row_cos, inverse = np.unique(np.concatenate([qd[:, 2], sdirs[:, 2]]), return_inverse=True)
-    q_row = np.ascontiguousarray(inverse[: qd.shape[0]], dtype=np.int64)
-    s_row = np.ascontiguousarray(inverse[qd.shape[0]:], dtype=np.int64)
-    out = np.empty((coeffs.shape[0], scheme.n_patches))
-    _kernel(
-        coeffs,
-        np.ascontiguousarray(model_sun, dtype=np.float64).reshape(-1, 3),
-        np.ascontiguousarray(diffuse_illuminance, dtype=np.float64).reshape(-1),
-        qd,
-        np.ascontiguousarray(qw, dtype=np.float64).reshape(-1),
-        q_row,
-        sdirs,
-        s_row,
-        np.ascontiguousarray(row_cos),
-        n_sub,
-        out,
-    )
+    coeffs = np.asarray(coefficients, dtype=np.float64).reshape(-1, 5)
+    sun = np.asarray(model_sun, dtype=np.float64).reshape(-1, 3)
+    scale = np.asarray(diffuse_illuminance, dtype=np.float64).reshape(-1)
+    qd = np.asarray(qd, dtype=np.float64).reshape(-1, 3)
+    dirs = np.concatenate([qd, np.asarray(sdirs, dtype=np.float64)])
+    dirs_t = np.ascontiguousarray(dirs.T)
+    # distinct zenith cosines of nodes and samples, for the per-sky gradation table
+    row_cos, rows = np.unique(dirs[:, 2], return_inverse=True)
+    qw = np.asarray(qw, dtype=np.float64).reshape(-1)
+    q_rows = None
+    nz, na = NORMALISATION_NODES
+    if qw.size == nz * na and np.all(rows[: qw.size].reshape(nz, na) == rows[: qw.size : na, None]):
+        q_rows, qw = rows[: qw.size : na], qw.reshape(nz, na)  # the horizontal rule: rows of equal zenith angle
+    out = np.zeros((coeffs.shape[0], scheme.n_patches))
+    lit = np.flatnonzero(scale > 0.0)
+    step = max(1, CHUNK_VALUES // dirs.shape[0])
+    work = np.empty((step, dirs.shape[0]))
+    for start in range(0, lit.size, step):
+        sel = lit[start : start + step]
+        block = np.empty((sel.size, scheme.n_patches))
+        _perez_chunk(coeffs[sel], sun[sel], scale[sel], dirs_t, q_rows, rows, row_cos, qw, n_sub, block, work)
+        out[sel] = block
     return out
 
 
@@ -156,8 +161,11 @@ class SkyMatrix:
     ----------
     luminance : ndarray, shape (n_hours, n_patches)
         Mean patch luminance [cd m^-2] (sky; plus the sun's share if ``include_sun``).
-    times : pandas.DatetimeIndex
-        Middle of each hour, local standard time of the file.
+    unix_time : ndarray, shape (n_hours,)
+        Middle of each hour (record) as Unix time [s since 1970-01-01T00:00 UTC]; :attr:`times` gives them as a
+        pandas ``DatetimeIndex`` in the file's standard time, :meth:`iso_times` as ISO 8601 text.
+    utc_offset_hours : float
+        The file's standard time minus UTC [h].
     sun_zenith, sun_azimuth : ndarray, shape (n_hours,)
         SPA sun position at mid-hour [rad] (azimuth from north towards east).
     epsilon, delta : ndarray
@@ -171,7 +179,8 @@ class SkyMatrix:
     """
 
     luminance: NDArray[np.float64]
-    times: object
+    unix_time: NDArray[np.float64]
+    utc_offset_hours: float
     sun_zenith: NDArray[np.float64]
     sun_azimuth: NDArray[np.float64]
     epsilon: NDArray[np.float64]
@@ -182,6 +191,26 @@ class SkyMatrix:
     location: EPWLocation
     include_sun: bool
     samples: int
+
+    @property
+    def times(self):
+        """Middle of each hour (record): tz-aware ``pandas.DatetimeIndex`` in the file's standard time."""
+        import datetime as dt
+
+        import pandas as pd
+
+        ns = np.round(self.unix_time * 1e3).astype(np.int64) * 1_000_000  # whole milliseconds, exactly
+        tz = dt.timezone(dt.timedelta(hours=self.utc_offset_hours))
+        return pd.DatetimeIndex(ns.astype("datetime64[ns]")).tz_localize("UTC").tz_convert(tz)
+
+    def iso_times(self) -> NDArray[np.str_]:
+        """Middle of each hour (record) as ISO 8601 text in the file's standard time, e.g.
+        ``2023-06-20T00:30:00+01:00`` (to the second: EPW records give whole seconds)."""
+        offset_s = round(self.utc_offset_hours * 3600.0)
+        local = np.round(self.unix_time + offset_s).astype(np.int64).astype("datetime64[s]")
+        sign = "-" if offset_s < 0 else "+"
+        minutes = abs(offset_s) // 60
+        return np.char.add(np.datetime_as_string(local, unit="s"), f"{sign}{minutes // 60:02d}:{minutes % 60:02d}")
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -218,7 +247,7 @@ class SkyMatrix:
             np.savez(
                 fh,
                 luminance=self.luminance.astype(np.float32),
-                times=np.asarray([t.isoformat() for t in self.times]),
+                times=self.iso_times(),
                 sun_zenith=self.sun_zenith,
                 sun_azimuth=self.sun_azimuth,
                 epsilon=self.epsilon,
@@ -245,7 +274,7 @@ class SkyMatrix:
 
     def _write_csv(self, tmp: Path) -> None:
         header = "time," + ",".join(f"patch_{i}" for i in range(self.scheme.n_patches))
-        stamps = [t.isoformat() for t in self.times]
+        stamps = self.iso_times().tolist()
         zero_row = ",".join(["0"] * self.scheme.n_patches)
         with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
             fh.write(header + "\n")
@@ -368,7 +397,7 @@ def skymatrix(
         Unknown scheme or bad options.
     """
     from .sky.perez import MIN_SUN_ZENITH, perez_parameters
-    from .sun.position import sun_position
+    from .sun.position import sun_position_unix
 
     geom = _check_scheme(scheme)
     if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 16:
@@ -382,8 +411,8 @@ def skymatrix(
         epw = epw.hourly()
     _check_irradiance(epw)
     loc = epw.location
-    times = epw.times()  # middle of each record's interval
-    pos = sun_position(loc.latitude, loc.longitude, times, altitude=loc.elevation)
+    unix_time = epw.unix_times()  # middle of each record's interval
+    pos = sun_position_unix(loc.latitude, loc.longitude, unix_time, altitude=loc.elevation)
     zen = np.asarray(pos.zenith, dtype=float)
     azi = np.asarray(pos.azimuth, dtype=float)
     n = len(epw)
@@ -436,7 +465,8 @@ def skymatrix(
             add_sun_to_patches(lum, sunny, direction_from_angles(model_zenith, azi[sunny]), e_sun[sunny], geom)
     return SkyMatrix(
         luminance=lum,
-        times=times,
+        unix_time=unix_time,
+        utc_offset_hours=float(loc.timezone_hours),
         sun_zenith=zen,
         sun_azimuth=azi,
         epsilon=eps,

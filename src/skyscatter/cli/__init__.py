@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import importlib
+import os
 import signal
 import sys
 from collections.abc import Iterator, Sequence
@@ -22,6 +23,24 @@ from ..errors import SkyscatterError
 # Subcommand modules in the order ``--help`` lists them.
 _COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo", "precompute", "export_luts", "reference",
              "fit_hosek_wilkie"]
+# Each module registers one subcommand, named like the module with '-' for '_'.
+_MODULE_OF = {name.replace("_", "-"): name for name in _COMMANDS}
+# Commands whose linear algebra is a few small products: their BLAS pool starts with one thread (below).
+_SMALL_BLAS_COMMANDS = ("sun", "sky", "illuminance", "skymatrix")
+_BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "GOTO_NUM_THREADS")
+
+
+def _one_blas_thread_for(command: str | None) -> None:
+    """Start numpy's BLAS with one thread for a command that only multiplies small matrices.
+
+    OpenBLAS starts a thread per core when numpy is imported and keeps it spinning for a while: about 0.06 s of
+    a two-core machine, more with more cores, all for nothing in these commands (issue 12, a quick command
+    line). Only before numpy is imported and only if the user has set none of the BLAS thread variables;
+    :func:`skyscatter.runtime.set_num_threads` still sizes the pool later if a computation asks for it.
+    """
+    if (command in _SMALL_BLAS_COMMANDS and "numpy" not in sys.modules
+            and not any(v in os.environ for v in _BLAS_THREAD_VARIABLES)):
+        os.environ["OPENBLAS_NUM_THREADS"] = "1"
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -87,7 +106,10 @@ def _cli_environment() -> Iterator[None]:
             signal.signal(signal.SIGTERM, previous)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser with every subcommand, or with ``command`` alone (when it names one): a command then imports
+    only its own module and what that needs (issue 12, a quick command line). ``--help``, a missing or an
+    unknown command get the full parser, so that the listing and "invalid choice" name every command."""
     parser = OneLineParser(
         prog="skyscatter",
         description="Physically based daylight: sun position, sky models, sky images and landscapes.",
@@ -95,7 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"skyscatter {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
-    for name in _COMMANDS:
+    for name in [_MODULE_OF[command]] if command in _MODULE_OF else _COMMANDS:
         module = importlib.import_module(f"skyscatter.cli.{name}")
         module.register(sub)
     return parser
@@ -108,9 +130,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    parser = build_parser()
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    command = args_list[0] if args_list else None
+    _one_blas_thread_for(command)
+    parser = build_parser(command)
     try:
-        args = parser.parse_args(argv)
+        args = parser.parse_args(args_list)
     except SystemExit as exc:  # --help, --version and usage errors (already printed)
         return int(exc.code or 0) if not isinstance(exc.code, str) else 2
     if args.command is None:

@@ -36,7 +36,6 @@ Graphics and Applications 33(3), 44-52 (2013), https://doi.org/10.1109/MCG.2013.
 from __future__ import annotations
 
 import json
-import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -45,7 +44,6 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -54,7 +52,7 @@ from ..errors import FileFormatError, InvalidParameterError
 from ..fileio import atomic_path
 from ..spectral import as_wavelengths
 from .base import SkyModel, SunSkyMixin, check_sun_angles
-from .perez_family import hosek_wilkie_f_scalar
+from .perez_family import HOSEK_WILKIE_OFFSET, gradation, indicatrix
 
 __all__ = [
     "BANDS",
@@ -455,10 +453,22 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         """
         d = as_directions(directions)
         shape = d.shape[:-1]
-        flat = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
+        flat = np.asarray(d.reshape(-1, 3), dtype=np.float64)
         out = np.empty((flat.shape[0], scale.size))
-        _evaluate_kernel(flat, np.asarray(self.sun_direction, dtype=np.float64),
-                         np.ascontiguousarray(params), np.ascontiguousarray(scale), clip, out)
+        # Parameters in the stored order A..G, I, H (HOSEK_WILKIE_PARAMETER_ORDER), one row per band.
+        a, b, c, dd, e, f, g, i, h = (np.asarray(params, dtype=np.float64)[None, :, k] for k in range(9))
+        step = max(1, _CHUNK // max(scale.size, 1))
+        for start in range(0, flat.shape[0], step):
+            sl = slice(start, start + step)
+            z = flat[sl, 2:3]
+            gamma = self._gamma(flat[sl])[:, None]  # atan2 form, accurate near the sun
+            v = gradation(z, a, b, HOSEK_WILKIE_OFFSET)
+            v *= indicatrix(z, gamma, np.cos(gamma), c, dd, e, f, g, h, i)
+            v *= scale
+            if clip:
+                np.maximum(v, 0.0, out=v)
+            v[z[:, 0] < 0.0] = 0.0  # the form is defined on the upper hemisphere only
+            out[sl] = v
         return out.reshape(*shape, scale.size)
 
     def band_radiance(self, directions: ArrayLike) -> NDArray[np.float64]:
@@ -604,27 +614,8 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         return super().sun_xyz()
 
 
-@numba.njit(parallel=True, nogil=True, cache=True)
-def _evaluate_kernel(d, sun, params, scale, clip, out):  # pragma: no cover - compiled
-    """out[n, b] = F(theta_n, gamma_n; params[b]) * scale[b] (0 below the horizon, clipped at 0 if ``clip``).
-
-    gamma = atan2(|d x s|, d . s), accurate near the sun; the reference code takes cos(gamma) of it.
-    """
-    n_bands = scale.size
-    for n in numba.prange(d.shape[0]):
-        x, y, z = d[n, 0], d[n, 1], d[n, 2]
-        if z < 0.0:
-            for b in range(n_bands):
-                out[n, b] = 0.0
-            continue
-        cx = y * sun[2] - z * sun[1]
-        cy = z * sun[0] - x * sun[2]
-        cz = x * sun[1] - y * sun[0]
-        gamma = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), x * sun[0] + y * sun[1] + z * sun[2])
-        for b in range(n_bands):
-            p = params[b]
-            v = scale[b] * hosek_wilkie_f_scalar(z, gamma, p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8])
-            out[n, b] = max(v, 0.0) if clip else v
+#: Direction x band values per vectorised step of ``HosekWilkieSky._evaluate`` (temporaries stay in cache).
+_CHUNK = 65536
 
 
 @lru_cache(maxsize=1)

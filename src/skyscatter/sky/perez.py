@@ -16,10 +16,10 @@ Sky parameters from irradiance (Perez et al. 1990): clearness (Eq. 1)
 ``epsilon = ((D_h + I_n) / D_h + kappa Z^3) / (1 + kappa Z^3)``, kappa = 1.041, and brightness (Eq. 2)
 ``delta = D_h m / I_0``, with D_h the diffuse horizontal and I_n the direct normal irradiance [W m^-2], m the
 relative optical air mass (Kasten 1966, :func:`skyscatter.atmosphere.airmass.relative_optical_mass`) and
-I_0 the extraterrestrial normal irradiance (1367 W m^-2 times Spencer's 1971 eccentricity factor, via
-pvlib). Illuminance from irradiance uses the luminous efficacy models of Perez et al. 1990, Table 4
-(``skyscatter/data/perez1990_luminous_efficacy.csv``), with the precipitable water ``W = exp(0.07 T_d -
-0.075)`` [cm] from the surface dew point T_d [deg C] (Eq. 3).
+I_0 the extraterrestrial normal irradiance (1367 W m^-2 times Spencer's 1971 eccentricity factor,
+:func:`extraterrestrial_irradiance`). Illuminance from irradiance uses the luminous efficacy models of
+Perez et al. 1990, Table 4 (``skyscatter/data/perez1990_luminous_efficacy.csv``), with the precipitable water
+``W = exp(0.07 T_d - 0.075)`` [cm] from the surface dew point T_d [deg C] (Eq. 3).
 
 Guards (on by default, ``guards=False`` turns them off; each is what Radiance's gendaylit/gendaymtx apply):
 
@@ -133,17 +133,19 @@ def sky_clearness(
 def extraterrestrial_irradiance(day_of_year: ArrayLike | None) -> NDArray[np.float64] | float:
     """Extraterrestrial normal irradiance I_0 [W m^-2]: 1367 W m^-2 times Spencer's (1971) eccentricity factor.
 
-    ``day_of_year`` is 1-366; None gives the mean Sun-Earth distance (I_0 = 1367 W m^-2). Uses
-    ``pvlib.irradiance.get_extra_radiation(method="spencer")``.
+    ``E_0 = 1.000110 + 0.034221 cos G + 0.001280 sin G + 0.000719 cos 2G + 0.000077 sin 2G`` with the day angle
+    ``G = 2 pi (day_of_year - 1) / 365`` (Spencer 1971, Search 2(5):172; Iqbal 1983, An Introduction to Solar
+    Radiation, Eq. 1.2.1); equal to ``pvlib.irradiance.get_extra_radiation(method="spencer")`` in the tests.
+    ``day_of_year`` is 1-366; None gives the mean Sun-Earth distance (I_0 = 1367 W m^-2).
     """
     if day_of_year is None:
         return SOLAR_CONSTANT
-    from pvlib.irradiance import get_extra_radiation
-
     doy = np.asarray(day_of_year, dtype=float)
     if np.any(~np.isfinite(doy)) or np.any(doy < 1) or np.any(doy > 366):
         raise InvalidParameterError(f"day_of_year must be within 1-366; got {day_of_year!r}")
-    out = np.asarray(get_extra_radiation(doy, solar_constant=SOLAR_CONSTANT, method="spencer"), dtype=float)
+    g = (2.0 * np.pi / 365.0) * (doy - 1.0)
+    out = SOLAR_CONSTANT * (1.00011 + 0.034221 * np.cos(g) + 0.00128 * np.sin(g) + 0.000719 * np.cos(2.0 * g)
+                            + 7.7e-05 * np.sin(2.0 * g))
     return float(out) if out.ndim == 0 else out
 
 

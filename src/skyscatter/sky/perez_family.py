@@ -27,17 +27,17 @@ finite), and Hosek-Wilkie adds its published offset 0.01 to ``cos theta`` clampe
 horizon are each model's business (zero or the horizon value, as its docstring says); the kernel sees only
 ``cos theta`` >= 0 after the floor.
 
-The kernel is a numba scalar function (:func:`extended_perez_scalar`, called from other compiled kernels such as
-the Preetham sky's and the sky matrix's) and a broadcasting ufunc built from the same function
-(:func:`extended_perez`), so there is one description of the formula.
+The kernel is written once, in numpy (:func:`gradation` and :func:`indicatrix`, whose product is
+:func:`extended_perez`): every model and the sky matrix evaluate whole arrays of directions through it. numpy's
+vectorised exp/arccos/sqrt are faster per direction than numba's scalar libm calls on this formula, and the
+sky package then needs no compiled kernel at all: a command-line call pays neither numba's import nor its
+first-use set-up (about 0.35 s; issue 12, "a quick command line").
 """
 
 from __future__ import annotations
 
-import functools
 import math
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -49,12 +49,10 @@ __all__ = [
     "HOSEK_WILKIE_PARAMETER_ORDER",
     "cie_parameters",
     "extended_perez",
-    "extended_perez_scalar",
-    "gradation_scalar",
-    "indicatrix_scalar",
+    "gradation",
+    "indicatrix",
     "hosek_wilkie_f",
     "hosek_wilkie_f_jacobian",
-    "hosek_wilkie_f_scalar",
     "kittler_parameters",
     "perez_f",
     "perez_parameters_from_abcde",
@@ -72,50 +70,64 @@ HOSEK_WILKIE_PARAMETER_ORDER = ("A", "B", "C", "D", "E", "F", "G", "I", "H")
 _HW_TO_ALPHABETICAL = np.array([0, 1, 2, 3, 4, 5, 6, 8, 7])
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def gradation_scalar(cos_theta, a, b, offset):  # pragma: no cover - compiled
-    """The gradation ``1 + A exp(B / d)``, ``d = max(cos theta, 0.01)`` (offset 0) or ``cos theta + offset``."""
-    ct = min(max(cos_theta, 0.0), 1.0)
-    denominator = ct + offset if offset > 0.0 else max(ct, HORIZON_COS)
-    return 1.0 + a * math.exp(b / denominator)
+def gradation(cos_theta: ArrayLike, a: ArrayLike, b: ArrayLike, offset: float = 0.0) -> NDArray[np.float64]:
+    """The gradation ``1 + A exp(B / d)``, ``d = max(cos theta, 0.01)`` (offset 0) or ``cos theta + offset``.
 
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def indicatrix_scalar(cos_theta, gamma, cos_g, c, d, e, f, g, h, i):  # pragma: no cover - compiled
-    """The indicatrix ``C + D exp(E gamma) + F cos^2 gamma + G chi(H, gamma) + I sqrt(cos theta)``."""
-    value = c + d * math.exp(e * gamma) + f * cos_g * cos_g
-    if g != 0.0:  # Hosek-Wilkie's aureole term; zero for the classic models (saves a root per direction)
-        q = 1.0 + h * h - 2.0 * h * cos_g
-        value += g * (1.0 + cos_g * cos_g) / (q * math.sqrt(q))  # q^1.5, equal to pow(q, 1.5) to rounding
-    if i != 0.0:
-        value += i * math.sqrt(min(max(cos_theta, 0.0), 1.0))
-    return value
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def extended_perez_scalar(cos_theta, gamma, cos_g, a, b, c, d, e, f, g, h, i, offset):  # pragma: no cover
-    """F(theta, gamma) for one direction, given gamma [rad] and its cosine (callers usually have both).
-
-    ``offset`` 0 applies the 0.01 floor of the classic models; > 0 adds it to cos theta (Hosek-Wilkie). Kernels
-    that evaluate many directions of one sky may combine :func:`gradation_scalar` (per zenith angle) and
-    :func:`indicatrix_scalar` (per angle from the sun) themselves: F is their product.
+    ``cos theta`` is clipped to [0, 1] first (the one horizon rule, module docstring). Arguments broadcast;
+    ``offset`` is one number (0: the classic models; Hosek-Wilkie: :data:`HOSEK_WILKIE_OFFSET`).
     """
-    return gradation_scalar(cos_theta, a, b, offset) * indicatrix_scalar(cos_theta, gamma, cos_g, c, d, e, f, g, h,
-                                                                         i)
+    ct = np.array(cos_theta, dtype=np.float64)  # a copy: clipped in place
+    np.clip(ct, 0.0, 1.0, out=ct)
+    if offset > 0.0:
+        ct += offset
+    else:
+        np.maximum(ct, HORIZON_COS, out=ct)
+    out = np.empty(np.broadcast_shapes(ct.shape, np.shape(a), np.shape(b)))
+    np.divide(b, ct, out=out)
+    np.exp(out, out=out)
+    out *= a
+    out += 1.0
+    return out
 
 
-def _from_gamma(cos_theta, gamma, a, b, c, d, e, f, g, h, i, offset):  # pragma: no cover - compiled
-    return extended_perez_scalar(cos_theta, gamma, math.cos(gamma), a, b, c, d, e, f, g, h, i, offset)
+def indicatrix(cos_theta: ArrayLike, gamma: ArrayLike, cos_gamma: ArrayLike, c: ArrayLike, d: ArrayLike,
+               e: ArrayLike, f: ArrayLike, g: ArrayLike = 0.0, h: ArrayLike = 0.0, i: ArrayLike = 0.0, *,
+               out: NDArray[np.float64] | None = None, work: NDArray[np.float64] | None = None
+               ) -> NDArray[np.float64]:
+    """The indicatrix ``C + D exp(E gamma) + F cos^2 gamma + G chi(H, gamma) + I sqrt(cos theta)``.
 
+    ``gamma`` [rad] and its cosine are both given (callers have both; computing one from the other costs an
+    arccos or a cos per direction). Arguments broadcast. The chi and sqrt terms are left out where G or I is
+    0 (the classic models), so a zero G never meets chi's pole at H = 1, gamma = 0.
 
-@functools.cache
-def _extended_perez_ufunc():
-    # Built on first use: a vectorize with a signature compiles when it is created, and numba's first
-    # compilation (about 0.5 s) should not be paid by every import of the sky package (CLI latency).
-    return numba.vectorize(
-        ["float64(float64, float64, float64, float64, float64, float64, float64, float64, float64, float64, "
-         "float64, float64)"], nopython=True, cache=True,
-    )(_from_gamma)
+    ``out`` and ``work``, float64 arrays of the result's shape, receive the result and the cos^2 gamma term;
+    ``out`` may be ``gamma`` itself (read first), ``work`` must be an array of its own. A loop over large blocks
+    of directions passes them and allocates nothing (fresh temporaries of a few hundred kB cost more than the
+    arithmetic here).
+    """
+    shapes = [x.shape if isinstance(x, np.ndarray) else np.shape(x)
+              for x in (cos_theta, gamma, cos_gamma, c, d, e, f, g, h, i) if not isinstance(x, float)]
+    shape = np.broadcast_shapes(*shapes)
+    cg = cos_gamma if isinstance(cos_gamma, np.ndarray) else np.asarray(cos_gamma, dtype=np.float64)
+    out = np.empty(shape) if out is None else out
+    work = np.empty(shape) if work is None else work
+    np.multiply(e, gamma, out=out)
+    np.exp(out, out=out)
+    out *= d
+    out += c
+    np.multiply(f, cg, out=work)
+    work *= cg
+    out += work
+    g = np.asarray(g, dtype=np.float64)
+    if g.any():  # Hosek-Wilkie's aureole term
+        q = 1.0 + h * h - 2.0 * h * cg
+        with np.errstate(divide="ignore", invalid="ignore"):
+            term = g * (1.0 + cg * cg) / (q * np.sqrt(q))  # q^1.5, equal to pow(q, 1.5) to rounding
+        out += term if g.all() else np.where(g != 0.0, term, 0.0)
+    i = np.asarray(i, dtype=np.float64)
+    if i.any():
+        out += i * np.sqrt(np.clip(cos_theta, 0.0, 1.0))
+    return out
 
 
 def extended_perez(cos_theta: ArrayLike, gamma: ArrayLike, parameters: ArrayLike, *, offset: float = 0.0
@@ -138,8 +150,12 @@ def extended_perez(cos_theta: ArrayLike, gamma: ArrayLike, parameters: ArrayLike
     p = np.asarray(parameters, dtype=float)
     if p.shape[-1:] != (9,):
         raise InvalidParameterError(f"parameters must have a last axis of 9 (A..I); got shape {p.shape}")
-    return _extended_perez_ufunc()(np.asarray(cos_theta, dtype=float), np.asarray(gamma, dtype=float),
-                                   *(p[..., k] for k in range(9)), float(offset))
+    ct = np.asarray(cos_theta, dtype=float)
+    gam = np.asarray(gamma, dtype=float)
+    a, b, c, d, e, f, g, h, i = (p[..., k] for k in range(9))
+    out = gradation(ct, a, b, float(offset))
+    out = out * indicatrix(ct, gam, np.cos(gam), c, d, e, f, g, h, i)
+    return out[()] if out.ndim == 0 else out
 
 
 def perez_parameters_from_abcde(coefficients: ArrayLike) -> NDArray[np.float64]:
@@ -177,12 +193,6 @@ def kittler_parameters() -> NDArray[np.float64]:
 
 
 # ------------------------------------------------------------------------------------------ Hosek & Wilkie 2012
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def hosek_wilkie_f_scalar(cos_theta, gamma, a, b, c, d, e, f, g, i, h):  # pragma: no cover - compiled
-    """Hosek & Wilkie's F for one direction, parameters in their stored order A..G, I, H (for compiled loops)."""
-    return extended_perez_scalar(cos_theta, gamma, math.cos(gamma), a, b, c, d, e, f, g, h, i, HOSEK_WILKIE_OFFSET)
 
 
 def hosek_wilkie_f(cos_theta: ArrayLike, gamma: ArrayLike, params: ArrayLike) -> NDArray[np.float64]:

@@ -16,10 +16,10 @@ doi:10.1145/311535.311545.
 
 from __future__ import annotations
 
+import math
 import warnings
 from typing import Literal
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -36,7 +36,7 @@ from ..spectral import (
     xyY_to_xyz,
 )
 from .base import SkyModel, SunSkyMixin, check_sun_angles
-from .perez_family import extended_perez_scalar, perez_f
+from .perez_family import gradation, indicatrix, perez_f
 
 __all__ = [
     "MAX_TURBIDITY",
@@ -205,13 +205,16 @@ class PreethamSky(SunSkyMixin, SkyModel):
             d = as_directions(directions)  # raises the standard error
         if d.ndim == 0 or d.shape[-1] != 3 or d.dtype.kind not in "biuf":
             as_directions(d)  # raises the standard shape or type error
-        flat = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
+        flat = np.asarray(d.reshape(-1, 3), dtype=np.float64)
         coefficients = np.stack([self._coefficients[k] for k in ("x", "y", "Y")])
         scale = np.array([self._zenith[k] / self._norm[k] for k in ("x", "y", "Y")])
         out = np.empty((3, flat.shape[0]))
-        n_bad = _preetham_kernel(
-            flat, self.sun_direction, coefficients, scale, self.below_horizon == "horizon", not self.strict, out
-        )
+        n_bad = 0
+        sun = np.asarray(self.sun_direction, dtype=np.float64)
+        for start in range(0, flat.shape[0], _CHUNK):
+            sl = slice(start, start + _CHUNK)
+            n_bad += _preetham_xyY(flat[sl], sun, coefficients, scale, self.below_horizon == "horizon",
+                                   not self.strict, out[:, sl])
         if n_bad:
             raise InvalidDirectionError(f"directions contain NaN, infinite or zero-length vectors ({n_bad} vectors)")
         x, y, Y = (o.reshape(d.shape[:-1]) for o in out)  # noqa: N806
@@ -282,52 +285,48 @@ class PreethamSky(SunSkyMixin, SkyModel):
         return sun_spectral_radiance(self.sun_zenith, self.turbidity, as_wavelengths(wavelengths))
 
 
-@numba.njit(parallel=True, cache=True)
-def _preetham_kernel(d, sun, coefficients, scale, horizon_mode, clip_negative, out):  # pragma: no cover - JIT
-    """x, y, Y of the Preetham sky for unit-normalised copies of ``d`` (n, 3); returns the number of bad rows.
+#: Directions per vectorised step of :func:`_preetham_xyY` (its temporaries stay in the CPU caches).
+_CHUNK = 16384
 
-    One fused pass over the directions (Perez form, Eq. 3, for the three channels) instead of many numpy
-    temporaries; it evaluates the shared Perez-family kernel (:mod:`skyscatter.sky.perez_family`) per channel.
+
+def _preetham_xyY(d, sun, coefficients, scale, horizon_mode, clip_negative, out) -> int:  # noqa: N802
+    """x, y, Y of the Preetham sky into ``out`` (3, n) for the directions ``d`` (n, 3); returns the bad rows.
+
+    Each direction is normalised; NaN, infinite or zero-length vectors are bad (output 0). Below the horizon Y
+    is 0 (``horizon_mode``: the direction is moved onto the horizon at its azimuth, at the sun's azimuth if it
+    points straight down). Eq. 3 for each channel is the shared Perez-family kernel
+    (:mod:`skyscatter.sky.perez_family`) with C = 1 and no Hosek-Wilkie terms.
     """
-    n = d.shape[0]
-    bad = 0
-    for i in numba.prange(n):
-        dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
-        norm = np.sqrt(dx * dx + dy * dy + dz * dz)
-        if not (norm > 0.0 and np.isfinite(norm)):
-            bad += 1
-            out[0, i] = 0.0
-            out[1, i] = 0.0
-            out[2, i] = 0.0
-            continue
-        dx /= norm
-        dy /= norm
-        dz /= norm
-        below = dz < 0.0
-        if below and horizon_mode:
-            h = np.sqrt(dx * dx + dy * dy)
-            if h > 1e-12:
-                dx /= h
-                dy /= h
-            else:
-                h = np.sqrt(sun[0] * sun[0] + sun[1] * sun[1])
-                if h > 0:
-                    dx, dy = sun[0] / h, sun[1] / h
-                else:
-                    dx, dy = 0.0, 1.0
-            dz = 0.0
-            below = False
-        cos_gamma = min(1.0, max(-1.0, dx * sun[0] + dy * sun[1] + dz * sun[2]))
-        gamma = np.arccos(cos_gamma)
-        for c in range(3):
-            k = coefficients[c]
-            out[c, i] = scale[c] * extended_perez_scalar(dz, gamma, cos_gamma, k[0], k[1], 1.0, k[2], k[3], k[4],
-                                                         0.0, 0.0, 0.0, 0.0)
-        if clip_negative and out[2, i] < 0.0:
-            out[2, i] = 0.0
-        if below:
-            out[2, i] = 0.0
-    return bad
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        norm = np.sqrt(np.einsum("ij,ij->i", d, d))
+        bad = ~((norm > 0.0) & np.isfinite(norm))
+        u = d / norm[:, None]
+    n_bad = int(np.count_nonzero(bad))
+    if n_bad:
+        u[bad] = (0.0, 0.0, 1.0)  # any finite direction; its output is zeroed below
+    below = u[:, 2] < 0.0
+    if horizon_mode and below.any():
+        h = np.hypot(u[below, 0], u[below, 1])
+        hs = math.hypot(sun[0], sun[1])
+        straight_down = (sun[0] / hs, sun[1] / hs) if hs > 0 else (0.0, 1.0)
+        flat = np.where((h > 1e-12)[:, None], u[below, :2] / np.where(h > 1e-12, h, 1.0)[:, None],
+                        straight_down)
+        u[below] = np.column_stack([flat, np.zeros(flat.shape[0])])
+        below[:] = False
+    dz = u[:, 2]
+    cos_gamma = np.clip(u @ sun, -1.0, 1.0)
+    gamma = np.arccos(cos_gamma)
+    for c in range(3):
+        k = coefficients[c]
+        f = gradation(dz, k[0], k[1])
+        f *= indicatrix(dz, gamma, cos_gamma, 1.0, k[2], k[3], k[4])
+        np.multiply(scale[c], f, out=out[c])
+    if clip_negative:
+        np.maximum(out[2], 0.0, out=out[2])
+    out[2, below] = 0.0
+    if n_bad:
+        out[:, bad] = 0.0
+    return n_bad
 
 
 def _check_turbidity(turbidity: float, strict: bool) -> float:

@@ -1,23 +1,30 @@
-"""The sun: its position for a place and time, and its spectral radiance after the atmosphere."""
+"""The sun: its position for a place and time, and its spectral radiance after the atmosphere.
 
-from .disc import SUN_ANGULAR_RADIUS, solar_disc_solid_angle
-from .position import SunPosition, sun_position
-from .sunlight import (
-    SunTransmittances,
-    extraterrestrial_radiance,
-    sun_direct_normal_irradiance,
-    sun_spectral_radiance,
-    transmittances,
-)
+Names are imported on first use, so that code needing only the sun's position or disc (a sky matrix from an EPW
+file) does not import the atmosphere behind the spectral sunlight.
+"""
 
-__all__ = [
-    "SUN_ANGULAR_RADIUS",
-    "SunPosition",
-    "SunTransmittances",
-    "extraterrestrial_radiance",
-    "sun_direct_normal_irradiance",
-    "sun_position",
-    "solar_disc_solid_angle",
-    "sun_spectral_radiance",
-    "transmittances",
-]
+from __future__ import annotations
+
+from ..lazy import lazy_namespace
+
+# public name -> submodule that defines it
+_LAZY = {
+    "SUN_ANGULAR_RADIUS": "disc",
+    "solar_disc_solid_angle": "disc",
+    "SunPosition": "position",
+    "sun_position": "position",
+    "sun_position_unix": "position",
+    "SunTransmittances": "sunlight",
+    "extraterrestrial_radiance": "sunlight",
+    "sun_direct_normal_irradiance": "sunlight",
+    "sun_spectral_radiance": "sunlight",
+    "transmittances": "sunlight",
+}
+
+_SUBMODULES = ("disc", "position", "spa", "sunlight")
+
+__all__ = sorted(_LAZY)
+
+
+__getattr__, __dir__ = lazy_namespace(globals(), _LAZY, _SUBMODULES)

@@ -3,12 +3,12 @@
 Two methods:
 
 ``"spa"`` (default)
-    The NREL Solar Position Algorithm (Reda & Andreas 2004, corrigendum 2007) as implemented by pvlib
-    (``pvlib.spa.solar_position``, the numpy code path of ``pvlib.solarposition.get_solarposition(...,
-    method='nrel_numpy')``); about 0.0003 deg uncertainty over -2000..6000. By default the zenith is the
-    *apparent* topocentric zenith, i.e. corrected for atmospheric refraction with the site's pressure and
-    temperature (``apparent=False`` gives the geometric one); near the horizon they differ by about 0.5 deg.
-    Delta T (TT - UT1) defaults to pvlib's polynomial for the date (``pvlib.spa.calculate_deltat``).
+    The NREL Solar Position Algorithm (Reda & Andreas 2004, corrigendum 2007), in numpy in
+    :mod:`skyscatter.sun.spa` (equal to pvlib's ``pvlib.spa.solar_position`` to 1e-8 deg in the tests); about
+    0.0003 deg uncertainty over -2000..6000. By default the zenith is the *apparent* topocentric zenith, i.e.
+    corrected for atmospheric refraction with the site's pressure and temperature (``apparent=False`` gives the
+    geometric one); near the horizon they differ by about 0.5 deg. Delta T (TT - UT1) defaults to Espenak &
+    Meeus's polynomial for the date (:func:`skyscatter.sun.spa.delta_t_espenak_meeus`, pvlib's rule too).
 
 ``"preetham1999"``
     The approximation of Preetham, Shirley & Smits (1999), Appendix A.6: solar time from the local standard
@@ -45,11 +45,11 @@ import sys
 from typing import Any, NamedTuple
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 
-__all__ = ["SunPosition", "sun_position"]
+__all__ = ["SunPosition", "sun_position", "sun_position_unix"]
 
 _METHODS = ("spa", "preetham1999")
 _NAIVE_HINT = (
@@ -156,16 +156,15 @@ def _utc_year_month(unix: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDA
 
 
 def _spa(unix, lat, lon, *, altitude, pressure, temperature, delta_t, apparent):
-    from pvlib import spa
+    from .spa import delta_t_espenak_meeus, spa_solar_position
 
     if delta_t is None:
-        delta_t = spa.calculate_deltat(*_utc_year_month(unix))
-    result = spa.solar_position(
-        unix, np.degrees(lat), np.degrees(lon), altitude, pressure / 100.0, temperature, delta_t, 0.5667
+        delta_t = delta_t_espenak_meeus(*_utc_year_month(unix))
+    apparent_zenith, zenith, azimuth = spa_solar_position(
+        unix, np.degrees(lat), np.degrees(lon), elevation=altitude, pressure=pressure / 100.0,
+        temperature=temperature, delta_t=delta_t, refraction=0.5667,
     )
-    # rows: apparent zenith, zenith, elevation, apparent elevation, azimuth, equation of time [deg, min]
-    zenith = result[0] if apparent else result[1]
-    return np.radians(zenith), np.radians(result[4])
+    return np.radians(apparent_zenith if apparent else zenith), np.radians(azimuth)
 
 
 def _preetham1999(unix, offset, lat, lon):
@@ -215,7 +214,7 @@ def sun_position(
     when : datetime.datetime, pandas.Timestamp, pandas.DatetimeIndex or array_like of datetime
         Timezone-aware time(s). Naive times are refused.
     method : {"spa", "preetham1999"}
-        NREL SPA through pvlib, or the approximation of Preetham et al. (1999) A.6 (module docstring).
+        NREL SPA (:mod:`skyscatter.sun.spa`), or the approximation of Preetham et al. (1999) A.6 (module docstring).
     altitude : float
         Site height above sea level [m] (SPA only).
     pressure : float
@@ -223,7 +222,7 @@ def sun_position(
     temperature : float
         Mean air temperature at the site [deg C], for the refraction correction (SPA only).
     delta_t : float, optional
-        TT - UT1 [s] (SPA only); default: pvlib's estimate for the date.
+        TT - UT1 [s] (SPA only); default: Espenak & Meeus's polynomial for the date (UTC year and month).
     apparent : bool
         SPA only: return the refraction-corrected (apparent) zenith (default) or the geometric one.
 
@@ -238,12 +237,49 @@ def sun_position(
     InvalidParameterError
         Naive or unreadable times, a site outside the allowed ranges, or an unknown method.
     """
+    unix, offset, shape = _times(when)
+    return _position(latitude, longitude, unix, offset, shape, method=method, altitude=altitude,
+                     pressure=pressure, temperature=temperature, delta_t=delta_t, apparent=apparent)
+
+
+def sun_position_unix(
+    latitude: float,
+    longitude: float,
+    unix_seconds: ArrayLike,
+    *,
+    utc_offset: ArrayLike = 0.0,
+    method: str = "spa",
+    altitude: float = 0.0,
+    pressure: float = 101325.0,
+    temperature: float = 12.0,
+    delta_t: float | None = None,
+    apparent: bool = True,
+) -> SunPosition:
+    """:func:`sun_position` for instants given as Unix time: seconds since 1970-01-01T00:00 UTC.
+
+    For callers that hold many times as numbers (an EPW file's records): no datetime objects and no pandas.
+    ``utc_offset`` [s] (local standard time minus UTC, broadcast against the times) is used by the
+    ``"preetham1999"`` method only (its day of the year is the local one). Other arguments and the result as in
+    :func:`sun_position`; the result has the shape of ``unix_seconds`` (floats for a scalar).
+    """
+    unix = np.asarray(unix_seconds, dtype=float)
+    if not np.all(np.isfinite(unix)):
+        raise InvalidParameterError("unix_seconds must be finite numbers of seconds since 1970-01-01 UTC")
+    offset = np.broadcast_to(np.asarray(utc_offset, dtype=float), unix.shape).reshape(-1)
+    if not np.all(np.isfinite(offset)):
+        raise InvalidParameterError("utc_offset must be finite seconds")
+    return _position(latitude, longitude, unix.reshape(-1), offset, unix.shape if unix.ndim else None,
+                     method=method, altitude=altitude, pressure=pressure, temperature=temperature,
+                     delta_t=delta_t, apparent=apparent)
+
+
+def _position(latitude, longitude, unix, offset, shape, *, method, altitude, pressure, temperature, delta_t,
+              apparent) -> SunPosition:
     if method not in _METHODS:
         raise InvalidParameterError(
             f"unknown sun-position method {method!r}; choose one of {', '.join(_METHODS)}"
         )
     lat, lon = _site(latitude, longitude)
-    unix, offset, shape = _times(when)
     if method == "spa":
         if not np.isfinite(altitude):
             raise InvalidParameterError(f"altitude must be a finite height in m; got {altitude!r}")
