@@ -92,7 +92,7 @@ def add_sun_options(parser: argparse.ArgumentParser, *, default_elevation: float
                     default_azimuth: float = 120.0) -> None:
     """Add the sun-placement options: explicit angles or a place and time."""
     g = parser.add_argument_group(
-        "sun", "Place the sun either by angles or by --lat/--lon/--time (NREL SPA through pvlib)."
+        "sun", "Place the sun either by angles or by --lat/--lon/--time (NREL SPA, Reda & Andreas 2004)."
     )
     g.add_argument("--sun-elevation", type=float_in(-90, 90), default=None, metavar="DEG",
                    help=f"sun elevation above the horizon [deg] (default {default_elevation:g} when no --time)")

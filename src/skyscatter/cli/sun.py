@@ -15,7 +15,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="sun zenith, azimuth and elevation for a place and time",
         description=(
             "Print the sun's zenith angle, azimuth (from north towards east) and elevation in degrees for a "
-            "site and a time. The default method is NREL SPA (through pvlib) with the refraction-corrected "
+            "site and a time. The default method is NREL SPA (Reda & Andreas 2004) with the refraction-corrected "
             "(apparent) zenith; 'preetham1999' is the approximation of Preetham et al. 1999, Appendix A.6."
         ),
         formatter_class=HELP_FORMATTER,
@@ -27,7 +27,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--time", type=aware_datetime, required=True, default=argparse.SUPPRESS, metavar="ISO",
                    help="time with a UTC offset, ISO 8601, e.g. 2024-06-21T09:30+02:00 or 2024-06-21T07:30Z")
     p.add_argument("--method", choices=["spa", "preetham1999"], default="spa",
-                   help="NREL SPA via pvlib, or Preetham 1999 A.6 (about 0.3 deg mean, 1.2 deg max error)")
+                   help="NREL SPA (Reda & Andreas 2004, skyscatter.sun.spa), or Preetham 1999 A.6 (about 0.3 deg "
+                        "mean, 1.2 deg max error)")
     p.add_argument("--altitude", type=finite_float, default=0.0, metavar="M",
                    help="site height above sea level [m] (spa only)")
     p.add_argument("--pressure", type=float_in(1.0, 2.0e5), default=101325.0, metavar="PA",
