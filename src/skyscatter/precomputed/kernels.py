@@ -431,7 +431,7 @@ def multiple_scattering_kernel(transmittance, density_r, density_m, beta_r, beta
     s_m = np.empty((n_pts, n_l))
     tmp = np.empty(n_l)
     q = np.empty((n_pts, n_l))
-    sl = np.empty((n_s, n_n, n_l))
+    sl = np.empty((n_s, n_n, n_l), dtype=np.float32)  # as the tables: half the memory traffic
     acc = np.empty((n_s, n_n, n_l))
     nu_tab = np.empty((n_s, n_n))
     big_a = mu_s_limit_a(mu_s_min, bottom, top)
