@@ -125,19 +125,22 @@ def test_vertical_single_scattering_closed_form(earth_single):
 
 
 def _density_of(field, params, sizes, first=False, n_theta=16):
-    """The phase-weighted radiances (Rayleigh, aerosol) of the scattering density kernel for ``field``."""
+    """The scattering density per unit scattering coefficient of the kernel for ``field``."""
+    prof, counts = _profiles(params)
+    wl = np.array([550.0])
     t = np.ones((*sizes.transmittance_shape, 1), dtype=np.float32)
     e = np.zeros((*sizes.irradiance_shape, 1), dtype=np.float32)
-    out_r, out_m = np.zeros_like(field), np.zeros_like(field)
+    out = np.zeros_like(field)
     parallel_for(kernels.scattering_density_kernel, sizes.scattering_r, t, field, field, first, e, np.zeros(1),
-                 params.mie_phase_g, aerosol_phase_kind(params.mie_phase_function), params.bottom_radius,
-                 params.top_radius, params.mu_s_min, n_theta, out_r, out_m)
-    return out_r, out_m
+                 params.rayleigh_scattering_at(wl), params.mie_scattering_at(wl), params.mie_phase_g,
+                 aerosol_phase_kind(params.mie_phase_function), prof, counts, params.bottom_radius,
+                 params.top_radius, params.mu_s_min, n_theta, out)
+    return out
 
 
 def test_scattering_density_of_uniform_field():
-    """J (Eq. 7) of a uniform radiance L0 is beta_s(r) L0 (energy conservation, 1e-5): both phase-weighted
-    radiances of the kernel (J per unit Rayleigh and per unit aerosol scattering coefficient) equal L0.
+    """J (Eq. 7) of a uniform radiance L0 is beta_s(r) L0 (energy conservation, 1e-5): the kernel's density per
+    unit scattering coefficient equals L0 at every radius.
 
     The former check with a field linear in nu (which the old nu axis, (1 + nu) / 2 with clamped texels,
     represented exactly) no longer applies: the nu axis is now the view-sun azimuth, and the ground half of the mu
@@ -146,9 +149,7 @@ def test_scattering_density_of_uniform_field():
     to end against DISORT in test_precomputed_disort.py."""
     sizes = TableSizes(**TINY)
     uniform = np.full((*sizes.scattering_shape, 1), 2.0, dtype=np.float32)
-    j_r, j_m = _density_of(uniform, EARTH, sizes)
-    np.testing.assert_allclose(j_r, 2.0, rtol=1e-5)
-    np.testing.assert_allclose(j_m, 2.0, rtol=1e-5)
+    np.testing.assert_allclose(_density_of(uniform, EARTH, sizes), 2.0, rtol=1e-5)
 
 
 # ------------------------------------------------------------------------------------------ tables vs integration

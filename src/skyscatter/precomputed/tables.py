@@ -328,8 +328,8 @@ class PrecomputedAtmosphere:
             tqdm progress bar per scattering order (default: when stderr is a terminal).
         chunk_size : int, optional
             Wavelengths computed together. Most of the work is geometry shared by all wavelengths of a chunk,
-            so larger chunks are faster; memory grows with them (about 7 x 4 bytes per texel of the 4D tables
-            and wavelength). Default: as many as fit in 512 MB of working tables (17 with the default sizes).
+            so larger chunks are faster; memory grows with them (about 6 x 4 bytes per texel of the 4D tables
+            and wavelength). Default: as many as fit in 512 MB of working tables (20 with the default sizes).
         """
         from tqdm.auto import tqdm
 
@@ -346,7 +346,7 @@ class PrecomputedAtmosphere:
         _check_colour_range(params, wl)
         sz = TableSizes.coerce(sizes)
         if chunk_size is None:
-            chunk_size = max(1, int(512e6 // (28 * math.prod(sz.scattering_shape))))
+            chunk_size = max(1, int(512e6 // (24 * math.prod(sz.scattering_shape))))
         if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
             raise InvalidParameterError(f"chunk_size must be a whole number >= 1; got {chunk_size!r}")
         bottom, top, mu_s_min = params.bottom_radius, params.top_radius, params.mu_s_min
@@ -409,11 +409,10 @@ class PrecomputedAtmosphere:
                 sums: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
                 for k in range(2, orders + 1):
                     t0 = time.perf_counter()
-                    dens_r = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
-                    dens_m = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
+                    dens = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
                     parallel_for(kernels.scattering_density_kernel, n_r, t_c, prev_a, prev_b, first, e_prev,
-                                 albedo[ch], g, mie_kind, bottom, top, mu_s_min, sz.density_sphere_samples, dens_r,
-                                 dens_m)
+                                 albedo[ch], beta_r[ch], beta_m[ch], g, mie_kind, profiles, counts, bottom, top,
+                                 mu_s_min, sz.density_sphere_samples, dens)
                     t1 = time.perf_counter()
                     d_irr = np.zeros((*sz.irradiance_shape, nc), dtype=np.float32)
                     parallel_for(kernels.indirect_irradiance_kernel, n_irr, prev_a, prev_b, first, g, mie_kind,
@@ -421,9 +420,9 @@ class PrecomputedAtmosphere:
                     irr_c += d_irr
                     t2 = time.perf_counter()
                     d_scat = np.zeros((*sz.scattering_shape, nc), dtype=np.float32)
-                    parallel_for(kernels.multiple_scattering_kernel, n_r * n_mu, t_c, dens_r, dens_m, beta_r[ch],
+                    parallel_for(kernels.multiple_scattering_kernel, n_r * n_mu, t_c, dens, beta_r[ch],
                                  beta_m[ch], profiles, counts, bottom, top, mu_s_min, sz.ray_samples, d_scat)
-                    del dens_r, dens_m
+                    del dens
                     mult_c += d_scat
                     sums.append((d_scat.sum(axis=(0, 1, 2, 3), dtype=np.float64),
                                  d_irr.sum(axis=(0, 1), dtype=np.float64)))
