@@ -391,7 +391,6 @@ class PrecomputedAtmosphere:
             return e_dir, s_r, s_m
 
         chunks = [np.arange(i, min(i + chunk_size, nl)) for i in range(0, nl, chunk_size)]
-        tail_ratio = np.zeros(nl)
         with tqdm(total=orders * len(chunks), desc="scattering orders", unit="order",
                   disable=not _progress_enabled(progress), leave=False) as bar:
             for ch in chunks:
@@ -440,14 +439,11 @@ class PrecomputedAtmosphere:
                         ratio = np.clip(np.divide(now, before, out=np.zeros_like(now), where=before > 0), 0.0,
                                         MAX_ORDER_RATIO)
                         table += last * (ratio / (1.0 - ratio)).astype(np.float32)
-                        tail_ratio[ch] = np.maximum(tail_ratio[ch], ratio)
                 single_rayleigh[..., ch] = s1_r
                 single_mie[..., ch] = s1_m
                 multiple[..., ch] = mult_c
                 irradiance[..., ch] = irr_c
         timings["total"] = time.perf_counter() - t_start
-        if orders >= 3:
-            timings["tail ratio (largest)"] = float(tail_ratio.max())
         tables = {"transmittance": transmittance, "irradiance": irradiance, "single_rayleigh": single_rayleigh,
                   "single_mie": single_mie, "multiple": multiple}
         return cls(params, wl, sz, orders, tables, timings)
