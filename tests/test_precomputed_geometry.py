@@ -130,24 +130,3 @@ def test_irradiance_mapping_round_trip():
             p = g.irradiance_coord(r, mu_s, BOTTOM, TOP, 8, 16)
             assert abs(p[0] - i_r) < 1e-9 and abs(p[1] - i_s) < 1e-9
 
-
-def test_acos_fast_matches_libm():
-    """geometry.acos_fast (table coordinates) against numpy's arccos on [-1, 1]: within 3.5e-13 rad everywhere,
-    exact at the ends and the centre (its polynomial was fitted to arcsin on [0, 1/2]; the half-angle reduction
-    covers the rest)."""
-    import numba
-
-    from skyscatter.precomputed.geometry import acos_fast
-
-    @numba.njit
-    def many(x):
-        out = np.empty_like(x)
-        for i in range(x.size):
-            out[i] = acos_fast(x[i])
-        return out
-
-    x = np.concatenate([np.linspace(-1.0, 1.0, 400001), [-1.0, -0.5, -1e-300, 0.0, 0.5, 1.0 - 1e-16, 1.0],
-                        np.random.default_rng(5).uniform(-1, 1, 100000)])
-    got = many(x)
-    assert np.max(np.abs(got - np.arccos(x))) < 3.5e-13  # twice the fit's 1.5e-13 in the half-angle branch
-    assert got[np.flatnonzero(x == 1.0)[0]] == 0.0 and abs(got[np.flatnonzero(x == -1.0)[0]] - np.pi) < 1e-15

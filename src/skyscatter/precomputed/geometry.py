@@ -47,7 +47,6 @@ import math
 import numba
 
 __all__ = [
-    "acos_fast",
     "clamp",
     "distance_to_bottom",
     "distance_to_boundary",
@@ -70,41 +69,6 @@ _jit = numba.njit(cache=True, fastmath=False)
 @_jit
 def clamp(x: float, lo: float, hi: float) -> float:
     return min(max(x, lo), hi)
-
-
-#: Coefficients of ``asin(t) = t + t^3 P(t^2)`` on ``0 <= t <= 1/2`` (least-squares polynomial of degree 8 in
-#: ``t^2`` fitted by us to numpy's arcsin on 4000 Chebyshev nodes; largest error 1.5e-13 rad, checked in
-#: tests/test_precomputed_geometry.py). The leading terms are the Taylor series' 1/6 and 3/40.
-_ASIN_P = (0.16666666666172686, 0.0750000006043917, 0.044642847283632076, 0.030381418171540442,
-           0.022392949921038813, 0.017048820455561362, 0.01623872012018919, 0.002488650916802939,
-           0.027016060727074295)
-
-
-@_jit
-def _asin_small(t: float) -> float:
-    u = t * t
-    p = _ASIN_P[8]
-    for k in range(7, -1, -1):
-        p = p * u + _ASIN_P[k]
-    return t + t * u * p
-
-
-@_jit
-def acos_fast(x: float) -> float:
-    """``acos(x)`` [rad] for ``x`` in [-1, 1] within 3.1e-13 rad (measured), about 5 times quicker than libm's in the inner
-    loops of the precomputation and the lookups (table coordinates; the tables are float32, 1e-7 relative).
-
-    ``|x| <= 1/2``: ``pi/2 - asin(x)``; otherwise the half-angle forms ``acos(x) = 2 asin(sqrt((1 - x) / 2))`` and
-    ``pi - 2 asin(sqrt((1 + x) / 2))``, so the polynomial only ever sees arguments up to 1/2 (Abramowitz & Stegun
-    4.4.41-style reduction)."""
-    x = clamp(x, -1.0, 1.0)
-    if x > 0.5:
-        return 2.0 * _asin_small(math.sqrt(0.5 * (1.0 - x)))
-    if x < -0.5:
-        return math.pi - 2.0 * _asin_small(math.sqrt(0.5 * (1.0 + x)))
-    if x >= 0.0:
-        return 0.5 * math.pi - _asin_small(x)
-    return 0.5 * math.pi + _asin_small(-x)
 
 
 @_jit
@@ -239,7 +203,7 @@ def sky_mu_unit(r: float, mu: float, top: float, rho: float, big_h: float, theta
     d_min = top - r
     d_max = rho + big_h
     x_d = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
-    x_a = acos_fast(mu) / theta_h
+    x_a = math.acos(clamp(mu, -1.0, 1.0)) / theta_h
     return 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0))
 
 
@@ -294,7 +258,7 @@ def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float
     d_min = top - bottom
     a = (d - d_min) / (math.sqrt(h2) - d_min)
     x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0)
-    x_a = clamp(1.0 - acos_fast(mu_s) / theta_max, 0.0, 1.0)
+    x_a = clamp(1.0 - math.acos(clamp(mu_s, -1.0, 1.0)) / theta_max, 0.0, 1.0)
     return 0.5 * (x_d + x_a) * (n_mu_s - 1)
 
 
@@ -324,7 +288,7 @@ def scattering_nu_coord(mu: float, mu_s: float, nu: float, n_nu: int) -> float:
     if s < 1e-9:
         return 0.5 * (n_nu - 1)
     cphi = clamp((nu - mu * mu_s) / s, -1.0, 1.0)
-    return (1.0 - acos_fast(cphi) / math.pi) * (n_nu - 1)
+    return (1.0 - math.acos(cphi) / math.pi) * (n_nu - 1)
 
 
 @_jit
