@@ -76,7 +76,7 @@ DEFAULT_ORDERS = 6
 #: Largest ratio of successive orders used for the tail (a bound against a noisy estimate: 1 would be infinite).
 MAX_ORDER_RATIO = 0.95
 #: Version of the table layout and algorithm; part of the cache key and checked by :meth:`load`.
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
 _TABLE_NAMES = ("transmittance", "irradiance", "single_rayleigh", "single_mie", "multiple")
 
 
