@@ -381,3 +381,21 @@ def test_multiple_scattering_against_disort():
             d = np.array([side * math.sin(th), 0.0, math.cos(th)])
             ours = atm.sky_radiance([0.0, 0.0, p.bottom_radius], d, sun)[0]
             assert abs(ours / res.intensities(k, 0, j) - 1) < 0.05, (math.degrees(th), side)
+
+
+def test_geometric_tail_of_the_orders():
+    """From 3 orders on, the orders beyond the last are added as their geometric tail (tables module docstring,
+    "Orders"): 6 orders with the tail equal 12 orders within 0.3 % (turbidity 3 over albedo 0.3, sun 17 deg,
+    random directions of sky and ground; measured 0.07 % on these small tables, 0.00-0.22 % on the default sizes
+    against 16 orders), where orders 3 and up carry up to 47 % of the radiance (2 orders, which have no tail)."""
+    sizes = dict(scattering_r=8, scattering_mu=32, scattering_mu_s=16, scattering_nu=4, transmittance_mu=64,
+                 transmittance_r=16, irradiance_mu_s=16, irradiance_r=8, density_sphere_samples=8,
+                 irradiance_sphere_samples=16)
+    p = AtmosphereParameters.from_turbidity(3.0).replace(ground_albedo=0.3)
+    d = np.random.default_rng(2).normal(size=(500, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    sun = np.array([0.0, math.cos(0.3), math.sin(0.3)])
+    rad = {o: PrecomputedAtmosphere.compute(p, orders=o, wavelengths=[550.0], sizes=sizes, progress=False)
+           .sky_radiance([0.0, 0.0, p.bottom_radius], d, sun)[:, 0] for o in (2, 6, 12)}
+    assert np.max(np.abs(rad[6] / rad[12] - 1)) < 3e-3
+    assert np.max(np.abs(rad[2] / rad[12] - 1)) > 0.3
