@@ -102,6 +102,26 @@ def _sun_cos_factor(mu, alpha):
     return (mu + alpha) * (mu + alpha) / (4.0 * alpha)
 
 
+@_jit
+def _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top,
+                     alpha, t, tmp, e_sky, e_sun, out):
+    """Radiance of the Lambertian ground lit by the sun and the sky (Eqs. 10, 14) where the ray from (px, py, pz)
+    [m] along (vx, vy, vz) meets it, seen through the atmosphere (Eq. 16), into ``out``; leaves the transmittance
+    to the ground in ``t``."""
+    d = distance_to_bottom(r, mu, bottom)
+    transmittance_segment(transmittance, r, mu, d, True, bottom, top, t, tmp)
+    gx = px + d * vx
+    gy = py + d * vy
+    gz = pz + d * vz
+    gr = math.sqrt(gx * gx + gy * gy + gz * gz)
+    mu_s_g = clamp((gx * sx + gy * sy + gz * sz) / gr, -1.0, 1.0)
+    irradiance_lookup(irradiance, bottom, mu_s_g, bottom, top, e_sky)
+    transmittance_to_top(transmittance, bottom, mu_s_g, bottom, top, e_sun)
+    cf = _sun_cos_factor(mu_s_g, alpha)
+    for k in range(out.shape[0]):
+        out[k] = t[k] * albedo[k] / PI * (solar[k] * e_sun[k] * cf + e_sky[k])
+
+
 @_kjit
 def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, bottom, top,
                mu_s_min, g, mie_kind, alpha, include_ground, rad_out, tr_out, start, stop):
@@ -116,6 +136,7 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
     tmp = np.empty(n_l)
     e_sky = np.empty(n_l)
     e_sun = np.empty(n_l)
+    ground = np.empty(n_l)
     for q in range(start, stop):
         vx, vy, vz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
         sx, sy, sz = suns[q, 0], suns[q, 1], suns[q, 2]
@@ -150,22 +171,12 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
         for k in range(n_l):
             rad_out[q, k] = c[k]
         if hits:
-            d = distance_to_bottom(rc, mu, bottom)
-            transmittance_segment(transmittance, rc, mu, d, True, bottom, top, t, tmp)
+            _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, rc, mu,
+                             bottom, top, alpha, t, tmp, e_sky, e_sun, ground)
             for k in range(n_l):
                 tr_out[q, k] = t[k]
-            if include_ground:
-                gx = px + d * vx
-                gy = py + d * vy
-                gz = pz + d * vz
-                gr = math.sqrt(gx * gx + gy * gy + gz * gz)
-                mu_s_g = clamp((gx * sx + gy * sy + gz * sz) / gr, -1.0, 1.0)
-                irradiance_lookup(irradiance, bottom, mu_s_g, bottom, top, e_sky)
-                transmittance_to_top(transmittance, bottom, mu_s_g, bottom, top, e_sun)
-                cf = _sun_cos_factor(mu_s_g, alpha)
-                for k in range(n_l):
-                    e = solar[k] * e_sun[k] * cf + e_sky[k]
-                    rad_out[q, k] += t[k] * albedo[k] / PI * e
+                if include_ground:
+                    rad_out[q, k] += ground[k]
         else:
             transmittance_to_top(transmittance, rc, mu, bottom, top, t)
             for k in range(n_l):
@@ -219,6 +230,7 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     tmp = np.empty(n_l)
     e_sky = np.empty(n_l)
     e_sun = np.empty(n_l)
+    ground = np.empty(n_l)
     px, py, pz = position[0], position[1], position[2]
     sx, sy, sz = sun[0], sun[1], sun[2]
     r = math.sqrt(px * px + py * py + pz * pz)
@@ -260,20 +272,11 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
                 for k in range(n_c):
                     out[q, k] += wr * cell[0, k] + wm * cell[1, k] + we * cell[2, k]
         if hits and include_ground:
-            d = distance_to_bottom(rc, mu, bottom)
-            transmittance_segment(transmittance, rc, mu, d, True, bottom, top, t, tmp)
-            gx = px + d * vx
-            gy = py + d * vy
-            gz = pz + d * vz
-            gr = math.sqrt(gx * gx + gy * gy + gz * gz)
-            mu_s_g = clamp((gx * sx + gy * sy + gz * sz) / gr, -1.0, 1.0)
-            irradiance_lookup(irradiance, bottom, mu_s_g, bottom, top, e_sky)
-            transmittance_to_top(transmittance, bottom, mu_s_g, bottom, top, e_sun)
-            cf = _sun_cos_factor(mu_s_g, alpha)
+            _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, rc, mu,
+                             bottom, top, alpha, t, tmp, e_sky, e_sun, ground)
             for j in range(n_l):
-                ground = t[j] * albedo[j] / PI * (solar[j] * e_sun[j] * cf + e_sky[j])
                 for k in range(n_c):
-                    out[q, k] += projection[k, j] * ground
+                    out[q, k] += projection[k, j] * ground[j]
 
 
 @_jit
