@@ -90,8 +90,8 @@ def main() -> int:
         if best is None or wall < best[1]:
             best = (atm, wall, cpu)
     atm, wall, cpu = best
-    print(f"precompute, default sizes {atm.sizes.scattering_shape}, {atm.orders} orders + tail, the default {atm.wavelengths.size} "
-          f"wavelengths: {wall:.1f} s wall (target <= 30 s), {cpu:.1f} s CPU")
+    print(f"precompute, default sizes {atm.sizes.scattering_shape}, {atm.orders} orders + tail, the default "
+          f"{atm.wavelengths.size} wavelengths: {wall:.1f} s wall (target <= 30 s), {cpu:.1f} s CPU")
     _, wall3, cpu3 = _timed(lambda: PrecomputedAtmosphere.compute(progress=False, wavelengths="rgb"))
     print(f"precompute, 3-wavelength mode (wavelengths='rgb'): {wall3:.1f} s wall, {cpu3:.1f} s CPU")
     for name, t in atm.timings.items():

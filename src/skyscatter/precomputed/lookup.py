@@ -170,13 +170,17 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
             _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, c)
         for k in range(n_l):
             rad_out[q, k] = c[k]
-        if hits:
+        if hits and include_ground:
             _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, rc, mu,
                              bottom, top, alpha, t, tmp, e_sky, e_sun, ground)
             for k in range(n_l):
                 tr_out[q, k] = t[k]
-                if include_ground:
-                    rad_out[q, k] += ground[k]
+                rad_out[q, k] += ground[k]
+        elif hits:
+            transmittance_segment(transmittance, rc, mu, distance_to_bottom(rc, mu, bottom), True, bottom, top, t,
+                                  tmp)
+            for k in range(n_l):
+                tr_out[q, k] = t[k]
         else:
             transmittance_to_top(transmittance, rc, mu, bottom, top, t)
             for k in range(n_l):

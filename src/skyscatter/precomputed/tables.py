@@ -602,23 +602,25 @@ class PrecomputedAtmosphere:
 
     def _observer(self, positions, directions, sun_direction, include_ground, *, xyz):
         """The observer fast path of :meth:`sky_xyz` / :meth:`sky_radiance`, or None where it does not apply."""
-        pos = np.asarray(positions, dtype=float)
-        sun = np.asarray(sun_direction, dtype=float)
-        if pos.shape != (3,) or sun.shape != (3,) or (xyz and not self.spectral_mode) or not np.any(sun):
+        # Anything unusual (several positions or suns, bad values, an observer outside the atmosphere, whose rays
+        # the general kernel first moves to the top) goes the general way, which also says what is wrong.
+        try:
+            pos = np.asarray(positions, dtype=float)
+            sun = np.asarray(sun_direction, dtype=float)
+            d = np.asarray(directions)
+        except (ValueError, TypeError):
+            return None
+        if (pos.shape != (3,) or sun.shape != (3,) or (xyz and not self.spectral_mode)
+                or not (np.all(np.isfinite(pos)) and np.all(np.isfinite(sun)) and np.any(sun))
+                or d.dtype.kind not in "fiu" or d.ndim == 0 or d.shape[-1] != 3):
             return None
         bottom, top, mu_s_min = self._geometry()
-        r = float(np.linalg.norm(pos)) if np.all(np.isfinite(pos)) else math.nan
-        if not (bottom - 1.0 <= r <= top):  # outside: the general kernel moves each ray to the top first
+        r = float(np.linalg.norm(pos))
+        if not (bottom - 1.0 <= r <= top):
             return None
         from .lookup import observer_kernel, observer_slices
         from .parallel import parallel_for
 
-        try:
-            d = np.asarray(directions)
-        except (ValueError, TypeError):
-            return None
-        if d.dtype.kind not in "fiu" or d.ndim == 0 or d.shape[-1] != 3 or not np.all(np.isfinite(sun)):
-            return None  # the general path says what is wrong
         shape = d.shape[:-1]
         dirs = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
         s = sun / np.linalg.norm(sun)
