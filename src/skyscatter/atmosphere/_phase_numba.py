@@ -13,7 +13,7 @@ import numba
 
 from . import phase
 
-_jit = numba.njit(cache=True, nogil=True, fastmath=False)
+_jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
 
 #: ``rayleigh_phase_scalar(mu)`` [sr^-1], Bruneton & Neyret (2008) Eq. 2.
 rayleigh_phase_scalar = _jit(phase._rayleigh_formula)

@@ -47,6 +47,7 @@ import math
 import numba
 
 __all__ = [
+    "acos_table",
     "clamp",
     "distance_to_bottom",
     "distance_to_boundary",
@@ -63,7 +64,30 @@ __all__ = [
     "transmittance_params",
 ]
 
-_jit = numba.njit(cache=True, fastmath=False)
+#: numpy's error model: a float division by zero gives inf/NaN instead of raising, so numba emits no test and
+#: branch per division and the loops over rays can be vectorised (every division here is guarded explicitly).
+_jit = numba.njit(cache=True, fastmath={"arcp", "contract"}, error_model="numpy")
+
+#: Coefficients of Abramowitz & Stegun (1964), Handbook of Mathematical Functions, Eq. 4.4.46 (from Hastings
+#: 1955): ``acos(x) = sqrt(1 - x) (a0 + a1 x + ... + a7 x^7)`` for 0 <= x <= 1, absolute error <= 2e-8 rad as
+#: published (2.18e-8 with the printed 10-decimal coefficients, at x = 0; tests/test_precomputed_geometry.py).
+_ACOS_COEFFICIENTS = (1.5707963050, -0.2145988016, 0.0889789874, -0.0501743046, 0.0308918810, -0.0170881256,
+                      0.0066700901, -0.0012624911)
+_A0, _A1, _A2, _A3, _A4, _A5, _A6, _A7 = _ACOS_COEFFICIENTS
+
+
+@_jit
+def acos_table(x: float) -> float:
+    """Arc cosine [rad] of ``x`` in [-1, 1] to 2.2e-8 rad (Abramowitz & Stegun 4.4.46, ``acos(-x) = pi - acos(x)``)
+    for the table coordinates.
+
+    libm's ``acos`` is a call the compiler cannot vectorise and it took half of each lookup; a coordinate
+    2e-8 rad off moves a lookup by less than 1e-6 of a texel. Out-of-range ``x`` is clamped.
+    """
+    a = min(abs(x), 1.0)
+    p = ((((((_A7 * a + _A6) * a + _A5) * a + _A4) * a + _A3) * a + _A2) * a + _A1) * a + _A0
+    v = math.sqrt(1.0 - a) * p
+    return v if x >= 0.0 else math.pi - v
 
 
 @_jit
@@ -191,7 +215,7 @@ def horizon_constants(r: float, bottom: float, top: float) -> tuple[float, float
     angle of the horizon [rad] (the constants of the ``mu`` mapping for one radius)."""
     big_h = math.sqrt(top * top - bottom * bottom)
     rho = math.sqrt(max(r * r - bottom * bottom, 0.0))
-    return rho, big_h, math.acos(clamp(-rho / r, -1.0, 1.0))
+    return rho, big_h, acos_table(-rho / r)
 
 
 @_jit
@@ -203,7 +227,7 @@ def sky_mu_unit(r: float, mu: float, top: float, rho: float, big_h: float, theta
     d_min = top - r
     d_max = rho + big_h
     x_d = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
-    x_a = math.acos(clamp(mu, -1.0, 1.0)) / theta_h
+    x_a = acos_table(mu) / theta_h
     return 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0))
 
 
@@ -258,7 +282,7 @@ def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float
     d_min = top - bottom
     a = (d - d_min) / (math.sqrt(h2) - d_min)
     x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0)
-    x_a = clamp(1.0 - math.acos(clamp(mu_s, -1.0, 1.0)) / theta_max, 0.0, 1.0)
+    x_a = clamp(1.0 - acos_table(mu_s) / theta_max, 0.0, 1.0)
     return 0.5 * (x_d + x_a) * (n_mu_s - 1)
 
 
@@ -271,7 +295,7 @@ def scattering_mu_s_coord(mu_s: float, bottom: float, top: float, mu_s_min: floa
     angles 0-42 deg in one cell of a 32-texel axis, across which the forward-peaked multiple scattering of
     aerosols cannot be interpolated (+18 % at the zenith against DISORT, docs/bruneton.md).
     """
-    return scattering_mu_s_coord_a(mu_s, bottom, top, _mu_s_a(mu_s_min, bottom, top), math.acos(mu_s_min),
+    return scattering_mu_s_coord_a(mu_s, bottom, top, _mu_s_a(mu_s_min, bottom, top), acos_table(mu_s_min),
                                    n_mu_s)
 
 
@@ -288,7 +312,7 @@ def scattering_nu_coord(mu: float, mu_s: float, nu: float, n_nu: int) -> float:
     if s < 1e-9:
         return 0.5 * (n_nu - 1)
     cphi = clamp((nu - mu * mu_s) / s, -1.0, 1.0)
-    return (1.0 - math.acos(cphi) / math.pi) * (n_nu - 1)
+    return (1.0 - acos_table(cphi) / math.pi) * (n_nu - 1)
 
 
 @_jit
@@ -323,7 +347,7 @@ def scattering_r_mu_params(i_r: int, i_mu: int, bottom: float, top: float, n_r: 
             return r, -1.0, True
         mu = -(rho * rho + d * d) / (2.0 * r * d)
         return r, clamp(mu, -1.0, 1.0), True
-    theta_h = math.acos(clamp(-rho / r, -1.0, 1.0))
+    theta_h = acos_table(-rho / r)
     x = (i_mu - half) / (half - 1)
     if x <= 0.0:
         return r, 1.0, False
@@ -343,7 +367,7 @@ def scattering_r_mu_params(i_r: int, i_mu: int, bottom: float, top: float, n_r: 
 def scattering_mu_s_param(i_mu_s: int, bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> float:
     """``mu_s`` of texel index ``i_mu_s``; inverse of :func:`scattering_mu_s_coord` (bisection in the angle)."""
     x = float(i_mu_s)
-    theta_max = math.acos(mu_s_min)
+    theta_max = acos_table(mu_s_min)
     if i_mu_s <= 0:
         return mu_s_min
     if i_mu_s >= n_mu_s - 1:

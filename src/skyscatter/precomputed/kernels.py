@@ -30,6 +30,7 @@ import numba
 import numpy as np
 
 from .geometry import (
+    acos_table,
     clamp,
     distance_to_bottom,
     distance_to_boundary,
@@ -58,10 +59,10 @@ from .sampling import (
     transmittance_to_top,
 )
 
-_kjit = numba.njit(cache=True, nogil=True, fastmath=False)
+_kjit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def mu_s_texels(bottom, top, mu_s_min, n_mu_s):
     """``mu_s`` of every texel of the 4D tables (each found by bisection, so computed once per kernel call)."""
     out = np.empty(n_mu_s)
@@ -70,7 +71,7 @@ def mu_s_texels(bottom, top, mu_s_min, n_mu_s):
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def ray_sample_distance(i, n_samples, d_end, mu, hits_ground):
     """Distance [m] of sample ``i`` of ``n_samples`` steps along a ray of length ``d_end``: quadratic spacing,
     dense at the ray's lower end where the aerosols are (the start for rays going up, the end for rays that meet
@@ -220,14 +221,14 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
                     mie[i_r, i_mu, i_s, i_n, k] = acc_m[k]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _quadratic_form(m, vx, vy, vz):
     """v^T m v for a symmetric 3 x 3 matrix."""
     return (m[0, 0] * vx * vx + m[1, 1] * vy * vy + m[2, 2] * vz * vz
             + 2.0 * (m[0, 1] * vx * vy + m[0, 2] * vx * vz + m[1, 2] * vy * vz))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def sphere_quadrature(n_theta, hemisphere):
     """Midpoint-rule directions and solid angles [sr] on the sphere (or upper hemisphere), in a frame whose
     x axis points to the sun's azimuth: (n_theta * 2 n_theta, 3) directions and their weights."""
@@ -251,7 +252,7 @@ def sphere_quadrature(n_theta, hemisphere):
     return om, dom
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"}, error_model="numpy")
 def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance, albedo, beta_r, beta_m, g, mie_kind,
                               profiles, counts, bottom, top, mu_s_min, n_theta, out, start, stop):
     """Scattering density J (Eq. 7) of one order per unit total scattering coefficient, ``J / (beta_R rho_R(r) +
@@ -415,6 +416,27 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, bottom, top, mu_s_m
             out[i_r, i_s, k] = acc[k]
 
 
+@numba.njit(cache=True, nogil=True, fastmath={"arcp", "contract"}, error_model="numpy")
+def _sun_cells(r, d, r_i, mu_i, mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a, theta_max, n_s, n_n, cell, w_s,
+               w_n):
+    """(mu_s, nu) cells and weights at a ray sample (distance ``d`` [m] from the texel's point at radius ``r``,
+    radius ``r_i``, view zenith cosine ``mu_i`` there) for every texel sun (``mu_s_flat``, ``nu_flat``: the
+    texel's sun zenith and view-sun cosines, n_s * n_n); ``cell`` -1 where the sun at the sample is beyond the
+    tables' limit. Branch-free apart from selects: the compiler vectorises it (the sun coordinates were most of
+    the multiple-scattering time)."""
+    for u in range(mu_s_flat.shape[0]):
+        nu = nu_flat[u]
+        mu_s_i = (r * mu_s_flat[u] + d * nu) / r_i
+        # A texel whose sun is at the limit (mu_s_min) has samples there to rounding: keep them all.
+        ok = mu_s_i >= mu_s_min - 1e-12
+        mu_s_i = min(max(mu_s_i, mu_s_min), 1.0)
+        j_s, ws = lerp_index(scattering_mu_s_coord_a(mu_s_i, bottom, top, big_a, theta_max, n_s), 0, n_s - 1)
+        j_n, wn = lerp_index(scattering_nu_coord(mu_i, mu_s_i, nu, n_n), 0, n_n - 1)
+        cell[u] = j_s * n_n + j_n if ok else -1
+        w_s[u] = ws
+        w_n[u] = wn
+
+
 @_kjit
 def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles, counts, bottom, top,
                                mu_s_min, n_samples, out, start, stop):
@@ -441,10 +463,15 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     q = np.empty((n_pts, n_l))
     sl = np.empty((n_s, n_n, n_l), dtype=np.float32)  # as the tables: half the memory traffic
     acc = np.empty((n_s, n_n, n_l))
-    nu_tab = np.empty((n_s, n_n))
+    acc_flat = acc.reshape(n_s * n_n, n_l)
+    nu_flat = np.empty(n_s * n_n)
+    cell = np.empty(n_s * n_n, dtype=np.int64)
+    w_s = np.empty(n_s * n_n)
+    w_n = np.empty(n_s * n_n)
     big_a = mu_s_limit_a(mu_s_min, bottom, top)
-    theta_max = math.acos(mu_s_min)
+    theta_max = acos_table(mu_s_min)
     mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_s)
+    mu_s_flat = np.repeat(mu_s_tab, n_n)
     for idx in range(start, stop):
         i_r = idx // n_mu
         i_mu = idx % n_mu
@@ -454,7 +481,7 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
             continue
         for i_s in range(n_s):
             for i_n in range(n_n):
-                nu_tab[i_s, i_n] = scattering_nu_param(i_n, mu, mu_s_tab[i_s], n_n)
+                nu_flat[i_s * n_n + i_n] = scattering_nu_param(i_n, mu, mu_s_tab[i_s], n_n)
         for i in range(n_pts):
             d = ray_sample_distance(i, n_samples, d_end, mu, hits)
             dist[i] = d
@@ -496,24 +523,22 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
                                                         + c01 * density[ir, imu + 1, j_s, j_n, k]
                                                         + c10 * density[ir + 1, imu, j_s, j_n, k]
                                                         + c11 * density[ir + 1, imu + 1, j_s, j_n, k])
-            for i_s in range(n_s):
-                mu_s = mu_s_tab[i_s]
-                for i_n in range(n_n):
-                    nu = nu_tab[i_s, i_n]
-                    mu_s_i = (r * mu_s + dist[i] * nu) / rad[i]
-                    if mu_s_i < mu_s_min:
-                        continue
-                    mu_s_i = min(mu_s_i, 1.0)
-                    p_s = scattering_mu_s_coord_a(mu_s_i, bottom, top, big_a, theta_max, n_s)
-                    j_s, w_s = lerp_index(p_s, 0, n_s - 1)
-                    j_n, w_n = lerp_index(scattering_nu_coord(mu_ray[i], mu_s_i, nu, n_n), 0, n_n - 1)
-                    a00 = (1.0 - w_s) * (1.0 - w_n)
-                    a01 = (1.0 - w_s) * w_n
-                    a10 = w_s * (1.0 - w_n)
-                    a11 = w_s * w_n
-                    for k in range(n_l):
-                        acc[i_s, i_n, k] += q[i, k] * (a00 * sl[j_s, j_n, k] + a01 * sl[j_s, j_n + 1, k]
-                                                       + a10 * sl[j_s + 1, j_n, k] + a11 * sl[j_s + 1, j_n + 1, k])
+            _sun_cells(r, dist[i], rad[i], mu_ray[i], mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a, theta_max,
+                       n_s, n_n, cell, w_s, w_n)
+            for u in range(n_s * n_n):
+                if cell[u] < 0:
+                    continue
+                j_s = cell[u] // n_n
+                j_n = cell[u] - j_s * n_n
+                ws = w_s[u]
+                wn = w_n[u]
+                a00 = (1.0 - ws) * (1.0 - wn)
+                a01 = (1.0 - ws) * wn
+                a10 = ws * (1.0 - wn)
+                a11 = ws * wn
+                for k in range(n_l):
+                    acc_flat[u, k] += q[i, k] * (a00 * sl[j_s, j_n, k] + a01 * sl[j_s, j_n + 1, k]
+                                                 + a10 * sl[j_s + 1, j_n, k] + a11 * sl[j_s + 1, j_n + 1, k])
         for i_s in range(n_s):
             for i_n in range(n_n):
                 for k in range(n_l):

@@ -51,8 +51,8 @@ from .sampling import (
     transmittance_to_top,
 )
 
-_kjit = numba.njit(cache=True, nogil=True, fastmath=False)
-_jit = numba.njit(cache=True, fastmath=False)
+_kjit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
+_jit = numba.njit(cache=True, fastmath={"arcp", "contract"}, error_model="numpy")
 
 PI = math.pi
 #: Half-width, in mu, of the band around the horizon where two rays just above and below it are blended
@@ -215,72 +215,123 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     return out
 
 
+#: Rays per block of :func:`observer_kernel` (its buffers stay in the L1 cache).
+OBSERVER_BLOCK = 256
+
+
+@_jit
+def _observer_coords(dirs, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho, big_h, theta_h, g, mie_kind,
+                     n_mu, n_nu, cell, w_mu, w_nu, p_r, p_m, kind):
+    """Table cells, weights and phase factors of a block of rays from one observer (the first pass of
+    :func:`observer_kernel`). No branch that the compiler cannot turn into a select, no libm call: the loop runs
+    on SIMD lanes. ``kind``: 0 bad direction (zero, infinite or NaN), 1 sky, 2 ground."""
+    half = n_mu // 2
+    for k in range(dirs.shape[0]):
+        vx = dirs[k, 0]
+        vy = dirs[k, 1]
+        vz = dirs[k, 2]
+        n2 = vx * vx + vy * vy + vz * vz
+        ok = n2 > 0.0 and n2 < math.inf
+        inv = 1.0 / math.sqrt(n2)
+        mu = clamp((px * vx + py * vy + pz * vz) * inv / r, -1.0, 1.0) if ok else 0.0
+        nu = clamp((vx * sx + vy * sy + vz * sz) * inv, -1.0, 1.0) if ok else 0.0
+        hits = ray_hits_ground(rc, mu, bottom)
+        p_ground = ground_mu_unit(rc, mu, bottom, rho) * (half - 1)
+        p_sky = half + sky_mu_unit(rc, mu, top, rho, big_h, theta_h) * (half - 1)
+        if hits:
+            i_mu, wm = lerp_index(p_ground, 0, half - 1)
+        else:
+            i_mu, wm = lerp_index(p_sky, half, n_mu - 1)
+        i_n, wn = lerp_index(scattering_nu_coord(mu, mu_s, nu, n_nu), 0, n_nu - 1)
+        cell[k] = i_mu * n_nu + i_n
+        w_mu[k] = wm
+        w_nu[k] = wn
+        p_r[k] = rayleigh_phase(nu)
+        p_m[k] = aerosol_phase(nu, g, mie_kind)
+        kind[k] = (2 if hits else 1) if ok else 0
+
+
+@_jit
+def _observer_gather(flat, n_nu, n_c, cell, w_mu, w_nu, p_r, p_m, out):
+    """Bilinear interpolation of the observer slices (flattened (n_mu, n_nu, 3, C)) for a block of rays from
+    :func:`_observer_coords`, phase factors applied: ``out`` (m, C)."""
+    col = 3 * n_c
+    row = n_nu * col
+    for k in range(cell.shape[0]):
+        wm = w_mu[k]
+        wn = w_nu[k]
+        w00 = (1.0 - wm) * (1.0 - wn)
+        w01 = (1.0 - wm) * wn
+        w10 = wm * (1.0 - wn)
+        w11 = wm * wn
+        b = cell[k] * col
+        pr = p_r[k]
+        pm = p_m[k]
+        for c in range(n_c):
+            v = 0.0
+            for t, f in ((0, pr), (1, pm), (2, 1.0)):
+                o = b + t * n_c + c
+                v += f * (w00 * flat[o] + w01 * flat[o + col] + w10 * flat[o + row] + w11 * flat[o + row + col])
+            out[k, c] = v
+
+
 @_kjit
 def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, solar, projection, bottom, top,
                     g, mie_kind, alpha, include_ground, dirs, out, bad, start, stop):
     """:func:`sky_kernel`'s radiance (no shadows) for rays ``start..stop`` from one ``position`` inside the
-    atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C), initialised to 0).
+    atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C)).
 
     Inscattering from :func:`observer_slices` (bilinear in ``mu`` and ``nu``: the same values as the 4D
     lookup); the ground term, a product of spectra (transmittance times irradiance), is formed per wavelength
     and then projected with ``projection`` (C, n_wavelengths). ``dirs`` need not be unit vectors; a zero,
-    infinite or NaN one sets ``bad[q]`` and is skipped (the caller raises).
+    infinite or NaN one sets ``bad[q]`` (the caller raises). Rays go in blocks of :data:`OBSERVER_BLOCK` in
+    three passes: coordinates (vectorised), table reads, and the ground for the rays that meet it.
     """
     n_l = transmittance.shape[2]
     n_c = out.shape[1]
-    n_mu, n_n = slices.shape[0], slices.shape[1]
-    half = n_mu // 2
+    n_mu, n_nu = slices.shape[0], slices.shape[1]
+    flat = slices.ravel()
     t = np.empty(n_l)
     tmp = np.empty(n_l)
     e_sky = np.empty(n_l)
     e_sun = np.empty(n_l)
     ground = np.empty(n_l)
+    cell = np.empty(OBSERVER_BLOCK, dtype=np.int64)
+    kind = np.empty(OBSERVER_BLOCK, dtype=np.int64)
+    w_mu = np.empty(OBSERVER_BLOCK)
+    w_nu = np.empty(OBSERVER_BLOCK)
+    p_r = np.empty(OBSERVER_BLOCK)
+    p_m = np.empty(OBSERVER_BLOCK)
     px, py, pz = position[0], position[1], position[2]
     sx, sy, sz = sun[0], sun[1], sun[2]
     r = math.sqrt(px * px + py * py + pz * pz)
     rc = clamp(r, bottom, top)
     mu_s = clamp((px * sx + py * sy + pz * sz) / r, -1.0, 1.0)
     rho, big_h, theta_h = horizon_constants(rc, bottom, top)
-    for q in range(start, stop):
-        vx, vy, vz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
-        n2 = vx * vx + vy * vy + vz * vz
-        if not (n2 > 0.0 and n2 < math.inf):
-            bad[q] = True
-            continue
-        inv = 1.0 / math.sqrt(n2)
-        vx *= inv
-        vy *= inv
-        vz *= inv
-        mu = clamp((px * vx + py * vy + pz * vz) / r, -1.0, 1.0)
-        nu = clamp(vx * sx + vy * sy + vz * sz, -1.0, 1.0)
-        hits = ray_hits_ground(rc, mu, bottom)
-        p_r = rayleigh_phase(nu)
-        p_m = aerosol_phase(nu, g, mie_kind)
-        if hits:
-            i_mu, w_mu = lerp_index(ground_mu_unit(rc, mu, bottom, rho) * (half - 1), 0, half - 1)
-        else:
-            i_mu, w_mu = lerp_index(half + sky_mu_unit(rc, mu, top, rho, big_h, theta_h) * (half - 1), half,
-                                    n_mu - 1)
-        i_n, w_n = lerp_index(scattering_nu_coord(mu, mu_s, nu, n_n), 0, n_n - 1)
-        for b in range(2):
-            wb = w_mu if b else 1.0 - w_mu
-            if wb == 0.0:
+    for b0 in range(start, stop, OBSERVER_BLOCK):
+        b1 = min(b0 + OBSERVER_BLOCK, stop)
+        m = b1 - b0
+        _observer_coords(dirs[b0:b1], px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho, big_h, theta_h, g,
+                         mie_kind, n_mu, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], kind[:m])
+        _observer_gather(flat, n_nu, n_c, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], out[b0:b1])
+        for k in range(m):
+            if kind[k] == 1:
                 continue
-            for e in range(2):
-                we = wb * (w_n if e else 1.0 - w_n)
-                if we == 0.0:
-                    continue
-                cell = slices[i_mu + b, i_n + e]
-                wr = we * p_r
-                wm = we * p_m
-                for k in range(n_c):
-                    out[q, k] += wr * cell[0, k] + wm * cell[1, k] + we * cell[2, k]
-        if hits and include_ground:
-            _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, rc, mu,
-                             bottom, top, alpha, t, tmp, e_sky, e_sun, ground)
-            for j in range(n_l):
-                for k in range(n_c):
-                    out[q, k] += projection[k, j] * ground[j]
+            q = b0 + k
+            if kind[k] == 0:
+                bad[q] = True
+            elif include_ground:
+                vx, vy, vz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
+                inv = 1.0 / math.sqrt(vx * vx + vy * vy + vz * vz)
+                vx *= inv
+                vy *= inv
+                vz *= inv
+                mu = clamp((px * vx + py * vy + pz * vz) / r, -1.0, 1.0)
+                _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, rc,
+                                 mu, bottom, top, alpha, t, tmp, e_sky, e_sun, ground)
+                for j in range(n_l):
+                    for c in range(n_c):
+                        out[q, c] += projection[c, j] * ground[j]
 
 
 @_jit

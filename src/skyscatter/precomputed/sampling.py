@@ -25,7 +25,7 @@ from .geometry import (
     transmittance_coord,
 )
 
-_jit = numba.njit(cache=True, fastmath=False)
+_jit = numba.njit(cache=True, fastmath=False, error_model="numpy")
 
 PI = math.pi
 

@@ -595,13 +595,25 @@ class PrecomputedAtmosphere:
         ``to_xyz(sky_radiance(...))`` (with fewer wavelengths the colour rule is not linear in the spectrum: the
         negative-lobe guard of :mod:`.conversion`).
         """
-        fast = self._observer(positions, directions, sun_direction, include_ground, xyz=True)
-        if fast is not None:
-            return fast
+        if self.spectral_mode:
+            fast = self._observer(positions, directions, sun_direction, include_ground, self.xyz_matrix)
+            if fast is not None:
+                return fast
         return self.to_xyz(self.sky_radiance(positions, directions, sun_direction, include_ground=include_ground))
 
-    def _observer(self, positions, directions, sun_direction, include_ground, *, xyz):
-        """The observer fast path of :meth:`sky_xyz` / :meth:`sky_radiance`, or None where it does not apply."""
+    def sky_luminance(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike, *,
+                      include_ground: bool = True) -> NDArray[np.float64]:
+        """Luminance [cd m^-2] of :meth:`sky_radiance` (no light shafts), shape broadcast: the Y of
+        :meth:`sky_xyz`, with one projected channel instead of three on the observer's fast path."""
+        if self.spectral_mode:
+            fast = self._observer(positions, directions, sun_direction, include_ground, self.xyz_matrix[1:2])
+            if fast is not None:
+                return fast[..., 0]
+        return self.sky_xyz(positions, directions, sun_direction, include_ground=include_ground)[..., 1]
+
+    def _observer(self, positions, directions, sun_direction, include_ground, projection):
+        """The observer fast path of :meth:`sky_xyz`, :meth:`sky_luminance` and :meth:`sky_radiance` (radiance
+        projected with ``projection`` (C, n_wavelengths)), or None where it does not apply."""
         # Anything unusual (several positions or suns, bad values, an observer outside the atmosphere, whose rays
         # the general kernel first moves to the top) goes the general way, which also says what is wrong.
         try:
@@ -610,7 +622,7 @@ class PrecomputedAtmosphere:
             d = np.asarray(directions)
         except (ValueError, TypeError):
             return None
-        if (pos.shape != (3,) or sun.shape != (3,) or (xyz and not self.spectral_mode)
+        if (pos.shape != (3,) or sun.shape != (3,)
                 or not (np.all(np.isfinite(pos)) and np.all(np.isfinite(sun)) and np.any(sun))
                 or d.dtype.kind not in "fiu" or d.ndim == 0 or d.shape[-1] != 3):
             return None
@@ -625,14 +637,14 @@ class PrecomputedAtmosphere:
         dirs = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
         s = sun / np.linalg.norm(sun)
         mu_s = float(np.clip(pos @ s / r, -1.0, 1.0))
-        projection = self.xyz_matrix if xyz else np.eye(self.wavelengths.size)
+        projection = np.ascontiguousarray(projection, dtype=np.float64)
         slices = observer_slices(self.tables["single_rayleigh"], self.tables["single_mie"], self.tables["multiple"],
                                  min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, projection)
-        out = np.zeros((dirs.shape[0], projection.shape[0]))
+        out = np.empty((dirs.shape[0], projection.shape[0]))
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
         parallel_for(observer_kernel, dirs.shape[0], pos, s, slices, self.tables["transmittance"],
-                     self.tables["irradiance"], self._albedo, self._solar, np.ascontiguousarray(projection),
+                     self.tables["irradiance"], self._albedo, self._solar, projection,
                      bottom, top, self.parameters.mie_phase_g, self._mie_kind, self.parameters.sun_angular_radius,
                      bool(include_ground), dirs, out, bad, grain=2048)
         if bad.any():
@@ -666,7 +678,8 @@ class PrecomputedAtmosphere:
             The solar disc is not included (see :meth:`sun_radiance`); rays that miss the atmosphere give 0.
         """
         if shadow_length is None and not return_transmittance:
-            fast = self._observer(positions, directions, sun_direction, include_ground, xyz=False)
+            fast = self._observer(positions, directions, sun_direction, include_ground,
+                                  np.eye(self.wavelengths.size))
             if fast is not None:
                 return fast
         shape, pos, dirs, sun, sh = self._broadcast_rays(positions, directions, sun_direction, shadow_length)

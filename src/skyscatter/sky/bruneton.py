@@ -186,7 +186,7 @@ class BrunetonSky(SunSkyMixin, SkyModel):
 
     def luminance(self, directions: ArrayLike) -> NDArray[np.float64]:
         """Luminance [cd m^-2] of sky and ground in ``directions`` (...)."""
-        return self.xyz(directions)[..., 1]
+        return self.atmosphere.sky_luminance(self.position, directions, self.sun_direction)
 
     def aerial_perspective(self, points: ArrayLike, *, shadow_length: ArrayLike | None = None
                            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
