@@ -361,6 +361,9 @@ def test_observer_slices_equal_the_4d_lookup(atm, altitude, sun_elevation):
                                    rtol=1e-6, atol=1e-12)
     np.testing.assert_allclose(spectral.sky_xyz(pos, d, sun), spectral.to_xyz(spectral.sky_radiance(many, d, sun)),
                                rtol=1e-6, atol=1e-9)
+    # luminance alone (one projected channel) is the Y of the three
+    np.testing.assert_allclose(spectral.sky_luminance(pos, d, sun), spectral.sky_xyz(pos, d, sun)[:, 1],
+                               rtol=1e-12, atol=1e-15)
     # unnormalised directions are normalised; invalid ones are refused with the library's error
     np.testing.assert_allclose(spectral.sky_xyz(pos, 3.0 * d[:5], sun), spectral.sky_xyz(pos, d[:5], sun), rtol=1e-12)
     from skyscatter.errors import InvalidDirectionError

@@ -44,6 +44,7 @@ from .geometry import (
     scattering_nu_coord,
     scattering_nu_param,
     scattering_r_mu_params,
+    transmittance_coord,
     transmittance_params,
 )
 from .sampling import (
@@ -54,8 +55,8 @@ from .sampling import (
     r_mu_cell,
     rayleigh_phase,
     scattering_lookup,
+    sun_visible_fraction,
     transmittance_segment,
-    transmittance_to_sun,
     transmittance_to_top,
 )
 
@@ -146,6 +147,18 @@ def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
                 out[i_r, i_mu, i_s, i_n] = scattering_nu_param(i_n, mu, mu_s, n_nu)
 
 
+@numba.njit(cache=True, nogil=True, fastmath={"arcp", "contract"}, error_model="numpy")
+def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w, frac):
+    """Transmittance-table ``mu`` cells and weights towards the sun, and the visible fraction of its disc, at a
+    ray sample (distance ``d`` [m] from the texel's point at radius ``r``, radius ``r_i``) for every texel sun
+    (``mu_s_flat``, ``nu_flat``, n_mu_s * n_nu). Selects only: the compiler vectorises it."""
+    for u in range(mu_s_flat.shape[0]):
+        mu_s_i = clamp((r * mu_s_flat[u] + d * nu_flat[u]) / r_i, -1.0, 1.0)
+        frac[u] = sun_visible_fraction(r_i, mu_s_i, bottom, alpha)
+        _, p_mu = transmittance_coord(r_i, mu_s_i, bottom, top, 2, n_tmu)
+        cell[u], w[u] = lerp_index(p_mu, 0, n_tmu - 1)
+
+
 @_kjit
 def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profiles, counts, n_samples, ray, mie,
                              start, stop):
@@ -166,10 +179,16 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
     tmp = np.empty(n_l)
     w_r = np.empty((n_pts, n_l))
     w_m = np.empty((n_pts, n_l))
-    t_sun = np.empty(n_l)
-    acc_r = np.empty(n_l)
-    acc_m = np.empty(n_l)
+    n_tr, n_tmu, _ = transmittance.shape
+    n_suns = n_mu_s * n_nu
+    acc_r = np.empty((n_suns, n_l))
+    acc_m = np.empty((n_suns, n_l))
+    nu_flat = np.empty(n_suns)
+    cell = np.empty(n_suns, dtype=np.int64)
+    w_sun = np.empty(n_suns)
+    frac = np.empty(n_suns)
     mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_mu_s)
+    mu_s_flat = np.repeat(mu_s_tab, n_nu)
     for idx in range(start, stop):
         i_r = idx // n_mu
         i_mu = idx % n_mu
@@ -202,23 +221,39 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
                 w_m[i, k] += ca * fa
                 w_m[i + 1, k] += cb * fb
         for i_s in range(n_mu_s):
-            mu_s = mu_s_tab[i_s]
             for i_n in range(n_nu):
-                nu = scattering_nu_param(i_n, mu, mu_s, n_nu)
+                nu_flat[i_s * n_nu + i_n] = scattering_nu_param(i_n, mu, mu_s_tab[i_s], n_nu)
+        acc_r[:] = 0.0
+        acc_m[:] = 0.0
+        for i in range(n_pts):
+            if rho_r[i] == 0.0 and rho_m[i] == 0.0:
+                continue
+            # the transmittance table's r cell is the same for every sun at this sample
+            p_r, _ = transmittance_coord(rad[i], 1.0, bottom, top, n_tr, n_tmu)
+            j_r, w_tr = lerp_index(p_r, 0, n_tr - 1)
+            _sun_transmittance_cells(r, dist[i], rad[i], mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell,
+                                     w_sun, frac)
+            for u in range(n_mu_s * n_nu):
+                f = frac[u]
+                if f <= 0.0:
+                    continue
+                j = cell[u]
+                w = w_sun[u]
+                a00 = f * (1.0 - w_tr) * (1.0 - w)
+                a01 = f * (1.0 - w_tr) * w
+                a10 = f * w_tr * (1.0 - w)
+                a11 = f * w_tr * w
                 for k in range(n_l):
-                    acc_r[k] = 0.0
-                    acc_m[k] = 0.0
-                for i in range(n_pts):
-                    if rho_r[i] == 0.0 and rho_m[i] == 0.0:
-                        continue
-                    mu_s_i = clamp((r * mu_s + dist[i] * nu) / rad[i], -1.0, 1.0)
-                    transmittance_to_sun(transmittance, rad[i], mu_s_i, bottom, top, alpha, t_sun)
-                    for k in range(n_l):
-                        acc_r[k] += w_r[i, k] * t_sun[k]
-                        acc_m[k] += w_m[i, k] * t_sun[k]
+                    t_sun = (a00 * transmittance[j_r, j, k] + a01 * transmittance[j_r, j + 1, k]
+                             + a10 * transmittance[j_r + 1, j, k] + a11 * transmittance[j_r + 1, j + 1, k])
+                    acc_r[u, k] += w_r[i, k] * t_sun
+                    acc_m[u, k] += w_m[i, k] * t_sun
+        for i_s in range(n_mu_s):
+            for i_n in range(n_nu):
+                u = i_s * n_nu + i_n
                 for k in range(n_l):
-                    ray[i_r, i_mu, i_s, i_n, k] = acc_r[k]
-                    mie[i_r, i_mu, i_s, i_n, k] = acc_m[k]
+                    ray[i_r, i_mu, i_s, i_n, k] = acc_r[u, k]
+                    mie[i_r, i_mu, i_s, i_n, k] = acc_m[u, k]
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -220,28 +220,37 @@ OBSERVER_BLOCK = 256
 
 
 @_jit
-def _observer_coords(dirs, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho, big_h, theta_h, g, mie_kind,
-                     n_mu, n_nu, cell, w_mu, w_nu, p_r, p_m, kind):
+def _unit_block(dirs):
+    """True if every direction of the block is a unit vector to 1e-12 (NaN and infinite ones are not)."""
+    off = 0
+    for k in range(dirs.shape[0]):
+        n2 = dirs[k, 0] * dirs[k, 0] + dirs[k, 1] * dirs[k, 1] + dirs[k, 2] * dirs[k, 2]
+        off += 0 if abs(n2 - 1.0) <= 1e-12 else 1
+    return off == 0
+
+
+@_jit
+def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho, big_h, theta_h, g,
+                     mie_kind, n_mu, n_nu, cell, w_mu, w_nu, p_r, p_m, kind):
     """Table cells, weights and phase factors of a block of rays from one observer (the first pass of
-    :func:`observer_kernel`). No branch that the compiler cannot turn into a select, no libm call: the loop runs
-    on SIMD lanes. ``kind``: 0 bad direction (zero, infinite or NaN), 1 sky, 2 ground."""
+    :func:`observer_kernel`); ``unit``: the block's directions are unit vectors (:func:`_unit_block`), so the
+    normalisation (a square root and a division per ray) is skipped. No branch that the compiler cannot turn into
+    a select, no libm call: the loop runs on SIMD lanes. Every ray gets the sky half's ``mu`` cell; ``kind``
+    marks the rays that meet the ground (2), whose cell the caller replaces, and bad directions (0: zero,
+    infinite or NaN); 1 for the sky."""
     half = n_mu // 2
+    inv_r = 1.0 / r
     for k in range(dirs.shape[0]):
         vx = dirs[k, 0]
         vy = dirs[k, 1]
         vz = dirs[k, 2]
         n2 = vx * vx + vy * vy + vz * vz
         ok = n2 > 0.0 and n2 < math.inf
-        inv = 1.0 / math.sqrt(n2)
-        mu = clamp((px * vx + py * vy + pz * vz) * inv / r, -1.0, 1.0) if ok else 0.0
+        inv = 1.0 if unit else 1.0 / math.sqrt(n2)
+        mu = clamp((px * vx + py * vy + pz * vz) * (inv * inv_r), -1.0, 1.0) if ok else 0.0
         nu = clamp((vx * sx + vy * sy + vz * sz) * inv, -1.0, 1.0) if ok else 0.0
         hits = ray_hits_ground(rc, mu, bottom)
-        p_ground = ground_mu_unit(rc, mu, bottom, rho) * (half - 1)
-        p_sky = half + sky_mu_unit(rc, mu, top, rho, big_h, theta_h) * (half - 1)
-        if hits:
-            i_mu, wm = lerp_index(p_ground, 0, half - 1)
-        else:
-            i_mu, wm = lerp_index(p_sky, half, n_mu - 1)
+        i_mu, wm = lerp_index(half + sky_mu_unit(rc, mu, top, rho, big_h, theta_h) * (half - 1), half, n_mu - 1)
         i_n, wn = lerp_index(scattering_nu_coord(mu, mu_s, nu, n_nu), 0, n_nu - 1)
         cell[k] = i_mu * n_nu + i_n
         w_mu[k] = wm
@@ -290,6 +299,7 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     n_l = transmittance.shape[2]
     n_c = out.shape[1]
     n_mu, n_nu = slices.shape[0], slices.shape[1]
+    half = n_mu // 2
     flat = slices.ravel()
     t = np.empty(n_l)
     tmp = np.empty(n_l)
@@ -311,27 +321,39 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     for b0 in range(start, stop, OBSERVER_BLOCK):
         b1 = min(b0 + OBSERVER_BLOCK, stop)
         m = b1 - b0
-        _observer_coords(dirs[b0:b1], px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho, big_h, theta_h, g,
-                         mie_kind, n_mu, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], kind[:m])
-        _observer_gather(flat, n_nu, n_c, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], out[b0:b1])
+        block = dirs[b0:b1]
+        _observer_coords(block, _unit_block(block), px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho, big_h,
+                         theta_h, g, mie_kind, n_mu, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], kind[:m])
+        n_ground = 0
         for k in range(m):
-            if kind[k] == 1:
+            if kind[k] == 2:
+                # the ground half of the mu axis
+                n_ground += 1
+                vx, vy, vz = block[k, 0], block[k, 1], block[k, 2]
+                mu = clamp((px * vx + py * vy + pz * vz) / (r * math.sqrt(vx * vx + vy * vy + vz * vz)), -1.0,
+                           1.0)
+                i_mu, w_mu[k] = lerp_index(ground_mu_unit(rc, mu, bottom, rho) * (half - 1), 0, half - 1)
+                cell[k] = i_mu * n_nu + cell[k] % n_nu
+            elif kind[k] == 0:
+                bad[b0 + k] = True
+        _observer_gather(flat, n_nu, n_c, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], out[b0:b1])
+        if n_ground == 0 or not include_ground:
+            continue
+        for k in range(m):
+            if kind[k] != 2:
                 continue
             q = b0 + k
-            if kind[k] == 0:
-                bad[q] = True
-            elif include_ground:
-                vx, vy, vz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
-                inv = 1.0 / math.sqrt(vx * vx + vy * vy + vz * vz)
-                vx *= inv
-                vy *= inv
-                vz *= inv
-                mu = clamp((px * vx + py * vy + pz * vz) / r, -1.0, 1.0)
-                _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, rc,
-                                 mu, bottom, top, alpha, t, tmp, e_sky, e_sun, ground)
-                for j in range(n_l):
-                    for c in range(n_c):
-                        out[q, c] += projection[c, j] * ground[j]
+            vx, vy, vz = block[k, 0], block[k, 1], block[k, 2]
+            inv = 1.0 / math.sqrt(vx * vx + vy * vy + vz * vz)
+            vx *= inv
+            vy *= inv
+            vz *= inv
+            mu = clamp((px * vx + py * vy + pz * vz) / r, -1.0, 1.0)
+            _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, rc, mu,
+                             bottom, top, alpha, t, tmp, e_sky, e_sun, ground)
+            for j in range(n_l):
+                for c in range(n_c):
+                    out[q, c] += projection[c, j] * ground[j]
 
 
 @_jit
