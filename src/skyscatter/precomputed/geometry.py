@@ -138,15 +138,13 @@ def distance_to_boundary(r: float, mu: float, hits_ground: bool, bottom: float, 
 
 @_jit
 def lerp_index(p: float, lo: int, hi: int) -> tuple[int, float]:
-    """Interpolation cell of index position ``p`` within texels ``lo..hi`` (hi > lo): (i0, weight of i0 + 1)."""
-    if p <= lo:
-        return lo, 0.0
-    if p >= hi:
-        return hi - 1, 1.0
-    i = int(math.floor(p))
-    if i >= hi:
-        i = hi - 1
-    return i, p - i
+    """Interpolation cell of index position ``p`` within texels ``lo..hi`` (0 <= lo < hi): (i0, weight of i0 + 1).
+
+    ``p`` is clamped to [lo, hi] (a NaN gives lo); branch-free, so loops over rays vectorise.
+    """
+    pc = min(max(p, float(lo)), float(hi)) if p == p else float(lo)
+    i = min(int(pc), hi - 1)  # pc >= 0: truncation is the floor
+    return i, pc - i
 
 
 # --------------------------------------------------------------------------------------------- transmittance

@@ -189,7 +189,8 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
 
 def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, projection):
     """The 4D inscattering tables at one observer radius ``r`` [m] and sun zenith cosine ``mu_s``: an array
-    (n_mu, n_nu, 3, C) of single Rayleigh, single Mie and multiple scattering over the view axes, each
+    (n_mu, n_nu, C, 4) holding, for each channel, single Rayleigh, single Mie and multiple scattering over the
+    view axes (and a zero, so that each texel's three values are one aligned 32-byte load), each
     ``table @ projection.T`` (``projection`` (C, n_wavelengths): the identity for spectra, the XYZ matrix for
     colour).
 
@@ -201,7 +202,7 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     """
     n_r, n_mu, n_s, n_nu, _ = single_rayleigh.shape
     proj = np.asarray(projection, dtype=np.float64)
-    out = np.zeros((n_mu, n_nu, 3, proj.shape[0]))
+    out = np.zeros((n_mu, n_nu, proj.shape[0], 4))
     if mu_s < mu_s_min:
         return out
     i_r, w_r, i_s, w_s = r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_s)
@@ -211,7 +212,7 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
             for c, wc in ((0, 1.0 - w_s), (1, w_s)):
                 if wa * wc > 0.0:
                     acc += (wa * wc) * table[i_r + a, :, i_s + c, :, :]
-        out[:, :, j, :] = acc @ proj.T
+        out[:, :, :, j] = acc @ proj.T
     return out
 
 
@@ -237,9 +238,10 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
     normalisation (a square root and a division per ray) is skipped. No branch that the compiler cannot turn into
     a select, no libm call: the loop runs on SIMD lanes. Every ray gets the sky half's ``mu`` cell; ``kind``
     marks the rays that meet the ground (2), whose cell the caller replaces, and bad directions (0: zero,
-    infinite or NaN); 1 for the sky."""
+    infinite or NaN); 1 for the sky. Returns the number of rays that are not sky rays."""
     half = n_mu // 2
     inv_r = 1.0 / r
+    special = 0
     for k in range(dirs.shape[0]):
         vx = dirs[k, 0]
         vy = dirs[k, 1]
@@ -258,14 +260,14 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
         p_r[k] = rayleigh_phase(nu)
         p_m[k] = aerosol_phase(nu, g, mie_kind)
         kind[k] = (2 if hits else 1) if ok else 0
+        special += 0 if ok and not hits else 1
+    return special
 
 
 @_jit
-def _observer_gather(flat, n_nu, n_c, cell, w_mu, w_nu, p_r, p_m, out):
-    """Bilinear interpolation of the observer slices (flattened (n_mu, n_nu, 3, C)) for a block of rays from
-    :func:`_observer_coords`, phase factors applied: ``out`` (m, C)."""
-    col = 3 * n_c
-    row = n_nu * col
+def _observer_gather(slices, n_nu, cell, w_mu, w_nu, p_r, p_m, out):
+    """Bilinear interpolation of the observer slices (:func:`observer_slices` as (n_mu * n_nu, C, 4)) for a block
+    of rays from :func:`_observer_coords`, phase factors applied: ``out`` (m, C)."""
     for k in range(cell.shape[0]):
         wm = w_mu[k]
         wn = w_nu[k]
@@ -273,14 +275,15 @@ def _observer_gather(flat, n_nu, n_c, cell, w_mu, w_nu, p_r, p_m, out):
         w01 = (1.0 - wm) * wn
         w10 = wm * (1.0 - wn)
         w11 = wm * wn
-        b = cell[k] * col
+        c0 = cell[k]
         pr = p_r[k]
         pm = p_m[k]
-        for c in range(n_c):
+        for c in range(out.shape[1]):
             v = 0.0
-            for t, f in ((0, pr), (1, pm), (2, 1.0)):
-                o = b + t * n_c + c
-                v += f * (w00 * flat[o] + w01 * flat[o + col] + w10 * flat[o + row] + w11 * flat[o + row + col])
+            for t in range(3):
+                f = pr if t == 0 else (pm if t == 1 else 1.0)
+                v += f * (w00 * slices[c0, c, t] + w01 * slices[c0 + 1, c, t] + w10 * slices[c0 + n_nu, c, t]
+                          + w11 * slices[c0 + n_nu + 1, c, t])
             out[k, c] = v
 
 
@@ -300,7 +303,7 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     n_c = out.shape[1]
     n_mu, n_nu = slices.shape[0], slices.shape[1]
     half = n_mu // 2
-    flat = slices.ravel()
+    flat = slices.reshape(n_mu * n_nu, slices.shape[2], 4)
     t = np.empty(n_l)
     tmp = np.empty(n_l)
     e_sky = np.empty(n_l)
@@ -322,10 +325,11 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
         b1 = min(b0 + OBSERVER_BLOCK, stop)
         m = b1 - b0
         block = dirs[b0:b1]
-        _observer_coords(block, _unit_block(block), px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho, big_h,
-                         theta_h, g, mie_kind, n_mu, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], kind[:m])
+        special = _observer_coords(block, _unit_block(block), px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho,
+                                   big_h, theta_h, g, mie_kind, n_mu, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m],
+                                   p_m[:m], kind[:m])
         n_ground = 0
-        for k in range(m):
+        for k in range(m if special else 0):
             if kind[k] == 2:
                 # the ground half of the mu axis
                 n_ground += 1
@@ -336,7 +340,7 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
                 cell[k] = i_mu * n_nu + cell[k] % n_nu
             elif kind[k] == 0:
                 bad[b0 + k] = True
-        _observer_gather(flat, n_nu, n_c, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], out[b0:b1])
+        _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], out[b0:b1])
         if n_ground == 0 or not include_ground:
             continue
         for k in range(m):
