@@ -9,9 +9,10 @@ Measured in one run on the same 10^6 random upper-hemisphere directions (uniform
   call (tracemalloc: numpy allocations);
 * a 2048 x 1024 environment map (``sky_image``, equirect, sun disc) and a 1024 x 768 camera view;
 * Mitsuba's ``sunsky`` in ``llvm_ad_rgb`` (child process of ``bench_hosek_wilkie.py``; needs ``DRJIT_LIBLLVM_PATH``
-  pointing at LLVM >= 16, see that file), numpy in and numpy out, and on device arrays.
+  pointing at LLVM >= 16, see that file), numpy in and numpy out, and on device arrays, in ``--rounds`` rounds that
+  alternate with ours (the machine's load changes from second to second: the ratio is taken per round).
 
-Usage: ``python benchmarks/bench_bruneton_lookup.py [--repeat N]``. The default tables are built (about 25 s) if
+Usage: ``python benchmarks/bench_bruneton_lookup.py [--repeat N] [--rounds N]``. The default tables are built (about 15 s) if
 they are not cached.
 """
 
@@ -46,6 +47,7 @@ def sphere(d: np.ndarray) -> np.ndarray:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5, help="runs per figure (best is reported)")
+    ap.add_argument("--rounds", type=int, default=3, help="alternating rounds of ours and Mitsuba's lookups")
     args = ap.parse_args()
 
     from skyscatter import BrunetonSky
@@ -82,13 +84,27 @@ def main() -> int:
                                     width=1024, height=768, include_sun=False), args.repeat)
     print(f"1024 x 768 sky-and-ground camera view:               {t:.3f} s (target < 0.5 s)")
 
+    # Side by side: rounds alternate ours and Mitsuba's (a child process), so that both see the same load; each
+    # round's ratio uses that round's best times.
     hw = Path(__file__).with_name("bench_hosek_wilkie.py")
-    run = subprocess.run([sys.executable, str(hw), "llvm_ad_rgb", str(n)], capture_output=True, text=True)
-    lines = [ln for ln in run.stdout.splitlines() if ln.startswith("mitsuba")]
-    if run.returncode == 0 and lines:
-        print(*lines, sep="\n")
-    else:
-        print(f"mitsuba llvm_ad_rgb: not measured (exit {run.returncode}; set DRJIT_LIBLLVM_PATH, see {hw.name})")
+    ratios = []
+    for k in range(args.rounds):
+        t = timed(lambda: sky.luminance(up), args.repeat)
+        run = subprocess.run([sys.executable, str(hw), "llvm_ad_rgb", str(n)], capture_output=True, text=True)
+        lines = [ln for ln in run.stdout.splitlines() if ln.startswith("mitsuba")]
+        if run.returncode != 0 or not lines:
+            print(f"mitsuba llvm_ad_rgb: not measured (exit {run.returncode}; set DRJIT_LIBLLVM_PATH, see {hw.name})")
+            break
+        rates = {("device" if "eval" in ln else "numpy"): float(ln.rsplit("->", 1)[1].split("M dir/s")[0]) for ln in lines}
+        ours = n / t / 1e6
+        ratios.append((ours / rates["numpy"], ours / rates["device"]))
+        print(f"round {k + 1}: BrunetonSky.luminance {ours:6.2f} M dir/s; Mitsuba numpy in -> numpy out "
+              f"{rates['numpy']:6.2f}, on device {rates['device']:6.2f} M dir/s; ours / Mitsuba {ratios[-1][0]:.2f} "
+              f"(numpy in and out), {ratios[-1][1]:.2f} (device)")
+    if ratios:
+        a = np.array(ratios)
+        print(f"ours / Mitsuba over {len(ratios)} rounds: numpy in and out {a[:, 0].min():.2f}-{a[:, 0].max():.2f} "
+              f"(median {np.median(a[:, 0]):.2f}); on device {a[:, 1].min():.2f}-{a[:, 1].max():.2f}")
     return 0
 
 

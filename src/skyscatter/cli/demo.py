@@ -120,12 +120,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     s.add_argument("--model", choices=["preetham", "bruneton"], default=None,
                    help="atmosphere model: preetham (the sky and aerial perspective above); bruneton (precomputed "
                    "multiple scattering of Bruneton & Neyret 2008 with the Earth defaults, cached after the "
-                   "first run (about 30 s): sky, sunlight, aerial perspective, and light shafts from the "
+                   "first run (about 15 s): sky, sunlight, aerial perspective, and light shafts from the "
                    "mountains' shadow; --sky, its parameters and --aerial do not apply) (default preetham: the "
                    "sky chosen by --sky)")
     b = p.add_argument_group("precomputed atmosphere (--model bruneton; --turbidity also applies)",
                              "The Earth defaults unless changed; each atmosphere's tables are computed once "
-                             "(about 25 s) and cached.")
+                             "(about 15 s) and cached.")
     add_parameter_options(b, "bruneton", [n for n in _BRUNETON_OPTIONS if n != "turbidity"])
     add_sun_options(p, default_elevation=EVENING_SUN[0], default_azimuth=EVENING_SUN[1])
     c = p.add_argument_group("camera and terrain")

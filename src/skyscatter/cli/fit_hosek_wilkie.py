@@ -26,7 +26,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="fit the Hosek-Wilkie sky form to the precomputed atmosphere and write a dataset (.npz)",
         description=(
             "Sample the precomputed multiple-scattering sky (Bruneton & Neyret 2008; tables from the cache, built "
-            "the first time, about 30 s) at several sun elevations and fit the Hosek & Wilkie 2012 form (nine "
+            "the first time, about 15 s) at several sun elevations and fit the Hosek & Wilkie 2012 form (nine "
             "parameters and a radiance scale, quintic Bezier curves in the cube root of the sun elevation) at each "
             "wavelength by least squares. The dataset file is read by HosekWilkieSky(..., dataset="
             "HosekWilkieDataset.load(path)). Example: skyscatter fit-hosek-wilkie --turbidity 3 --out t3.npz"

@@ -106,7 +106,8 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
     if computed:
         if progress is None:  # a library call that did not choose: say once why it takes a while
             warnings.warn(f"building the precomputed tables for this atmosphere once ({wl.size} wavelengths, "
-                          f"{orders} orders; typically 30-90 s on 2 cores); they are then cached in {path.parent}",
+                          f"{orders} orders; typically 10-30 s on 2 cores, and about 20 s more the first time, "
+                          f"to compile the kernels); they are then cached in {path.parent}",
                           TableBuildWarning, stacklevel=3)
         atm = PrecomputedAtmosphere.compute(params, orders=orders, wavelengths=wl, sizes=sz, progress=progress)
         try:

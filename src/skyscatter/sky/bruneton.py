@@ -81,7 +81,7 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         the view is from space.
     atmosphere : PrecomputedAtmosphere or AtmosphereParameters, optional
         Precomputed tables, or parameters whose tables are taken from the disk cache (computed the first
-        time, about 30-60 s on 2 cores, with a warning saying so); default: the Earth defaults.
+        time, about 10-30 s on 2 cores, with a warning saying so); default: the Earth defaults.
     turbidity : float, optional
         Aerosols from turbidity, 1 to 20 (Preetham 1999 A.1: Angstrom alpha 1.3, beta 0.04608 T - 0.04586).
     aerosol_optical_depth : float, optional
