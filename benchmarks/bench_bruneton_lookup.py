@@ -12,8 +12,8 @@ Measured in one run on the same 10^6 random upper-hemisphere directions (uniform
   pointing at LLVM >= 16, see that file), numpy in and numpy out, and on device arrays, in ``--rounds`` rounds that
   alternate with ours (the machine's load changes from second to second: the ratio is taken per round).
 
-Usage: ``python benchmarks/bench_bruneton_lookup.py [--repeat N] [--rounds N]``. The default tables are built (about 15 s) if
-they are not cached.
+Usage: ``python benchmarks/bench_bruneton_lookup.py [--repeat N] [--rounds N]``. The default tables are built
+(about 15 s) if they are not cached.
 """
 
 from __future__ import annotations
@@ -95,7 +95,8 @@ def main() -> int:
         if run.returncode != 0 or not lines:
             print(f"mitsuba llvm_ad_rgb: not measured (exit {run.returncode}; set DRJIT_LIBLLVM_PATH, see {hw.name})")
             break
-        rates = {("device" if "eval" in ln else "numpy"): float(ln.rsplit("->", 1)[1].split("M dir/s")[0]) for ln in lines}
+        rates = {("device" if "eval" in ln else "numpy"): float(ln.rsplit("->", 1)[1].split("M dir/s")[0])
+                 for ln in lines}
         ours = n / t / 1e6
         ratios.append((ours / rates["numpy"], ours / rates["device"]))
         print(f"round {k + 1}: BrunetonSky.luminance {ours:6.2f} M dir/s; Mitsuba numpy in -> numpy out "

@@ -145,3 +145,15 @@ def test_acos_table_within_its_published_bound():
     assert g.acos_table(1.0) == 0.0 and abs(g.acos_table(-1.0) - math.pi) < 2e-8
     # out of range (rounding in a caller) clamps instead of returning NaN
     assert g.acos_table(1.0 + 1e-15) == 0.0 and math.isfinite(g.acos_table(-1.0 - 1e-15))
+
+
+def test_last_sky_texel_is_the_horizon_itself():
+    """The sky half's last view-zenith texel is the horizon, cos = -rho / r, to rounding (not through the
+    polynomial arc cosine, 2e-8 rad off, which put it below the horizon at some radii while flagged as missing
+    the ground; review of the vectorised kernels)."""
+    n_r, n_mu = 32, 128
+    for i_r in range(1, n_r):
+        r, mu, hits = g.scattering_r_mu_params(i_r, n_mu - 1, BOTTOM, TOP, n_r, n_mu)
+        assert not hits
+        rho = H * i_r / (n_r - 1)  # as the mapping defines it (sqrt(r^2 - R_g^2) loses digits to cancellation)
+        assert math.isclose(mu, -rho / r, rel_tol=1e-15)

@@ -392,3 +392,30 @@ def test_wavelengths_option_chooses_the_tables(atm, monkeypatch):
         BrunetonSky(0.5, 0.0, atmosphere=atm, wavelengths="rgb")
     with pytest.raises(InvalidParameterError, match="'spectral' or 'rgb'"):
         BrunetonSky(0.5, 0.0, wavelengths="blue")
+
+
+def test_sun_exactly_at_the_tables_limit_is_not_dark(atm):
+    """A sun at the tables' largest zenith angle (max_sun_zenith, accepted by BrunetonSky) lies on the last texel:
+    the lookups keep it (MU_S_LIMIT_TOLERANCE) instead of dropping it by a rounding of mu_s below mu_s_min, which
+    made the whole sky black (review of the vectorised kernels). The value continues the sky inside the limit:
+    the lookup is linear in a coordinate that is smooth there, so the straight line through the suns 1e-9 and
+    2e-9 rad inside reaches it to second order (~1e-7; the first sun-zenith cell is steep, the values themselves
+    differ by up to 4e-4)."""
+    limit = atm.parameters.max_sun_zenith
+    d = np.array([[0.0, 0.3, 1.0], [0.2, -0.9, 0.3], [0.0, 0.99, 0.05]])
+    for altitude in (0.0, 1000.0):
+        lum = [BrunetonSky(limit - k * 1e-9, 0.0, atmosphere=atm, altitude=altitude).luminance(d) for k in (0, 1, 2)]
+        assert np.all(lum[0] > 0.0)
+        np.testing.assert_allclose(lum[0], 2.0 * lum[1] - lum[2], rtol=1e-6)
+
+
+def test_irradiance_and_sun_lookups_refuse_points_below_the_ground(atm):
+    """Points below the surface (the planet's centre: NaN from the kernels' divisions) are refused with the
+    library's error; points outside the atmosphere stay allowed."""
+    sun = np.array([0.0, 0.0, 1.0])
+    for bad in ([0.0, 0.0, 0.0], [0.0, 0.0, R - 1000.0]):
+        with pytest.raises(InvalidParameterError, match="below the surface"):
+            atm.sun_transmittance(bad, sun)
+        with pytest.raises(InvalidParameterError, match="below the surface"):
+            atm.ground_irradiance(bad, [0.0, 0.0, 1.0], sun)
+    assert np.all(np.isfinite(atm.sun_transmittance([0.0, 0.0, R + 1.0e6], sun)))

@@ -68,6 +68,10 @@ __all__ = [
 #: branch per division and the loops over rays can be vectorised (every division here is guarded explicitly).
 _jit = numba.njit(cache=True, fastmath={"arcp", "contract"}, error_model="numpy")
 
+#: Sun zenith cosines this close below the tables' limit ``mu_s_min`` count as at the limit: a sun exactly there
+#: (a texel's, or a caller's at ``max_sun_zenith``) must not be kept or dropped by the last bit of rounding.
+MU_S_LIMIT_TOLERANCE = 1e-12
+
 #: Coefficients of Abramowitz & Stegun (1964), Handbook of Mathematical Functions, Eq. 4.4.46 (from Hastings
 #: 1955): ``acos(x) = sqrt(1 - x) (a0 + a1 x + ... + a7 x^7)`` for 0 <= x <= 1, absolute error <= 2e-8 rad as
 #: published (2.18e-8 with the printed 10-decimal coefficients, at x = 0; tests/test_precomputed_geometry.py).
@@ -353,7 +357,7 @@ def scattering_r_mu_params(i_r: int, i_mu: int, bottom: float, top: float, n_r: 
     if x <= 0.0:
         return r, 1.0, False
     if x >= 1.0:
-        return r, math.cos(theta_h), False
+        return r, clamp(-rho / r, -1.0, 1.0), False  # the horizon itself (cos of acos_table is 2e-8 off)
     lo, hi = 0.0, theta_h
     for _ in range(60):
         mid = 0.5 * (lo + hi)

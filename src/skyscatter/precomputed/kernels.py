@@ -30,6 +30,7 @@ import numba
 import numpy as np
 
 from .geometry import (
+    MU_S_LIMIT_TOLERANCE,
     acos_table,
     clamp,
     distance_to_bottom,
@@ -151,7 +152,8 @@ def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
 def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w, frac):
     """Transmittance-table ``mu`` cells and weights towards the sun, and the visible fraction of its disc, at a
     ray sample (distance ``d`` [m] from the texel's point at radius ``r``, radius ``r_i``) for every texel sun
-    (``mu_s_flat``, ``nu_flat``, n_mu_s * n_nu). Selects only: the compiler vectorises it."""
+    (``mu_s_flat``, ``nu_flat``, n_mu_s * n_nu). Its branches are short and side-effect free, so the compiler turns
+    them into selects and vectorises the loop."""
     for u in range(mu_s_flat.shape[0]):
         mu_s_i = clamp((r * mu_s_flat[u] + d * nu_flat[u]) / r_i, -1.0, 1.0)
         frac[u] = sun_visible_fraction(r_i, mu_s_i, bottom, alpha)
@@ -463,7 +465,7 @@ def _sun_cells(r, d, r_i, mu_i, mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a
         nu = nu_flat[u]
         mu_s_i = (r * mu_s_flat[u] + d * nu) / r_i
         # A texel whose sun is at the limit (mu_s_min) has samples there to rounding: keep them all.
-        ok = mu_s_i >= mu_s_min - 1e-12
+        ok = mu_s_i >= mu_s_min - MU_S_LIMIT_TOLERANCE
         mu_s_i = min(max(mu_s_i, mu_s_min), 1.0)
         j_s, ws = lerp_index(scattering_mu_s_coord_a(mu_s_i, bottom, top, big_a, theta_max, n_s), 0, n_s - 1)
         j_n, wn = lerp_index(scattering_nu_coord(mu_i, mu_s_i, nu, n_n), 0, n_n - 1)

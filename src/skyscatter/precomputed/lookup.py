@@ -28,6 +28,7 @@ import numba
 import numpy as np
 
 from .geometry import (
+    MU_S_LIMIT_TOLERANCE,
     clamp,
     distance_to_bottom,
     distance_to_boundary,
@@ -82,8 +83,9 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r
     (``p_r``, ``p_m``: phase functions at ``nu``); zero below the sun-zenith limit."""
     for k in range(out.shape[0]):
         out[k] = 0.0
-    if mu_s < mu_s_min:
+    if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
         return
+    mu_s = max(mu_s, mu_s_min)
     n_r, n_mu, n_s, n_n, _ = ray.shape
     i_r, w_r, i_mu, w_mu = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
@@ -198,13 +200,15 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     interpolating the slice bilinearly in (``mu``, ``nu``) gives the same values as the 4D lookup; and the
     inscattered radiance is a sum of table values times wavelength-independent phase factors, so projecting the
     slice first gives the same XYZ as projecting each looked-up spectrum (Bruneton's 2017 rewrite folds its
-    tables to luminance the same way). Zero when ``mu_s < mu_s_min`` (no data below the tables' sun limit).
+    tables to luminance the same way). Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables' sun
+    limit; :data:`.geometry.MU_S_LIMIT_TOLERANCE` for rounding).
     """
     n_r, n_mu, n_s, n_nu, _ = single_rayleigh.shape
     proj = np.asarray(projection, dtype=np.float64)
     out = np.zeros((n_mu, n_nu, proj.shape[0], 4))
-    if mu_s < mu_s_min:
+    if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
         return out
+    mu_s = max(mu_s, mu_s_min)
     i_r, w_r, i_s, w_s = r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_s)
     for j, table in enumerate((single_rayleigh, single_mie, multiple)):
         acc = np.zeros((n_mu, n_nu, table.shape[-1]))
@@ -297,7 +301,8 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     lookup); the ground term, a product of spectra (transmittance times irradiance), is formed per wavelength
     and then projected with ``projection`` (C, n_wavelengths). ``dirs`` need not be unit vectors; a zero,
     infinite or NaN one sets ``bad[q]`` (the caller raises). Rays go in blocks of :data:`OBSERVER_BLOCK` in
-    three passes: coordinates (vectorised), table reads, and the ground for the rays that meet it.
+    four passes: coordinates (vectorised), the ground half's ``mu`` cell for rays that meet the ground (only in
+    blocks that have such rays or bad directions), table reads, and the ground's own radiance.
     """
     n_l = transmittance.shape[2]
     n_c = out.shape[1]

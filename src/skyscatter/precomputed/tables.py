@@ -76,7 +76,7 @@ DEFAULT_ORDERS = 6
 #: Largest ratio of successive orders used for the tail (a bound against a noisy estimate: 1 would be infinite).
 MAX_ORDER_RATIO = 0.95
 #: Version of the table layout and algorithm; part of the cache key and checked by :meth:`load`.
-FORMAT_VERSION = 4
+FORMAT_VERSION = 5
 _TABLE_NAMES = ("transmittance", "irradiance", "single_rayleigh", "single_mie", "multiple")
 
 
@@ -731,6 +731,7 @@ class PrecomputedAtmosphere:
         from .parallel import parallel_for
 
         shape, pos, _, sun, _ = self._broadcast_rays(positions, sun_direction, sun_direction, None)
+        self._check_above_ground(pos)
         bottom, top, _ = self._geometry()
         t = np.ones((pos.shape[0], self.wavelengths.size))
         parallel_for(sun_kernel, pos.shape[0], pos, sun, self.tables["transmittance"], bottom, top,
@@ -755,6 +756,7 @@ class PrecomputedAtmosphere:
 
         shape, pts, nrm, sun, _ = self._broadcast_rays(points, normals, sun_direction, None,
                                                        direction_name="normals")
+        self._check_above_ground(pts, "points")
         bottom, top, _ = self._geometry()
         e_sun = np.zeros((pts.shape[0], self.wavelengths.size))
         e_sky = np.zeros((pts.shape[0], self.wavelengths.size))
