@@ -48,6 +48,7 @@ import numba
 
 __all__ = [
     "acos_table",
+    "bilinear_weights",
     "clamp",
     "distance_to_bottom",
     "distance_to_boundary",
@@ -149,6 +150,13 @@ def lerp_index(p: float, lo: int, hi: int) -> tuple[int, float]:
     pc = min(max(p, float(lo)), float(hi)) if p == p else float(lo)
     i = min(int(pc), hi - 1)  # pc >= 0: truncation is the floor
     return i, pc - i
+
+
+@_jit
+def bilinear_weights(w0: float, w1: float) -> tuple[float, float, float, float]:
+    """Weights of the four corners (00, 01, 10, 11) of a cell for fractional positions ``w0``, ``w1`` along its
+    two axes (the weights that :func:`lerp_index` returns)."""
+    return (1.0 - w0) * (1.0 - w1), (1.0 - w0) * w1, w0 * (1.0 - w1), w0 * w1
 
 
 # --------------------------------------------------------------------------------------------- transmittance

@@ -32,6 +32,7 @@ import numpy as np
 from .geometry import (
     MU_S_LIMIT_TOLERANCE,
     acos_table,
+    bilinear_weights,
     clamp,
     distance_to_bottom,
     distance_to_boundary,
@@ -241,13 +242,10 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
                     continue
                 j = cell[u]
                 w = w_sun[u]
-                a00 = f * (1.0 - w_tr) * (1.0 - w)
-                a01 = f * (1.0 - w_tr) * w
-                a10 = f * w_tr * (1.0 - w)
-                a11 = f * w_tr * w
+                a00, a01, a10, a11 = bilinear_weights(w_tr, w)
                 for k in range(n_l):
-                    t_sun = (a00 * transmittance[j_r, j, k] + a01 * transmittance[j_r, j + 1, k]
-                             + a10 * transmittance[j_r + 1, j, k] + a11 * transmittance[j_r + 1, j + 1, k])
+                    t_sun = f * (a00 * transmittance[j_r, j, k] + a01 * transmittance[j_r, j + 1, k]
+                                 + a10 * transmittance[j_r + 1, j, k] + a11 * transmittance[j_r + 1, j + 1, k])
                     acc_r[u, k] += w_r[i, k] * t_sun
                     acc_m[u, k] += w_m[i, k] * t_sun
         for i_s in range(n_mu_s):
@@ -549,10 +547,7 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
             # The sample's (r, mu) cell is the same for every sun: interpolate the density over it once, into a
             # slice over (mu_s, nu); each lookup is then bilinear (the same value as the quadrilinear one).
             ir, wr, imu, wmu = cell_ir[i], cell_wr[i], cell_imu[i], cell_wmu[i]
-            c00 = (1.0 - wr) * (1.0 - wmu)
-            c01 = (1.0 - wr) * wmu
-            c10 = wr * (1.0 - wmu)
-            c11 = wr * wmu
+            c00, c01, c10, c11 = bilinear_weights(wr, wmu)
             for j_s in range(n_s):
                 for j_n in range(n_n):
                     for k in range(n_l):
@@ -569,10 +564,7 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
                 j_n = cell[u] - j_s * n_n
                 ws = w_s[u]
                 wn = w_n[u]
-                a00 = (1.0 - ws) * (1.0 - wn)
-                a01 = (1.0 - ws) * wn
-                a10 = ws * (1.0 - wn)
-                a11 = ws * wn
+                a00, a01, a10, a11 = bilinear_weights(ws, wn)
                 for k in range(n_l):
                     acc_flat[u, k] += q[i, k] * (a00 * sl[j_s, j_n, k] + a01 * sl[j_s, j_n + 1, k]
                                                  + a10 * sl[j_s + 1, j_n, k] + a11 * sl[j_s + 1, j_n + 1, k])

@@ -29,6 +29,7 @@ import numpy as np
 
 from .geometry import (
     MU_S_LIMIT_TOLERANCE,
+    bilinear_weights,
     clamp,
     distance_to_bottom,
     distance_to_boundary,
@@ -275,10 +276,7 @@ def _observer_gather(slices, n_nu, cell, w_mu, w_nu, p_r, p_m, out):
     for k in range(cell.shape[0]):
         wm = w_mu[k]
         wn = w_nu[k]
-        w00 = (1.0 - wm) * (1.0 - wn)
-        w01 = (1.0 - wm) * wn
-        w10 = wm * (1.0 - wn)
-        w11 = wm * wn
+        w00, w01, w10, w11 = bilinear_weights(wm, wn)
         c0 = cell[k]
         pr = p_r[k]
         pm = p_m[k]

@@ -17,6 +17,7 @@ import numba
 from ..atmosphere.phase import aerosol_phase_scalar, cornette_shanks_scalar, rayleigh_phase_scalar
 from .geometry import (
     acos_table,
+    bilinear_weights,
     clamp,
     irradiance_coord,
     lerp_index,
@@ -44,10 +45,7 @@ def bilinear_read(table, p0, p1, out):
     n0, n1, n_l = table.shape
     i, w0 = lerp_index(p0, 0, n0 - 1)
     j, w1 = lerp_index(p1, 0, n1 - 1)
-    a00 = (1.0 - w0) * (1.0 - w1)
-    a01 = (1.0 - w0) * w1
-    a10 = w0 * (1.0 - w1)
-    a11 = w0 * w1
+    a00, a01, a10, a11 = bilinear_weights(w0, w1)
     for k in range(n_l):
         out[k] = (a00 * table[i, j, k] + a01 * table[i, j + 1, k]
                   + a10 * table[i + 1, j, k] + a11 * table[i + 1, j + 1, k])
