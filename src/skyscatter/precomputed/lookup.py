@@ -35,19 +35,23 @@ from .geometry import (
     distance_to_boundary,
     ground_mu_unit,
     horizon_constants,
+    irradiance_coord,
     lerp_index,
     ray_hits_ground,
     scattering_nu_coord,
     sky_mu_unit,
+    transmittance_coord,
 )
 from .sampling import (
     aerosol_phase,
+    bilinear_read,
     irradiance_lookup,
     lookup4_cell,
     mu_s_nu_cell,
     r_mu_cell,
     r_mu_s_cell,
     rayleigh_phase,
+    transmittance_ratio,
     transmittance_segment,
     transmittance_to_sun,
     transmittance_to_top,
@@ -106,23 +110,63 @@ def _sun_cos_factor(mu, alpha):
 
 
 @_jit
+def _ground_coords(px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top, alpha, n_tr, n_tmu, n_er, n_emu):
+    """Table coordinates of the ground term of :func:`_ground_radiance` for the ray from (px, py, pz) [m] (radius
+    ``r``, view zenith cosine ``mu``) along the unit (vx, vy, vz) that meets the ground, towards the unit sun
+    (sx, sy, sz): index positions of the transmittance from the ground point and from the ray's origin along the
+    reversed ray (``T(x, y) = T(y, -v) / T(x, -v)``, Sec. 4; transmittance table n_tr x n_tmu), of the sky
+    irradiance at the ground point's sun zenith (irradiance table n_er x n_emu) and of the transmittance towards
+    the sun there, and the sun's cosine factor (averaged over its disc of angular radius ``alpha`` [rad]).
+    Branches are short and side-effect free, so loops over rays vectorise."""
+    d = distance_to_bottom(r, mu, bottom)
+    r_d = clamp(math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0)), bottom, top)
+    mu_d = clamp((r * mu + d) / r_d, -1.0, 1.0)
+    pa_r, pa_mu = transmittance_coord(r_d, -mu_d, bottom, top, n_tr, n_tmu)
+    pb_r, pb_mu = transmittance_coord(r, -mu, bottom, top, n_tr, n_tmu)
+    gx = px + d * vx
+    gy = py + d * vy
+    gz = pz + d * vz
+    mu_s_g = clamp((gx * sx + gy * sy + gz * sz) / math.sqrt(gx * gx + gy * gy + gz * gz), -1.0, 1.0)
+    pe_r, pe_mu = irradiance_coord(bottom, mu_s_g, bottom, top, n_er, n_emu)
+    ps_r, ps_mu = transmittance_coord(bottom, mu_s_g, bottom, top, n_tr, n_tmu)
+    return pa_r, pa_mu, pb_r, pb_mu, pe_r, pe_mu, ps_r, ps_mu, _sun_cos_factor(mu_s_g, alpha)
+
+
+@_jit
+def _ground_from_coords(transmittance, irradiance, albedo, solar, pa_r, pa_mu, pb_r, pb_mu, pe_r, pe_mu, ps_r, ps_mu,
+                        cf, t, tmp, e_sky, e_sun, out):
+    """The ground's radiance (Eqs. 10, 14) seen through the atmosphere (Eq. 16) from the coordinates of
+    :func:`_ground_coords`, into ``out``; leaves the transmittance to the ground in ``t``."""
+    bilinear_read(transmittance, pa_r, pa_mu, t)
+    bilinear_read(transmittance, pb_r, pb_mu, tmp)
+    transmittance_ratio(t, tmp)
+    bilinear_read(irradiance, pe_r, pe_mu, e_sky)
+    bilinear_read(transmittance, ps_r, ps_mu, e_sun)
+    for k in range(out.shape[0]):
+        out[k] = t[k] * albedo[k] / PI * (solar[k] * e_sun[k] * cf + e_sky[k])
+
+
+@_jit
 def _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top,
                      alpha, t, tmp, e_sky, e_sun, out):
     """Radiance of the Lambertian ground lit by the sun and the sky (Eqs. 10, 14) where the ray from (px, py, pz)
     [m] along (vx, vy, vz) meets it, seen through the atmosphere (Eq. 16), into ``out``; leaves the transmittance
     to the ground in ``t``."""
-    d = distance_to_bottom(r, mu, bottom)
-    transmittance_segment(transmittance, r, mu, d, True, bottom, top, t, tmp)
-    gx = px + d * vx
-    gy = py + d * vy
-    gz = pz + d * vz
-    gr = math.sqrt(gx * gx + gy * gy + gz * gz)
-    mu_s_g = clamp((gx * sx + gy * sy + gz * sz) / gr, -1.0, 1.0)
-    irradiance_lookup(irradiance, bottom, mu_s_g, bottom, top, e_sky)
-    transmittance_to_top(transmittance, bottom, mu_s_g, bottom, top, e_sun)
-    cf = _sun_cos_factor(mu_s_g, alpha)
-    for k in range(out.shape[0]):
-        out[k] = t[k] * albedo[k] / PI * (solar[k] * e_sun[k] * cf + e_sky[k])
+    c = _ground_coords(px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top, alpha, transmittance.shape[0],
+                       transmittance.shape[1], irradiance.shape[0], irradiance.shape[1])
+    _ground_from_coords(transmittance, irradiance, albedo, solar, c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7],
+                        c[8], t, tmp, e_sky, e_sun, out)
+
+
+@_jit
+def _ground_coords_block(gv, gmu, px, py, pz, sx, sy, sz, r, bottom, top, alpha, n_tr, n_tmu, n_er, n_emu, gc):
+    """:func:`_ground_coords` for a block's ground rays (unit directions ``gv`` (m, 3), view zenith cosines
+    ``gmu``) into ``gc`` (m, 9), on SIMD lanes."""
+    for k in range(gmu.shape[0]):
+        c = _ground_coords(px, py, pz, gv[k, 0], gv[k, 1], gv[k, 2], sx, sy, sz, r, gmu[k], bottom, top, alpha, n_tr,
+                           n_tmu, n_er, n_emu)
+        for j in range(9):
+            gc[k, j] = c[j]
 
 
 @_kjit
@@ -299,8 +343,9 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     lookup); the ground term, a product of spectra (transmittance times irradiance), is formed per wavelength
     and then projected with ``projection`` (C, n_wavelengths). ``dirs`` need not be unit vectors; a zero,
     infinite or NaN one sets ``bad[q]`` (the caller raises). Rays go in blocks of :data:`OBSERVER_BLOCK` in
-    four passes: coordinates (vectorised), the ground half's ``mu`` cell for rays that meet the ground (only in
-    blocks that have such rays or bad directions), table reads, and the ground's own radiance.
+    passes: coordinates (vectorised), the ground half's ``mu`` cell for rays that meet the ground (only in blocks
+    that have such rays or bad directions), table reads, then for the rays that meet the ground the coordinates of
+    the ground term (vectorised) and its spectrum, projected.
     """
     n_l = transmittance.shape[2]
     n_c = out.shape[1]
@@ -318,6 +363,12 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     w_nu = np.empty(OBSERVER_BLOCK)
     p_r = np.empty(OBSERVER_BLOCK)
     p_m = np.empty(OBSERVER_BLOCK)
+    g_idx = np.empty(OBSERVER_BLOCK, dtype=np.int64)
+    g_v = np.empty((OBSERVER_BLOCK, 3))
+    g_mu = np.empty(OBSERVER_BLOCK)
+    g_c = np.empty((OBSERVER_BLOCK, 9))
+    n_tr, n_tmu = transmittance.shape[0], transmittance.shape[1]
+    n_er, n_emu = irradiance.shape[0], irradiance.shape[1]
     px, py, pz = position[0], position[1], position[2]
     sx, sy, sz = sun[0], sun[1], sun[2]
     r = math.sqrt(px * px + py * py + pz * pz)
@@ -334,33 +385,35 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
         n_ground = 0
         for k in range(m if special else 0):
             if kind[k] == 2:
-                # the ground half of the mu axis
-                n_ground += 1
+                # the ground half of the mu axis; the unit direction and mu kept for the ground term
                 vx, vy, vz = block[k, 0], block[k, 1], block[k, 2]
-                mu = clamp((px * vx + py * vy + pz * vz) / (r * math.sqrt(vx * vx + vy * vy + vz * vz)), -1.0,
-                           1.0)
+                inv = 1.0 / math.sqrt(vx * vx + vy * vy + vz * vz)
+                mu = clamp((px * vx + py * vy + pz * vz) * inv / r, -1.0, 1.0)
                 i_mu, w_mu[k] = lerp_index(ground_mu_unit(rc, mu, bottom, rho) * (half - 1), 0, half - 1)
                 cell[k] = i_mu * n_nu + cell[k] % n_nu
+                g_idx[n_ground] = k
+                g_v[n_ground, 0] = vx * inv
+                g_v[n_ground, 1] = vy * inv
+                g_v[n_ground, 2] = vz * inv
+                g_mu[n_ground] = mu
+                n_ground += 1
             elif kind[k] == 0:
                 bad[b0 + k] = True
         _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], out[b0:b1])
         if n_ground == 0 or not include_ground:
             continue
-        for k in range(m):
-            if kind[k] != 2:
-                continue
-            q = b0 + k
-            vx, vy, vz = block[k, 0], block[k, 1], block[k, 2]
-            inv = 1.0 / math.sqrt(vx * vx + vy * vy + vz * vz)
-            vx *= inv
-            vy *= inv
-            vz *= inv
-            mu = clamp((px * vx + py * vy + pz * vz) / r, -1.0, 1.0)
-            _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, rc, mu,
-                             bottom, top, alpha, t, tmp, e_sky, e_sun, ground)
-            for j in range(n_l):
-                for c in range(n_c):
-                    out[q, c] += projection[c, j] * ground[j]
+        _ground_coords_block(g_v[:n_ground], g_mu[:n_ground], px, py, pz, sx, sy, sz, rc, bottom, top, alpha, n_tr,
+                             n_tmu, n_er, n_emu, g_c[:n_ground])
+        for j in range(n_ground):
+            c = g_c[j]
+            _ground_from_coords(transmittance, irradiance, albedo, solar, c[0], c[1], c[2], c[3], c[4], c[5], c[6],
+                                c[7], c[8], t, tmp, e_sky, e_sun, ground)
+            q = b0 + g_idx[j]
+            for ch in range(n_c):
+                acc = 0.0
+                for i in range(n_l):
+                    acc += projection[ch, i] * ground[i]
+                out[q, ch] += acc
 
 
 @_jit
