@@ -84,3 +84,52 @@ def test_set_num_threads_caps_the_blas_pools():
         assert all(pool["num_threads"] == 1 for pool in threadpool_info())
     finally:
         runtime.set_num_threads(before)
+
+
+def _fill_chunk(out, start, stop):
+    """A stand-in kernel: writes each index of its chunk into ``out``."""
+    out[start:stop] = range(start, stop)
+
+
+def test_kernel_pool_is_kept_resized_and_safe_after_fork():
+    """parallel_for keeps one pool per process (no thread start-up per call), re-creates it when the number of
+    threads changes, covers the range exactly, runs inline when called from its own worker, and a forked child
+    gets a fresh pool instead of the parent's dead threads."""
+    import multiprocessing
+
+    import numpy as np
+
+    from skyscatter.precomputed import parallel
+
+    before = runtime.num_threads()
+    try:
+        runtime.set_num_threads(2)
+        out = np.full(10_000, -1.0)
+        parallel.parallel_for(_fill_chunk, out.size, out, grain=100)
+        np.testing.assert_array_equal(out, np.arange(out.size))
+        pool = parallel._executor(2)
+        parallel.parallel_for(_fill_chunk, out.size, out, grain=100)
+        assert parallel._executor(2) is pool
+        runtime.set_num_threads(3)
+        parallel.parallel_for(_fill_chunk, out.size, out, grain=100)
+        assert parallel._executor(3) is not pool
+        # from a worker of the pool: inline, no deadlock
+        inner = np.full(1000, -1.0)
+        parallel._executor(3).submit(parallel.parallel_for, _fill_chunk, inner.size, inner).result(timeout=30)
+        np.testing.assert_array_equal(inner, np.arange(inner.size))
+        if "fork" in multiprocessing.get_all_start_methods():
+            ctx = multiprocessing.get_context("fork")
+            with ctx.Pool(1) as child:
+                assert child.apply_async(_sum_in_child).get(timeout=60) == sum(range(5000))
+    finally:
+        runtime.set_num_threads(before)
+
+
+def _sum_in_child():
+    import numpy as np
+
+    from skyscatter.precomputed import parallel
+
+    out = np.zeros(5000)
+    parallel.parallel_for(_fill_chunk, out.size, out, grain=100)
+    return int(out.sum())
