@@ -87,3 +87,28 @@ def test_aerosol_multiple_scattering_against_disort(disort_tables, aod, albedo, 
         ours = atm.sky_radiance([0.0, 0.0, p.bottom_radius], d, sun)[:, 0]
         err = ours / ref[:, j] - 1.0
         assert np.all(np.abs(err) < tol), (side, np.round(100 * err, 2), np.round(100 * tol, 2))
+
+
+def test_hardest_case_against_the_monte_carlo_reference(disort_tables):
+    """Issue 11, item 0, against the Monte Carlo reference: the same spherical atmosphere on both sides, so no
+    sphericity allowance. The hardest DISORT case (aerosol optical depth 0.5 over albedo 0.8, sun zenith 70 deg,
+    where orders 7 and up carry ~13 % of the radiance), principal plane, view zenith 0-70 deg, 550 nm.
+
+    Each direction within the issue's 3 % plus 3 Monte Carlo standard errors (1.0-1.9 % with 32768 paths); the
+    mean over the 16 directions, whose standard error is 0.34 %, within 3 % including 3 of its standard errors.
+    Seeded, so deterministic. (All 12 cases at the default table sizes with 131072 paths:
+    ``benchmarks/compare_montecarlo_disort_cases.py``, within 2.8 %, docs/accuracy.md.)"""
+    from skyscatter.montecarlo import sky_radiance
+
+    params = _params(0.5, 0.8)
+    zen = math.radians(70.0)
+    sun = np.array([0.0, math.sin(zen), math.cos(zen)])
+    dirs = np.concatenate([np.stack([0.0 * VIEW_ZENITH, side * np.sin(VIEW_ZENITH), np.cos(VIEW_ZENITH)], axis=-1)
+                           for side in (1.0, -1.0)])
+    tab = disort_tables[0.5, 0.8].sky_radiance(np.array([0.0, 0.0, params.bottom_radius]), dirs, sun)[:, 0]
+    mc = sky_radiance(params, dirs, np.array([550.0]), sun_zenith=zen, samples=32768, seed=3)
+    rel = tab / mc.radiance[:, 0] - 1.0
+    rse = mc.stderr[:, 0] / mc.radiance[:, 0]
+    assert np.all(np.abs(rel) < 0.03 + 3.0 * rse), rel
+    mean_se = math.sqrt(float(np.sum(rse**2))) / rel.size
+    assert abs(rel.mean()) + 3.0 * mean_se < 0.03, (rel.mean(), mean_se)
