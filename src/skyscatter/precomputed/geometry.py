@@ -56,6 +56,7 @@ __all__ = [
     "irradiance_coord",
     "irradiance_params",
     "lerp_index",
+    "point_along_ray",
     "ray_hits_ground",
     "scattering_nu_azimuth",
     "scattering_nu_coord",
@@ -76,9 +77,8 @@ MU_S_LIMIT_TOLERANCE = 1e-12
 #: Coefficients of Abramowitz & Stegun (1964), Handbook of Mathematical Functions, Eq. 4.4.46 (from Hastings
 #: 1955): ``acos(x) = sqrt(1 - x) (a0 + a1 x + ... + a7 x^7)`` for 0 <= x <= 1, absolute error <= 2e-8 rad as
 #: published (2.18e-8 with the printed 10-decimal coefficients, at x = 0; tests/test_precomputed_geometry.py).
-_ACOS_COEFFICIENTS = (1.5707963050, -0.2145988016, 0.0889789874, -0.0501743046, 0.0308918810, -0.0170881256,
-                      0.0066700901, -0.0012624911)
-_A0, _A1, _A2, _A3, _A4, _A5, _A6, _A7 = _ACOS_COEFFICIENTS
+_A0, _A1, _A2, _A3 = 1.5707963050, -0.2145988016, 0.0889789874, -0.0501743046
+_A4, _A5, _A6, _A7 = 0.0308918810, -0.0170881256, 0.0066700901, -0.0012624911
 
 
 @_jit
@@ -125,6 +125,15 @@ def distance_to_bottom(r: float, mu: float, bottom: float) -> float:
     if q <= 0.0:
         return 0.0
     return max((r * r - bottom * bottom) / q, 0.0)
+
+
+@_jit
+def point_along_ray(r: float, mu: float, d: float, bottom: float, top: float) -> tuple[float, float]:
+    """Radius [m] and view zenith cosine at distance ``d`` [m] along the ray from radius ``r`` with cosine ``mu``:
+    ``r_d = sqrt(d^2 + 2 r mu d + r^2)`` (clamped to the atmosphere) and ``mu_d = (r mu + d) / r_d`` (Bruneton &
+    Neyret 2008, Sec. 4, the point ``x + d v``)."""
+    r_d = clamp(math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0)), bottom, top)
+    return r_d, clamp((r * mu + d) / r_d, -1.0, 1.0)
 
 
 @_jit

@@ -39,6 +39,7 @@ from .geometry import (
     irradiance_params,
     lerp_index,
     mu_s_limit_a,
+    point_along_ray,
     ray_hits_ground,
     scattering_mu_s_coord_a,
     scattering_mu_s_param,
@@ -202,7 +203,7 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
         for i in range(n_pts):
             d = ray_sample_distance(i, n_samples, d_end, mu, hits)
             dist[i] = d
-            rad[i] = clamp(math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0)), bottom, top)
+            rad[i] = point_along_ray(r, mu, d, bottom, top)[0]
             rho_r[i] = density_at(profiles[0], counts[0], rad[i] - bottom)
             rho_m[i] = density_at(profiles[1], counts[1], rad[i] - bottom)
             transmittance_segment(transmittance, r, mu, d, hits, bottom, top, t_view[i], tmp)
@@ -520,9 +521,8 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
         for i in range(n_pts):
             d = ray_sample_distance(i, n_samples, d_end, mu, hits)
             dist[i] = d
-            r_i = clamp(math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0)), bottom, top)
+            r_i, mu_i = point_along_ray(r, mu, d, bottom, top)
             rad[i] = r_i
-            mu_i = clamp((r * mu + d) / r_i, -1.0, 1.0)
             mu_ray[i] = mu_i
             a, b, c, e = r_mu_cell(r_i, mu_i, hits, bottom, top, n_r, n_mu)
             cell_ir[i] = a

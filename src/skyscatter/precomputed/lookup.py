@@ -37,6 +37,7 @@ from .geometry import (
     horizon_constants,
     irradiance_coord,
     lerp_index,
+    point_along_ray,
     ray_hits_ground,
     scattering_nu_coord,
     sky_mu_unit,
@@ -119,8 +120,7 @@ def _ground_coords(px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top, alpha
     the sun there, and the sun's cosine factor (averaged over its disc of angular radius ``alpha`` [rad]).
     Branches are short and side-effect free, so loops over rays vectorise."""
     d = distance_to_bottom(r, mu, bottom)
-    r_d = clamp(math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0)), bottom, top)
-    mu_d = clamp((r * mu + d) / r_d, -1.0, 1.0)
+    r_d, mu_d = point_along_ray(r, mu, d, bottom, top)
     pa_r, pa_mu = transmittance_coord(r_d, -mu_d, bottom, top, n_tr, n_tmu)
     pb_r, pb_mu = transmittance_coord(r, -mu, bottom, top, n_tr, n_tmu)
     gx = px + d * vx
@@ -202,8 +202,7 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
         if l_sh > 0.0:
             # Eq. 18: the first l_sh metres are in shadow; inscatter starts at xs = x + l v.
             l_sh = min(l_sh, distance_to_boundary(rc, mu, hits, bottom, top))
-            r_s = clamp(math.sqrt(max(l_sh * l_sh + 2.0 * rc * mu * l_sh + rc * rc, 0.0)), bottom, top)
-            mu_ss = clamp((rc * mu + l_sh) / r_s, -1.0, 1.0)
+            r_s, mu_ss = point_along_ray(rc, mu, l_sh, bottom, top)
             mu_s_s = clamp((rc * mu_s + l_sh * nu) / r_s, -1.0, 1.0)
             if r_s >= top and mu_ss > 0.0:
                 for k in range(n_l):
@@ -421,8 +420,7 @@ def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits,
                         c, t, c2, tmp):
     """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``."""
     _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, c)
-    r_p = clamp(math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0)), bottom, top)
-    mu_p = clamp((r * mu + d) / r_p, -1.0, 1.0)
+    r_p, mu_p = point_along_ray(r, mu, d, bottom, top)
     mu_s_p = clamp((r * mu_s + d * nu) / r_p, -1.0, 1.0)
     _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, p_r, p_m, c2)
     transmittance_segment(transmittance, r, mu, d, hits, bottom, top, t, tmp)

@@ -21,6 +21,7 @@ from .geometry import (
     clamp,
     irradiance_coord,
     lerp_index,
+    point_along_ray,
     scattering_mu_s_coord,
     scattering_nu_coord,
     scattering_r_mu_coord,
@@ -67,8 +68,7 @@ def transmittance_segment(table, r, mu, d, hits_ground, bottom, top, out, tmp):
     Uses ``T(x, y) = T(x, v) / T(y, v)`` for rays to the top and the reversed rays for rays that meet the
     ground (Bruneton & Neyret 2008, Sec. 4).
     """
-    r_d = clamp(math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0)), bottom, top)
-    mu_d = clamp((r * mu + d) / r_d, -1.0, 1.0)
+    r_d, mu_d = point_along_ray(r, mu, d, bottom, top)
     if hits_ground:
         transmittance_to_top(table, r_d, -mu_d, bottom, top, out)
         transmittance_to_top(table, r, -mu, bottom, top, tmp)
