@@ -60,6 +60,9 @@ from .sampling import (
 
 _kjit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
 _jit = numba.njit(cache=True, fastmath={"arcp", "contract"}, error_model="numpy")
+#: For a function that must be inlined where it is called in a loop that should vectorise: LLVM does not inline
+#: large numba functions, and a call inside a loop keeps it scalar.
+_ijit = numba.njit(cache=True, fastmath={"arcp", "contract"}, error_model="numpy", inline="always")
 
 PI = math.pi
 #: Half-width, in mu, of the band around the horizon where two rays just above and below it are blended
@@ -110,7 +113,7 @@ def _sun_cos_factor(mu, alpha):
     return (mu + alpha) * (mu + alpha) / (4.0 * alpha)
 
 
-@_jit
+@_ijit
 def _ground_coords(px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top, alpha, n_tr, n_tmu, n_er, n_emu):
     """Table coordinates of the ground term of :func:`_ground_radiance` for the ray from (px, py, pz) [m] (radius
     ``r``, view zenith cosine ``mu``) along the unit (vx, vy, vz) that meets the ground, towards the unit sun
@@ -159,14 +162,14 @@ def _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, v
 
 
 @_jit
-def _ground_coords_block(gv, gmu, px, py, pz, sx, sy, sz, r, bottom, top, alpha, n_tr, n_tmu, n_er, n_emu, gc):
-    """:func:`_ground_coords` for a block's ground rays (unit directions ``gv`` (m, 3), view zenith cosines
-    ``gmu``) into ``gc`` (m, 9), on SIMD lanes."""
-    for k in range(gmu.shape[0]):
-        c = _ground_coords(px, py, pz, gv[k, 0], gv[k, 1], gv[k, 2], sx, sy, sz, r, gmu[k], bottom, top, alpha, n_tr,
-                           n_tmu, n_er, n_emu)
-        for j in range(9):
-            gc[k, j] = c[j]
+def _ground_coords_block(m, gv, gmu, px, py, pz, sx, sy, sz, r, bottom, top, alpha, n_tr, n_tmu, n_er, n_emu, gc):
+    """:func:`_ground_coords` for a block's first ``m`` ground rays (unit directions ``gv`` (3, >= m) by component,
+    view zenith cosines ``gmu``) into ``gc`` (9, >= m), on SIMD lanes (ray index last: unit strides, see
+    :func:`_observer_coords`)."""
+    for k in range(m):
+        (gc[0, k], gc[1, k], gc[2, k], gc[3, k], gc[4, k], gc[5, k], gc[6, k], gc[7, k],
+         gc[8, k]) = _ground_coords(px, py, pz, gv[0, k], gv[1, k], gv[2, k], sx, sy, sz, r, gmu[k], bottom, top, alpha,
+                                    n_tr, n_tmu, n_er, n_emu)
 
 
 @_kjit
@@ -270,10 +273,11 @@ OBSERVER_BLOCK = 256
 
 @_jit
 def _unit_block(dirs):
-    """True if every direction of the block is a unit vector to 1e-12 (NaN and infinite ones are not)."""
+    """True if every direction of the block (flat x, y, z triples) is a unit vector to 1e-12 (NaN and infinite
+    ones are not)."""
     off = 0
-    for k in range(dirs.shape[0]):
-        n2 = dirs[k, 0] * dirs[k, 0] + dirs[k, 1] * dirs[k, 1] + dirs[k, 2] * dirs[k, 2]
+    for k in range(dirs.shape[0] // 3):
+        n2 = dirs[3 * k] * dirs[3 * k] + dirs[3 * k + 1] * dirs[3 * k + 1] + dirs[3 * k + 2] * dirs[3 * k + 2]
         off += 0 if abs(n2 - 1.0) <= 1e-12 else 1
     return off == 0
 
@@ -286,14 +290,19 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
     normalisation (a square root and a division per ray) is skipped. No branch that the compiler cannot turn into
     a select, no libm call: the loop runs on SIMD lanes. Every ray gets the sky half's ``mu`` cell; ``kind``
     marks the rays that meet the ground (2), whose cell the caller replaces, and bad directions (0: zero,
-    infinite or NaN); 1 for the sky. Returns the number of rays that are not sky rays."""
+    infinite or NaN); 1 for the sky. Returns the number of rays that are not sky rays.
+
+    ``dirs`` is the block's directions as flat x, y, z triples: indexed ``dirs[k, j]``, a C-ordered (m, 3) array
+    has a row length known only at run time, and LLVM then vectorises the loop only for rows of length 1 (a
+    scalar loop runs for ours); with the stride a constant 3 the loads become SIMD shuffles (coordinates 27 ->
+    15 ns per ray)."""
     half = n_mu // 2
     inv_r = 1.0 / r
     special = 0
-    for k in range(dirs.shape[0]):
-        vx = dirs[k, 0]
-        vy = dirs[k, 1]
-        vz = dirs[k, 2]
+    for k in range(dirs.shape[0] // 3):
+        vx = dirs[3 * k]
+        vy = dirs[3 * k + 1]
+        vz = dirs[3 * k + 2]
         n2 = vx * vx + vy * vy + vz * vz
         ok = n2 > 0.0 and n2 < math.inf
         inv = 1.0 if unit else 1.0 / math.sqrt(n2)
@@ -315,7 +324,22 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
 @_jit
 def _observer_gather(slices, n_nu, cell, w_mu, w_nu, p_r, p_m, out):
     """Bilinear interpolation of the observer slices (:func:`observer_slices` as (n_mu * n_nu, C, 4)) for a block
-    of rays from :func:`_observer_coords`, phase factors applied: ``out`` (m, C)."""
+    of rays from :func:`_observer_coords`, phase factors applied: ``out`` (m, C).
+
+    One channel (luminance) has its own loop: with the channel count known to be 1 the compiler turns the four
+    texel reads into SIMD gathers (gather 6.6 -> 4.7 ns per ray); for C channels it leaves the loop scalar."""
+    if out.shape[1] == 1:
+        for k in range(cell.shape[0]):
+            w00, w01, w10, w11 = bilinear_weights(w_mu[k], w_nu[k])
+            a = cell[k]
+            b = a + n_nu
+            v = p_r[k] * (w00 * slices[a, 0, 0] + w01 * slices[a + 1, 0, 0] + w10 * slices[b, 0, 0]
+                          + w11 * slices[b + 1, 0, 0])
+            v += p_m[k] * (w00 * slices[a, 0, 1] + w01 * slices[a + 1, 0, 1] + w10 * slices[b, 0, 1]
+                           + w11 * slices[b + 1, 0, 1])
+            out[k, 0] = v + (w00 * slices[a, 0, 2] + w01 * slices[a + 1, 0, 2] + w10 * slices[b, 0, 2]
+                             + w11 * slices[b + 1, 0, 2])
+        return
     for k in range(cell.shape[0]):
         wm = w_mu[k]
         wn = w_nu[k]
@@ -363,9 +387,9 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     p_r = np.empty(OBSERVER_BLOCK)
     p_m = np.empty(OBSERVER_BLOCK)
     g_idx = np.empty(OBSERVER_BLOCK, dtype=np.int64)
-    g_v = np.empty((OBSERVER_BLOCK, 3))
+    g_v = np.empty((3, OBSERVER_BLOCK))
     g_mu = np.empty(OBSERVER_BLOCK)
-    g_c = np.empty((OBSERVER_BLOCK, 9))
+    g_c = np.empty((9, OBSERVER_BLOCK))
     n_tr, n_tmu = transmittance.shape[0], transmittance.shape[1]
     n_er, n_emu = irradiance.shape[0], irradiance.shape[1]
     px, py, pz = position[0], position[1], position[2]
@@ -374,10 +398,11 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     rc = clamp(r, bottom, top)
     mu_s = clamp((px * sx + py * sy + pz * sz) / r, -1.0, 1.0)
     rho, big_h, theta_h = horizon_constants(rc, bottom, top)
+    flat_dirs = dirs.reshape(-1)
     for b0 in range(start, stop, OBSERVER_BLOCK):
         b1 = min(b0 + OBSERVER_BLOCK, stop)
         m = b1 - b0
-        block = dirs[b0:b1]
+        block = flat_dirs[3 * b0:3 * b1]
         special = _observer_coords(block, _unit_block(block), px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho,
                                    big_h, theta_h, g, mie_kind, n_mu, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m],
                                    p_m[:m], kind[:m])
@@ -385,15 +410,15 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
         for k in range(m if special else 0):
             if kind[k] == 2:
                 # the ground half of the mu axis; the unit direction and mu kept for the ground term
-                vx, vy, vz = block[k, 0], block[k, 1], block[k, 2]
+                vx, vy, vz = block[3 * k], block[3 * k + 1], block[3 * k + 2]
                 inv = 1.0 / math.sqrt(vx * vx + vy * vy + vz * vz)
                 mu = clamp((px * vx + py * vy + pz * vz) * inv / r, -1.0, 1.0)
                 i_mu, w_mu[k] = lerp_index(ground_mu_unit(rc, mu, bottom, rho) * (half - 1), 0, half - 1)
                 cell[k] = i_mu * n_nu + cell[k] % n_nu
                 g_idx[n_ground] = k
-                g_v[n_ground, 0] = vx * inv
-                g_v[n_ground, 1] = vy * inv
-                g_v[n_ground, 2] = vz * inv
+                g_v[0, n_ground] = vx * inv
+                g_v[1, n_ground] = vy * inv
+                g_v[2, n_ground] = vz * inv
                 g_mu[n_ground] = mu
                 n_ground += 1
             elif kind[k] == 0:
@@ -401,12 +426,11 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
         _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], out[b0:b1])
         if n_ground == 0 or not include_ground:
             continue
-        _ground_coords_block(g_v[:n_ground], g_mu[:n_ground], px, py, pz, sx, sy, sz, rc, bottom, top, alpha, n_tr,
-                             n_tmu, n_er, n_emu, g_c[:n_ground])
+        _ground_coords_block(n_ground, g_v, g_mu, px, py, pz, sx, sy, sz, rc, bottom, top, alpha, n_tr, n_tmu, n_er,
+                             n_emu, g_c)
         for j in range(n_ground):
-            c = g_c[j]
-            _ground_from_coords(transmittance, irradiance, albedo, solar, c[0], c[1], c[2], c[3], c[4], c[5], c[6],
-                                c[7], c[8], t, tmp, e_sky, e_sun, ground)
+            _ground_from_coords(transmittance, irradiance, albedo, solar, g_c[0, j], g_c[1, j], g_c[2, j], g_c[3, j],
+                                g_c[4, j], g_c[5, j], g_c[6, j], g_c[7, j], g_c[8, j], t, tmp, e_sky, e_sun, ground)
             q = b0 + g_idx[j]
             for ch in range(n_c):
                 acc = 0.0
