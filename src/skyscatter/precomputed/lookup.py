@@ -59,7 +59,8 @@ from .sampling import (
 )
 
 _kjit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
-_jit = numba.njit(cache=True, fastmath={"arcp", "contract"}, error_model="numpy")
+# Helpers: no allocation, no reference counting (see :mod:`.sampling`); the kernels (``_kjit``) allocate buffers.
+_jit = numba.njit(cache=True, fastmath={"arcp", "contract"}, error_model="numpy", _nrt=False)
 #: For a function that must be inlined where it is called in a loop that should vectorise: LLVM does not inline
 #: large numba functions, and a call inside a loop keeps it scalar.
 _ijit = numba.njit(cache=True, fastmath={"arcp", "contract"}, error_model="numpy", inline="always")

@@ -28,7 +28,12 @@ from .geometry import (
     transmittance_coord,
 )
 
-_jit = numba.njit(cache=True, fastmath=False, error_model="numpy")
+# These helpers never allocate; without the runtime (``_nrt=False``, numba's option for code that needs no
+# reference counting) a helper that passes its arrays on to another function does not incref and decref each of
+# them per call. With NRT, numba keeps those atomic updates wherever an array argument is handed to a call
+# (its pass that drops them gives up there), and in the kernels' inner loops two threads then contend for the
+# shared tables' counters: the ground term of a lookup took 0.30 us per ray and thread with them, 0.19 without.
+_jit = numba.njit(cache=True, fastmath=False, error_model="numpy", _nrt=False)
 
 PI = math.pi
 
