@@ -70,6 +70,9 @@ __all__ = ["column_along", "disc_transmittance", "trace_block"]
 
 _jit = numba.njit(cache=True, nogil=True)
 _jit_inline = numba.njit(cache=True, nogil=True, inline="always")
+# Helpers that never allocate: without numba's runtime they do not incref and decref the arrays they pass on at
+# every call (see skyscatter.precomputed.sampling).
+_hjit = numba.njit(cache=True, nogil=True, _nrt=False)
 
 # 4-point Gauss-Legendre nodes and weights on [-1, 1] (Abramowitz & Stegun 1964, Table 25.4)
 _GX = (-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526)
@@ -101,7 +104,7 @@ def _densities(r: float, rb: float, layers: np.ndarray, nlay: np.ndarray) -> tup
     return _density(h, layers, nlay, 0), _density(h, layers, nlay, 1), _density(h, layers, nlay, 2)
 
 
-@_jit
+@_hjit
 def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     """Distance [m] along the ray to the ground or out of the top of the atmosphere, and whether it is the ground."""
     r2 = px * px + py * py + pz * pz
@@ -115,7 +118,7 @@ def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     return (t if t > 0.0 else 0.0), False
 
 
-@_jit
+@_hjit
 def _piece_columns(r2, b, a, c, rb, layers, nlay, out):
     """Gauss-Legendre columns of the three components over ``[a, c]`` of a ray with ``|p|^2 = r2``, ``p.d = b``."""
     half = 0.5 * (c - a)
@@ -135,7 +138,7 @@ def _piece_columns(r2, b, a, c, rb, layers, nlay, out):
     out[2] = s2 * half
 
 
-@_jit
+@_hjit
 def _invert_in_piece(r2, b, a, c, rem, dtau, target, k0, k1, k2, rb, layers, nlay, tmp):
     """Distance ``s`` in ``[a, c]`` where the optical depth from ``a`` reaches ``rem`` (``dtau`` over the whole
     piece); Newton on the Gauss-Legendre integral with a bisection safeguard. ``tmp`` gets the columns over
@@ -162,7 +165,7 @@ def _invert_in_piece(r2, b, a, c, rem, dtau, target, k0, k1, k2, rb, layers, nla
     return s
 
 
-@_jit
+@_hjit
 def _march(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec):
     """:func:`column_along`; also records, per piece ``k``, its end ``t``, the cumulative optical depth and the
     cumulative columns in ``rec[k, 0:5]`` (``rec`` has at least ``2 len(edges) + 2`` rows). Returns
@@ -254,7 +257,7 @@ def column_along(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, l
     return t, reached
 
 
-@_jit
+@_hjit
 def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, layers, nlay, rec, npc, cols, tmp):
     """Collision at hero optical depth ``target`` on a ray already marched to its end (pieces in ``rec``), without
     integrating it again: the same pieces, cumulative sums and inversion as :func:`_march`."""
@@ -284,14 +287,14 @@ def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, l
     return t_end, False
 
 
-@_jit
+@_hjit
 def _sun_sample(sx, sy, sz, cos_max, u1, u2):
     """Direction uniform in solid angle over the cone of half-angle ``acos(cos_max)`` about the sun."""
     mu = 1.0 - u1 * (1.0 - cos_max)
     return direction_about_axis(sx, sy, sz, mu, 2.0 * math.pi * u2)
 
 
-@_jit
+@_hjit
 def _normalise(f, p, n):
     m = 0.0
     for i in range(n):
