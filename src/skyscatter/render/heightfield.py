@@ -89,7 +89,10 @@ def _cell_hit(h, ix, iy, wrap, nx, ny, gx, gy, oz, dgx, dgy, dz, tc0, tc1):
     return tc0 + best
 
 
-@numba.njit(cache=True)
+# The walkers never allocate: without numba's runtime (_nrt=False) they do not increment and decrement the height
+# arrays' reference counts (atomic operations, contended between threads) at every call; the light shafts trace
+# one shadow ray per sample.
+@numba.njit(cache=True, _nrt=False)
 def _walk_cells(h, wrap, nx, ny, ncx, ncy, block, bx, by, gx, gy, oz, dgx, dgy, dz, t0, t1):
     """Walk the cells of block (bx, by) between t0 and t1; first hit or inf."""
     tm = t0
@@ -150,7 +153,7 @@ def _walk_cells(h, wrap, nx, ny, ncx, ncy, block, bx, by, gx, gy, oz, dgx, dgy, 
             return _INF
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _walk_grid(h, bmax, wrap, block, gx, gy, oz, dgx, dgy, dz, ta, tb):
     """Two-level walk between ta and tb (grid coordinates in cells, t in metres); first hit or inf."""
     ny, nx = h.shape
@@ -220,7 +223,7 @@ def _walk_grid(h, bmax, wrap, block, gx, gy, oz, dgx, dgy, dz, ta, tb):
             return _INF
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, _nrt=False)
 def trace_ray(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax, ox, oy, oz, dx, dy, dz, tmin, tmax):
     """Distance [m] along one ray to the first point of the terrain surface, or ``inf`` (numba-compiled).
 
