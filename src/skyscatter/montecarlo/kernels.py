@@ -70,8 +70,7 @@ __all__ = ["column_along", "disc_transmittance", "trace_block"]
 
 _jit = numba.njit(cache=True, nogil=True)
 _jit_inline = numba.njit(cache=True, nogil=True, inline="always")
-# Helpers that never allocate: without numba's runtime they do not incref and decref the arrays they pass on at
-# every call (see skyscatter.precomputed.sampling).
+# Helpers that never allocate: _nrt=False (why: skyscatter.precomputed.sampling, docs/architecture.md).
 _hjit = numba.njit(cache=True, nogil=True, _nrt=False)
 
 # 4-point Gauss-Legendre nodes and weights on [-1, 1] (Abramowitz & Stegun 1964, Table 25.4)

@@ -89,9 +89,8 @@ def _cell_hit(h, ix, iy, wrap, nx, ny, gx, gy, oz, dgx, dgy, dz, tc0, tc1):
     return tc0 + best
 
 
-# The walkers never allocate: without numba's runtime (_nrt=False) they do not increment and decrement the height
-# arrays' reference counts (atomic operations, contended between threads) at every call; the light shafts trace
-# one shadow ray per sample.
+# The walkers never allocate: _nrt=False (why: skyscatter.precomputed.sampling, docs/architecture.md); the light
+# shafts call them once per shadow ray, one ray per sample.
 @numba.njit(cache=True, _nrt=False)
 def _walk_cells(h, wrap, nx, ny, ncx, ncy, block, bx, by, gx, gy, oz, dgx, dgy, dz, t0, t1):
     """Walk the cells of block (bx, by) between t0 and t1; first hit or inf."""
