@@ -131,3 +131,24 @@ def test_disc_partly_outside_a_pinhole_frame_and_below_a_fisheye_horizon():
     below = registry.build("bruneton", math.radians(92.0), 0.0)  # renders its ground; its disc is under it
     proj = projection_for("fisheye", 256, None, 0.0, 0.0, 1.0)
     assert disc_deposit(below.sun.direction, below.sun.angular_radius, proj) is None
+
+
+@pytest.mark.parametrize("view", ["camera", "fisheye"])
+def test_bruneton_views_carry_the_transmitted_sun(view):
+    """camera_view / fisheye_view of the precomputed atmosphere: the disc's flux is its transmitted radiance times
+    its solid angle (sun 30 deg high, from the ground)."""
+    from skyscatter.render.bruneton import camera_view, fisheye_view
+
+    sky = registry.build("bruneton", math.radians(60.0), math.radians(100.0))
+    atm = sky.atmosphere
+    if view == "camera":
+        kw = dict(heading=math.radians(100.0), pitch=math.radians(30.0), fov=math.radians(3.0), width=96, height=96)
+        both = [camera_view(atm, math.radians(60.0), math.radians(100.0), output="xyz", include_sun=s, **kw)
+                for s in (True, False)]
+        omega = pixel_solid_angles("pinhole", 96, 96, fov=kw["fov"])
+    else:
+        both = [fisheye_view(atm, math.radians(60.0), math.radians(100.0), size=200, output="xyz", include_sun=s)
+                for s in (True, False)]
+        omega = pixel_solid_angles("fisheye", 200)
+    flux = float(((both[0] - both[1])[..., 1] * omega).sum())
+    assert flux == pytest.approx(sky.sun.illuminance_normal(), rel=1e-6)
