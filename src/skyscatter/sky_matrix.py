@@ -103,6 +103,20 @@ def _perez_chunk(coeffs, sun, scale, dirs_t, q_rows, rows, row_cos, qweights, n_
     out[uniform] = (scale[uniform] / np.pi)[:, None]
 
 
+def _hour_directions(scheme: PatchScheme, samples: int):
+    """The directions every hour's sky is evaluated at: the 48 x 96 normalisation nodes, then ``samples^2``
+    equal-area cells per patch (the centres for 1). Returns (dirs (n, 3), dirs.T contiguous, node weights,
+    cells per patch)."""
+    from .photometry import plane_quadrature
+
+    qd, qw = plane_quadrature(0.0, 0.0, nodes=NORMALISATION_NODES)
+    sdirs = scheme.centre_directions if samples == 1 else scheme.sample_directions(samples)
+    sdirs = np.asarray(sdirs, dtype=np.float64).reshape(-1, 3)
+    dirs = np.concatenate([np.asarray(qd, dtype=np.float64).reshape(-1, 3), sdirs])
+    n_sub = sdirs.shape[0] // scheme.n_patches
+    return dirs, np.ascontiguousarray(dirs.T), np.asarray(qw, dtype=np.float64).reshape(-1), n_sub
+
+
 def perez_patch_luminance(
     coefficients: NDArray[np.float64],
     model_sun: NDArray[np.float64],
@@ -125,23 +139,12 @@ def perez_patch_luminance(
     samples : int
         Cells per patch side (1: patch centres).
     """
-    from .photometry import plane_quadrature
-
-    qd, qw = plane_quadrature(0.0, 0.0, nodes=NORMALISATION_NODES)
-    if samples == 1:
-        sdirs = scheme.centre_directions.reshape(-1, 3)
-    else:
-        sdirs = scheme.sample_directions(samples).reshape(-1, 3)
-    n_sub = sdirs.shape[0] // scheme.n_patches
+    dirs, dirs_t, qw, n_sub = _hour_directions(scheme, samples)
     coeffs = np.asarray(coefficients, dtype=np.float64).reshape(-1, 5)
     sun = np.asarray(model_sun, dtype=np.float64).reshape(-1, 3)
     scale = np.asarray(diffuse_illuminance, dtype=np.float64).reshape(-1)
-    qd = np.asarray(qd, dtype=np.float64).reshape(-1, 3)
-    dirs = np.concatenate([qd, np.asarray(sdirs, dtype=np.float64)])
-    dirs_t = np.ascontiguousarray(dirs.T)
     # distinct zenith cosines of nodes and samples, for the per-sky gradation table
     row_cos, rows = np.unique(dirs[:, 2], return_inverse=True)
-    qw = np.asarray(qw, dtype=np.float64).reshape(-1)
     q_rows = None
     nz, na = NORMALISATION_NODES
     if qw.size == nz * na and np.all(rows[: qw.size].reshape(nz, na) == rows[: qw.size : na, None]):
@@ -187,16 +190,9 @@ def asrc_cie_patch_luminance(
     samples : int
         Cells per patch side (1: patch centres).
     """
-    from .photometry import plane_quadrature
     from .sky.asrc_cie import asrc_cie_relative_luminance
 
-    qd, qw = plane_quadrature(0.0, 0.0, nodes=NORMALISATION_NODES)
-    sdirs = scheme.centre_directions if samples == 1 else scheme.sample_directions(samples)
-    sdirs = np.asarray(sdirs, dtype=np.float64).reshape(-1, 3)
-    n_sub = sdirs.shape[0] // scheme.n_patches
-    dirs = np.concatenate([np.asarray(qd, dtype=np.float64).reshape(-1, 3), sdirs])
-    dirs_t = np.ascontiguousarray(dirs.T)
-    qw = np.asarray(qw, dtype=np.float64).reshape(-1)
+    dirs, dirs_t, qw, n_sub = _hour_directions(scheme, samples)
     n_q = qw.size
     w = np.asarray(weights, dtype=np.float64).reshape(-1, 4)
     zen = np.asarray(sun_zenith, dtype=np.float64).reshape(-1)
