@@ -110,10 +110,12 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser with every subcommand, or with ``command`` alone (when it names one): a command then imports
     only its own module and what that needs (issue 12, a quick command line). ``--help``, a missing or an
     unknown command get the full parser, so that the listing and "invalid choice" name every command."""
+    from .common import HelpFormatter
+
     parser = OneLineParser(
         prog="skyscatter",
         description="Physically based daylight: sun position, sky models, sky images and landscapes.",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"skyscatter {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
@@ -124,9 +126,26 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``skyscatter`` command; returns the exit status."""
+    """Run one command; returns the exit status (for calling the command line from Python)."""
     with _cli_environment():
         return _main(argv)
+
+
+def console_main() -> None:
+    """The ``skyscatter`` executable: :func:`main`, then exit with its status.
+
+    After an interruption (Ctrl-C, SIGTERM: status 130 or 143) the process ends at once, once the command's own
+    clean-up has run (temporary files removed, locks released): the interpreter's finalisation (tearing down the
+    imported numerical libraries, up to a few seconds) and any computation still running in worker threads are
+    skipped, so that the command stops within a second.
+    """
+    code = main()
+    if code in (130, 143):
+        with contextlib.suppress(Exception):
+            sys.stdout.flush()
+            sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -163,4 +182,4 @@ def _main(argv: Sequence[str] | None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    console_main()
