@@ -127,8 +127,30 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one command; returns the exit status (for calling the command line from Python)."""
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    name = args_list[0] if args_list and args_list[0] in _MODULE_OF else None
     with _cli_environment():
-        return _main(argv)
+        try:
+            return _main(args_list)
+        except BaseException as exc:  # an interruption anywhere: parsing, a lazy import, the command, its output
+            interruption = _interruption(exc)
+            if interruption is None:
+                raise
+            word, code = ("terminated", 143) if isinstance(interruption, Terminated) else ("interrupted", 130)
+            print(f"skyscatter{' ' + name if name else ''}: {word}", file=sys.stderr)
+            return code
+
+
+def _interruption(exc: BaseException) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt (Ctrl-C) or Terminated (SIGTERM) behind ``exc``: itself, or the cause of an error it
+    turned into (Ctrl-C while a C extension initialises surfaces as ``ImportError: initialization failed``)."""
+    seen = 0
+    while exc is not None and seen < 16:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        exc = exc.__cause__ or exc.__context__
+        seen += 1
+    return None
 
 
 def console_main() -> None:
@@ -148,8 +170,7 @@ def console_main() -> None:
     sys.exit(code)
 
 
-def _main(argv: Sequence[str] | None) -> int:
-    args_list = list(sys.argv[1:] if argv is None else argv)
+def _main(args_list: list[str]) -> int:
     command = args_list[0] if args_list else None
     _one_blas_thread_for(command)
     parser = build_parser(command)
@@ -166,6 +187,8 @@ def _main(argv: Sequence[str] | None) -> int:
         print(f"skyscatter {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:
+        if _interruption(exc) is not None:
+            raise
         print(f"skyscatter {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "),
               file=sys.stderr)
         return 2
@@ -173,12 +196,6 @@ def _main(argv: Sequence[str] | None) -> int:
         print(f"skyscatter {args.command}: error: not enough memory; use a smaller image or table size",
               file=sys.stderr)
         return 2
-    except Terminated:
-        print(f"skyscatter {args.command}: terminated", file=sys.stderr)
-        return 143
-    except KeyboardInterrupt:
-        print(f"skyscatter {args.command}: interrupted", file=sys.stderr)
-        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -256,8 +256,13 @@ def _acquire(store: Path) -> None:
             continue
         except OSError as exc:
             raise OutputError(f"cannot write {store}: {exc.strerror or exc}") from None
-        with os.fdopen(fd, "w", encoding="ascii") as fh:
-            fh.write(f"{os.getpid()}\n")
+        try:
+            with os.fdopen(fd, "w", encoding="ascii") as fh:
+                fh.write(f"{os.getpid()}\n")
+        except OSError as exc:  # a full disk: no lock is left behind
+            with contextlib.suppress(OSError):
+                lock.unlink()
+            raise OutputError(f"cannot write {store}: {exc.strerror or exc}") from None
         return
     raise OutputError(f"{store}: could not take its lock {lock}")  # pragma: no cover - a live race on the lock
 
@@ -500,8 +505,8 @@ def reference(store: str | os.PathLike[str], *, sun_elevations: ArrayLike, albed
             try:
                 _write_cell(path, (i, k, m), res.radiance, res.stderr, disc)
             except OSError as exc:
-                raise OutputError(f"cannot write {path}: {exc.strerror or exc} (the {c} cell(s) written before are "
-                                  "kept; re-running the same command resumes)") from None
+                raise OutputError(f"cannot write {path}: {exc.strerror or exc} ({c} cell(s) finished before are "
+                                  "kept, this one is not; re-running the same command resumes)") from None
     finally:
         _release(path)
     return _xarray().open_zarr(path, consolidated=False, chunks=None)
