@@ -9,29 +9,26 @@ from __future__ import annotations
 
 import math
 
-import numba
-
+from ..jit import helper
 from . import phase
 
-_jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
-
 #: ``rayleigh_phase_scalar(mu)`` [sr^-1], Bruneton & Neyret (2008) Eq. 2.
-rayleigh_phase_scalar = _jit(phase._rayleigh_formula)
+rayleigh_phase_scalar = helper(phase._rayleigh_formula)
 #: ``henyey_greenstein_scalar(mu, g)`` [sr^-1].
-henyey_greenstein_scalar = _jit(phase._henyey_greenstein_formula)
+henyey_greenstein_scalar = helper(phase._henyey_greenstein_formula)
 #: ``cornette_shanks_scalar(mu, g)`` [sr^-1], Bruneton & Neyret (2008) Eq. 4.
-cornette_shanks_scalar = _jit(phase._cornette_shanks_formula)
+cornette_shanks_scalar = helper(phase._cornette_shanks_formula)
 #: ``rayleigh_inverse_cdf_scalar(u)``: ``mu`` [-] with Rayleigh CDF ``u`` in [0, 1] (Frisvad 2011, Eq. 13;
 #: :func:`.phase.rayleigh_inverse_cdf` without its validation).
-rayleigh_inverse_cdf_scalar = _jit(phase._rayleigh_inverse_cdf_formula)
+rayleigh_inverse_cdf_scalar = helper(phase._rayleigh_inverse_cdf_formula)
 #: ``henyey_greenstein_inverse_cdf_scalar(u, g)``: ``mu`` [-] with Henyey-Greenstein CDF ``u`` in [0, 1]
 #: (:func:`.phase.henyey_greenstein_inverse_cdf` without its validation).
-henyey_greenstein_inverse_cdf_scalar = _jit(phase._henyey_greenstein_inverse_cdf_formula)
+henyey_greenstein_inverse_cdf_scalar = helper(phase._henyey_greenstein_inverse_cdf_formula)
 
 _HENYEY_GREENSTEIN = phase.AEROSOL_PHASE_FUNCTIONS.index("henyey-greenstein")
 
 
-@_jit
+@helper
 def aerosol_phase_scalar(mu, g, kind):
     """Aerosol phase function [sr^-1] of integer ``kind`` (:func:`.phase.aerosol_phase_kind`) at ``mu``."""
     if kind == _HENYEY_GREENSTEIN:
@@ -39,7 +36,7 @@ def aerosol_phase_scalar(mu, g, kind):
     return cornette_shanks_scalar(mu, g)
 
 
-@_jit
+@helper
 def direction_about_axis(ax, ay, az, mu, phi):
     """Unit vector at angle ``acos(mu)`` from the unit vector ``(ax, ay, az)`` and at azimuth ``phi`` [rad] about it.
 
