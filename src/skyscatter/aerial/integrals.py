@@ -39,8 +39,7 @@ model's densities are respectively opaque and negligible, so every exponential s
 :func:`in_scattering_integrals` with ``method="analytic"`` uses (a) when ``|alpha_haze s c| <`` the
 ``horizon_threshold`` (default 1e-3) and (b) otherwise, as the paper prescribes.
 
-Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
-doi:10.1145/311535.311545.
+Reference: [Preetham1999].
 """
 
 from __future__ import annotations

@@ -18,8 +18,7 @@ The angular coefficients are :func:`skyscatter.atmosphere.rayleigh_angular_scatt
 :func:`skyscatter.atmosphere.mie_angular_scattering` (A.3 with Table 1 eta), tabulated once on a 0.25-degree
 grid of scattering angles and interpolated linearly inside the integration kernel.
 
-Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
-doi:10.1145/311535.311545.
+Reference: [Preetham1999].
 """
 
 from __future__ import annotations

@@ -40,9 +40,8 @@ def aerosol_phase_scalar(mu, g, kind):
 def direction_about_axis(ax, ay, az, mu, phi):
     """Unit vector at angle ``acos(mu)`` from the unit vector ``(ax, ay, az)`` and at azimuth ``phi`` [rad] about it.
 
-    The azimuth is measured from the first vector of the branchless orthonormal basis of Duff, Burgess,
-    Christensen, Hery, Kensler, Liani & Villemin (2017), "Building an orthonormal basis, revisited", J. Comput.
-    Graph. Tech. 6(1), 1-8, Listing 3 (https://jcgt.org/published/0006/01/01/): a fixed, continuous-almost-
+    The azimuth is measured from the first vector of the branchless orthonormal basis of [Duff2017]
+    Listing 3: a fixed, continuous-almost-
     everywhere choice, so that ``phi`` uniform in [0, 2 pi) gives directions uniform in azimuth about the axis.
     ``mu`` in [-1, 1] [-]. Returns the three components (renormalised against rounding).
     """

@@ -21,9 +21,9 @@ Free paths are sampled by inverting this optical depth (``tau(t) = -ln(1 - xi)``
 inside the piece where the target is crossed), so the collision density ``sigma_t(x) T(x)`` is known exactly for
 every wavelength, which spectral MIS needs.
 
-Estimator (backward paths from the observer; Veach 1997, PhD thesis, Stanford, Ch. 8-9):
+Estimator (backward paths from the observer; [Veach1997] Ch. 8-9):
 
-* forced first collision (Cashwell & Everett 1959): when the view ray leaves the atmosphere without hitting the
+* forced first collision ([CashwellEverett1959]): when the view ray leaves the atmosphere without hitting the
   ground, its first collision is drawn from ``sigma_t T / (1 - T_total)`` on the ray, so no path is wasted on
   clear sky;
 * next-event estimation to the sun at every medium and ground vertex: a direction uniform over the solar disc
@@ -40,8 +40,7 @@ Estimator (backward paths from the observer; Veach 1997, PhD thesis, Stanford, C
 * Russian roulette (Arvo & Kirk 1990) from the second vertex when the largest weight falls below 0.5, survival
   probability ``w_max / 0.5``; a hard cap of 1000 vertices (never reached in the tests).
 
-Hero wavelengths (Wilkie et al. 2014, "Hero wavelength spectral sampling", Comput. Graph. Forum 33(4), 123-131,
-doi:10.1111/cgf.12419): one path serves all the wavelengths of its group. The hero (uniformly chosen per path)
+Hero wavelengths ([Wilkie2014]): one path serves all the wavelengths of its group. The hero (uniformly chosen per path)
 drives every decision; each wavelength's estimate is weighted with the balance heuristic over the group, i.e.
 ``F_i(path) / mean_k p_k(path)`` where ``p_k`` is the density the path would have had with wavelength ``k`` as
 hero (one-sample MIS, Veach 1997, Sec. 9.2.4). Plain ratio weights ``F_i / p_hero`` would be unbounded between

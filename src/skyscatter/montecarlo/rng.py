@@ -4,9 +4,8 @@ Every random number is a pure function of (seed, direction index, wavelength-gro
 index, draw number), so a Monte Carlo result depends only on the seed and the job, never on how the job was split
 into tasks, in which order they ran, or on how many threads or workers ran them.
 
-The key of a stream is built by chaining the SplitMix64 finaliser over the counters (Steele, Lea & Flood 2014,
-"Fast splittable pseudorandom number generators", OOPSLA, doi:10.1145/2660193.2660195; finaliser constants of
-Stafford's "Mix13"); the draws of one sample are successive outputs of SplitMix64 started at
+The key of a stream is built by chaining the SplitMix64 finaliser over the counters ([Steele2014]; finaliser
+constants of Stafford's "Mix13"); the draws of one sample are successive outputs of SplitMix64 started at
 ``mix(key, sample index)``. Doubles take the top 53 bits: ``(x >> 11) * 2^-53`` in [0, 1).
 """
 

@@ -32,12 +32,11 @@ Mappings (Sec. 4, "Parameterization", with the distance-based forms of Bruneton'
 * Irradiance table: ``x_r = (r - R_g) / (R_t - R_g)``, ``x_mu_s = (1 + mu_s) / 2``.
 
 The angular halves of the ``mu`` (sky) and ``mu_s`` mappings and the azimuth ``nu`` axis are skyscatter's
-(issue 11): the distance mappings alone leave 36-42 deg around the zenith in one cell, across which the
+(docs/bruneton.md): the distance mappings alone leave 36-42 deg around the zenith in one cell, across which the
 forward-peaked multiple scattering of aerosols was interpolated (+18 % to +44 % against DISORT,
 ``docs/bruneton.md``). Parameters of texels in the mixed halves are found by bisection in the angle.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
@@ -71,7 +70,7 @@ __all__ = [
 #: (a texel's, or a caller's at ``max_sun_zenith``) must not be kept or dropped by the last bit of rounding.
 MU_S_LIMIT_TOLERANCE = 1e-12
 
-#: Coefficients of Abramowitz & Stegun (1964), Handbook of Mathematical Functions, Eq. 4.4.46 (from Hastings
+#: Coefficients of [Abramowitz1964] Eq. 4.4.46 (from Hastings
 #: 1955): ``acos(x) = sqrt(1 - x) (a0 + a1 x + ... + a7 x^7)`` for 0 <= x <= 1, absolute error <= 2e-8 rad as
 #: published (2.18e-8 with the printed 10-decimal coefficients, at x = 0; tests/test_precomputed_geometry.py).
 _A0, _A1, _A2, _A3 = 1.5707963050, -0.2145988016, 0.0889789874, -0.0501743046

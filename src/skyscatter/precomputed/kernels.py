@@ -19,8 +19,7 @@ Ray integrals use product integration (:func:`.sampling.exp_segment_weights`): e
 coefficient is exponential between two samples and the rest of the integrand linear, which keeps 50 samples
 accurate for the 1.2 km aerosol layer on vertical rays where the plain trapezoidal rule is 8 % off.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
@@ -80,7 +79,7 @@ def ray_sample_distance(i, n_samples, d_end, mu, hits_ground):
     dense at the ray's lower end where the aerosols are (the start for rays going up, the end for rays that meet
     the ground), uniform for other downward rays. With uniform steps a 70 deg slant path through an aerosol
     optical depth of 0.5 had one of 50 steps per scale height and its radiance came out 5-30 % high against
-    DISORT (issue 11)."""
+    DISORT (docs/bruneton.md)."""
     u = i / n_samples
     if hits_ground:
         return d_end * (1.0 - (1.0 - u) * (1.0 - u))
@@ -299,7 +298,7 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     scale height is 1.2 km) while this weighted radiance varies slowly: :func:`multiple_scattering_kernel`
     interpolates it between table radii and multiplies by the exact coefficient at each ray sample. Interpolating
     J itself overestimated it between radii (linear interpolation of a convex exponential): +5 to +7 % in the
-    converged multiple scattering of an aerosol optical depth of 0.5 against DISORT with 16 radii (issue 11).
+    converged multiple scattering of an aerosol optical depth of 0.5 against DISORT with 16 radii (docs/bruneton.md).
     Keeping the Rayleigh and aerosol parts apart (two tables, exact coefficients for each) agreed with this
     within 0.6 % there and made the multiple-scattering kernel 13 % slower.
 

@@ -16,8 +16,7 @@ direction per ray; they return spectral quantities at the table wavelengths.
   ``(1 + n.n_bar) / 2`` for the sky part).
 * :func:`sun_kernel` - transmittance to the sun (times the visible fraction of its disc) from any position.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations

@@ -4,8 +4,7 @@ Shared by the precomputation kernels (:mod:`.kernels`) and the rendering kernels
 function writes its per-wavelength result into a caller-provided ``out`` array so that inner loops do not
 allocate.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations

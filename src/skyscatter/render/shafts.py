@@ -1,6 +1,6 @@
 """Light shafts in a landscape: the length of each view ray that lies in the terrain's shadow.
 
-Bruneton & Neyret (2008), Sec. 5 (doi:10.1111/j.1467-8659.2008.01245.x), render light shafts by moving the
+Bruneton & Neyret ([Bruneton2008] Sec. 5) render light shafts by moving the
 total length ``l`` of a view ray that lies in terrain shadow to one end of the ray (Eqs. 17-18,
 :mod:`skyscatter.aerial.bruneton`). The paper finds ``l`` with a shadow-volume pass on the GPU; here it is
 estimated on the CPU (:func:`shadow_lengths`) by marching each view ray and casting a shadow ray towards the sun
