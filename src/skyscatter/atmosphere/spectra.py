@@ -2,13 +2,11 @@
 
 * :class:`PowerLawSpectrum`, :class:`TabulatedSpectrum` - a power law (Angstrom's law, lambda^-4) or a table.
 * :class:`RayleighPhysicalSpectrum` - Rayleigh scattering of standard air from the refractive index
-  (:func:`skyscatter.atmosphere.rayleigh.rayleigh_scattering_bodhaine1999`; Bodhaine et al. 1999,
-  doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2).
-* :func:`solar_spectrum_astm_g173` - ASTM G173-03 extraterrestrial spectral irradiance (ASTM International,
-  "Standard Tables for Reference Solar Spectral Irradiances", G173-03; data file ``solar_spectrum_astm_g173``).
-* :func:`ozone_cross_section_serdyuchenko` - ozone absorption cross-sections at 233 K of Serdyuchenko et al.
-  (2014), "High spectral resolution ozone absorption cross-sections - Part 2", Atmos. Meas. Tech. 7, 625,
-  doi:10.5194/amt-7-625-2014 (data file ``ozone_serdyuchenko2014_233K``).
+  (:func:`skyscatter.atmosphere.rayleigh.rayleigh_scattering_bodhaine1999`; [Bodhaine1999]).
+* :func:`solar_spectrum_astm_g173` - ASTM G173-03 extraterrestrial spectral irradiance ([ASTMG173]; data file
+  ``solar_spectrum_astm_g173``).
+* :func:`ozone_cross_section_serdyuchenko` - ozone absorption cross-sections at 233 K of [Serdyuchenko2014]
+  (data file ``ozone_serdyuchenko2014_233K``).
 
 The data files are read by :func:`skyscatter.atmosphere.tables.load_table`, the one loader of the package.
 """
@@ -30,6 +28,7 @@ from .tables import tabulated
 
 __all__ = [
     "DOBSON_UNIT",
+    "AngstromSpectrum",
     "PowerLawSpectrum",
     "RayleighPhysicalSpectrum",
     "Spectrum",
@@ -65,6 +64,8 @@ class Spectrum(abc.ABC):
             return TabulatedSpectrum(tuple(data["wavelengths"]), tuple(data["values"]), data["name"])
         if kind == "rayleigh_physical":
             return RayleighPhysicalSpectrum(data["depolarisation"], data["name"])
+        if kind == "angstrom":
+            return AngstromSpectrum(data["beta"], data["alpha"], data["column"], data["name"])
         raise FileFormatError(f"unknown spectrum kind {kind!r} in atmosphere parameters")
 
 
@@ -103,6 +104,39 @@ class PowerLawSpectrum(Spectrum):
     def to_dict(self) -> dict[str, Any]:
         return {"kind": "power_law", "coefficient": self.coefficient,
                 "reference_wavelength": self.reference_wavelength, "exponent": self.exponent, "name": self.name}
+
+
+@dataclass(frozen=True)
+class AngstromSpectrum(Spectrum):
+    """Extinction [m^-1] from Angstrom's law spread over a column: ``beta (lambda / 1 um)^-alpha / column``.
+
+    [Angstrom1929]: the vertical optical depth is
+    ``beta (lambda / 1 um)^-alpha``; divided by ``column`` [m], the integral of the component's relative density,
+    it is the coefficient at relative density 1. ``beta`` >= 0 [-], ``alpha`` [-] finite, ``column`` > 0 [m].
+    """
+
+    beta: float
+    alpha: float
+    column: float
+    name: str = "Angstrom extinction"
+
+    def __post_init__(self) -> None:
+        for label, v in (("beta", self.beta), ("alpha", self.alpha), ("column", self.column)):
+            if not math.isfinite(v):
+                raise InvalidParameterError(f"{self.name}: {label} must be finite; got {v!r}")
+        if self.beta < 0:
+            raise InvalidParameterError(f"{self.name}: beta must be >= 0; got {self.beta!r}")
+        if self.column <= 0:
+            raise InvalidParameterError(f"{self.name}: the density column must be > 0 m; got {self.column!r}")
+
+    def __call__(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        wl = np.asarray(wavelengths, dtype=float)
+        if self.beta == 0:
+            return np.zeros_like(wl)
+        return self.beta * (wl / 1000.0) ** (-self.alpha) / self.column
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": "angstrom", "beta": self.beta, "alpha": self.alpha, "column": self.column, "name": self.name}
 
 
 @dataclass(frozen=True)

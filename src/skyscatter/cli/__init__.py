@@ -34,9 +34,10 @@ def _one_blas_thread_for(command: str | None) -> None:
     """Start numpy's BLAS with one thread for a command that only multiplies small matrices.
 
     OpenBLAS starts a thread per core when numpy is imported and keeps it spinning for a while: about 0.06 s of
-    a two-core machine, more with more cores, all for nothing in these commands (issue 12, a quick command
-    line). Only before numpy is imported and only if the user has set none of the BLAS thread variables;
-    :func:`skyscatter.runtime.set_num_threads` still sizes the pool later if a computation asks for it.
+    a two-core machine, more with more cores, all for nothing in these commands (a quick command line:
+    docs/architecture.md, "Start-up"). Only before numpy is imported and only if the user has set none of the BLAS
+    thread variables; :func:`skyscatter.runtime.set_num_threads` still sizes the pool later if a computation asks for
+    it.
     """
     if (command in _SMALL_BLAS_COMMANDS and "numpy" not in sys.modules
             and not any(v in os.environ for v in _BLAS_THREAD_VARIABLES)):
@@ -108,7 +109,7 @@ def _cli_environment() -> Iterator[None]:
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser with every subcommand, or with ``command`` alone (when it names one): a command then imports
-    only its own module and what that needs (issue 12, a quick command line). ``--help``, a missing or an
+    only its own module and what that needs (a quick command line). ``--help``, a missing or an
     unknown command get the full parser, so that the listing and "invalid choice" name every command."""
     from .common import HelpFormatter
 

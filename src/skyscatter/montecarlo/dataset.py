@@ -85,7 +85,7 @@ LOCK_SUFFIX = ".skyscatter-lock"
 
 def equal_area_directions(n: int) -> NDArray[np.float64]:
     """``n`` directions spread evenly over the upper hemisphere (spherical Fibonacci lattice, equal area per point;
-    Gonzalez 2010, Math. Geosci. 42, 49-64, doi:10.1007/s11004-009-9257-x), unit ENU vectors (n, 3)."""
+    [Gonzalez2010]), unit ENU vectors (n, 3)."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise InvalidParameterError(f"number of directions must be an integer >= 1; got {n!r}")
     i = np.arange(n) + 0.5

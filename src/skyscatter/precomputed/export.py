@@ -19,8 +19,7 @@ B = 440 nm; the default 16-wavelength tables export 16 channels):
 * ``atmosphere.json`` - sizes, coordinate mappings, constants, per-channel coefficients, the radiance formula
   and the matrix from channels to CIE XYZ.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations

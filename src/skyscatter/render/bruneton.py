@@ -1,4 +1,4 @@
-"""Images of the precomputed atmosphere (Bruneton & Neyret 2008, doi:10.1111/j.1467-8659.2008.01245.x).
+"""Images of the precomputed atmosphere ([Bruneton2008]).
 
 * :func:`camera_view`, :func:`fisheye_view` - the sky (and planet) from any position: the ground, an
   aircraft, orbit; :func:`preview_png` to look at them.

@@ -2,8 +2,7 @@
 
 Every analytic sky in skyscatter is a product of a *gradation* (how the sky brightens or darkens towards the
 horizon) and an *indicatrix* (how it brightens towards the sun). The most general published form is Hosek and
-Wilkie's extension (Hosek & Wilkie 2012, Eq. 9, doi:10.1145/2185520.2185591) of the Perez et al. (1993) formula
-(doi:10.1016/0038-092X(93)90017-I):
+Wilkie's extension ([HosekWilkie2012] Eq. 9) of the Perez et al. (1993) formula ([Perez1993]):
 
     F(theta, gamma) = (1 + A exp(B / (cos theta + o)))
                       * (C + D exp(E gamma) + F cos^2 gamma + G chi(H, gamma) + I sqrt(cos theta))
@@ -11,12 +10,14 @@ Wilkie's extension (Hosek & Wilkie 2012, Eq. 9, doi:10.1145/2185520.2185591) of 
     chi(H, gamma) = (1 + cos^2 gamma) / (1 + H^2 - 2 H cos gamma)^(3/2)
 
 with theta the view zenith angle and gamma the angle between the view and the sun [rad]. The older models are
-special cases (:func:`perez_parameters_from_abcde`, :func:`cie_parameters`, :func:`kittler_parameters`):
+special cases (:func:`perez_parameters_from_abcde`, :func:`cie_parameters`, :func:`kittler_parameters`,
+:func:`kittler_turbid_parameters`):
 
 ============================================  ==========================================================
 Perez 1993 Eq. 1 / Preetham 1999 Eq. 3        A..E = a..e, C = 1, G = I = 0
 CIE S 011/E:2003 general sky                  A = a, B = b, C = 1 - c exp(d pi/2), D = c, E = d, F = e
 CIE 1973 clear sky (Kittler)                  A = -1, B = -0.32, C = 0.91, D = 10, E = -3, F = 0.45
+CIE 1973 clear sky, turbid (Kittler)          A = -1, B = -0.32, C = 0.856, D = 16, E = -3, F = 0.3
 Hosek & Wilkie 2012                           their nine fitted values, o = 0.01 (their published form)
 ============================================  ==========================================================
 
@@ -31,7 +32,7 @@ The kernel is written once, in numpy (:func:`gradation` and :func:`indicatrix`, 
 :func:`extended_perez`): every model and the sky matrix evaluate whole arrays of directions through it. numpy's
 vectorised exp/arccos/sqrt are faster per direction than numba's scalar libm calls on this formula, and the
 sky package then needs no compiled kernel at all: a command-line call pays neither numba's import nor its
-first-use set-up (about 0.35 s; issue 12, "a quick command line").
+first-use set-up (about 0.35 s; docs/architecture.md, "Start-up").
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ __all__ = [
     "hosek_wilkie_f",
     "hosek_wilkie_f_jacobian",
     "kittler_parameters",
+    "kittler_turbid_parameters",
     "perez_f",
     "perez_parameters_from_abcde",
 ]
@@ -190,6 +192,18 @@ def kittler_parameters() -> NDArray[np.float64]:
     """CIE 1973 clear sky (Kittler; Preetham 1999 Eq. 1): ``(1 - exp(-0.32 / cos theta))
     (0.91 + 10 exp(-3 gamma) + 0.45 cos^2 gamma)`` as extended parameters."""
     return np.array([-1.0, -0.32, 0.91, 10.0, -3.0, 0.45, 0.0, 0.0, 0.0])
+
+
+def kittler_turbid_parameters() -> NDArray[np.float64]:
+    """CIE 1973 clear sky for a turbid (polluted) atmosphere (Kittler): ``(1 - exp(-0.32 / cos theta))
+    (0.856 + 16 exp(-3 gamma) + 0.3 cos^2 gamma)`` as extended parameters.
+
+    The "clear turbid sky" of the DOE-2.1E / EnergyPlus daylighting model (EnergyPlus Engineering Reference,
+    "Sky Luminance Distributions"; LBNL DElight ``dskylu``, sky type 2) and, to rounding, CIE S 011/E:2003 type 13
+    ("CIE standard clear sky, polluted atmosphere": a = -1, b = -0.32, c = 16, d = -3, e = 0.3, so
+    C = 1 - 16 exp(-3 pi/2) = 0.8563).
+    """
+    return np.array([-1.0, -0.32, 0.856, 16.0, -3.0, 0.3, 0.0, 0.0, 0.0])
 
 
 # ------------------------------------------------------------------------------------------ Hosek & Wilkie 2012
