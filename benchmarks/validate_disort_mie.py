@@ -41,7 +41,9 @@ def main() -> None:
 
         def no_delta(params, wavelengths, sizes=None):
             kind, g, (mu, full, _trunc, f) = original(params, wavelengths, sizes)
-            return kind, g, (mu, full, full, np.zeros_like(f))
+            even = np.linspace(-1.0, 1.0, compute_module.TRUNCATED_PHASE_NODES)
+            whole = np.ascontiguousarray(params.aerosol_phase_table(wavelengths).evaluate(even).T)
+            return kind, g, (mu, full, whole, np.zeros_like(f))
 
         compute_module.aerosol_phase_arrays = no_delta
     print("| type | AOD | sun zenith | side | error at view zenith 0, 10, ..., 70 deg [%] | max | allowed at 70 |")

@@ -21,9 +21,9 @@ Free paths are sampled by inverting this optical depth (``tau(t) = -ln(1 - xi)``
 inside the piece where the target is crossed), so the collision density ``sigma_t(x) T(x)`` is known exactly for
 every wavelength, which spectral MIS needs.
 
-Estimator (backward paths from the observer; Veach 1997, PhD thesis, Stanford, Ch. 8-9):
+Estimator (backward paths from the observer; [Veach1997] Ch. 8-9):
 
-* forced first collision (Cashwell & Everett 1959): when the view ray leaves the atmosphere without hitting the
+* forced first collision ([CashwellEverett1959]): when the view ray leaves the atmosphere without hitting the
   ground, its first collision is drawn from ``sigma_t T / (1 - T_total)`` on the ray, so no path is wasted on
   clear sky;
 * next-event estimation to the sun at every medium and ground vertex: a direction uniform over the solar disc
@@ -40,8 +40,7 @@ Estimator (backward paths from the observer; Veach 1997, PhD thesis, Stanford, C
 * Russian roulette (Arvo & Kirk 1990) from the second vertex when the largest weight falls below 0.5, survival
   probability ``w_max / 0.5``; a hard cap of 1000 vertices (never reached in the tests).
 
-Hero wavelengths (Wilkie et al. 2014, "Hero wavelength spectral sampling", Comput. Graph. Forum 33(4), 123-131,
-doi:10.1111/cgf.12419): one path serves all the wavelengths of its group. The hero (uniformly chosen per path)
+Hero wavelengths ([Wilkie2014]): one path serves all the wavelengths of its group. The hero (uniformly chosen per path)
 drives every decision; each wavelength's estimate is weighted with the balance heuristic over the group, i.e.
 ``F_i(path) / mean_k p_k(path)`` where ``p_k`` is the density the path would have had with wavelength ``k`` as
 hero (one-sample MIS, Veach 1997, Sec. 9.2.4). Plain ratio weights ``F_i / p_hero`` would be unbounded between
@@ -53,7 +52,6 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from ..atmosphere.phase import (
@@ -64,14 +62,11 @@ from ..atmosphere.phase import (
     rayleigh_inverse_cdf_scalar,
     rayleigh_phase_scalar,
 )
+from ..jit import helper, inline, kernel
 from .rng import next_uniform, sample_state, stream_key
 
 __all__ = ["column_along", "disc_transmittance", "trace_block"]
 
-_jit = numba.njit(cache=True, nogil=True)
-_jit_inline = numba.njit(cache=True, nogil=True, inline="always")
-# Helpers that never allocate: _nrt=False (why: skyscatter.precomputed.sampling, docs/architecture.md).
-_hjit = numba.njit(cache=True, nogil=True, _nrt=False)
 
 # 4-point Gauss-Legendre nodes and weights on [-1, 1] (Abramowitz & Stegun 1964, Table 25.4)
 _GX = (-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526)
@@ -80,7 +75,7 @@ _MAX_VERTICES = 1000
 _RR_THRESHOLD = 0.5
 
 
-@_jit_inline
+@inline
 def _density(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> float:
     """Relative density of component ``comp`` at altitude ``h`` [m] (DensityProfile semantics)."""
     start = 0.0
@@ -97,13 +92,13 @@ def _density(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> float
     return 0.0
 
 
-@_jit_inline
+@inline
 def _densities(r: float, rb: float, layers: np.ndarray, nlay: np.ndarray) -> tuple[float, float, float]:
     h = r - rb
     return _density(h, layers, nlay, 0), _density(h, layers, nlay, 1), _density(h, layers, nlay, 2)
 
 
-@_hjit
+@helper
 def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     """Distance [m] along the ray to the ground or out of the top of the atmosphere, and whether it is the ground."""
     r2 = px * px + py * py + pz * pz
@@ -117,7 +112,7 @@ def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     return (t if t > 0.0 else 0.0), False
 
 
-@_hjit
+@helper
 def _piece_columns(r2, b, a, c, rb, layers, nlay, out):
     """Gauss-Legendre columns of the three components over ``[a, c]`` of a ray with ``|p|^2 = r2``, ``p.d = b``."""
     half = 0.5 * (c - a)
@@ -137,7 +132,7 @@ def _piece_columns(r2, b, a, c, rb, layers, nlay, out):
     out[2] = s2 * half
 
 
-@_hjit
+@helper
 def _invert_in_piece(r2, b, a, c, rem, dtau, target, k0, k1, k2, rb, layers, nlay, tmp):
     """Distance ``s`` in ``[a, c]`` where the optical depth from ``a`` reaches ``rem`` (``dtau`` over the whole
     piece); Newton on the Gauss-Legendre integral with a bisection safeguard. ``tmp`` gets the columns over
@@ -164,7 +159,7 @@ def _invert_in_piece(r2, b, a, c, rem, dtau, target, k0, k1, k2, rb, layers, nla
     return s
 
 
-@_hjit
+@helper
 def _march(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec):
     """:func:`column_along`; also records, per piece ``k``, its end ``t``, the cumulative optical depth and the
     cumulative columns in ``rec[k, 0:5]`` (``rec`` has at least ``2 len(edges) + 2`` rows). Returns
@@ -242,7 +237,7 @@ def _march(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers,
         a = c
 
 
-@_jit
+@kernel
 def column_along(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp):
     """March along ``p + t d`` for ``0 <= t <= t_end`` [m] until the optical depth ``k . col`` reaches ``target``.
 
@@ -256,7 +251,7 @@ def column_along(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, l
     return t, reached
 
 
-@_hjit
+@helper
 def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, layers, nlay, rec, npc, cols, tmp):
     """Collision at hero optical depth ``target`` on a ray already marched to its end (pieces in ``rec``), without
     integrating it again: the same pieces, cumulative sums and inversion as :func:`_march`."""
@@ -286,14 +281,14 @@ def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, l
     return t_end, False
 
 
-@_hjit
+@helper
 def _sun_sample(sx, sy, sz, cos_max, u1, u2):
     """Direction uniform in solid angle over the cone of half-angle ``acos(cos_max)`` about the sun."""
     mu = 1.0 - u1 * (1.0 - cos_max)
     return direction_about_axis(sx, sy, sz, mu, 2.0 * math.pi * u2)
 
 
-@_hjit
+@helper
 def _normalise(f, p, n):
     m = 0.0
     for i in range(n):
@@ -305,7 +300,7 @@ def _normalise(f, p, n):
             p[i] = p[i] / m
 
 
-@_jit
+@kernel
 def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, mie_ssa, g, kind,
                 albedo, esun, seed, group, batch0, n_batches, batch_size, sums, sumsq):
     """Trace ``n_batches`` batches of ``batch_size`` paths for each direction of a block; one wavelength group.
@@ -483,7 +478,7 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                     sumsq[j, i, bi] += c * c
 
 
-@_jit
+@kernel
 def disc_transmittance(r_obs, sun, sun_radius, rb, rt, edges, layers, nlay, coef, n_radial, n_angular, out):
     """Mean transmittance over the solar disc seen from ``(0, 0, r_obs)`` for each wavelength (``out`` (n_wl,)).
 

@@ -27,8 +27,7 @@ it 0.00 / 0.01 / 0.26 %; turbidity 3 over albedo 0.3, 23 / 34 / 43 % and 0.15 / 
 aerosol optical depth 0.5 over albedo 0.8, 6 orders with the tail are within 0.9 % of 16 orders
 (``docs/bruneton.md``). Four orders are too few for the tail (the shape has not settled: +10 % in that case).
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
@@ -81,6 +80,8 @@ def density_profiles(params: AtmosphereParameters) -> tuple[F64, NDArray[np.int6
 #: Streams of the delta-M truncation of a tabulated aerosol phase for the scattering-density quadrature, per
 #: polar sample of that quadrature (:attr:`.TableSizes.density_sphere_samples`): 2 x 16 = 32 Legendre moments.
 DELTA_M_STREAMS_PER_SAMPLE = 2
+#: Cosines (evenly spaced from -1 to 1) at which the truncated phase is given to the scattering-density kernel.
+TRUNCATED_PHASE_NODES = 2049
 
 
 @dataclass(frozen=True)
@@ -91,7 +92,8 @@ class Medium:
     The aerosol phase is analytic (``mie_kind`` of :func:`skyscatter.atmosphere.phase.aerosol_phase_kind` with
     ``mie_phase_g``: the formula, bit for bit the tables of before) or tabulated (``mie_kind`` =
     :data:`.sampling.TABLE_PHASE`): ``phase_mu`` (n,) ascending cosines, ``phase_full`` (n_wl, n) the aerosol's
-    phase table at the wavelengths, ``phase_trunc`` its delta-M truncation for the scattering-density quadrature
+    phase table at the wavelengths, ``phase_trunc`` (n_wl, :data:`TRUNCATED_PHASE_NODES`) its delta-M truncation
+    for the scattering-density quadrature at even cosines
     and ``forward`` (n_wl,) the truncated forward fraction (:func:`.kernels.scattering_density_kernel`).
     """
 
@@ -154,10 +156,11 @@ def aerosol_phase_arrays(params: AtmosphereParameters, wavelengths: F64,
     sz = TableSizes() if sizes is None else sizes
     table = params.aerosol_phase_table(wavelengths)
     trunc, f = table.delta_m(DELTA_M_STREAMS_PER_SAMPLE * sz.density_sphere_samples)
-    arr, tr = table.numba_arrays(), trunc.numba_arrays()
-    if not np.array_equal(arr.mu, tr.mu):
-        raise AssertionError("delta-M table on another grid")  # same angles by construction
-    return TABLE_PHASE, 0.0, (arr.mu, arr.values, tr.values, np.ascontiguousarray(f))
+    arr = table.numba_arrays()
+    # the truncated phase on an even cosine grid (the kernel indexes it without a search; linear between
+    # 2049 nodes of a 32-term Legendre series)
+    trunc_even = np.ascontiguousarray(trunc.evaluate(np.linspace(-1.0, 1.0, TRUNCATED_PHASE_NODES)).T)
+    return TABLE_PHASE, 0.0, (arr.mu, arr.values, trunc_even, np.ascontiguousarray(f))
 
 
 @dataclass(frozen=True)

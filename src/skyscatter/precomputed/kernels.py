@@ -19,17 +19,16 @@ Ray integrals use product integration (:func:`.sampling.exp_segment_weights`): e
 coefficient is exponential between two samples and the rest of the integrand linear, which keeps 50 samples
 accurate for the 1.2 km aerosol layer on vertical rays where the plain trapezoidal rule is 8 % off.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from ..jit import CONTRACT_ARCP, CONTRACT_REASSOC, helper, kernel
 from .geometry import (
     MU_S_LIMIT_TOLERANCE,
     acos_table,
@@ -66,10 +65,8 @@ from .sampling import (
     transmittance_to_top,
 )
 
-_kjit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
 
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def mu_s_texels(bottom, top, mu_s_min, n_mu_s):
     """``mu_s`` of every texel of the 4D tables (each found by bisection, so computed once per kernel call)."""
     out = np.empty(n_mu_s)
@@ -78,13 +75,13 @@ def mu_s_texels(bottom, top, mu_s_min, n_mu_s):
     return out
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@helper
 def ray_sample_distance(i, n_samples, d_end, mu, hits_ground):
     """Distance [m] of sample ``i`` of ``n_samples`` steps along a ray of length ``d_end``: quadratic spacing,
     dense at the ray's lower end where the aerosols are (the start for rays going up, the end for rays that meet
     the ground), uniform for other downward rays. With uniform steps a 70 deg slant path through an aerosol
     optical depth of 0.5 had one of 50 steps per scale height and its radiance came out 5-30 % high against
-    DISORT (issue 11)."""
+    DISORT (docs/bruneton.md)."""
     u = i / n_samples
     if hits_ground:
         return d_end * (1.0 - (1.0 - u) * (1.0 - u))
@@ -95,7 +92,7 @@ def ray_sample_distance(i, n_samples, d_end, mu, hits_ground):
 PI = math.pi
 
 
-@_kjit
+@kernel
 def optical_length_kernel(bottom, top, profiles, counts, n_samples, out, start, stop):
     """Optical length of each profile [m] from the texels of the transmittance table to the top.
 
@@ -117,7 +114,7 @@ def optical_length_kernel(bottom, top, profiles, counts, n_samples, out, start, 
                 out[i_r, i_mu, p] += w * density_at(profiles[p], counts[p], r_i - bottom)
 
 
-@_kjit
+@kernel
 def direct_irradiance_kernel(transmittance, bottom, top, alpha, out, start, stop):
     """Direct irradiance on a horizontal surface per unit solar irradiance into ``out`` (n_r, n_mu_s, n_wl).
 
@@ -138,7 +135,7 @@ def direct_irradiance_kernel(transmittance, bottom, top, alpha, out, start, stop
             out[i_r, i_s, k] = t[k] * cos_factor
 
 
-@_kjit
+@kernel
 def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
     """The (clamped) view-sun cosine of every texel of the 4D tables, into ``out`` (n_r, n_mu, n_mu_s, n_nu)."""
     n_r, n_mu, n_mu_s, n_nu = out.shape
@@ -153,7 +150,7 @@ def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
                 out[i_r, i_mu, i_s, i_n] = scattering_nu_param(i_n, mu, mu_s, n_nu)
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"arcp", "contract"}, error_model="numpy")
+@helper(fastmath=CONTRACT_ARCP)
 def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w, frac):
     """Transmittance-table ``mu`` cells and weights towards the sun, and the visible fraction of its disc, at a
     ray sample (distance ``d`` [m] from the texel's point at radius ``r``, radius ``r_i``) for every texel sun
@@ -166,7 +163,7 @@ def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, 
         cell[u], w[u] = lerp_index(p_mu, 0, n_tmu - 1)
 
 
-@_kjit
+@kernel
 def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profiles, counts, n_samples, ray, mie,
                              start, stop):
     """Single scattering integrals per unit solar irradiance and unit scattering coefficient.
@@ -260,14 +257,14 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
                     mie[i_r, i_mu, i_s, i_n, k] = acc_m[u, k]
 
 
-@numba.njit(cache=True, error_model="numpy")
+@helper
 def _quadratic_form(m, vx, vy, vz):
     """v^T m v for a symmetric 3 x 3 matrix."""
     return (m[0, 0] * vx * vx + m[1, 1] * vy * vy + m[2, 2] * vz * vz
             + 2.0 * (m[0, 1] * vx * vy + m[0, 2] * vx * vz + m[1, 2] * vy * vz))
 
 
-@numba.njit(cache=True, error_model="numpy")
+@kernel
 def sphere_quadrature(n_theta, hemisphere):
     """Midpoint-rule directions and solid angles [sr] on the sphere (or upper hemisphere), in a frame whose
     x axis points to the sun's azimuth: (n_theta * 2 n_theta, 3) directions and their weights."""
@@ -291,7 +288,7 @@ def sphere_quadrature(n_theta, hemisphere):
     return om, dom
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"}, error_model="numpy")
+@kernel(fastmath=CONTRACT_REASSOC)
 def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance, albedo, beta_r, beta_m, g, mie_kind,
                               phase_mu, phase_full, phase_trunc, forward, profiles, counts, bottom, top, mu_s_min,
                               n_theta, out, start, stop):
@@ -304,7 +301,7 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     scale height is 1.2 km) while this weighted radiance varies slowly: :func:`multiple_scattering_kernel`
     interpolates it between table radii and multiplies by the exact coefficient at each ray sample. Interpolating
     J itself overestimated it between radii (linear interpolation of a convex exponential): +5 to +7 % in the
-    converged multiple scattering of an aerosol optical depth of 0.5 against DISORT with 16 radii (issue 11).
+    converged multiple scattering of an aerosol optical depth of 0.5 against DISORT with 16 radii (docs/bruneton.md).
     Keeping the Rayleigh and aerosol parts apart (two tables, exact coefficients for each) agreed with this
     within 0.6 % there and made the multiple-scattering kernel 13 % slower.
 
@@ -325,7 +322,9 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     quadrature radiance.
 
     A tabulated aerosol phase (``mie_kind`` :data:`.sampling.TABLE_PHASE`; ``phase_mu`` (n,) ascending cosines,
-    ``phase_full`` and ``phase_trunc`` (n_wl, n) the phase table and its delta-M truncation, ``forward`` (n_wl,)
+    ``phase_full`` (n_wl, n) the phase table, ``phase_trunc`` (n_wl, n_u) its delta-M truncation sampled at
+    ``n_u`` cosines evenly spaced from -1 to 1 (a smooth Legendre series: one index per direction pair instead of a
+    search), ``forward`` (n_wl,)
     the truncated forward fraction ``f``; :meth:`skyscatter.atmosphere.phase_table.PhaseTable.delta_m`) depends on
     wavelength and may have a diffraction peak far narrower than the quadrature's 180 / n_theta deg: the aerosol
     part of J is ``(1 - f) sum_w p*(v . w) L(w) dw / norm* + f L(v)``, the truncated phase on the grid (normalised
@@ -349,6 +348,10 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     mie_t = np.empty((n_lt, n_s, n_v))
     own = np.empty((n_lt, n_s, n_v))  # L(v) at each texel (the delta part)
     rad_k = np.empty((n_s, n_om))
+    n_u = phase_trunc.shape[1]
+    half_u = 0.5 * (n_u - 1)
+    idx_t = np.zeros((n_om if table else 0, n_v), dtype=np.int64)
+    wt_t = np.zeros((n_om if table else 0, n_v))
     pv = np.empty(n_l)
     tmp2 = np.empty(n_l)
     view = np.empty((n_v, 3))
@@ -385,13 +388,12 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 view[v, 1] = vy
                 view[v, 2] = mu
                 if table:
-                    for k in range(n_l):
-                        norm_t[k, v] = 0.0
+                    # cell of v . w on the truncated phase's uniform cosine grid; the values per wavelength below
                     for w in range(n_om):
-                        phase_table_values(phase_mu, phase_trunc, vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], pv)
-                        for k in range(n_l):
-                            phase_t[k, w, v] = pv[k]
-                            norm_t[k, v] += pv[k] * dom[w]
+                        x = (clamp(vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], -1.0, 1.0) + 1.0) * half_u
+                        i = min(int(x), n_u - 2)
+                        idx_t[w, v] = i
+                        wt_t[w, v] = x - i
                 else:
                     nm = 0.0
                     for w in range(n_om):
@@ -400,6 +402,18 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                         nm += pm * dom[w]
                     norm_m[v] = nm
                 norm_r[v] = w0 + _quadratic_form(w2, vx, vy, mu)
+        if table:
+            for k in range(n_l):
+                for v in range(n_v):
+                    norm_t[k, v] = 0.0
+                for w in range(n_om):
+                    dw = dom[w]
+                    for v in range(n_v):
+                        i = idx_t[w, v]
+                        f = wt_t[w, v]
+                        p = (1.0 - f) * phase_trunc[k, i] + f * phase_trunc[k, i + 1]
+                        phase_t[k, w, v] = p
+                        norm_t[k, v] += p * dw
         m0[:] = 0.0
         m2[:] = 0.0
         for i_s in range(n_s):
@@ -473,7 +487,7 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                         out[i_r, i_mu, i_s, i_n, k] = f_r[k] * acc_r / norm_r[v] + f_m[k] * acc_m
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@helper
 def _own_radiance(s_a, s_b, first, ground_irradiance, transmittance, albedo, phase_mu, phase_full, i_r, view,
                   mu_s_tab, bottom, top, n_n, own, buf, e_buf, t_buf, tmp, pv):
     """The previous order's radiance ``L(v)`` at every texel of radius index ``i_r``, in the texel's own view
@@ -510,7 +524,7 @@ def _own_radiance(s_a, s_b, first, ground_irradiance, transmittance, albedo, pha
                 own[k, i_s, v] = buf[k]
 
 
-@_kjit
+@kernel
 def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_mu, phase_full, bottom, top, mu_s_min, n_theta,
                                out, start, stop):
     """Irradiance on a horizontal surface from one order of sky radiance (Eq. 15) into ``out`` (n_r, n_mu_s,
@@ -556,7 +570,7 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_mu, phase_ful
             out[i_r, i_s, k] = acc[k]
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"arcp", "contract"}, error_model="numpy")
+@helper(fastmath=CONTRACT_ARCP)
 def _sun_cells(r, d, r_i, mu_i, mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a, theta_max, n_s, n_n, cell, w_s,
                w_n):
     """(mu_s, nu) cells and weights at a ray sample (distance ``d`` [m] from the texel's point at radius ``r``,
@@ -577,7 +591,7 @@ def _sun_cells(r, d, r_i, mu_i, mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a
         w_n[u] = wn
 
 
-@_kjit
+@kernel
 def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles, counts, bottom, top,
                                mu_s_min, n_samples, out, start, stop):
     """Radiance of one order scattered towards each texel's point (Eq. 11 with the order's J) into ``out``
