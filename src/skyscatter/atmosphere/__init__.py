@@ -3,6 +3,10 @@
 * :mod:`.medium` - :class:`AtmosphereParameters` (planet, density profiles, Rayleigh/aerosol/ozone
   coefficients, aerosol phase function, ground albedo, solar spectrum), with the per-altitude coefficients and
   phase-function sampling a path tracer needs; :class:`DensityProfile`.
+* :mod:`.particles` - particle components (aerosols, cloud droplets): density profile, extinction and albedo
+  spectra and a phase table each; :mod:`.phase_table` - tabulated per-wavelength phase functions
+  (:class:`PhaseTable`: evaluation, inverse-CDF sampling, Legendre moments, delta-M; numba versions);
+  :mod:`.profiles` - density profiles.
 * :mod:`.spectra` - spectral inputs (power law, table, physical Rayleigh) and the published data they use.
 * :mod:`.phase` - Rayleigh, Henyey-Greenstein and Cornette-Shanks phase functions and their samplers.
 * :mod:`.rayleigh` - the Rayleigh formula with one set of physical constants (Bodhaine et al. 1999,
@@ -34,9 +38,14 @@ _LAZY = {
     "JUNGE_EXPONENT": "mie",
     "KOSCHMIEDER_CONSTANT": "turbidity",
     "STANDARD_AIR_NUMBER_DENSITY": "rayleigh",
+    "AnalyticParticles": "particles",
+    "AngstromSpectrum": "spectra",
     "AtmosphereParameters": "medium",
-    "DensityLayer": "medium",
-    "DensityProfile": "medium",
+    "DensityLayer": "profiles",
+    "DensityProfile": "profiles",
+    "ParticleComponent": "particles",
+    "PhaseTable": "phase_table",
+    "TabulatedParticles": "particles",
     "PowerLawSpectrum": "spectra",
     "RayleighPhysicalSpectrum": "spectra",
     "Spectrum": "spectra",
@@ -55,6 +64,7 @@ _LAZY = {
     "mie_k": "mie",
     "mie_phase_function": "mie",
     "mie_total_scattering": "mie",
+    "phase_angle_grid": "phase_table",
     "ozone_cross_section_serdyuchenko": "spectra",
     "rayleigh_angular_scattering": "rayleigh",
     "rayleigh_angular_scattering_preetham1999": "rayleigh",
@@ -74,7 +84,8 @@ _LAZY = {
     "solar_spectrum_astm_g173": "spectra",
     "turbidity_from_meteorological_range": "turbidity",
 }
-_SUBMODULES = ("airmass", "medium", "mie", "phase", "rayleigh", "spectra", "tables", "turbidity")
+_SUBMODULES = ("airmass", "medium", "mie", "particles", "phase", "phase_table", "profiles", "rayleigh", "spectra",
+               "tables", "turbidity")
 
 __all__ = sorted(_LAZY)
 

@@ -63,3 +63,72 @@ def direction_about_axis(ax, ay, az, mu, phi):
     oz = c * t1z + s * t2z + mu * az
     n = 1.0 / math.sqrt(ox * ox + oy * oy + oz * oz)
     return ox * n, oy * n, oz * n
+
+
+# ------------------------------------------------------------------ tabulated phase functions (.phase_table)
+
+# Non-allocating helpers that take arrays: compiled without numba's runtime (docs/architecture.md).
+_tjit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy", _nrt=False)
+
+
+@_tjit
+def phase_table_segment(mu_nodes, mu):
+    """``(i, w)``: the segment ``mu_nodes[i] <= mu <= mu_nodes[i + 1]`` of ascending nodes and the weight of node
+    ``i + 1`` (linear in ``mu``); ``mu`` is clamped to [-1, 1]. Bisection (:mod:`.phase_table`)."""
+    n = mu_nodes.shape[0]
+    if mu <= mu_nodes[0]:
+        return 0, 0.0
+    if mu >= mu_nodes[n - 1]:
+        return n - 2, 1.0
+    lo = 0
+    hi = n - 1
+    while hi - lo > 1:
+        mid = (lo + hi) >> 1
+        if mu_nodes[mid] <= mu:
+            lo = mid
+        else:
+            hi = mid
+    return lo, (mu - mu_nodes[lo]) / (mu_nodes[lo + 1] - mu_nodes[lo])
+
+
+@_tjit
+def phase_table_value(mu_nodes, values, k, mu):
+    """Tabulated phase function [sr^-1] of wavelength index ``k`` at ``mu`` (``values`` (n_wl, n), ascending mu)."""
+    i, w = phase_table_segment(mu_nodes, mu)
+    return (1.0 - w) * values[k, i] + w * values[k, i + 1]
+
+
+@_tjit
+def phase_table_values(mu_nodes, values, mu, out):
+    """``out[k]`` = tabulated phase function [sr^-1] of every wavelength ``k`` at ``mu`` (one bisection)."""
+    i, w = phase_table_segment(mu_nodes, mu)
+    for k in range(values.shape[0]):
+        out[k] = (1.0 - w) * values[k, i] + w * values[k, i + 1]
+
+
+@_tjit
+def phase_table_inverse_cdf(mu_nodes, values, cdf, k, u):
+    """``mu`` [-] with CDF ``u`` in [0, 1] under the table of wavelength index ``k``: exact for the interpolant
+    linear in ``mu`` (:meth:`.phase_table.PhaseTable.inverse_cdf`, the same formula)."""
+    n = mu_nodes.shape[0]
+    if u <= 0.0:
+        return -1.0
+    if u >= 1.0:
+        return 1.0
+    lo = 0
+    hi = n - 1
+    while hi - lo > 1:  # largest i with cdf[k, i] <= u
+        mid = (lo + hi) >> 1
+        if cdf[k, mid] <= u:
+            lo = mid
+        else:
+            hi = mid
+    a = mu_nodes[lo]
+    dmu = mu_nodes[lo + 1] - a
+    v0 = values[k, lo]
+    s = (values[k, lo + 1] - v0) / dmu
+    c = (u - cdf[k, lo]) / (2.0 * math.pi)
+    den = v0 + math.sqrt(max(v0 * v0 + 2.0 * s * c, 0.0))
+    x = 2.0 * c / den if den > 0.0 else 0.0
+    x = min(max(x, 0.0), dmu)
+    return min(max(a + x, -1.0), 1.0)

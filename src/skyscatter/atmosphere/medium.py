@@ -42,8 +42,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FileFormatError, InvalidParameterError
 from . import phase as _phase
+from .particles import AnalyticParticles, ParticleComponent, particle_component_from_dict
+from .phase_table import PhaseTable
+from .profiles import DensityLayer, DensityProfile
 from .spectra import (
     DOBSON_UNIT,
+    AngstromSpectrum,
     PowerLawSpectrum,
     Spectrum,
     TabulatedSpectrum,
@@ -61,105 +65,6 @@ __all__ = [
 
 #: Width [nm] of the box filter applied to the solar spectrum before sampling it at a table wavelength.
 SOLAR_BAND_WIDTH = 10.0
-
-
-@dataclass(frozen=True)
-class DensityLayer:
-    """One layer of a density profile: ``max(0, exp_term * exp(exp_scale * h) + linear_term * h + constant_term)``.
-
-    ``h`` is the altitude above the planet surface [m]; ``width`` [m] is the thickness of the layer (ignored
-    for the last layer of a profile, which extends upwards without limit).
-    """
-
-    width: float = 0.0
-    exp_term: float = 0.0
-    exp_scale: float = 0.0
-    linear_term: float = 0.0
-    constant_term: float = 0.0
-
-    def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
-            if not math.isfinite(v):
-                raise InvalidParameterError(f"density layer {f.name} must be finite; got {v!r}")
-        if self.width < 0:
-            raise InvalidParameterError(f"density layer width must be >= 0 m; got {self.width!r}")
-
-
-@dataclass(frozen=True)
-class DensityProfile:
-    """Relative density (1 = the reference density of the coefficients) as a stack of :class:`DensityLayer`."""
-
-    layers: tuple[DensityLayer, ...]
-
-    def __post_init__(self) -> None:
-        if not self.layers:
-            raise InvalidParameterError("a density profile needs at least one layer")
-        object.__setattr__(self, "layers", tuple(self.layers))
-
-    @classmethod
-    def exponential(cls, scale_height: float) -> DensityProfile:
-        """``exp(-h / scale_height)`` (Eqs. 1 and 3); ``scale_height`` [m] > 0."""
-        if not (math.isfinite(scale_height) and scale_height > 0):
-            raise InvalidParameterError(f"scale height must be > 0 m; got {scale_height!r}")
-        return cls((DensityLayer(0.0, 1.0, -1.0 / scale_height, 0.0, 0.0),))
-
-    @classmethod
-    def tent(cls, bottom: float, peak: float, top: float) -> DensityProfile:
-        """Piecewise-linear layer: 0 below ``bottom``, rising to 1 at ``peak``, 0 again from ``top`` [m]."""
-        if not (0 <= bottom < peak < top and math.isfinite(top)):
-            raise InvalidParameterError(f"tent profile needs 0 <= bottom < peak < top [m]; got {bottom}, {peak}, {top}")
-        up = 1.0 / (peak - bottom)
-        down = 1.0 / (top - peak)
-        return cls((DensityLayer(peak, 0.0, 0.0, up, -bottom * up), DensityLayer(0.0, 0.0, 0.0, -down, top * down)))
-
-    @classmethod
-    def uniform(cls) -> DensityProfile:
-        """Density 1 at every altitude."""
-        return cls((DensityLayer(0.0, 0.0, 0.0, 0.0, 1.0),))
-
-    def __call__(self, altitude: ArrayLike) -> NDArray[np.float64]:
-        """Relative density at ``altitude`` [m] above the surface."""
-        h = np.asarray(altitude, dtype=float)
-        out = np.zeros_like(h)
-        start = 0.0
-        done = np.zeros(h.shape, dtype=bool)
-        for k, layer in enumerate(self.layers):
-            last = k == len(self.layers) - 1
-            sel = ~done if last else (~done & (h < start + layer.width))
-            v = layer.exp_term * np.exp(layer.exp_scale * h) + layer.linear_term * h + layer.constant_term
-            out = np.where(sel, np.maximum(v, 0.0), out)
-            done |= sel
-            start += layer.width
-        return out
-
-    def column(self, height: float) -> float:
-        """Integral of the relative density from the surface to ``height`` [m] (an equivalent thickness [m])."""
-        return _profile_column(self, float(height))
-
-    def as_array(self) -> NDArray[np.float64]:
-        """Layers as an (n_layers, 5) array: width, exp_term, exp_scale, linear_term, constant_term."""
-        return np.array([[la.width, la.exp_term, la.exp_scale, la.linear_term, la.constant_term] for la in self.layers])
-
-    def to_dict(self) -> list[dict[str, float]]:
-        return [dataclasses.asdict(la) for la in self.layers]
-
-    @classmethod
-    def from_dict(cls, data: list[dict[str, float]]) -> DensityProfile:
-        return cls(tuple(DensityLayer(**la) for la in data))
-
-
-@lru_cache(maxsize=64)
-def _profile_column(profile: DensityProfile, height: float) -> float:
-    # Fine trapezoid with the layer boundaries as nodes: exact for linear layers, better than 1e-6 relative
-    # for exponential ones with scale heights of 1 km and more.
-    edges = list(np.cumsum([0.0] + [lay.width for lay in profile.layers[:-1]]))
-    # zero crossings of linear layers are kinks of max(0, .)
-    edges += [-lay.constant_term / lay.linear_term for lay in profile.layers
-              if lay.linear_term != 0 and lay.exp_term == 0]
-    e = np.array(edges)
-    nodes = np.unique(np.concatenate([np.linspace(0.0, height, 40001), e[(e > 0) & (e < height)]]))
-    return float(np.trapezoid(profile(nodes), nodes))
 
 
 def _as_spectrum(value: Any, name: str) -> Spectrum:
@@ -217,6 +122,16 @@ class AtmosphereParameters:
     max_sun_zenith : float
         Largest sun zenith angle tabulated [rad], in [102 deg, 180 deg] (default 102 deg); the sky is dark
         beyond it.
+    aerosol : ParticleComponent or None
+        The aerosol as a particle component (:mod:`skyscatter.atmosphere.particles`: its own density profile,
+        extinction and albedo spectra and phase table, e.g. a Mie aerosol type). None (default): the aerosol of
+        the ``mie_*`` fields above (Angstrom's law, constant albedo, analytic phase), which
+        :attr:`aerosol_component` describes as an :class:`~skyscatter.atmosphere.particles.AnalyticParticles`.
+        When given, it replaces ``mie_density``, ``mie_angstrom_*``, ``mie_single_scattering_albedo`` and
+        ``mie_phase_*`` (which are then ignored).
+    particles : tuple of ParticleComponent
+        Further particle components (cloud layers, more aerosol layers), each with its own profile and phase
+        function (default none). Solvers that handle one aerosol only refuse them.
     """
 
     bottom_radius: float = 6_360_000.0
@@ -238,6 +153,8 @@ class AtmosphereParameters:
     sun_angular_radius: float = 0.004675
     max_sun_zenith: float = math.radians(102.0)
     mie_phase_function: str = "cornette-shanks"
+    aerosol: ParticleComponent | None = None
+    particles: tuple[ParticleComponent, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.mie_phase_function, str):
@@ -282,8 +199,22 @@ class AtmosphereParameters:
                 f"max_sun_zenith must be in [102, 180] deg (twilight needs at least 102 deg); got "
                 f"{math.degrees(self.max_sun_zenith):.4g} deg"
             )
-        if self.mie_angstrom_beta > 0 and self.mie_density.column(self.thickness) <= 0:
+        if self.aerosol is None and self.mie_angstrom_beta > 0 and self.mie_density.column(self.thickness) <= 0:
             raise InvalidParameterError("mie_density is zero everywhere but mie_angstrom_beta > 0")
+        if self.aerosol is not None and not isinstance(self.aerosol, ParticleComponent):
+            raise InvalidParameterError(
+                f"aerosol must be a ParticleComponent (skyscatter.atmosphere.particles) or None; "
+                f"got {type(self.aerosol).__name__}")
+        if isinstance(self.particles, ParticleComponent):
+            object.__setattr__(self, "particles", (self.particles,))
+        try:
+            object.__setattr__(self, "particles", tuple(self.particles))
+        except TypeError:
+            raise InvalidParameterError("particles must be a sequence of ParticleComponent") from None
+        for comp in self.particles:
+            if not isinstance(comp, ParticleComponent):
+                raise InvalidParameterError(
+                    f"particles must be ParticleComponent instances; got {type(comp).__name__}")
 
     # ------------------------------------------------------------------ constructors
 
@@ -347,16 +278,45 @@ class AtmosphereParameters:
         """Rayleigh scattering (= extinction) coefficient at relative density 1 [m^-1]."""
         return self.rayleigh_scattering(wavelengths)
 
+    @property
+    def aerosol_component(self) -> ParticleComponent:
+        """The aerosol as a particle component: :attr:`aerosol` when set, else the ``mie_*`` fields as an
+        :class:`~skyscatter.atmosphere.particles.AnalyticParticles` (``mie_density``; Angstrom extinction
+        ``beta (lambda / 1 um)^-alpha / column``; ``mie_single_scattering_albedo``; ``mie_phase_function`` with
+        ``mie_phase_g``), which gives the same coefficients bit for bit."""
+        if self.aerosol is not None:
+            return self.aerosol
+        return _legacy_aerosol(self.mie_density, self.mie_angstrom_beta, self.mie_angstrom_alpha,
+                               self.mie_single_scattering_albedo, self.mie_phase_function, self.mie_phase_g,
+                               self.thickness)
+
+    @property
+    def particle_components(self) -> tuple[ParticleComponent, ...]:
+        """Every particle component of the medium: :attr:`aerosol_component` first, then :attr:`particles`."""
+        return (self.aerosol_component, *self.particles)
+
+    def aerosol_phase_table(self, wavelengths: ArrayLike, angles: ArrayLike | None = None) -> PhaseTable:
+        """The aerosol's phase function at ``wavelengths`` [nm] as a normalised table
+        (:class:`~skyscatter.atmosphere.phase_table.PhaseTable`; ``angles`` [rad] default the component's grid).
+        For the default analytic aerosol it tabulates the formula; solvers that have the formula can use it
+        instead (``aerosol_component.analytic_phase``)."""
+        return self.aerosol_component.phase_table(self._wavelengths(wavelengths), angles)
+
     def mie_extinction_at(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
-        """Aerosol extinction coefficient at relative density 1 [m^-1] (Angstrom's law over the Mie column)."""
+        """Aerosol extinction coefficient at relative density 1 [m^-1] (:attr:`aerosol_component`; by default
+        Angstrom's law over the column of ``mie_density``)."""
+        if self.aerosol is not None:
+            return self.aerosol.extinction_at(wavelengths)
         wl = np.asarray(wavelengths, dtype=float)
         if self.mie_angstrom_beta == 0:
             return np.zeros_like(wl)
-        column = self.mie_density.column(self.thickness)
-        return self.mie_angstrom_beta * (wl / 1000.0) ** (-self.mie_angstrom_alpha) / column
+        return _angstrom_extinction(self.mie_density, self.mie_angstrom_beta, self.mie_angstrom_alpha,
+                                    self.thickness)(wl)
 
     def mie_scattering_at(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
         """Aerosol scattering coefficient at relative density 1 [m^-1]."""
+        if self.aerosol is not None:
+            return self.aerosol.scattering_at(wavelengths)
         return self.mie_extinction_at(wavelengths) * self.mie_single_scattering_albedo
 
     def ozone_number_density_peak(self) -> float:
@@ -426,29 +386,37 @@ class AtmosphereParameters:
 
         Returns
         -------
-        rayleigh, aerosol : ndarray, shape (..., n_wl)
-            ``rayleigh_density(h) beta_R(lambda)`` and ``mie_density(h) beta_M,s(lambda)`` [m^-1].
+        rayleigh, particles : ndarray, shape (..., n_wl)
+            ``rayleigh_density(h) beta_R(lambda)`` and the sum over :attr:`particle_components` of
+            ``density(h) beta_s(lambda)`` (by default the aerosol's ``mie_density(h) beta_M,s(lambda)``) [m^-1].
         """
         h = self._altitude(altitude)
         wl = self._wavelengths(wavelengths)
         inside = (h <= self.thickness)[..., None]
         ray = np.where(inside, self.rayleigh_density(h)[..., None] * self.rayleigh_scattering_at(wl), 0.0)
-        mie = np.where(inside, self.mie_density(h)[..., None] * self.mie_scattering_at(wl), 0.0)
+        mie = np.where(inside, self._aerosol_density(h)[..., None] * self.mie_scattering_at(wl), 0.0)
+        for comp in self.particles:
+            mie = mie + np.where(inside, comp.density(h)[..., None] * comp.scattering_at(wl), 0.0)
         return ray, mie
+
+    def _aerosol_density(self, h: NDArray[np.float64]) -> NDArray[np.float64]:
+        return self.mie_density(h) if self.aerosol is None else self.aerosol.density(h)
 
     def absorption_coefficient(self, altitude: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64]:
         """Absorption coefficient [m^-1] at ``altitude``: aerosol absorption plus ozone, shape (..., n_wl).
 
-        Aerosol absorption is ``mie_density(h) (1 - albedo) beta_M,e``; ozone ``ozone_density(h) sigma N_O3``
-        (molecules do not absorb; Bruneton & Neyret 2008, Sec. 2.1, with ozone as in Bruneton 2017).
-        Parameters as in :meth:`scattering_coefficients`.
+        Aerosol absorption is ``mie_density(h) (1 - albedo) beta_M,e`` (and the same for each further particle
+        component); ozone ``ozone_density(h) sigma N_O3`` (molecules do not absorb; Bruneton & Neyret 2008, Sec.
+        2.1, with ozone as in Bruneton 2017). Parameters as in :meth:`scattering_coefficients`.
         """
         h = self._altitude(altitude)
         wl = self._wavelengths(wavelengths)
         inside = (h <= self.thickness)[..., None]
         mie_abs = self.mie_extinction_at(wl) - self.mie_scattering_at(wl)
-        out = (self.mie_density(h)[..., None] * mie_abs
+        out = (self._aerosol_density(h)[..., None] * mie_abs
                + self.ozone_density(h)[..., None] * self.ozone_absorption_at(wl))
+        for comp in self.particles:
+            out = out + comp.density(h)[..., None] * comp.absorption_at(wl)
         return np.where(inside, out, 0.0)
 
     def extinction_coefficient(self, altitude: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64]:
@@ -461,18 +429,35 @@ class AtmosphereParameters:
         """Rayleigh phase function [sr^-1] at the cosine of the scattering angle (:mod:`.phase`)."""
         return _phase.rayleigh_phase(cos_theta)
 
-    def aerosol_phase(self, cos_theta: ArrayLike) -> NDArray[np.float64]:
-        """Aerosol phase function [sr^-1] (:attr:`mie_phase_function` with :attr:`mie_phase_g`)."""
-        return _phase.aerosol_phase(cos_theta, self.mie_phase_g, self.mie_phase_function)
+    def aerosol_phase(self, cos_theta: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Aerosol phase function [sr^-1] at ``cos_theta`` [-].
+
+        Without ``wavelengths``: the analytic phase (by default :attr:`mie_phase_function` with
+        :attr:`mie_phase_g`), shape of ``cos_theta``; InvalidParameterError for a tabulated aerosol. With
+        ``wavelengths`` [nm]: :meth:`aerosol_phase_table` evaluated there, shape (..., n_wl).
+        """
+        if wavelengths is not None:
+            return self.aerosol_phase_table(wavelengths).evaluate(cos_theta)
+        analytic = self.aerosol_component.analytic_phase
+        if analytic is None:
+            raise InvalidParameterError("the aerosol's phase function depends on wavelength: pass wavelengths [nm]")
+        return _phase.aerosol_phase(cos_theta, analytic.g, analytic.kind)
 
     def sample_rayleigh_phase(self, size: int | tuple[int, ...], rng: Any = None) -> NDArray[np.float64]:
         """Cosines of scattering angles [-] drawn from the Rayleigh phase function (exact inverse CDF)."""
         return _phase.sample_rayleigh(size, rng)
 
-    def sample_aerosol_phase(self, size: int | tuple[int, ...], rng: Any = None) -> NDArray[np.float64]:
-        """Cosines of scattering angles [-] drawn from the aerosol phase function
-        (:func:`skyscatter.atmosphere.phase.sample_aerosol_phase`)."""
-        return _phase.sample_aerosol_phase(size, self.mie_phase_g, self.mie_phase_function, rng)
+    def sample_aerosol_phase(self, size: int | tuple[int, ...], rng: Any = None,
+                             wavelength: float | None = None) -> NDArray[np.float64]:
+        """Cosines of scattering angles [-] drawn from the aerosol phase function: the analytic one
+        (:func:`skyscatter.atmosphere.phase.sample_aerosol_phase`) without ``wavelength``, else the aerosol's
+        phase table at ``wavelength`` [nm] (:meth:`~skyscatter.atmosphere.phase_table.PhaseTable.sample`)."""
+        if wavelength is not None:
+            return self.aerosol_phase_table([float(wavelength)]).sample(size, 0, rng)
+        analytic = self.aerosol_component.analytic_phase
+        if analytic is None:
+            raise InvalidParameterError("the aerosol's phase function depends on wavelength: pass a wavelength [nm]")
+        return _phase.sample_aerosol_phase(size, analytic.g, analytic.kind, rng)
 
     def check_wavelengths(self, wavelengths: ArrayLike) -> None:
         """Raise InvalidParameterError if some spectral input is not defined at ``wavelengths`` [nm]."""
@@ -488,6 +473,13 @@ class AtmosphereParameters:
         out: dict[str, Any] = {}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
+            if f.name in ("aerosol", "particles"):
+                # absent when unset, so that the descriptions (and cache keys) of the default air do not change
+                if f.name == "aerosol" and v is not None:
+                    out["aerosol"] = v.to_dict()
+                elif f.name == "particles" and v:
+                    out["particles"] = [c.to_dict() for c in v]
+                continue
             if isinstance(v, Spectrum):
                 out[f.name] = v.to_dict()
             elif isinstance(v, DensityProfile):
@@ -503,13 +495,21 @@ class AtmosphereParameters:
         """Inverse of :meth:`to_dict`.
 
         A description written before ``mie_phase_function`` existed (older caches and table files) has no
-        such key and gets the Cornette-Shanks phase function it was computed with.
+        such key and gets the Cornette-Shanks phase function it was computed with; one without ``aerosol`` or
+        ``particles`` has the default (the ``mie_*`` aerosol, no further components).
         """
         kwargs: dict[str, Any] = {}
         try:
             for f in dataclasses.fields(cls):
                 if f.name == "mie_phase_function":
                     kwargs[f.name] = data.get(f.name, "cornette-shanks")
+                    continue
+                if f.name == "aerosol":
+                    if data.get("aerosol") is not None:
+                        kwargs["aerosol"] = particle_component_from_dict(data["aerosol"])
+                    continue
+                if f.name == "particles":
+                    kwargs["particles"] = tuple(particle_component_from_dict(c) for c in data.get("particles", ()))
                     continue
                 v = data[f.name]
                 if f.name.endswith("_density"):
@@ -525,3 +525,16 @@ class AtmosphereParameters:
     def canonical_json(self) -> str:
         """Deterministic JSON text of :meth:`to_dict` (sorted keys, repr-exact floats)."""
         return json.dumps(self.to_dict(), sort_keys=True, separators=(",", ":"))
+
+
+@lru_cache(maxsize=64)
+def _angstrom_extinction(density: DensityProfile, beta: float, alpha: float, thickness: float) -> AngstromSpectrum:
+    return AngstromSpectrum(beta, alpha, density.column(thickness), "aerosol extinction (Angstrom)")
+
+
+@lru_cache(maxsize=64)
+def _legacy_aerosol(density: DensityProfile, beta: float, alpha: float, albedo: float, kind: str, g: float,
+                    thickness: float) -> AnalyticParticles:
+    ext: Spectrum = (_angstrom_extinction(density, beta, alpha, thickness) if beta > 0
+                     else PowerLawSpectrum(0.0, 1000.0, 0.0, "aerosol extinction"))
+    return AnalyticParticles("aerosol", density, ext, albedo, kind, g)

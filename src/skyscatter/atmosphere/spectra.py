@@ -30,6 +30,7 @@ from .tables import tabulated
 
 __all__ = [
     "DOBSON_UNIT",
+    "AngstromSpectrum",
     "PowerLawSpectrum",
     "RayleighPhysicalSpectrum",
     "Spectrum",
@@ -65,6 +66,8 @@ class Spectrum(abc.ABC):
             return TabulatedSpectrum(tuple(data["wavelengths"]), tuple(data["values"]), data["name"])
         if kind == "rayleigh_physical":
             return RayleighPhysicalSpectrum(data["depolarisation"], data["name"])
+        if kind == "angstrom":
+            return AngstromSpectrum(data["beta"], data["alpha"], data["column"], data["name"])
         raise FileFormatError(f"unknown spectrum kind {kind!r} in atmosphere parameters")
 
 
@@ -103,6 +106,39 @@ class PowerLawSpectrum(Spectrum):
     def to_dict(self) -> dict[str, Any]:
         return {"kind": "power_law", "coefficient": self.coefficient,
                 "reference_wavelength": self.reference_wavelength, "exponent": self.exponent, "name": self.name}
+
+
+@dataclass(frozen=True)
+class AngstromSpectrum(Spectrum):
+    """Extinction [m^-1] from Angstrom's law spread over a column: ``beta (lambda / 1 um)^-alpha / column``.
+
+    Angstrom (1929), doi:10.1080/20014422.1929.11880498: the vertical optical depth is
+    ``beta (lambda / 1 um)^-alpha``; divided by ``column`` [m], the integral of the component's relative density,
+    it is the coefficient at relative density 1. ``beta`` >= 0 [-], ``alpha`` [-] finite, ``column`` > 0 [m].
+    """
+
+    beta: float
+    alpha: float
+    column: float
+    name: str = "Angstrom extinction"
+
+    def __post_init__(self) -> None:
+        for label, v in (("beta", self.beta), ("alpha", self.alpha), ("column", self.column)):
+            if not math.isfinite(v):
+                raise InvalidParameterError(f"{self.name}: {label} must be finite; got {v!r}")
+        if self.beta < 0:
+            raise InvalidParameterError(f"{self.name}: beta must be >= 0; got {self.beta!r}")
+        if self.column <= 0:
+            raise InvalidParameterError(f"{self.name}: the density column must be > 0 m; got {self.column!r}")
+
+    def __call__(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        wl = np.asarray(wavelengths, dtype=float)
+        if self.beta == 0:
+            return np.zeros_like(wl)
+        return self.beta * (wl / 1000.0) ** (-self.alpha) / self.column
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": "angstrom", "beta": self.beta, "alpha": self.alpha, "column": self.column, "name": self.name}
 
 
 @dataclass(frozen=True)

@@ -341,6 +341,11 @@ class PrecomputedAtmosphere:
             raise InvalidParameterError(f"params must be AtmosphereParameters; got {type(params).__name__}")
         if isinstance(orders, bool) or not isinstance(orders, (int, np.integer)) or not 1 <= orders <= 50:
             raise InvalidParameterError(f"orders must be a whole number in [1, 50]; got {orders!r}")
+        if params.aerosol is not None or params.particles:
+            # until the tables read the particle components (issue 20): never a sky with the wrong aerosol
+            raise InvalidParameterError(
+                "the precomputed tables take the default aerosol of the mie_* fields only (no aerosol component "
+                "or further particle components yet)")
         wl = _as_wavelengths(wavelengths)
         params.check_wavelengths(wl)
         _check_colour_range(params, wl)
