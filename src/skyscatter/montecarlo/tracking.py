@@ -51,8 +51,8 @@ from numpy.typing import NDArray
 
 from .rng import next_uniform
 
-__all__ = ["PackedField", "STOP_OPTICAL_DEPTH", "empty_field", "field_box_hit", "field_density", "field_free_path",
-           "field_transmittance", "pack_grid"]
+__all__ = ["PackedField", "STOP_OPTICAL_DEPTH", "empty_field", "field_box_hit", "field_density", "field_density_at",
+           "field_free_path", "field_transmittance", "pack_grid"]
 
 _hjit = numba.njit(cache=True, nogil=True, _nrt=False)
 _ijit = numba.njit(cache=True, nogil=True, _nrt=False, inline="always")
@@ -178,6 +178,26 @@ def field_density(px, py, pz, vf, vi, rho, jx, jy, jz):
     lo = jz * vi[BZ]
     hi = min(nz, lo + vi[BZ]) - 1
     iz = min(max(iz, lo), hi)
+    return rho[ix, iy, iz]
+
+
+@_hjit
+def field_density_at(px, py, pz, vf, vi, rho):
+    """Density of the voxel containing ``p`` (0 outside the field)."""
+    nx = vi[NX]
+    ny = vi[NY]
+    nz = vi[NZ]
+    ix = _floor_div(px - vf[X0], vf[DX])
+    iy = _floor_div(py - vf[Y0], vf[DY])
+    if vf[PERIODIC] != 0.0:
+        ix %= nx
+        iy %= ny
+    elif ix < 0 or ix >= nx or iy < 0 or iy >= ny:
+        return 0.0
+    r = math.sqrt(px * px + py * py + pz * pz)
+    iz = _floor_div(r - vf[R0], vf[DZ])
+    if iz < 0 or iz >= nz:
+        return 0.0
     return rho[ix, iy, iz]
 
 
