@@ -828,3 +828,229 @@ def disc_transmittance(origin, sun, sun_radius, rb, rt, edges, layers, nlay, coe
                 out[i] += v * trf[i] if field else v
     for i in range(n):
         out[i] /= n_radial * n_angular
+
+
+@_hjit
+def _next_interface(px, py, pz, dx, dy, dz, r_top, r_base, t_end):
+    """First crossing after 0 of the domain's top sphere going up (kind 1) or of its base sphere going down (kind
+    2) within ``[0, t_end]``; ``(t_end, 0)`` when there is none. Roots closer than ``1e-4 m + 1e-12 R`` to 0 are
+    the sphere the point sits on and are skipped."""
+    r2 = px * px + py * py + pz * pz
+    b = px * dx + py * dy + pz * dz
+    best = t_end
+    kind = 0
+    # top: the outward root (larger) crosses it going up
+    disc = b * b - (r2 - r_top * r_top)
+    if disc >= 0.0:
+        t = -b + math.sqrt(disc)
+        if t > 1e-4 + 1e-12 * r_top and t <= best:
+            best = t
+            kind = 1
+    disc = b * b - (r2 - r_base * r_base)
+    if disc >= 0.0:
+        t = -b - math.sqrt(disc)
+        if t > 1e-4 + 1e-12 * r_base and t <= best:
+            best = t
+            kind = 2
+    return best, kind
+
+
+@_hjit
+def _pixel(px, py, dom):
+    """Index of the domain pixel (periodic) under the planet-frame point (px, py); ``dom`` = x0, y0, dx, dy, nx,
+    ny."""
+    nx = int(dom[4])
+    ny = int(dom[5])
+    ix = int(math.floor((px - dom[0]) / dom[2])) % nx
+    iy = int(math.floor((py - dom[1]) / dom[3])) % ny
+    return ix * ny + iy
+
+
+@_jit
+def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo,
+               fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, dom, r_top, r_base, seed, group, batch0,
+               n_batches, batch_size, up, down, absorbed, vertices_out):
+    """Forward photons from the sun through a periodic domain: per pixel, the upward crossings of the top sphere,
+    the downward crossings of the base sphere and the absorption in the column (docs: :mod:`.domain`).
+
+    Photons enter at the top of the atmosphere, uniformly over the domain's cell ``dom`` (x0, y0, dx, dy, nx, ny:
+    pixel corner [m], pixel size [m], pixel counts), travelling along ``-sun``; the same free paths, collision
+    densities, lobes and hero-wavelength weights as :func:`trace_block` (without next-event estimation). Each
+    crossing of ``r_top`` upwards adds the photon's weight to ``up`` at the pixel under the crossing, each
+    crossing of ``r_base`` downwards to ``down``, and each collision ``f sigma_a`` to ``absorbed`` at the pixel
+    under it (when ``r_base <= r <= r_top``). Outputs ``up``, ``down``, ``absorbed`` (n_pixels, n_wl, 2): per
+    batch the tallies are summed, then their sum and sum of squares over batches are added to ``[..., 0]`` and
+    ``[..., 1]``. ``vertices_out`` (1,) counts the vertices.
+    """
+    n = coef.shape[0]
+    nc = coef.shape[1]
+    npix = up.shape[0]
+    st = np.empty(1, dtype=np.uint64)
+    f = np.empty(n)
+    p = np.empty(n)
+    cols = np.empty(nc)
+    tmp = np.empty(nc)
+    dens = np.empty(nc)
+    kh = np.empty(nc)
+    coef_t = np.ascontiguousarray(coef.T)
+    scat_t = np.ascontiguousarray(scat.T)
+    sc = np.empty((nc + 1, n))
+    ph = np.empty((nc + 1, n))
+    qs = np.empty((nc + 1, n))
+    stt = np.empty(n)
+    sst = np.empty(n)
+    tau = np.empty(n)
+    val = np.empty(n)
+    val2 = np.empty(n)
+    bu = np.empty((npix, n))
+    bd = np.empty((npix, n))
+    ba = np.empty((npix, n))
+    fstate = np.zeros(6, dtype=np.int64)
+    rec = np.empty((2 * edges.shape[0] + 2, 2 + nc))
+    field = fvf[8] != 0.0
+    fsmax = 0.0
+    for i in range(n):
+        fsmax = max(fsmax, fs[i])
+    n_active = 0
+    for c in range(nc + 1):
+        if lobe[c] != LOBE_NONE:
+            n_active += 1
+    active = np.empty(n_active, dtype=np.int64)
+    n_active = 0
+    for c in range(nc + 1):
+        if lobe[c] != LOBE_NONE:
+            active[n_active] = c
+            n_active += 1
+    lx = dom[2] * dom[4]
+    ly = dom[3] * dom[5]
+    nvert = 0
+    for bi in range(n_batches):
+        key = stream_key(seed, 0, group, batch0 + bi)
+        for k in range(npix):
+            for i in range(n):
+                bu[k, i] = 0.0
+                bd[k, i] = 0.0
+                ba[k, i] = 0.0
+        for smp in range(batch_size):
+            st[0] = sample_state(key, smp)
+            for i in range(n):
+                f[i] = 1.0
+                p[i] = 1.0
+            hero = min(int(next_uniform(st) * n), n - 1)
+            for q in range(nc):
+                kh[q] = coef[hero, q]
+            x = dom[0] + next_uniform(st) * lx
+            y = dom[1] + next_uniform(st) * ly
+            px, py, pz = x, y, math.sqrt(rt * rt - x * x - y * y)
+            dx, dy, dz = -sun[0], -sun[1], -sun[2]
+            vertices = 0
+            while True:
+                t_end, ground = _exit_distance(px, py, pz, dx, dy, dz, rb, rt)
+                t_if, kind = _next_interface(px, py, pz, dx, dy, dz, r_top, r_base, t_end)
+                u = next_uniform(st)
+                t, reached, npc = _march(px, py, pz, dx, dy, dz, t_if, -math.log1p(-u), kh, rb, edges, layers, nlay,
+                                         cols, tmp, rec)
+                if not reached:
+                    t = t_if
+                rho_f = 0.0
+                if field:
+                    tv, hit, rv = field_free_path(px, py, pz, dx, dy, dz, t, hero, fs, fsmax, fvf, fvi, frho, fbmax,
+                                                  fbmin, fxe, fye, fre, f, p, st, fstate)
+                    if hit:
+                        _columns_at(px, py, pz, dx, dy, dz, tv, rb, layers, nlay, rec, npc, cols, tmp)
+                        t = tv
+                        reached = True
+                        rho_f = rv
+                px += t * dx
+                py += t * dy
+                pz += t * dz
+                _optical_depths(coef_t, cols, tau)
+                if reached:
+                    if field and rho_f == 0.0:
+                        rho_f = field_density_at(px, py, pz, fvf, fvi, frho)
+                    _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt, sst)
+                    for i in range(n):
+                        tr = math.exp(-tau[i])
+                        f[i] *= tr
+                        p[i] *= stt[i] * tr
+                    _normalise(f, p, n)
+                    rr = math.sqrt(px * px + py * py + pz * pz)
+                    if r_base <= rr <= r_top:
+                        k = _pixel(px, py, dom)
+                        for i in range(n):
+                            ba[k, i] += f[i] * (stt[i] - sst[i])
+                    if sst[hero] <= 0.0:
+                        break
+                    u = next_uniform(st) * sst[hero]
+                    pick = active[n_active - 1]
+                    acc = 0.0
+                    for a in range(n_active):
+                        c = active[a]
+                        acc += sc[c, hero]
+                        if u < acc:
+                            pick = c
+                            break
+                    mu = _sample_lobe(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st), tmu, tval,
+                                      tcdf)
+                    dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
+                    _lobe_values(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, ph, qs)
+                    _lobe_sum(active, sc, ph, val)
+                    _lobe_sum(active, sc, qs, val2)
+                    for i in range(n):
+                        f[i] *= val[i]
+                        p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
+                    _normalise(f, p, n)
+                else:
+                    for i in range(n):
+                        tr = math.exp(-tau[i])
+                        f[i] *= tr
+                        p[i] *= tr
+                    _normalise(f, p, n)
+                    if kind != 0:
+                        k = _pixel(px, py, dom)
+                        if kind == 1:
+                            for i in range(n):
+                                bu[k, i] += f[i]
+                        else:
+                            for i in range(n):
+                                bd[k, i] += f[i]
+                    if kind == 0 or t_if >= t_end:
+                        if not ground:
+                            break  # out of the top of the atmosphere
+                        rr = math.sqrt(px * px + py * py + pz * pz)
+                        nx, ny, nz = px / rr, py / rr, pz / rr
+                        px, py, pz = nx * rb, ny * rb, nz * rb
+                        u1 = next_uniform(st)
+                        dx, dy, dz = direction_about_axis(nx, ny, nz, math.sqrt(u1), 2.0 * math.pi * next_uniform(st))
+                        for i in range(n):
+                            f[i] *= albedo[i]
+                    else:
+                        continue  # through the interface: same direction, no vertex
+                vertices += 1
+                if vertices >= _MAX_VERTICES:
+                    break
+                wmax = 0.0
+                for i in range(n):
+                    if f[i] > wmax:
+                        wmax = f[i]
+                if wmax <= 0.0:
+                    break
+                if vertices >= 2 and wmax < _RR_THRESHOLD:
+                    q = wmax / _RR_THRESHOLD
+                    if next_uniform(st) >= q:
+                        break
+                    for i in range(n):
+                        f[i] /= q
+            nvert += vertices
+        for k in range(npix):
+            for i in range(n):
+                v = bu[k, i]
+                up[k, i, 0] += v
+                up[k, i, 1] += v * v
+                v = bd[k, i]
+                down[k, i, 0] += v
+                down[k, i, 1] += v * v
+                v = ba[k, i]
+                absorbed[k, i, 0] += v
+                absorbed[k, i, 1] += v * v
+    vertices_out[0] += nvert
