@@ -31,6 +31,7 @@ REFERENCE_TESTS = {
     "cie-overcast": "test_cie_skies.py",
     "cie-clear": "test_cie_skies.py",
     "perez": "test_perez.py",
+    "asrc-cie": "test_asrc_cie.py",
     "bruneton": "test_precomputed_sky.py",
     "montecarlo": "test_montecarlo_physics.py",
     "hosek-wilkie": "test_hosek_wilkie.py",
@@ -61,7 +62,7 @@ def _random_parameters(spec, rng) -> dict:
         elif p.kind == "int" and p.low is not None and p.high is not None:
             out[p.name] = int(rng.integers(int(p.low), int(min(p.high, 2**62)) + 1))
     # Perez: a sky condition is one pair; irradiances need DHI > 0 and are drawn as a pair.
-    if spec.name == "perez":
+    if spec.name in ("perez", "asrc-cie"):
         for k in ("direct_normal_irradiance", "diffuse_horizontal_irradiance", "diffuse_illuminance"):
             out.pop(k, None)
         out["epsilon"], out["delta"] = float(rng.uniform(1.0, 12.0)), float(rng.uniform(0.01, 0.6))
@@ -151,7 +152,7 @@ def _fill(spec, name, value) -> dict:
                 "direct_normal_irradiance": ("diffuse_horizontal_irradiance", 100.0),
                 "diffuse_horizontal_irradiance": ("direct_normal_irradiance", 500.0)}
     out = {name: value}
-    if spec.name == "perez" and name in partners:
+    if spec.name in ("perez", "asrc-cie") and name in partners:
         k, v = partners[name]
         out[k] = v
     return out

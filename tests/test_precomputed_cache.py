@@ -43,10 +43,11 @@ def test_cache_writes_then_reads_without_recomputing(cache, monkeypatch):
 
 def test_key_changes_with_parameters_sizes_orders_wavelengths():
     base = PrecomputedAtmosphere.compute(orders=1, sizes=TINY, progress=False).cache_key
-    from skyscatter.precomputed.tables import TableSizes, _as_wavelengths, cache_key
+    from skyscatter.precomputed.sizes import table_wavelengths
+    from skyscatter.precomputed.tables import TableSizes, cache_key
 
     p = AtmosphereParameters()
-    wl = _as_wavelengths(None)
+    wl = table_wavelengths(None)
     sz = TableSizes(**TINY)
     assert cache_key(p, 1, wl, sz) == base
     assert cache_key(p.replace(ground_albedo=0.3), 1, wl, sz) != base

@@ -21,8 +21,8 @@ from skyscatter.precomputed import (
     kernels,
     sampling,
 )
+from skyscatter.precomputed.compute import density_profiles
 from skyscatter.precomputed.parallel import parallel_for
-from skyscatter.precomputed.tables import _profiles
 from test_precomputed_reference import SMALL_SIZES, single_scattering, small_earth, transmittance
 
 SMALL = SMALL_SIZES
@@ -61,7 +61,7 @@ def test_phase_functions_are_normalised():
 
 
 def _optical_lengths(params, sizes):
-    prof, counts = _profiles(params)
+    prof, counts = density_profiles(params)
     out = np.zeros((*sizes.transmittance_shape, 3))
     parallel_for(kernels.optical_length_kernel, out.shape[0] * out.shape[1], params.bottom_radius,
                  params.top_radius, prof, counts, sizes.transmittance_samples, out)
@@ -126,7 +126,7 @@ def test_vertical_single_scattering_closed_form(earth_single):
 
 def _density_of(field, params, sizes, first=False, n_theta=16):
     """The scattering density per unit scattering coefficient of the kernel for ``field``."""
-    prof, counts = _profiles(params)
+    prof, counts = density_profiles(params)
     wl = np.array([550.0])
     t = np.ones((*sizes.transmittance_shape, 1), dtype=np.float32)
     e = np.zeros((*sizes.irradiance_shape, 1), dtype=np.float32)

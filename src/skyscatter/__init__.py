@@ -1,7 +1,8 @@
 """skyscatter: physically based daylight.
 
-Sun position, spectral sunlight, sky models (Preetham 1999, CIE, Perez 1993, Hosek & Wilkie 2012, Bruneton &
-Neyret 2008), fitting of the Hosek-Wilkie form to any atmosphere, aerial perspective and sky/landscape images.
+Sun position, spectral sunlight, sky models (Preetham 1999, CIE, Perez 1993, ASRC-CIE, Hosek & Wilkie 2012,
+Bruneton & Neyret 2008), fitting of the Hosek-Wilkie form to any atmosphere, aerial perspective and sky/landscape
+images.
 Frame, units and colour conventions are in ``docs/conventions.md``: ENU directions, radians, nm, SI radiometric
 units, cd m^-2.
 
@@ -27,6 +28,7 @@ _LAZY = {
     "CIEClearSky": "sky.cie",
     "CIEStandardSky": "sky.cie",
     "PerezSky": "sky.perez",
+    "ASRCCIESky": "sky.asrc_cie",
     "HosekWilkieSky": "sky.hosek_wilkie",
     "skymatrix": "sky_matrix",
     "BrunetonSky": "sky.bruneton",

@@ -1,4 +1,4 @@
-"""Annual sky matrices: hourly Perez (1993) sky luminance over Tregenza/Reinhart patches from an EPW file.
+"""Annual sky matrices: hourly Perez (1993) or ASRC-CIE sky luminance over Tregenza/Reinhart patches from an EPW.
 
 The job Radiance's ``gendaymtx`` does, vectorised over hours:
 
@@ -9,8 +9,10 @@ The job Radiance's ``gendaymtx`` does, vectorised over hours:
    elevation as altitude);
 3. the Perez sky of every hour with :func:`skyscatter.sky.perez.perez_parameters` (clearness and brightness from
    the irradiances, Perez 1990 luminous efficacies with the hour's dew point, all the guards of
-   :mod:`skyscatter.sky.perez`); the sky is scaled so that it integrates to the hour's diffuse horizontal
-   illuminance (Gauss-Legendre rule of :func:`skyscatter.photometry.plane_quadrature`, 48 x 96 nodes);
+   :mod:`skyscatter.sky.perez`); with ``model="asrc-cie"`` the same sky condition weights the four CIE-type
+   skies of :mod:`skyscatter.sky.asrc_cie` instead; the sky is scaled so that it integrates to the hour's
+   diffuse horizontal illuminance (Gauss-Legendre rule of :func:`skyscatter.photometry.plane_quadrature`,
+   48 x 96 nodes);
 4. every patch gets the sky's mean luminance over ``samples x samples`` equal-area cells (``samples=1``: the
    patch centre, as gendaymtx does).
 
@@ -40,8 +42,11 @@ from .fileio import atomic_path, atomic_paths
 from .patches import PatchScheme, patch_scheme
 from .sky.perez_family import gradation, indicatrix
 
-__all__ = ["NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches", "perez_patch_luminance",
-           "skymatrix"]
+__all__ = ["MODELS", "NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches",
+           "asrc_cie_patch_luminance", "perez_patch_luminance", "skymatrix"]
+
+#: Sky models :func:`skymatrix` builds from an hour's direct normal and diffuse horizontal irradiance.
+MODELS = ("perez", "asrc-cie")
 
 #: Gauss-Legendre nodes (zenith, azimuth) of the per-hour normalisation integral.
 NORMALISATION_NODES = (48, 96)
@@ -98,6 +103,20 @@ def _perez_chunk(coeffs, sun, scale, dirs_t, q_rows, rows, row_cos, qweights, n_
     out[uniform] = (scale[uniform] / np.pi)[:, None]
 
 
+def _hour_directions(scheme: PatchScheme, samples: int):
+    """The directions every hour's sky is evaluated at: the 48 x 96 normalisation nodes, then ``samples^2``
+    equal-area cells per patch (the centres for 1). Returns (dirs (n, 3), dirs.T contiguous, node weights,
+    cells per patch)."""
+    from .photometry import plane_quadrature
+
+    qd, qw = plane_quadrature(0.0, 0.0, nodes=NORMALISATION_NODES)
+    sdirs = scheme.centre_directions if samples == 1 else scheme.sample_directions(samples)
+    sdirs = np.asarray(sdirs, dtype=np.float64).reshape(-1, 3)
+    dirs = np.concatenate([np.asarray(qd, dtype=np.float64).reshape(-1, 3), sdirs])
+    n_sub = sdirs.shape[0] // scheme.n_patches
+    return dirs, np.ascontiguousarray(dirs.T), np.asarray(qw, dtype=np.float64).reshape(-1), n_sub
+
+
 def perez_patch_luminance(
     coefficients: NDArray[np.float64],
     model_sun: NDArray[np.float64],
@@ -120,23 +139,12 @@ def perez_patch_luminance(
     samples : int
         Cells per patch side (1: patch centres).
     """
-    from .photometry import plane_quadrature
-
-    qd, qw = plane_quadrature(0.0, 0.0, nodes=NORMALISATION_NODES)
-    if samples == 1:
-        sdirs = scheme.centre_directions.reshape(-1, 3)
-    else:
-        sdirs = scheme.sample_directions(samples).reshape(-1, 3)
-    n_sub = sdirs.shape[0] // scheme.n_patches
+    dirs, dirs_t, qw, n_sub = _hour_directions(scheme, samples)
     coeffs = np.asarray(coefficients, dtype=np.float64).reshape(-1, 5)
     sun = np.asarray(model_sun, dtype=np.float64).reshape(-1, 3)
     scale = np.asarray(diffuse_illuminance, dtype=np.float64).reshape(-1)
-    qd = np.asarray(qd, dtype=np.float64).reshape(-1, 3)
-    dirs = np.concatenate([qd, np.asarray(sdirs, dtype=np.float64)])
-    dirs_t = np.ascontiguousarray(dirs.T)
     # distinct zenith cosines of nodes and samples, for the per-sky gradation table
     row_cos, rows = np.unique(dirs[:, 2], return_inverse=True)
-    qw = np.asarray(qw, dtype=np.float64).reshape(-1)
     q_rows = None
     nz, na = NORMALISATION_NODES
     if qw.size == nz * na and np.all(rows[: qw.size].reshape(nz, na) == rows[: qw.size : na, None]):
@@ -150,6 +158,60 @@ def perez_patch_luminance(
         block = np.empty((sel.size, scheme.n_patches))
         _perez_chunk(coeffs[sel], sun[sel], scale[sel], dirs_t, q_rows, rows, row_cos, qw, n_sub, block, work)
         out[sel] = block
+    return out
+
+
+def asrc_cie_patch_luminance(
+    weights: NDArray[np.float64],
+    sun_zenith: NDArray[np.float64],
+    sun_directions: NDArray[np.float64],
+    diffuse_illuminance: NDArray[np.float64],
+    scheme: PatchScheme,
+    *,
+    samples: int = 3,
+) -> NDArray[np.float64]:
+    """Mean patch luminance [cd m^-2] of many ASRC-CIE skies at once, shape (n_skies, n_patches).
+
+    Each sky is :func:`skyscatter.sky.asrc_cie.asrc_cie_relative_luminance` scaled so that the 48 x 96 Gauss rule
+    gives its D_v (as :func:`perez_patch_luminance`). Skies are taken in groups of the same pair of component
+    skies (epsilon <= 1.2, <= 3, above), so each step evaluates two components, not four.
+
+    Parameters
+    ----------
+    weights : ndarray, shape (n, 4)
+        :func:`skyscatter.sky.asrc_cie.asrc_cie_weights` per sky.
+    sun_zenith : ndarray, shape (n,)
+        Solar zenith angle [rad], at most pi/2.
+    sun_directions : ndarray, shape (n, 3)
+        Unit vectors to the sun.
+    diffuse_illuminance : ndarray, shape (n,)
+        D_v [lx]; 0 gives a zero row.
+    scheme : PatchScheme
+    samples : int
+        Cells per patch side (1: patch centres).
+    """
+    from .sky.asrc_cie import asrc_cie_relative_luminance
+
+    dirs, dirs_t, qw, n_sub = _hour_directions(scheme, samples)
+    n_q = qw.size
+    w = np.asarray(weights, dtype=np.float64).reshape(-1, 4)
+    zen = np.asarray(sun_zenith, dtype=np.float64).reshape(-1)
+    sun = np.asarray(sun_directions, dtype=np.float64).reshape(-1, 3)
+    scale = np.asarray(diffuse_illuminance, dtype=np.float64).reshape(-1)
+    out = np.zeros((w.shape[0], scheme.n_patches))
+    # pair of the sky: 0 intermediate/overcast, 1 turbid/intermediate, 2 clear/turbid (weights of the others 0)
+    pair = np.where(w[:, 3] > 0, 0, np.where(w[:, 2] > 0, 1, 2))
+    step = max(1, CHUNK_VALUES // dirs.shape[0])  # temporaries that stay in the CPU caches (as the Perez kernel)
+    for g in range(3):
+        hours = np.flatnonzero((scale > 0.0) & (pair == g))
+        for start in range(0, hours.size, step):
+            sel = hours[start : start + step]
+            cos_g = sun[sel] @ dirs_t
+            np.clip(cos_g, -1.0, 1.0, out=cos_g)
+            rel = asrc_cie_relative_luminance(dirs[:, 2], np.arccos(cos_g), zen[sel, None], w[sel, None, :],
+                                              cos_gamma=cos_g)
+            norm = scale[sel] / (rel[:, :n_q] @ qw)
+            out[sel] = norm[:, None] * rel[:, n_q:].reshape(sel.size, -1, n_sub).mean(axis=-1)
     return out
 
 
@@ -176,6 +238,8 @@ class SkyMatrix:
     location : EPWLocation
     include_sun : bool
     samples : int
+    model : str
+        The sky model of every hour (one of :data:`MODELS`).
     """
 
     luminance: NDArray[np.float64]
@@ -191,6 +255,7 @@ class SkyMatrix:
     location: EPWLocation
     include_sun: bool
     samples: int
+    model: str = "perez"
 
     @property
     def times(self):
@@ -260,6 +325,7 @@ class SkyMatrix:
                 scheme=np.array(g.name),
                 include_sun=np.array(self.include_sun),
                 samples=np.array(self.samples),
+                model=np.array(self.model),
                 latitude=np.array(self.location.latitude),
                 longitude=np.array(self.location.longitude),
                 units=np.array("luminance cd m^-2; angles rad; illuminance lx"),
@@ -361,6 +427,7 @@ def skymatrix(
     chunk_hours: int = 512,
     progress: bool = False,
     timestep: str = "records",
+    model: str = "perez",
 ) -> SkyMatrix:
     """Hourly Perez sky luminance over sky patches for a year of weather (the job of Radiance's gendaymtx).
 
@@ -368,6 +435,10 @@ def skymatrix(
     ----------
     epw_path : path or EPWData
         An hourly EnergyPlus weather file (or one already read with :func:`skyscatter.epw.read_epw`).
+    model : {"perez", "asrc-cie"}
+        The sky of every hour: the Perez et al. 1993 all-weather sky (default, as gendaymtx) or the ASRC-CIE sky
+        (:class:`skyscatter.sky.asrc_cie.ASRCCIESky`), both from the hour's Perez 1990 sky condition and
+        luminous efficacies.
     scheme : str or PatchScheme
         "tregenza" (= "reinhart1", 145 patches), "reinhart2" (577, default) or "reinhart4" (2305).
     include_sun : bool
@@ -396,6 +467,7 @@ def skymatrix(
     InvalidParameterError
         Unknown scheme or bad options.
     """
+    from .sky.asrc_cie import asrc_cie_weights
     from .sky.perez import MIN_SUN_ZENITH, perez_parameters
     from .sun.position import sun_position_unix
 
@@ -406,6 +478,8 @@ def skymatrix(
         raise InvalidParameterError(f"chunk_hours must be a whole number >= 1; got {chunk_hours!r}")
     if timestep not in ("records", "hourly"):
         raise InvalidParameterError(f"timestep must be 'records' or 'hourly'; got {timestep!r}")
+    if model not in MODELS:
+        raise InvalidParameterError(f"model must be one of {', '.join(MODELS)}; got {model!r}")
     epw = epw_path if isinstance(epw_path, EPWData) else read_epw(epw_path)
     if timestep == "hourly":
         epw = epw.hourly()
@@ -443,11 +517,15 @@ def skymatrix(
                 day_of_year=doy[sel],
                 dew_point=dew[sel],
             )
-            model_sun = np.stack(
-                [np.sin(p.sun_zenith) * np.sin(azi[sel]), np.sin(p.sun_zenith) * np.cos(azi[sel]),
-                 np.cos(p.sun_zenith)], axis=-1,
-            )
-            lum[sel] = perez_patch_luminance(p.coefficients, model_sun, p.diffuse_illuminance, geom, samples=samples)
+            if model == "perez":
+                model_sun = direction_from_angles(p.sun_zenith, azi[sel])
+                lum[sel] = perez_patch_luminance(p.coefficients, model_sun, p.diffuse_illuminance, geom,
+                                                 samples=samples)
+            else:  # the CIE-type skies need no altitude clamp: the true sun, on the horizon at twilight
+                z = np.minimum(zen[sel], np.pi / 2)
+                lum[sel] = asrc_cie_patch_luminance(asrc_cie_weights(p.epsilon, p.delta), z,
+                                                    direction_from_angles(z, azi[sel]), p.diffuse_illuminance,
+                                                    geom, samples=samples)
             eps[sel], dlt[sel] = p.epsilon, p.delta
             d_v[sel], e_sun[sel] = p.diffuse_illuminance, p.sun_illuminance_normal
             if bar is not None:
@@ -477,4 +555,5 @@ def skymatrix(
         location=loc,
         include_sun=bool(include_sun),
         samples=int(samples),
+        model=model,
     )

@@ -111,8 +111,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     add_model_options(s, [m for m in registry.names() if m != "bruneton"], default=None, flag="--sky",
                       dest="model_sky", shown_default="preetham", shared=("albedo",))
-    s.description = (f"--turbidity is the sky's and the haze's turbidity; with a sky that has none (cie*, perez) it "
-                     f"is the haze's alone (1.65 to 11, default {DEFAULT_HAZE_TURBIDITY}).")
+    s.description = (f"--turbidity is the sky's and the haze's turbidity; with a sky that has none (cie*, perez, "
+                     f"asrc-cie) it is the haze's alone (1.65 to 11, default {DEFAULT_HAZE_TURBIDITY}).")
     s.add_argument("--aerial", choices=["analytic", "numeric", "constant", "ward-larson", "none"], default=None,
                    help="aerial perspective: analytic (Preetham 1999 closed form), numeric (quadrature), "
                    "constant (constant density; lit by the sun only, or by the sky for the sunless cie-overcast "

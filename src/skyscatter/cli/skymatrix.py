@@ -1,4 +1,4 @@
-"""``skyscatter skymatrix``: hourly Perez sky luminance over sky patches from an EPW weather file."""
+"""``skyscatter skymatrix``: hourly Perez (or ASRC-CIE) sky luminance over sky patches from an EPW weather file."""
 
 from __future__ import annotations
 
@@ -14,8 +14,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "skymatrix",
         help="annual sky matrix (hours x patches) from an EPW weather file, like Radiance gendaymtx",
         description="Read an hourly EnergyPlus weather file (.epw), place the sun at the middle of every hour "
-        "(NREL SPA), build the Perez 1993 all-weather sky of every hour from its direct normal and diffuse "
-        "horizontal irradiance (Perez 1990 luminous efficacies with the hour's dew point) and write the mean "
+        "(NREL SPA), build the sky of every hour (--model: the Perez 1993 all-weather sky, or the ASRC-CIE sky) "
+        "from its direct normal and diffuse horizontal irradiance (Perez 1990 sky clearness, brightness and "
+        "luminous efficacies with the hour's dew point) and write the mean "
         "luminance [cd m^-2] of every sky patch: an hours x patches matrix in a .npz file (and optionally a "
         "CSV). Patches: Tregenza (145) or Reinhart MF 2 (577) / MF 4 (2305), ordered from the horizon band up, "
         "each band starting at north and going east, zenith last (Radiance's order without its ground patch). "
@@ -73,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidParameterError(f"--samples must be at most 16; got {args.samples}")
     t0 = time.perf_counter()
     matrix = skymatrix(args.epw, scheme=args.patches, include_sun=args.include_sun, samples=args.samples,
-                       progress=args.progress and sys.stderr.isatty(), timestep=args.timestep)
+                       progress=args.progress and sys.stderr.isatty(), timestep=args.timestep, model=args.model)
     elapsed = time.perf_counter() - t0
     written = [str(t) for t in matrix.save(args.out, args.csv)]
     hours, patches = matrix.shape
@@ -81,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     loc = matrix.location
     print(f"{args.epw}: {loc.city}, {loc.country} ({loc.latitude_deg:.3f}, {loc.longitude_deg:.3f} deg, "
           f"UTC{loc.timezone_hours:+g} h); {hours} hours, {lit} with daylight")
-    print(f"{patches} patches ({matrix.scheme.name}), sun {'included' if matrix.include_sun else 'excluded'}; "
-          f"computed in {elapsed:.2f} s")
+    print(f"{patches} patches ({matrix.scheme.name}), {matrix.model} sky, sun "
+          f"{'included' if matrix.include_sun else 'excluded'}; computed in {elapsed:.2f} s")
     print("wrote " + " and ".join(written))
     return 0

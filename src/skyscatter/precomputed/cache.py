@@ -1,7 +1,7 @@
 """On-disk cache of precomputed tables.
 
 Tables live in ``$SKYSCATTER_CACHE_DIR`` or, by default, ``~/.cache/skyscatter/``, one ``.npz`` file per
-configuration named after the first 24 hex digits of :func:`.tables.cache_key` (a SHA-256 of the atmosphere
+configuration named after the first 24 hex digits of :func:`.storage.cache_key` (a SHA-256 of the atmosphere
 parameters, orders, wavelengths, table sizes, library version and table format). Files are written atomically
 and verified when read (format, per-table SHA-256 checksums, stored key): a corrupt, truncated or mismatched
 file triggers a :class:`CacheRebuildWarning` and is recomputed, never trusted. Tables loaded once are also
@@ -19,7 +19,9 @@ from numpy.typing import ArrayLike
 
 from ..errors import FileFormatError, InvalidParameterError, OutputError
 from .parameters import AtmosphereParameters
-from .tables import DEFAULT_ORDERS, PrecomputedAtmosphere, TableSizes, _as_wavelengths, cache_key
+from .sizes import DEFAULT_ORDERS, TableSizes, table_wavelengths
+from .storage import cache_key
+from .tables import PrecomputedAtmosphere
 
 __all__ = ["CacheRebuildWarning", "TableBuildWarning", "cache_dir", "cache_path", "cached_atmosphere",
            "check_cache_dir", "clear_memory_cache", "load_or_compute", "resolve_atmosphere"]
@@ -87,7 +89,7 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
     is an :class:`~skyscatter.errors.OutputError`, raised before any computation, instead of a warning.
     """
     params = AtmosphereParameters() if params is None else params
-    wl = _as_wavelengths(wavelengths)
+    wl = table_wavelengths(wavelengths)
     sz = TableSizes.coerce(sizes)
     key = cache_key(params, orders, wl, sz)
     hit = None if force else _MEMORY.get(key)

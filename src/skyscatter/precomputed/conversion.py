@@ -11,7 +11,7 @@ Every rule is linear in the samples, so XYZ is a 3 x n matrix (:func:`xyz_matrix
 luminance" coefficients Bruneton's 2017 rewrite precomputes, derived here from a stated spectral model rather
 than a fit.
 
-* **Spectral mode** (15 or more wavelengths; the default tables, :data:`.tables.DEFAULT_TABLE_WAVELENGTHS`):
+* **Spectral mode** (15 or more wavelengths; the default tables, :data:`.sizes.DEFAULT_TABLE_WAVELENGTHS`):
   ``rho`` is interpolated linearly in ``lambda`` between neighbouring table wavelengths and is **zero outside
   the table range** ``[min lambda_k, max lambda_k]``: no light is invented beyond the computed wavelengths,
   and :meth:`ColourConversion.resample` returns exactly the table value at a table wavelength. The default
@@ -19,7 +19,7 @@ than a fit.
   bounds measured there.
   Measured against the observer integral of 41 wavelengths (380-780 nm, 10 nm) of the same atmosphere:
   ``benchmarks/bruneton_colour_error.py`` and ``docs/bruneton.md``.
-* **Few wavelengths** (e.g. the 3-wavelength mode, :data:`.tables.RGB_TABLE_WAVELENGTHS`): both single
+* **Few wavelengths** (e.g. the 3-wavelength mode, :data:`.sizes.RGB_TABLE_WAVELENGTHS`): both single
   scattering and transmission depend on wavelength mostly through the Rayleigh coefficient
   ``beta_R ~ lambda^-4``, so ``rho`` is modelled as a polynomial in ``x = (lambda / 550 nm)^-4`` through the
   samples: with 3 wavelengths the quadratic through the three ``(x_k, rho_k)`` (a second-order expansion in the
@@ -59,7 +59,8 @@ __all__ = ["SPECTRAL_MODE_MIN_WAVELENGTHS", "ColourConversion", "reconstruction_
 
 #: From this many wavelengths on, XYZ is integrated directly from the samples.
 SPECTRAL_MODE_MIN_WAVELENGTHS = 15
-_FINE_GRID = np.arange(360.0, 830.0 + 0.5, 1.0)
+#: The 1 nm grid [nm] over the CIE observer's range on which spectra are rebuilt and integrated.
+FINE_GRID = np.arange(360.0, 830.0 + 0.5, 1.0)
 
 
 def _hat_basis(nodes: NDArray[np.float64], x: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -148,9 +149,9 @@ def xyz_matrix(table_wavelengths: ArrayLike, params: AtmosphereParameters) -> ND
     tw = np.asarray(table_wavelengths, dtype=float)
     if tw.size >= SPECTRAL_MODE_MIN_WAVELENGTHS:
         lo, hi = tw.min(), tw.max()
-        grid = np.unique(np.concatenate([[lo, hi], _FINE_GRID[(_FINE_GRID > lo) & (_FINE_GRID < hi)]]))
+        grid = np.unique(np.concatenate([[lo, hi], FINE_GRID[(FINE_GRID > lo) & (FINE_GRID < hi)]]))
         return _observer_matrix(grid).T @ reconstruction_matrix(tw, grid, params)
-    return _observer_matrix(_FINE_GRID).T @ reconstruction_matrix(tw, _FINE_GRID, params)
+    return _observer_matrix(FINE_GRID).T @ reconstruction_matrix(tw, FINE_GRID, params)
 
 
 def _observer_matrix(grid: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -177,11 +178,11 @@ class ColourConversion:
         self.guarded = 2 <= tw.size <= 3
         self.xyz_polynomial = xyz_matrix(tw, params)
         if self.guarded:
-            linear = _reconstruction(tw, _FINE_GRID, params, piecewise_linear=True)
-            self.xyz_linear = _observer_matrix(_FINE_GRID).T @ linear
+            linear = _reconstruction(tw, FINE_GRID, params, piecewise_linear=True)
+            self.xyz_linear = _observer_matrix(FINE_GRID).T @ linear
             # Where the blend is kept non-negative: every 5 nm over the observer's range.
-            self._check_polynomial = reconstruction_matrix(tw, _FINE_GRID[::5], params)
-            self._check_linear = _reconstruction(tw, _FINE_GRID[::5], params, piecewise_linear=True)
+            self._check_polynomial = reconstruction_matrix(tw, FINE_GRID[::5], params)
+            self._check_linear = _reconstruction(tw, FINE_GRID[::5], params, piecewise_linear=True)
 
     def linear_weight(self, radiance: ArrayLike) -> NDArray[np.float64]:
         """Weight ``t`` (...,) of the piecewise-linear rule in the blend of the module docstring: twice the least

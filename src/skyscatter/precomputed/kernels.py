@@ -1,6 +1,7 @@
 """Numba kernels of the precomputation (Bruneton & Neyret 2008, Algorithm 4.1).
 
-Each kernel fills one table; the orchestration (orders, wavelengths, units) is in :mod:`.tables`.
+Each kernel fills one table; the steps of the algorithm that call them (orders, wavelengths, units) are in
+:mod:`.compute`.
 Tables are float32 arrays with a trailing wavelength axis; sums are accumulated in float64.
 
 * :func:`optical_length_kernel` - integral of each density profile from (r, mu) to the top (Eq. 5 without

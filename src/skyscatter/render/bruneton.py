@@ -10,7 +10,7 @@ Views: the camera sits at ``altitude`` [m] above the point of the planet on the 
 whose axes are that point's East-North-Up frame; ``heading``, ``pitch`` and ``fov`` follow
 :func:`skyscatter.conventions.pinhole_directions`. Images are (H, W, 3) CIE XYZ [cd m^-2] or linear sRGB in
 skyscatter's HDR scale (``Y = luminance / 683``, :data:`skyscatter.spectral.HDR_SCALE`), with the solar disc
-(radiance after transmission) on the pixels whose centres fall inside it.
+(radiance after transmission) deposited energy-true at any resolution (:mod:`skyscatter.render.sun_disc`).
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ from ..spectral import HDR_SCALE, xyz_to_linear_srgb
 from .camera import PinholeCamera
 from .heightfield import HeightfieldTracer
 from .scene import Scene
+from .sun_disc import FisheyeProjection, PinholeProjection, disc_deposit
 from .terrain import Terrain
 
 __all__ = ["bruneton_scene", "camera_view", "fisheye_view", "preview_png", "render_directions"]
@@ -104,18 +105,45 @@ def camera_view(atmosphere: PrecomputedAtmosphere, sun_zenith: float, sun_azimut
     """
     dirs = pinhole_directions(width, height, heading=heading, pitch=pitch, fov=fov)
     sun = direction_from_angles(sun_zenith, sun_azimuth)
-    return render_directions(atmosphere, _observer(atmosphere, altitude), dirs, sun, output=output,
-                             include_sun=include_sun)
+    pos = _observer(atmosphere, altitude)
+    img = render_directions(atmosphere, pos, dirs, sun, output=output, include_sun=False)
+    if include_sun:
+        _draw_disc(atmosphere, pos, sun, img, PinholeProjection(width, height, heading, pitch, fov), output)
+    return img
 
 
 def fisheye_view(atmosphere: PrecomputedAtmosphere, sun_zenith: float, sun_azimuth: float, *, altitude: float = 0.0,
                  size: int = 256, output: str = "rgb", include_sun: bool = True) -> NDArray[np.float64]:
     """Upper-hemisphere fisheye (equidistant, zenith at the centre, north up, east left); 0 outside the circle."""
     dirs, inside = fisheye_directions(size)
-    img = render_directions(atmosphere, _observer(atmosphere, altitude), dirs, direction_from_angles(sun_zenith,
-                            sun_azimuth), output=output, include_sun=include_sun)
+    sun = direction_from_angles(sun_zenith, sun_azimuth)
+    pos = _observer(atmosphere, altitude)
+    img = render_directions(atmosphere, pos, dirs, sun, output=output, include_sun=False)
     img[~inside] = 0.0
+    if include_sun:
+        _draw_disc(atmosphere, pos, sun, img, FisheyeProjection(size), output)
     return img
+
+
+def _draw_disc(atmosphere: PrecomputedAtmosphere, position: NDArray[np.float64], sun: NDArray[np.float64],
+               image: NDArray[np.float64], proj, output: str) -> None:
+    """Add the solar disc to an image, energy-true at any resolution (:mod:`.sun_disc`); the planet in front of
+    a pixel's centre hides that pixel's share."""
+    deposit = disc_deposit(sun, atmosphere.parameters.sun_angular_radius, proj)
+    if deposit is None:
+        return
+    value = atmosphere.sun_radiance(position, sun)
+    if output != "spectral":
+        value = atmosphere.to_xyz(value)
+    add = deposit.values(value[None, :])
+    x, y = deposit.cols + 0.5, deposit.rows + 0.5
+    d = proj.from_pixel(x.astype(float), y.astype(float))
+    rmu = d @ position
+    blocked = (rmu < 0) & (rmu**2 - position @ position + atmosphere.parameters.bottom_radius**2 >= 0)
+    add[blocked] = 0.0
+    if output == "rgb":
+        add = xyz_to_linear_srgb(add) * HDR_SCALE
+    image[deposit.rows, deposit.cols] += add
 
 
 def preview_png(image: ArrayLike, path: str | Path, *, exposure: float | None = None) -> Path:

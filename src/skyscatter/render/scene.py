@@ -42,6 +42,7 @@ from ..sky.base import SkyModel
 from ..spectral import HDR_SCALE, as_wavelengths, spectrum_to_xyz, xyz_to_linear_srgb
 from .camera import PinholeCamera
 from .heightfield import HeightfieldTracer
+from .sun_disc import PinholeProjection, disc_deposit, disc_profile_spectral, profile_nodes_for
 from .terrain import Terrain, default_terrain
 
 __all__ = ["RenderResult", "Scene", "camera_above_ground", "default_camera"]
@@ -241,12 +242,16 @@ class Scene:
         e_sky_h = e_sky[0, 0]
         e_h = e_sky_h + (e_sun * sun_dir[2] if sun_dir is not None else 0.0)
         rho = self.albedo
-        sun_disc_radiance = None
-        sun_radius = 0.0
+        disc_pixels = disc_values = None  # the solar disc: sorted flat pixel indices and their spectra
         if self.sun_disc and sun_dir is not None:
             disc = self.sky.sun  # not None: _sun() found a sun above the horizon
-            sun_radius = float(disc.angular_radius)
-            sun_disc_radiance = np.asarray(disc.spectral_radiance(wl), dtype=float)
+            proj = PinholeProjection(width, height, cam.heading, cam.pitch, cam.fov)
+            deposit = disc_deposit(disc.direction, disc.angular_radius, proj, nodes=profile_nodes_for(disc))
+            if deposit is not None:
+                flat = deposit.rows * width + deposit.cols
+                order = np.argsort(flat)
+                disc_pixels = flat[order]
+                disc_values = deposit.values(disc_profile_spectral(disc, deposit, wl))[order]
         cmf_xyz = _xyz_matrix(wl)
         pixel = cam.pixel_angle(width)
         rgb = np.empty((height, width, 3), dtype=np.float64)
@@ -299,10 +304,14 @@ class Scene:
                     _, haze = self.aerial.evaluate_rays(origin, dm[below], np.full(int(below.sum()),
                                                                                     tracer.max_distance), wl)
                     sky_l[below] = haze
-                if sun_disc_radiance is not None:
-                    cover = _sun_coverage(cam, rr.reshape(-1)[miss], cc.reshape(-1)[miss], width, height,
-                                          sun_dir, sun_radius, pixel)
-                    sky_l += cover[:, None] * sun_disc_radiance
+                if disc_pixels is not None:
+                    # the disc on the sky pixels it touches (terrain in front of a pixel hides its share)
+                    flat = (rr.reshape(-1)[miss] - 0.5).astype(np.int64) * width + (cc.reshape(-1)[miss] - 0.5
+                                                                                     ).astype(np.int64)
+                    at = np.minimum(np.searchsorted(disc_pixels, flat), disc_pixels.size - 1)
+                    hit_disc = disc_pixels[at] == flat
+                    if np.any(hit_disc):
+                        sky_l[hit_disc] += disc_values[at[hit_disc]]
                 spec[miss] = sky_l
             t4 = time.perf_counter()
             timings["sky"] += t4 - t3
@@ -352,18 +361,3 @@ def _irradiance_lookup(table: NDArray[np.float64], normals: NDArray[np.float64])
     fa = (ga - ia)[:, None]
     return ((table[it, ia] * (1 - fa) + table[it, ia + 1] * fa) * (1 - ft)
             + (table[it + 1, ia] * (1 - fa) + table[it + 1, ia + 1] * fa) * ft)
-
-
-def _sun_coverage(cam: PinholeCamera, rows: NDArray, cols: NDArray, width: int, height: int,
-                  sun: NDArray[np.float64], radius: float, pixel: float, n: int = 8) -> NDArray[np.float64]:
-    """Fraction of each pixel (centres at rows, cols) covered by the solar disc, by n x n sub-samples."""
-    cover = np.zeros(rows.shape)
-    centre = cam.directions_at(rows, cols, width, height)
-    near = np.arccos(np.clip(centre @ sun, -1.0, 1.0)) <= radius + 1.5 * pixel
-    if not np.any(near):
-        return cover
-    offs = (np.arange(n) + 0.5) / n - 0.5
-    oy, ox = np.meshgrid(offs, offs, indexing="ij")
-    sub = cam.directions_at(rows[near, None] + oy.ravel(), cols[near, None] + ox.ravel(), width, height)
-    cover[near] = np.mean(sub @ sun >= math.cos(radius), axis=-1)
-    return cover

@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 from ..conventions import equirect_directions, fisheye_directions, pinhole_directions
 from ..errors import InvalidParameterError
 from ..sky.base import SkyModel, SolarDisc
-from ..spectral import HDR_SCALE, REFERENCE_WAVELENGTHS, spectrum_to_xyz, xyz_to_linear_srgb
+from ..spectral import HDR_SCALE, xyz_to_linear_srgb
 
 __all__ = ["pixel_solid_angles", "sky_image"]
 
@@ -136,10 +136,11 @@ def sky_image(
         Pinhole camera: azimuth of the optical axis from north towards east [rad], its elevation [rad], and
         the horizontal field of view [rad] (default 60 deg).
     sun_disc : bool
-        Add the solar disc of sun-aware models (default True). Pixels whose centre lies within the sun's
-        angular radius get the disc's radiance; if no pixel centre does (pixels larger than the sun), the
-        pixel nearest the sun gets the disc's flux spread over that pixel's solid angle, so the image's
-        irradiance is right at any resolution.
+        Add the solar disc of sun-aware models (default True), deposited with the bilinear kernel of the pixel
+        grid (:mod:`skyscatter.render.sun_disc`): the image's flux is the disc's normal irradiance at any width
+        and projection (a disc smaller than a pixel is splatted over the pixels around it), the irradiance on
+        any plane is right to second order in the pixel size, and limb darkening is kept where the model has it
+        (Hosek-Wilkie 2013).
     ground_albedo : float or None
         Below the horizon (for models that do not render the ground themselves): a neutral (D65) Lambertian
         ground of this albedo lit by the model's global horizontal illuminance,
@@ -174,32 +175,35 @@ def sky_image(
             xyz[below] = ground_albedo * e_v / np.pi * _D65_XYZ
         else:
             xyz[below] = 0.0
-    if sun_disc and model.sun is not None:
-        _add_sun(xyz, directions, model.sun, model.renders_ground, projection, width, height, fov)
+    sun = model.sun if sun_disc else None
+    if sun is not None:
+        _add_sun(xyz, sun, model.renders_ground, projection_for(projection, width, height, heading, pitch, fov,
+                                                               layout))
     xyz[~inside] = 0.0
     return (xyz_to_linear_srgb(xyz) * HDR_SCALE).astype(dtype)
 
 
-def _add_sun(xyz, directions, sun: SolarDisc, renders_ground: bool, projection, width, height, fov) -> None:
-    """Draw the solar disc where pixels resolve it (limb-darkened where the model has it), else splat its flux."""
-    s = sun.direction
+def projection_for(projection: str, width: int, height: int | None, heading: float, pitch: float, fov: float,
+                   layout: str = "skyscatter"):
+    """The continuous pixel <-> direction map of a :func:`sky_image` image (:mod:`.sun_disc`)."""
+    from .sun_disc import EquirectProjection, FisheyeProjection, PinholeProjection
+
+    if projection == "equirect":
+        h = height if height is not None else width // 2
+        return EquirectProjection(width, h, LAYOUT_NORTH_COLUMN[layout])
+    if projection == "fisheye":
+        return FisheyeProjection(width)
+    h = height if height is not None else max(1, round(width * 3 / 4))
+    return PinholeProjection(width, h, heading, pitch, fov)
+
+
+def _add_sun(xyz, sun: SolarDisc, renders_ground: bool, proj) -> None:
+    """Add the solar disc, energy-true at any resolution (:mod:`.sun_disc`; limb-darkened where the model has it)."""
+    from .sun_disc import disc_deposit, disc_profile_xyz, profile_nodes_for
+
     if not renders_ground and not sun.above_horizon:
         return
-    cos_r = np.cos(sun.angular_radius)
-    dots = directions @ s
-    disc = dots >= cos_r
-    sun_xyz = np.asarray(sun.xyz(), dtype=float)
-    if np.any(disc):
-        if sun.limb_darkening is None:
-            xyz[disc] += sun_xyz
-        else:
-            r = np.arccos(np.clip(dots[disc], -1.0, 1.0)) / sun.angular_radius
-            spectra = sun.spectral_radiance(REFERENCE_WAVELENGTHS) * sun.limb_darkening(r, REFERENCE_WAVELENGTHS)
-            xyz[disc] += spectrum_to_xyz(spectra, REFERENCE_WAVELENGTHS)
+    deposit = disc_deposit(sun.direction, sun.angular_radius, proj, nodes=profile_nodes_for(sun))
+    if deposit is None:
         return
-    idx = np.unravel_index(np.argmax(dots), dots.shape)
-    # Only splat if the sun actually falls within this pixel's footprint (it may be outside a pinhole view).
-    omega = pixel_solid_angles(projection, width, height, fov=fov)[idx]
-    pixel_radius = np.sqrt(omega / np.pi)
-    if np.arccos(min(1.0, dots[idx])) <= pixel_radius + sun.angular_radius:
-        xyz[idx] += sun_xyz * min(1.0, sun.solid_angle / omega)
+    xyz[deposit.rows, deposit.cols] += deposit.values(disc_profile_xyz(sun, deposit))

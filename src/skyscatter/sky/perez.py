@@ -65,12 +65,14 @@ __all__ = [
     "SOLAR_CONSTANT",
     "PerezSky",
     "PerezParameters",
+    "PerezSkyCondition",
     "epsilon_bin",
     "extraterrestrial_irradiance",
     "luminous_efficacy",
     "perez_coefficients",
     "perez_parameters",
     "perez_relative_luminance",
+    "perez_sky_condition",
     "precipitable_water",
     "sky_brightness",
     "sky_clearness",
@@ -379,6 +381,108 @@ def _finite(name: str, value, unit: str, *, low: float | None = None, strict_low
     return v
 
 
+class PerezSkyCondition:
+    """The validated sky condition of one hour: what :func:`perez_sky_condition` returns.
+
+    Attributes
+    ----------
+    sun_zenith, sun_azimuth : float
+        The sun [rad] as given (validated; azimuth wrapped into [0, 2 pi)).
+    parameters : PerezParameters
+        Epsilon, delta, the illuminances and the rest (:func:`perez_parameters`, scalars).
+    day_of_year : int or None
+    dew_point : float
+        [deg C].
+    guards : bool
+    notes : list of str
+        The guards that changed the sky condition (epsilon cap, delta range, sun altitude clamp).
+    model_parameters : dict
+        The keyword arguments that rebuild the condition (what a sky ``_remember``s).
+    """
+
+    def __init__(self, **values) -> None:
+        self.__dict__.update(values)
+
+
+def perez_sky_condition(
+    sun_zenith: float,
+    sun_azimuth: float,
+    *,
+    epsilon: float | None = None,
+    delta: float | None = None,
+    diffuse_illuminance: float | None = None,
+    direct_normal_irradiance: float | None = None,
+    diffuse_horizontal_irradiance: float | None = None,
+    day_of_year: int | None = None,
+    dew_point: float = DEFAULT_DEW_POINT,
+    guards: bool = True,
+) -> PerezSkyCondition:
+    """Validate one hour's inputs and compute its Perez et al. (1990) sky condition (the skies' shared front end).
+
+    Takes the arguments of :class:`PerezSky` (units and ranges there); raises
+    :class:`~skyscatter.errors.InvalidParameterError` (or ``SunBelowHorizonError``) naming the bad input, and
+    computes :func:`perez_parameters` with the guards. :class:`PerezSky` and
+    :class:`~skyscatter.sky.asrc_cie.ASRCCIESky` both start here, so the same hour gives both the same epsilon,
+    delta, diffuse illuminance and sun.
+    """
+    sun_zenith, sun_azimuth = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=False)
+    by_irradiance = direct_normal_irradiance is not None or diffuse_horizontal_irradiance is not None
+    by_parameters = epsilon is not None or delta is not None
+    if by_irradiance and by_parameters:
+        raise InvalidParameterError(
+            "give either epsilon and delta or direct_normal_irradiance and diffuse_horizontal_irradiance, "
+            "not both"
+        )
+    kwargs: dict = {}
+    notes: list[str] = []
+    if by_irradiance:
+        if direct_normal_irradiance is None or diffuse_horizontal_irradiance is None:
+            raise InvalidParameterError(
+                "direct_normal_irradiance and diffuse_horizontal_irradiance [W m^-2] must be given together"
+            )
+        kwargs["direct_normal_irradiance"] = _finite(
+            "direct_normal_irradiance", direct_normal_irradiance, "W m^-2", low=0.0)
+        kwargs["diffuse_horizontal_irradiance"] = _finite(
+            "diffuse_horizontal_irradiance", diffuse_horizontal_irradiance, "W m^-2", low=0.0, strict_low=True)
+    elif by_parameters:
+        if epsilon is None or delta is None:
+            raise InvalidParameterError("epsilon and delta must be given together")
+        kwargs["epsilon"] = _finite("epsilon (sky clearness)", epsilon, "-", low=1.0)
+        kwargs["delta"] = _finite("delta (sky brightness)", delta, "-", low=0.0, strict_low=not guards)
+    else:
+        kwargs["epsilon"], kwargs["delta"] = DEFAULT_EPSILON, DEFAULT_DELTA
+    if diffuse_illuminance is not None:
+        kwargs["diffuse_illuminance"] = _finite("diffuse_illuminance", diffuse_illuminance, "lx", low=0.0)
+    if day_of_year is not None:
+        doy = _finite("day_of_year", day_of_year, "day", low=1.0)
+        if doy > 366 or not doy.is_integer():
+            raise InvalidParameterError(f"day_of_year must be a whole number 1-366; got {day_of_year!r}")
+        day_of_year = int(doy)
+    dew_point = _finite("dew_point", dew_point, "deg C", low=-90.0, high=60.0,
+                        why=" (the range of surface dew points on Earth)")
+    guards = bool(guards)
+    p = perez_parameters(sun_zenith, day_of_year=day_of_year, dew_point=dew_point, guards=guards, **kwargs)
+    if guards:
+        raw_z = min(sun_zenith, np.pi / 2)
+        if raw_z < MIN_SUN_ZENITH:
+            notes.append(f"sun zenith {np.degrees(raw_z):.3g} deg raised to 3 deg (altitude clamp)")
+        with np.errstate(all="ignore"):  # the unguarded model is evaluated only to describe the guards
+            raw = perez_parameters(sun_zenith, day_of_year=day_of_year, dew_point=dew_point, guards=False, **kwargs)
+        if float(raw.epsilon) > EPSILON_CAP:
+            notes.append(f"epsilon {float(raw.epsilon):.4g} capped at {EPSILON_CAP}")
+        if not DELTA_RANGE[0] <= float(raw.delta) <= DELTA_RANGE[1]:
+            notes.append(f"delta {float(raw.delta):.4g} clamped to [{DELTA_RANGE[0]}, {DELTA_RANGE[1]}]")
+    return PerezSkyCondition(
+        sun_zenith=sun_zenith,
+        sun_azimuth=sun_azimuth,
+        parameters=p,
+        day_of_year=day_of_year,
+        dew_point=dew_point,
+        guards=guards,
+        notes=notes,
+        model_parameters={**kwargs, "day_of_year": day_of_year, "dew_point": dew_point, "guards": guards},
+    )
+
 
 class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
     """Perez et al. (1993) all-weather sky, from (epsilon, delta) or from direct and diffuse irradiance.
@@ -438,61 +542,19 @@ class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
         dew_point: float = DEFAULT_DEW_POINT,
         guards: bool = True,
     ) -> None:
-        self.sun_zenith, self.sun_azimuth = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=False)
-        by_irradiance = direct_normal_irradiance is not None or diffuse_horizontal_irradiance is not None
-        by_parameters = epsilon is not None or delta is not None
-        if by_irradiance and by_parameters:
-            raise InvalidParameterError(
-                "give either epsilon and delta or direct_normal_irradiance and diffuse_horizontal_irradiance, "
-                "not both"
-            )
-        kwargs: dict = {}
-        notes: list[str] = []
-        if by_irradiance:
-            if direct_normal_irradiance is None or diffuse_horizontal_irradiance is None:
-                raise InvalidParameterError(
-                    "direct_normal_irradiance and diffuse_horizontal_irradiance [W m^-2] must be given together"
-                )
-            kwargs["direct_normal_irradiance"] = _finite(
-                "direct_normal_irradiance", direct_normal_irradiance, "W m^-2", low=0.0)
-            kwargs["diffuse_horizontal_irradiance"] = _finite(
-                "diffuse_horizontal_irradiance", diffuse_horizontal_irradiance, "W m^-2", low=0.0, strict_low=True)
-        elif by_parameters:
-            if epsilon is None or delta is None:
-                raise InvalidParameterError("epsilon and delta must be given together")
-            kwargs["epsilon"] = _finite("epsilon (sky clearness)", epsilon, "-", low=1.0)
-            kwargs["delta"] = _finite("delta (sky brightness)", delta, "-", low=0.0, strict_low=not guards)
-        else:
-            kwargs["epsilon"], kwargs["delta"] = DEFAULT_EPSILON, DEFAULT_DELTA
-        if diffuse_illuminance is not None:
-            kwargs["diffuse_illuminance"] = _finite("diffuse_illuminance", diffuse_illuminance, "lx", low=0.0)
-        if day_of_year is not None:
-            doy = _finite("day_of_year", day_of_year, "day", low=1.0)
-            if doy > 366 or not doy.is_integer():
-                raise InvalidParameterError(f"day_of_year must be a whole number 1-366; got {day_of_year!r}")
-            day_of_year = int(doy)
-        self.dew_point = _finite("dew_point", dew_point, "deg C", low=-90.0, high=60.0,
-                                 why=" (the range of surface dew points on Earth)")
-        self.guards = bool(guards)
-        p = perez_parameters(
-            self.sun_zenith, day_of_year=day_of_year, dew_point=self.dew_point, guards=self.guards, **kwargs
+        c = perez_sky_condition(
+            sun_zenith, sun_azimuth, epsilon=epsilon, delta=delta, diffuse_illuminance=diffuse_illuminance,
+            direct_normal_irradiance=direct_normal_irradiance,
+            diffuse_horizontal_irradiance=diffuse_horizontal_irradiance, day_of_year=day_of_year,
+            dew_point=dew_point, guards=guards,
         )
-        if self.guards:
-            raw_z = min(self.sun_zenith, np.pi / 2)
-            if raw_z < MIN_SUN_ZENITH:
-                notes.append(f"sun zenith {np.degrees(raw_z):.3g} deg raised to 3 deg (altitude clamp)")
-            with np.errstate(all="ignore"):  # the unguarded model is evaluated only to describe the guards
-                raw = perez_parameters(
-                    self.sun_zenith, day_of_year=day_of_year, dew_point=self.dew_point, guards=False, **kwargs
-                )
-            if float(raw.epsilon) > EPSILON_CAP:
-                notes.append(f"epsilon {float(raw.epsilon):.4g} capped at {EPSILON_CAP}")
-            if not DELTA_RANGE[0] <= float(raw.delta) <= DELTA_RANGE[1]:
-                notes.append(f"delta {float(raw.delta):.4g} clamped to [{DELTA_RANGE[0]}, {DELTA_RANGE[1]}]")
-            if 1.065 < float(p.epsilon) < 2.8 and float(p.delta) < DELTA_FLOOR_BINS_2_5:
-                notes.append(f"delta {float(p.delta):.4g} raised to 0.2 for the coefficients (bins 2-5)")
+        self.sun_zenith, self.sun_azimuth = c.sun_zenith, c.sun_azimuth
+        self.dew_point, self.guards, day_of_year, p = c.dew_point, c.guards, c.day_of_year, c.parameters
+        notes = list(c.notes)
+        if self.guards and 1.065 < float(p.epsilon) < 2.8 and float(p.delta) < DELTA_FLOOR_BINS_2_5:
+            notes.append(f"delta {float(p.delta):.4g} raised to 0.2 for the coefficients (bins 2-5)")
         self.guards_applied = notes
-        self._remember(**kwargs, day_of_year=day_of_year, dew_point=self.dew_point, guards=self.guards)
+        self._remember(**c.model_parameters)
         self.day_of_year = day_of_year
         self.epsilon = float(p.epsilon)
         self.delta = float(p.delta)

@@ -11,12 +11,14 @@ Wilkie's extension (Hosek & Wilkie 2012, Eq. 9, doi:10.1145/2185520.2185591) of 
     chi(H, gamma) = (1 + cos^2 gamma) / (1 + H^2 - 2 H cos gamma)^(3/2)
 
 with theta the view zenith angle and gamma the angle between the view and the sun [rad]. The older models are
-special cases (:func:`perez_parameters_from_abcde`, :func:`cie_parameters`, :func:`kittler_parameters`):
+special cases (:func:`perez_parameters_from_abcde`, :func:`cie_parameters`, :func:`kittler_parameters`,
+:func:`kittler_turbid_parameters`):
 
 ============================================  ==========================================================
 Perez 1993 Eq. 1 / Preetham 1999 Eq. 3        A..E = a..e, C = 1, G = I = 0
 CIE S 011/E:2003 general sky                  A = a, B = b, C = 1 - c exp(d pi/2), D = c, E = d, F = e
 CIE 1973 clear sky (Kittler)                  A = -1, B = -0.32, C = 0.91, D = 10, E = -3, F = 0.45
+CIE 1973 clear sky, turbid (Kittler)          A = -1, B = -0.32, C = 0.856, D = 16, E = -3, F = 0.3
 Hosek & Wilkie 2012                           their nine fitted values, o = 0.01 (their published form)
 ============================================  ==========================================================
 
@@ -54,6 +56,7 @@ __all__ = [
     "hosek_wilkie_f",
     "hosek_wilkie_f_jacobian",
     "kittler_parameters",
+    "kittler_turbid_parameters",
     "perez_f",
     "perez_parameters_from_abcde",
 ]
@@ -190,6 +193,18 @@ def kittler_parameters() -> NDArray[np.float64]:
     """CIE 1973 clear sky (Kittler; Preetham 1999 Eq. 1): ``(1 - exp(-0.32 / cos theta))
     (0.91 + 10 exp(-3 gamma) + 0.45 cos^2 gamma)`` as extended parameters."""
     return np.array([-1.0, -0.32, 0.91, 10.0, -3.0, 0.45, 0.0, 0.0, 0.0])
+
+
+def kittler_turbid_parameters() -> NDArray[np.float64]:
+    """CIE 1973 clear sky for a turbid (polluted) atmosphere (Kittler): ``(1 - exp(-0.32 / cos theta))
+    (0.856 + 16 exp(-3 gamma) + 0.3 cos^2 gamma)`` as extended parameters.
+
+    The "clear turbid sky" of the DOE-2.1E / EnergyPlus daylighting model (EnergyPlus Engineering Reference,
+    "Sky Luminance Distributions"; LBNL DElight ``dskylu``, sky type 2) and, to rounding, CIE S 011/E:2003 type 13
+    ("CIE standard clear sky, polluted atmosphere": a = -1, b = -0.32, c = 16, d = -3, e = 0.3, so
+    C = 1 - 16 exp(-3 pi/2) = 0.8563).
+    """
+    return np.array([-1.0, -0.32, 0.856, 16.0, -3.0, 0.3, 0.0, 0.0, 0.0])
 
 
 # ------------------------------------------------------------------------------------------ Hosek & Wilkie 2012

@@ -414,28 +414,42 @@ register(ModelSpec(
     citation="CIE 22-1973, Standardization of luminance distribution on clear skies (Kittler 1967)",
     parameters=(*_SCALE, _SUN_ILLUMINANCE),
 ))
+
+# The sky condition of one hour (Perez et al. 1990): the parameters of every model built from it.
+_SKY_CONDITION = (
+    Parameter("epsilon", "1", None, "sky clearness epsilon (with --delta; default 6.5 with delta 0.15, a clear "
+              "sky)", low=1.0),
+    Parameter("delta", "1", None, "sky brightness delta (with --epsilon)", low=0.0),
+    _SCALE[1],
+    Parameter("direct_normal_irradiance", "W m^-2", None,
+              "direct normal irradiance (with --dhi, instead of --epsilon/--delta); at most the solar constant",
+              low=0.0, high=MAX_EXTRATERRESTRIAL_IRRADIANCE, why=_SUN_LIMIT, flag="--dni"),
+    Parameter("diffuse_horizontal_irradiance", "W m^-2", None, "diffuse horizontal irradiance", low=0.0,
+              high=MAX_EXTRATERRESTRIAL_IRRADIANCE, why=_SUN_LIMIT, flag="--dhi", low_open=True),
+    Parameter("day_of_year", "1", None, "day of the year for the Sun-Earth distance (default: mean distance)",
+              kind="int", low=1, high=366),
+    Parameter("dew_point", "deg C", 11.0, "surface dew point for the luminous efficacies", low=-90.0, high=60.0),
+    Parameter("guards", "", True, "apply Radiance gendaylit's guards on epsilon, delta and the sun zenith",
+              kind="bool", cli=False),
+)
+
 register(ModelSpec(
     name="perez",
     factory="skyscatter.sky.perez:PerezSky",
     summary="Perez et al. 1993 all-weather sky (epsilon/delta or DNI/DHI), luminance only",
     citation="Perez, Seals, Michalsky (1993), All-weather model for sky luminance distribution, Solar Energy "
              "50(3):235-245, doi:10.1016/0038-092X(93)90017-I",
-    parameters=(
-        Parameter("epsilon", "1", None, "sky clearness epsilon (with --delta; default 6.5 with delta 0.15, a clear "
-                  "sky)", low=1.0),
-        Parameter("delta", "1", None, "sky brightness delta (with --epsilon)", low=0.0),
-        _SCALE[1],
-        Parameter("direct_normal_irradiance", "W m^-2", None,
-                  "direct normal irradiance (with --dhi, instead of --epsilon/--delta); at most the solar constant",
-                  low=0.0, high=MAX_EXTRATERRESTRIAL_IRRADIANCE, why=_SUN_LIMIT, flag="--dni"),
-        Parameter("diffuse_horizontal_irradiance", "W m^-2", None, "diffuse horizontal irradiance", low=0.0,
-                  high=MAX_EXTRATERRESTRIAL_IRRADIANCE, why=_SUN_LIMIT, flag="--dhi", low_open=True),
-        Parameter("day_of_year", "1", None, "day of the year for the Sun-Earth distance (default: mean distance)",
-                  kind="int", low=1, high=366),
-        Parameter("dew_point", "deg C", 11.0, "surface dew point for the luminous efficacies", low=-90.0, high=60.0),
-        Parameter("guards", "", True, "apply Radiance gendaylit's guards on epsilon, delta and the sun zenith",
-                  kind="bool", cli=False),
-    ),
+    parameters=_SKY_CONDITION,
+))
+register(ModelSpec(
+    name="asrc-cie",
+    factory="skyscatter.sky.asrc_cie:ASRCCIESky",
+    summary="ASRC-CIE sky: CIE clear, turbid, intermediate and overcast skies weighted by epsilon/delta "
+            "(or DNI/DHI), luminance only",
+    citation="Perez, Michalsky, Seals (1992), Modeling sky luminance angular distribution for real sky conditions, "
+             "J. Illum. Eng. Soc. 21(2):84-92; weights and components as restated in the EnergyPlus Engineering "
+             "Reference (DOE-2.1E daylighting), Time-Step Sky Luminance",
+    parameters=_SKY_CONDITION,
 ))
 register(ModelSpec(
     name="hosek-wilkie",

@@ -1,0 +1,364 @@
+"""Evaluating the tables: the radiance, transmittance and irradiance of a precomputed atmosphere anywhere
+(Bruneton & Neyret 2008, Sec. 5), and its colour.
+
+:class:`TableLookups` holds what :class:`.PrecomputedAtmosphere` answers from its tables: the sky's radiance
+along rays (Eq. 16; light shafts by Eq. 18), aerial perspective between two points (Eqs. 16, 17), the
+transmittance and radiance of the sun, the irradiance on surfaces (Eq. 14), and the conversion of spectral
+radiance at the table wavelengths to XYZ and to other wavelengths (:mod:`.conversion`). Arguments are checked
+and broadcast here; the loops over rays are the numba kernels of :mod:`.lookup`, run on all cores by
+:func:`.parallel.parallel_for`.
+
+Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
+doi:10.1111/j.1467-8659.2008.01245.x.
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..atmosphere.phase import aerosol_phase_kind
+from ..conventions import as_directions
+from ..errors import InvalidDirectionError, InvalidParameterError
+from ..sun.disc import solar_disc_solid_angle
+from .conversion import SPECTRAL_MODE_MIN_WAVELENGTHS, ColourConversion, xyz_matrix
+from .parallel import parallel_for
+from .parameters import AtmosphereParameters
+
+__all__ = ["TableLookups"]
+
+
+def _kernels() -> ModuleType:
+    """The numba kernels of :mod:`.lookup`, imported on the first lookup: importing the package stays free of
+    numba (start-up of the commands that do not read tables)."""
+    from . import lookup
+
+    return lookup
+
+
+def _as_points(name: str, value: ArrayLike) -> NDArray[np.float64]:
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 0 or a.shape[-1] != 3:
+        raise InvalidParameterError(f"{name} must have shape (..., 3) [m]; got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise InvalidParameterError(f"{name} contains NaN or infinite values")
+    return a
+
+
+def _as_dirs(name: str, value: ArrayLike) -> NDArray[np.float64]:
+    try:
+        return as_directions(value)
+    except InvalidDirectionError as exc:
+        raise InvalidDirectionError(f"{name}: {exc}") from None
+
+
+
+class TableLookups:
+    """The lookups of a precomputed atmosphere: a base of :class:`.PrecomputedAtmosphere`, which provides the
+    attributes below. Positions are in metres in a planet-centred frame (the planet's centre at the origin);
+    directions are unit vectors in the same frame; spectral results are at :attr:`wavelengths`.
+    """
+
+    parameters: AtmosphereParameters
+    wavelengths: NDArray[np.float64]
+    tables: dict[str, NDArray[np.float32]]
+    #: solar irradiance [W m^-2 nm^-1] and ground albedo at the table wavelengths
+    _solar: NDArray[np.float64]
+    _albedo: NDArray[np.float64]
+    _xyz_matrix: NDArray[np.float64] | None
+    _colour: ColourConversion | None
+
+    # ------------------------------------------------------------------ colour
+
+    @property
+    def spectral_mode(self) -> bool:
+        """True when XYZ is integrated directly from the samples (>= 15 wavelengths)."""
+        return self.wavelengths.size >= SPECTRAL_MODE_MIN_WAVELENGTHS
+
+    @property
+    def xyz_matrix(self) -> NDArray[np.float64]:
+        """(3, n_wavelengths) matrix from table radiance to CIE XYZ [cd m^-2] (see :mod:`.conversion`)."""
+        if self._xyz_matrix is None:
+            self._xyz_matrix = xyz_matrix(self.wavelengths, self.parameters)
+        return self._xyz_matrix
+
+    @property
+    def colour(self) -> ColourConversion:
+        """The :class:`.conversion.ColourConversion` of these tables (built once)."""
+        if self._colour is None:
+            self._colour = ColourConversion(self.wavelengths, self.parameters)
+        return self._colour
+
+    def to_xyz(self, radiance: ArrayLike) -> NDArray[np.float64]:
+        """CIE XYZ [cd m^-2] of spectral radiance (..., n_wavelengths) at the table wavelengths."""
+        return self.colour.to_xyz(radiance)
+
+    def luminance(self, radiance: ArrayLike) -> NDArray[np.float64]:
+        """Luminance [cd m^-2] of spectral radiance (..., n_wavelengths) at the table wavelengths."""
+        return self.to_xyz(radiance)[..., 1]
+
+    def resample(self, radiance: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        """Radiance (..., n_table) at the table wavelengths to (..., n) at ``wavelengths`` [nm], never negative
+        (see :class:`.conversion.ColourConversion`)."""
+        return self.colour.resample(radiance, wavelengths)
+
+    # ------------------------------------------------------------------ lookups
+
+    @property
+    def _mie_kind(self) -> int:
+        """Integer code of the aerosol phase function for the numba kernels."""
+        return aerosol_phase_kind(self.parameters.mie_phase_function)
+
+    def _geometry(self) -> tuple[float, float, float]:
+        p = self.parameters
+        return p.bottom_radius, p.top_radius, p.mu_s_min
+
+    def transmittance(self, r: ArrayLike, mu: ArrayLike) -> NDArray[np.float64]:
+        """Transmittance from radius ``r`` [m] along direction cosine ``mu`` to the top of the atmosphere, or to
+        the ground for rays that meet it; shape broadcast(r, mu) + (n_wavelengths,)."""
+        r_a, mu_a = np.broadcast_arrays(np.asarray(r, dtype=float), np.asarray(mu, dtype=float))
+        bottom, top, _ = self._geometry()
+        if not (np.all(np.isfinite(r_a)) and np.all(np.isfinite(mu_a))):
+            raise InvalidParameterError("r and mu must be finite")
+        if np.any((r_a < bottom * (1 - 1e-12)) | (r_a > top * (1 + 1e-12))):
+            raise InvalidParameterError(f"r must lie in [{bottom:g}, {top:g}] m (inside the atmosphere)")
+        if np.any(np.abs(mu_a) > 1.0 + 1e-12):
+            raise InvalidParameterError("mu must be in [-1, 1]")
+        shape = r_a.shape
+        pos = np.zeros((r_a.size, 3))
+        pos[:, 2] = np.clip(r_a.ravel(), bottom, top)
+        mu_f = np.clip(mu_a.ravel(), -1.0, 1.0)
+        dirs = np.stack([np.sqrt(1.0 - mu_f**2), np.zeros_like(mu_f), mu_f], axis=-1)
+        _, t = self._sky(pos, dirs, np.tile([0.0, 0.0, 1.0], (r_a.size, 1)), None, False)
+        return t.reshape(*shape, -1)
+
+    def _broadcast_rays(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike,
+                        extra: ArrayLike | None, direction_name: str = "directions"):
+        pos = _as_points("positions", positions)
+        if direction_name == "points":
+            dirs = _as_points("points", directions)
+        else:
+            dirs = _as_dirs(direction_name, directions)
+        sun = _as_dirs("sun_direction", sun_direction)
+        arrays = [pos[..., 0], dirs[..., 0], sun[..., 0]]
+        if extra is not None:
+            ex = np.asarray(extra, dtype=float)
+            if not np.all(np.isfinite(ex)) or np.any(ex < 0):
+                raise InvalidParameterError("shadow_length must be finite and >= 0 [m]")
+            arrays.append(ex)
+        try:
+            shape = np.broadcast_shapes(*(a.shape for a in arrays))
+        except ValueError:
+            raise InvalidParameterError(
+                f"positions {pos.shape}, {direction_name} {dirs.shape} and sun_direction {sun.shape} do not broadcast"
+            ) from None
+
+        def flat(a: NDArray[np.float64], last: int | None) -> NDArray[np.float64]:
+            full = np.broadcast_to(a, (*shape, last) if last else shape)
+            return np.ascontiguousarray(full.reshape(-1, last) if last else full.reshape(-1))
+
+        sh = flat(np.asarray(extra, dtype=float), None) if extra is not None else None
+        return shape, flat(pos, 3), flat(dirs, 3), flat(sun, 3), sh
+
+    def _check_above_ground(self, pos: NDArray[np.float64], name: str = "positions") -> None:
+        """Refuse points below the surface (the tables start at ``bottom_radius``); 1 m tolerance for rounding."""
+        bottom = self.parameters.bottom_radius
+        r = np.sqrt(np.einsum("ij,ij->i", pos, pos))
+        if r.size and r.min() < bottom - 1.0:
+            raise InvalidParameterError(
+                f"{name} must be on or above the planet's surface (distance from its centre >= bottom_radius "
+                f"= {bottom:.7g} m); got one at {r.min():.7g} m, {bottom - r.min():.4g} m below the surface"
+            )
+
+    def _sky(self, pos, dirs, sun, shadow, include_ground):
+        lookup = _kernels()
+
+        bottom, top, mu_s_min = self._geometry()
+        n = pos.shape[0]
+        sh = np.zeros(n) if shadow is None else shadow
+        rad = np.zeros((n, self.wavelengths.size))
+        tr = np.ones((n, self.wavelengths.size))
+        parallel_for(lookup.sky_kernel, n, pos, dirs, sun, sh, self.tables["transmittance"],
+                     self.tables["single_rayleigh"], self.tables["single_mie"], self.tables["multiple"],
+                     self.tables["irradiance"], self._albedo, self._solar, bottom, top,
+                     mu_s_min, self.parameters.mie_phase_g, self._mie_kind, self.parameters.sun_angular_radius,
+                     include_ground, rad, tr,
+                     grain=2048)
+        return rad, tr
+
+    def sky_xyz(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike, *,
+                include_ground: bool = True) -> NDArray[np.float64]:
+        """CIE 1931 XYZ [cd m^-2] of :meth:`sky_radiance` (no light shafts), shape broadcast + (3,).
+
+        In the spectral mode, for one position inside the atmosphere and one sun direction (a sky seen by one
+        observer), the lookups run on 2D slices of the tables projected to XYZ (:func:`.lookup.observer_slices`):
+        the same values as ``to_xyz(sky_radiance(...))`` to rounding, several times faster. Otherwise this is
+        ``to_xyz(sky_radiance(...))`` (with fewer wavelengths the colour rule is not linear in the spectrum: the
+        negative-lobe guard of :mod:`.conversion`).
+        """
+        if self.spectral_mode:
+            fast = self._observer(positions, directions, sun_direction, include_ground, self.xyz_matrix)
+            if fast is not None:
+                return fast
+        return self.to_xyz(self.sky_radiance(positions, directions, sun_direction, include_ground=include_ground))
+
+    def sky_luminance(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike, *,
+                      include_ground: bool = True) -> NDArray[np.float64]:
+        """Luminance [cd m^-2] of :meth:`sky_radiance` (no light shafts), shape broadcast: the Y of
+        :meth:`sky_xyz`, with one projected channel instead of three on the observer's fast path."""
+        if self.spectral_mode:
+            fast = self._observer(positions, directions, sun_direction, include_ground, self.xyz_matrix[1:2])
+            if fast is not None:
+                return fast[..., 0]
+        return self.sky_xyz(positions, directions, sun_direction, include_ground=include_ground)[..., 1]
+
+    def _observer(self, positions, directions, sun_direction, include_ground, projection):
+        """The observer fast path of :meth:`sky_xyz`, :meth:`sky_luminance` and :meth:`sky_radiance` (radiance
+        projected with ``projection`` (C, n_wavelengths)), or None where it does not apply."""
+        # Anything unusual (several positions or suns, bad values, an observer outside the atmosphere, whose rays
+        # the general kernel first moves to the top) goes the general way, which also says what is wrong.
+        try:
+            pos = np.asarray(positions, dtype=float)
+            sun = np.asarray(sun_direction, dtype=float)
+            d = np.asarray(directions)
+        except (ValueError, TypeError):
+            return None
+        if (pos.shape != (3,) or sun.shape != (3,)
+                or not (np.all(np.isfinite(pos)) and np.all(np.isfinite(sun)) and np.any(sun))
+                or d.dtype.kind not in "fiu" or d.ndim == 0 or d.shape[-1] != 3):
+            return None
+        bottom, top, mu_s_min = self._geometry()
+        r = float(np.linalg.norm(pos))
+        if not (bottom - 1.0 <= r <= top):
+            return None
+        lookup = _kernels()
+
+        shape = d.shape[:-1]
+        dirs = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
+        s = sun / np.linalg.norm(sun)
+        mu_s = float(np.clip(pos @ s / r, -1.0, 1.0))
+        projection = np.ascontiguousarray(projection, dtype=np.float64)
+        slices = lookup.observer_slices(self.tables["single_rayleigh"], self.tables["single_mie"],
+                                        self.tables["multiple"], min(max(r, bottom), top), mu_s, bottom, top,
+                                        mu_s_min, projection)
+        out = np.empty((dirs.shape[0], projection.shape[0]))
+        bad = np.zeros(dirs.shape[0], dtype=np.bool_)
+        # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
+        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, self.tables["transmittance"],
+                     self.tables["irradiance"], self._albedo, self._solar, projection,
+                     bottom, top, self.parameters.mie_phase_g, self._mie_kind, self.parameters.sun_angular_radius,
+                     bool(include_ground), dirs, out, bad, grain=2048)
+        if bad.any():
+            return None
+        return out.reshape(*shape, projection.shape[0])
+
+    def sky_radiance(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike, *,
+                     shadow_length: ArrayLike | None = None, include_ground: bool = True,
+                     return_transmittance: bool = False):
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] seen from ``positions`` along ``directions`` (Eq. 16).
+
+        Parameters
+        ----------
+        positions : array_like, shape (..., 3)
+            Observer positions [m] from the planet centre; on or above the surface (1 m tolerance), also
+            outside the atmosphere.
+        directions : array_like, shape (..., 3)
+            View directions (unit vectors, same frame).
+        sun_direction : array_like, shape (3,) or (..., 3)
+            Direction towards the sun.
+        shadow_length : array_like, optional
+            Length [m] of the shadowed part at the near end of each ray (light shafts, Eq. 18).
+        include_ground : bool
+            Add the ground (albedo of the parameters, lit by the sun and the sky) for rays that meet it.
+        return_transmittance : bool
+            Also return the transmittance to the end of each ray (1 for rays that miss the atmosphere).
+
+        Returns
+        -------
+        ndarray, shape broadcast + (n_wavelengths,)
+            The solar disc is not included (see :meth:`sun_radiance`); rays that miss the atmosphere give 0.
+        """
+        if shadow_length is None and not return_transmittance:
+            fast = self._observer(positions, directions, sun_direction, include_ground,
+                                  np.eye(self.wavelengths.size))
+            if fast is not None:
+                return fast
+        shape, pos, dirs, sun, sh = self._broadcast_rays(positions, directions, sun_direction, shadow_length)
+        self._check_above_ground(pos)
+        rad, t = self._sky(pos, dirs, sun, sh, bool(include_ground))
+        rad = rad.reshape(*shape, -1)
+        if return_transmittance:
+            return rad, t.reshape(*shape, -1)
+        return rad
+
+    def aerial_perspective(self, positions: ArrayLike, points: ArrayLike, sun_direction: ArrayLike, *,
+                           shadow_length: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Transmittance and inscattered radiance between observers and points (Eq. 16; Eq. 17 with shadows).
+
+        Parameters
+        ----------
+        positions, points : array_like, shape (..., 3)
+            Observer and object positions [m] from the planet centre.
+        sun_direction : array_like, shape (3,) or (..., 3)
+            Direction towards the sun.
+        shadow_length : array_like, optional
+            Total shadowed length [m] along each ray, moved to the object's end (Eq. 17).
+
+        Returns
+        -------
+        transmittance, inscatter : ndarray, shape broadcast + (n_wavelengths,)
+            The object's radiance ``L_obj`` reaches the observer as ``transmittance * L_obj + inscatter``
+            [W m^-2 sr^-1 nm^-1].
+        """
+        lookup = _kernels()
+
+        shape, cam, pts, sun, sh = self._broadcast_rays(positions, points, sun_direction, shadow_length,
+                                                        direction_name="points")
+        bottom, top, mu_s_min = self._geometry()
+        n = cam.shape[0]
+        sh = np.zeros(n) if sh is None else sh
+        t = np.ones((n, self.wavelengths.size))
+        s = np.zeros((n, self.wavelengths.size))
+        tab = self.tables
+        parallel_for(lookup.aerial_kernel, n, cam, pts, sun, sh, tab["transmittance"], tab["single_rayleigh"],
+                     tab["single_mie"], tab["multiple"], bottom, top, mu_s_min, self.parameters.mie_phase_g,
+                     self._mie_kind, t, s, grain=2048)
+        return t.reshape(*shape, -1), s.reshape(*shape, -1)
+
+    def sun_transmittance(self, positions: ArrayLike, sun_direction: ArrayLike) -> NDArray[np.float64]:
+        """Transmittance from ``positions`` [m] to the sun, times the fraction of its disc above the horizon."""
+        lookup = _kernels()
+
+        shape, pos, _, sun, _ = self._broadcast_rays(positions, sun_direction, sun_direction, None)
+        self._check_above_ground(pos)
+        bottom, top, _ = self._geometry()
+        t = np.ones((pos.shape[0], self.wavelengths.size))
+        parallel_for(lookup.sun_kernel, pos.shape[0], pos, sun, self.tables["transmittance"], bottom, top,
+                     self.parameters.sun_angular_radius, t, grain=4096)
+        return t.reshape(*shape, -1)
+
+    def sun_radiance(self, positions: ArrayLike, sun_direction: ArrayLike) -> NDArray[np.float64]:
+        """Mean spectral radiance of the solar disc [W m^-2 sr^-1 nm^-1] seen from ``positions`` (Eq. 9)."""
+        omega = solar_disc_solid_angle(self.parameters.sun_angular_radius)
+        return self.sun_transmittance(positions, sun_direction) * (self._solar / omega)
+
+    def ground_irradiance(self, points: ArrayLike, normals: ArrayLike,
+                          sun_direction: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Sun and sky spectral irradiance [W m^-2 nm^-1] on surfaces at ``points`` [m] with ``normals``.
+
+        The sky part is the precomputed irradiance on a horizontal surface times ``(1 + n . up) / 2`` (Eq. 14).
+        """
+        lookup = _kernels()
+
+        shape, pts, nrm, sun, _ = self._broadcast_rays(points, normals, sun_direction, None,
+                                                       direction_name="normals")
+        self._check_above_ground(pts, "points")
+        bottom, top, _ = self._geometry()
+        e_sun = np.zeros((pts.shape[0], self.wavelengths.size))
+        e_sky = np.zeros((pts.shape[0], self.wavelengths.size))
+        parallel_for(lookup.irradiance_kernel, pts.shape[0], pts, nrm, sun, self.tables["transmittance"],
+                     self.tables["irradiance"], self._solar, bottom, top, self.parameters.sun_angular_radius, e_sun,
+                     e_sky, grain=4096)
+        return e_sun.reshape(*shape, -1), e_sky.reshape(*shape, -1)
