@@ -74,7 +74,10 @@ class DomainResult:
     up_views, down_views : (n, 2) the (zenith, azimuth) [rad] of those directions.
     wavelengths : (n_wl,) [nm]; samples : backward paths per radiance; photons : forward photons in all;
     mean_vertices : vertices per path; seconds : wall time.
-    ground_albedo : (n_wl,) the albedo used for :attr:`absorptance`.
+    ground_albedo : (n_wl,) the ground's albedo.
+    levels : (L,) altitudes [m] of the flux levels (the base first, the top last); level_up, level_down and their
+        ``_stderr`` (L, nx, ny, n_wl): upward and downward (direct + diffuse) irradiance / (mu0 F0) there;
+        level_direct (L, nx, ny, n_wl): the direct part of level_down (deterministic).
     """
 
     reflectance: NDArray[np.float64]
@@ -96,6 +99,12 @@ class DomainResult:
     photons: int
     mean_vertices: float
     seconds: float
+    levels: NDArray[np.float64]
+    level_up: NDArray[np.float64]
+    level_up_stderr: NDArray[np.float64]
+    level_down: NDArray[np.float64]
+    level_down_stderr: NDArray[np.float64]
+    level_direct: NDArray[np.float64]
 
     @property
     def mean_reflectance(self) -> NDArray[np.float64]:
@@ -126,20 +135,20 @@ class DomainResult:
         return 1.0 - self.mean_reflectance - self.mean_transmittance * (1.0 - self.ground_albedo) - self.absorptance
 
 
-def _flux_task(medium, sun, dom, r_top, r_base, group, wl_index, batch0, n_batches, batch_size, seed):
+def _flux_task(medium, sun, dom, levels, group, wl_index, batch0, n_batches, batch_size, seed):
     from . import kernels
 
     m = medium.subset(wl_index)
     npix = int(dom[4]) * int(dom[5])
-    up = np.zeros((npix, wl_index.size, 2))
+    up = np.zeros((levels.size, npix, wl_index.size, 2))
     down = np.zeros_like(up)
-    absorbed = np.zeros_like(up)
+    absorbed = np.zeros((npix, wl_index.size, 2))
     verts = np.zeros(1)
     f = m.field
     kernels.flux_block(sun, m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.scat, m.lobe, m.lobe_g,
                        m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe, f.ye,
-                       f.re, m.fs, m.fss, dom, r_top, r_base, seed, group, batch0, n_batches, batch_size, up, down,
-                       absorbed, verts)
+                       f.re, m.fs, m.fss, dom, levels, seed, group, batch0, n_batches, batch_size, up, down, absorbed,
+                       verts)
     return up, down, absorbed, verts
 
 
@@ -147,41 +156,48 @@ def _flux_task(medium, sun, dom, r_top, r_base, group, wl_index, batch0, n_batch
 _FORWARD_SEED_OFFSET = 0x5F0D
 
 
-def _domain_fluxes(medium, clouds, atmosphere, sun, n_wl, *, samples, seed, scheduler, group_size, progress):
-    """Forward photons over the domain: (R, T, A) per pixel (nx, ny, n_wl) with standard errors (batch to batch),
-    photons used, vertices per photon."""
+def _batch_stats(s1: NDArray[np.float64], s2: NDArray[np.float64], n_batches: int, batch_size: int, npix: int):
+    """Per-pixel estimates (tally per photon times the number of pixels) and standard errors from the per-batch
+    sums of tallies ``s1`` and of their squares ``s2``."""
+    mean_b = s1 / n_batches
+    var_b = np.maximum(s2 / n_batches - mean_b ** 2, 0.0) * (n_batches / (n_batches - 1))
+    return mean_b / batch_size * npix, np.sqrt(var_b / n_batches) / batch_size * npix
+
+
+def _domain_fluxes(medium, clouds, radii, sun, n_wl, *, samples, seed, scheduler, group_size, progress):
+    """Forward photons over the domain: upward and downward fluxes at the level spheres ``radii`` [m] (L, nx, ny,
+    n_wl) and the column absorptance (nx, ny, n_wl), each with standard errors (batch to batch), / (mu0 F0); the
+    photons used and the vertices per photon."""
     from .driver import batch_layout, execute, plan_tasks, wavelength_groups
 
-    n_samples = int(samples)
-    batch_size, n_batches = batch_layout(n_samples)
-    if n_batches < 8:
-        n_batches = 8
+    batch_size, n_batches = batch_layout(int(samples))
+    n_batches = max(n_batches, 8)
     groups = wavelength_groups(n_wl, group_size)
     nx, ny, _ = clouds.shape
     dx, dy, _ = clouds.voxel_size
     dom = np.array([clouds.origin[0], clouds.origin[1], dx, dy, float(nx), float(ny)])
-    r_top = atmosphere.bottom_radius + clouds.top
-    r_base = atmosphere.bottom_radius + clouds.base
     specs = plan_tasks(1, len(groups), n_batches, batch_size, directions_per_task=1,
                        batches_per_task=max(1, 65536 // batch_size))
-    calls = [(medium, sun, dom, r_top, r_base, sp.group, groups[sp.group], sp.batch0, sp.n_batches, batch_size,
+    calls = [(medium, sun, dom, radii, sp.group, groups[sp.group], sp.batch0, sp.n_batches, batch_size,
               int(seed) + _FORWARD_SEED_OFFSET) for sp in specs]
     results = execute(_flux_task, calls, scheduler, progress)
     npix = nx * ny
-    tallies = np.zeros((3, npix, n_wl, 2))
+    nlev = radii.size
+    levels = np.zeros((2, nlev, npix, n_wl, 2))
+    absorbed = np.zeros((npix, n_wl, 2))
     verts = 0.0
     for sp, (u, d, a, v) in zip(specs, results, strict=True):
-        gi = groups[sp.group]
-        tallies[:, :, gi[0]: gi[-1] + 1] += np.stack([u, d, a])
+        gi = slice(groups[sp.group][0], groups[sp.group][-1] + 1)
+        levels[0, :, :, gi] += u
+        levels[1, :, :, gi] += d
+        absorbed[:, gi] += a
         verts += float(v[0])
-    s1, s2 = tallies[..., 0], tallies[..., 1]
-    mean_b = s1 / n_batches
-    var_b = np.maximum(s2 / n_batches - mean_b ** 2, 0.0) * (n_batches / (n_batches - 1))
-    mean = mean_b / batch_size * npix
-    err = np.sqrt(var_b / n_batches) / batch_size * npix
+    lv, lv_err = _batch_stats(levels[..., 0], levels[..., 1], n_batches, batch_size, npix)
+    ab, ab_err = _batch_stats(absorbed[..., 0], absorbed[..., 1], n_batches, batch_size, npix)
     used = batch_size * n_batches
-    shape = (3, nx, ny, n_wl)
-    return mean.reshape(shape), err.reshape(shape), used, verts / (used * len(groups))
+    shape = (2, nlev, nx, ny, n_wl)
+    return (lv.reshape(shape), lv_err.reshape(shape), ab.reshape(nx, ny, n_wl), ab_err.reshape(nx, ny, n_wl), used,
+            verts / (used * len(groups)))
 
 
 def _views(name: str, views: ArrayLike | None) -> NDArray[np.float64]:
@@ -209,7 +225,7 @@ def domain_quantities(atmosphere: AtmosphereParameters, clouds: Any, wavelengths
                       down_views: ArrayLike | None = None, samples: int = 4096, seed: int = 0,
                       direct_points: int = 16, scheduler: Any = None, group_size: int = DEFAULT_GROUP_SIZE,
                       progress: Callable[[int, int], None] | None = None, majorant_block: Any = None,
-                      fluxes: bool = True) -> DomainResult:
+                      fluxes: bool = True, levels: ArrayLike | None = None) -> DomainResult:
     """R, T, direct T, absorptance and reflectivities per column of a periodic ``clouds`` (module docstring).
 
     Parameters
@@ -234,6 +250,9 @@ def domain_quantities(atmosphere: AtmosphereParameters, clouds: Any, wavelengths
         Points per pixel axis for the direct transmittance (>= 1).
     fluxes : bool
         False skips R, T and the absorptance (radiances only; their arrays are NaN).
+    levels : array_like, optional
+        Further altitudes [m] (between the ground and the top of the atmosphere) at which the upward and downward
+        fluxes are tallied too (:attr:`DomainResult.level_up` ...); the field's base and top always are.
     seed, scheduler, group_size, progress, majorant_block
         As :func:`~skyscatter.montecarlo.sky_radiance`.
     """
@@ -264,14 +283,25 @@ def domain_quantities(atmosphere: AtmosphereParameters, clouds: Any, wavelengths
     r_base = atmosphere.bottom_radius + clouds.base
     top = _on_sphere(cx, cy, r_top)
     base = _on_sphere(cx, cy, r_base)
-    nan = np.full((nx, ny, wl.size), np.nan)
-    flux_mean = np.stack([nan] * 3)
-    flux_err = flux_mean.copy()
+    alts = np.array([clouds.base, clouds.top], dtype=float)
+    if levels is not None:
+        extra = np.atleast_1d(np.asarray(levels, dtype=float))
+        if extra.ndim != 1 or not np.all(np.isfinite(extra)) or np.any(extra < 0) or \
+                np.any(extra >= atmosphere.thickness):
+            raise InvalidParameterError(
+                f"levels must be altitudes [m] from 0 to below the top of the atmosphere ({atmosphere.thickness:g} m)")
+        alts = np.unique(np.concatenate([alts, extra]))
+    radii = atmosphere.bottom_radius + alts
+    nlev = alts.size
+    nan = np.full((nlev, nx, ny, wl.size), np.nan)
+    lv, lv_err = np.stack([nan, nan]), np.stack([nan, nan])
+    ab, ab_err = nan[0], nan[0]
     photons, fverts = 0, math.nan
     if fluxes:
-        flux_mean, flux_err, photons, fverts = _domain_fluxes(
-            medium, clouds, atmosphere, sun, wl.size, samples=n_samples * ncol, seed=seed, scheduler=scheduler,
+        lv, lv_err, ab, ab_err, photons, fverts = _domain_fluxes(
+            medium, clouds, radii, sun, wl.size, samples=n_samples * ncol, seed=seed, scheduler=scheduler,
             group_size=group_size, progress=progress)
+        # each photon carries mu0 F0 times the domain's area / photons: the tallies are already / (mu0 F0)
     origins, dirs = [], []
     for zen, azi in ups:
         origins.append(top)
@@ -294,18 +324,22 @@ def domain_quantities(atmosphere: AtmosphereParameters, clouds: Any, wavelengths
         scale = math.pi / (mu0 * medium.esun)
         refl = (mean * scale).reshape(n_sets, nx, ny, wl.size)
         refl_err = (stderr * scale).reshape(n_sets, nx, ny, wl.size)
-    # direct transmittance: exact at npts x npts points over each pixel (1 along an axis of one voxel)
+    # direct transmittance: exact at npts x npts points over each pixel (1 along an axis of one voxel), each level
     frac = (np.arange(npts) + 0.5) / npts - 0.5
     qx = frac * dx if nx > 1 else np.zeros(1)
     qy = frac * dy if ny > 1 else np.zeros(1)
     ox, oy = (a.ravel() for a in np.meshgrid(qx, qy, indexing="ij"))
-    pts = _on_sphere((cx[:, None] + ox[None, :]).ravel(), (cy[:, None] + oy[None, :]).ravel(), r_base)
-    direct = direct_transmittance(medium, pts, sun, 1, 1).reshape(ncol, ox.size, wl.size).mean(axis=1)
-    direct = direct.reshape(nx, ny, wl.size)
+    direct = np.empty((nlev, nx, ny, wl.size))
+    for j, radius in enumerate(radii):
+        pts = _on_sphere((cx[:, None] + ox[None, :]).ravel(), (cy[:, None] + oy[None, :]).ravel(), radius)
+        d = direct_transmittance(medium, pts, sun, 1, 1).reshape(ncol, ox.size, wl.size).mean(axis=1)
+        direct[j] = d.reshape(nx, ny, wl.size)
     nu = ups.shape[0]
-    return DomainResult(flux_mean[0], flux_err[0], flux_mean[1], flux_err[1], direct, flux_mean[2], flux_err[2],
+    top, base = nlev - 1, 0
+    return DomainResult(lv[0, top], lv_err[0, top], lv[1, base], lv_err[1, base], direct[base], ab, ab_err,
                         refl[:nu], refl_err[:nu], refl[nu:], refl_err[nu:], ups, downs, wl,
-                        np.asarray(medium.albedo, dtype=float), used, photons, verts, time.perf_counter() - t0)
+                        np.asarray(medium.albedo, dtype=float), used, photons, verts, time.perf_counter() - t0,
+                        alts, lv[0], lv_err[0], lv[1], lv_err[1], direct)
 
 
 @dataclass(frozen=True)

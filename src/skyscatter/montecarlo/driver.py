@@ -32,6 +32,10 @@ __all__ = ["MonteCarloResult", "Medium", "prepare_medium", "sky_radiance", "sola
 DEFAULT_GROUP_SIZE = 16
 #: Largest number of paths in one batch (the unit of the random streams and of the reduction).
 MAX_BATCH_SIZE = 512
+#: Probability of drawing a scattering direction about the sun in a cloudy medium, and the asymmetry of that lobe
+#: (directional importance sampling, ``kernels`` module docstring); cloudless media do not use it.
+DDIS_PROBABILITY = 0.1
+DDIS_G = 0.85
 
 
 @dataclass(frozen=True)
@@ -98,6 +102,7 @@ class Medium:
     field_exact: tracking.PackedField
     fs: NDArray[np.float64]
     fss: NDArray[np.float64]
+    ddis: float = 0.0
 
     def subset(self, index: NDArray[np.int64]) -> Medium:
         """The same medium at a subset of its wavelengths."""
@@ -227,6 +232,7 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
         lobes.append((kernels.LOBE_NONE, 0.0, -1))
         field = field_exact = tracking.empty_field()
     tmu, tval, tcdf = _stack_tables(tables, wl.size)
+    cloudy = clouds is not None or len(comps) > 1
     return Medium(
         rb, atmosphere.top_radius, quadrature_edges(atmosphere), layers,
         np.array([a.shape[0] for a in arrs], dtype=np.int64),
@@ -237,7 +243,7 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
         np.ascontiguousarray(atmosphere.ground_albedo_at(wl), dtype=float),
         np.ascontiguousarray(atmosphere.solar_irradiance_at(wl), dtype=float),
         atmosphere.sun_angular_radius, field, field_exact, np.ascontiguousarray(fs, dtype=float),
-        np.ascontiguousarray(fss, dtype=float),
+        np.ascontiguousarray(fss, dtype=float), DDIS_PROBABILITY if cloudy else 0.0,
     )
 
 
@@ -317,7 +323,8 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
     kernels.trace_block(origins, jitter, dirs, mode, dir_index, sun, math.cos(m.sun_angular_radius),
                         m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.scat, m.lobe, m.lobe_g,
                         m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe,
-                        f.ye, f.re, m.fs, m.fss, seed, group, batch0, n_batches, batch_size, sums, sumsq, verts)
+                        f.ye, f.re, m.fs, m.fss, m.ddis, DDIS_G, seed, group, batch0, n_batches, batch_size, sums,
+                        sumsq, verts)
     return sums, sumsq, verts
 
 

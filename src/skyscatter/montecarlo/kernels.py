@@ -41,6 +41,14 @@ Estimator (backward paths from the observer; Veach 1997, PhD thesis, Stanford, C
   blocks it; through the field by ratio tracking), phase function or ``albedo / pi * cos``. The sun is reached
   only by NEE, so the sky radiance never contains the directly transmitted sun (reported separately);
 * absorption (particle albedos, ozone) enters as a weight, never as termination;
+* directional importance sampling towards the sun (the "DDIS" of Buras & Mayer 2011, "Efficient unbiased
+  variance reduction techniques for Monte Carlo simulations of radiative transfer in cloudy atmospheres: the
+  solution", JQSRT 112, 434, doi:10.1016/j.jqsrt.2010.10.005, Sec. 3.3, here for backward paths): in a cloudy
+  medium, with probability ``ddis`` (0.1) the new direction is drawn from a Henyey-Greenstein lobe (g 0.85)
+  centred on the sun, otherwise from the medium's lobes, and every wavelength's direction density is the mixture
+  of the two. Next-event estimates through a forward-peaked cloud phase function are large only for the rare
+  paths heading near the sun; the mixture makes those paths common and their weights small (heavy tails
+  removed, no bias). Off (``ddis = 0``) for a cloudless medium, whose paths are then unchanged;
 * scattering direction: the lobe (Rayleigh, each particle component, the cloud field) chosen by the hero's
   scattering coefficients at the collision point, the cosine drawn by the exact inverse CDFs of
   :mod:`skyscatter.atmosphere.phase` (Rayleigh; Henyey-Greenstein; a Cornette-Shanks aerosol is sampled as
@@ -507,7 +515,7 @@ def _lobe_sum(active, sc, ph, out):
 @_jit
 def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, scat,
                 lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
-                fre, fs, fss, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
+                fre, fs, fss, ddis, ddis_g, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
     """Trace ``n_batches`` batches of ``batch_size`` paths for each entry of a block; one wavelength group.
 
     Parameters (all SI; arrays float64 unless stated)
@@ -525,6 +533,8 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     albedo : (n_wl,) ground albedo; esun : (n_wl,) solar irradiance [W m^-2 nm^-1].
     fvf ... fre : the packed cloud field (:class:`.tracking.PackedField`; ``fvf[PRESENT] = 0`` for none);
     fs, fss : (n_wl,) its extinction and scattering per unit density [-].
+    ddis, ddis_g : probability of drawing a scattering direction about the sun instead (Henyey-Greenstein of
+    asymmetry ``ddis_g`` centred on the sun; 0: never); see the module docstring.
     seed, group, batch0 : RNG counters (batch numbers batch0 .. batch0 + n_batches - 1).
     sums, sumsq : (n, n_wl, n_batches) outputs: per batch, sum and sum of squares of the per-path estimate.
     vertices_out : (n, n_batches) output: per batch, the number of scattering and ground vertices of its paths.
@@ -691,25 +701,39 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                                     if field:
                                         tr *= trf[i]
                                     contrib[i] += f[i] * val[i] * esun[i] * tr
-                        # scattering direction: lobe chosen by the hero's scattering coefficients
-                        u = next_uniform(st) * sst[hero]
-                        pick = active[n_active - 1]
-                        acc = 0.0
-                        for a in range(n_active):
-                            c = active[a]
-                            acc += sc[c, hero]
-                            if u < acc:
-                                pick = c
-                                break
-                        mu = _sample_lobe(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st), tmu,
-                                          tval, tcdf)
-                        dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
+                        # scattering direction: lobe chosen by the hero's scattering coefficients, or (with
+                        # probability ddis) about the sun
+                        if ddis > 0.0 and next_uniform(st) < ddis:
+                            ms = henyey_greenstein_inverse_cdf_scalar(next_uniform(st), ddis_g)
+                            ex, ey, ez = direction_about_axis(sx, sy, sz, ms, 2.0 * math.pi * next_uniform(st))
+                            mu = min(max(ex * dx + ey * dy + ez * dz, -1.0), 1.0)
+                            dx, dy, dz = ex, ey, ez
+                        else:
+                            u = next_uniform(st) * sst[hero]
+                            pick = active[n_active - 1]
+                            acc = 0.0
+                            for a in range(n_active):
+                                c = active[a]
+                                acc += sc[c, hero]
+                                if u < acc:
+                                    pick = c
+                                    break
+                            mu = _sample_lobe(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st), tmu,
+                                              tval, tcdf)
+                            dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
                         _lobe_values(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, ph, qs)
                         _lobe_sum(active, sc, ph, val)
                         _lobe_sum(active, sc, qs, val2)
-                        for i in range(n):
-                            f[i] *= val[i]
-                            p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
+                        if ddis > 0.0:
+                            q_sun = ddis * henyey_greenstein_scalar(dx * sx + dy * sy + dz * sz, ddis_g)
+                            for i in range(n):
+                                f[i] *= val[i]
+                                lobes = val2[i] / sst[i] if sst[i] > 0.0 else 0.0
+                                p[i] *= (1.0 - ddis) * lobes + q_sun
+                        else:
+                            for i in range(n):
+                                f[i] *= val[i]
+                                p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
                         _normalise(f, p, n)
                     else:
                         # ground (Lambertian)
@@ -831,28 +855,35 @@ def disc_transmittance(origin, sun, sun_radius, rb, rt, edges, layers, nlay, coe
 
 
 @_hjit
-def _next_interface(px, py, pz, dx, dy, dz, r_top, r_base, t_end):
-    """First crossing after 0 of the domain's top sphere going up (kind 1) or of its base sphere going down (kind
-    2) within ``[0, t_end]``; ``(t_end, 0)`` when there is none. Roots closer than ``1e-4 m + 1e-12 R`` to 0 are
-    the sphere the point sits on and are skipped."""
+def _next_level(px, py, pz, dx, dy, dz, levels, t_end):
+    """First crossing after 0 of one of the level spheres (radii ``levels`` [m]) within ``[0, t_end]``: ``(t, k,
+    up)`` with ``k`` the level and ``up`` whether it is crossed outwards; ``(t_end, -1, False)`` when there is none.
+    Roots closer than ``1e-4 m + 1e-12 R`` to 0 belong to the sphere the point sits on and are skipped."""
     r2 = px * px + py * py + pz * pz
     b = px * dx + py * dy + pz * dz
     best = t_end
-    kind = 0
-    # top: the outward root (larger) crosses it going up
-    disc = b * b - (r2 - r_top * r_top)
-    if disc >= 0.0:
-        t = -b + math.sqrt(disc)
-        if t > 1e-4 + 1e-12 * r_top and t <= best:
+    k = -1
+    up = False
+    for j in range(levels.shape[0]):
+        radius = levels[j]
+        disc = b * b - (r2 - radius * radius)
+        if disc < 0.0:
+            continue
+        s = math.sqrt(disc)
+        eps = 1e-4 + 1e-12 * radius
+        t = -b - s
+        if t > eps:
+            if t <= best:
+                best = t
+                k = j
+                up = False
+            continue
+        t = -b + s
+        if t > eps and t <= best:
             best = t
-            kind = 1
-    disc = b * b - (r2 - r_base * r_base)
-    if disc >= 0.0:
-        t = -b - math.sqrt(disc)
-        if t > 1e-4 + 1e-12 * r_base and t <= best:
-            best = t
-            kind = 2
-    return best, kind
+            k = j
+            up = True
+    return best, k, up
 
 
 @_hjit
@@ -868,23 +899,28 @@ def _pixel(px, py, dom):
 
 @_jit
 def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo,
-               fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, dom, r_top, r_base, seed, group, batch0,
-               n_batches, batch_size, up, down, absorbed, vertices_out):
-    """Forward photons from the sun through a periodic domain: per pixel, the upward crossings of the top sphere,
-    the downward crossings of the base sphere and the absorption in the column (docs: :mod:`.domain`).
+               fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, dom, levels, seed, group, batch0, n_batches,
+               batch_size, up, down, absorbed, vertices_out):
+    """Forward photons from the sun through a periodic domain: per pixel and level, the upward and downward
+    crossings of the level spheres, and the absorption in the column between the lowest and the highest level
+    (:mod:`.domain`).
 
     Photons enter at the top of the atmosphere, uniformly over the domain's cell ``dom`` (x0, y0, dx, dy, nx, ny:
     pixel corner [m], pixel size [m], pixel counts), travelling along ``-sun``; the same free paths, collision
-    densities, lobes and hero-wavelength weights as :func:`trace_block` (without next-event estimation). Each
-    crossing of ``r_top`` upwards adds the photon's weight to ``up`` at the pixel under the crossing, each
-    crossing of ``r_base`` downwards to ``down``, and each collision ``f sigma_a`` to ``absorbed`` at the pixel
-    under it (when ``r_base <= r <= r_top``). Outputs ``up``, ``down``, ``absorbed`` (n_pixels, n_wl, 2): per
-    batch the tallies are summed, then their sum and sum of squares over batches are added to ``[..., 0]`` and
-    ``[..., 1]``. ``vertices_out`` (1,) counts the vertices.
+    densities, lobes and hero-wavelength weights as :func:`trace_block` (without next-event estimation). A free
+    path stops at each level sphere (``levels`` (L,) radii [m], ascending), where the crossing adds the photon's
+    weight to ``up`` or ``down`` at that level and the pixel under the crossing, and starts afresh (free paths
+    are memoryless); each collision adds ``f sigma_a`` to ``absorbed`` at the pixel under it. Outputs ``up``,
+    ``down`` (L, n_pixels, n_wl, 2) and ``absorbed`` (n_pixels, n_wl, 2): per batch the tallies are summed, then
+    their sum and sum of squares over batches are added to ``[..., 0]`` and ``[..., 1]``. ``vertices_out`` (1,)
+    counts the vertices.
     """
     n = coef.shape[0]
     nc = coef.shape[1]
-    npix = up.shape[0]
+    npix = absorbed.shape[0]
+    nlev = levels.shape[0]
+    r_base = levels[0]
+    r_top = levels[nlev - 1]
     st = np.empty(1, dtype=np.uint64)
     f = np.empty(n)
     p = np.empty(n)
@@ -902,8 +938,8 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
     tau = np.empty(n)
     val = np.empty(n)
     val2 = np.empty(n)
-    bu = np.empty((npix, n))
-    bd = np.empty((npix, n))
+    bu = np.empty((nlev, npix, n))
+    bd = np.empty((nlev, npix, n))
     ba = np.empty((npix, n))
     fstate = np.zeros(6, dtype=np.int64)
     rec = np.empty((2 * edges.shape[0] + 2, 2 + nc))
@@ -928,9 +964,10 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
         key = stream_key(seed, 0, group, batch0 + bi)
         for k in range(npix):
             for i in range(n):
-                bu[k, i] = 0.0
-                bd[k, i] = 0.0
                 ba[k, i] = 0.0
+                for j in range(nlev):
+                    bu[j, k, i] = 0.0
+                    bd[j, k, i] = 0.0
         for smp in range(batch_size):
             st[0] = sample_state(key, smp)
             for i in range(n):
@@ -946,7 +983,7 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
             vertices = 0
             while True:
                 t_end, ground = _exit_distance(px, py, pz, dx, dy, dz, rb, rt)
-                t_if, kind = _next_interface(px, py, pz, dx, dy, dz, r_top, r_base, t_end)
+                t_if, lev, outward = _next_level(px, py, pz, dx, dy, dz, levels, t_end)
                 u = next_uniform(st)
                 t, reached, npc = _march(px, py, pz, dx, dy, dz, t_if, -math.log1p(-u), kh, rb, edges, layers, nlay,
                                          cols, tmp, rec)
@@ -1006,15 +1043,15 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
                         f[i] *= tr
                         p[i] *= tr
                     _normalise(f, p, n)
-                    if kind != 0:
+                    if lev >= 0:
                         k = _pixel(px, py, dom)
-                        if kind == 1:
+                        if outward:
                             for i in range(n):
-                                bu[k, i] += f[i]
+                                bu[lev, k, i] += f[i]
                         else:
                             for i in range(n):
-                                bd[k, i] += f[i]
-                    if kind == 0 or t_if >= t_end:
+                                bd[lev, k, i] += f[i]
+                    if lev < 0 or t_if >= t_end:
                         if not ground:
                             break  # out of the top of the atmosphere
                         rr = math.sqrt(px * px + py * py + pz * pz)
@@ -1044,12 +1081,13 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
             nvert += vertices
         for k in range(npix):
             for i in range(n):
-                v = bu[k, i]
-                up[k, i, 0] += v
-                up[k, i, 1] += v * v
-                v = bd[k, i]
-                down[k, i, 0] += v
-                down[k, i, 1] += v * v
+                for j in range(nlev):
+                    v = bu[j, k, i]
+                    up[j, k, i, 0] += v
+                    up[j, k, i, 1] += v * v
+                    v = bd[j, k, i]
+                    down[j, k, i, 0] += v
+                    down[j, k, i, 1] += v * v
                 v = ba[k, i]
                 absorbed[k, i, 0] += v
                 absorbed[k, i, 1] += v * v

@@ -87,16 +87,20 @@ def _block_of(local, edges, nb, direction):
 @_ijit
 def _radial_state(r, b, re, nbz):
     """Radial block index of radius ``r`` moving with radial velocity sign ``b``: -1 below the field, ``nbz``
-    above it; a point on a boundary sphere belongs to the shell it moves into."""
-    if r < re[0] or (r <= re[0] and b <= 0.0):
+    above it. A point on a boundary sphere (within ``1e-6 m + 1e-12 r``: the rounding of a radius computed from
+    coordinates) belongs to the shell it moves into."""
+    eps = 1e-6 + 1e-12 * r
+    if r < re[0] - eps or (r <= re[0] + eps and b <= 0.0):
         return -1
-    if r > re[nbz] or (r >= re[nbz] and b >= 0.0):
+    if r > re[nbz] + eps or (r >= re[nbz] - eps and b >= 0.0):
         return nbz
     j = 0
-    while j < nbz - 1 and re[j + 1] <= r:
+    while j < nbz - 1 and re[j + 1] <= r + eps:
         j += 1
-    if b < 0.0 and r <= re[j]:
+    if b < 0.0 and r <= re[j] + eps:
         j -= 1
+    elif b >= 0.0 and j < nbz - 1 and r >= re[j + 1] - eps:
+        j += 1
     return j
 
 
