@@ -20,24 +20,19 @@ Sources of fields:
   attributes ``periodic``, ``base``, ``top``, ``reference_wavelength``. (OpenVDB: the PyPI binding
   ``pyopenvdb`` was last released in 2020 and builds against no current Python; not supported.)
 * :meth:`CloudField.procedural` - fractal Perlin-Worley noise remapped by a cloud cover fraction, in the
-  manner of the real-time cloudscapes of Schneider (2015, 2017: "The real-time volumetric cloudscapes of
-  Horizon Zero Dawn", SIGGRAPH Advances in Real-Time Rendering; "Nubis: authoring real-time volumetric
-  cloudscapes with the Decima engine"): a periodic 2D coverage map thresholded at the requested cover fraction
-  (exactly that fraction of the columns is cloudy), a cloud top that rises with the coverage value, 3D Worley
-  erosion of the edges, and a liquid water content rising linearly from the base (adiabatic clouds; Brenguier
-  et al. 2000, J. Atmos. Sci. 57, 803, doi:10.1175/1520-0469(2000)057<0803:RPOBLC>2.0.CO;2), scaled to the
-  requested mean optical depth of the cloudy columns. Deterministic for a seed.
-* :meth:`CloudField.i3rc_step_cloud` - the step cloud of the I3RC Phase 1 case 1 (Cahalan et al. 2005,
-  "The I3RC: bringing together the most advanced radiative transfer tools for cloudy atmospheres", BAMS
-  86(9), 1275, doi:10.1175/BAMS-86-9-1275): 32 periodic columns across 0.5 km, 16 of optical depth 2 and 16 of
-  18, 0.25 km thick, uniform in y.
+  manner of the real-time cloudscapes of [Schneider2015] and [Schneider2017]: a periodic 2D coverage map
+  thresholded at the requested cover fraction (exactly that fraction of the columns is cloudy), a cloud top
+  that rises with the coverage value, 3D Worley erosion of the edges, and a liquid water content rising
+  linearly from the base (adiabatic clouds; [Brenguier2000] Sec. 2), scaled to the requested mean optical
+  depth of the cloudy columns. Deterministic for a seed.
+* :meth:`CloudField.i3rc_step_cloud` - the step cloud of the I3RC Phase 1 case 1 ([Cahalan2005]): 32 periodic
+  columns across 0.5 km, 16 of optical depth 2 and 16 of 18, 0.25 km thick, uniform in y.
 
 The noise (no PyPI noise library gives periodic 3D gradient and cellular noise on numpy arrays: ``noise``
 evaluates one point per Python call and ``opensimplex`` is not periodic) is written here: Perlin's improved
-gradient noise (Perlin 2002, "Improving noise", ACM TOG 21(3), 681, doi:10.1145/566654.566636: quintic fade
-``6t^5 - 15t^4 + 10t^3`` and 12 edge gradients) on a periodic lattice, and Worley's cellular noise (Worley 1996,
-"A cellular texture basis function", SIGGRAPH, doi:10.1145/237170.237267: distance to the nearest of one random
-feature point per cell, the neighbours taken with wrap-around); fractal sums of octaves doubling the frequency
+gradient noise ([Perlin2002]: quintic fade ``6t^5 - 15t^4 + 10t^3`` and 12 edge gradients) on a periodic
+lattice, and Worley's cellular noise ([Worley1996]: distance to the nearest of one random feature point per
+cell, the neighbours taken with wrap-around); fractal sums of octaves doubling the frequency
 and halving the amplitude stay periodic.
 """
 
@@ -222,9 +217,8 @@ class CloudField:
                                   effective_radius: float, **kw: Any) -> CloudField:
         """A field from liquid water content [kg m^-3] per voxel and the droplets' effective radius [m].
 
-        ``beta_e = 3 Q_e LWC / (4 rho_w r_e)`` (Hansen & Travis 1974, Space Sci. Rev. 16, 527,
-        doi:10.1007/BF00168069, Eq. 2.53, with the extinction efficiency ``Q_e`` = 2 of large droplets; Stephens
-        1978, J. Atmos. Sci. 35, 2123, Eq. 8): for ``r_e`` in [1, 100] um, ``rho_w`` = 1000 kg m^-3.
+        ``beta_e = 3 Q_e LWC / (4 rho_w r_e)`` ([HansenTravis1974] Eq. 2.53, with the extinction efficiency
+        ``Q_e`` = 2 of large droplets; [Stephens1978] Eq. 8): for ``r_e`` in [1, 100] um, ``rho_w`` = 1000 kg m^-3.
         """
         w = np.asarray(lwc, dtype=float)
         if w.ndim != 3 or not np.all(np.isfinite(w)) or np.any(w < 0) or np.any(w > 0.1):
@@ -234,9 +228,9 @@ class CloudField:
 
     @classmethod
     def i3rc_step_cloud(cls, particles: Any) -> CloudField:
-        """The I3RC Phase 1 step cloud (case 1; module docstring): 32 columns 15.625 m wide across a periodic
-        0.5 km domain, the first 16 of optical depth 2 and the last 16 of 18, from the ground to 0.25 km, uniform
-        in y; ``origin`` (0, 0), so that column ``i`` spans ``x`` in ``[15.625 i, 15.625 (i + 1)]`` m."""
+        """The I3RC Phase 1 step cloud ([Cahalan2005], case 1; module docstring): 32 columns 15.625 m wide across
+        a periodic 0.5 km domain, the first 16 of optical depth 2 and the last 16 of 18, from the ground to 0.25 km,
+        uniform in y; ``origin`` (0, 0), so that column ``i`` spans ``x`` in ``[15.625 i, 15.625 (i + 1)]`` m."""
         tau = np.concatenate([np.full(16, 2.0), np.full(16, 18.0)])
         ext = (tau / 250.0)[:, None, None]
         return cls(ext, (500.0, 500.0), 0.0, 250.0, particles, origin=(0.0, 0.0), periodic=True)
@@ -393,7 +387,7 @@ def _check_particles(particles: Any) -> None:
 
 # --------------------------------------------------------------------------------------------- noise
 
-# the 12 edge gradients of Perlin (2002)
+# the 12 edge gradients of [Perlin2002]
 _GRADIENTS = np.array([[1, 1, 0], [-1, 1, 0], [1, -1, 0], [-1, -1, 0], [1, 0, 1], [-1, 0, 1], [1, 0, -1],
                        [-1, 0, -1], [0, 1, 1], [0, -1, 1], [0, 1, -1], [0, -1, -1]], dtype=float)
 
@@ -403,7 +397,7 @@ def _fade(t: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _perlin(points: NDArray[np.float64], period: NDArray[np.int64], rng: np.random.Generator) -> NDArray[np.float64]:
-    """Perlin (2002) gradient noise at ``points`` (..., d) [lattice units], periodic with ``period`` (d,) cells;
+    """[Perlin2002] gradient noise at ``points`` (..., d) [lattice units], periodic with ``period`` (d,) cells;
     values in about [-1, 1]. d = 2 or 3 (2D uses the gradients' first two components)."""
     d = points.shape[-1]
     grads = rng.integers(0, 12, size=tuple(int(p) for p in period))
@@ -424,7 +418,7 @@ def _perlin(points: NDArray[np.float64], period: NDArray[np.int64], rng: np.rand
 
 
 def _worley(points: NDArray[np.float64], period: NDArray[np.int64], rng: np.random.Generator) -> NDArray[np.float64]:
-    """Worley (1996) cellular noise F1: distance to the nearest feature point (one per cell, uniform in it),
+    """[Worley1996] cellular noise F1: distance to the nearest feature point (one per cell, uniform in it),
     periodic with ``period`` cells; in lattice units, about [0, 1]."""
     d = points.shape[-1]
     feats = rng.random(tuple(int(p) for p in period) + (d,))
@@ -482,7 +476,7 @@ def _procedural_extinction(cover: float, nx: int, ny: int, nz: int, sx: float, s
     gx = (np.arange(nx) + 0.5) / nx
     gy = (np.arange(ny) + 0.5) / ny
     xy = np.stack(np.meshgrid(gx * px, gy * py, indexing="ij"), axis=-1)
-    # coverage map: Perlin-Worley (Schneider 2017): Perlin fBm remapped into the Worley fBm's range
+    # coverage map: Perlin-Worley ([Schneider2017]): Perlin fBm remapped into the Worley fBm's range
     perlin = 0.5 * (1.0 + perlin_fbm(xy, (px, py), 4, seeds[0]))
     worley = worley_fbm(xy, (px, py), 3, seeds[1])
     shape = np.clip(perlin - (1.0 - worley) * 0.5, 0.0, None) + 1e-9 * perlin

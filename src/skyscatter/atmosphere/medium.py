@@ -1,10 +1,10 @@
 """The medium: a spherical planet with a clear atmosphere of molecules, aerosols and ozone.
 
 :class:`AtmosphereParameters` is the one description of the atmosphere for every model that integrates
-through it: the precomputed tables of Bruneton & Neyret (2008), "Precomputed Atmospheric Scattering",
-doi:10.1111/j.1467-8659.2008.01245.x (Sec. 2.1), and a path tracer. It holds the planet and top-of-atmosphere
-radii, density profiles, Rayleigh and aerosol coefficients, the aerosol phase function, ozone absorption,
-ground albedo, the top-of-atmosphere solar spectrum, the solar angular radius and the largest sun zenith
+through it: the precomputed tables of Bruneton & Neyret ([Bruneton2008] Sec. 2.1) and a path tracer. It holds
+the planet and top-of-atmosphere radii, density profiles, Rayleigh and aerosol coefficients, the aerosol phase function,
+ozone absorption, ground albedo, the top-of-atmosphere solar spectrum, the solar angular radius and the largest sun
+zenith
 angle to tabulate. Defaults are the Earth values of Bruneton's 2017 rewrite of the paper's model:
 
 =====================  =========================================================================
@@ -223,7 +223,7 @@ class AtmosphereParameters:
                                    **changes: Any) -> AtmosphereParameters:
         """Earth defaults with a vertical aerosol optical depth ``tau`` at 550 nm and Angstrom exponent ``alpha``.
 
-        Angstrom's law ``tau(lambda) = beta (lambda / 1 um)^-alpha`` (Angstrom 1929, doi:10.1080/20014422.1929.11880498)
+        Angstrom's law ``tau(lambda) = beta (lambda / 1 um)^-alpha`` ([Angstrom1929])
         gives ``beta = tau (0.55)^alpha``; ``tau`` in [0, 10], ``alpha`` in [-1, 4] (default 1.3, Preetham 1999 A.1).
         """
         checked = []

@@ -13,7 +13,23 @@ from pathlib import Path
 
 from ..errors import InvalidParameterError
 
-HELP_FORMATTER = argparse.ArgumentDefaultsHelpFormatter
+
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """``--help`` with "(default: ...)" only where it says something: not on flags (``--no-glare`` would read
+    "(default: True)"), required options, options whose default (None, an empty list) the help text describes,
+    or help that already names its default."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (default is None or default is argparse.SUPPRESS or isinstance(default, bool) or action.required
+                or (isinstance(default, (list, tuple)) and not default) or "(default" in text):
+            return text
+        return super()._get_help_string(action)
+
+
+#: The formatter of every subcommand's ``--help``.
+HELP_FORMATTER = HelpFormatter
 
 
 @contextlib.contextmanager

@@ -66,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
         params = AtmosphereParameters(**changes)
     t0 = time.perf_counter()
     atm, _ = load_or_compute(params, progress=sys.stderr.isatty())
-    from ..precomputed.sky import BrunetonSky
+    from ..sky.bruneton import BrunetonSky
 
     def make(zenith: float, azimuth: float):
         return BrunetonSky(zenith, azimuth, atmosphere=atm)

@@ -1,6 +1,6 @@
 """Fitting analytic sky forms to any sky model skyscatter can compute.
 
-:func:`fit_hosek_wilkie` fits the Hosek & Wilkie 2012 form (https://doi.org/10.1145/2185520.2185591) to a
+:func:`fit_hosek_wilkie` fits the Hosek & Wilkie 2012 form ([HosekWilkie2012]) to a
 callable that builds sky models for sun positions, and returns a :class:`HosekWilkieDataset` that
 :class:`skyscatter.HosekWilkieSky` evaluates (``HosekWilkieSky(sun_zenith, sun_azimuth, dataset=ds)``).
 """

@@ -1,8 +1,8 @@
 """Fluxes and radiances of a cloud field's domain, per column (the I3RC quantities), and irradiance at the ground.
 
 :func:`domain_quantities` answers, for every column ``(i, j)`` of a :class:`~skyscatter.atmosphere.clouds.CloudField`
-(its pixel), what the intercomparisons of 3D radiative transfer codes ask (Cahalan et al. 2005, "The I3RC",
-BAMS 86(9), 1275, doi:10.1175/BAMS-86-9-1275; the I3RC Phase 1 output definitions):
+(its pixel), what the intercomparisons of 3D radiative transfer codes ask ([Cahalan2005]; the I3RC Phase 1
+output definitions):
 
 * reflectance ``R = F_up(top) / (mu0 F0)``: the upward irradiance at the field's top averaged over the pixel;
 * transmittance ``T = F_down(base) / (mu0 F0)``, direct + diffuse, at the field's base (the ground when the base
@@ -168,7 +168,7 @@ def _domain_fluxes(medium, clouds, radii, sun, n_wl, *, samples, seed, scheduler
     """Forward photons over the domain: upward and downward fluxes at the level spheres ``radii`` [m] (L, nx, ny,
     n_wl) and the column absorptance (nx, ny, n_wl), each with standard errors (batch to batch), / (mu0 F0); the
     photons used and the vertices per photon."""
-    from .driver import batch_layout, execute, plan_tasks, wavelength_groups
+    from .driver import batch_layout, count_tasks, iter_tasks, run_tasks, wavelength_groups
 
     batch_size, n_batches = batch_layout(int(samples))
     n_batches = max(n_batches, 8)
@@ -176,28 +176,43 @@ def _domain_fluxes(medium, clouds, radii, sun, n_wl, *, samples, seed, scheduler
     nx, ny, _ = clouds.shape
     dx, dy, _ = clouds.voxel_size
     dom = np.array([clouds.origin[0], clouds.origin[1], dx, dy, float(nx), float(ny)])
-    specs = plan_tasks(1, len(groups), n_batches, batch_size, directions_per_task=1,
-                       batches_per_task=max(1, 65536 // batch_size))
-    calls = [(medium, sun, dom, radii, sp.group, groups[sp.group], sp.batch0, sp.n_batches, batch_size,
-              int(seed) + _FORWARD_SEED_OFFSET) for sp in specs]
-    results = execute(_flux_task, calls, scheduler, progress)
+    sizes = dict(directions_per_task=1, batches_per_task=max(1, 65536 // batch_size))
     npix = nx * ny
     nlev = radii.size
     levels = np.zeros((2, nlev, npix, n_wl, 2))
     absorbed = np.zeros((npix, n_wl, 2))
-    verts = 0.0
-    for sp, (u, d, a, v) in zip(specs, results, strict=True):
-        gi = slice(groups[sp.group][0], groups[sp.group][-1] + 1)
-        levels[0, :, :, gi] += u
-        levels[1, :, :, gi] += d
-        absorbed[:, gi] += a
-        verts += float(v[0])
+    verts = [0.0]
+    specs: dict[int, Any] = {}
+    waiting: dict[int, tuple] = {}
+    nxt = [0]
+
+    def calls():
+        for k, sp in enumerate(iter_tasks(1, len(groups), n_batches, batch_size, **sizes)):
+            specs[k] = sp
+            yield (medium, sun, dom, radii, sp.group, groups[sp.group], sp.batch0, sp.n_batches, batch_size,
+                   int(seed) + _FORWARD_SEED_OFFSET)
+
+    def add(k: int, result: tuple) -> None:
+        # added in task order (results may arrive in any order on a cluster): the same bits on any scheduler
+        waiting[k] = result
+        while nxt[0] in waiting:
+            u, d, a, v = waiting.pop(nxt[0])
+            sp = specs.pop(nxt[0])
+            gi = slice(int(groups[sp.group][0]), int(groups[sp.group][-1]) + 1)
+            levels[0, :, :, gi] += u
+            levels[1, :, :, gi] += d
+            absorbed[:, gi] += a
+            verts[0] += float(v[0])
+            nxt[0] += 1
+
+    total = count_tasks(1, len(groups), n_batches, batch_size, **sizes)
+    run_tasks(_flux_task, calls(), scheduler, on_result=add, progress=progress, total=total)
     lv, lv_err = _batch_stats(levels[..., 0], levels[..., 1], n_batches, batch_size, npix)
     ab, ab_err = _batch_stats(absorbed[..., 0], absorbed[..., 1], n_batches, batch_size, npix)
     used = batch_size * n_batches
     shape = (2, nlev, nx, ny, n_wl)
     return (lv.reshape(shape), lv_err.reshape(shape), ab.reshape(nx, ny, n_wl), ab_err.reshape(nx, ny, n_wl), used,
-            verts / (used * len(groups)))
+            verts[0] / (used * len(groups)))
 
 
 def _views(name: str, views: ArrayLike | None) -> NDArray[np.float64]:

@@ -4,8 +4,10 @@ A job is (medium, directions, wavelengths, sun, observer altitude, samples, seed
 of paths (``batch_size`` paths, a function of ``samples`` only) and fixed *wavelength groups* (consecutive
 wavelengths sharing paths, at most ``group_size``), and every (direction, group, batch) draws from its own
 counter-based random stream (:mod:`.rng`). Tasks bundle direction blocks x groups x runs of batches; each returns
-per-batch sums, and the final reduction adds the batches of the whole job in one fixed order. The result therefore
-depends on the seed and the job only, not on the task sizes, the scheduler or the number of workers.
+per-batch sums, and the reduction adds the batches of the whole job in one fixed order (batch 0, 1, 2, ... for
+every direction and wavelength). The result therefore depends on the seed and the job only, not on the task
+sizes, the scheduler or the number of workers. Tasks are planned and reduced lazily, a window at a time, so a job
+of any number of samples needs memory for its directions and wavelengths only.
 """
 
 from __future__ import annotations
@@ -13,8 +15,10 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from itertools import islice
 from typing import Any
 
 import numpy as np
@@ -23,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..atmosphere import AtmosphereParameters
 from ..atmosphere.phase import aerosol_phase_kind
 from ..conventions import direction_from_angles
-from ..errors import InvalidDirectionError, InvalidParameterError
+from ..errors import InvalidDirectionError, InvalidParameterError, MissingDependencyError
 from . import kernels, tracking
 
 __all__ = ["MonteCarloResult", "Medium", "prepare_medium", "sky_radiance", "solar_disc_radiance"]
@@ -338,19 +342,37 @@ class TaskSpec:
     n_batches: int
 
 
-def plan_tasks(n_dirs: int, n_groups: int, n_batches: int, batch_size: int, *,
-               directions_per_task: int | None = None, batches_per_task: int | None = None) -> list[TaskSpec]:
-    """Cut a job into tasks (direction blocks x wavelength groups x runs of batches); any cut gives the same result."""
-    dpt = directions_per_task or min(n_dirs, 32)
+def _task_sizes(n_dirs: int, n_batches: int, batch_size: int, directions_per_task: int | None,
+                batches_per_task: int | None) -> tuple[int, int]:
+    dpt = int(directions_per_task or min(n_dirs, 32))
     if batches_per_task is None:
         batches_per_task = max(1, 32768 // (batch_size * dpt))
-    bpt = max(1, min(int(batches_per_task), n_batches))
-    out = []
+    return dpt, max(1, min(int(batches_per_task), n_batches))
+
+
+def iter_tasks(n_dirs: int, n_groups: int, n_batches: int, batch_size: int, *,
+               directions_per_task: int | None = None, batches_per_task: int | None = None) -> Iterator[TaskSpec]:
+    """The tasks of a job (direction blocks x wavelength groups x runs of batches), generated one at a time, so
+    that a job of any size is planned in constant memory; any cut gives the same result."""
+    dpt, bpt = _task_sizes(n_dirs, n_batches, batch_size, directions_per_task, batches_per_task)
     for d0 in range(0, n_dirs, dpt):
         for g in range(n_groups):
             for b0 in range(0, n_batches, bpt):
-                out.append(TaskSpec(slice(d0, min(n_dirs, d0 + dpt)), g, b0, min(bpt, n_batches - b0)))
-    return out
+                yield TaskSpec(slice(d0, min(n_dirs, d0 + dpt)), g, b0, min(bpt, n_batches - b0))
+
+
+def count_tasks(n_dirs: int, n_groups: int, n_batches: int, batch_size: int, *,
+                directions_per_task: int | None = None, batches_per_task: int | None = None) -> int:
+    """Number of tasks :func:`iter_tasks` yields (without generating them)."""
+    dpt, bpt = _task_sizes(n_dirs, n_batches, batch_size, directions_per_task, batches_per_task)
+    return -(-n_dirs // dpt) * n_groups * -(-n_batches // bpt)
+
+
+def plan_tasks(n_dirs: int, n_groups: int, n_batches: int, batch_size: int, *,
+               directions_per_task: int | None = None, batches_per_task: int | None = None) -> list[TaskSpec]:
+    """Every task of a job as a list (:func:`iter_tasks`; for small jobs)."""
+    return list(iter_tasks(n_dirs, n_groups, n_batches, batch_size, directions_per_task=directions_per_task,
+                           batches_per_task=batches_per_task))
 
 
 def _resolve_scheduler(scheduler: Any) -> tuple[str, Any]:
@@ -360,22 +382,19 @@ def _resolve_scheduler(scheduler: Any) -> tuple[str, Any]:
     if scheduler in ("synchronous", "sync"):
         return "local", "sync"
     if isinstance(scheduler, str):
-        try:
-            from distributed import Client
-        except ImportError:  # pragma: no cover
-            raise InvalidParameterError("a scheduler address needs the 'distributed' package") from None
         if "://" not in scheduler and ":" not in scheduler:
             raise InvalidParameterError(
                 "scheduler must be None (threads), 'synchronous', a dask.distributed Client or a scheduler address "
                 f"such as 'tcp://host:8786'; got {scheduler!r}"
             )
+        Client = _distributed().Client  # noqa: N806
         try:
             return "distributed", Client(scheduler, timeout="10s")
         except (OSError, ValueError, TimeoutError) as exc:
             raise InvalidParameterError(f"cannot connect to the dask scheduler at {scheduler!r}: {exc}") from None
     try:
         from distributed import Client
-    except ImportError:  # pragma: no cover
+    except ImportError:  # no distributed: a Client cannot have been made
         Client = None  # noqa: N806
     if Client is not None and isinstance(scheduler, Client):
         return "distributed", scheduler
@@ -385,69 +404,116 @@ def _resolve_scheduler(scheduler: Any) -> tuple[str, Any]:
     )
 
 
-def execute(fn: Callable[..., Any], calls: list[tuple], scheduler: Any = None,
-            progress: Callable[[int, int], None] | None = None, on_result: Callable[[int, Any], None] | None = None
-            ) -> list[Any]:
-    """Run ``fn(*args)`` for each tuple of ``calls`` as dask tasks; return the results in order.
+def _distributed():
+    """The ``distributed`` package, or a one-line error naming the extra that installs it."""
+    try:
+        import distributed
+    except ImportError:
+        raise MissingDependencyError(
+            "a dask.distributed scheduler address needs the 'distributed' package: pip install "
+            "'skyscatter[montecarlo]' (or pip install distributed)") from None
+    return distributed
 
-    ``progress(done, total)`` is called as tasks finish; ``on_result(i, result)`` as each result arrives (in
-    completion order on a cluster, in order otherwise).
+
+def check_scheduler(scheduler: Any) -> None:
+    """Refuse a scheduler :func:`sky_radiance` cannot use, before any work (an address is checked for its form
+    and for the ``distributed`` package, not connected to)."""
+    if scheduler is None or scheduler in ("threads", "threaded", "synchronous", "sync"):
+        return
+    if isinstance(scheduler, str):
+        if "://" not in scheduler and ":" not in scheduler:
+            _resolve_scheduler(scheduler)  # raises with the allowed forms
+        _distributed()
+        return
+    _resolve_scheduler(scheduler)
+
+
+def run_tasks(fn: Callable[..., Any], calls: Iterable[tuple], scheduler: Any = None, *,
+              on_result: Callable[[int, Any], None], progress: Callable[[int, int], None] | None = None,
+              total: int | None = None) -> int:
+    """Run ``fn(*args)`` for each tuple that ``calls`` yields as dask tasks; ``on_result(i, result)`` receives each
+    result (in order on the local schedulers, in completion order on a cluster). Returns the number of tasks.
+
+    ``calls`` is consumed lazily, a window of tasks at a time (a few per worker thread), so neither the plan nor
+    the results of a job need to fit in memory. ``progress(done, total)`` is called as windows finish. On the
+    threaded scheduler the tasks run in a pool owned by this call: an interrupt (Ctrl-C, SIGTERM in the command
+    line) cancels the queued tasks and returns at once; the running ones (a fraction of a second each) finish
+    in the background.
     """
     import dask
 
+    from ..runtime import num_threads
+
     kind, sched = _resolve_scheduler(scheduler)
-    total = len(calls)
+    it = iter(calls)
+    done = 0
     if kind == "distributed":
-        from distributed import as_completed
-
         client = sched
-        futures = [client.submit(fn, *args, pure=False) for args in calls]
-        index = {f.key: i for i, f in enumerate(futures)}
-        results: list[Any] = [None] * total
-        done = 0
-        for fut in as_completed(futures):
-            i = index[fut.key]
-            results[i] = fut.result()
-            done += 1
-            if on_result is not None:
-                on_result(i, results[i])
-            if progress is not None:
-                progress(done, total)
-        if isinstance(scheduler, str):
-            client.close()
-        return results
-    delayed = [dask.delayed(fn, pure=False)(*args) for args in calls]
-    if progress is None and on_result is None:
-        return list(dask.compute(*delayed, scheduler=sched))
-    # run in chunks so that progress and partial results arrive while the job runs
-    from dask.callbacks import Callback
+        ac = _distributed().as_completed()
+        in_flight: dict[Any, tuple[int, Any]] = {}  # key -> (task number, future)
+        submitted = 0
 
-    counter = {"n": 0}
-    keys = {d.key for d in delayed}
+        def submit(n: int) -> None:
+            nonlocal submitted
+            for args in islice(it, n):
+                fut = client.submit(fn, *args, pure=False)
+                in_flight[fut.key] = (submitted, fut)
+                submitted += 1
+                ac.add(fut)
 
-    class _Progress(Callback):
-        def _posttask(self, key, result, dsk, state, worker_id):  # noqa: D401
-            if key in keys:
-                counter["n"] += 1
+        try:
+            submit(max(4, 4 * sum(client.nthreads().values())))
+            for fut in ac:
+                i, _ = in_flight.pop(fut.key)
+                on_result(i, fut.result())
+                done += 1
                 if progress is not None:
-                    progress(counter["n"], total)
+                    progress(done, total or done)
+                submit(1)
+        except BaseException:
+            client.cancel([f for _, f in in_flight.values()])
+            raise
+        finally:
+            if isinstance(scheduler, str):
+                client.close()
+        return done
+    workers = num_threads() if sched == "threads" else 1
+    window = 8 * workers
+    pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="skyscatter-mc") if sched == "threads" else None
+    extra = {"pool": pool} if pool is not None else {}
+    finished = False
+    try:
+        while True:
+            chunk = list(islice(it, window))
+            if not chunk:
+                break
+            results = dask.compute(*[dask.delayed(fn, pure=False)(*a) for a in chunk], scheduler=sched, **extra)
+            for r in results:
+                on_result(done, r)
+                done += 1
+            if progress is not None:
+                progress(done, total or done)
+        finished = True
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=finished, cancel_futures=not finished)
+    return done
 
-    out: list[Any] = []
-    chunk = max(1, 4 * (dask.config.get("num_workers", None) or _cpu_count()))
-    with _Progress():
-        for s in range(0, total, chunk):
-            res = dask.compute(*delayed[s: s + chunk], scheduler=sched)
-            for k, r in enumerate(res):
-                if on_result is not None:
-                    on_result(s + k, r)
-            out.extend(res)
+
+def execute(fn: Callable[..., Any], calls: list[tuple], scheduler: Any = None,
+            progress: Callable[[int, int], None] | None = None, on_result: Callable[[int, Any], None] | None = None
+            ) -> list[Any]:
+    """Run ``fn(*args)`` for each tuple of ``calls`` as dask tasks; return the results in order
+    (:func:`run_tasks` collecting them; for small jobs)."""
+    out: list[Any] = [None] * len(calls)
+
+    def keep(i: int, r: Any) -> None:
+        out[i] = r
+        if on_result is not None:
+            on_result(i, r)
+
+    run_tasks(fn, calls, scheduler, on_result=keep, progress=progress, total=len(calls))
     return out
-
-
-def _cpu_count() -> int:
-    import os
-
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 # --------------------------------------------------------------------------------------------- public API
@@ -488,31 +554,36 @@ def trace(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float
     seed = int(seed)
     if seed < 0:
         raise InvalidParameterError(f"seed must be >= 0; got {seed}")
+    check_scheduler(scheduler)
     batch_size, n_batches = batch_layout(n_samples)
     groups = wavelength_groups(n_wavelengths, group_size)
     n = dirs.shape[0]
-    specs = plan_tasks(n, len(groups), n_batches, batch_size, directions_per_task=directions_per_task,
-                       batches_per_task=batches_per_task)
+    sizes = dict(directions_per_task=directions_per_task, batches_per_task=batches_per_task)
+    total = count_tasks(n, len(groups), n_batches, batch_size, **sizes)
     index = np.arange(n, dtype=np.int64)
+    fold = _BatchFold(n, n_wavelengths, groups)
+    specs: dict[int, TaskSpec] = {}
+    vertices = [0.0]
 
     def c(a, sl):
         return np.ascontiguousarray(a[sl])
 
-    calls = [(medium, c(origins, sp.dir_slice), c(jitter, sp.dir_slice), c(dirs, sp.dir_slice),
-              c(mode, sp.dir_slice), sun, index[sp.dir_slice], sp.group, groups[sp.group], sp.batch0, sp.n_batches,
-              batch_size, seed) for sp in specs]
-    results = execute(_run_task, calls, scheduler, progress)
-    sums = np.zeros((n, n_wavelengths, n_batches))
-    sumsq = np.zeros_like(sums)
-    verts = np.zeros((n, len(groups), n_batches))
-    for sp, (a, b, v) in zip(specs, results, strict=True):
-        gi = groups[sp.group]
-        sums[sp.dir_slice, gi[0]: gi[-1] + 1, sp.batch0: sp.batch0 + sp.n_batches] = a
-        sumsq[sp.dir_slice, gi[0]: gi[-1] + 1, sp.batch0: sp.batch0 + sp.n_batches] = b
-        verts[sp.dir_slice, sp.group, sp.batch0: sp.batch0 + sp.n_batches] = v
+    def calls() -> Iterator[tuple]:
+        for k, sp in enumerate(iter_tasks(n, len(groups), n_batches, batch_size, **sizes)):
+            specs[k] = sp
+            yield (medium, c(origins, sp.dir_slice), c(jitter, sp.dir_slice), c(dirs, sp.dir_slice),
+                   c(mode, sp.dir_slice), sun, index[sp.dir_slice], sp.group, groups[sp.group], sp.batch0,
+                   sp.n_batches, batch_size, seed)
+
+    def add(k: int, result: tuple) -> None:
+        a, b, v = result
+        fold.add(specs.pop(k), a, b)
+        vertices[0] += float(np.sum(v))  # whole numbers: exact in any order
+
+    run_tasks(_run_task, calls(), scheduler, on_result=add, progress=progress, total=total)
     used = batch_size * n_batches
-    mean, stderr = reduce_batches(sums, sumsq, used)
-    return mean, stderr, used, float(np.sum(verts) / (n * len(groups) * used))
+    mean, stderr = reduce_batches(fold.sums, fold.sumsq, used)
+    return mean, stderr, used, vertices[0] / (n * len(groups) * used)
 
 
 def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavelengths: ArrayLike, *,
@@ -573,13 +644,40 @@ def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavele
     return MonteCarloResult(mean, stderr, used, time.perf_counter() - t_start, wl, dirs, verts)
 
 
+class _BatchFold:
+    """Adds per-batch sums into running totals in one fixed order: for every direction and wavelength, batch 0,
+    then 1, 2, ... (tasks arriving out of order wait for their turn). The result is therefore the same bits
+    whatever the task sizes, the scheduler or the order of completion, in memory independent of the samples."""
+
+    def __init__(self, n_dirs: int, n_wl: int, groups: list[NDArray[np.int64]]) -> None:
+        self.sums = np.zeros((n_dirs, n_wl))
+        self.sumsq = np.zeros((n_dirs, n_wl))
+        self.groups = groups
+        self.next: dict[tuple[int, int], int] = {}
+        self.waiting: dict[tuple[int, int], dict[int, tuple]] = {}
+
+    def add(self, spec: TaskSpec, sums: NDArray[np.float64], sumsq: NDArray[np.float64]) -> None:
+        key = (spec.dir_slice.start, spec.group)
+        waiting = self.waiting.setdefault(key, {})
+        waiting[spec.batch0] = (spec, sums, sumsq)
+        nxt = self.next.get(key, 0)
+        while nxt in waiting:
+            sp, a, b = waiting.pop(nxt)
+            gi = self.groups[sp.group]
+            cols = slice(int(gi[0]), int(gi[-1]) + 1)
+            tot, tot2 = self.sums[sp.dir_slice, cols], self.sumsq[sp.dir_slice, cols]
+            for k in range(sp.n_batches):  # one batch at a time: the order of the additions is fixed
+                tot += a[..., k]
+                tot2 += b[..., k]
+            nxt += sp.n_batches
+        self.next[key] = nxt
+
+
 def reduce_batches(sums: NDArray[np.float64], sumsq: NDArray[np.float64], n: int
                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Mean and standard error from per-batch sums (last axis), added in one fixed order."""
-    s = np.sum(sums, axis=-1)
-    s2 = np.sum(sumsq, axis=-1)
-    mean = s / n
-    var = np.maximum(s2 / n - mean * mean, 0.0) * (n / max(n - 1, 1))
+    """Mean and standard error from the sums and sums of squares of ``n`` per-path estimates."""
+    mean = sums / n
+    var = np.maximum(sumsq / n - mean * mean, 0.0) * (n / max(n - 1, 1))
     return mean, np.sqrt(var / n)
 
 

@@ -31,9 +31,9 @@ field, free paths are sampled by decomposition and delta tracking against a bloc
 by residual ratio tracking (:mod:`.tracking`); the two are combined by decomposition: the shell free path
 ``t_s`` is drawn first, the field is tracked up to ``t_s``, and whichever collides first is the collision.
 
-Estimator (backward paths from the observer; Veach 1997, PhD thesis, Stanford, Ch. 8-9):
+Estimator (backward paths from the observer; [Veach1997] Ch. 8-9):
 
-* forced first collision (Cashwell & Everett 1959): when the view ray leaves the atmosphere without hitting the
+* forced first collision ([CashwellEverett1959]): when the view ray leaves the atmosphere without hitting the
   ground and does not meet the cloud field's box, its first collision is drawn from ``sigma_t T / (1 -
   T_total)`` on the ray, so no path is wasted on clear sky;
 * next-event estimation to the sun at every medium and ground vertex: a direction uniform over the solar disc
@@ -41,9 +41,8 @@ Estimator (backward paths from the observer; Veach 1997, PhD thesis, Stanford, C
   blocks it; through the field by ratio tracking), phase function or ``albedo / pi * cos``. The sun is reached
   only by NEE, so the sky radiance never contains the directly transmitted sun (reported separately);
 * absorption (particle albedos, ozone) enters as a weight, never as termination;
-* directional importance sampling towards the sun (the "DDIS" of Buras & Mayer 2011, "Efficient unbiased
-  variance reduction techniques for Monte Carlo simulations of radiative transfer in cloudy atmospheres: the
-  solution", JQSRT 112, 434, doi:10.1016/j.jqsrt.2010.10.005, Sec. 3.3, here for backward paths): in a cloudy
+* directional importance sampling towards the sun (the "DDIS" of [BurasMayer2011] Sec. 3.3, here for backward
+  paths): in a cloudy
   medium, with probability ``ddis`` (0.1) the new direction is drawn from a Henyey-Greenstein lobe (g 0.85)
   centred on the sun, otherwise from the medium's lobes, and every wavelength's direction density is the mixture
   of the two. Next-event estimates through a forward-peaked cloud phase function are large only for the rare
@@ -56,14 +55,13 @@ Estimator (backward paths from the observer; Veach 1997, PhD thesis, Stanford, C
   ``cornette_shanks_hg_weight`` in ``[3 / (2 (2 + g^2)), 3 / (2 + g^2)]``) or, for a tabulated phase function,
   the exact inverse CDF of the hero wavelength's table (:mod:`skyscatter.atmosphere.phase_table`: linear in
   ``cos theta`` between nodes, a closed-form root per segment; its diffraction peak is sampled, never
-  truncated), the direction built about the current one by ``direction_about_axis`` (Duff et al. 2017);
+  truncated), the direction built about the current one by ``direction_about_axis`` ([Duff2017]);
   Lambertian ground: cosine-weighted hemisphere;
-* Russian roulette (Arvo & Kirk 1990) from the second vertex when the largest weight falls below 0.5, survival
+* Russian roulette ([ArvoKirk1990]) from the second vertex when the largest weight falls below 0.5, survival
   probability ``w_max / 0.5``; a hard cap of 100000 vertices (never reached in the tests; a path through a cloud
   of optical depth 100 scatters some 10^3-10^4 times).
 
-Hero wavelengths (Wilkie et al. 2014, "Hero wavelength spectral sampling", Comput. Graph. Forum 33(4), 123-131,
-doi:10.1111/cgf.12419): one path serves all the wavelengths of its group. The hero (uniformly chosen per path)
+Hero wavelengths ([Wilkie2014]): one path serves all the wavelengths of its group. The hero (uniformly chosen per path)
 drives every decision; each wavelength's estimate is weighted with the balance heuristic over the group, i.e.
 ``F_i(path) / mean_k p_k(path)`` where ``p_k`` is the density the path would have had with wavelength ``k`` as
 hero (one-sample MIS, Veach 1997, Sec. 9.2.4). The direction density under hero ``k`` is the mixture of the
@@ -83,7 +81,6 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from ..atmosphere.phase import (
@@ -95,21 +92,17 @@ from ..atmosphere.phase import (
     rayleigh_phase_scalar,
 )
 from ..atmosphere.phase_table import phase_table_inverse_cdf, phase_table_values
+from ..jit import helper, inline, kernel
 from .rng import next_uniform, sample_state, stream_key
 from .tracking import field_box_hit, field_density_at, field_free_path, field_transmittance
 
 __all__ = ["column_along", "disc_transmittance", "trace_block", "LOBE_NONE", "LOBE_RAYLEIGH",
            "LOBE_CORNETTE_SHANKS", "LOBE_HENYEY_GREENSTEIN", "LOBE_TABLE"]
 
-_jit = numba.njit(cache=True, nogil=True)
-_jit_inline = numba.njit(cache=True, nogil=True, inline="always")
-# Helpers that never allocate: _nrt=False (why: skyscatter.precomputed.sampling, docs/architecture.md).
-_hjit = numba.njit(cache=True, nogil=True, _nrt=False)
-# Small per-collision helpers with many array arguments: inlined (a call passes 7 words per array argument,
-# which costs as much as their loops over a dozen wavelengths).
-_ijit = numba.njit(cache=True, nogil=True, _nrt=False, inline="always")
+# Small per-collision helpers with many array arguments are inlined (``inline``): a call passes 7 words per array
+# argument, about what their loops over a dozen wavelengths cost.
 
-# 4-point Gauss-Legendre nodes and weights on [-1, 1] (Abramowitz & Stegun 1964, Table 25.4)
+# 4-point Gauss-Legendre nodes and weights on [-1, 1] ([Abramowitz1964] Table 25.4)
 _GX = (-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526)
 _GW = (0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538)
 _MAX_VERTICES = 100_000
@@ -120,7 +113,7 @@ _RR_THRESHOLD = 0.5
 LOBE_NONE, LOBE_RAYLEIGH, LOBE_CORNETTE_SHANKS, LOBE_HENYEY_GREENSTEIN, LOBE_TABLE = range(5)
 
 
-@_jit_inline
+@inline
 def _density(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> float:
     """Relative density of component ``comp`` at altitude ``h`` [m] (DensityProfile semantics)."""
     start = 0.0
@@ -137,7 +130,7 @@ def _density(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> float
     return 0.0
 
 
-@_hjit
+@helper
 def _densities(r, rb, layers, nlay, out):
     """Relative densities of every shell component at radius ``r`` [m] into ``out`` (n_comp,)."""
     h = r - rb
@@ -145,7 +138,7 @@ def _densities(r, rb, layers, nlay, out):
         out[c] = _density(h, layers, nlay, c)
 
 
-@_hjit
+@helper
 def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     """Distance [m] along the ray to the ground or out of the top of the atmosphere, and whether it is the ground."""
     r2 = px * px + py * py + pz * pz
@@ -159,7 +152,7 @@ def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     return (t if t > 0.0 else 0.0), False
 
 
-@_hjit
+@helper
 def _piece_columns(r2, b, a, c, rb, layers, nlay, out):
     """Gauss-Legendre columns of every component over ``[a, c]`` of a ray with ``|p|^2 = r2``, ``p.d = b``."""
     half = 0.5 * (c - a)
@@ -193,7 +186,7 @@ def _piece_columns(r2, b, a, c, rb, layers, nlay, out):
         out[q] *= half
 
 
-@_hjit
+@helper
 def _dot(k, cols):
     if cols.shape[0] == 3:
         return k[0] * cols[0] + k[1] * cols[1] + k[2] * cols[2]
@@ -203,7 +196,7 @@ def _dot(k, cols):
     return s
 
 
-@_hjit
+@helper
 def _dot_row(coef, i, cols):
     """``coef[i] . cols`` without a view of the row (no reference counting in the kernels' loops)."""
     if cols.shape[0] == 3:
@@ -214,7 +207,7 @@ def _dot_row(coef, i, cols):
     return s
 
 
-@_hjit
+@helper
 def _invert_in_piece(r2, b, a, c, rem, dtau, target, k, rb, layers, nlay, tmp):
     """Distance ``s`` in ``[a, c]`` where the optical depth ``k . col`` from ``a`` reaches ``rem`` (``dtau`` over
     the whole piece); Newton on the Gauss-Legendre integral with a bisection safeguard. ``tmp`` gets the columns
@@ -247,7 +240,7 @@ def _invert_in_piece(r2, b, a, c, rem, dtau, target, k, rb, layers, nlay, tmp):
     return s
 
 
-@_hjit
+@helper
 def _march(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec):
     """:func:`column_along`; also records, per piece ``j``, its end ``t``, the cumulative optical depth and the
     cumulative columns in ``rec[j, 0]``, ``rec[j, 1]``, ``rec[j, 2:]`` (``rec`` has at least ``2 len(edges) + 2``
@@ -322,7 +315,7 @@ def _march(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, co
         a = c
 
 
-@_jit
+@kernel
 def column_along(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp):
     """March along ``p + t d`` for ``0 <= t <= t_end`` [m] until the optical depth ``k . col`` reaches ``target``.
 
@@ -335,7 +328,7 @@ def column_along(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nl
     return t, reached
 
 
-@_hjit
+@helper
 def _columns_at(px, py, pz, dx, dy, dz, t, rb, layers, nlay, rec, npc, cols, tmp):
     """Columns from 0 to ``t`` on a ray whose first ``npc`` pieces are recorded in ``rec`` by :func:`_march`
     (``t`` inside a recorded piece or in the one after them), without integrating the recorded pieces again."""
@@ -352,7 +345,7 @@ def _columns_at(px, py, pz, dx, dy, dz, t, rb, layers, nlay, rec, npc, cols, tmp
         cols[q] = tmp[q] + (rec[k - 1, 2 + q] if k > 0 else 0.0)
 
 
-@_hjit
+@helper
 def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k, rb, layers, nlay, rec, npc, cols, tmp):
     """Collision at hero optical depth ``target`` on a ray already marched to its end (pieces in ``rec``), without
     integrating it again: the same pieces, cumulative sums and inversion as :func:`_march`."""
@@ -375,14 +368,14 @@ def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k, rb, layers, nl
     return t_end, False
 
 
-@_hjit
+@helper
 def _sun_sample(sx, sy, sz, cos_max, u1, u2):
     """Direction uniform in solid angle over the cone of half-angle ``acos(cos_max)`` about the sun."""
     mu = 1.0 - u1 * (1.0 - cos_max)
     return direction_about_axis(sx, sy, sz, mu, 2.0 * math.pi * u2)
 
 
-@_hjit
+@helper
 def _normalise(f, p, n):
     m = 0.0
     for i in range(n):
@@ -394,7 +387,7 @@ def _normalise(f, p, n):
             p[i] = p[i] / m
 
 
-@_ijit
+@inline
 def _lobe_values(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, ph, qs):
     """Phase function ``ph[c, i]`` [sr^-1] of every active lobe ``c`` (indices ``active``) at every wavelength ``i``
     at ``mu``, and the density ``qs[c, i]`` by which the lobe is sampled (Henyey-Greenstein for a Cornette-Shanks
@@ -422,7 +415,7 @@ def _lobe_values(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, ph, qs):
             qs[c, i] = w
 
 
-@_hjit
+@helper
 def _sample_lobe(kind, g, tab, hero, u, tmu, tval, tcdf):
     """Cosine of the scattering angle drawn from lobe ``kind`` for the hero wavelength (uniform ``u``)."""
     if kind == LOBE_RAYLEIGH:
@@ -432,7 +425,7 @@ def _sample_lobe(kind, g, tab, hero, u, tmu, tval, tcdf):
     return henyey_greenstein_inverse_cdf_scalar(u, g)
 
 
-@_ijit
+@inline
 def _optical_depths(coef_t, cols, out):
     """``out[i] = sum_q coef_t[q, i] cols[q]``: the optical depth at every wavelength of a ray's columns (the loop
     over wavelengths innermost, on contiguous rows)."""
@@ -453,7 +446,7 @@ def _optical_depths(coef_t, cols, out):
             out[i] += coef_t[q, i] * cq
 
 
-@_ijit
+@inline
 def _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt, sst):
     """At a point: extinction ``stt[i]`` and scattering ``sst[i]`` [m^-1] per wavelength and the scattering
     coefficient ``sc[c, i]`` of each lobe (shell components, then the field with density ``rho_f``)."""
@@ -494,7 +487,7 @@ def _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, den
         sst[i] += v
 
 
-@_ijit
+@inline
 def _lobe_sum(active, sc, ph, out):
     """``out[i] = sum_c sc[c, i] ph[c, i]`` over the active lobes."""
     n = out.shape[0]
@@ -512,7 +505,7 @@ def _lobe_sum(active, sc, ph, out):
             out[i] += sc[c, i] * ph[c, i]
 
 
-@_jit
+@kernel
 def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, scat,
                 lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
                 fre, fs, fss, ddis, ddis_g, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
@@ -800,7 +793,7 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
             vertices_out[j, bi] += nvert
 
 
-@_jit
+@kernel
 def disc_transmittance(origin, sun, sun_radius, rb, rt, edges, layers, nlay, coef, fvf, fvi, frho, fbmax, fbmin, fxe,
                        fye, fre, fs, n_radial, n_angular, out):
     """Mean transmittance over the solar disc seen from ``origin`` (3,) for each wavelength (``out`` (n_wl,)).
@@ -854,7 +847,7 @@ def disc_transmittance(origin, sun, sun_radius, rb, rt, edges, layers, nlay, coe
         out[i] /= n_radial * n_angular
 
 
-@_hjit
+@helper
 def _next_level(px, py, pz, dx, dy, dz, levels, t_end):
     """First crossing after 0 of one of the level spheres (radii ``levels`` [m]) within ``[0, t_end]``: ``(t, k,
     up)`` with ``k`` the level and ``up`` whether it is crossed outwards; ``(t_end, -1, False)`` when there is none.
@@ -886,7 +879,7 @@ def _next_level(px, py, pz, dx, dy, dz, levels, t_end):
     return best, k, up
 
 
-@_hjit
+@helper
 def _pixel(px, py, dom):
     """Index of the domain pixel (periodic) under the planet-frame point (px, py); ``dom`` = x0, y0, dx, dy, nx,
     ny."""
@@ -897,7 +890,7 @@ def _pixel(px, py, dom):
     return ix * ny + iy
 
 
-@_jit
+@kernel
 def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo,
                fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, dom, levels, seed, group, batch0, n_batches,
                batch_size, up, down, absorbed, vertices_out):

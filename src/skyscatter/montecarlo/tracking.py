@@ -13,27 +13,23 @@ and the smallest density of its voxels (``bmax``, ``bmin``). Rays walk from bloc
 crossings are ray-plane and ray-sphere intersections, the indices stepped exactly rather than recomputed from
 rounded positions), so thin air around a dense cloud is crossed at the block's own rate, not at the cloud's.
 
-**Free paths: decomposition + delta tracking** (Woodcock, Murphy, Hemmings & Longworth 1965, "Techniques used
-in the GEM code for Monte Carlo neutronics calculations", ANL-7050, p. 557; Kutz, Habel, Li & Novak 2017,
-"Spectral and decomposition tracking for rendering heterogeneous volumes", ACM TOG 36(4), 111,
-doi:10.1145/3072959.3073665, Sec. 4-5). In a block the density is split into the constant control ``bmin``
-and the residual ``rho - bmin <= bmax - bmin``. The control's free path is exponential (sampled exactly); the
-residual's by delta tracking against the residual majorant ``mu = s_max (bmax - bmin)`` with ``s_max`` the
-largest spectral scale ``s_i = sigma_i / rho`` of the wavelength group, so that one majorant serves every
-wavelength. A tentative residual collision at density ``rho`` is real with probability ``s_h (rho - bmin) /
-mu`` for the hero ``h``. Homogeneous blocks (``bmax = bmin``: a uniform layer, a column of the I3RC step cloud)
+**Free paths: decomposition + delta tracking** ([Woodcock1965]; [Kutz2017] Sec. 4-5). In a block the density
+is split into the constant control ``bmin`` and the residual ``rho - bmin <= bmax - bmin``. The control's free
+path is exponential (sampled exactly); the residual's by delta tracking against the residual majorant
+``mu = s_max (bmax - bmin)`` with ``s_max`` the largest spectral scale ``s_i = sigma_i / rho`` of the
+wavelength group, so that one majorant serves every wavelength. A tentative residual collision at density
+``rho`` is real with probability ``s_h (rho - bmin) / mu`` for the hero ``h``. Homogeneous blocks (``bmax = bmin``: a uniform layer, a column of the I3RC step cloud)
 have no tentative collisions at all: the free path is exact.
 
-**Spectral MIS.** The path weights ``f_i`` and the hero densities ``p_i`` (balance heuristic, Veach 1997,
+**Spectral MIS.** The path weights ``f_i`` and the hero densities ``p_i`` (balance heuristic, [Veach1997]
 Sec. 9.2.4; the kernels' ``f`` and ``p`` arrays, docs/montecarlo.md) are multiplied by ``exp(-s_i bmin l)`` for
 each control segment of length ``l`` and by ``(mu - s_i (rho - bmin)) / mu`` at each rejected (null) residual
 collision: the same factor for ``f_i`` and ``p_i``, which is ``T_i`` estimated by the null-collision integral
-(Galtier et al. 2013, doi:10.1016/j.jqsrt.2013.04.001) for ``f`` and the probability of the hero's decisions
+([Galtier2013]) for ``f`` and the probability of the hero's decisions
 had ``i`` been the hero for ``p``. The collision density at a real collision is then ``s_i rho`` for every
 wavelength (the kernels multiply ``p_i`` by the total extinction there).
 
-**Shadow rays: residual ratio tracking** (Novak, Selle & Jarosz 2014, "Residual ratio tracking for estimating
-attenuation in participating media", ACM TOG 33(6), 179, doi:10.1145/2661229.2661292, Sec. 4): per
+**Shadow rays: residual ratio tracking** ([Novak2014] Sec. 4): per
 wavelength ``T_i = exp(-s_i sum_blocks bmin l) prod_events (1 - s_i (rho - bmin) / mu)``, unbiased for every
 wavelength with one set of tentative events. With the voxel grid as its own majorant grid (``bx = by = bz =
 1``, :func:`pack_field` ``exact=True``) there are no events: the transmittance is exact (regular tracking).
@@ -45,17 +41,14 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from ..jit import helper, inline
 from .rng import next_uniform
 
 __all__ = ["PackedField", "STOP_OPTICAL_DEPTH", "empty_field", "field_box_hit", "field_density", "field_density_at",
            "field_free_path", "field_transmittance", "pack_grid"]
-
-_hjit = numba.njit(cache=True, nogil=True, _nrt=False)
-_ijit = numba.njit(cache=True, nogil=True, _nrt=False, inline="always")
 
 #: Control optical depth beyond which a shadow ray counts as blocked (exp(-50) = 2e-22).
 STOP_OPTICAL_DEPTH = 50.0
@@ -67,12 +60,12 @@ X0, Y0, R0, DX, DY, DZ, LX, LY, PRESENT, PERIODIC, R_TOP = range(11)
 NX, NY, NZ, BX, BY, BZ, NBX, NBY, NBZ = range(9)
 
 
-@_ijit
+@inline
 def _floor_div(a, b):
     return int(math.floor(a / b))
 
 
-@_ijit
+@inline
 def _block_of(local, edges, nb, direction):
     """Block index of a local coordinate in ``[edges[0], edges[nb]]``; on a boundary the side ``direction`` points
     to (``direction >= 0`` takes the upper block)."""
@@ -84,7 +77,7 @@ def _block_of(local, edges, nb, direction):
     return j
 
 
-@_ijit
+@inline
 def _radial_state(r, b, re, nbz):
     """Radial block index of radius ``r`` moving with radial velocity sign ``b``: -1 below the field, ``nbz``
     above it. A point on a boundary sphere (within ``1e-6 m + 1e-12 r``: the rounding of a radius computed from
@@ -104,13 +97,13 @@ def _radial_state(r, b, re, nbz):
     return j
 
 
-@_ijit
+@inline
 def _outer_root(b, c, radius):
     disc = b * b - (c - radius * radius)
     return -b + math.sqrt(disc if disc > 0.0 else 0.0)
 
 
-@_ijit
+@inline
 def _inner_root(b, c, radius):
     """Smaller root of ``|o + t d| = radius`` (the inward crossing), or inf if the ray misses the sphere."""
     disc = b * b - (c - radius * radius)
@@ -119,7 +112,7 @@ def _inner_root(b, c, radius):
     return -b - math.sqrt(disc)
 
 
-@_hjit
+@helper
 def field_box_hit(ox, oy, oz, dx, dy, dz, t_end, vf):
     """``(ta, tb)``: the part of ``[0, t_end]`` of the ray ``o + t d`` inside the field's horizontal box (all of it
     for a periodic field) and between the spheres of its bottom and top; ``ta >= tb`` when the ray misses it.
@@ -159,7 +152,7 @@ def field_box_hit(ox, oy, oz, dx, dy, dz, t_end, vf):
     return ta, tb
 
 
-@_hjit
+@helper
 def field_density(px, py, pz, vf, vi, rho, jx, jy, jz):
     """Density [m^-1 at the reference wavelength] of the voxel containing ``p``, clamped into block ``(jx, jy, jz)``
     (so that it never exceeds that block's majorant through rounding)."""
@@ -185,7 +178,7 @@ def field_density(px, py, pz, vf, vi, rho, jx, jy, jz):
     return rho[ix, iy, iz]
 
 
-@_hjit
+@helper
 def field_density_at(px, py, pz, vf, vi, rho):
     """Density of the voxel containing ``p`` (0 outside the field)."""
     nx = vi[NX]
@@ -205,7 +198,7 @@ def field_density_at(px, py, pz, vf, vi, rho):
     return rho[ix, iy, iz]
 
 
-@_hjit
+@helper
 def _start(ox, oy, oz, dx, dy, dz, t, vf, vi, xe, ye, re, state):
     """Block indices of the point ``o + t d`` moving along ``d``; ``state`` (6,) int64 gets jx, kx, jy, ky, jz and a
     flag 1 (inside the horizontal box; always for periodic fields)."""
@@ -237,7 +230,7 @@ def _start(ox, oy, oz, dx, dy, dz, t, vf, vi, xe, ye, re, state):
     state[5] = 1
 
 
-@_hjit
+@helper
 def _next_crossing(ox, oy, oz, dx, dy, dz, t, vf, vi, xe, ye, re, state):
     """Distance of the next block boundary after ``t`` and which axis it crosses (0 x, 1 y, 2 radius; -1 none)."""
     best = _INF
@@ -281,7 +274,7 @@ def _next_crossing(ox, oy, oz, dx, dy, dz, t, vf, vi, xe, ye, re, state):
     return best, axis
 
 
-@_hjit
+@helper
 def _step(ox, oy, oz, dx, dy, dz, t, axis, vf, vi, re, state):
     """Move ``state`` across the boundary on ``axis`` at distance ``t``; returns False when the ray leaves an open
     field's box."""
@@ -328,7 +321,7 @@ def _step(ox, oy, oz, dx, dy, dz, t, axis, vf, vi, re, state):
     return True
 
 
-@_hjit
+@helper
 def field_free_path(ox, oy, oz, dx, dy, dz, t_end, hero, s, smax, vf, vi, rho, bmax, bmin, xe, ye, re, f, p, st,
                     state):
     """Free path of the hero through the field along ``o + t d``, ``0 <= t <= t_end`` [m] (module docstring).
@@ -397,7 +390,7 @@ def field_free_path(ox, oy, oz, dx, dy, dz, t_end, hero, s, smax, vf, vi, rho, b
     return t_end, False, 0.0
 
 
-@_hjit
+@helper
 def field_transmittance(ox, oy, oz, dx, dy, dz, t_end, s, smax, smin, vf, vi, rho, bmax, bmin, xe, ye, re, tr,
                         st, state):
     """Transmittance of the field along ``o + t d``, ``0 <= t <= t_end`` [m], per wavelength into ``tr`` (n,):
@@ -444,7 +437,7 @@ def field_transmittance(ox, oy, oz, dx, dy, dz, t_end, s, smax, smin, vf, vi, rh
                             if tr[i] > wmax:
                                 wmax = tr[i]
                         if wmax < 0.01:
-                            # Russian roulette on the ratio-tracking estimate (Novak et al. 2014, Sec. 4.2)
+                            # Russian roulette on the ratio-tracking estimate ([Novak2014] Sec. 4.2)
                             if next_uniform(st) >= 0.5:
                                 for i in range(n):
                                     tr[i] = 0.0

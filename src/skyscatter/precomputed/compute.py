@@ -27,8 +27,7 @@ it 0.00 / 0.01 / 0.26 %; turbidity 3 over albedo 0.3, 23 / 34 / 43 % and 0.15 / 
 aerosol optical depth 0.5 over albedo 0.8, 6 orders with the tail are within 0.9 % of 16 orders
 (``docs/bruneton.md``). Four orders are too few for the tail (the shape has not settled: +10 % in that case).
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
@@ -249,7 +248,7 @@ def compute_tables(params: AtmosphereParameters, *, orders: int = DEFAULT_ORDERS
     if isinstance(orders, bool) or not isinstance(orders, (int, np.integer)) or not 1 <= orders <= 50:
         raise InvalidParameterError(f"orders must be a whole number in [1, 50]; got {orders!r}")
     if params.aerosol is not None or params.particles:
-        # until the tables read the particle components (issue 20): never a sky with the wrong aerosol
+        # until the tables read the particle components: never a sky with the wrong aerosol
         raise InvalidParameterError(
             "the precomputed tables take the default aerosol of the mie_* fields only (no aerosol component "
             "or further particle components yet)")

@@ -8,8 +8,7 @@ radiance at the table wavelengths to XYZ and to other wavelengths (:mod:`.conver
 and broadcast here; the loops over rays are the numba kernels of :mod:`.lookup`, run on all cores by
 :func:`.parallel.parallel_for`.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations

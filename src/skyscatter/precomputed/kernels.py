@@ -19,17 +19,16 @@ Ray integrals use product integration (:func:`.sampling.exp_segment_weights`): e
 coefficient is exponential between two samples and the rest of the integrand linear, which keeps 50 samples
 accurate for the 1.2 km aerosol layer on vertical rays where the plain trapezoidal rule is 8 % off.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from ..jit import CONTRACT_ARCP, CONTRACT_REASSOC, helper, kernel
 from .geometry import (
     MU_S_LIMIT_TOLERANCE,
     acos_table,
@@ -64,10 +63,8 @@ from .sampling import (
     transmittance_to_top,
 )
 
-_kjit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
 
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def mu_s_texels(bottom, top, mu_s_min, n_mu_s):
     """``mu_s`` of every texel of the 4D tables (each found by bisection, so computed once per kernel call)."""
     out = np.empty(n_mu_s)
@@ -76,13 +73,13 @@ def mu_s_texels(bottom, top, mu_s_min, n_mu_s):
     return out
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@helper
 def ray_sample_distance(i, n_samples, d_end, mu, hits_ground):
     """Distance [m] of sample ``i`` of ``n_samples`` steps along a ray of length ``d_end``: quadratic spacing,
     dense at the ray's lower end where the aerosols are (the start for rays going up, the end for rays that meet
     the ground), uniform for other downward rays. With uniform steps a 70 deg slant path through an aerosol
     optical depth of 0.5 had one of 50 steps per scale height and its radiance came out 5-30 % high against
-    DISORT (issue 11)."""
+    DISORT (docs/bruneton.md)."""
     u = i / n_samples
     if hits_ground:
         return d_end * (1.0 - (1.0 - u) * (1.0 - u))
@@ -93,7 +90,7 @@ def ray_sample_distance(i, n_samples, d_end, mu, hits_ground):
 PI = math.pi
 
 
-@_kjit
+@kernel
 def optical_length_kernel(bottom, top, profiles, counts, n_samples, out, start, stop):
     """Optical length of each profile [m] from the texels of the transmittance table to the top.
 
@@ -115,7 +112,7 @@ def optical_length_kernel(bottom, top, profiles, counts, n_samples, out, start, 
                 out[i_r, i_mu, p] += w * density_at(profiles[p], counts[p], r_i - bottom)
 
 
-@_kjit
+@kernel
 def direct_irradiance_kernel(transmittance, bottom, top, alpha, out, start, stop):
     """Direct irradiance on a horizontal surface per unit solar irradiance into ``out`` (n_r, n_mu_s, n_wl).
 
@@ -136,7 +133,7 @@ def direct_irradiance_kernel(transmittance, bottom, top, alpha, out, start, stop
             out[i_r, i_s, k] = t[k] * cos_factor
 
 
-@_kjit
+@kernel
 def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
     """The (clamped) view-sun cosine of every texel of the 4D tables, into ``out`` (n_r, n_mu, n_mu_s, n_nu)."""
     n_r, n_mu, n_mu_s, n_nu = out.shape
@@ -151,7 +148,7 @@ def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
                 out[i_r, i_mu, i_s, i_n] = scattering_nu_param(i_n, mu, mu_s, n_nu)
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"arcp", "contract"}, error_model="numpy")
+@helper(fastmath=CONTRACT_ARCP)
 def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w, frac):
     """Transmittance-table ``mu`` cells and weights towards the sun, and the visible fraction of its disc, at a
     ray sample (distance ``d`` [m] from the texel's point at radius ``r``, radius ``r_i``) for every texel sun
@@ -164,7 +161,7 @@ def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, 
         cell[u], w[u] = lerp_index(p_mu, 0, n_tmu - 1)
 
 
-@_kjit
+@kernel
 def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profiles, counts, n_samples, ray, mie,
                              start, stop):
     """Single scattering integrals per unit solar irradiance and unit scattering coefficient.
@@ -258,14 +255,14 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
                     mie[i_r, i_mu, i_s, i_n, k] = acc_m[u, k]
 
 
-@numba.njit(cache=True, error_model="numpy")
+@helper
 def _quadratic_form(m, vx, vy, vz):
     """v^T m v for a symmetric 3 x 3 matrix."""
     return (m[0, 0] * vx * vx + m[1, 1] * vy * vy + m[2, 2] * vz * vz
             + 2.0 * (m[0, 1] * vx * vy + m[0, 2] * vx * vz + m[1, 2] * vy * vz))
 
 
-@numba.njit(cache=True, error_model="numpy")
+@kernel
 def sphere_quadrature(n_theta, hemisphere):
     """Midpoint-rule directions and solid angles [sr] on the sphere (or upper hemisphere), in a frame whose
     x axis points to the sun's azimuth: (n_theta * 2 n_theta, 3) directions and their weights."""
@@ -289,7 +286,7 @@ def sphere_quadrature(n_theta, hemisphere):
     return om, dom
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"}, error_model="numpy")
+@kernel(fastmath=CONTRACT_REASSOC)
 def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance, albedo, beta_r, beta_m, g, mie_kind,
                               profiles, counts, bottom, top, mu_s_min, n_theta, out, start, stop):
     """Scattering density J (Eq. 7) of one order per unit total scattering coefficient, ``J / (beta_R rho_R(r) +
@@ -301,7 +298,7 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     scale height is 1.2 km) while this weighted radiance varies slowly: :func:`multiple_scattering_kernel`
     interpolates it between table radii and multiplies by the exact coefficient at each ray sample. Interpolating
     J itself overestimated it between radii (linear interpolation of a convex exponential): +5 to +7 % in the
-    converged multiple scattering of an aerosol optical depth of 0.5 against DISORT with 16 radii (issue 11).
+    converged multiple scattering of an aerosol optical depth of 0.5 against DISORT with 16 radii (docs/bruneton.md).
     Keeping the Rayleigh and aerosol parts apart (two tables, exact coefficients for each) agreed with this
     within 0.6 % there and made the multiple-scattering kernel 13 % slower.
 
@@ -419,7 +416,7 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                                                        + f_m[k] * mie[i_s * n_l + k, v] / norm_m[v])
 
 
-@_kjit
+@kernel
 def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, bottom, top, mu_s_min, n_theta, out, start, stop):
     """Irradiance on a horizontal surface from one order of sky radiance (Eq. 15) into ``out`` (n_r, n_mu_s,
     n_wl).
@@ -453,7 +450,7 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, bottom, top, mu_s_m
             out[i_r, i_s, k] = acc[k]
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"arcp", "contract"}, error_model="numpy")
+@helper(fastmath=CONTRACT_ARCP)
 def _sun_cells(r, d, r_i, mu_i, mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a, theta_max, n_s, n_n, cell, w_s,
                w_n):
     """(mu_s, nu) cells and weights at a ray sample (distance ``d`` [m] from the texel's point at radius ``r``,
@@ -474,7 +471,7 @@ def _sun_cells(r, d, r_i, mu_i, mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a
         w_n[u] = wn
 
 
-@_kjit
+@kernel
 def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles, counts, bottom, top,
                                mu_s_min, n_samples, out, start, stop):
     """Radiance of one order scattered towards each texel's point (Eq. 11 with the order's J) into ``out``

@@ -73,7 +73,14 @@ def _save_exr(path: Path, pixels: NDArray[np.float32]) -> None:
 
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
               "chromaticities": SRGB_CHROMATICITIES}
-    OpenEXR.File(header, {"RGB": pixels}).write(str(path))
+    try:
+        OpenEXR.File(header, {"RGB": pixels}).write(str(path))
+    except RuntimeError as exc:
+        # OpenEXR reports I/O failures (a full disk, a file too large) as RuntimeError('Failed to write ... image
+        # file "<path>". No space left on device.'): an OSError for the atomic writer, which names the target.
+        text = str(exc)
+        reason = text.rsplit('". ', 1)[-1].rstrip(". ") if '". ' in text else text.replace(str(path), "the file")
+        raise OSError(None, reason or "the OpenEXR library could not write the file", str(path)) from exc
 
 
 def _save_png(path: Path, display: NDArray[np.float64]) -> None:

@@ -1,7 +1,6 @@
 """The precomputed atmosphere of Bruneton & Neyret (2008) as a skyscatter sky model: :class:`BrunetonSky`.
 
-Bruneton, E., Neyret, F. (2008). Precomputed Atmospheric Scattering. Computer Graphics Forum 27(4),
-1079-1086, doi:10.1111/j.1467-8659.2008.01245.x. The tables come from :mod:`skyscatter.precomputed`.
+Reference: [Bruneton2008]. The tables come from :mod:`skyscatter.precomputed`.
 
 The observer stands at ``altitude`` above the planet's surface; the local East-North-Up frame is the
 planet-centred frame with the observer on its +z axis. Directions that meet the planet return the ground
