@@ -18,8 +18,9 @@ is split into the constant control ``bmin`` and the residual ``rho - bmin <= bma
 path is exponential (sampled exactly); the residual's by delta tracking against the residual majorant
 ``mu = s_max (bmax - bmin)`` with ``s_max`` the largest spectral scale ``s_i = sigma_i / rho`` of the
 wavelength group, so that one majorant serves every wavelength. A tentative residual collision at density
-``rho`` is real with probability ``s_h (rho - bmin) / mu`` for the hero ``h``. Homogeneous blocks (``bmax = bmin``: a uniform layer, a column of the I3RC step cloud)
-have no tentative collisions at all: the free path is exact.
+``rho`` is real with probability ``s_h (rho - bmin) / mu`` for the hero ``h``. Homogeneous blocks (``bmax =
+bmin``: a uniform layer, a column of the I3RC step cloud) have no tentative collisions at all: the free path is
+exact.
 
 **Spectral MIS.** The path weights ``f_i`` and the hero densities ``p_i`` (balance heuristic, [Veach1997]
 Sec. 9.2.4; the kernels' ``f`` and ``p`` arrays, docs/montecarlo.md) are multiplied by ``exp(-s_i bmin l)`` for
