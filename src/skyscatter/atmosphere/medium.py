@@ -243,6 +243,22 @@ class AtmosphereParameters:
                    **changes)
 
     @classmethod
+    def with_aerosol_type(cls, name: str, aerosol_optical_depth: float | None = None,
+                          relative_humidity: float = 50.0, **changes: Any) -> AtmosphereParameters:
+        """Earth defaults with an OPAC aerosol type as the aerosol (Hess et al. 1998;
+        :mod:`skyscatter.atmosphere.aerosol_types`): Mie optics of its components, its vertical profile.
+
+        ``name`` one of :data:`~skyscatter.atmosphere.aerosol_types.AEROSOL_TYPES` (``"continental-average"``,
+        ``"maritime-clean"``, ``"urban"``, ``"desert"``, ...); ``aerosol_optical_depth`` the vertical optical
+        depth at 550 nm in [0, 10] (None: the type's own number densities); ``relative_humidity`` [%] in
+        [0, 99]. Other fields as keyword arguments.
+        """
+        from .aerosol_types import OpacAerosol
+
+        top = float(changes.get("top_radius", cls.top_radius)) - float(changes.get("bottom_radius", cls.bottom_radius))
+        return cls(aerosol=OpacAerosol.preset(name, aerosol_optical_depth, relative_humidity, top), **changes)
+
+    @classmethod
     def from_turbidity(cls, turbidity: float, **changes: Any) -> AtmosphereParameters:
         """Earth defaults with aerosols from Linke-style turbidity T (Preetham et al. 1999, Appendix A.1).
 
