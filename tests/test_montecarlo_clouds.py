@@ -269,3 +269,64 @@ def test_tabulated_phase_sampling_follows_the_table():
     counts, _ = np.histogram(mu, edges)
     expect = n / 40.0
     assert np.sum((counts - expect) ** 2 / expect) < 72.1
+
+
+def test_cloud_layer_optics_and_validation():
+    """Mie droplets (10 um, v 0.1): albedo ~1 in the visible, g about 0.86, tau = LWP C_e / (rho_w <V>), which
+    is 3 LWP / (2 rho_w r_e) within the extinction efficiency's departure from 2 (Q_e = 2.09 here)."""
+    from skyscatter.atmosphere.clouds import CloudLayer
+    from skyscatter.errors import InvalidParameterError
+
+    layer = CloudLayer(1000.0, 1500.0, 15.0)
+    ext = layer.extinction_at([550.0])[0]
+    assert ext * 500.0 == pytest.approx(15.0)
+    assert layer.single_scattering_albedo_at([450.0, 650.0]) == pytest.approx(1.0, abs=1e-5)
+    g = layer.phase_table([550.0]).asymmetry[0]
+    assert 0.85 < g < 0.88
+    lwp = layer.liquid_water_path
+    # tau = 3 Q_e LWP / (4 rho_w r_e): with Q_e = 2, LWP = 0.1 kg m^-2; Mie's Q_e ~ 2.09 gives 4.5 % less
+    assert lwp == pytest.approx(4 * 1000.0 * 10e-6 * 15.0 / (3 * 2.0), rel=0.06) and lwp < 0.1
+    assert CloudLayer(1000.0, 1500.0, liquid_water_path=lwp).optical_depth_550 == pytest.approx(15.0)
+    atm = AtmosphereParameters(particles=(layer,))
+    assert AtmosphereParameters.from_dict(atm.to_dict()).particles[0] == layer
+    for kw, msg in ((dict(base=1500.0, top=1000.0, optical_depth=5.0), "above the cloud base"),
+                    (dict(base=0.0, top=100.0, optical_depth=-1.0), "optical depth"),
+                    (dict(base=0.0, top=100.0, optical_depth=2000.0), "optical depth"),
+                    (dict(base=0.0, top=100.0, optical_depth=5.0, effective_radius=0.1e-6), "effective radius"),
+                    (dict(base=0.0, top=100.0), "exactly one")):
+        with pytest.raises(InvalidParameterError, match=msg):
+            CloudLayer(**kw)
+
+
+def test_montecarlo_sky_with_a_cloud_layer_and_the_reference_command(tmp_path, capsys):
+    """MonteCarloSky(cloud_optical_depth=...) and 'skyscatter reference --cloud-optical-depth': the overcast zenith
+    is darker in the blue than the clear one and greyer; the store's job holds the cloud layer."""
+    import json
+
+    import xarray as xr
+
+    from skyscatter.cli import main
+    from skyscatter.sky.montecarlo import MonteCarloSky
+    from skyscatter.sky.registry import from_dict
+
+    kw = dict(samples=256, seed=2, scheduler="synchronous")
+    clear = MonteCarloSky(math.radians(40.0), **kw).spectral_radiance([0, 0, 1], [450.0, 650.0])
+    cloudy_sky = MonteCarloSky(math.radians(40.0), cloud_optical_depth=20.0, **kw)
+    cloudy = cloudy_sky.spectral_radiance([0, 0, 1], [450.0, 650.0])
+    assert cloudy[0] / cloudy[1] < clear[0] / clear[1]
+    assert from_dict(cloudy_sky.to_dict()).cloud_layer == cloudy_sky.cloud_layer
+    store = tmp_path / "overcast.zarr"
+    args = ["reference", str(store), "--sun-elevation", "30", "--directions", "2", "--samples", "64",
+            "--wavelengths", "450,650", "--cloud-optical-depth", "20", "--cloud-base", "800", "--cloud-top", "1200",
+            "--no-progress", "--scheduler", "synchronous"]
+    assert main(args) == 0
+    assert "1 cells x 2 directions x 2 wavelengths" in capsys.readouterr().out
+    ds = xr.open_zarr(store, consolidated=False)
+    job = json.loads(ds.attrs["job"])
+    (layer,) = job["atmosphere"]["particles"]
+    assert layer["kind"] == "cloud_layer" and layer["optical_depth_550"] == 20.0 and layer["base"] == 800.0
+    assert np.all(np.isfinite(ds["radiance"].values)) and np.all(ds["radiance"].values > 0)
+    assert main(["reference", str(tmp_path / "bad.zarr"), "--cloud-optical-depth", "5", "--cloud-base", "2000",
+                 "--cloud-top", "1000", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "above the cloud base" in err[0]

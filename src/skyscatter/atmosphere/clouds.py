@@ -48,8 +48,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FileFormatError, InvalidParameterError, OutputError
+from .particles import ParticleComponent, register_particle_kind
 
-__all__ = ["CloudField", "REFERENCE_WAVELENGTH", "MAX_VOXELS", "perlin_fbm", "worley_fbm"]
+__all__ = ["CloudField", "CloudLayer", "REFERENCE_WAVELENGTH", "MAX_VOXELS", "perlin_fbm", "worley_fbm"]
 
 #: Wavelength [nm] at which a field's extinction is given.
 REFERENCE_WAVELENGTH = 550.0
@@ -199,6 +200,24 @@ class CloudField:
                 "size_m": list(self.size), "base_m": self.base, "top_m": self.top, "origin_m": list(self.origin),
                 "periodic": self.periodic, "reference_wavelength_nm": REFERENCE_WAVELENGTH,
                 "particles": self.particles.to_dict()}
+
+    def to_dict(self) -> dict[str, Any]:
+        """Complete JSON-compatible description (the grid as nested lists; :meth:`from_dict` reads it back)."""
+        return {**self.description(), "extinction": self._extinction.tolist()}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> CloudField:
+        from .particles import particle_component_from_dict
+
+        try:
+            field = cls(np.asarray(data["extinction"], dtype=float), tuple(data["size_m"]), data["base_m"],
+                        data["top_m"], particle_component_from_dict(data["particles"]), origin=tuple(data["origin_m"]),
+                        periodic=bool(data["periodic"]))
+        except (KeyError, TypeError) as exc:
+            raise FileFormatError(f"cloud field description is incomplete or malformed: {exc}") from None
+        if "extinction_sha256" in data and data["extinction_sha256"] != field.digest():
+            raise FileFormatError("cloud field description: the grid does not match its SHA-256")
+        return field
 
     def __repr__(self) -> str:
         return (f"CloudField(shape={self.shape}, size={self.size}, base={self.base:g}, top={self.top:g}, "
@@ -509,3 +528,178 @@ def _procedural_extinction(cover: float, nx: int, ny: int, nz: int, sx: float, s
     dz = depth / nz
     mean_col = float(col[cloudy_cols].mean()) * dz
     return lwc * (tau / mean_col)
+
+
+# --------------------------------------------------------------------------------------------- cloud layers
+
+#: Largest optical depth of a cloud layer at 550 nm (a thick cumulonimbus reaches a few hundred).
+MAX_LAYER_OPTICAL_DEPTH = 1000.0
+#: Range of effective radii of the droplet optics [m] (water's refractive index covers 250-1200 nm).
+EFFECTIVE_RADIUS_RANGE = (1e-6, 50e-6)
+
+
+def _droplet_optics(effective_radius: float, effective_variance: float, wavelengths: tuple[float, ...]):
+    from .mie_optics import water_droplets
+
+    return water_droplets(effective_radius, effective_variance, np.array(wavelengths))
+
+
+def _with_reference(wavelengths: ArrayLike) -> tuple[tuple[float, ...], NDArray[np.int64], int]:
+    wl = np.atleast_1d(np.asarray(wavelengths, dtype=float))
+    grid = np.unique(np.concatenate([wl, [REFERENCE_WAVELENGTH]]))
+    return tuple(float(v) for v in grid), np.searchsorted(grid, wl), int(np.searchsorted(grid, REFERENCE_WAVELENGTH))
+
+
+class CloudLayer(ParticleComponent):
+    """A horizontally uniform water cloud between two altitudes: a particle component of the medium.
+
+    Its droplets follow a modified-gamma size distribution of effective radius and variance ([HansenTravis1974]
+    Eqs. 2.53-2.56), with the optics of liquid water from Mie theory (:func:`.mie_optics.water_droplets`:
+    extinction spectrum, single-scattering albedo and the tabulated phase function with its diffraction peak,
+    rainbow and glory). The layer has constant density from ``base`` to ``top`` (a box profile), and its amount is
+    given by the vertical optical depth at 550 nm or by the liquid water path ``LWP``, related by ``tau = LWP C_e /
+    (rho_w <V>)`` (the droplets' mean extinction cross-section over their mean volume, ``rho_w`` = 1000 kg m^-3;
+    [Stephens1978] Eq. 8 in the limit ``Q_e = 2``: ``tau = 3 LWP / (2 rho_w r_e)``). Several layers stack in
+    ``AtmosphereParameters(particles=(layer1, layer2))``; every solver that reads the medium's particle
+    components sees them (the Monte Carlo traces them exactly; the precomputed tables refuse or handle them as
+    their documentation says).
+
+    Parameters
+    ----------
+    base, top : float
+        Altitudes of the cloud base and top above the ground [m], ``0 <= base < top <= 100 km``.
+    optical_depth : float, optional
+        Vertical optical depth at 550 nm, in [0, 1000].
+    liquid_water_path : float, optional
+        [kg m^-2] in [0, 10] (instead of ``optical_depth``; exactly one of the two).
+    effective_radius : float
+        [m] in [1, 50] um (default 10 um).
+    effective_variance : float
+        [-] in (0, 0.5] (default 0.1).
+    name : str
+        Label (default "cloud").
+    """
+
+    kind = "cloud_layer"
+    __slots__ = ("base", "top", "optical_depth_550", "effective_radius", "effective_variance", "name")
+
+    def __init__(self, base: float, top: float, optical_depth: float | None = None, *,
+                 liquid_water_path: float | None = None, effective_radius: float = 10e-6,
+                 effective_variance: float = 0.1, name: str = "cloud") -> None:
+        b = _number("cloud base", base, 0.0, 1e5)
+        t = _number("cloud top", top, 0.0, 1e5)
+        if not t > b:
+            raise InvalidParameterError(f"cloud top ({t:g} m) must be above the cloud base ({b:g} m)")
+        lo, hi = EFFECTIVE_RADIUS_RANGE
+        r = _number("effective radius", effective_radius, lo, hi)
+        v = _number("effective variance", effective_variance, 0.0, 0.5, "")
+        if v <= 0:
+            raise InvalidParameterError("effective variance must be > 0")
+        if (optical_depth is None) == (liquid_water_path is None):
+            raise InvalidParameterError("give exactly one of optical_depth (at 550 nm) and liquid_water_path [kg m^-2]")
+        if not isinstance(name, str) or not name:
+            raise InvalidParameterError("cloud layer name must be a non-empty string")
+        object.__setattr__(self, "base", b)
+        object.__setattr__(self, "top", t)
+        object.__setattr__(self, "effective_radius", r)
+        object.__setattr__(self, "effective_variance", v)
+        object.__setattr__(self, "name", name)
+        if optical_depth is not None:
+            tau = _number("cloud optical depth", optical_depth, 0.0, MAX_LAYER_OPTICAL_DEPTH, "")
+        else:
+            lwp = _number("liquid water path", liquid_water_path, 0.0, 10.0, "kg m^-2")
+            tau = lwp * self._extinction_per_mass()
+            if tau > MAX_LAYER_OPTICAL_DEPTH:
+                raise InvalidParameterError(
+                    f"liquid water path {lwp:g} kg m^-2 gives optical depth {tau:.4g} > {MAX_LAYER_OPTICAL_DEPTH:g}")
+        object.__setattr__(self, "optical_depth_550", tau)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError("CloudLayer is immutable; use replace()")
+
+    def _extinction_per_mass(self) -> float:
+        """Mass extinction coefficient at 550 nm [m^2 kg^-1]: ``C_e / (rho_w 4/3 pi <r^3>)``."""
+        from .size_distributions import ModifiedGammaMode
+
+        mode = ModifiedGammaMode.from_effective(self.effective_radius, self.effective_variance)
+        optics = _droplet_optics(self.effective_radius, self.effective_variance, (REFERENCE_WAVELENGTH,))
+        volume = 4.0 / 3.0 * math.pi * mode.moment(3) / mode.moment(0)
+        return float(optics.extinction_cross_section[0]) / (WATER_DENSITY * volume)
+
+    @property
+    def liquid_water_path(self) -> float:
+        """[kg m^-2] of the layer's optical depth."""
+        return self.optical_depth_550 / self._extinction_per_mass()
+
+    @property
+    def density(self):
+        from .profiles import DensityProfile
+
+        return DensityProfile.box(self.base, self.top)
+
+    @property
+    def analytic_phase(self) -> None:
+        return None
+
+    def _optics(self, wavelengths: ArrayLike):
+        grid, idx, ref = _with_reference(wavelengths)
+        return _droplet_optics(self.effective_radius, self.effective_variance, grid), idx, ref
+
+    def extinction_at(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        """Extinction coefficient inside the layer [m^-1]: the optical depth spread over its thickness, with the
+        droplets' extinction spectrum relative to 550 nm."""
+        optics, idx, ref = self._optics(wavelengths)
+        ce = optics.extinction_cross_section
+        return self.optical_depth_550 / (self.top - self.base) * ce[idx] / ce[ref]
+
+    def single_scattering_albedo_at(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        optics, idx, _ = self._optics(wavelengths)
+        return np.asarray(optics.single_scattering_albedo[idx], dtype=float)
+
+    def scattering_at(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        return self.extinction_at(wavelengths) * self.single_scattering_albedo_at(wavelengths)
+
+    def absorption_at(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        return self.extinction_at(wavelengths) - self.scattering_at(wavelengths)
+
+    def optical_depth(self, wavelengths: ArrayLike, height: float) -> NDArray[np.float64]:
+        """Vertical optical depth [-] from the ground to ``height`` [m]."""
+        return self.extinction_at(wavelengths) * self.density.column(float(height))
+
+    def phase_table(self, wavelengths: ArrayLike, angles: ArrayLike | None = None):
+        optics, _, _ = self._optics(wavelengths)
+        table = optics.phase.at_wavelengths(np.atleast_1d(np.asarray(wavelengths, dtype=float)))
+        return table if angles is None else table.on_angles(angles)
+
+    def replace(self, **changes: Any) -> CloudLayer:
+        kw = dict(base=self.base, top=self.top, optical_depth=self.optical_depth_550,
+                  effective_radius=self.effective_radius, effective_variance=self.effective_variance, name=self.name)
+        if "liquid_water_path" in changes:
+            kw.pop("optical_depth")
+        kw.update(changes)
+        base, top = kw.pop("base"), kw.pop("top")
+        return CloudLayer(base, top, kw.pop("optical_depth", None), **kw)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "name": self.name, "base": self.base, "top": self.top,
+                "optical_depth_550": self.optical_depth_550, "effective_radius": self.effective_radius,
+                "effective_variance": self.effective_variance}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> CloudLayer:
+        return cls(float(data["base"]), float(data["top"]), float(data["optical_depth_550"]),
+                   effective_radius=float(data["effective_radius"]),
+                   effective_variance=float(data["effective_variance"]), name=str(data["name"]))
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, CloudLayer) and self.to_dict() == other.to_dict()
+
+    def __hash__(self) -> int:
+        return hash(tuple(sorted(self.to_dict().items())))
+
+    def __repr__(self) -> str:
+        return (f"CloudLayer(base={self.base:g}, top={self.top:g}, optical_depth={self.optical_depth_550:g}, "
+                f"effective_radius={self.effective_radius:g}, effective_variance={self.effective_variance:g})")
+
+
+register_particle_kind(CloudLayer)

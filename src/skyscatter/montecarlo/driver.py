@@ -697,17 +697,17 @@ def direct_transmittance(medium: Medium, origins: NDArray[np.float64], sun: NDAr
 
 def solar_disc_radiance(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, *, sun_zenith: float,
                         altitude: float = 0.0, n_radial: int = 8, n_angular: int = 16,
-                        clouds: Any = None) -> NDArray[np.float64]:
+                        clouds: Any = None, sun_azimuth: float = 0.0) -> NDArray[np.float64]:
     """Directly transmitted solar radiance, averaged over the solar disc [W m^-2 sr^-1 nm^-1], shape (n,).
 
     ``E_sun(lambda) / Omega_sun * mean_disc T(lambda)``: the transmittance ``T`` of the straight path from the
     observer to each point of a uniform disc of the parameters' angular radius (no limb darkening, as in the
     parameters), by deterministic quadrature over the disc (``n_radial`` x ``n_angular`` points equal in solid
-    angle), through the cloud field ``clouds`` exactly (voxel by voxel). Points below the planet's limb contribute
-    0. This is what :func:`sky_radiance` leaves out.
+    angle), through the cloud field ``clouds`` exactly (voxel by voxel; ``sun_azimuth`` [rad] then matters). Points
+    below the planet's limb contribute 0. This is what :func:`sky_radiance` leaves out.
     """
     wl = check_wavelengths(wavelengths)
-    sun = _sun_vector(sun_zenith, 0.0)
+    sun = _sun_vector(sun_zenith, sun_azimuth)
     r_obs = _observer_radius(atmosphere, altitude)
     m = prepare_medium(atmosphere, wl, _check_clouds(clouds))
     out = direct_transmittance(m, np.array([[0.0, 0.0, r_obs]]), sun, n_radial, n_angular)[0]
