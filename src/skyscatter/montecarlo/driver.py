@@ -36,10 +36,9 @@ __all__ = ["MonteCarloResult", "Medium", "prepare_medium", "sky_radiance", "sola
 DEFAULT_GROUP_SIZE = 16
 #: Largest number of paths in one batch (the unit of the random streams and of the reduction).
 MAX_BATCH_SIZE = 512
-#: Probability of drawing a scattering direction about the sun in a cloudy medium, and the asymmetry of that lobe
+#: Probability of drawing a scattering direction about the sun from the cloud's phase function in a cloudy medium
 #: (directional importance sampling, ``kernels`` module docstring); cloudless media do not use it.
-DDIS_PROBABILITY = 0.1
-DDIS_G = 0.85
+DDIS_PROBABILITY = 0.0
 
 
 @dataclass(frozen=True)
@@ -107,6 +106,7 @@ class Medium:
     fs: NDArray[np.float64]
     fss: NDArray[np.float64]
     ddis: float = 0.0
+    ddis_lobe: int = 0
 
     def subset(self, index: NDArray[np.int64]) -> Medium:
         """The same medium at a subset of its wavelengths."""
@@ -237,6 +237,8 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
         field = field_exact = tracking.empty_field()
     tmu, tval, tcdf = _stack_tables(tables, wl.size)
     cloudy = clouds is not None or len(comps) > 1
+    # the cloud's lobe for directional sampling: the field's, else the last further particle component's
+    ddis_lobe = len(lobes) - 1 if clouds is not None else (len(lobes) - 2 if len(comps) > 1 else 0)
     return Medium(
         rb, atmosphere.top_radius, quadrature_edges(atmosphere), layers,
         np.array([a.shape[0] for a in arrs], dtype=np.int64),
@@ -247,7 +249,7 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
         np.ascontiguousarray(atmosphere.ground_albedo_at(wl), dtype=float),
         np.ascontiguousarray(atmosphere.solar_irradiance_at(wl), dtype=float),
         atmosphere.sun_angular_radius, field, field_exact, np.ascontiguousarray(fs, dtype=float),
-        np.ascontiguousarray(fss, dtype=float), DDIS_PROBABILITY if cloudy else 0.0,
+        np.ascontiguousarray(fss, dtype=float), DDIS_PROBABILITY if cloudy else 0.0, ddis_lobe,
     )
 
 
@@ -327,7 +329,7 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
     kernels.trace_block(origins, jitter, dirs, mode, dir_index, sun, math.cos(m.sun_angular_radius),
                         m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.scat, m.lobe, m.lobe_g,
                         m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe,
-                        f.ye, f.re, m.fs, m.fss, m.ddis, DDIS_G, seed, group, batch0, n_batches, batch_size, sums,
+                        f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, seed, group, batch0, n_batches, batch_size, sums,
                         sumsq, verts)
     return sums, sumsq, verts
 

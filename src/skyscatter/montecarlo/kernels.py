@@ -43,9 +43,9 @@ Estimator (backward paths from the observer; [Veach1997] Ch. 8-9):
 * absorption (particle albedos, ozone) enters as a weight, never as termination;
 * directional importance sampling towards the sun (the "DDIS" of [BurasMayer2011] Sec. 3.3, here for backward
   paths): in a cloudy
-  medium, with probability ``ddis`` (0.1) the new direction is drawn from a Henyey-Greenstein lobe (g 0.85)
-  centred on the sun, otherwise from the medium's lobes, and every wavelength's direction density is the mixture
-  of the two. Next-event estimates through a forward-peaked cloud phase function are large only for the rare
+  medium, with probability ``ddis`` (0.1) the new direction is drawn from the cloud's own phase function (the
+  hero's table, diffraction peak included) centred on the sun, otherwise from the medium's lobes, and every
+  wavelength's direction density is the mixture of the two (its own table about the sun). Next-event estimates through a forward-peaked cloud phase function are large only for the rare
   paths heading near the sun; the mixture makes those paths common and their weights small (heavy tails
   removed, no bias). Off (``ddis = 0``) for a cloudless medium, whose paths are then unchanged;
 * scattering direction: the lobe (Rayleigh, each particle component, the cloud field) chosen by the hero's
@@ -107,6 +107,9 @@ _GX = (-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.861136311
 _GW = (0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538)
 _MAX_VERTICES = 100_000
 _RR_THRESHOLD = 0.5
+#: Optical depth of the least extinguished wavelength at which a shadow ray stops (transmittance < 2e-22): deep
+#: in a thick cloud the sun is not marched to; in clear air it is never reached.
+_NEE_STOP = 50.0
 
 #: Lobe (phase function) codes of the components: an absorber, Rayleigh, Cornette-Shanks(g),
 #: Henyey-Greenstein(g), a table per wavelength.
@@ -508,7 +511,7 @@ def _lobe_sum(active, sc, ph, out):
 @kernel
 def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, scat,
                 lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
-                fre, fs, fss, ddis, ddis_g, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
+                fre, fs, fss, ddis, ddis_lobe, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
     """Trace ``n_batches`` batches of ``batch_size`` paths for each entry of a block; one wavelength group.
 
     Parameters (all SI; arrays float64 unless stated)
@@ -526,8 +529,8 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     albedo : (n_wl,) ground albedo; esun : (n_wl,) solar irradiance [W m^-2 nm^-1].
     fvf ... fre : the packed cloud field (:class:`.tracking.PackedField`; ``fvf[PRESENT] = 0`` for none);
     fs, fss : (n_wl,) its extinction and scattering per unit density [-].
-    ddis, ddis_g : probability of drawing a scattering direction about the sun instead (Henyey-Greenstein of
-    asymmetry ``ddis_g`` centred on the sun; 0: never); see the module docstring.
+    ddis, ddis_lobe : probability of drawing a scattering direction about the sun instead (0: never), from the
+    phase function of lobe ``ddis_lobe`` (the cloud's) centred on the sun; see the module docstring.
     seed, group, batch0 : RNG counters (batch numbers batch0 .. batch0 + n_batches - 1).
     sums, sumsq : (n, n_wl, n_batches) outputs: per batch, sum and sum of squares of the per-path estimate.
     vertices_out : (n, n_batches) output: per batch, the number of scattering and ground vertices of its paths.
@@ -553,6 +556,9 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     tau2 = np.empty(n)
     val = np.empty(n)
     val2 = np.empty(n)
+    ph2 = np.empty((nc + 1, n))
+    qs2 = np.empty((nc + 1, n))
+    ddis_active = np.full(1, max(ddis_lobe, 0), dtype=np.int64)
     stt = np.empty(n)
     sst = np.empty(n)
     trf = np.empty(n)
@@ -564,6 +570,11 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     for i in range(n):
         fsmax = max(fsmax, fs[i])
         fsmin = min(fsmin, fs[i])
+    kmin = np.empty(nc)
+    for q in range(nc):
+        kmin[q] = coef[0, q]
+        for i in range(n):
+            kmin[q] = min(kmin[q], coef[i, q])
     # lobes that scatter (not ozone, not an absent field): the only ones the phase sums visit
     n_active = 0
     for c in range(nc + 1):
@@ -684,7 +695,11 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                                     if trf[i] > 0.0:
                                         live = True
                             if live:
-                                _march(px, py, pz, wx, wy, wz, te, np.inf, kh, rb, edges, layers, nlay, tot, tmp, rec)
+                                # stop once even the least extinguished wavelength is blocked (exp(-50))
+                                _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers,
+                                                      nlay, tot, tmp, rec)
+                                live = not opaque
+                            if live:
                                 _lobe_values(wx * dx + wy * dy + wz * dz, active, lobe, lobe_g, lobe_tab, tmu, tval, ph,
                                              qs)
                                 _lobe_sum(active, sc, ph, val)
@@ -697,7 +712,8 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                         # scattering direction: lobe chosen by the hero's scattering coefficients, or (with
                         # probability ddis) about the sun
                         if ddis > 0.0 and next_uniform(st) < ddis:
-                            ms = henyey_greenstein_inverse_cdf_scalar(next_uniform(st), ddis_g)
+                            ms = _sample_lobe(lobe[ddis_lobe], lobe_g[ddis_lobe], lobe_tab[ddis_lobe], hero,
+                                              next_uniform(st), tmu, tval, tcdf)
                             ex, ey, ez = direction_about_axis(sx, sy, sz, ms, 2.0 * math.pi * next_uniform(st))
                             mu = min(max(ex * dx + ey * dy + ez * dz, -1.0), 1.0)
                             dx, dy, dz = ex, ey, ez
@@ -718,11 +734,14 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                         _lobe_sum(active, sc, ph, val)
                         _lobe_sum(active, sc, qs, val2)
                         if ddis > 0.0:
-                            q_sun = ddis * henyey_greenstein_scalar(dx * sx + dy * sy + dz * sz, ddis_g)
+                            # each wavelength's density of that direction: the lobes' mixture or, with
+                            # probability ddis, the cloud's phase function of its own wavelength about the sun
+                            _lobe_values(dx * sx + dy * sy + dz * sz, ddis_active, lobe, lobe_g, lobe_tab, tmu, tval,
+                                         ph2, qs2)
                             for i in range(n):
                                 f[i] *= val[i]
                                 lobes = val2[i] / sst[i] if sst[i] > 0.0 else 0.0
-                                p[i] *= (1.0 - ddis) * lobes + q_sun
+                                p[i] *= (1.0 - ddis) * lobes + ddis * ph2[ddis_lobe, i]
                         else:
                             for i in range(n):
                                 f[i] *= val[i]
@@ -755,7 +774,11 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                                     if trf[i] > 0.0:
                                         live = True
                             if live:
-                                _march(px, py, pz, wx, wy, wz, te, np.inf, kh, rb, edges, layers, nlay, tot, tmp, rec)
+                                # stop once even the least extinguished wavelength is blocked (exp(-50))
+                                _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers,
+                                                      nlay, tot, tmp, rec)
+                                live = not opaque
+                            if live:
                                 _optical_depths(coef_t, tot, tau)
                                 for i in range(n):
                                     tr = math.exp(-tau[i])
