@@ -390,7 +390,7 @@ def _normalise(f, p, n):
             p[i] = p[i] / m
 
 
-@inline
+@helper
 def _lobe_values(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, ph, qs):
     """Phase function ``ph[c, i]`` [sr^-1] of every active lobe ``c`` (indices ``active``) at every wavelength ``i``
     at ``mu``, and the density ``qs[c, i]`` by which the lobe is sampled (Henyey-Greenstein for a Cornette-Shanks
@@ -428,7 +428,7 @@ def _sample_lobe(kind, g, tab, hero, u, tmu, tval, tcdf):
     return henyey_greenstein_inverse_cdf_scalar(u, g)
 
 
-@inline
+@helper
 def _optical_depths(coef_t, cols, out):
     """``out[i] = sum_q coef_t[q, i] cols[q]``: the optical depth at every wavelength of a ray's columns (the loop
     over wavelengths innermost, on contiguous rows)."""
@@ -449,7 +449,7 @@ def _optical_depths(coef_t, cols, out):
             out[i] += coef_t[q, i] * cq
 
 
-@inline
+@helper
 def _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt, sst):
     """At a point: extinction ``stt[i]`` and scattering ``sst[i]`` [m^-1] per wavelength and the scattering
     coefficient ``sc[c, i]`` of each lobe (shell components, then the field with density ``rho_f``)."""
@@ -490,7 +490,7 @@ def _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, den
         sst[i] += v
 
 
-@inline
+@helper
 def _lobe_sum(active, sc, ph, out):
     """``out[i] = sum_c sc[c, i] ph[c, i]`` over the active lobes."""
     n = out.shape[0]
