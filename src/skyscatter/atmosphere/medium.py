@@ -538,6 +538,35 @@ class AtmosphereParameters:
             raise FileFormatError(f"atmosphere parameters are incomplete or malformed: {exc}") from None
         return cls(**kwargs)
 
+    def save_json(self, path: str, extra: dict[str, Any] | None = None) -> None:
+        """Write ``{"atmosphere": to_dict(), **extra}`` as JSON to ``path`` atomically (``skyscatter
+        fit-atmosphere`` adds its fit report as ``extra``); :meth:`load_json` reads it back."""
+        from ..fileio import atomic_path
+
+        with atomic_path(path) as tmp:
+            tmp.write_text(json.dumps({"atmosphere": self.to_dict(), **(extra or {})}, indent=1, sort_keys=True))
+
+    @classmethod
+    def load_json(cls, path: str) -> AtmosphereParameters:
+        """The atmosphere of a JSON file: ``{"atmosphere": {...}}`` (:meth:`save_json`, ``skyscatter
+        fit-atmosphere``) or a bare :meth:`to_dict` mapping. FileFormatError naming the file if it is unreadable."""
+        from pathlib import Path
+
+        try:
+            data = json.loads(Path(path).read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise FileFormatError(f"cannot read the atmosphere file {path}: {exc.strerror or exc}") from None
+        except ValueError as exc:
+            raise FileFormatError(f"{path}: not a JSON file ({exc})") from None
+        if isinstance(data, dict) and isinstance(data.get("atmosphere"), dict):
+            data = data["atmosphere"]
+        if not isinstance(data, dict):
+            raise FileFormatError(f"{path}: expected an atmosphere description (a JSON object)")
+        try:
+            return cls.from_dict(data)
+        except FileFormatError as exc:
+            raise FileFormatError(f"{path}: {exc}") from None
+
     def canonical_json(self) -> str:
         """Deterministic JSON text of :meth:`to_dict` (sorted keys, repr-exact floats)."""
         return json.dumps(self.to_dict(), sort_keys=True, separators=(",", ":"))

@@ -22,7 +22,7 @@ from ..errors import SkyscatterError
 
 # Subcommand modules in the order ``--help`` lists them.
 _COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo", "precompute", "export_luts", "reference",
-             "fit_hosek_wilkie"]
+             "fit_hosek_wilkie", "fit_atmosphere"]
 # Each module registers one subcommand, named like the module with '-' for '_'.
 _MODULE_OF = {name.replace("_", "-"): name for name in _COMMANDS}
 # Commands whose linear algebra is a few small products: their BLAS pool starts with one thread (below).

@@ -13,6 +13,7 @@ from .common import (
     check_output_paths,
     finite_float,
     float_in,
+    output_file,
     png_path,
     positive_int,
     sun_angles_from_args,
@@ -67,11 +68,32 @@ def run(args: argparse.Namespace) -> int:
     check_output_paths(args)
     if args.layout != "skyscatter" and args.projection != "equirect":
         raise InvalidParameterError(f"--layout {args.layout} applies to --projection equirect only")
+    if args.format == "radiance":
+        given = [flag for flag, bad in (("--projection", args.projection != "equirect"),
+                                        ("--layout", args.layout != "skyscatter"), ("--no-sun-disc", not args.sun_disc),
+                                        ("--height", args.height is not None)) if bad]
+        if given:
+            raise InvalidParameterError(f"{', '.join(given)}: not with --format radiance (a Radiance sky is an "
+                                        "equirect picture of the whole sphere, width x width/2, with the sun as "
+                                        "a light source)")
     # The precomputed atmosphere ignores refraction, so it wants the geometric sun (docs/bruneton.md).
     zenith, azimuth = sun_angles_from_args(args, apparent=args.model != "bruneton")
     model = build_sky_from_args(args, zenith, azimuth)
     bar = _monte_carlo_progress(model, args) if args.model == "montecarlo" else None
     t0 = time.perf_counter()
+    if args.format == "radiance":
+        from ..render.radiance_sky import write_radiance_sky
+
+        try:
+            files = write_radiance_sky(output_file(args), model, width=args.width, ground_albedo=args.ground_albedo,
+                                       png_path=png_path(args), exposure_ev=args.exposure)
+        finally:
+            if bar is not None:
+                bar.close()
+        print(f"{model!r}: sun zenith {math.degrees(zenith):.2f} deg, azimuth {math.degrees(azimuth):.2f} deg")
+        print(f"wrote {', '.join(map(str, files))} ({args.width} x {args.width // 2} picture, "
+              f"{time.perf_counter() - t0:.2f} s); render with: oconv {files[0].name} > sky.oct, in that folder")
+        return 0
     try:
         image = sky_image(
             model,
@@ -89,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
         if bar is not None:
             bar.close()
     elapsed = time.perf_counter() - t0
-    out, png = write_exr_and_png(args.out, png_path(args), image, exposure_ev=args.exposure, key=0.45)
+    out, png = write_exr_and_png(output_file(args), png_path(args), image, exposure_ev=args.exposure, key=0.45)
     print(f"{model!r}: sun zenith {math.degrees(zenith):.2f} deg, azimuth {math.degrees(azimuth):.2f} deg")
     print(f"wrote {out} and {png} ({image.shape[1]} x {image.shape[0]}, rendered in {elapsed:.2f} s)")
     return 0

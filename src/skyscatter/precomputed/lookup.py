@@ -43,11 +43,14 @@ from .geometry import (
     transmittance_coord,
 )
 from .sampling import (
+    TABLE_PHASE,
     aerosol_phase,
     bilinear_read,
     irradiance_lookup,
     lookup4_cell,
+    lookup4_cell_spectral,
     mu_s_nu_cell,
+    phase_table_values,
     r_mu_cell,
     r_mu_s_cell,
     rayleigh_phase,
@@ -80,9 +83,10 @@ def _enter_atmosphere(px, py, pz, vx, vy, vz, top):
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, out):
+def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, out):
     """Inscattered radiance ``S_R P_R + S_M P_M + S_multiple`` from the tables at a point, into ``out``
-    (``p_r``, ``p_m``: phase functions at ``nu``); zero below the sun-zenith limit."""
+    (``p_r``, ``p_m``: phase functions at ``nu``; ``p_m_spec``, if not empty, the aerosol phase per wavelength,
+    used instead of ``p_m``); zero below the sun-zenith limit."""
     for k in range(out.shape[0]):
         out[k] = 0.0
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
@@ -92,7 +96,10 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r
     i_r, w_r, i_mu, w_mu = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
     lookup4_cell(ray, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_r, out)
-    lookup4_cell(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_m, out)
+    if p_m_spec.shape[0]:
+        lookup4_cell_spectral(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_m_spec, out)
+    else:
+        lookup4_cell(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_m, out)
     lookup4_cell(mult, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, 1.0, out)
 
 
@@ -167,13 +174,15 @@ def _ground_coords_block(m, gv, gmu, px, py, pz, sx, sy, sz, r, bottom, top, alp
 
 @kernel
 def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, bottom, top,
-               mu_s_min, g, mie_kind, alpha, include_ground, rad_out, tr_out, start, stop):
+               mu_s_min, g, mie_kind, phase_mu, phase_values, alpha, include_ground, rad_out, tr_out, start, stop):
     """Radiance [W m^-2 sr^-1 nm^-1] and transmittance along rays ``start..stop``; see the module docstring.
 
     Writes ``rad_out`` and ``tr_out`` (n_rays, n_wavelengths), which the caller initialises to 0 and 1
-    (the values of rays that miss the atmosphere).
+    (the values of rays that miss the atmosphere). A tabulated aerosol phase (``mie_kind``
+    :data:`.sampling.TABLE_PHASE`) is read per wavelength from ``phase_mu``, ``phase_values``.
     """
     n_l = transmittance.shape[2]
+    p_m_spec = np.empty(n_l if mie_kind == TABLE_PHASE else 0)
     c = np.empty(n_l)
     t = np.empty(n_l)
     tmp = np.empty(n_l)
@@ -193,7 +202,9 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
         nu = clamp(vx * sx + vy * sy + vz * sz, -1.0, 1.0)
         hits = ray_hits_ground(rc, mu, bottom)
         p_r = rayleigh_phase(nu)
-        p_m = aerosol_phase(nu, g, mie_kind)
+        p_m = aerosol_phase(nu, g, mie_kind) if mie_kind != TABLE_PHASE else 0.0
+        if p_m_spec.shape[0]:
+            phase_table_values(phase_mu, phase_values, nu, p_m_spec)
         l_sh = shadow[q]
         if l_sh > 0.0:
             # Eq. 18: the first l_sh metres are in shadow; inscatter starts at xs = x + l v.
@@ -204,12 +215,13 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
                 for k in range(n_l):
                     c[k] = 0.0
             else:
-                _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, c)
+                _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec,
+                           c)
             transmittance_segment(transmittance, rc, mu, l_sh, hits, bottom, top, t, tmp)
             for k in range(n_l):
                 c[k] *= t[k]
         else:
-            _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, c)
+            _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, c)
         for k in range(n_l):
             rad_out[q, k] = c[k]
         if hits and include_ground:
@@ -434,12 +446,12 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
 
 @helper(fastmath=CONTRACT_ARCP)
 def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, p_r, p_m,
-                        c, t, c2, tmp):
+                        p_m_spec, c, t, c2, tmp):
     """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``."""
-    _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, c)
+    _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, c)
     r_p, mu_p = point_along_ray(r, mu, d, bottom, top)
     mu_s_p = clamp((r * mu_s + d * nu) / r_p, -1.0, 1.0)
-    _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, p_r, p_m, c2)
+    _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, c2)
     transmittance_segment(transmittance, r, mu, d, hits, bottom, top, t, tmp)
     for k in range(c.shape[0]):
         c[k] = max(c[k] - t[k] * c2[k], 0.0)
@@ -447,7 +459,7 @@ def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits,
 
 @kernel
 def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, g, mie_kind,
-                  tr_out, in_out, start, stop):
+                  phase_mu, phase_values, tr_out, in_out, start, stop):
     """Transmittance and inscattered radiance between cameras and points (Eqs. 16-17), rays ``start..stop``.
 
     Writes ``tr_out`` (initialised to 1) and ``in_out`` (initialised to 0), each (n_rays, n_wavelengths).
@@ -459,6 +471,7 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
     c2 = np.empty(n_l)
     tmp = np.empty(n_l)
     lo_c = np.empty(n_l)
+    p_m_spec = np.empty(n_l if mie_kind == TABLE_PHASE else 0)
     for q in range(start, stop):
         dx = points[q, 0] - cams[q, 0]
         dy = points[q, 1] - cams[q, 1]
@@ -487,22 +500,24 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
         if d_lit <= 0.0:
             continue
         p_r = rayleigh_phase(nu)
-        p_m = aerosol_phase(nu, g, mie_kind)
+        p_m = aerosol_phase(nu, g, mie_kind) if mie_kind != TABLE_PHASE else 0.0
+        if p_m_spec.shape[0]:
+            phase_table_values(phase_mu, phase_values, nu, p_m_spec)
         mu_h = -math.sqrt(max(1.0 - (bottom / rc) ** 2, 0.0))
         if abs(mu - mu_h) < HORIZON_EPSILON:
             # Blend the rays just above and below the horizon: the two halves of the table disagree there.
             mu_lo = mu_h - HORIZON_EPSILON
             mu_hi = mu_h + HORIZON_EPSILON
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_lo, mu_s, nu, d_lit, True, bottom, top,
-                                mu_s_min, p_r, p_m, lo_c, t, c2, tmp)
+                                mu_s_min, p_r, p_m, p_m_spec, lo_c, t, c2, tmp)
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_hi, mu_s, nu, d_lit, False, bottom, top,
-                                mu_s_min, p_r, p_m, c, t, c2, tmp)
+                                mu_s_min, p_r, p_m, p_m_spec, c, t, c2, tmp)
             a = (mu - mu_lo) / (mu_hi - mu_lo)
             for k in range(n_l):
                 c[k] = (1.0 - a) * lo_c[k] + a * c[k]
         else:
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu, mu_s, nu, d_lit, hits, bottom, top,
-                                mu_s_min, p_r, p_m, c, t, c2, tmp)
+                                mu_s_min, p_r, p_m, p_m_spec, c, t, c2, tmp)
         for k in range(n_l):
             in_out[q, k] = c[k]
 

@@ -11,7 +11,13 @@ from __future__ import annotations
 
 import math
 
-from ..atmosphere.phase import aerosol_phase_scalar, cornette_shanks_scalar, rayleigh_phase_scalar
+from ..atmosphere.phase import (
+    AEROSOL_PHASE_FUNCTIONS,
+    aerosol_phase_scalar,
+    cornette_shanks_scalar,
+    rayleigh_phase_scalar,
+)
+from ..atmosphere.phase_table import phase_table_values
 from ..jit import helper
 from .geometry import (
     acos_table,
@@ -34,6 +40,21 @@ PI = math.pi
 rayleigh_phase = rayleigh_phase_scalar
 mie_phase = cornette_shanks_scalar
 aerosol_phase = aerosol_phase_scalar
+#: ``mie_kind`` of a tabulated, wavelength-dependent aerosol phase function (after the analytic kinds): the kernels
+#: then read it per wavelength with ``phase_table_values`` (:mod:`skyscatter.atmosphere.phase_table`).
+TABLE_PHASE = len(AEROSOL_PHASE_FUNCTIONS)
+
+
+@helper
+def aerosol_phase_spectrum(nu, g, mie_kind, phase_mu, phase_values, out):
+    """``out[k]`` = the aerosol phase [sr^-1] at ``nu`` per wavelength: the table (``mie_kind ==``
+    :data:`TABLE_PHASE`; ``phase_mu`` ascending cosines, ``phase_values`` (n_wl, n)) or the analytic kind."""
+    if mie_kind == TABLE_PHASE:
+        phase_table_values(phase_mu, phase_values, nu, out)
+    else:
+        p = aerosol_phase(nu, g, mie_kind)
+        for k in range(out.shape[0]):
+            out[k] = p
 
 
 @helper
@@ -175,6 +196,31 @@ def lookup4_cell(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scale, out):
                     we *= scale
                     for k in range(n_l):
                         out[k] += we * table[i_r + a, i_mu + b, i_s + c, i_n + e, k]
+
+
+@helper
+def lookup4_cell_spectral(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scales, out):
+    """``out[k] += scales[k] * table(cell)[k]``: :func:`lookup4_cell` with a scale per wavelength (a tabulated
+    aerosol phase)."""
+    n_l = table.shape[4]
+    for a in range(2):
+        wa = w_r if a else 1.0 - w_r
+        if wa == 0.0:
+            continue
+        for b in range(2):
+            wb = wa * (w_mu if b else 1.0 - w_mu)
+            if wb == 0.0:
+                continue
+            for c in range(2):
+                wc = wb * (w_s if c else 1.0 - w_s)
+                if wc == 0.0:
+                    continue
+                for e in range(2):
+                    we = wc * (w_n if e else 1.0 - w_n)
+                    if we == 0.0:
+                        continue
+                    for k in range(n_l):
+                        out[k] += we * scales[k] * table[i_r + a, i_mu + b, i_s + c, i_n + e, k]
 
 
 @helper

@@ -46,6 +46,12 @@ __all__ = [
 DICT_VERSION = 1
 
 
+def _aerosol_types() -> tuple[str, ...]:
+    from ..atmosphere.aerosol_types import AEROSOL_TYPES
+
+    return tuple(AEROSOL_TYPES)
+
+
 @dataclass(frozen=True)
 class Parameter:
     """One parameter of a sky model (a keyword argument of its class).
@@ -60,8 +66,9 @@ class Parameter:
         Value used when the parameter is not given (None: optional, the model decides).
     help : str
         One line for documentation and ``--help``.
-    kind : {"float", "int", "bool", "choice", "atmosphere", "object"}
-        Value type. ``"atmosphere"`` is an :class:`~skyscatter.atmosphere.AtmosphereParameters` or precomputed
+    kind : {"float", "int", "bool", "choice", "path", "atmosphere", "object"}
+        Value type (``"path"``: a file name). ``"atmosphere"`` is an
+        :class:`~skyscatter.atmosphere.AtmosphereParameters` or precomputed
         tables (serialised through the parameters' ``to_dict``); ``"object"`` a skyscatter object with
         ``to_dict`` / ``from_dict`` (such as a fitted dataset).
     low, high : float or None
@@ -145,6 +152,10 @@ class Parameter:
         if self.kind == "choice":
             if value not in self.choices:
                 raise InvalidParameterError(f"{where} must be {self.range_text()}; got {value!r}")
+            return value
+        if self.kind == "path":
+            if not isinstance(value, str) or not value:
+                raise InvalidParameterError(f"{where} must be a file name; got {value!r}")
             return value
         return value
 
@@ -480,6 +491,12 @@ register(ModelSpec(
                   high=1.0),
         Parameter("ozone_column", "DU", None, "total ozone column (default 300)", low=0.0, high=1000.0,
                   flag="--ozone"),
+        Parameter("aerosol_type", "", None, "OPAC aerosol type with Mie optics (Hess et al. 1998; with --aod its "
+                  "optical depth at 550 nm, else the type's own)", kind="choice", choices=_aerosol_types(),
+                  flag="--aerosol"),
+        Parameter("atmosphere_file", "", None, "the air from a JSON file (written by 'skyscatter fit-atmosphere' "
+                  "or AtmosphereParameters.save_json); the other options change it", kind="path",
+                  flag="--atmosphere"),
         Parameter("wavelengths", "", None, "table wavelengths: spectral (default: 16, 400-700 nm, right colour) "
                   "or rgb (3: quicker to build, wrong colour at low sun)", kind="choice", choices=("spectral", "rgb")),
         Parameter("atmosphere", "", None, "the atmosphere (AtmosphereParameters or precomputed tables; default: "
