@@ -21,7 +21,7 @@ import numpy as np
 def main() -> None:
     print(f"load average at start: {os.getloadavg()}")
     t = time.perf_counter()
-    from skyscatter.atmosphere.mie_optics import _miepython, _mie_optics_cached
+    from skyscatter.atmosphere.mie_optics import _mie_optics_cached, _miepython
 
     _miepython()
     print(f"miepython import (numba backend): {time.perf_counter() - t:.2f} s")
