@@ -79,8 +79,10 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
         tau = float(cloud_optical_depth)
         if not (math.isfinite(tau) and tau >= 0):
             raise InvalidParameterError(f"cloud_optical_depth must be >= 0; got {cloud_optical_depth!r}")
+        # validated even without a cloud (the registry's ranges hold for every value given)
+        checked = CloudLayer(cloud_base, cloud_top, tau, effective_radius=cloud_effective_radius)
         if tau > 0:
-            layer = CloudLayer(cloud_base, cloud_top, tau, effective_radius=cloud_effective_radius)
+            layer = checked
         if clouds is not None and not isinstance(clouds, CloudField):
             raise InvalidParameterError(f"clouds must be a CloudField or None; got {type(clouds).__name__}")
         atm = base_atm if layer is None else base_atm.replace(particles=(*base_atm.particles, layer))
