@@ -140,7 +140,8 @@ def particle_component_from_dict(data: dict[str, Any]) -> ParticleComponent:
 
 
 #: Kinds defined in modules that are imported only when a description names them (module path by kind).
-_LAZY_KINDS: dict[str, str] = {"opac": "skyscatter.atmosphere.aerosol_types"}
+_LAZY_KINDS: dict[str, str] = {"opac": "skyscatter.atmosphere.aerosol_types",
+                               "cloud_layer": "skyscatter.atmosphere.clouds"}
 
 
 def _check_density(name: str, density: Any) -> None:

@@ -74,6 +74,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="observer altitude above the ground [m], 0 to 1e8")
     p.add_argument("--phase", choices=AEROSOL_PHASE_FUNCTIONS, default="cornette-shanks",
                    help="aerosol phase function (asymmetry g = 0.8)")
+    cloud = p.add_argument_group("cloud layer", "a horizontally uniform water cloud in every cell (Mie droplets, "
+                                 "modified-gamma sizes of effective variance 0.1)")
+    cloud.add_argument("--cloud-optical-depth", type=float_in(0.0, 1000.0), default=0.0, metavar="TAU",
+                       help="optical depth of the cloud layer at 550 nm (0: no cloud)")
+    cloud.add_argument("--cloud-base", type=float_in(0.0, 1e5), default=1000.0, metavar="M",
+                       help="altitude of the cloud base [m]")
+    cloud.add_argument("--cloud-top", type=float_in(0.0, 1e5), default=1500.0, metavar="M",
+                       help="altitude of the cloud top [m]")
+    cloud.add_argument("--cloud-effective-radius", type=float_in(1.0, 50.0), default=10.0, metavar="UM",
+                       help="effective radius of the droplets [um]")
     p.add_argument("--scheduler", default=None, metavar="ADDR",
                    help="'synchronous', or a dask.distributed scheduler address (tcp://host:8786; needs the "
                    "montecarlo extra); default: local threads ($SKYSCATTER_NUM_THREADS)")
@@ -100,12 +110,19 @@ def run(args: argparse.Namespace) -> int:
         bar.refresh()
 
     turbidity = args.turbidity if args.turbidity is not None or args.aod is not None else [2.5]
+    atmosphere = AtmosphereParameters(mie_phase_function=args.phase)
+    if args.cloud_optical_depth > 0:
+        from ..atmosphere.clouds import CloudLayer
+
+        layer = CloudLayer(args.cloud_base, args.cloud_top, args.cloud_optical_depth,
+                           effective_radius=args.cloud_effective_radius * 1e-6)
+        atmosphere = atmosphere.replace(particles=(layer,))
     t0 = time.perf_counter()
     try:
         ds = reference(args.output, sun_elevations=[math.radians(e) for e in args.sun_elevation],
                        turbidities=turbidity, aerosol_optical_depths=args.aod, albedos=args.albedo,
                        wavelengths=args.wavelengths, directions=equal_area_directions(args.directions),
-                       atmosphere=AtmosphereParameters(mie_phase_function=args.phase), samples=args.samples,
+                       atmosphere=atmosphere, samples=args.samples,
                        seed=args.seed, altitude=args.altitude, scheduler=args.scheduler, progress=progress)
     finally:
         if bar is not None:

@@ -46,6 +46,15 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
         Seed of the random streams (default 0).
     scheduler : optional
         Dask scheduler for :func:`~skyscatter.montecarlo.sky_radiance` (None = local threads).
+    cloud_optical_depth : float
+        Optical depth at 550 nm of a horizontally uniform water cloud layer added to the atmosphere (0 = none,
+        the default; :class:`~skyscatter.atmosphere.clouds.CloudLayer`), in [0, 1000].
+    cloud_base, cloud_top : float
+        Its base and top altitudes [m] (default 1000 and 1500 m).
+    cloud_effective_radius : float
+        Its droplets' effective radius [m] (default 10 um; effective variance 0.1), in [1, 50] um.
+    clouds : CloudField, optional
+        A 3D cloud field (:class:`~skyscatter.atmosphere.clouds.CloudField`) around the observer.
 
     Directions that meet the ground return the radiance of the ground (``renders_ground`` is True), as in
     :class:`~skyscatter.precomputed.sky.BrunetonSky`; the solar disc is never included (see
@@ -57,11 +66,26 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
     renders_ground = True
 
     def __init__(self, sun_zenith: float, sun_azimuth: float = 0.0, *, atmosphere: AtmosphereParameters | None = None,
-                 altitude: float = 0.0, samples: int = 1024, seed: int = 0, scheduler: Any = None) -> None:
+                 altitude: float = 0.0, samples: int = 1024, seed: int = 0, scheduler: Any = None,
+                 cloud_optical_depth: float = 0.0, cloud_base: float = 1000.0, cloud_top: float = 1500.0,
+                 cloud_effective_radius: float = 10e-6, clouds: Any = None) -> None:
         zen, azi = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=True)
-        atm = AtmosphereParameters() if atmosphere is None else atmosphere
-        if not isinstance(atm, AtmosphereParameters):
-            raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(atm).__name__}")
+        base_atm = AtmosphereParameters() if atmosphere is None else atmosphere
+        if not isinstance(base_atm, AtmosphereParameters):
+            raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(base_atm).__name__}")
+        from ..atmosphere.clouds import CloudField, CloudLayer
+
+        layer = None
+        tau = float(cloud_optical_depth)
+        if not (math.isfinite(tau) and tau >= 0):
+            raise InvalidParameterError(f"cloud_optical_depth must be >= 0; got {cloud_optical_depth!r}")
+        # validated even without a cloud (the registry's ranges hold for every value given)
+        checked = CloudLayer(cloud_base, cloud_top, tau, effective_radius=cloud_effective_radius)
+        if tau > 0:
+            layer = checked
+        if clouds is not None and not isinstance(clouds, CloudField):
+            raise InvalidParameterError(f"clouds must be a CloudField or None; got {type(clouds).__name__}")
+        atm = base_atm if layer is None else base_atm.replace(particles=(*base_atm.particles, layer))
         try:
             alt = float(altitude)
         except (TypeError, ValueError):
@@ -81,8 +105,12 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
         self.scheduler = scheduler
         #: ``progress(done, total)`` called as the tasks of each evaluation finish (not a model parameter).
         self.progress: Callable[[int, int], None] | None = None
+        self.clouds = clouds
+        self.cloud_layer = layer
         self.sun_angular_radius = atm.sun_angular_radius
-        self._remember(altitude=alt, samples=self.samples, seed=self.seed, atmosphere=atmosphere)
+        self._remember(altitude=alt, samples=self.samples, seed=self.seed, atmosphere=atmosphere,
+                       cloud_optical_depth=tau, cloud_base=float(cloud_base), cloud_top=float(cloud_top),
+                       cloud_effective_radius=float(cloud_effective_radius), clouds=clouds)
 
     def __repr__(self) -> str:
         return (f"MonteCarloSky(sun_zenith={self.sun_zenith:.6g}, sun_azimuth={self.sun_azimuth:.6g}, "
@@ -98,7 +126,7 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
         shape = d.shape[:-1]
         res = sky_radiance(self.atmosphere, d.reshape(-1, 3), wl, sun_zenith=self.sun_zenith,
                            sun_azimuth=self.sun_azimuth, altitude=self.altitude, samples=self.samples,
-                           seed=self.seed, scheduler=self.scheduler, progress=self.progress)
+                           seed=self.seed, scheduler=self.scheduler, progress=self.progress, clouds=self.clouds)
         return res.radiance.reshape(*shape, wl.size), res.stderr.reshape(*shape, wl.size)
 
     def estimate_seconds(self, n_directions: int, n_wavelengths: int = REFERENCE_WAVELENGTHS.size) -> float:
@@ -120,7 +148,7 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
         pilot_dirs = np.stack([r * np.sin(phi), r * np.cos(phi), z], axis=-1)
         wl = REFERENCE_WAVELENGTHS[np.linspace(0, REFERENCE_WAVELENGTHS.size - 1, DEFAULT_GROUP_SIZE).astype(int)]
         kw = dict(sun_zenith=self.sun_zenith, sun_azimuth=self.sun_azimuth, altitude=self.altitude, seed=self.seed,
-                  scheduler="synchronous")
+                  scheduler="synchronous", clouds=self.clouds)
         sky_radiance(self.atmosphere, pilot_dirs[:1], wl, samples=1, **kw)  # loads the compiled kernels
         t0 = time.perf_counter()
         sky_radiance(self.atmosphere, pilot_dirs, wl, samples=pilot_samples, **kw)
@@ -138,4 +166,5 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
         from ..montecarlo import solar_disc_radiance
 
         wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
-        return solar_disc_radiance(self.atmosphere, wl, sun_zenith=self.sun_zenith, altitude=self.altitude)
+        return solar_disc_radiance(self.atmosphere, wl, sun_zenith=self.sun_zenith, sun_azimuth=self.sun_azimuth,
+                                   altitude=self.altitude, clouds=self.clouds)
