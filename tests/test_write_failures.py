@@ -218,12 +218,10 @@ def test_zarr_store_writes(tmp_path, monkeypatch, code):
     ["sky", "--width", "256", "--out", "sky.exr"],
     ["sky", "--width", "256", "--format", "radiance", "--out", "sky.rad"],
     ["skymatrix", str(DATA / "weather.epw"), "--format", "radiance", "--csv", "m.csv", "--out", "m.mtx"],
-    ["reference", "r.zarr", "--sun-elevation", "30", "--wavelengths", "380:780:5", "--directions", "400",
-     "--samples", "8", "--scheduler", "synchronous", "--no-progress"],
-], ids=["sky", "sky-radiance", "skymatrix", "reference"])
+], ids=["sky", "sky-radiance", "skymatrix"])
 def test_file_size_limit_end_to_end(tmp_path, command):
     """The real programs under a 16 KiB file-size limit (the kernel's EFBIG): one line, exit 2, nothing left
-    (the reference store: created, no cell marked done)."""
+    (the Zarr store's failures are injected above: its cells go through zarr's own I/O threads)."""
     import resource
 
     def limit():
@@ -234,12 +232,4 @@ def test_file_size_limit_end_to_end(tmp_path, command):
     lines = res.stderr.strip().splitlines()
     assert res.returncode == 2 and len(lines) == 1 and os.strerror(errno.EFBIG) in lines[0], res.stderr
     assert "Traceback" not in res.stderr and ".tmp" not in lines[0]
-    left = _entries(tmp_path)
-    if command[0] == "reference":
-        import xarray as xr
-
-        assert left in ([], ["r.zarr"])
-        if left:
-            assert not xr.open_zarr(tmp_path / "r.zarr", consolidated=False)["done"].values.any()
-    else:
-        assert left == []
+    assert _entries(tmp_path) == []
