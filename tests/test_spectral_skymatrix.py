@@ -415,3 +415,31 @@ def test_cli_spectral(epw, tmp_path, capsys):
     assert main(["skymatrix", str(epw), str(b), "--out", str(tmp_path / "y.npz")]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and ".nc or .zarr" in err
+
+
+def test_ground_only_family_equals_full_tables(options):
+    """The ground-level nodes give the full tables' sky radiance, sun and irradiance for an observer on the ground
+    (to float32 rounding of the same table values)."""
+    import warnings
+
+    from skyscatter.fit.weather import default_family
+    from skyscatter.precomputed import cached_atmosphere
+
+    fam = default_family(options)
+    assert fam.ground_only
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        small = fam.node((1, 0))
+        full = cached_atmosphere(fam.parameters((1, 0)), orders=fam.orders, wavelengths=fam.wavelengths,
+                                 sizes=fam.sizes, progress=False)
+    assert small.tables["multiple"].shape[0] == 2 and full.tables["multiple"].shape[0] == fam.sizes.scattering_r
+    pos = np.array([0.0, 0.0, fam.base.bottom_radius])
+    rng = np.random.default_rng(3)
+    d = rng.normal(size=(500, 3))
+    d[:, 2] = np.abs(d[:, 2])
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    for sun in ([0.3, 0.1, 0.95], [0.9, 0.0, 0.1], [0.0, 0.99, -0.05]):
+        s = np.array(sun) / np.linalg.norm(sun)
+        np.testing.assert_allclose(small.sky_radiance(pos, d, s), full.sky_radiance(pos, d, s), rtol=1e-6, atol=1e-12)
+        np.testing.assert_allclose(small.ground_irradiance(pos, [0, 0, 1.0], s)[1],
+                                   full.ground_irradiance(pos, [0, 0, 1.0], s)[1], rtol=1e-12)

@@ -83,3 +83,67 @@ def write_epw(path: Path, *, days=((6, 20, "clear"), (6, 21, "broken"), (6, 22, 
     lines += [",".join(r) for r in rows]
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+def write_year_epw(path: Path, *, year: int = 2023, seed: int = 24, site: dict | None = None) -> Path:
+    """A year of hours for benchmarks and the Monte Carlo comparison: each day clear (35 %), broken (35 %) or
+    overcast (30 %), drawn with ``seed``; clear-sky irradiance from SPECTRL2 with a daily aerosol optical depth
+    (log-normal around 0.12 at 550 nm) and a seasonal precipitable water (1-2.5 cm); broken and overcast days as
+    in :func:`write_epw`. The file's water field holds the truth, its aerosol field a flat 0.1 (TMY style)."""
+    import pvlib
+
+    from skyscatter.sun.position import sun_position_unix
+
+    site = SITE if site is None else site
+    rng = np.random.default_rng(seed)
+    start = np.datetime64(f"{year}-01-01T00:00").astype("datetime64[s]").astype(np.int64)
+    n_days = 365
+    hours = np.arange(n_days * 24)
+    unix = start + (hours + 0.5) * 3600.0 - site["timezone"] * 3600.0
+    pos = sun_position_unix(np.radians(site["latitude"]), np.radians(site["longitude"]), unix, apparent=False)
+    zen = np.degrees(np.asarray(pos.zenith))
+    doy = hours // 24 + 1
+    kinds = rng.choice(3, size=n_days, p=[0.35, 0.35, 0.30])
+    aod = np.exp(rng.normal(np.log(0.12), 0.4, size=n_days)).clip(0.02, 0.9)
+    water = 1.75 - 0.75 * np.cos(2 * np.pi * (np.arange(n_days) - 15) / 365.0)
+    day = hours // 24
+    up = zen < 89.0
+    dni = np.zeros(hours.size)
+    dhi = np.zeros(hours.size)
+    am = pvlib.atmosphere.get_relative_airmass(np.where(up, zen, 0.0), model="kasten1966")
+    s = pvlib.spectrum.spectrl2(apparent_zenith=zen[up], aoi=zen[up], surface_tilt=0.0, ground_albedo=0.2,
+                                surface_pressure=101325.0, relative_airmass=am[up],
+                                precipitable_water=water[day[up]], ozone=0.3,
+                                aerosol_turbidity_500nm=aod[day[up]] * (500 / 550) ** -ALPHA, dayofyear=doy[up],
+                                alpha=ALPHA)
+    wl = s["wavelength"]
+    dni[up] = np.trapezoid(s["dni"], wl, axis=0)
+    dhi[up] = np.trapezoid(s["dhi"], wl, axis=0)
+    kind = kinds[day]
+    ghi_clear = dhi + dni * np.maximum(np.cos(np.radians(zen)), 0.0)
+    broken = kind == 1
+    dni[broken] *= 0.4
+    dhi[broken] *= 2.0
+    over = kind == 2
+    dni[over] = 0.0
+    dhi[over] = 0.35 * ghi_clear[over]
+    ghi = dhi + dni * np.maximum(np.cos(np.radians(zen)), 0.0)
+    cover = np.array([0, 5, 10])[kind]
+    rows = []
+    dates = (np.datetime64(f"{year}-01-01") + np.arange(n_days)).astype(str)
+    for i in hours:
+        y, m, d = dates[day[i]].split("-")
+        rows.append(",".join([y, str(int(m)), str(int(d)), str(i % 24 + 1), "60", "?9?9?9?9E0", "12.0", "6.0", "70",
+                              "101325", "9999", "9999", "9999", f"{ghi[i]:.0f}", f"{dni[i]:.0f}", f"{dhi[i]:.0f}",
+                              "999999", "999999", "999999", "9999", "180", "2.0", str(cover[i]), str(cover[i]), "9999",
+                              "99999", "9", "999999999", f"{water[day[i]] * 10:.0f}", "0.100", "999", "99", "0.2",
+                              "999", "99"]))
+    head = [f"LOCATION,Synthville,BY,DEU,skyscatter benchmark,999999,{site['latitude']},{site['longitude']},"
+            f"{site['timezone']},{site['elevation']}",
+            "DESIGN CONDITIONS,0", "TYPICAL/EXTREME PERIODS,0", "GROUND TEMPERATURES,0",
+            "HOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0",
+            f"COMMENTS 1,made by tests/weather_synth.py write_year_epw (SPECTRL2 clear skies) seed {seed}",
+            "COMMENTS 2,", "DATA PERIODS,1,1,Data,Sunday, 1/ 1,12/31"]
+    path.write_text("\n".join(head + rows) + "\n")
+    np.savez(path.with_suffix(".truth.npz"), aod=aod, water=water, kinds=kinds)
+    return path

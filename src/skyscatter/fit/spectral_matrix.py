@@ -206,47 +206,78 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
 
             bar = tqdm(total=rows.size, unit="h", desc=f"spectral sky ({geom.name}, {n_b} bands)")
 
-        def patch_pass(sel: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-            """(band radiances (len(sel), n_p, n_b), horizontal sky irradiance at the table wavelengths)."""
+        names = [ax.name for ax in fam.axes]
+        k_ssa = names.index("aerosol_single_scattering_albedo") if "aerosol_single_scattering_albedo" in names else None
+
+        def patch_pass(values: NDArray[np.float64]) -> NDArray[np.float32]:
+            """Band radiances (n_p * n_b) and horizontal sky irradiance at the table wavelengths (n_t) per hour."""
 
             def evaluate(atm, sub):
-                out = np.empty((sub.size, n_p * n_b + n_t))
-                for j, i in enumerate(sel[sub]):
+                out = np.empty((sub.size, n_p * n_b + n_t), dtype=np.float32)
+                for j, i in enumerate(rows[sub]):
                     rad = atm.sky_radiance(ground, flat, sun_dirs[i]).reshape(n_p, -1, n_t).mean(axis=1)
                     out[j, : n_p * n_b] = (rad @ bmat.T).reshape(-1)
                     out[j, n_p * n_b:] = (omega * cos_cells) @ rad  # horizontal sky irradiance
                 return out
 
-            values = np.stack([_axis_values(fam, a.name, h) for a in fam.axes], axis=1)[sel]
-            res = fam.interpolate(values, evaluate, progress=(lambda k: bar.update(k)) if bar is not None else None)
-            return res[:, : n_p * n_b].reshape(sel.size, n_p, n_b), res[:, n_p * n_b:]
+            return fam.interpolate(values, evaluate, dtype=np.float32,
+                                   progress=(lambda k: bar.update(k)) if bar is not None else None)
 
-        def matrix_dhi(sel, e_sky):
-            return model.broadband_diffuse(e_sky, h.sun_zenith[sel], h.precipitable_water[sel], h.pressure[sel],
-                                           h.ozone[sel], ecc[sel], table_wl)
+        def matrix_dhi(e_sky):
+            return model.broadband_diffuse(e_sky, h.sun_zenith[rows], h.precipitable_water[rows], h.pressure[rows],
+                                           h.ozone[rows], ecc[rows], table_wl)
 
+        values = np.stack([_axis_values(fam, a.name, h) for a in fam.axes], axis=1)[rows]
         try:
-            bandsky, e_sky_t = patch_pass(rows)
-            dhi_matrix[rows] = matrix_dhi(rows, e_sky_t)
-            # The retrieval closed DHI with the tables' irradiance; the patches are another quadrature of the same
-            # sky (a few per cent apart with the sun low). One step of the albedo on the matrix's own DHI (linear in
-            # the albedo) closes it; hours whose albedo then leaves the grid become "clear, DHI not closed".
-            redo = _closure_step(h, rows, dhi_matrix, CLOSURE_TOLERANCE)
-            if redo.size:
+            if k_ssa is None:
+                res = patch_pass(values)
+                dhi_matrix[rows] = matrix_dhi(res[:, n_p * n_b:].astype(float))
+            else:
+                # The sky is linear in the albedo within its grid cell: compute it at the cell's two albedo nodes
+                # (each pass interpolates along the other axes only), then choose the albedo that makes the
+                # matrix's own DHI equal the record's (the retrieval closed DHI with the tables' irradiance; the
+                # patches are another quadrature of the same sky, a few per cent apart with the sun low).
+                nodes = np.asarray(fam.axes[k_ssa].values)
+                lower, _, _ = fam.cells(values)
+                lo_v, hi_v = nodes[lower[:, k_ssa]], nodes[lower[:, k_ssa] + 1]
+                v_lo, v_hi = values.copy(), values.copy()
+                v_lo[:, k_ssa], v_hi[:, k_ssa] = lo_v, hi_v
                 if bar is not None:
-                    bar.total += redo.size
+                    bar.total = 2 * rows.size
                     bar.refresh()
-                k = np.searchsorted(rows, redo)
-                bandsky[k], e_sky_t[k] = patch_pass(redo)
-                dhi_matrix[redo] = matrix_dhi(redo, e_sky_t[k])
+                res = patch_pass(v_lo)
+                res_hi = patch_pass(v_hi)
+                d_lo = matrix_dhi(res[:, n_p * n_b:].astype(float))
+                d_hi = matrix_dhi(res_hi[:, n_p * n_b:].astype(float))
+                w = (values[:, k_ssa] - lo_v) / (hi_v - lo_v)
+                clear = h.status[rows] == CLEAR
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    w_close = (h.dhi[rows] - d_lo) / (d_hi - d_lo)
+                ok = clear & np.isfinite(w_close) & (d_hi > d_lo)
+                inside = ok & (w_close >= 0) & (w_close <= 1)
+                # at the grid's first or last cell an albedo beyond the cell is beyond the grid
+                w = np.where(inside, w_close, w)
+                out_of_grid = ok & ~inside
+                w = np.where(out_of_grid, np.clip(w_close, 0, 1), w)
+                for j in np.flatnonzero(out_of_grid):
+                    i = rows[j]
+                    h.status[i] = CLEAR_OPEN
+                    h.reason[i] = "the matrix's DHI needs an aerosol albedo outside the grid cell: clamped, not closed"
+                h.single_scattering_albedo[rows] = lo_v + w * (hi_v - lo_v)
+                res *= (1 - w)[:, None].astype(np.float32)
+                res += w[:, None].astype(np.float32) * res_hi
+                del res_hi
+                dhi_matrix[rows] = (1 - w) * d_lo + w * d_hi
         finally:
             if bar is not None:
                 bar.close()
+        bandsky = res[:, : n_p * n_b].reshape(rows.size, n_p, n_b)
         gas_b = np.ones((rows.size, n_b))
         if gases:
             tg = model.gas_transmittance(h.sun_zenith[rows], h.precipitable_water[rows], h.pressure[rows])
             gas_b = _band_means(tg, model.e0 * model.weights, masks)
-        sky[rows] = (bandsky * (ecc[rows, None] * gas_b)[:, None, :]).astype(np.float32)
+        bandsky *= (ecc[rows, None] * gas_b).astype(np.float32)[:, None, :]
+        sky[rows] = bandsky
         direct = model.direct_normal_spectral(h.sun_zenith[rows], h.aerosol_optical_depth[rows],
                                               h.precipitable_water[rows], h.pressure[rows], h.ozone[rows],
                                               ecc[rows], weighted=False)
@@ -321,29 +352,6 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
                       "doi:10.1175/1520-0450(1986)025<0087:SSSMFD>2.0.CO;2",
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
-
-
-#: Relative DHI mismatch of the matrix above which its clear hours get a closure step (0.2 %).
-CLOSURE_TOLERANCE = 0.002
-
-
-def _closure_step(h: HourlyAtmosphere, rows: NDArray[np.int64], dhi_matrix: NDArray[np.float64],
-                  tolerance: float) -> NDArray[np.int64]:
-    """Move the albedo of clear hours whose matrix DHI misses the record; return the hours to recompute."""
-    sel = rows[(h.status[rows] == CLEAR) & np.isfinite(h.dhi_albedo_slope[rows]) & (h.dhi_albedo_slope[rows] > 0)]
-    miss = np.abs(dhi_matrix[sel] / h.dhi[sel] - 1.0) > tolerance
-    sel = sel[miss]
-    if not sel.size:
-        return sel
-    axis = next(a for a in h.family.axes if a.name == "aerosol_single_scattering_albedo")
-    lo, hi = axis.values[0], axis.values[-1]
-    new = h.single_scattering_albedo[sel] + (h.dhi[sel] - dhi_matrix[sel]) / h.dhi_albedo_slope[sel]
-    out = (new < lo) | (new > hi)
-    h.single_scattering_albedo[sel] = np.clip(new, lo, hi)
-    h.status[sel[out]] = CLEAR_OPEN
-    for i in sel[out]:
-        h.reason[i] = "the matrix's DHI needs an aerosol albedo outside the grid: clamped, DHI not closed"
-    return sel
 
 
 def _axis_values(fam, name: str, h: HourlyAtmosphere) -> NDArray[np.float64]:

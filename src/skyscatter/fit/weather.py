@@ -527,14 +527,15 @@ TABLE_PRESETS = {
 
 def default_family(options: RetrievalOptions | None = None) -> TableFamily:
     """The table family of a retrieval: aerosol optical depth x single-scattering albedo over the base medium,
-    with the options' table preset."""
+    with the options' table preset, for ground observers (every node kept in memory: 4.5 MB each by default)."""
     o = RetrievalOptions() if options is None else options
     preset = TABLE_PRESETS[o.tables]
     return TableFamily([GridAxis("aerosol_optical_depth", tuple(o.aerosol_optical_depth_nodes)),
                         GridAxis("aerosol_single_scattering_albedo", tuple(o.single_scattering_albedo_nodes))],
                        base=o.base_atmosphere(), wavelengths=preset["wavelengths"],
                        sizes=o.sizes if o.sizes is not None else preset["sizes"],
-                       orders=o.orders if o.orders is not None else preset["orders"])
+                       orders=o.orders if o.orders is not None else preset["orders"], ground_only=True,
+                       max_in_memory=len(o.aerosol_optical_depth_nodes) * len(o.single_scattering_albedo_nodes))
 
 
 @dataclass(eq=False)
