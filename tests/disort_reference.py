@@ -6,7 +6,8 @@ the ground; each layer's Rayleigh, aerosol-extinction, aerosol-scattering and oz
 integrals of the exponential (or tent) density profiles over it. The layer phase function is the scattering
 weighted mix of the Rayleigh moments (chi_0 = 1, chi_2 = 1/10 for 3/(16 pi)(1 + nu^2)) and the Legendre moments
 of the Cornette-Shanks phase (Bruneton & Neyret 2008, Eq. 4), computed by Gauss-Legendre quadrature with 4000
-nodes. Delta-M scaling and the Nakajima-Tanaka intensity correction (DISORT's defaults with many moments) keep
+nodes, or those of a tabulated aerosol phase (its ``PhaseTable.legendre_moments``, exact for the table).
+Delta-M scaling and the Nakajima-Tanaka intensity correction (DISORT's defaults with many moments) keep
 the forward peak accurate.
 
 This is independent of the code under test: only the atmosphere's parameters (coefficients, scale heights,
@@ -88,12 +89,16 @@ def disort_radiance(params, wavelength: float, sun_zenith: float, view_zenith, v
     edges = np.linspace(params.thickness, 0.0, n_layers + 1)  # from the top down
     z_hi, z_lo = edges[:-1], edges[1:]
     i_r = _layer_integral(params.rayleigh_density, z_lo, z_hi)
-    i_m = _layer_integral(params.mie_density, z_lo, z_hi)
+    i_m = _layer_integral(params.aerosol_component.density, z_lo, z_hi)
     i_o = _layer_integral(params.ozone_density, z_lo, z_hi)
     tau_r, tau_ms = beta_r * i_r, beta_ms * i_m
     tau = tau_r + beta_me * i_m + beta_o * i_o
     ssa = (tau_r + tau_ms) / tau
-    chi_m = cornette_shanks_moments(params.mie_phase_g, n_moments)
+    analytic = params.aerosol_component.analytic_phase
+    if analytic is not None and analytic.kind == "cornette-shanks":
+        chi_m = cornette_shanks_moments(analytic.g, n_moments)
+    else:  # a tabulated phase: the exact moments of its table (DISORT applies delta-M to them itself)
+        chi_m = params.aerosol_phase_table(wl).legendre_moments(n_moments + 1)[0]
     chi_r = np.zeros(n_moments + 1)
     chi_r[0], chi_r[2] = 1.0, 0.1
     f_r = tau_r / (tau_r + tau_ms)

@@ -110,7 +110,7 @@ def test_skymatrix_default_scheme_no_progress(capsys, epw, tmp_path, monkeypatch
 @pytest.mark.parametrize(
     "mutate,message",
     [
-        (lambda p: p.write_text("garbage\n"), "w.epw: has 1 lines"),
+        (lambda p: p.write_text("garbage\n"), "w.epw: line 1: an EPW file starts with a LOCATION line"),
         (lambda p: p.write_text(p.read_text().replace("2023,6,20,5,", "2023,6,20,5,7,", 1)), "line 13: a data record"),
         (lambda p: p.unlink(), "no such file"),
     ],

@@ -49,12 +49,17 @@ def test_numba_phase_functions_equal_the_numpy_ones(mu):
 
 
 def test_aerosol_kinds_of_the_kernels():
-    """The integer kinds the driver passes to the kernels: 0 Cornette-Shanks, 1 Henyey-Greenstein."""
+    """The phase functions the driver passes to the kernels: Rayleigh, the aerosol's (Cornette-Shanks or
+    Henyey-Greenstein with its g), none for ozone and for an absent cloud field."""
+    from skyscatter.montecarlo import kernels
     from skyscatter.montecarlo.driver import prepare_medium
 
-    for name, kind in (("cornette-shanks", 0), ("henyey-greenstein", 1)):
+    for name, kind, lobe in (("cornette-shanks", 0, kernels.LOBE_CORNETTE_SHANKS),
+                             ("henyey-greenstein", 1, kernels.LOBE_HENYEY_GREENSTEIN)):
         assert phase_np.aerosol_phase_kind(name) == kind
-        assert prepare_medium(EARTH.replace(mie_phase_function=name), np.array([550.0])).kind == kind
+        m = prepare_medium(EARTH.replace(mie_phase_function=name, mie_phase_g=0.7), np.array([550.0]))
+        assert m.lobe.tolist() == [kernels.LOBE_RAYLEIGH, lobe, kernels.LOBE_NONE, kernels.LOBE_NONE]
+        assert m.lobe_g[1] == 0.7
     assert phase_np.aerosol_phase_scalar(0.3, 0.8, 0) == phase_np.cornette_shanks_scalar(0.3, 0.8)
     assert phase_np.aerosol_phase_scalar(0.3, 0.8, 1) == phase_np.henyey_greenstein_scalar(0.3, 0.8)
 

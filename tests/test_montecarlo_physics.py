@@ -53,7 +53,7 @@ def test_columns_match_adaptive_quadrature(alt, zen_deg):
     d = (math.sqrt(1 - mu * mu), 0.0, mu)
     t_end, _ = kernels._exit_distance(0.0, 0.0, r0, *d, p.bottom_radius, p.top_radius)
     cols, tmp = np.empty(3), np.empty(3)
-    kernels.column_along(0.0, 0.0, r0, *d, t_end, np.inf, 0.0, 0.0, 0.0, p.bottom_radius, m.edges, m.layers,
+    kernels.column_along(0.0, 0.0, r0, *d, t_end, np.inf, np.zeros(3), p.bottom_radius, m.edges, m.layers,
                          m.nlay, cols, tmp)
     ref = _ray_density_integral(p, r0, mu, t_end)
     np.testing.assert_allclose(cols, ref, rtol=3e-7 if abs(mu) > 0.2 else 2e-6, atol=1e-6)
@@ -70,7 +70,7 @@ def test_free_path_inversion_hits_the_target_optical_depth():
     t_end, _ = kernels._exit_distance(0.0, 0.0, r0, *d, p.bottom_radius, p.top_radius)
     cols, tmp = np.empty(3), np.empty(3)
     for target in (1e-4, 0.05, 0.3, 1.0):
-        t, reached = kernels.column_along(0.0, 0.0, r0, *d, t_end, target, *k, p.bottom_radius, m.edges,
+        t, reached = kernels.column_along(0.0, 0.0, r0, *d, t_end, target, k, p.bottom_radius, m.edges,
                                           m.layers, m.nlay, cols, tmp)
         assert reached
         ref = _ray_density_integral(p, r0, mu, t)

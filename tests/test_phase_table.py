@@ -267,10 +267,10 @@ def test_bad_components_are_refused():
             AnalyticParticles("a", DensityProfile.exponential(1000.0), 1e-5, **kwargs)
     with pytest.raises(FileFormatError, match="kind"):
         particle_component_from_dict({"kind": "nonsense"})
-    with pytest.raises(InvalidParameterError, match="aerosol"):
+    with pytest.raises(InvalidParameterError, match="particle components"):
         from skyscatter.precomputed import PrecomputedAtmosphere
 
-        PrecomputedAtmosphere.compute(AtmosphereParameters(aerosol=_tabulated()), wavelengths=[550.0])
+        PrecomputedAtmosphere.compute(AtmosphereParameters(particles=(_tabulated(),)), wavelengths=[550.0])
     comp = AnalyticParticles("a", DensityProfile.boundary_layer(1500.0, 1000.0), PowerLawSpectrum(1e-5, 550.0, -1.0))
     assert particle_component_from_dict(comp.to_dict()) == comp
     assert abs(comp.density.column(60000.0) - 2500.0) < 1e-3

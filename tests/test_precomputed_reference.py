@@ -44,7 +44,7 @@ def extinction(h: np.ndarray, params: AtmosphereParameters, wl: np.ndarray) -> n
     """Extinction coefficient [m^-1] at altitudes h, shape h.shape + (n_wl,)."""
     h = np.asarray(h, dtype=float)[..., None]
     return (params.rayleigh_density(h) * params.rayleigh_scattering_at(wl)
-            + params.mie_density(h) * params.mie_extinction_at(wl)
+            + params.aerosol_component.density(h) * params.mie_extinction_at(wl)
             + params.ozone_density(h) * params.ozone_absorption_at(wl))
 
 
@@ -103,9 +103,18 @@ def single_scattering(r: float, mu: float, mu_s: float, nu: float, params: Atmos
     tr = np.exp(-tau_view - tau_sun) * (~blocked)[:, None]
     h = ry - params.bottom_radius
     ray = (params.rayleigh_density(h)[:, None] * tr * w[:, None]).sum(0) * params.rayleigh_scattering_at(wl)
-    mie = (params.mie_density(h)[:, None] * tr * w[:, None]).sum(0) * params.mie_scattering_at(wl)
+    mie = (params.aerosol_component.density(h)[:, None] * tr * w[:, None]).sum(0) * params.mie_scattering_at(wl)
     p_r = 3 / (16 * np.pi) * (1 + nu * nu)
-    return params.solar_irradiance_at(wl) * (ray * p_r + mie * _cs_phase(nu, params.mie_phase_g))
+    return params.solar_irradiance_at(wl) * (ray * p_r + mie * aerosol_phase(nu, params, wl))
+
+
+def aerosol_phase(nu: float, params: AtmosphereParameters, wl: np.ndarray) -> np.ndarray:
+    """The aerosol phase [sr^-1] at ``nu``: Cornette-Shanks written out here, or the numpy interpolant of the
+    aerosol's phase table (:meth:`PhaseTable.evaluate`) for a tabulated one, (n_wl,) or scalar."""
+    analytic = params.aerosol_component.analytic_phase
+    if analytic is not None and analytic.kind == "cornette-shanks":
+        return _cs_phase(nu, analytic.g)
+    return params.aerosol_phase_table(wl).evaluate(nu)
 
 
 # ------------------------------------------------------------------------------------------ self-checks

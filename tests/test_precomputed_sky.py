@@ -275,7 +275,7 @@ def test_cli_help_texts():
                  "single_mie_scattering.raw", "multiple_scattering.raw", "scattering.raw", "scattering_rgba.raw",
                  "atmosphere.json"):
         assert name in flat
-    assert "written atomically" in flat
+    assert "The files are written together: all appear" in flat
     flat = " ".join(sub.choices["precompute"].format_help().split())
     for default in ("(default: 256x64)", "(default: 64x16)", "(default: 32x128x32x8)"):
         assert default in flat

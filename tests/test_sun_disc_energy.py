@@ -72,7 +72,7 @@ def test_disc_carries_the_sun_at_every_width_and_projection(model):
         e_n = photometry.sun_normal_illuminance(sky)
         e_h = photometry.sun_plane_illuminance(sky, 0.0, 0.0)  # the sun's term of horizontal_illuminance
         assert e_n > 0 and e_h > 0
-        for k, width in enumerate(WIDTHS):
+        for k, width in enumerate(WIDTHS[i % 2::2]):  # every width 20 times, each sun at three of them
             projection, layout = VIEWS[(i + k) % len(VIEWS)]
             flux, horizontal = _disc_integrals(sky, projection, layout, width)
             assert flux == pytest.approx(e_n, rel=1e-9), (model, elevation, width, projection, layout)

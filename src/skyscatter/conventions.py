@@ -33,11 +33,10 @@ __all__ = [
 #: orbital eccentricity e = 0.0167 (Spencer 1971's factor peaks at 1.0344 on 3 January).
 PERIHELION_FACTOR = 1.0344
 #: Extraterrestrial normal irradiance at perihelion [W m^-2]: the solar constant 1367 W m^-2 (WRC value that
-#: Perez et al. 1990 and Radiance use; the measured TSI is 1360.8, Kopp & Lean 2011,
-#: doi:10.1029/2010GL045777) times PERIHELION_FACTOR. No direct or diffuse irradiance at the ground exceeds it.
+#: Perez et al. 1990 and Radiance use; the measured TSI is 1360.8, [KoppLean2011])
+#: times PERIHELION_FACTOR. No direct or diffuse irradiance at the ground exceeds it.
 MAX_EXTRATERRESTRIAL_IRRADIANCE = 1367.0 * PERIHELION_FACTOR
-#: Luminous solar constant [lx] (Darula, Kittler & Gueymard 2005, Solar Energy 79, 559-565,
-#: doi:10.1016/j.solener.2005.01.004): extraterrestrial normal illuminance at the mean Sun-Earth distance.
+#: Luminous solar constant [lx] ([Darula2005]): extraterrestrial normal illuminance at the mean Sun-Earth distance.
 LUMINOUS_SOLAR_CONSTANT = 133_800.0
 #: Extraterrestrial normal illuminance at perihelion [lx]: no sun or sky illuminance at the ground exceeds it.
 MAX_EXTRATERRESTRIAL_ILLUMINANCE = LUMINOUS_SOLAR_CONSTANT * PERIHELION_FACTOR

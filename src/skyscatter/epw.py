@@ -42,14 +42,26 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from .conventions import MAX_EXTRATERRESTRIAL_IRRADIANCE
 from .errors import FileFormatError
 
-__all__ = ["N_FIELDS", "EPWLocation", "EPWData", "read_epw"]
+__all__ = ["N_FIELDS", "EPWLocation", "EPWData", "EPWWarning", "read_epw"]
 
 #: Number of fields in an EPW data record.
 N_FIELDS = 35
 #: Years the time stamps can hold (pandas nanosecond timestamps, used for the sun position).
 YEAR_RANGE = (1678, 2261)
+#: Largest EPW file read [bytes]; a year of one-minute records is about 80 MB.
+MAX_FILE_BYTES = 256 * 2**20
+#: Bytes read first to tell an EPW file (it starts with its LOCATION line) from anything else.
+SNIFF_BYTES = 4096
+#: Largest difference [h] between the time zone and longitude / 15 deg before a warning: civil time zones stray
+#: from their meridian by up to about 3 h (western China, Spain's 1 h over west of Greenwich); beyond that the zone
+#: is most likely of another place, or of the wrong sign, and every sun position of the file is off.
+TIME_ZONE_TOLERANCE = 3.0
+#: Diffuse horizontal irradiance may exceed global horizontal by this much [W m^-2, plus 5 %] (rounding and
+#: the instruments of measured files); more cannot be: global = diffuse + direct normal x cos(zenith).
+DIFFUSE_EXCESS = 5.0
 #: Record counts per hour a DATA PERIODS line may declare (divisors of 60 minutes).
 RECORDS_PER_HOUR = (1, 2, 3, 4, 5, 6, 10, 12, 15, 20, 30, 60)
 _HEADER_KEYS = (
@@ -80,6 +92,10 @@ _FIELDS = (
     (14, "direct normal radiation", "Wh m^-2", 0.0, 1500.0, 9999.0),
     (15, "diffuse horizontal radiation", "Wh m^-2", 0.0, 1500.0, 9999.0),
 )
+
+
+class EPWWarning(UserWarning):
+    """An EPW file whose data look wrong but can be used (a time zone far from the longitude's, light at night)."""
 
 
 @dataclass(frozen=True)
@@ -269,6 +285,67 @@ def _parse_location(path: Path, text: str) -> EPWLocation:
     return EPWLocation(parts[1], parts[2], parts[3], parts[4], parts[5], lat, lon, tz, elev)
 
 
+def _read_bounded(p: Path) -> bytes:
+    """The bytes of ``p`` if it can be an EPW file: a regular file of at most MAX_FILE_BYTES that starts with its
+    LOCATION line (checked on the first bytes, so that a wrong file, ``/dev/zero`` included, is refused at once)."""
+    try:
+        st = p.stat()
+    except FileNotFoundError:
+        raise FileFormatError(f"{p}: no such file") from None
+    except OSError as exc:
+        raise FileFormatError(f"{p}: cannot read: {exc.strerror or exc}") from None
+    import stat
+
+    if stat.S_ISDIR(st.st_mode):
+        raise FileFormatError(f"{p}: is a folder, not an EPW file")
+    if not stat.S_ISREG(st.st_mode):
+        raise FileFormatError(f"{p}: is not a regular file (a device, a pipe or a socket); give an .epw file")
+    if st.st_size > MAX_FILE_BYTES:
+        raise FileFormatError(f"{p}: {st.st_size / 2**20:.0f} MiB is larger than any EPW file (at most "
+                              f"{MAX_FILE_BYTES // 2**20} MiB: a year of one-minute records is about 80 MiB)")
+    try:
+        with open(p, "rb") as fh:
+            head = fh.read(SNIFF_BYTES)
+            first = head.lstrip(b"\xef\xbb\xbf").lstrip()[:8].upper()
+            if first != b"LOCATION":
+                shown = head[:40].decode("latin-1").split("\n", 1)[0]
+                raise FileFormatError(f"{p}: line 1: an EPW file starts with a LOCATION line; found {shown!r} "
+                                      "(not an EPW file)")
+            return head + fh.read(MAX_FILE_BYTES + 1 - len(head))
+    except OSError as exc:
+        raise FileFormatError(f"{p}: cannot read: {exc.strerror or exc}") from None
+
+
+def _check_time_zone(p: Path, location: EPWLocation) -> None:
+    """Warn when the time zone is far from the longitude's (every sun position of the file would be off)."""
+    expected = location.longitude_deg / 15.0
+    off = abs(location.timezone_hours - expected)
+    if off > TIME_ZONE_TOLERANCE:
+        import warnings
+
+        warnings.warn(f"{p}: line 1: time zone UTC{location.timezone_hours:+g} h is {off:.1f} h "
+                      f"from the longitude's ({location.longitude_deg:g} deg: about UTC{expected:+.1f} h); if it is "
+                      "wrong (a sign, another place), every sun position computed from this file is off by as much",
+                      EPWWarning, stacklevel=3)
+
+
+def _check_irradiance(p: Path, ghi, dni, dhi, line_numbers) -> None:
+    """Refuse, with the line, a direct normal irradiance above the extraterrestrial value and a diffuse horizontal
+    irradiance above the global horizontal one (beyond rounding)."""
+    with np.errstate(invalid="ignore"):
+        bad = dni > MAX_EXTRATERRESTRIAL_IRRADIANCE
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            raise _fail(p, int(line_numbers[i]), f"direct normal radiation {dni[i]:g} W m^-2 exceeds the "
+                        f"extraterrestrial value ({MAX_EXTRATERRESTRIAL_IRRADIANCE:.1f} W m^-2 at perihelion): "
+                        "no sunlight at the ground can be brighter")
+        bad = dhi > ghi * 1.05 + DIFFUSE_EXCESS  # NaN (missing) compares False
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            raise _fail(p, int(line_numbers[i]), f"diffuse horizontal radiation {dhi[i]:g} W m^-2 exceeds the "
+                        f"global horizontal radiation {ghi[i]:g} W m^-2 (global = diffuse + direct x cos(zenith))")
+
+
 def read_epw(path: str | os.PathLike[str]) -> EPWData:
     """Read an EPW weather file (hourly or sub-hourly, as its DATA PERIODS line declares).
 
@@ -284,17 +361,19 @@ def read_epw(path: str | os.PathLike[str]) -> EPWData:
     Raises
     ------
     FileFormatError
-        The message names the file and line: missing or misplaced header lines, a LOCATION with bad values,
-        more than one record per hour, a record without exactly 35 fields, a non-numeric field, an impossible
-        date or hour, or a value out of the data dictionary's range.
+        The message names the file and line: not a regular file, larger than :data:`MAX_FILE_BYTES`, not
+        starting with a LOCATION line (checked on the first bytes), missing or misplaced header lines, a
+        LOCATION with bad values, more than one record per hour, a record without exactly 35 fields, a
+        non-numeric field, an impossible date or hour, a value out of the data dictionary's range, a direct
+        normal irradiance above the extraterrestrial value, a diffuse horizontal irradiance above the global.
+
+    Warns
+    -----
+    EPWWarning
+        The time zone is more than :data:`TIME_ZONE_TOLERANCE` hours from the longitude's (``longitude / 15``).
     """
     p = Path(path)
-    try:
-        raw = p.read_bytes()
-    except FileNotFoundError:
-        raise FileFormatError(f"{p}: no such file") from None
-    except IsADirectoryError:
-        raise FileFormatError(f"{p}: is a folder, not an EPW file") from None
+    raw = _read_bounded(p)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
@@ -309,6 +388,7 @@ def read_epw(path: str | os.PathLike[str]) -> EPWData:
         if head != key:
             raise _fail(p, i + 1, f"header line {i + 1} should start with {key!r}; found {lines[i][:40]!r}")
     location = _parse_location(p, lines[0])
+    _check_time_zone(p, location)
     periods = [s.strip() for s in lines[7].split(",")]
     per_hour = 1
     if len(periods) > 2 and periods[2]:
@@ -333,6 +413,7 @@ def read_epw(path: str | os.PathLike[str]) -> EPWData:
     year, month, day, hour, minute = (ints[:, k] for k in range(5))
     _check_dates(p, year, month, day, hour, line_numbers)
     step = _check_steps(p, year, month, day, hour, minute, line_numbers, per_hour)
+    _check_irradiance(p, values[:, 2], values[:, 3], values[:, 4], line_numbers)
     return EPWData(
         path=p,
         location=location,

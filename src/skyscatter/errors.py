@@ -30,3 +30,7 @@ class FileFormatError(SkyscatterError):
 
 class OutputError(SkyscatterError):
     """An output file could not be written (for example the folder does not exist or is read-only)."""
+
+
+class MissingDependencyError(SkyscatterError):
+    """An optional package a feature needs is not installed (the message names it and the extra that installs it)."""

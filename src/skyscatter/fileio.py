@@ -13,6 +13,7 @@ Nothing here changes process-wide state (no ``umask`` toggling), so threads may 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import re
 from collections.abc import Iterator
@@ -20,7 +21,8 @@ from pathlib import Path
 
 from .errors import OutputError
 
-__all__ = ["atomic_path", "atomic_paths", "check_output_path", "ensure_output_folder", "remove_stale_temporaries"]
+__all__ = ["atomic_path", "atomic_paths", "check_output_path", "ensure_output_folder", "remove_stale_temporaries",
+           "write_failure"]
 
 # .<target name>.<pid>.<token>.<tmp|old><suffix>
 _TEMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.(?P<token>[0-9a-f]{12})\.(?P<kind>tmp|old)(?P<suffix>\.[^.]*)?$")
@@ -131,6 +133,28 @@ def remove_stale_temporaries(folder: str | os.PathLike[str]) -> list[Path]:
     return done
 
 
+def write_failure(exc: OSError, targets: list[Path], temps: list[Path] | None = None) -> OutputError:
+    """The one-line error for an OSError raised while writing ``targets`` (through ``temps``): names the target
+    the failing file stands for (all of them when the error does not say which) and the reason, never a
+    temporary file's name."""
+    temps = temps or []
+    names = [str(t) for t in targets]
+    if exc.filename is not None and Path(exc.filename) in temps:
+        names = [str(targets[temps.index(Path(exc.filename))])]
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    for tmp, target in zip(temps, targets, strict=False):
+        reason = reason.replace(str(tmp), str(target))
+    code = exc.errno
+    if code is None:  # a library that gave the reason only (OpenEXR): recognise the usual ones
+        code = next((c for c in (errno.ENOSPC, errno.EFBIG, errno.EDQUOT) if os.strerror(c) in reason), None)
+    if code in (errno.ENOSPC, errno.EDQUOT):
+        reason += " (the disk or the quota is full)"
+    elif code == errno.EFBIG:
+        reason += " (the file system or the process's file size limit does not allow a file this large)"
+    what = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+    return OutputError(f"cannot write {what}: {reason}; nothing was written")
+
+
 def _new_temp(target: Path, kind: str) -> Path:
     """Create an empty temporary file beside ``target`` with the permissions ``open()`` would give it."""
     folder = _folder(target)
@@ -155,7 +179,9 @@ def atomic_paths(*paths: str | os.PathLike[str]) -> Iterator[list[Path]]:
 
     The temporary names keep their target's suffix, so writers that dispatch on the extension still work.
     Every target is checked first (:func:`check_output_path`). If the block raises (any exception, including
-    ``KeyboardInterrupt``), the temporaries are removed and no target changes. If renaming fails part way,
+    ``KeyboardInterrupt``), the temporaries are removed and no target changes; an OSError (disk full, file too
+    large, permission lost, I/O error) becomes an :class:`~skyscatter.errors.OutputError` naming the target
+    (:func:`write_failure`). If renaming fails part way,
     the targets already renamed are restored to their previous versions (or removed if new). Errors name the
     targets, never the temporaries.
 
@@ -176,12 +202,8 @@ def atomic_paths(*paths: str | os.PathLike[str]) -> Iterator[list[Path]]:
             temps.append(_new_temp(t, "tmp"))
         try:
             yield list(temps)
-        except OSError as exc:
-            named = exc.filename is not None and Path(exc.filename) in temps
-            if named:
-                target = targets[temps.index(Path(exc.filename))]
-                raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from exc
-            raise
+        except OSError as exc:  # disk full, file too large, permission lost, I/O error... while writing
+            raise write_failure(exc, targets, temps) from exc
         if len(targets) == 1:
             try:
                 os.replace(temps[0], targets[0])

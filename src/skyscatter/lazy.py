@@ -1,8 +1,8 @@
 """Package namespaces that import their public names on first use (PEP 562 module ``__getattr__``).
 
 ``import skyscatter``, ``skyscatter.sun`` and ``skyscatter.atmosphere`` stay quick, and importing one submodule
-(the sun's position, the air mass) does not import its siblings (the spectral sunlight, the medium): issue 12,
-a quick command line.
+(the sun's position, the air mass) does not import its siblings (the spectral sunlight, the medium): a quick command
+line (docs/architecture.md, "Start-up").
 """
 
 from __future__ import annotations

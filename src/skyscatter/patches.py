@@ -1,8 +1,7 @@
 """Sky patch schemes: Tregenza (145 patches) and its Reinhart subdivisions (MF = 1, 2, 4).
 
-Tregenza, P. R. (1987) "Subdivision of the sky hemisphere for luminance measurements", Lighting Research and
-Technology 19(1), 13-14: seven 12-degree altitude bands holding 30, 30, 24, 24, 18, 12 and 6 patches, and a
-polar cap of 6 degrees radius (145 patches). Reinhart's subdivision (Reinhart & Walkenhorst 2001; the form of
+[Tregenza1987]: seven 12-degree altitude bands holding 30, 30, 24, 24, 18, 12 and 6 patches, and a
+polar cap of 6 degrees radius (145 patches). Reinhart's subdivision ([ReinhartWalkenhorst2001]; the form of
 Radiance's ``reinhartb.cal`` and ``gendaymtx -m MF``) splits every band into MF bands and every patch into MF
 azimuth steps with a band height ``alpha = (pi / 2) / (7 MF + 1/2)``; the cap keeps half a band
 (radius alpha / 2). MF = 1 is Tregenza's scheme, MF = 2 gives 577 patches, MF = 4 gives 2305.

@@ -35,12 +35,15 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from . import __version__
 from .conventions import direction_from_angles
 from .epw import EPWData, EPWLocation, read_epw
 from .errors import FileFormatError, InvalidParameterError
 from .fileio import atomic_path, atomic_paths
 from .patches import PatchScheme, patch_scheme
+from .radiance import write_radiance_matrix
 from .sky.perez_family import gradation, indicatrix
+from .spectral import RADIANCE_EFFICACY
 
 __all__ = ["MODELS", "NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches",
            "asrc_cie_patch_luminance", "perez_patch_luminance", "skymatrix"]
@@ -215,6 +218,11 @@ def asrc_cie_patch_luminance(
     return out
 
 
+#: gendaymtx's default sky colour (its ``-c``, [RadianceSource2025] gendaymtx.c), Radiance RGB whose luminance
+#: weights give 1.000.
+GENDAYMTX_SKY_COLOUR = (0.960, 1.004, 1.118)
+
+
 @dataclass(eq=False)
 class SkyMatrix:
     """Hourly sky luminance over a patch scheme.
@@ -240,6 +248,9 @@ class SkyMatrix:
     samples : int
     model : str
         The sky model of every hour (one of :data:`MODELS`).
+    sun_patches, sun_patch_luminance : ndarray, shape (n_hours, 4), optional
+        With ``include_sun``: the patches each hour's sun was spread over (-1: none) and the luminance [cd m^-2]
+        it added to each (included in ``luminance``); the Radiance output colours the sun apart from the sky.
     """
 
     luminance: NDArray[np.float64]
@@ -256,6 +267,8 @@ class SkyMatrix:
     include_sun: bool
     samples: int
     model: str = "perez"
+    sun_patches: NDArray[np.int64] | None = None
+    sun_patch_luminance: NDArray[np.float64] | None = None
 
     @property
     def times(self):
@@ -271,8 +284,13 @@ class SkyMatrix:
     def iso_times(self) -> NDArray[np.str_]:
         """Middle of each hour (record) as ISO 8601 text in the file's standard time, e.g.
         ``2023-06-20T00:30:00+01:00`` (to the second: EPW records give whole seconds)."""
-        offset_s = round(self.utc_offset_hours * 3600.0)
-        local = np.round(self.unix_time + offset_s).astype(np.int64).astype("datetime64[s]")
+        return self.iso_times_of(self.unix_time, self.utc_offset_hours)
+
+    @staticmethod
+    def iso_times_of(unix_time: NDArray[np.float64], utc_offset_hours: float) -> NDArray[np.str_]:
+        """Unix times [s] as ISO 8601 text at a fixed UTC offset [h] (see :meth:`iso_times`)."""
+        offset_s = round(utc_offset_hours * 3600.0)
+        local = np.round(unix_time + offset_s).astype(np.int64).astype("datetime64[s]")
         sign = "-" if offset_s < 0 else "+"
         minutes = abs(offset_s) // 60
         return np.char.add(np.datetime_as_string(local, unit="s"), f"{sign}{minutes // 60:02d}:{minutes % 60:02d}")
@@ -287,16 +305,79 @@ class SkyMatrix:
         g = self.scheme
         return self.luminance @ (g.solid_angles * np.sin(g.centre_altitude))
 
-    def save(self, npz_path: str | os.PathLike[str], csv_path: str | os.PathLike[str] | None = None) -> list[Path]:
-        """Write the ``.npz`` and, if given, the CSV together: both files appear, or neither does."""
+    def save(self, npz_path: str | os.PathLike[str], csv_path: str | os.PathLike[str] | None = None, *,
+             format: str = "npz", ground_reflectance: float = 0.2) -> list[Path]:
+        """Write the matrix and, if given, the CSV together: both files appear, or neither does.
+
+        ``format`` "npz" (:meth:`save_npz`, the path must end in ``.npz``) or "radiance" (:meth:`save_radiance`
+        with ``ground_reflectance``; any name but ``.npz``)."""
         targets = [Path(npz_path)] + ([Path(csv_path)] if csv_path is not None else [])
-        if targets[0].suffix.lower() != ".npz":
-            raise InvalidParameterError(f"{targets[0]}: the matrix file must end in .npz")
+        if format not in ("npz", "radiance"):
+            raise InvalidParameterError(f"format must be 'npz' or 'radiance'; got {format!r}")
+        if (targets[0].suffix.lower() == ".npz") != (format == "npz"):
+            raise InvalidParameterError(f"{targets[0]}: an npz matrix file must end in .npz, a Radiance one must "
+                                        "not (e.g. .mtx or .smx)")
+        values = self.radiance_values(ground_reflectance) if format == "radiance" else None
         with atomic_paths(*targets) as temps:
-            self._write_npz(temps[0])
+            if values is None:
+                self._write_npz(temps[0])
+            else:
+                write_radiance_matrix(temps[0], values, header=self._radiance_header(ground_reflectance),
+                                      atomic=False)
             if csv_path is not None:
                 self._write_csv(temps[1])
         return targets
+
+    def radiance_values(self, ground_reflectance: float = 0.2, *,
+                        sky_colour: tuple[float, float, float] = GENDAYMTX_SKY_COLOUR,
+                        sun_colour: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> NDArray[np.float64]:
+        """The matrix as Radiance's ``gendaymtx`` lays it out: (1 + n_patches, n_hours, 3) RGB radiance
+        [W sr^-1 m^-2], 179 lm/W.
+
+        Row 0 is the ground, ``ground_reflectance (D_v + E_sun,n max(0, sin(altitude))) / (pi 179)``, grey; then
+        the sky patches in this matrix's order (Radiance's own), each ``L_sky / 179`` times ``sky_colour``
+        (default gendaymtx's 0.960 1.004 1.118, whose Radiance luminance is 1.000) plus the sun's share
+        ``L_sun / 179`` times ``sun_colour`` ([RadianceSource2025] gendaymtx.c ``ComputeSky``, ``AddDirect``).
+        Radiance's luminance ``179 (0.265 R + 0.670 G + 0.065 B)`` gives the patch luminance back.
+        """
+        try:
+            rho = float(ground_reflectance)
+        except (TypeError, ValueError):
+            raise InvalidParameterError(f"ground_reflectance must be a number in [0, 1]; got "
+                                        f"{ground_reflectance!r}") from None
+        if not 0.0 <= rho <= 1.0:
+            raise InvalidParameterError(f"ground_reflectance must be in [0, 1]; got {ground_reflectance!r}")
+        sky = self.luminance.copy()
+        sun = np.zeros_like(sky)
+        if self.sun_patches is not None and self.sun_patch_luminance is not None:
+            hours, k = np.nonzero(self.sun_patches >= 0)
+            patches = self.sun_patches[hours, k]
+            np.add.at(sun, (hours, patches), self.sun_patch_luminance[hours, k])
+            sky -= sun
+            np.maximum(sky, 0.0, out=sky)  # rounding of the subtraction
+        out = np.empty((self.scheme.n_patches + 1, sky.shape[0], 3))
+        out[1:] = (sky.T[..., None] * np.asarray(sky_colour, dtype=float)
+                   + sun.T[..., None] * np.asarray(sun_colour, dtype=float)) / RADIANCE_EFFICACY
+        sin_alt = np.maximum(np.cos(self.sun_zenith), 0.0)
+        ground = rho * (self.diffuse_illuminance + self.sun_illuminance_normal * sin_alt) / (np.pi
+                                                                                              * RADIANCE_EFFICACY)
+        out[0] = ground[:, None]
+        return out
+
+    def save_radiance(self, path: str | os.PathLike[str], *, ground_reflectance: float = 0.2,
+                      encoding: str = "float") -> Path:
+        """Write the matrix as a Radiance matrix file that ``rmtxop`` and ``dctimestep`` read
+        (:func:`skyscatter.radiance.write_radiance_matrix`; layout and colours: :meth:`radiance_values`),
+        atomically; returns the path. ``encoding`` "float" (default), "double" or "ascii"."""
+        return write_radiance_matrix(path, self.radiance_values(ground_reflectance),
+                                     header=self._radiance_header(ground_reflectance), encoding=encoding)
+
+    def _radiance_header(self, ground_reflectance: float) -> list[str]:
+        loc = self.location
+        return [f"skyscatter {__version__} sky matrix: {self.model} sky, {self.scheme.name} ({self.scheme.n_patches} "
+                f"patches + ground), {self.shape[0]} time steps from {self.iso_times()[0] if self.shape[0] else '-'}"
+                f", sun {'included' if self.include_sun else 'excluded'}, ground reflectance {ground_reflectance:g}",
+                f"LATLONG= {loc.latitude_deg:.8f} {loc.longitude_deg:.8f}"]
 
     def save_npz(self, path: str | os.PathLike[str]) -> Path:
         """Write an ``.npz`` (uncompressed, atomically: fast to write and read; 20 MB for a Reinhart MF 2 year);
@@ -387,9 +468,18 @@ def add_sun_to_patches(
     scheme : PatchScheme
     n_patches : int
         Patches per sun (gendaymtx: 4).
+
+    Returns
+    -------
+    patches : ndarray of int, shape (len(rows), n_patches)
+        The patches each sun was spread over.
+    added : ndarray, shape (len(rows), n_patches)
+        The luminance [cd m^-2] added to each.
     """
     centres = scheme.centre_directions.reshape(-1, 3)
     k = int(min(n_patches, centres.shape[0]))
+    patches = np.empty((rows.size, k), dtype=np.int64)
+    added = np.empty((rows.size, k))
     for start in range(0, rows.size, chunk):
         sl = slice(start, start + chunk)
         dots = sun_directions[sl] @ centres.T
@@ -397,11 +487,59 @@ def add_sun_to_patches(
         d = np.take_along_axis(dots, near, axis=1)
         w = 1.0 / (1.002 - d)
         w /= w.sum(axis=1, keepdims=True)
-        luminance[rows[sl, None], near] += sun_illuminance[sl, None] * w / scheme.solid_angles[near]
+        add = sun_illuminance[sl, None] * w / scheme.solid_angles[near]
+        luminance[rows[sl, None], near] += add
+        patches[sl], added[sl] = near, add
+    return patches, added
 
 
 def _check_scheme(scheme: str | PatchScheme) -> PatchScheme:
     return scheme if isinstance(scheme, PatchScheme) else patch_scheme(scheme)
+
+
+#: Depression of the sun [rad] beyond which a record may carry no direct light (refraction 0.57 deg and the disc's
+#: radius 0.27 deg, rounded up) and no diffuse light (the end of civil twilight, where the sky gives ~3 lx).
+NIGHT_DIRECT_DEPRESSION = np.radians(1.0)
+NIGHT_DIFFUSE_DEPRESSION = np.radians(6.0)
+
+
+def _light_at_night(epw: EPWData, unix_time: NDArray[np.float64], zenith: NDArray[np.float64]) -> NDArray[np.int64]:
+    """Records with light while the sun stays below the horizon for their whole interval (the highest of the
+    sun at the start, middle and end of the interval: within a fraction of a degree of the interval's maximum)."""
+    from .sun.position import sun_position_unix
+
+    dni, dhi = epw.direct_normal_irradiance, epw.diffuse_horizontal_irradiance
+    cand = np.flatnonzero(((dni > 0) | (dhi > 0)) & (zenith > np.pi / 2))
+    if cand.size == 0:
+        return cand
+    loc = epw.location
+    half = 1800.0 / epw.records_per_hour
+    highest = np.pi / 2 - zenith[cand]
+    for shift in (-half, half):
+        pos = sun_position_unix(loc.latitude, loc.longitude, unix_time[cand] + shift, altitude=loc.elevation)
+        highest = np.maximum(highest, np.pi / 2 - np.asarray(pos.zenith, dtype=float))
+    bad = ((dni[cand] > 0) & (highest < -NIGHT_DIRECT_DEPRESSION)) | (
+        (dhi[cand] > 0) & (highest < -NIGHT_DIFFUSE_DEPRESSION))
+    return cand[bad]
+
+
+def _report_light_at_night(epw: EPWData, night: NDArray[np.int64], mode: str, unix_time, zenith) -> None:
+    i = int(night[0])
+    stamp = SkyMatrix.iso_times_of(unix_time[i: i + 1], epw.location.timezone_hours)[0]
+    first = (f"line {int(epw.line_numbers[i])} ({stamp}: sun {90.0 - np.degrees(zenith[i]):.1f} deg at mid-record, "
+             f"direct normal {epw.direct_normal_irradiance[i]:g}, diffuse horizontal "
+             f"{epw.diffuse_horizontal_irradiance[i]:g} W m^-2)")
+    why = ("the sun stays below the horizon for the whole record (a time shift, the wrong time zone or place in the "
+           "LOCATION line?)")
+    if mode == "error":
+        raise FileFormatError(f"{epw.path}: {first}: light although {why}")
+    import warnings
+
+    from .epw import EPWWarning
+
+    warnings.warn(f"{epw.path}: {night.size} record(s) have light although {why}; they are left dark (first: "
+                  f"{first}; night_irradiance='error' / --night-irradiance error refuses such files)", EPWWarning,
+                  stacklevel=3)
 
 
 def _check_irradiance(epw: EPWData) -> None:
@@ -428,6 +566,7 @@ def skymatrix(
     progress: bool = False,
     timestep: str = "records",
     model: str = "perez",
+    night_irradiance: str = "dark",
 ) -> SkyMatrix:
     """Hourly Perez sky luminance over sky patches for a year of weather (the job of Radiance's gendaymtx).
 
@@ -455,6 +594,12 @@ def skymatrix(
         one row per record, the sun at the middle of the record's own interval (as gendaymtx gives one row per
         time step of its input); "hourly" averages the records of each hour first (:meth:`EPWData.hourly`)
         and gives one row per hour. Hourly files give one row per hour either way.
+    night_irradiance : {"dark", "error"}
+        Records with light although the sun stays below the horizon for their whole interval (direct normal
+        irradiance with the sun more than 1 deg below it: refraction and the disc's radius; diffuse with the sun
+        more than 6 deg below it: civil twilight), which a time shift or a wrong place in the file produces:
+        "dark" (default) leaves them dark with one :class:`~skyscatter.epw.EPWWarning` counting them and naming
+        the first; "error" refuses the file at the first one (:class:`~skyscatter.errors.FileFormatError`).
 
     Returns
     -------
@@ -463,7 +608,8 @@ def skymatrix(
     Raises
     ------
     FileFormatError
-        Malformed EPW file, or missing direct/diffuse radiation in a record (the message names the line).
+        Malformed EPW file (:func:`~skyscatter.epw.read_epw`), missing direct/diffuse radiation in a record, or
+        (``night_irradiance="error"``) light at night (the message names the line).
     InvalidParameterError
         Unknown scheme or bad options.
     """
@@ -480,6 +626,8 @@ def skymatrix(
         raise InvalidParameterError(f"timestep must be 'records' or 'hourly'; got {timestep!r}")
     if model not in MODELS:
         raise InvalidParameterError(f"model must be one of {', '.join(MODELS)}; got {model!r}")
+    if night_irradiance not in ("dark", "error"):
+        raise InvalidParameterError(f"night_irradiance must be 'dark' or 'error'; got {night_irradiance!r}")
     epw = epw_path if isinstance(epw_path, EPWData) else read_epw(epw_path)
     if timestep == "hourly":
         epw = epw.hourly()
@@ -492,6 +640,12 @@ def skymatrix(
     n = len(epw)
     dni = epw.direct_normal_irradiance
     dhi = epw.diffuse_horizontal_irradiance
+    night = _light_at_night(epw, unix_time, zen)
+    if night.size:
+        _report_light_at_night(epw, night, night_irradiance, unix_time, zen)
+        dni, dhi = dni.copy(), dhi.copy()
+        dni[night] = 0.0
+        dhi[night] = 0.0
     dew = np.where(np.isfinite(epw.dew_point), epw.dew_point, 11.0)
     doy = epw.day_of_year
     lit = dhi > 0.0
@@ -534,13 +688,18 @@ def skymatrix(
         if bar is not None:
             bar.close()
     # direct sun without diffuse light cannot be modelled (epsilon undefined); such records are left dark
+    sun_patches = sun_added = None
     if include_sun:
         sunny = np.flatnonzero(e_sun > 0.0)
+        sun_patches = np.full((n, SUN_PATCHES), -1, dtype=np.int64)
+        sun_added = np.zeros((n, SUN_PATCHES))
         if sunny.size:
             # The sun the sky model uses: altitude at most 87 deg (gendaymtx limits it the same way before adding
             # the sun), a sun below the horizon at mid-record put on the horizon at its azimuth.
             model_zenith = np.clip(zen[sunny], MIN_SUN_ZENITH, np.pi / 2)
-            add_sun_to_patches(lum, sunny, direction_from_angles(model_zenith, azi[sunny]), e_sun[sunny], geom)
+            near, added = add_sun_to_patches(lum, sunny, direction_from_angles(model_zenith, azi[sunny]),
+                                             e_sun[sunny], geom)
+            sun_patches[sunny, : near.shape[1]], sun_added[sunny, : near.shape[1]] = near, added
     return SkyMatrix(
         luminance=lum,
         unix_time=unix_time,
@@ -556,4 +715,6 @@ def skymatrix(
         include_sun=bool(include_sun),
         samples=int(samples),
         model=model,
+        sun_patches=sun_patches,
+        sun_patch_luminance=sun_added,
     )

@@ -1,7 +1,7 @@
 """The aerial-perspective protocol and shared argument checks.
 
 An aerial-perspective model describes how the air between an observer and an object changes the object's
-radiance: ``L = L_0 tau + L_in`` (Preetham, Shirley & Smits 1999, Sec. 4, doi:10.1145/311535.311545). Every
+radiance: ``L = L_0 tau + L_in`` ([Preetham1999] Sec. 4). Every
 model derives from :class:`AerialPerspective` and implements one method,
 
 * ``evaluate_rays(origins, directions, distances, wavelengths)`` -> ``(tau, L_in)``, each (..., n):
@@ -177,7 +177,7 @@ def as_aerial_perspective(model: AerialPerspective | PathFunctions) -> AerialPer
 class ShadowCaster(abc.ABC):
     """Something that shadows the air from the sun (terrain): how much of each ray lies in its shadow.
 
-    Used for light shafts (Bruneton & Neyret 2008, Eqs. 17-18, doi:10.1111/j.1467-8659.2008.01245.x).
+    Used for light shafts ([Bruneton2008] Eqs. 17-18).
     """
 
     #: Longest ray [m] the caster follows; beyond it nothing is shadowed.

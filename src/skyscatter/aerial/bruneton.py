@@ -1,7 +1,6 @@
 """Aerial perspective and light shafts from the precomputed tables (Bruneton & Neyret 2008, Sec. 5, Eqs. 16-18).
 
-Bruneton, E., Neyret, F. (2008). Precomputed Atmospheric Scattering. Computer Graphics Forum 27(4),
-1079-1086, doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 
 An object at ``x_o`` seen from ``x`` has radiance ``L = T(x, x_o) L_o + S|x - T(x, x_o) S|x_o`` (Eq. 16), the
 inscattered light ``S`` coming from the 4D tables. With terrain shadows, the total length ``l`` of the view ray

@@ -19,8 +19,7 @@ Here the "constant" density is the one at the observer's height, ``beta_i = beta
 the A.4 decay constants, so the model agrees with :class:`PreethamAerialPerspective` for horizontal rays
 (test_aerial.py checks this).
 
-Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
-doi:10.1145/311535.311545.
+Reference: [Preetham1999].
 """
 
 from __future__ import annotations

@@ -39,8 +39,7 @@ model's densities are respectively opaque and negligible, so every exponential s
 :func:`in_scattering_integrals` with ``method="analytic"`` uses (a) when ``|alpha_haze s c| <`` the
 ``horizon_threshold`` (default 1e-3) and (b) otherwise, as the paper prescribes.
 
-Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
-doi:10.1145/311535.311545.
+Reference: [Preetham1999].
 """
 
 from __future__ import annotations
@@ -52,6 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
+from ..jit import helper, inline, parallel_kernel
 
 __all__ = [
     "ALPHA_HAZE",
@@ -95,7 +95,7 @@ _GL_X = 0.5 * (_GL_X + 1.0)
 _GL_W = 0.5 * _GL_W
 
 
-@numba.njit(cache=True, inline="always")
+@inline
 def _e(a):
     """E(a) = (1 - exp(-a)) / a, with E(0) = 1 (accurate for small |a|)."""
     if abs(a) < 1e-8:
@@ -103,7 +103,7 @@ def _e(a):
     return -math.expm1(-a) / a
 
 
-@numba.njit(cache=True, inline="always")
+@inline
 def _hermite_integral(z, p0, p1, d0, d1):
     """int_0^1 e^{z w} p(w) dw for the cubic with p(0)=p0, p(1)=p1, p'(0)=d0, p'(1)=d1.
 
@@ -135,7 +135,7 @@ def _hermite_integral(z, p0, p1, d0, d1):
     return p0 * m0 + d0 * m1 + c2 * m2 + c3 * m3
 
 
-@numba.njit(cache=True, inline="always")
+@inline
 def _clip_length(c, h0, s):
     """The part [m] of a path of length s from height h0 [m] (direction cosine c) between PATH_BOTTOM and
     PATH_TOP."""
@@ -146,7 +146,7 @@ def _clip_length(c, h0, s):
     return s
 
 
-@numba.njit(cache=True)
+@helper
 def _opaque_length(c, h0, s, b1min, b2min, a1, a2):
     """The path length [m] up to where every wavelength's optical depth reaches OPAQUE_DEPTH (or s).
 
@@ -169,7 +169,7 @@ def _opaque_length(c, h0, s, b1min, b2min, a1, a2):
     return hi
 
 
-@numba.njit(cache=True)
+@helper
 def _segment_count(c, h0, s, b1max, b2max, a1, a2):
     """Pieces of the composite analytic form: at most SEGMENT_DEPTH optical depth per species (at the
     densest point of the path) and SEGMENT_DECAY e-folds of haze density per piece."""
@@ -185,7 +185,7 @@ def _segment_count(c, h0, s, b1max, b2max, a1, a2):
     return int(math.ceil(need))
 
 
-@numba.njit(cache=True, parallel=True)
+@parallel_kernel
 def _integrals_many(cos_t, h0, s, beta1, beta2, a1, a2, method, threshold, segments, out1, out2, out_tau):
     """(I_1, I_2) and the path's transmittance tau for rays i and wavelengths j.
 
@@ -273,7 +273,7 @@ def _integrals_many(cos_t, h0, s, beta1, beta2, a1, a2, method, threshold, segme
             depth[j] = math.exp(-depth[j])
 
 
-@numba.njit(cache=True)
+@helper
 def _quadrature(c, h1, h2, s, b1, b2, a1, a2):
     """Composite Gauss-Legendre reference for (I_1, I_2)."""
     gx = _GL_X

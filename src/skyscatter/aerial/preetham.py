@@ -6,8 +6,7 @@
 Scattering coefficients: Rayleigh for molecules and Mie with the Table 1/Table 2 data for haze (A.3), via
 :mod:`skyscatter.atmosphere`.
 
-Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
-doi:10.1145/311535.311545.
+Reference: [Preetham1999].
 """
 
 from __future__ import annotations

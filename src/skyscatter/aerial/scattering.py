@@ -18,8 +18,7 @@ The angular coefficients are :func:`skyscatter.atmosphere.rayleigh_angular_scatt
 :func:`skyscatter.atmosphere.mie_angular_scattering` (A.3 with Table 1 eta), tabulated once on a 0.25-degree
 grid of scattering angles and interpolated linearly inside the integration kernel.
 
-Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
-doi:10.1145/311535.311545.
+Reference: [Preetham1999].
 """
 
 from __future__ import annotations
@@ -33,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..atmosphere import mie_angular_scattering, rayleigh_angular_scattering
 from ..conventions import as_directions, direction_from_angles
 from ..errors import InvalidParameterError
+from ..jit import parallel_kernel
 from ..sky.base import SkyModel
 from ..spectral import as_wavelengths
 
@@ -59,7 +59,7 @@ def hemisphere_quadrature(n_zenith: int = 32, n_azimuth: int = 64) -> tuple[NDAr
     return d, weights
 
 
-@numba.njit(cache=True, parallel=True)
+@parallel_kernel
 def _sky_kernel(views, dirs, radiance, weights, tab1, tab2, step, out1, out2):
     """out_i[v, l] = sum_d w_d L[d, l] tab_i(angle(view_v, dir_d), l)."""
     nv = views.shape[0]
@@ -170,7 +170,7 @@ class ScatteringTable:
         return out1.reshape(shape + (nl,)), out2.reshape(shape + (nl,))
 
 
-@numba.njit(cache=True, parallel=True)
+@parallel_kernel
 def _lookup_kernel(d, sun_az, dtheta, dphi, sky1, sky2, has_sun, sun, sun1, sun2, dgamma, out1, out2):
     n = d.shape[0]
     nt, npf, nl = sky1.shape

@@ -12,8 +12,7 @@ the same in every direction (the "ambient" in-scattering of the Radiance system)
 gives the matching sky: a luminance distribution (e.g. the CIE clear sky) with one relative spectrum (e.g. the
 zenith's) everywhere.
 
-Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
-doi:10.1145/311535.311545.
+Reference: [Preetham1999].
 """
 
 from __future__ import annotations

@@ -9,10 +9,10 @@
   :mod:`.profiles` - density profiles.
 * :mod:`.spectra` - spectral inputs (power law, table, physical Rayleigh) and the published data they use.
 * :mod:`.phase` - Rayleigh, Henyey-Greenstein and Cornette-Shanks phase functions and their samplers.
-* :mod:`.rayleigh` - the Rayleigh formula with one set of physical constants (Bodhaine et al. 1999,
-  doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2) and Preetham's (1999) A.3 constants.
-* :mod:`.mie`, :mod:`.turbidity`, :mod:`.airmass` - Preetham, Shirley & Smits (1999), "A Practical Analytic
-  Model for Daylight", doi:10.1145/311535.311545, Appendix A.1 and A.3 (haze, Angstrom turbidity, optical mass).
+* :mod:`.rayleigh` - the Rayleigh formula with one set of physical constants ([Bodhaine1999])
+  and the A.3 constants of [Preetham1999].
+* :mod:`.mie`, :mod:`.turbidity`, :mod:`.airmass` - [Preetham1999] Appendix A.1 and A.3 (haze, Angstrom
+  turbidity, optical mass).
 * :mod:`.tables` - the one loader of the packaged data tables.
 
 Every function takes wavelengths in nm and angles in radians and returns SI coefficients (m^-1, m^-1 sr^-1,

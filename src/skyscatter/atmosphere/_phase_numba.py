@@ -9,29 +9,26 @@ from __future__ import annotations
 
 import math
 
-import numba
-
+from ..jit import helper
 from . import phase
 
-_jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
-
 #: ``rayleigh_phase_scalar(mu)`` [sr^-1], Bruneton & Neyret (2008) Eq. 2.
-rayleigh_phase_scalar = _jit(phase._rayleigh_formula)
+rayleigh_phase_scalar = helper(phase._rayleigh_formula)
 #: ``henyey_greenstein_scalar(mu, g)`` [sr^-1].
-henyey_greenstein_scalar = _jit(phase._henyey_greenstein_formula)
+henyey_greenstein_scalar = helper(phase._henyey_greenstein_formula)
 #: ``cornette_shanks_scalar(mu, g)`` [sr^-1], Bruneton & Neyret (2008) Eq. 4.
-cornette_shanks_scalar = _jit(phase._cornette_shanks_formula)
+cornette_shanks_scalar = helper(phase._cornette_shanks_formula)
 #: ``rayleigh_inverse_cdf_scalar(u)``: ``mu`` [-] with Rayleigh CDF ``u`` in [0, 1] (Frisvad 2011, Eq. 13;
 #: :func:`.phase.rayleigh_inverse_cdf` without its validation).
-rayleigh_inverse_cdf_scalar = _jit(phase._rayleigh_inverse_cdf_formula)
+rayleigh_inverse_cdf_scalar = helper(phase._rayleigh_inverse_cdf_formula)
 #: ``henyey_greenstein_inverse_cdf_scalar(u, g)``: ``mu`` [-] with Henyey-Greenstein CDF ``u`` in [0, 1]
 #: (:func:`.phase.henyey_greenstein_inverse_cdf` without its validation).
-henyey_greenstein_inverse_cdf_scalar = _jit(phase._henyey_greenstein_inverse_cdf_formula)
+henyey_greenstein_inverse_cdf_scalar = helper(phase._henyey_greenstein_inverse_cdf_formula)
 
 _HENYEY_GREENSTEIN = phase.AEROSOL_PHASE_FUNCTIONS.index("henyey-greenstein")
 
 
-@_jit
+@helper
 def aerosol_phase_scalar(mu, g, kind):
     """Aerosol phase function [sr^-1] of integer ``kind`` (:func:`.phase.aerosol_phase_kind`) at ``mu``."""
     if kind == _HENYEY_GREENSTEIN:
@@ -39,13 +36,12 @@ def aerosol_phase_scalar(mu, g, kind):
     return cornette_shanks_scalar(mu, g)
 
 
-@_jit
+@helper
 def direction_about_axis(ax, ay, az, mu, phi):
     """Unit vector at angle ``acos(mu)`` from the unit vector ``(ax, ay, az)`` and at azimuth ``phi`` [rad] about it.
 
-    The azimuth is measured from the first vector of the branchless orthonormal basis of Duff, Burgess,
-    Christensen, Hery, Kensler, Liani & Villemin (2017), "Building an orthonormal basis, revisited", J. Comput.
-    Graph. Tech. 6(1), 1-8, Listing 3 (https://jcgt.org/published/0006/01/01/): a fixed, continuous-almost-
+    The azimuth is measured from the first vector of the branchless orthonormal basis of [Duff2017]
+    Listing 3: a fixed, continuous-almost-
     everywhere choice, so that ``phi`` uniform in [0, 2 pi) gives directions uniform in azimuth about the axis.
     ``mu`` in [-1, 1] [-]. Returns the three components (renormalised against rounding).
     """
@@ -67,11 +63,7 @@ def direction_about_axis(ax, ay, az, mu, phi):
 
 # ------------------------------------------------------------------ tabulated phase functions (.phase_table)
 
-# Non-allocating helpers that take arrays: compiled without numba's runtime (docs/architecture.md).
-_tjit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy", _nrt=False)
-
-
-@_tjit
+@helper
 def phase_table_segment(mu_nodes, mu):
     """``(i, w)``: the segment ``mu_nodes[i] <= mu <= mu_nodes[i + 1]`` of ascending nodes and the weight of node
     ``i + 1`` (linear in ``mu``); ``mu`` is clamped to [-1, 1]. Bisection (:mod:`.phase_table`)."""
@@ -91,14 +83,14 @@ def phase_table_segment(mu_nodes, mu):
     return lo, (mu - mu_nodes[lo]) / (mu_nodes[lo + 1] - mu_nodes[lo])
 
 
-@_tjit
+@helper
 def phase_table_value(mu_nodes, values, k, mu):
     """Tabulated phase function [sr^-1] of wavelength index ``k`` at ``mu`` (``values`` (n_wl, n), ascending mu)."""
     i, w = phase_table_segment(mu_nodes, mu)
     return (1.0 - w) * values[k, i] + w * values[k, i + 1]
 
 
-@_tjit
+@helper
 def phase_table_values(mu_nodes, values, mu, out):
     """``out[k]`` = tabulated phase function [sr^-1] of every wavelength ``k`` at ``mu`` (one bisection)."""
     i, w = phase_table_segment(mu_nodes, mu)
@@ -106,7 +98,7 @@ def phase_table_values(mu_nodes, values, mu, out):
         out[k] = (1.0 - w) * values[k, i] + w * values[k, i + 1]
 
 
-@_tjit
+@helper
 def phase_table_inverse_cdf(mu_nodes, values, cdf, k, u):
     """``mu`` [-] with CDF ``u`` in [0, 1] under the table of wavelength index ``k``: exact for the interpolant
     linear in ``mu`` (:meth:`.phase_table.PhaseTable.inverse_cdf`, the same formula)."""

@@ -1,9 +1,8 @@
-"""Relative optical air mass, Preetham, Shirley & Smits (1999) A.1, doi:10.1145/311535.311545.
+"""Relative optical air mass, [Preetham1999] A.1.
 
     m(theta_s) = 1 / (cos theta_s + 0.15 (93.885 - theta_s[deg])^-1.253)
 
-the form of Kasten (1966), "A new table and approximation formula for the relative optical air mass", Arch.
-Met. Geoph. Biokl. B 14, 206, doi:10.1007/BF02248840, as quoted by Iqbal (1983).
+the form of [Kasten1966], as quoted by [Iqbal1983].
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
 """The medium: a spherical planet with a clear atmosphere of molecules, aerosols and ozone.
 
 :class:`AtmosphereParameters` is the one description of the atmosphere for every model that integrates
-through it: the precomputed tables of Bruneton & Neyret (2008), "Precomputed Atmospheric Scattering",
-doi:10.1111/j.1467-8659.2008.01245.x (Sec. 2.1), and a path tracer. It holds the planet and top-of-atmosphere
-radii, density profiles, Rayleigh and aerosol coefficients, the aerosol phase function, ozone absorption,
-ground albedo, the top-of-atmosphere solar spectrum, the solar angular radius and the largest sun zenith
+through it: the precomputed tables of Bruneton & Neyret ([Bruneton2008] Sec. 2.1) and a path tracer. It holds
+the planet and top-of-atmosphere radii, density profiles, Rayleigh and aerosol coefficients, the aerosol phase function,
+ozone absorption, ground albedo, the top-of-atmosphere solar spectrum, the solar angular radius and the largest sun
+zenith
 angle to tabulate. Defaults are the Earth values of Bruneton's 2017 rewrite of the paper's model:
 
 =====================  =========================================================================
@@ -223,7 +223,7 @@ class AtmosphereParameters:
                                    **changes: Any) -> AtmosphereParameters:
         """Earth defaults with a vertical aerosol optical depth ``tau`` at 550 nm and Angstrom exponent ``alpha``.
 
-        Angstrom's law ``tau(lambda) = beta (lambda / 1 um)^-alpha`` (Angstrom 1929, doi:10.1080/20014422.1929.11880498)
+        Angstrom's law ``tau(lambda) = beta (lambda / 1 um)^-alpha`` ([Angstrom1929])
         gives ``beta = tau (0.55)^alpha``; ``tau`` in [0, 10], ``alpha`` in [-1, 4] (default 1.3, Preetham 1999 A.1).
         """
         checked = []
@@ -241,6 +241,22 @@ class AtmosphereParameters:
 
         return cls(mie_angstrom_alpha=alpha, mie_angstrom_beta=angstrom_beta_from_optical_depth(tau, alpha),
                    **changes)
+
+    @classmethod
+    def with_aerosol_type(cls, name: str, aerosol_optical_depth: float | None = None,
+                          relative_humidity: float = 50.0, **changes: Any) -> AtmosphereParameters:
+        """Earth defaults with an OPAC aerosol type as the aerosol (Hess et al. 1998;
+        :mod:`skyscatter.atmosphere.aerosol_types`): Mie optics of its components, its vertical profile.
+
+        ``name`` one of :data:`~skyscatter.atmosphere.aerosol_types.AEROSOL_TYPES` (``"continental-average"``,
+        ``"maritime-clean"``, ``"urban"``, ``"desert"``, ...); ``aerosol_optical_depth`` the vertical optical
+        depth at 550 nm in [0, 10] (None: the type's own number densities); ``relative_humidity`` [%] in
+        [0, 99]. Other fields as keyword arguments.
+        """
+        from .aerosol_types import OpacAerosol
+
+        top = float(changes.get("top_radius", cls.top_radius)) - float(changes.get("bottom_radius", cls.bottom_radius))
+        return cls(aerosol=OpacAerosol.preset(name, aerosol_optical_depth, relative_humidity, top), **changes)
 
     @classmethod
     def from_turbidity(cls, turbidity: float, **changes: Any) -> AtmosphereParameters:
@@ -521,6 +537,35 @@ class AtmosphereParameters:
         except (KeyError, TypeError) as exc:
             raise FileFormatError(f"atmosphere parameters are incomplete or malformed: {exc}") from None
         return cls(**kwargs)
+
+    def save_json(self, path: str, extra: dict[str, Any] | None = None) -> None:
+        """Write ``{"atmosphere": to_dict(), **extra}`` as JSON to ``path`` atomically (``skyscatter
+        fit-atmosphere`` adds its fit report as ``extra``); :meth:`load_json` reads it back."""
+        from ..fileio import atomic_path
+
+        with atomic_path(path) as tmp:
+            tmp.write_text(json.dumps({"atmosphere": self.to_dict(), **(extra or {})}, indent=1, sort_keys=True))
+
+    @classmethod
+    def load_json(cls, path: str) -> AtmosphereParameters:
+        """The atmosphere of a JSON file: ``{"atmosphere": {...}}`` (:meth:`save_json`, ``skyscatter
+        fit-atmosphere``) or a bare :meth:`to_dict` mapping. FileFormatError naming the file if it is unreadable."""
+        from pathlib import Path
+
+        try:
+            data = json.loads(Path(path).read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise FileFormatError(f"cannot read the atmosphere file {path}: {exc.strerror or exc}") from None
+        except ValueError as exc:
+            raise FileFormatError(f"{path}: not a JSON file ({exc})") from None
+        if isinstance(data, dict) and isinstance(data.get("atmosphere"), dict):
+            data = data["atmosphere"]
+        if not isinstance(data, dict):
+            raise FileFormatError(f"{path}: expected an atmosphere description (a JSON object)")
+        try:
+            return cls.from_dict(data)
+        except FileFormatError as exc:
+            raise FileFormatError(f"{path}: {exc}") from None
 
     def canonical_json(self) -> str:
         """Deterministic JSON text of :meth:`to_dict` (sorted keys, repr-exact floats)."""

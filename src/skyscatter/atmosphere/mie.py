@@ -1,4 +1,4 @@
-"""Mie scattering by haze, Preetham, Shirley & Smits (1999) Appendix A.3, Tables 1 and 2, doi:10.1145/311535.311545.
+"""Mie scattering by haze, [Preetham1999] Appendix A.3, Tables 1 and 2.
 
 For a Junge size distribution with exponent v = 4 (the paper's sky model):
 
@@ -6,7 +6,7 @@ For a Junge size distribution with exponent v = 4 (the paper's sky model):
     beta_p        = 0.434 c pi (2 pi / lambda)^(v - 2) * K(lambda)                 [m^-1]
     c             = (0.6544 T - 0.6510) * 1e-16                                    (concentration factor)
 
-eta(theta, lambda) is Table 1 (after Bullrich 1964) and K(lambda) the K column of Table 2, both shipped as CSV
+eta(theta, lambda) is Table 1 (after [Bullrich1964]) and K(lambda) the K column of Table 2, both shipped as CSV
 files in ``skyscatter/data``.
 
 Units of c (why there is a factor 0.01). Read literally with lambda in metres, the formulas give

@@ -5,8 +5,8 @@ A :class:`ParticleComponent` is one population of particles: a relative density 
 and, at any wavelengths [nm], its extinction coefficient [m^-1] and single-scattering albedo [-] at relative
 density 1 and its phase function as a :class:`~skyscatter.atmosphere.phase_table.PhaseTable`. The radiative
 transfer equation needs exactly these per component: the scattering coefficient ``rho(h) beta_e omega``, the
-absorption coefficient ``rho(h) beta_e (1 - omega)`` and the phase function (Bruneton & Neyret 2008,
-doi:10.1111/j.1467-8659.2008.01245.x, Sec. 2.1; Chandrasekhar 1960, "Radiative Transfer", Ch. I).
+absorption coefficient ``rho(h) beta_e (1 - omega)`` and the phase function ([Bruneton2008] Sec. 2.1;
+[Chandrasekhar1960] Ch. I).
 
 Kinds of component (each registered by its ``kind`` for :func:`particle_component_from_dict`):
 
@@ -140,7 +140,8 @@ def particle_component_from_dict(data: dict[str, Any]) -> ParticleComponent:
 
 
 #: Kinds defined in modules that are imported only when a description names them (module path by kind).
-_LAZY_KINDS: dict[str, str] = {}
+_LAZY_KINDS: dict[str, str] = {"opac": "skyscatter.atmosphere.aerosol_types",
+                               "cloud_layer": "skyscatter.atmosphere.clouds"}
 
 
 def _check_density(name: str, density: Any) -> None:

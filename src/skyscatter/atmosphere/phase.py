@@ -3,10 +3,9 @@
 The one description of the phase functions in skyscatter; every model (the Preetham aerial perspective, the
 precomputed Bruneton tables, the path tracer) uses this module.
 
-* Rayleigh: ``3 / (16 pi) (1 + mu^2)`` (Preetham, Shirley & Smits 1999, A.3, doi:10.1145/311535.311545;
-  Bruneton & Neyret 2008, Eq. 2, doi:10.1111/j.1467-8659.2008.01245.x).
-* Henyey & Greenstein (1941), doi:10.1086/144246: ``(1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^(3/2))``.
-* Cornette & Shanks (1992), doi:10.1364/AO.31.003152 (the Mie phase of Bruneton & Neyret 2008, Eq. 4):
+* Rayleigh: ``3 / (16 pi) (1 + mu^2)`` ([Preetham1999] A.3; [Bruneton2008] Eq. 2).
+* Henyey-Greenstein [HenyeyGreenstein1941]: ``(1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^(3/2))``.
+* Cornette-Shanks [CornetteShanks1992] (the Mie phase of [Bruneton2008] Eq. 4):
   ``3 (1 - g^2) (1 + mu^2) / (8 pi (2 + g^2) (1 + g^2 - 2 g mu)^(3/2))``.
 
 ``mu`` is the cosine of the scattering angle (1 = forward scattering). The numpy functions take ``cos_theta``
@@ -21,19 +20,18 @@ numba:
   same formulas as :func:`rayleigh_inverse_cdf` and :func:`henyey_greenstein_inverse_cdf`, without their
   validation);
 * ``direction_about_axis(ax, ay, az, mu, phi)``: the unit vector at angle ``acos(mu)`` from a unit axis and at
-  azimuth ``phi`` about it, in the orthonormal basis of Duff et al. (2017), "Building an orthonormal basis,
-  revisited", J. Comput. Graph. Tech. 6(1), 1-8 (https://jcgt.org/published/0006/01/01/), Listing 3.
+  azimuth ``phi`` about it, in the orthonormal basis of [Duff2017] Listing 3.
 
 Sampling (cosines of the scattering angle; the azimuth about the incident direction is uniform):
 
 * Rayleigh: exact inverse CDF. ``F(mu) = (mu^3 + 3 mu + 4) / 8``; the one real root of the cubic
   ``mu^3 + 3 mu - z = 0``, ``z = 4 u - 2``, is ``mu = a - 1 / a`` with ``a = cbrt(z + sqrt(z^2 + 1))``
-  (Cardano; Frisvad 2011, "Importance sampling the Rayleigh phase function", J. Opt. Soc. Am. A 28, 2436,
-  doi:10.1364/JOSAA.28.002436, Eq. 13 without depolarisation). The root is odd in ``z``; it is evaluated as
+  (Cardano; [Frisvad2011] Eq. 13 without
+  depolarisation). The root is odd in ``z``; it is evaluated as
   ``sign(z) (a - 1 / a)`` with ``a = cbrt(|z| + sqrt(z^2 + 1))``, a sum of positive terms (no cancellation), so
   ``u = 0`` and ``u = 1`` give exactly -1 and 1 and ``F(mu(u)) - u`` stays within a few 1e-16.
 * Henyey-Greenstein: exact inverse CDF ``mu = (1 + g^2 - ((1 - g^2) / (1 - g + 2 g u))^2) / (2 g)``
-  (from integrating the density; Witt 1977, "Multiple scattering in reflection nebulae I", ApJS 35, 1-6,
+  (from integrating the density; [Witt1977]
   Eq. 7); its limit for ``g -> 0``, ``mu = 2 u - 1``, is used for ``|g| < 1e-6``. Both are increasing in ``u``.
 * Cornette-Shanks: from Henyey-Greenstein with the same ``g`` and the weight
   :func:`cornette_shanks_hg_weight` ``w(mu) = p_CS / p_HG = 3 (1 + mu^2) / (2 (2 + g^2))``, which lies in

@@ -18,23 +18,22 @@ piecewise-linear function, so the solvers all see the same phase function:
   "Numerical Recipes", 3rd ed., Sec. 5.6);
 * Legendre moments ``chi_l = 2 pi int p(mu) P_l(mu) dmu`` are integrated exactly per segment with
   ``int P_l = (P_{l+1} - P_{l-1}) / (2 l + 1)`` and ``mu P_l = ((l + 1) P_{l+1} + l P_{l-1}) / (2 l + 1)``
-  (Abramowitz & Stegun 1972, 22.7.10 and 22.8.5); ``chi_0 = 1`` and ``chi_1 = g``, the asymmetry parameter. With
+  ([Abramowitz1964] 22.7.10 and 22.8.5); ``chi_0 = 1`` and ``chi_1 = g``, the asymmetry parameter. With
   these the phase function is ``p(mu) = sum_l (2 l + 1) chi_l P_l(mu) / (4 pi)`` (the convention of DISORT:
-  Stamnes et al. 1988, doi:10.1364/AO.27.002502, Eq. 3, whose ``PMOM`` are these ``chi_l``).
+  [Stamnes1988] Eq. 3, whose ``PMOM`` are these ``chi_l``).
 
 **The grid.** :func:`phase_angle_grid` spaces the nodes from ``forward_step`` at 0 deg, growing linearly to
 ``step`` at ``ramp_end`` and constant beyond. The default (0.01 deg at the forward direction, 0.25 deg from 15
 deg on; 863 nodes) resolves the diffraction peak of a cloud droplet (about 1 deg wide for an effective radius of
 10 um in the visible: the first minimum of the Airy pattern lies at ``3.83 / x`` rad for a size parameter ``x =
-2 pi r / lambda``, 1.4 deg at 400 nm; van de Hulst 1957, "Light Scattering by Small Particles", Sec. 8.31), the
+2 pi r / lambda``, 1.4 deg at 400 nm; [vanDeHulst1957] Sec. 8.31), the
 rainbow and the glory. Interpolating linearly in ``mu`` on it reproduces Henyey-Greenstein with ``g = 0.8`` to
 1.2e-4 relative and ``g = 0.99`` to 4e-4, and their Legendre moments ``g^l`` to 1e-5 and 5e-5
 (tests/test_phase_table.py).
 
-**Delta-M** (Wiscombe 1977, "The delta-M method: rapid yet accurate radiative flux calculations for strongly
-asymmetric phase functions", J. Atmos. Sci. 34, 1408, doi:10.1175/1520-0469(1977)034<1408:TDMRYA>2.0.CO;2,
-Eqs. 5-7): for ``M`` streams the forward fraction ``f = chi_M`` is taken out as unscattered light and the rest
-``p* = sum_{l<M} (2 l + 1) (chi_l - f) / (1 - f) P_l / (4 pi)`` is scattered; optical depths and albedos of the
+**Delta-M** ([Wiscombe1977] Eqs. 5-7): for ``M`` streams the forward fraction ``f = chi_M`` is taken out as unscattered
+light and the rest ``p* = sum_{l<M} (2 l + 1) (chi_l - f) / (1 - f) P_l / (4 pi)`` is scattered; optical depths and
+albedos of the
 component scale as ``tau* = (1 - omega f) tau`` and ``omega* = (1 - f) omega / (1 - omega f)``. For quadratures
 (DISORT, coarse angular integrals) only; a Monte Carlo samples the full table.
 

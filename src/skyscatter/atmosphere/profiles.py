@@ -2,8 +2,8 @@
 coefficients) as a function of altitude [m] above the ground.
 
 A :class:`DensityProfile` is a stack of :class:`DensityLayer` s, each ``max(0, a exp(b h) + c h + d)``: the form
-of Bruneton's 2017 rewrite of Bruneton & Neyret (2008) (doi:10.1111/j.1467-8659.2008.01245.x, Sec. 2.1, Eqs. 1
-and 3 for the exponential profiles), which covers exponential, tent (ozone), box (a cloud or a well-mixed layer)
+of [Bruneton2017], the rewrite of [Bruneton2008] (Sec. 2.1, Eqs. 1 and 3 for the exponential
+profiles), which covers exponential, tent (ozone), box (a cloud or a well-mixed layer)
 and boundary-layer profiles. Re-exported by :mod:`.medium`.
 """
 

@@ -4,8 +4,7 @@ The scattering coefficient of a gas of N molecules per m^3 with refractive index
 
     beta(lambda) = 8 pi^3 (n^2 - 1)^2 / (3 N lambda^4) * F_K,     F_K = (6 + 3 p_n) / (6 - 7 p_n)
 
-(Penndorf 1957; Bodhaine et al. 1999, "On Rayleigh optical depth calculations", J. Atmos. Oceanic Technol. 16,
-1854, doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2, Eqs. 2 and 3 with the King factor F_K of the
+([Penndorf1957]; [Bodhaine1999] Eqs. 2 and 3 with the King factor F_K of the
 depolarisation p_n), and the angular coefficient is beta times the Rayleigh phase function
 (:func:`skyscatter.atmosphere.phase.rayleigh_phase`). Wavelengths are taken in nm; coefficients are in m^-1.
 
@@ -14,18 +13,18 @@ spectrum of the precomputed model):
 
 * :data:`STANDARD_AIR_NUMBER_DENSITY` N_s = 2.546899e25 m^-3, molecules of standard air at 288.15 K and
   1013.25 hPa (Bodhaine et al. 1999, Sec. 2; = p / (k T) with the CODATA Boltzmann constant).
-* refractive index of standard air (300 ppm CO2) n_s(lambda) of Peck & Reeder (1972), J. Opt. Soc. Am. 62,
-  958, doi:10.1364/JOSA.62.000958, as Bodhaine et al. Eq. 4: :func:`refractive_index_standard_air`.
+* refractive index of standard air (300 ppm CO2) n_s(lambda) of [PeckReeder1972], as
+  Bodhaine et al. Eq. 4: :func:`refractive_index_standard_air`.
   (n_s - 1 = 2.778e-4 at 550 nm.) The formula uses n^2 - 1, not its approximation 2 (n - 1), with which
   beta would be 2.8e-4 (relative) smaller.
 * :data:`DEPOLARISATION` p_n = 0.035 (Penndorf 1957, the value of Preetham et al. 1999, A.3): King factor
   1.0608. Bodhaine et al. prefer Bates' (1984) wavelength-dependent King factor, 1.0485 at 550 nm, 1.2 %
   lower; 0.035 is kept as the one value so that the Preetham model and the physical spectrum share it.
 
-Preetham, Shirley & Smits (1999), "A Practical Analytic Model for Daylight", doi:10.1145/311535.311545,
-Appendix A.3, evaluate the same formula with a wavelength-independent n = 1.0003 and N = 2.545e25 m^-3
-(:data:`AIR_REFRACTIVE_INDEX_PREETHAM1999`, :data:`AIR_NUMBER_DENSITY_PREETHAM1999`). Those are part of their
-model (the sky and aerial-perspective fits were made with them) and Bruneton's (2017) default coefficients
+Preetham, Shirley & Smits ([Preetham1999] Appendix A.3) evaluate the same formula with a wavelength-independent
+n = 1.0003 and N = 2.545e25 m^-3 (:data:`AIR_REFRACTIVE_INDEX_PREETHAM1999`, :data:`AIR_NUMBER_DENSITY_PREETHAM1999`).
+Those are part of their model (the sky and aerial-perspective fits were made with them) and Bruneton's (2017) default
+coefficients
 (5.802, 13.558, 33.100)e-6 m^-1 reproduce them to 0.05 %, so the Preetham functions keep them. They give
 12.7 % (400 nm) to 18.4 % (700 nm) more scattering than standard air: n = 1.0003 overstates n - 1 at 550 nm
 by 8 %, squared 16.7 %, and a constant n has no dispersion; N differs by -0.075 % (2.545e25 is the same

@@ -2,13 +2,11 @@
 
 * :class:`PowerLawSpectrum`, :class:`TabulatedSpectrum` - a power law (Angstrom's law, lambda^-4) or a table.
 * :class:`RayleighPhysicalSpectrum` - Rayleigh scattering of standard air from the refractive index
-  (:func:`skyscatter.atmosphere.rayleigh.rayleigh_scattering_bodhaine1999`; Bodhaine et al. 1999,
-  doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2).
-* :func:`solar_spectrum_astm_g173` - ASTM G173-03 extraterrestrial spectral irradiance (ASTM International,
-  "Standard Tables for Reference Solar Spectral Irradiances", G173-03; data file ``solar_spectrum_astm_g173``).
-* :func:`ozone_cross_section_serdyuchenko` - ozone absorption cross-sections at 233 K of Serdyuchenko et al.
-  (2014), "High spectral resolution ozone absorption cross-sections - Part 2", Atmos. Meas. Tech. 7, 625,
-  doi:10.5194/amt-7-625-2014 (data file ``ozone_serdyuchenko2014_233K``).
+  (:func:`skyscatter.atmosphere.rayleigh.rayleigh_scattering_bodhaine1999`; [Bodhaine1999]).
+* :func:`solar_spectrum_astm_g173` - ASTM G173-03 extraterrestrial spectral irradiance ([ASTMG173]; data file
+  ``solar_spectrum_astm_g173``).
+* :func:`ozone_cross_section_serdyuchenko` - ozone absorption cross-sections at 233 K of [Serdyuchenko2014]
+  (data file ``ozone_serdyuchenko2014_233K``).
 
 The data files are read by :func:`skyscatter.atmosphere.tables.load_table`, the one loader of the package.
 """
@@ -112,7 +110,7 @@ class PowerLawSpectrum(Spectrum):
 class AngstromSpectrum(Spectrum):
     """Extinction [m^-1] from Angstrom's law spread over a column: ``beta (lambda / 1 um)^-alpha / column``.
 
-    Angstrom (1929), doi:10.1080/20014422.1929.11880498: the vertical optical depth is
+    [Angstrom1929]: the vertical optical depth is
     ``beta (lambda / 1 um)^-alpha``; divided by ``column`` [m], the integral of the component's relative density,
     it is the coefficient at relative density 1. ``beta`` >= 0 [-], ``alpha`` [-] finite, ``column`` > 0 [m].
     """

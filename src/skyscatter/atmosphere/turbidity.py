@@ -1,6 +1,6 @@
 """Turbidity relations: Angstrom coefficients (Preetham 1999, A.1) and the meteorological range (Sec. 2.1).
 
-Preetham, Shirley & Smits (1999), "A Practical Analytic Model for Daylight", doi:10.1145/311535.311545. The
+Reference: [Preetham1999]. The
 Angstrom beta of A.1 is written once here (:func:`angstrom_beta`) and used by the Preetham sunlight and by
 :meth:`skyscatter.atmosphere.AtmosphereParameters.from_turbidity`.
 
@@ -51,8 +51,8 @@ def angstrom_beta_from_optical_depth(optical_depth: float, alpha: float = ANGSTR
                                      wavelength: float = _REFERENCE_WAVELENGTH) -> float:
     """Angstrom's beta [-] for a vertical aerosol optical depth ``tau`` at ``wavelength`` [nm] (default 550).
 
-    Angstrom's law ``tau(lambda) = beta (lambda / 1 um)^-alpha`` (Angstrom 1929,
-    doi:10.1080/20014422.1929.11880498) inverted: ``beta = tau (lambda / 1 um)^alpha``.
+    Angstrom's law ``tau(lambda) = beta (lambda / 1 um)^-alpha`` ([Angstrom1929])
+    inverted: ``beta = tau (lambda / 1 um)^alpha``.
     """
     return float(optical_depth) * (float(wavelength) / 1000.0) ** float(alpha)
 

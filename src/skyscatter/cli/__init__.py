@@ -22,7 +22,7 @@ from ..errors import SkyscatterError
 
 # Subcommand modules in the order ``--help`` lists them.
 _COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo", "precompute", "export_luts", "reference",
-             "fit_hosek_wilkie"]
+             "fit_hosek_wilkie", "fit_atmosphere"]
 # Each module registers one subcommand, named like the module with '-' for '_'.
 _MODULE_OF = {name.replace("_", "-"): name for name in _COMMANDS}
 # Commands whose linear algebra is a few small products: their BLAS pool starts with one thread (below).
@@ -34,9 +34,10 @@ def _one_blas_thread_for(command: str | None) -> None:
     """Start numpy's BLAS with one thread for a command that only multiplies small matrices.
 
     OpenBLAS starts a thread per core when numpy is imported and keeps it spinning for a while: about 0.06 s of
-    a two-core machine, more with more cores, all for nothing in these commands (issue 12, a quick command
-    line). Only before numpy is imported and only if the user has set none of the BLAS thread variables;
-    :func:`skyscatter.runtime.set_num_threads` still sizes the pool later if a computation asks for it.
+    a two-core machine, more with more cores, all for nothing in these commands (a quick command line:
+    docs/architecture.md, "Start-up"). Only before numpy is imported and only if the user has set none of the BLAS
+    thread variables; :func:`skyscatter.runtime.set_num_threads` still sizes the pool later if a computation asks for
+    it.
     """
     if (command in _SMALL_BLAS_COMMANDS and "numpy" not in sys.modules
             and not any(v in os.environ for v in _BLAS_THREAD_VARIABLES)):
@@ -108,12 +109,14 @@ def _cli_environment() -> Iterator[None]:
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser with every subcommand, or with ``command`` alone (when it names one): a command then imports
-    only its own module and what that needs (issue 12, a quick command line). ``--help``, a missing or an
+    only its own module and what that needs (a quick command line). ``--help``, a missing or an
     unknown command get the full parser, so that the listing and "invalid choice" name every command."""
+    from .common import HelpFormatter
+
     parser = OneLineParser(
         prog="skyscatter",
         description="Physically based daylight: sun position, sky models, sky images and landscapes.",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"skyscatter {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
@@ -124,13 +127,51 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``skyscatter`` command; returns the exit status."""
-    with _cli_environment():
-        return _main(argv)
-
-
-def _main(argv: Sequence[str] | None) -> int:
+    """Run one command; returns the exit status (for calling the command line from Python)."""
     args_list = list(sys.argv[1:] if argv is None else argv)
+    name = args_list[0] if args_list and args_list[0] in _MODULE_OF else None
+    with _cli_environment():
+        try:
+            return _main(args_list)
+        except BaseException as exc:  # an interruption anywhere: parsing, a lazy import, the command, its output
+            interruption = _interruption(exc)
+            if interruption is None:
+                raise
+            word, code = ("terminated", 143) if isinstance(interruption, Terminated) else ("interrupted", 130)
+            print(f"skyscatter{' ' + name if name else ''}: {word}", file=sys.stderr)
+            return code
+
+
+def _interruption(exc: BaseException) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt (Ctrl-C) or Terminated (SIGTERM) behind ``exc``: itself, or the cause of an error it
+    turned into (Ctrl-C while a C extension initialises surfaces as ``ImportError: initialization failed``)."""
+    seen = 0
+    while exc is not None and seen < 16:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        exc = exc.__cause__ or exc.__context__
+        seen += 1
+    return None
+
+
+def console_main() -> None:
+    """The ``skyscatter`` executable: :func:`main`, then exit with its status.
+
+    After an interruption (Ctrl-C, SIGTERM: status 130 or 143) the process ends at once, once the command's own
+    clean-up has run (temporary files removed, locks released): the interpreter's finalisation (tearing down the
+    imported numerical libraries, up to a few seconds) and any computation still running in worker threads are
+    skipped, so that the command stops within a second.
+    """
+    code = main()
+    if code in (130, 143):
+        with contextlib.suppress(Exception):
+            sys.stdout.flush()
+            sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
+def _main(args_list: list[str]) -> int:
     command = args_list[0] if args_list else None
     _one_blas_thread_for(command)
     parser = build_parser(command)
@@ -147,6 +188,8 @@ def _main(argv: Sequence[str] | None) -> int:
         print(f"skyscatter {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:
+        if _interruption(exc) is not None:
+            raise
         print(f"skyscatter {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "),
               file=sys.stderr)
         return 2
@@ -154,13 +197,7 @@ def _main(argv: Sequence[str] | None) -> int:
         print(f"skyscatter {args.command}: error: not enough memory; use a smaller image or table size",
               file=sys.stderr)
         return 2
-    except Terminated:
-        print(f"skyscatter {args.command}: terminated", file=sys.stderr)
-        return 143
-    except KeyboardInterrupt:
-        print(f"skyscatter {args.command}: interrupted", file=sys.stderr)
-        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    console_main()

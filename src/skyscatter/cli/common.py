@@ -13,7 +13,23 @@ from pathlib import Path
 
 from ..errors import InvalidParameterError
 
-HELP_FORMATTER = argparse.ArgumentDefaultsHelpFormatter
+
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """``--help`` with "(default: ...)" only where it says something: not on flags (``--no-glare`` would read
+    "(default: True)"), required options, options whose default (None, an empty list) the help text describes,
+    or help that already names its default."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (default is None or default is argparse.SUPPRESS or isinstance(default, bool) or action.required
+                or (isinstance(default, (list, tuple)) and not default) or "(default" in text):
+            return text
+        return super()._get_help_string(action)
+
+
+#: The formatter of every subcommand's ``--help``.
+HELP_FORMATTER = HelpFormatter
 
 
 @contextlib.contextmanager
@@ -131,25 +147,42 @@ def sun_angles_from_args(args: argparse.Namespace, *, apparent: bool = True) -> 
 
 
 def add_image_output_options(parser: argparse.ArgumentParser, *, default_out: str) -> None:
-    """--out (EXR), --png (preview, default beside the EXR) and --exposure."""
+    """--format (OpenEXR, or a Radiance sky), --out, --png (preview, default beside --out) and --exposure."""
     g = parser.add_argument_group("output")
-    g.add_argument("--out", type=output_path, default=Path(default_out), metavar="PATH",
-                   help="HDR output, OpenEXR float32 linear sRGB, Y = luminance / 683")
+    g.add_argument("--format", choices=["exr", "radiance"], default="exr",
+                   help="exr: an OpenEXR image, float32 linear sRGB, Y = luminance / 683; radiance: a sky Radiance "
+                   "renders (rpict, rtrace): --out names a .rad scene with the sun as a light source and the sky "
+                   "as a glow mapped from an equirect Radiance picture (.hdr, RGB radiance in W sr^-1 m^-2, 179 "
+                   "lm/W) through a function file (.cal), both beside it (run Radiance in that folder); equirect "
+                   "only, the image options --projection, --layout and --no-sun-disc do not apply")
+    g.add_argument("--out", type=output_path, default=None, metavar="PATH",
+                   help=f"the output (default: {default_out}, or {Path(default_out).with_suffix('.rad')} with "
+                   "--format radiance)")
     g.add_argument("--png", type=output_path, default=None, metavar="PATH",
                    help="tone-mapped preview PNG (default: the --out path with .png)")
     g.add_argument("--exposure", type=float_in(-30.0, 30.0), default=None, metavar="EV",
                    help="preview exposure compensation [EV stops]; default: automatic (scene key)")
+    parser.set_defaults(_default_out=default_out)
+
+
+def output_file(args: argparse.Namespace) -> Path:
+    """--out, or the default of the chosen --format."""
+    if args.out is not None:
+        return args.out
+    default = Path(args._default_out)
+    return default.with_suffix(".rad") if getattr(args, "format", "exr") == "radiance" else default
 
 
 def png_path(args: argparse.Namespace) -> Path:
     """The preview path: --png, or --out with the suffix .png."""
     if args.png is not None:
         return args.png
-    if not args.out.name:
+    out = output_file(args)
+    if not out.name:
         from ..errors import OutputError
 
-        raise OutputError(f"--out {str(args.out)!r}: an output path must name a file")
-    return args.out.with_suffix(".png")
+        raise OutputError(f"--out {str(out)!r}: an output path must name a file")
+    return out.with_suffix(".png")
 
 
 def check_output_paths(args: argparse.Namespace) -> None:
@@ -157,14 +190,23 @@ def check_output_paths(args: argparse.Namespace) -> None:
     read-only folder (:func:`skyscatter.fileio.check_output_path`)."""
     from ..fileio import check_output_path
 
-    check_output_path(args.out, option="--out")
+    out = output_file(args)
+    check_output_path(out, option="--out")
     png = png_path(args)
-    if args.out.suffix.lower() != ".exr":
-        raise InvalidParameterError(f"--out {args.out}: the HDR output must be an OpenEXR file ending in .exr")
+    if getattr(args, "format", "exr") == "radiance":
+        if out.suffix.lower() != ".rad":
+            raise InvalidParameterError(f"--out {out}: with --format radiance the output is a Radiance scene "
+                                        "description ending in .rad")
+        from ..render.radiance_sky import radiance_sky_files
+
+        radiance_sky_files(out, png)
+        return
+    if out.suffix.lower() != ".exr":
+        raise InvalidParameterError(f"--out {out}: the HDR output must be an OpenEXR file ending in .exr")
     check_output_path(png, option="--png")
     if png.suffix.lower() != ".png":
         raise InvalidParameterError(f"--png {png}: the preview must end in .png")
-    if args.out.resolve() == png.resolve():
+    if out.resolve() == png.resolve():
         raise InvalidParameterError("--out and --png must be different files")
 
 

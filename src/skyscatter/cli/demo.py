@@ -65,17 +65,6 @@ def _scene_options(args: argparse.Namespace) -> list[str]:
     return names
 
 
-class _HelpFormatter(HELP_FORMATTER):
-    """Shows "(default: ...)" only where it says something: not for flags, options whose default (None) is
-    described in the help text, or help that already names its default."""
-
-    def _get_help_string(self, action: argparse.Action) -> str | None:
-        text = action.help or ""
-        if action.default is None or isinstance(action.default, bool) or "(default" in text:
-            return text
-        return super()._get_help_string(action)
-
-
 def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "demo",
@@ -88,7 +77,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "current folder. Giving --sky, --turbidity, a sun option or --aerial renders one custom panel "
         "(landscape.exr/.png) instead. Nothing is written unless every image renders and every file can be "
         "written.",
-        formatter_class=_HelpFormatter,
+        formatter_class=HELP_FORMATTER,
     )
     p.add_argument("--figure", choices=["all", "7", "8", "custom"], default=None,
                    help="which figure to render (default: all, or custom when a scene option is given)")
@@ -367,9 +356,11 @@ def run(args: argparse.Namespace) -> int:
         if panel.bruneton_sun is not None:
             from ..render.bruneton import bruneton_scene
 
+            medium = dict(panel.bruneton_medium or {})
+            # --wavelengths chooses the tables' wavelengths; the renderer's come from --wavelength-step
             scenes.append(bruneton_scene(terrain, camera, *panel.bruneton_sun, albedo=args.albedo,
                                          sun_disc=args.sun_disc, wavelengths=wavelengths,
-                                         **(panel.bruneton_medium or {})))
+                                         table_wavelengths=medium.pop("wavelengths", None), **medium))
             continue
         scenes.append(Scene(panel.sky, terrain=terrain, camera=camera, aerial=panel.aerial, albedo=args.albedo,
                             sun_disc=args.sun_disc, wavelengths=wavelengths))

@@ -7,10 +7,12 @@ import json
 import math
 import sys
 import time
-from pathlib import Path
 
 from ..errors import InvalidParameterError
-from .common import HELP_FORMATTER, float_in, float_list, positive_int
+from .common import HELP_FORMATTER, float_in, float_list, output_path, positive_int
+
+#: Most sun elevations a fit samples (the published model has 6 control points; 90 is one per degree).
+MAX_ELEVATIONS = 90
 
 
 def _wavelength_list(text: str) -> list[float]:
@@ -33,32 +35,36 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         ),
         formatter_class=HELP_FORMATTER,
     )
-    p.add_argument("--out", type=Path, required=True, metavar="FILE.npz", help="dataset file to write")
+    p.add_argument("--out", type=output_path, required=True, metavar="FILE.npz",
+                   help="dataset file to write [.npz]; read it with HosekWilkieDataset.load")
     g = p.add_argument_group("atmosphere", "Earth defaults of the precomputed atmosphere unless changed.")
     g.add_argument("--turbidity", type=float_in(1.0, 20.0), default=None, metavar="T",
-                   help="aerosols from turbidity (Preetham 1999 A.1: Angstrom alpha 1.3, beta 0.04608 T - 0.04586)"
-                        " instead of the default (vertical aerosol optical depth 0.0053, alpha 0)")
+                   help="aerosols from turbidity, 1 to 20 (Preetham 1999 A.1: Angstrom alpha 1.3, beta 0.04608 T - "
+                        "0.04586) instead of the default (vertical aerosol optical depth 0.0053, alpha 0)")
     g.add_argument("--ground-albedo", type=float_in(0.0, 1.0), default=0.1, metavar="A",
-                   help="ground albedo (Lambertian, same at every wavelength)")
+                   help="ground albedo, 0 to 1 (Lambertian, same at every wavelength)")
     f = p.add_argument_group("fit")
     f.add_argument("--fit-wavelengths", type=_wavelength_list, default=[440.0, 550.0, 680.0], metavar="LIST",
-                   help="wavelengths to fit [nm], e.g. 440,550,680")
+                   help="wavelengths to fit [nm], increasing, 300 to 1000, a list like 440,550,680 or "
+                   "START:STOP:STEP (default: 440,550,680)")
     f.add_argument("--elevations", type=positive_int, default=16, metavar="N",
-                   help="number of sun elevations sampled, even in (elevation / 90 deg)^(1/3), at least 6")
+                   help=f"number of sun elevations sampled, even in (elevation / 90 deg)^(1/3), 6 to {MAX_ELEVATIONS}; "
+                   "the fit's time grows with it (about a second per elevation and wavelength)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..fileio import check_output_path
     from ..fit import fit_hosek_wilkie, fit_sun_elevations
     from ..precomputed import AtmosphereParameters
     from ..precomputed.cache import load_or_compute
 
     if args.out.suffix != ".npz":
         raise InvalidParameterError(f"--out must name an .npz file; got {args.out}")
-    if str(args.out.parent) and not args.out.parent.is_dir():
-        raise InvalidParameterError(f"--out: folder {args.out.parent} does not exist")
-    if args.elevations < 6:
-        raise InvalidParameterError(f"--elevations must be at least 6 (one per control point); got {args.elevations}")
+    check_output_path(args.out, option="--out")
+    if not 6 <= args.elevations <= MAX_ELEVATIONS:
+        raise InvalidParameterError(f"--elevations must be 6 (one per control point) to {MAX_ELEVATIONS}; got "
+                                    f"{args.elevations}")
     changes = dict(ground_albedo=args.ground_albedo)
     if args.turbidity is not None:
         params = AtmosphereParameters.from_turbidity(args.turbidity, **changes)
@@ -66,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
         params = AtmosphereParameters(**changes)
     t0 = time.perf_counter()
     atm, _ = load_or_compute(params, progress=sys.stderr.isatty())
-    from ..precomputed.sky import BrunetonSky
+    from ..sky.bruneton import BrunetonSky
 
     def make(zenith: float, azimuth: float):
         return BrunetonSky(zenith, azimuth, atmosphere=atm)

@@ -6,13 +6,29 @@ import argparse
 import math
 import sys
 import time
-from pathlib import Path
 
 from ..atmosphere.phase import AEROSOL_PHASE_FUNCTIONS
-from .common import HELP_FORMATTER, float_in, float_list, positive_int
+from .common import HELP_FORMATTER, float_in, float_list, output_path
+
+
+def _whole_in(low: int, high: int):
+    """argparse type: a whole number in [low, high]."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected a whole number from {low} to {high:.6g}, got {value}")
+        return value
+
+    return parse
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
+    from ..montecarlo.dataset import MAX_DIRECTIONS, MAX_SAMPLES
+
     p = subparsers.add_parser(
         "reference",
         help="Monte Carlo sky radiance reference grid (sun x aerosol x albedo x wavelength x directions) to Zarr",
@@ -20,35 +36,57 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "Trace the spectral Monte Carlo reference (all orders of scattering in the spherical atmosphere, "
             "the method of Hosek & Wilkie 2012, Sec. 3) for every sun elevation x aerosol amount x ground "
             "albedo, over an equal-area set of sky directions, and write radiance, standard error and the "
-            "transmitted solar disc to a Zarr store (an xarray Dataset with the job as attributes). Re-running "
-            "the same command resumes: cells already written are skipped. A store holding a different job is "
-            "refused."
+            "transmitted solar disc [W m^-2 sr^-1 nm^-1] to a Zarr store (an xarray Dataset with the job as "
+            "attributes). Re-running the same command resumes: cells already written (and matching their "
+            "checksum) are skipped, damaged ones recomputed. A store holding a different job is refused; a store "
+            "another process is writing is refused with its pid. Every option is checked before the store is "
+            "created. Cost: about samples x directions x cells x ceil(wavelengths / 16) paths at roughly 10^5 "
+            "paths per CPU-second; Ctrl-C or SIGTERM stops within a second, keeping the finished cells. "
+            "Example: skyscatter reference ref.zarr --turbidity 2,4 --directions 200"
         ),
         formatter_class=HELP_FORMATTER,
     )
-    p.add_argument("output", type=Path, metavar="STORE.zarr", help="Zarr store to create or resume")
+    p.add_argument("output", type=output_path, metavar="STORE.zarr",
+                   help="Zarr store (a folder) to create, or to resume if it holds the same job")
     p.add_argument("--sun-elevation", type=float_list("sun elevation", "deg"), default="60,30,10,0,-3,-6",
-                   metavar="DEG", help="sun elevations [deg], list or START:STOP:STEP")
+                   metavar="DEG", help="sun elevations [deg], -90 to 90 (negative: twilight), a list or "
+                   "START:STOP:STEP")
     aer = p.add_mutually_exclusive_group()
     aer.add_argument("--turbidity", type=float_list("turbidity", "1-20"), default=None, metavar="T",
-                     help="turbidities (Preetham 1999 A.1 Angstrom beta, alpha 1.3); 2.5 when neither --turbidity nor "
-                          "--aod is given")
+                     help="turbidities, 1 to 20 (Preetham 1999 A.1 Angstrom beta, alpha 1.3), a list; 2.5 when "
+                     "neither --turbidity nor --aod is given")
     aer.add_argument("--aod", type=float_list("aerosol optical depth", "at 550 nm"), default=None, metavar="TAU",
-                     help="vertical aerosol optical depths at 550 nm (Angstrom alpha 0 of the Earth defaults)")
+                     help="vertical aerosol optical depths at 550 nm, 0 to 10 (Angstrom alpha 0 of the Earth "
+                     "defaults), a list")
     p.add_argument("--albedo", type=float_list("albedo", "0-1"), default="0.1", metavar="A",
-                   help="ground albedos (Lambertian, grey)")
+                   help="ground albedos, 0 to 1 (Lambertian, grey), a list")
     p.add_argument("--wavelengths", type=float_list("wavelengths", "nm"), default="380:780:40", metavar="NM",
-                   help="wavelengths [nm] (ozone cross-sections cover 360-830 nm)")
-    p.add_argument("--directions", type=positive_int, default=200, metavar="N",
-                   help="number of equal-area sky directions over the upper hemisphere (spherical Fibonacci)")
-    p.add_argument("--samples", type=positive_int, default=4096, metavar="N", help="paths per direction")
-    p.add_argument("--seed", type=int, default=0, metavar="N", help="random seed (results depend only on it)")
-    p.add_argument("--altitude", type=float_in(0.0, 1e8), default=0.0, metavar="M", help="observer altitude [m]")
+                   help="wavelengths [nm], 360 to 830 (the ozone cross-sections), a list or START:STOP:STEP")
+    p.add_argument("--directions", type=_whole_in(1, MAX_DIRECTIONS), default=200, metavar="N",
+                   help=f"number of equal-area sky directions over the upper hemisphere (spherical Fibonacci), 1 to "
+                   f"{MAX_DIRECTIONS}")
+    p.add_argument("--samples", type=_whole_in(1, MAX_SAMPLES), default=4096, metavar="N",
+                   help=f"paths per direction, 1 to {MAX_SAMPLES:.0e} (rounded up to whole batches of 512; the "
+                   "standard error falls as 1/sqrt(N))")
+    p.add_argument("--seed", type=_whole_in(0, 2**63 - 1), default=0, metavar="N",
+                   help="random seed, 0 to 2^63 - 1 (results depend only on it and the job)")
+    p.add_argument("--altitude", type=float_in(0.0, 1e8), default=0.0, metavar="M",
+                   help="observer altitude above the ground [m], 0 to 1e8")
     p.add_argument("--phase", choices=AEROSOL_PHASE_FUNCTIONS, default="cornette-shanks",
                    help="aerosol phase function (asymmetry g = 0.8)")
+    cloud = p.add_argument_group("cloud layer", "a horizontally uniform water cloud in every cell (Mie droplets, "
+                                 "modified-gamma sizes of effective variance 0.1)")
+    cloud.add_argument("--cloud-optical-depth", type=float_in(0.0, 1000.0), default=0.0, metavar="TAU",
+                       help="optical depth of the cloud layer at 550 nm (0: no cloud)")
+    cloud.add_argument("--cloud-base", type=float_in(0.0, 1e5), default=1000.0, metavar="M",
+                       help="altitude of the cloud base [m]")
+    cloud.add_argument("--cloud-top", type=float_in(0.0, 1e5), default=1500.0, metavar="M",
+                       help="altitude of the cloud top [m]")
+    cloud.add_argument("--cloud-effective-radius", type=float_in(1.0, 50.0), default=10.0, metavar="UM",
+                       help="effective radius of the droplets [um]")
     p.add_argument("--scheduler", default=None, metavar="ADDR",
-                   help="'synchronous', or a dask.distributed scheduler address (tcp://host:8786); "
-                        "default: local threads")
+                   help="'synchronous', or a dask.distributed scheduler address (tcp://host:8786; needs the "
+                   "montecarlo extra); default: local threads ($SKYSCATTER_NUM_THREADS)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -72,12 +110,19 @@ def run(args: argparse.Namespace) -> int:
         bar.refresh()
 
     turbidity = args.turbidity if args.turbidity is not None or args.aod is not None else [2.5]
+    atmosphere = AtmosphereParameters(mie_phase_function=args.phase)
+    if args.cloud_optical_depth > 0:
+        from ..atmosphere.clouds import CloudLayer
+
+        layer = CloudLayer(args.cloud_base, args.cloud_top, args.cloud_optical_depth,
+                           effective_radius=args.cloud_effective_radius * 1e-6)
+        atmosphere = atmosphere.replace(particles=(layer,))
     t0 = time.perf_counter()
     try:
         ds = reference(args.output, sun_elevations=[math.radians(e) for e in args.sun_elevation],
                        turbidities=turbidity, aerosol_optical_depths=args.aod, albedos=args.albedo,
                        wavelengths=args.wavelengths, directions=equal_area_directions(args.directions),
-                       atmosphere=AtmosphereParameters(mie_phase_function=args.phase), samples=args.samples,
+                       atmosphere=atmosphere, samples=args.samples,
                        seed=args.seed, altitude=args.altitude, scheduler=args.scheduler, progress=progress)
     finally:
         if bar is not None:

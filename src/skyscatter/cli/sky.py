@@ -13,6 +13,7 @@ from .common import (
     check_output_paths,
     finite_float,
     float_in,
+    output_file,
     png_path,
     positive_int,
     sun_angles_from_args,
@@ -67,24 +68,86 @@ def run(args: argparse.Namespace) -> int:
     check_output_paths(args)
     if args.layout != "skyscatter" and args.projection != "equirect":
         raise InvalidParameterError(f"--layout {args.layout} applies to --projection equirect only")
+    if args.format == "radiance":
+        given = [flag for flag, bad in (("--projection", args.projection != "equirect"),
+                                        ("--layout", args.layout != "skyscatter"), ("--no-sun-disc", not args.sun_disc),
+                                        ("--height", args.height is not None)) if bad]
+        if given:
+            raise InvalidParameterError(f"{', '.join(given)}: not with --format radiance (a Radiance sky is an "
+                                        "equirect picture of the whole sphere, width x width/2, with the sun as "
+                                        "a light source)")
     # The precomputed atmosphere ignores refraction, so it wants the geometric sun (docs/bruneton.md).
     zenith, azimuth = sun_angles_from_args(args, apparent=args.model != "bruneton")
     model = build_sky_from_args(args, zenith, azimuth)
+    bar = _monte_carlo_progress(model, args) if args.model == "montecarlo" else None
     t0 = time.perf_counter()
-    image = sky_image(
-        model,
-        projection=args.projection,
-        width=args.width,
-        height=args.height,
-        heading=math.radians(args.heading),
-        pitch=math.radians(args.pitch),
-        fov=math.radians(args.fov),
-        sun_disc=args.sun_disc,
-        ground_albedo=args.ground_albedo,
-        layout=args.layout,
-    )
+    if args.format == "radiance":
+        from ..render.radiance_sky import write_radiance_sky
+
+        try:
+            files = write_radiance_sky(output_file(args), model, width=args.width, ground_albedo=args.ground_albedo,
+                                       png_path=png_path(args), exposure_ev=args.exposure)
+        finally:
+            if bar is not None:
+                bar.close()
+        print(f"{model!r}: sun zenith {math.degrees(zenith):.2f} deg, azimuth {math.degrees(azimuth):.2f} deg")
+        print(f"wrote {', '.join(map(str, files))} ({args.width} x {args.width // 2} picture, "
+              f"{time.perf_counter() - t0:.2f} s); render with: oconv {files[0].name} > sky.oct, in that folder")
+        return 0
+    try:
+        image = sky_image(
+            model,
+            projection=args.projection,
+            width=args.width,
+            height=args.height,
+            heading=math.radians(args.heading),
+            pitch=math.radians(args.pitch),
+            fov=math.radians(args.fov),
+            sun_disc=args.sun_disc,
+            ground_albedo=args.ground_albedo,
+            layout=args.layout,
+        )
+    finally:
+        if bar is not None:
+            bar.close()
     elapsed = time.perf_counter() - t0
-    out, png = write_exr_and_png(args.out, png_path(args), image, exposure_ev=args.exposure, key=0.45)
+    out, png = write_exr_and_png(output_file(args), png_path(args), image, exposure_ev=args.exposure, key=0.45)
     print(f"{model!r}: sun zenith {math.degrees(zenith):.2f} deg, azimuth {math.degrees(azimuth):.2f} deg")
     print(f"wrote {out} and {png} ({image.shape[1]} x {image.shape[0]}, rendered in {elapsed:.2f} s)")
     return 0
+
+
+def _format_seconds(seconds: float) -> str:
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+def _monte_carlo_progress(model, args: argparse.Namespace):
+    """Say how long the Monte Carlo sky will take (from a pilot run) and attach a progress bar to it."""
+    import sys
+
+    from tqdm import tqdm
+
+    from ..runtime import num_threads
+
+    h = args.height if args.height is not None else (
+        args.width // 2 if args.projection == "equirect" else args.width if args.projection == "fisheye"
+        else max(1, round(args.width * 3 / 4)))
+    n = args.width * h
+    seconds = model.estimate_seconds(n)
+    print(f"skyscatter sky: the Monte Carlo sky traces {model.samples} paths for each of {n} pixels x 6 wavelength "
+          f"groups (95 wavelengths): about {_format_seconds(seconds)} on {num_threads()} thread(s), estimated from "
+          "a pilot run; Ctrl-C stops it (a smaller --width or --samples is quicker)", file=sys.stderr, flush=True)
+    bar = tqdm(total=None, unit="task", desc="skyscatter sky (Monte Carlo)", file=sys.stderr, disable=None)
+
+    def progress(done: int, total: int) -> None:
+        if bar.total != total:
+            bar.total = total
+        bar.n = done
+        bar.refresh()
+
+    model.progress = progress
+    return bar

@@ -6,7 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
-from .common import HELP_FORMATTER, output_path, positive_int
+from .common import HELP_FORMATTER, float_in, output_path, positive_int
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -18,9 +18,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "from its direct normal and diffuse horizontal irradiance (Perez 1990 sky clearness, brightness and "
         "luminous efficacies with the hour's dew point) and write the mean "
         "luminance [cd m^-2] of every sky patch: an hours x patches matrix in a .npz file (and optionally a "
-        "CSV). Patches: Tregenza (145) or Reinhart MF 2 (577) / MF 4 (2305), ordered from the horizon band up, "
-        "each band starting at north and going east, zenith last (Radiance's order without its ground patch). "
-        "Example: skyscatter skymatrix weather.epw --patches reinhart2 --out matrix.npz --csv matrix.csv",
+        "CSV), or (--format radiance) a Radiance matrix file that rmtxop and dctimestep read, laid out as "
+        "gendaymtx writes it. Patches: Tregenza (145) or Reinhart MF 2 (577) / MF 4 (2305), ordered from the "
+        "horizon band up, each band starting at north and going east, zenith last (Radiance's order without its "
+        "ground patch). "
+        "Weather records are checked: a direct normal irradiance above the extraterrestrial value or a diffuse "
+        "horizontal above the global is refused with the line; light while the sun stays below the horizon is "
+        "left dark with a warning (--night-irradiance); a time zone more than 3 h from the longitude's is warned "
+        "about. Example: skyscatter skymatrix weather.epw --patches reinhart2 --out matrix.npz --csv matrix.csv",
         formatter_class=HELP_FORMATTER,
     )
     from ..patches import SCHEMES
@@ -37,10 +42,21 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    + "; ".join(f"{m}: {registry.get(m).summary}" for m in weather_models))
     p.add_argument("--patches", choices=list(SCHEMES), default="reinhart2",
                    help="patch scheme: tregenza = reinhart1 (145 patches), reinhart2 (577), reinhart4 (2305)")
-    p.add_argument("--out", type=output_path, default=Path("skymatrix.npz"), metavar="PATH",
-                   help="output .npz: luminance [cd m^-2] (hours x patches, float32), times, sun angles [rad], "
-                   "Perez epsilon/delta, diffuse and sun illuminance [lx], patch zenith/azimuth [rad] and solid "
-                   "angle [sr]")
+    p.add_argument("--format", choices=["npz", "radiance"], default="npz",
+                   help="npz: luminance [cd m^-2] (hours x patches, float32), times, sun angles [rad], Perez "
+                   "epsilon/delta, diffuse and sun illuminance [lx], patch zenith/azimuth [rad] and solid angle [sr]; "
+                   "radiance: a Radiance matrix (#?RADIANCE header, FORMAT=float), patches x hours x RGB with the "
+                   "ground patch first, RGB radiance [W sr^-1 m^-2] at Radiance's 179 lm/W, the sky in gendaymtx's "
+                   "default colour (0.960 1.004 1.118), the sun white")
+    p.add_argument("--out", type=output_path, default=None, metavar="PATH",
+                   help="output file (default: skymatrix.npz, or skymatrix.mtx with --format radiance)")
+    p.add_argument("--ground-albedo", type=float_in(0.0, 1.0), default=None, metavar="RHO",
+                   help="--format radiance: reflectance of the ground patch, whose radiance is RHO x the global "
+                   "horizontal illuminance / pi, 0 to 1 (gendaymtx's -g; default 0.2)")
+    p.add_argument("--night-irradiance", choices=["dark", "error"], default="dark",
+                   help="records with light while the sun stays below the horizon for their whole interval (more "
+                   "than 1 deg for direct, 6 deg for diffuse light; a time shift or the wrong place): dark = left "
+                   "dark with one warning counting them; error = refuse the file at the first")
     p.add_argument("--csv", type=output_path, default=None, metavar="PATH",
                    help="also write a CSV: a time column (ISO 8601, mid-hour) and one luminance column per patch")
     p.add_argument("--include-sun", action="store_true",
@@ -68,6 +84,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     g.add_argument("--radiance", type=output_path, default=None, metavar="PATH",
                    help="also write Radiance's matrix (ground patch + patches x hours x bands, FORMAT=float) for "
                    "rmtxop/dctimestep (one site only)")
+    g.add_argument("--radiance-rgb", type=output_path, default=None, metavar="PATH",
+                   help="also write the matrix as Radiance RGB radiance (NCOMP=3, 179 lm/W), which this Radiance's "
+                   "dctimestep needs (it takes 3 components only; rmtxop takes --radiance)")
     g.add_argument("--report", type=output_path, default=None, metavar="PATH",
                    help="also write a per-hour CSV report: status, reason, inputs used and their sources, retrieved "
                    "aerosol, DNI and DHI closure (one site only)")
@@ -103,13 +122,19 @@ def run(args: argparse.Namespace) -> int:
         return run_spectral(args)
     if len(args.epw) != 1:
         raise InvalidParameterError("several weather files need --spectral (one Zarr store with a site dimension)")
-    for name in ("radiance", "report"):
+    for name in ("radiance", "radiance_rgb", "report"):
         if getattr(args, name) is not None:
-            raise InvalidParameterError(f"--{name} goes with --spectral")
+            raise InvalidParameterError(f"--{name.replace('_', '-')} goes with --spectral")
     args.epw = args.epw[0]
     args.samples = 3 if args.samples is None else args.samples
-    if args.out.suffix.lower() != ".npz":
-        raise InvalidParameterError(f"--out must end in .npz; got {args.out}")
+    if args.out is None:
+        args.out = Path("skymatrix.mtx" if args.format == "radiance" else "skymatrix.npz")
+    if args.format == "npz" and args.out.suffix.lower() != ".npz":
+        raise InvalidParameterError(f"--out must end in .npz; got {args.out} (a Radiance matrix: --format radiance)")
+    if args.format == "radiance" and args.out.suffix.lower() == ".npz":
+        raise InvalidParameterError(f"--out {args.out}: a Radiance matrix is not an .npz file (use e.g. .mtx)")
+    if args.format == "npz" and args.ground_albedo is not None:
+        raise InvalidParameterError("--ground-albedo applies to --format radiance only")
     check_output_path(args.out, option="--out")
     if args.csv is not None:
         check_output_path(args.csv, option="--csv")
@@ -119,9 +144,12 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidParameterError(f"--samples must be at most 16; got {args.samples}")
     t0 = time.perf_counter()
     matrix = skymatrix(args.epw, scheme=args.patches, include_sun=args.include_sun, samples=args.samples,
-                       progress=args.progress and sys.stderr.isatty(), timestep=args.timestep, model=args.model)
+                       progress=args.progress and sys.stderr.isatty(), timestep=args.timestep, model=args.model,
+                       night_irradiance=args.night_irradiance)
     elapsed = time.perf_counter() - t0
-    written = [str(t) for t in matrix.save(args.out, args.csv)]
+    written = [str(t) for t in matrix.save(args.out, args.csv, format=args.format,
+                                           ground_reflectance=0.2 if args.ground_albedo is None
+                                           else args.ground_albedo)]
     hours, patches = matrix.shape
     lit = int(np.count_nonzero(matrix.diffuse_illuminance > 0))
     loc = matrix.location
@@ -189,13 +217,17 @@ def run_spectral(args: argparse.Namespace) -> int:
             raise InvalidParameterError(
                 f"--aod-nodes must be comma-separated numbers; got {args.aod_nodes!r}") from None
     options = RetrievalOptions(aerosol_optical_depth_nodes=nodes, bad_hours=args.bad_hours, tables=args.tables)
+    if args.format != "npz" or args.ground_albedo is not None or args.night_irradiance != "dark":
+        raise InvalidParameterError("--format, --ground-albedo and --night-irradiance go with the luminance matrix; "
+                                    "with --spectral use --radiance / --radiance-rgb (the ground albedo is the "
+                                    "tables' 0.2) and --bad-hours")
     out = args.out
-    if out == Path("skymatrix.npz"):
+    if out is None:
         out = Path("skymatrix.nc") if len(args.epw) == 1 else Path("sites.zarr")
     progress = args.progress and sys.stderr.isatty()
     t0 = time.perf_counter()
     if len(args.epw) > 1:
-        if args.radiance is not None or args.report is not None:
+        if args.radiance is not None or args.report is not None or args.radiance_rgb is not None:
             raise InvalidParameterError("--radiance and --report take one site; the multi-site store holds status "
                                         "and closure per site and hour")
         if out.suffix.lower() != ".zarr":
@@ -210,7 +242,8 @@ def run_spectral(args: argparse.Namespace) -> int:
         return 0
     if out.suffix.lower() not in (".nc", ".zarr"):
         raise InvalidParameterError(f"--out must end in .nc or .zarr with --spectral; got {out}")
-    for opt, path in (("--out", out), ("--radiance", args.radiance), ("--report", args.report)):
+    for opt, path in (("--out", out), ("--radiance", args.radiance), ("--radiance-rgb", args.radiance_rgb),
+                      ("--report", args.report)):
         if path is not None:
             check_output_path(path, option=opt)
     ds = spectral_sky_matrix(args.epw[0], scheme=args.patches, bands=args.bands, samples=samples, options=options,
@@ -218,6 +251,8 @@ def run_spectral(args: argparse.Namespace) -> int:
     written = [str(save_dataset(ds, out))]
     if args.radiance is not None:
         written.append(str(write_radiance_matrix(ds, args.radiance)))
+    if args.radiance_rgb is not None:
+        written.append(str(write_radiance_matrix(ds, args.radiance_rgb, rgb=True)))
     if args.report is not None:
         _csv_report(ds, args.report)
         written.append(str(args.report))

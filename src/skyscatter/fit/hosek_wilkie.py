@@ -1,6 +1,6 @@
 """Fit the Hosek-Wilkie sky form to any sky model: the analytic form for any atmosphere skyscatter can compute.
 
-The form is that of Hosek & Wilkie 2012 (Eqs. 9-12, https://doi.org/10.1145/2185520.2185591): per wavelength,
+The form is that of Hosek & Wilkie 2012 ([HosekWilkie2012] Eqs. 9-12): per wavelength,
 ``L = F(theta, gamma; A..I) * L_M`` with the nine parameters and L_M quintic Bezier curves of
 ``t = (eta / (pi/2))^(1/3)`` (eta the solar elevation), six control points each. The authors fitted each
 elevation first and the curves afterwards (Sec. 5); here the 6 x 10 control values per wavelength are fitted
@@ -223,8 +223,9 @@ def sky_fit_error(
 ) -> NDArray[np.float64]:
     """RMS relative error ``fitted / source - 1`` per wavelength over random sky directions.
 
-    The region is the one of issue 10's target: at least ``min_elevation_deg`` above the horizon and
-    ``sun_exclusion_deg`` from the sun; ``n`` directions uniform in solid angle there.
+    The region is the one the fit's accuracy target is stated on (docs/hosek_wilkie.md): at least
+    ``min_elevation_deg`` above the horizon and ``sun_exclusion_deg`` from the sun; ``n`` directions uniform in solid
+    angle there.
     """
     rng = np.random.default_rng(seed)
     lo = np.sin(np.radians(min_elevation_deg))

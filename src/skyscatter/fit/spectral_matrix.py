@@ -47,6 +47,7 @@ from numpy.typing import NDArray
 from ..errors import InvalidParameterError, OutputError
 from ..fileio import atomic_path, check_output_path
 from ..patches import PatchScheme, patch_scheme
+from ..radiance import write_radiance_matrix as _write_matrix
 from .weather import (
     CLEAR,
     CLEAR_OPEN,
@@ -449,9 +450,10 @@ def write_radiance_matrix(ds, path: str | os.PathLike[str], *, binary: bool = Tr
 
     Layout as gensdaymtx writes it: header ``#?RADIANCE``, ``NROWS`` = patches + 1 (the ground patch first,
     then the sky patches in Radiance's order), ``NCOLS`` = hours, ``NCOMP`` = bands, ``WAVELENGTH_SPLITS= 780 588
-    480 380`` for the standard 380-780 nm range, ``FORMAT=float`` (little-endian, ``BIGENDIAN=0``) or ``ascii``;
+    480 380`` for the standard 380-780 nm range, ``FORMAT=float`` (little-endian) or ``ascii``;
     each entry's components from the longest wavelength to the shortest (Radiance's spectral order), values the
-    band-mean spectral radiance [W m^-2 sr^-1 nm^-1]. ``rgb=True`` writes ``NCOMP=3`` Radiance RGB radiance
+    band-mean spectral radiance [W m^-2 sr^-1 nm^-1] (written by
+    :func:`skyscatter.radiance.write_radiance_matrix`). ``rgb=True`` writes ``NCOMP=3`` Radiance RGB radiance
     instead (:func:`radiance_rgb`, gendaymtx's form), which ``dctimestep`` needs (this Radiance's dctimestep takes 3
     components only; ``rmtxop`` takes the spectral matrix). Hours that are not retrieved are written as NaN (they
     propagate through ``rmtxop``/``dctimestep``: nothing takes them for a sky). Atomic.
@@ -466,22 +468,12 @@ def write_radiance_matrix(ds, path: str | os.PathLike[str], *, binary: bool = Tr
     wl_lo, wl_hi = float(ds["wavelength_low"].values[0]), float(ds["wavelength_high"].values[-1])
     splits = (RADIANCE_WAVELENGTH_SPLITS if (abs(wl_lo - 380) < 6 and abs(wl_hi - 780) < 6)
               else (wl_hi, wl_lo + 2 * (wl_hi - wl_lo) / 3, wl_lo + (wl_hi - wl_lo) / 3, wl_lo))
-    header = ["#?RADIANCE", command, f"LATLONG= {ds.attrs['latitude_deg']:.8f} {ds.attrs['longitude_deg']:.8f}",
-              f"NROWS={rows.shape[0]}", f"NCOLS={rows.shape[1]}", f"NCOMP={rows.shape[2]}"]
+    header = [command, f"LATLONG= {ds.attrs['latitude_deg']:.8f} {ds.attrs['longitude_deg']:.8f}"]
     if not rgb:
         header.append("WAVELENGTH_SPLITS= " + " ".join(f"{w:g}" for w in splits))
-    header += ["BIGENDIAN=0", "FORMAT=float"] if binary else ["FORMAT=ascii"]
-    with atomic_path(target) as tmp:
-        with open(tmp, "wb") as fh:
-            fh.write(("\n".join(header) + "\n\n").encode("ascii"))
-            if binary:
-                fh.write(rows.astype("<f4").tobytes())
-            else:
-                for r in range(rows.shape[0]):
-                    for c in range(rows.shape[1]):
-                        fh.write((" ".join(f"{v:.6g}" for v in rows[r, c].tolist()) + "\n").encode("ascii"))
-                    fh.write(b"\n")
-    return target
+    # NaN marks the hours without a sky (refused by the shared writer, which takes finite numbers)
+    return _write_matrix(target, rows, header=header, encoding="float" if binary else "ascii",
+                                        allow_nan=True)
 
 
 def plane_irradiance(ds, tilt: float, azimuth: float, *, samples: int = 4):

@@ -3,7 +3,7 @@
 ``sky_radiance(atmosphere, directions, wavelengths, sun_zenith=...)`` traces backward paths from the observer
 through the shells of an :class:`~skyscatter.atmosphere.AtmosphereParameters` medium (all orders of scattering,
 Lambertian ground, the sun as a disc), with next-event estimation to the sun, a forced first collision,
-Russian roulette and hero-wavelength spectral MIS (Wilkie et al. 2014, doi:10.1111/cgf.12419). Results depend
+Russian roulette and hero-wavelength spectral MIS ([Wilkie2014]). Results depend
 only on the seed. See ``docs/montecarlo.md`` for the method and its validation.
 
 numba kernels are in :mod:`.kernels`, random numbers in :mod:`.rng`, the Dask driver in :mod:`.driver` and the

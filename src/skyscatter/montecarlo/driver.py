@@ -4,16 +4,21 @@ A job is (medium, directions, wavelengths, sun, observer altitude, samples, seed
 of paths (``batch_size`` paths, a function of ``samples`` only) and fixed *wavelength groups* (consecutive
 wavelengths sharing paths, at most ``group_size``), and every (direction, group, batch) draws from its own
 counter-based random stream (:mod:`.rng`). Tasks bundle direction blocks x groups x runs of batches; each returns
-per-batch sums, and the final reduction adds the batches of the whole job in one fixed order. The result therefore
-depends on the seed and the job only, not on the task sizes, the scheduler or the number of workers.
+per-batch sums, and the reduction adds the batches of the whole job in one fixed order (batch 0, 1, 2, ... for
+every direction and wavelength). The result therefore depends on the seed and the job only, not on the task
+sizes, the scheduler or the number of workers. Tasks are planned and reduced lazily, a window at a time, so a job
+of any number of samples needs memory for its directions and wavelengths only.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from itertools import islice
 from typing import Any
 
 import numpy as np
@@ -22,8 +27,8 @@ from numpy.typing import ArrayLike, NDArray
 from ..atmosphere import AtmosphereParameters
 from ..atmosphere.phase import aerosol_phase_kind
 from ..conventions import direction_from_angles
-from ..errors import InvalidDirectionError, InvalidParameterError
-from . import kernels
+from ..errors import InvalidDirectionError, InvalidParameterError, MissingDependencyError
+from . import kernels, tracking
 
 __all__ = ["MonteCarloResult", "Medium", "prepare_medium", "sky_radiance", "solar_disc_radiance"]
 
@@ -31,6 +36,9 @@ __all__ = ["MonteCarloResult", "Medium", "prepare_medium", "sky_radiance", "sola
 DEFAULT_GROUP_SIZE = 16
 #: Largest number of paths in one batch (the unit of the random streams and of the reduction).
 MAX_BATCH_SIZE = 512
+#: Probability of drawing a scattering direction about the sun from the cloud's phase function in a cloudy medium
+#: (directional importance sampling, ``kernels`` module docstring); cloudless media do not use it.
+DDIS_PROBABILITY = 0.0
 
 
 @dataclass(frozen=True)
@@ -48,6 +56,8 @@ class MonteCarloResult:
     seconds : float
         Wall-clock time of the computation [s].
     wavelengths : ndarray (n_wavelengths,) [nm]; directions : ndarray (N, 3) unit ENU vectors.
+    mean_vertices : float
+        Mean number of vertices (scatterings and ground reflections) per path.
     """
 
     radiance: NDArray[np.float64]
@@ -56,6 +66,7 @@ class MonteCarloResult:
     seconds: float
     wavelengths: NDArray[np.float64]
     directions: NDArray[np.float64]
+    mean_vertices: float = math.nan
 
     @property
     def relative_stderr(self) -> NDArray[np.float64]:
@@ -66,7 +77,13 @@ class MonteCarloResult:
 
 @dataclass(frozen=True)
 class Medium:
-    """The atmosphere packed for the kernels at a set of wavelengths (all SI, see ``kernels.trace_block``)."""
+    """The medium packed for the kernels at a set of wavelengths (all SI, see ``kernels.trace_block``).
+
+    Shell components in the order Rayleigh, aerosol, ozone, then the further particle components of the
+    atmosphere (cloud layers, more aerosols); ``lobe``, ``lobe_g``, ``lobe_tab`` have one more entry, the cloud
+    field's. ``field`` is the field for tracking (majorant blocks), ``field_exact`` the same field with every
+    voxel its own block (exact transmittance of the direct sun); both :func:`.tracking.empty_field` without one.
+    """
 
     bottom_radius: float
     top_radius: float
@@ -74,31 +91,56 @@ class Medium:
     layers: NDArray[np.float64]
     nlay: NDArray[np.int64]
     coef: NDArray[np.float64]
-    mie_ssa: float
-    g: float
-    kind: int
+    scat: NDArray[np.float64]
+    lobe: NDArray[np.int64]
+    lobe_g: NDArray[np.float64]
+    lobe_tab: NDArray[np.int64]
+    tmu: NDArray[np.float64]
+    tval: NDArray[np.float64]
+    tcdf: NDArray[np.float64]
     albedo: NDArray[np.float64]
     esun: NDArray[np.float64]
     sun_angular_radius: float
+    field: tracking.PackedField
+    field_exact: tracking.PackedField
+    fs: NDArray[np.float64]
+    fss: NDArray[np.float64]
+    ddis: float = 0.0
+    ddis_lobe: int = 0
 
     def subset(self, index: NDArray[np.int64]) -> Medium:
         """The same medium at a subset of its wavelengths."""
-        return Medium(self.bottom_radius, self.top_radius, self.edges, self.layers, self.nlay,
-                      np.ascontiguousarray(self.coef[index]), self.mie_ssa, self.g, self.kind,
-                      np.ascontiguousarray(self.albedo[index]), np.ascontiguousarray(self.esun[index]),
-                      self.sun_angular_radius)
+        def c(a):
+            return np.ascontiguousarray(a)
+
+        return dataclasses.replace(self, coef=c(self.coef[index]), scat=c(self.scat[index]),
+                                   tval=c(self.tval[:, index]), tcdf=c(self.tcdf[:, index]),
+                                   albedo=c(self.albedo[index]), esun=c(self.esun[index]), fs=c(self.fs[index]),
+                                   fss=c(self.fss[index]))
+
+    @property
+    def has_field(self) -> bool:
+        return self.field.present
+
+
+def _shell_profiles(atmosphere: AtmosphereParameters) -> list:
+    """Density profiles of the shell components in the kernels' order (Rayleigh, aerosol, ozone, others)."""
+    comps = atmosphere.particle_components
+    return [atmosphere.rayleigh_density, comps[0].density, atmosphere.ozone_density, *(c.density for c in comps[1:])]
 
 
 def quadrature_edges(atmosphere: AtmosphereParameters) -> NDArray[np.float64]:
     """Radii [m] of the quadrature shells: layer boundaries, zeros of linear layers, and two scale heights apart
-    for each exponential layer (up to 12 scale heights), strictly inside the atmosphere.
+    for each exponential layer (up to 12 scale heights), strictly inside the atmosphere, for every shell
+    component (so a cloud layer's base and top are shell boundaries and its constant density is integrated
+    exactly).
 
     4-point Gauss-Legendre over a piece spanning two scale heights of ``exp`` integrates it to a relative error
     of ``2^9 (4!)^4 / (9 (8!)^3) ~ 3e-7`` (Abramowitz & Stegun 25.4.30); the tests check columns against
     adaptive quadrature."""
     top = atmosphere.thickness
     alts: list[float] = []
-    for prof in (atmosphere.rayleigh_density, atmosphere.mie_density, atmosphere.ozone_density):
+    for prof in _shell_profiles(atmosphere):
         start = 0.0
         for k, lay in enumerate(prof.layers):
             last = k == len(prof.layers) - 1
@@ -120,28 +162,94 @@ def quadrature_edges(atmosphere: AtmosphereParameters) -> NDArray[np.float64]:
     return atmosphere.bottom_radius + a
 
 
-def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.float64]) -> Medium:
-    """Pack ``atmosphere`` for the kernels at ``wavelengths`` [nm] (the aerosol phase function is the
-    atmosphere's ``mie_phase_function`` with ``mie_phase_g``)."""
+def _lobe_of(component: Any, wavelengths: NDArray[np.float64], tables: list) -> tuple[int, float, int]:
+    """(lobe code, g, table index) of a particle component; a tabulated phase is appended to ``tables``."""
+    analytic = component.analytic_phase
+    if analytic is not None:
+        code = kernels.LOBE_HENYEY_GREENSTEIN if aerosol_phase_kind(analytic.kind) == 1 else \
+            kernels.LOBE_CORNETTE_SHANKS
+        return code, float(analytic.g), -1
+    tables.append(component.phase_table(wavelengths))
+    return kernels.LOBE_TABLE, 0.0, len(tables) - 1
+
+
+def _stack_tables(tables: list, n_wl: int) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Phase tables on one ascending-mu grid (the union of their nodes, on which each interpolant is unchanged)."""
+    if not tables:
+        return np.array([-1.0, 1.0]), np.zeros((1, n_wl, 2)), np.zeros((1, n_wl, 2))
+    angles = np.unique(np.concatenate([t.angles for t in tables]))
+    same = [t if np.array_equal(t.angles, angles) else t.on_angles(angles) for t in tables]
+    arrs = [t.numba_arrays() for t in same]
+    return (np.ascontiguousarray(arrs[0].mu), np.ascontiguousarray(np.stack([a.values for a in arrs])),
+            np.ascontiguousarray(np.stack([a.cdf for a in arrs])))
+
+
+def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.float64], clouds: Any = None,
+                   block: Any = None) -> Medium:
+    """Pack ``atmosphere`` (and a :class:`~skyscatter.atmosphere.clouds.CloudField` ``clouds``) for the kernels at
+    ``wavelengths`` [nm]. ``block``: the field's majorant block edge in voxels (default
+    :data:`.tracking.DEFAULT_BLOCK`)."""
+    from ..atmosphere.clouds import REFERENCE_WAVELENGTH, CloudField
+
     if not isinstance(atmosphere, AtmosphereParameters):
         raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(atmosphere).__name__}")
+    if clouds is not None and not isinstance(clouds, CloudField):
+        raise InvalidParameterError(f"clouds must be a CloudField or None; got {type(clouds).__name__}")
     atmosphere.check_wavelengths(wavelengths)
-    profiles = (atmosphere.rayleigh_density, atmosphere.mie_density, atmosphere.ozone_density)
+    wl = np.asarray(wavelengths, dtype=float)
+    comps = atmosphere.particle_components
+    profiles = _shell_profiles(atmosphere)
     arrs = [pr.as_array() for pr in profiles]
     nmax = max(a.shape[0] for a in arrs)
-    layers = np.zeros((3, nmax, 5))
+    layers = np.zeros((len(arrs), nmax, 5))
     for c, a in enumerate(arrs):
         layers[c, : a.shape[0]] = a
-    coef = np.stack([atmosphere.rayleigh_scattering_at(wavelengths), atmosphere.mie_extinction_at(wavelengths),
-                     atmosphere.ozone_absorption_at(wavelengths)], axis=-1)
+    rayleigh = atmosphere.rayleigh_scattering_at(wl)
+    ozone = atmosphere.ozone_absorption_at(wl)
+    zero = np.zeros_like(wl)
+    coef = [rayleigh, atmosphere.mie_extinction_at(wl), ozone]
+    scat = [rayleigh, atmosphere.mie_scattering_at(wl), zero]
+    tables: list = []
+    lobes = [(kernels.LOBE_RAYLEIGH, 0.0, -1), _lobe_of(comps[0], wl, tables), (kernels.LOBE_NONE, 0.0, -1)]
+    for comp in comps[1:]:
+        coef.append(comp.extinction_at(wl))
+        scat.append(comp.scattering_at(wl))
+        lobes.append(_lobe_of(comp, wl, tables))
+    rb = atmosphere.bottom_radius
+    if clouds is not None:
+        ref = float(clouds.particles.extinction_at(np.array([REFERENCE_WAVELENGTH]))[0])
+        if not ref > 0.0:
+            raise InvalidParameterError("the cloud field's particles have no extinction at 550 nm")
+        fs = clouds.particles.extinction_at(wl) / ref
+        fss = clouds.particles.scattering_at(wl) / ref
+        lobes.append(_lobe_of(clouds.particles, wl, tables))
+        if clouds.top > atmosphere.thickness:
+            raise InvalidParameterError(
+                f"the cloud field's top ({clouds.top:g} m) is above the top of the atmosphere "
+                f"({atmosphere.thickness:g} m)")
+        geo = (clouds.extinction, clouds.size, clouds.origin, clouds.base, clouds.top, clouds.periodic, rb)
+        field = tracking.pack_grid(*geo, block=block)
+        field_exact = tracking.pack_grid(*geo, exact=True)
+    else:
+        fs = np.zeros_like(wl)
+        fss = np.zeros_like(wl)
+        lobes.append((kernels.LOBE_NONE, 0.0, -1))
+        field = field_exact = tracking.empty_field()
+    tmu, tval, tcdf = _stack_tables(tables, wl.size)
+    cloudy = clouds is not None or len(comps) > 1
+    # the cloud's lobe for directional sampling: the field's, else the last further particle component's
+    ddis_lobe = len(lobes) - 1 if clouds is not None else (len(lobes) - 2 if len(comps) > 1 else 0)
     return Medium(
-        atmosphere.bottom_radius, atmosphere.top_radius, quadrature_edges(atmosphere), layers,
-        np.array([a.shape[0] for a in arrs], dtype=np.int64), np.ascontiguousarray(coef, dtype=float),
-        atmosphere.mie_single_scattering_albedo, atmosphere.mie_phase_g,
-        aerosol_phase_kind(atmosphere.mie_phase_function),
-        np.ascontiguousarray(atmosphere.ground_albedo_at(wavelengths), dtype=float),
-        np.ascontiguousarray(atmosphere.solar_irradiance_at(wavelengths), dtype=float),
-        atmosphere.sun_angular_radius,
+        rb, atmosphere.top_radius, quadrature_edges(atmosphere), layers,
+        np.array([a.shape[0] for a in arrs], dtype=np.int64),
+        np.ascontiguousarray(np.stack(coef, axis=-1), dtype=float),
+        np.ascontiguousarray(np.stack(scat, axis=-1), dtype=float),
+        np.array([lo[0] for lo in lobes], dtype=np.int64), np.array([lo[1] for lo in lobes]),
+        np.array([lo[2] for lo in lobes], dtype=np.int64), tmu, tval, tcdf,
+        np.ascontiguousarray(atmosphere.ground_albedo_at(wl), dtype=float),
+        np.ascontiguousarray(atmosphere.solar_irradiance_at(wl), dtype=float),
+        atmosphere.sun_angular_radius, field, field_exact, np.ascontiguousarray(fs, dtype=float),
+        np.ascontiguousarray(fss, dtype=float), DDIS_PROBABILITY if cloudy else 0.0, ddis_lobe,
     )
 
 
@@ -206,18 +314,24 @@ def wavelength_groups(n: int, group_size: int = DEFAULT_GROUP_SIZE) -> list[NDAr
 # --------------------------------------------------------------------------------------------- tasks
 
 
-def _run_task(medium: Medium, r_obs: float, sun: NDArray[np.float64], dirs: NDArray[np.float64],
-              dir_index: NDArray[np.int64], group: int, wl_index: NDArray[np.int64], batch0: int, n_batches: int,
-              batch_size: int, seed: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """One task: per-batch sums and sums of squares, each (n_dirs, n_group_wavelengths, n_batches)."""
+def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float64], dirs: NDArray[np.float64],
+              mode: NDArray[np.int64], sun: NDArray[np.float64], dir_index: NDArray[np.int64], group: int,
+              wl_index: NDArray[np.int64], batch0: int, n_batches: int, batch_size: int, seed: int
+              ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """One task: per-batch sums and sums of squares, each (n_entries, n_group_wavelengths, n_batches), and the
+    vertices per batch (n_entries, n_batches)."""
     m = medium.subset(wl_index)
     n = dirs.shape[0]
     sums = np.zeros((n, wl_index.size, n_batches))
     sumsq = np.zeros_like(sums)
-    kernels.trace_block(r_obs, dirs, dir_index, sun, math.cos(m.sun_angular_radius), m.bottom_radius,
-                        m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.mie_ssa, m.g, m.kind, m.albedo, m.esun,
-                        seed, group, batch0, n_batches, batch_size, sums, sumsq)
-    return sums, sumsq
+    verts = np.zeros((n, n_batches))
+    f = m.field
+    kernels.trace_block(origins, jitter, dirs, mode, dir_index, sun, math.cos(m.sun_angular_radius),
+                        m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.scat, m.lobe, m.lobe_g,
+                        m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe,
+                        f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, seed, group, batch0, n_batches, batch_size, sums,
+                        sumsq, verts)
+    return sums, sumsq, verts
 
 
 @dataclass(frozen=True)
@@ -230,19 +344,37 @@ class TaskSpec:
     n_batches: int
 
 
-def plan_tasks(n_dirs: int, n_groups: int, n_batches: int, batch_size: int, *,
-               directions_per_task: int | None = None, batches_per_task: int | None = None) -> list[TaskSpec]:
-    """Cut a job into tasks (direction blocks x wavelength groups x runs of batches); any cut gives the same result."""
-    dpt = directions_per_task or min(n_dirs, 32)
+def _task_sizes(n_dirs: int, n_batches: int, batch_size: int, directions_per_task: int | None,
+                batches_per_task: int | None) -> tuple[int, int]:
+    dpt = int(directions_per_task or min(n_dirs, 32))
     if batches_per_task is None:
         batches_per_task = max(1, 32768 // (batch_size * dpt))
-    bpt = max(1, min(int(batches_per_task), n_batches))
-    out = []
+    return dpt, max(1, min(int(batches_per_task), n_batches))
+
+
+def iter_tasks(n_dirs: int, n_groups: int, n_batches: int, batch_size: int, *,
+               directions_per_task: int | None = None, batches_per_task: int | None = None) -> Iterator[TaskSpec]:
+    """The tasks of a job (direction blocks x wavelength groups x runs of batches), generated one at a time, so
+    that a job of any size is planned in constant memory; any cut gives the same result."""
+    dpt, bpt = _task_sizes(n_dirs, n_batches, batch_size, directions_per_task, batches_per_task)
     for d0 in range(0, n_dirs, dpt):
         for g in range(n_groups):
             for b0 in range(0, n_batches, bpt):
-                out.append(TaskSpec(slice(d0, min(n_dirs, d0 + dpt)), g, b0, min(bpt, n_batches - b0)))
-    return out
+                yield TaskSpec(slice(d0, min(n_dirs, d0 + dpt)), g, b0, min(bpt, n_batches - b0))
+
+
+def count_tasks(n_dirs: int, n_groups: int, n_batches: int, batch_size: int, *,
+                directions_per_task: int | None = None, batches_per_task: int | None = None) -> int:
+    """Number of tasks :func:`iter_tasks` yields (without generating them)."""
+    dpt, bpt = _task_sizes(n_dirs, n_batches, batch_size, directions_per_task, batches_per_task)
+    return -(-n_dirs // dpt) * n_groups * -(-n_batches // bpt)
+
+
+def plan_tasks(n_dirs: int, n_groups: int, n_batches: int, batch_size: int, *,
+               directions_per_task: int | None = None, batches_per_task: int | None = None) -> list[TaskSpec]:
+    """Every task of a job as a list (:func:`iter_tasks`; for small jobs)."""
+    return list(iter_tasks(n_dirs, n_groups, n_batches, batch_size, directions_per_task=directions_per_task,
+                           batches_per_task=batches_per_task))
 
 
 def _resolve_scheduler(scheduler: Any) -> tuple[str, Any]:
@@ -252,22 +384,19 @@ def _resolve_scheduler(scheduler: Any) -> tuple[str, Any]:
     if scheduler in ("synchronous", "sync"):
         return "local", "sync"
     if isinstance(scheduler, str):
-        try:
-            from distributed import Client
-        except ImportError:  # pragma: no cover
-            raise InvalidParameterError("a scheduler address needs the 'distributed' package") from None
         if "://" not in scheduler and ":" not in scheduler:
             raise InvalidParameterError(
                 "scheduler must be None (threads), 'synchronous', a dask.distributed Client or a scheduler address "
                 f"such as 'tcp://host:8786'; got {scheduler!r}"
             )
+        Client = _distributed().Client  # noqa: N806
         try:
             return "distributed", Client(scheduler, timeout="10s")
         except (OSError, ValueError, TimeoutError) as exc:
             raise InvalidParameterError(f"cannot connect to the dask scheduler at {scheduler!r}: {exc}") from None
     try:
         from distributed import Client
-    except ImportError:  # pragma: no cover
+    except ImportError:  # no distributed: a Client cannot have been made
         Client = None  # noqa: N806
     if Client is not None and isinstance(scheduler, Client):
         return "distributed", scheduler
@@ -277,69 +406,116 @@ def _resolve_scheduler(scheduler: Any) -> tuple[str, Any]:
     )
 
 
-def execute(fn: Callable[..., Any], calls: list[tuple], scheduler: Any = None,
-            progress: Callable[[int, int], None] | None = None, on_result: Callable[[int, Any], None] | None = None
-            ) -> list[Any]:
-    """Run ``fn(*args)`` for each tuple of ``calls`` as dask tasks; return the results in order.
+def _distributed():
+    """The ``distributed`` package, or a one-line error naming the extra that installs it."""
+    try:
+        import distributed
+    except ImportError:
+        raise MissingDependencyError(
+            "a dask.distributed scheduler address needs the 'distributed' package: pip install "
+            "'skyscatter[montecarlo]' (or pip install distributed)") from None
+    return distributed
 
-    ``progress(done, total)`` is called as tasks finish; ``on_result(i, result)`` as each result arrives (in
-    completion order on a cluster, in order otherwise).
+
+def check_scheduler(scheduler: Any) -> None:
+    """Refuse a scheduler :func:`sky_radiance` cannot use, before any work (an address is checked for its form
+    and for the ``distributed`` package, not connected to)."""
+    if scheduler is None or scheduler in ("threads", "threaded", "synchronous", "sync"):
+        return
+    if isinstance(scheduler, str):
+        if "://" not in scheduler and ":" not in scheduler:
+            _resolve_scheduler(scheduler)  # raises with the allowed forms
+        _distributed()
+        return
+    _resolve_scheduler(scheduler)
+
+
+def run_tasks(fn: Callable[..., Any], calls: Iterable[tuple], scheduler: Any = None, *,
+              on_result: Callable[[int, Any], None], progress: Callable[[int, int], None] | None = None,
+              total: int | None = None) -> int:
+    """Run ``fn(*args)`` for each tuple that ``calls`` yields as dask tasks; ``on_result(i, result)`` receives each
+    result (in order on the local schedulers, in completion order on a cluster). Returns the number of tasks.
+
+    ``calls`` is consumed lazily, a window of tasks at a time (a few per worker thread), so neither the plan nor
+    the results of a job need to fit in memory. ``progress(done, total)`` is called as windows finish. On the
+    threaded scheduler the tasks run in a pool owned by this call: an interrupt (Ctrl-C, SIGTERM in the command
+    line) cancels the queued tasks and returns at once; the running ones (a fraction of a second each) finish
+    in the background.
     """
     import dask
 
+    from ..runtime import num_threads
+
     kind, sched = _resolve_scheduler(scheduler)
-    total = len(calls)
+    it = iter(calls)
+    done = 0
     if kind == "distributed":
-        from distributed import as_completed
-
         client = sched
-        futures = [client.submit(fn, *args, pure=False) for args in calls]
-        index = {f.key: i for i, f in enumerate(futures)}
-        results: list[Any] = [None] * total
-        done = 0
-        for fut in as_completed(futures):
-            i = index[fut.key]
-            results[i] = fut.result()
-            done += 1
-            if on_result is not None:
-                on_result(i, results[i])
-            if progress is not None:
-                progress(done, total)
-        if isinstance(scheduler, str):
-            client.close()
-        return results
-    delayed = [dask.delayed(fn, pure=False)(*args) for args in calls]
-    if progress is None and on_result is None:
-        return list(dask.compute(*delayed, scheduler=sched))
-    # run in chunks so that progress and partial results arrive while the job runs
-    from dask.callbacks import Callback
+        ac = _distributed().as_completed()
+        in_flight: dict[Any, tuple[int, Any]] = {}  # key -> (task number, future)
+        submitted = 0
 
-    counter = {"n": 0}
-    keys = {d.key for d in delayed}
+        def submit(n: int) -> None:
+            nonlocal submitted
+            for args in islice(it, n):
+                fut = client.submit(fn, *args, pure=False)
+                in_flight[fut.key] = (submitted, fut)
+                submitted += 1
+                ac.add(fut)
 
-    class _Progress(Callback):
-        def _posttask(self, key, result, dsk, state, worker_id):  # noqa: D401
-            if key in keys:
-                counter["n"] += 1
+        try:
+            submit(max(4, 4 * sum(client.nthreads().values())))
+            for fut in ac:
+                i, _ = in_flight.pop(fut.key)
+                on_result(i, fut.result())
+                done += 1
                 if progress is not None:
-                    progress(counter["n"], total)
+                    progress(done, total or done)
+                submit(1)
+        except BaseException:
+            client.cancel([f for _, f in in_flight.values()])
+            raise
+        finally:
+            if isinstance(scheduler, str):
+                client.close()
+        return done
+    workers = num_threads() if sched == "threads" else 1
+    window = 8 * workers
+    pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="skyscatter-mc") if sched == "threads" else None
+    extra = {"pool": pool} if pool is not None else {}
+    finished = False
+    try:
+        while True:
+            chunk = list(islice(it, window))
+            if not chunk:
+                break
+            results = dask.compute(*[dask.delayed(fn, pure=False)(*a) for a in chunk], scheduler=sched, **extra)
+            for r in results:
+                on_result(done, r)
+                done += 1
+            if progress is not None:
+                progress(done, total or done)
+        finished = True
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=finished, cancel_futures=not finished)
+    return done
 
-    out: list[Any] = []
-    chunk = max(1, 4 * (dask.config.get("num_workers", None) or _cpu_count()))
-    with _Progress():
-        for s in range(0, total, chunk):
-            res = dask.compute(*delayed[s: s + chunk], scheduler=sched)
-            for k, r in enumerate(res):
-                if on_result is not None:
-                    on_result(s + k, r)
-            out.extend(res)
+
+def execute(fn: Callable[..., Any], calls: list[tuple], scheduler: Any = None,
+            progress: Callable[[int, int], None] | None = None, on_result: Callable[[int, Any], None] | None = None
+            ) -> list[Any]:
+    """Run ``fn(*args)`` for each tuple of ``calls`` as dask tasks; return the results in order
+    (:func:`run_tasks` collecting them; for small jobs)."""
+    out: list[Any] = [None] * len(calls)
+
+    def keep(i: int, r: Any) -> None:
+        out[i] = r
+        if on_result is not None:
+            on_result(i, r)
+
+    run_tasks(fn, calls, scheduler, on_result=keep, progress=progress, total=len(calls))
     return out
-
-
-def _cpu_count() -> int:
-    import os
-
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 # --------------------------------------------------------------------------------------------- public API
@@ -358,18 +534,73 @@ def _sun_vector(sun_zenith: float, sun_azimuth: float) -> NDArray[np.float64]:
     return np.ascontiguousarray(direction_from_angles(zen, azi), dtype=float)
 
 
+def _check_clouds(clouds: Any) -> Any:
+    from ..atmosphere.clouds import CloudField
+
+    if clouds is not None and not isinstance(clouds, CloudField):
+        raise InvalidParameterError(f"clouds must be a CloudField or None; got {type(clouds).__name__}")
+    return clouds
+
+
+def trace(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float64], dirs: NDArray[np.float64],
+          mode: NDArray[np.int64], sun: NDArray[np.float64], n_wavelengths: int, *, samples: int, seed: int,
+          scheduler: Any = None, group_size: int = DEFAULT_GROUP_SIZE, directions_per_task: int | None = None,
+          batches_per_task: int | None = None, progress: Callable[[int, int], None] | None = None
+          ) -> tuple[NDArray[np.float64], NDArray[np.float64], int, float]:
+    """Run the kernels for N entries (origin, footprint, direction, mode; ``kernels.trace_block``) on dask.
+
+    Returns ``(mean, stderr, samples_used, mean_vertices)``: per entry and wavelength the mean per-path estimate
+    and its standard error, the paths per entry and the mean number of scattering and ground vertices per path.
+    """
+    n_samples = _check_samples(samples)
+    seed = int(seed)
+    if seed < 0:
+        raise InvalidParameterError(f"seed must be >= 0; got {seed}")
+    check_scheduler(scheduler)
+    batch_size, n_batches = batch_layout(n_samples)
+    groups = wavelength_groups(n_wavelengths, group_size)
+    n = dirs.shape[0]
+    sizes = dict(directions_per_task=directions_per_task, batches_per_task=batches_per_task)
+    total = count_tasks(n, len(groups), n_batches, batch_size, **sizes)
+    index = np.arange(n, dtype=np.int64)
+    fold = _BatchFold(n, n_wavelengths, groups)
+    specs: dict[int, TaskSpec] = {}
+    vertices = [0.0]
+
+    def c(a, sl):
+        return np.ascontiguousarray(a[sl])
+
+    def calls() -> Iterator[tuple]:
+        for k, sp in enumerate(iter_tasks(n, len(groups), n_batches, batch_size, **sizes)):
+            specs[k] = sp
+            yield (medium, c(origins, sp.dir_slice), c(jitter, sp.dir_slice), c(dirs, sp.dir_slice),
+                   c(mode, sp.dir_slice), sun, index[sp.dir_slice], sp.group, groups[sp.group], sp.batch0,
+                   sp.n_batches, batch_size, seed)
+
+    def add(k: int, result: tuple) -> None:
+        a, b, v = result
+        fold.add(specs.pop(k), a, b)
+        vertices[0] += float(np.sum(v))  # whole numbers: exact in any order
+
+    run_tasks(_run_task, calls(), scheduler, on_result=add, progress=progress, total=total)
+    used = batch_size * n_batches
+    mean, stderr = reduce_batches(fold.sums, fold.sumsq, used)
+    return mean, stderr, used, vertices[0] / (n * len(groups) * used)
+
+
 def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavelengths: ArrayLike, *,
                  sun_zenith: float, sun_azimuth: float = 0.0, altitude: float = 0.0, samples: int = 4096,
                  seed: int = 0, scheduler: Any = None, group_size: int = DEFAULT_GROUP_SIZE,
                  directions_per_task: int | None = None, batches_per_task: int | None = None,
-                 progress: Callable[[int, int], None] | None = None) -> MonteCarloResult:
+                 progress: Callable[[int, int], None] | None = None, clouds: Any = None,
+                 majorant_block: Any = None) -> MonteCarloResult:
     """Monte Carlo spectral sky radiance (all orders of scattering, without the directly transmitted sun).
 
     Parameters
     ----------
     atmosphere : AtmosphereParameters
-        The medium (spherical shells, ground albedo, solar spectrum and disc radius, the aerosol phase function
-        ``mie_phase_function`` with asymmetry ``mie_phase_g``).
+        The medium (spherical shells, ground albedo, solar spectrum and disc radius, the aerosol and any further
+        particle components such as cloud layers, each with its analytic or tabulated phase function).
     directions : array_like, shape (..., 3)
         View directions (ENU at the observer; need not be unit length, must be finite and non-zero).
     wavelengths : array_like, shape (n,)
@@ -377,7 +608,8 @@ def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavele
     sun_zenith, sun_azimuth : float
         Sun position at the observer [rad] (azimuth from north towards east); any zenith in [0, pi].
     altitude : float
-        Observer altitude above the ground [m], >= 0 (above the top of the atmosphere is allowed).
+        Observer altitude above the ground [m], >= 0 (above the top of the atmosphere is allowed): below, inside or
+        above the clouds.
     samples : int
         Paths per direction (rounded up to whole batches of at most 512; the result says how many ran).
     seed : int
@@ -391,60 +623,95 @@ def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavele
         Task sizes (do not change the result).
     progress : callable(done, total), optional
         Called as tasks finish.
+    clouds : CloudField, optional
+        A 3D cloud field (:class:`skyscatter.atmosphere.clouds.CloudField`) in the atmosphere; the observer is
+        at the origin of its horizontal coordinates.
+    majorant_block : int or (int, int, int), optional
+        Block edge of the field's majorant grid in voxels (default 8; changes the random numbers, not the
+        expectation).
     """
     t_start = time.perf_counter()
     dirs = check_directions(directions)
     wl = check_wavelengths(wavelengths)
-    n_samples = _check_samples(samples)
+    _check_samples(samples)
     sun = _sun_vector(sun_zenith, sun_azimuth)
     r_obs = _observer_radius(atmosphere, altitude)
-    seed = int(seed)
-    if seed < 0:
-        raise InvalidParameterError(f"seed must be >= 0; got {seed}")
-    medium = prepare_medium(atmosphere, wl)
-    batch_size, n_batches = batch_layout(n_samples)
-    groups = wavelength_groups(wl.size, group_size)
-    specs = plan_tasks(dirs.shape[0], len(groups), n_batches, batch_size,
-                       directions_per_task=directions_per_task, batches_per_task=batches_per_task)
-    index = np.arange(dirs.shape[0], dtype=np.int64)
-    calls = [(medium, r_obs, sun, dirs[s.dir_slice], index[s.dir_slice], s.group, groups[s.group], s.batch0,
-              s.n_batches, batch_size, seed) for s in specs]
-    results = execute(_run_task, calls, scheduler, progress)
-    sums = np.zeros((dirs.shape[0], wl.size, n_batches))
-    sumsq = np.zeros_like(sums)
-    for s, (a, b) in zip(specs, results, strict=True):
-        gi = groups[s.group]
-        sums[s.dir_slice, gi[0]: gi[-1] + 1, s.batch0: s.batch0 + s.n_batches] = a
-        sumsq[s.dir_slice, gi[0]: gi[-1] + 1, s.batch0: s.batch0 + s.n_batches] = b
-    radiance, stderr = reduce_batches(sums, sumsq, batch_size * n_batches)
-    return MonteCarloResult(radiance, stderr, batch_size * n_batches, time.perf_counter() - t_start, wl, dirs)
+    medium = prepare_medium(atmosphere, wl, _check_clouds(clouds), majorant_block)
+    n = dirs.shape[0]
+    origins = np.tile(np.array([0.0, 0.0, r_obs]), (n, 1))
+    mean, stderr, used, verts = trace(medium, origins, np.zeros((n, 2)), dirs, np.zeros(n, dtype=np.int64), sun,
+                                      wl.size, samples=samples, seed=seed, scheduler=scheduler,
+                                      group_size=group_size, directions_per_task=directions_per_task,
+                                      batches_per_task=batches_per_task, progress=progress)
+    return MonteCarloResult(mean, stderr, used, time.perf_counter() - t_start, wl, dirs, verts)
+
+
+class _BatchFold:
+    """Adds per-batch sums into running totals in one fixed order: for every direction and wavelength, batch 0,
+    then 1, 2, ... (tasks arriving out of order wait for their turn). The result is therefore the same bits
+    whatever the task sizes, the scheduler or the order of completion, in memory independent of the samples."""
+
+    def __init__(self, n_dirs: int, n_wl: int, groups: list[NDArray[np.int64]]) -> None:
+        self.sums = np.zeros((n_dirs, n_wl))
+        self.sumsq = np.zeros((n_dirs, n_wl))
+        self.groups = groups
+        self.next: dict[tuple[int, int], int] = {}
+        self.waiting: dict[tuple[int, int], dict[int, tuple]] = {}
+
+    def add(self, spec: TaskSpec, sums: NDArray[np.float64], sumsq: NDArray[np.float64]) -> None:
+        key = (spec.dir_slice.start, spec.group)
+        waiting = self.waiting.setdefault(key, {})
+        waiting[spec.batch0] = (spec, sums, sumsq)
+        nxt = self.next.get(key, 0)
+        while nxt in waiting:
+            sp, a, b = waiting.pop(nxt)
+            gi = self.groups[sp.group]
+            cols = slice(int(gi[0]), int(gi[-1]) + 1)
+            tot, tot2 = self.sums[sp.dir_slice, cols], self.sumsq[sp.dir_slice, cols]
+            for k in range(sp.n_batches):  # one batch at a time: the order of the additions is fixed
+                tot += a[..., k]
+                tot2 += b[..., k]
+            nxt += sp.n_batches
+        self.next[key] = nxt
 
 
 def reduce_batches(sums: NDArray[np.float64], sumsq: NDArray[np.float64], n: int
                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Mean and standard error from per-batch sums (last axis), added in one fixed order."""
-    s = np.sum(sums, axis=-1)
-    s2 = np.sum(sumsq, axis=-1)
-    mean = s / n
-    var = np.maximum(s2 / n - mean * mean, 0.0) * (n / max(n - 1, 1))
+    """Mean and standard error from the sums and sums of squares of ``n`` per-path estimates."""
+    mean = sums / n
+    var = np.maximum(sumsq / n - mean * mean, 0.0) * (n / max(n - 1, 1))
     return mean, np.sqrt(var / n)
 
 
+def direct_transmittance(medium: Medium, origins: NDArray[np.float64], sun: NDArray[np.float64],
+                         n_radial: int = 8, n_angular: int = 16) -> NDArray[np.float64]:
+    """Mean transmittance over the solar disc from each origin (N, 3) [planet frame, m], (N, n_wl); exact through
+    a cloud field (deterministic)."""
+    m = medium
+    f = m.field_exact
+    out = np.zeros((origins.shape[0], m.coef.shape[0]))
+    for k in range(origins.shape[0]):
+        kernels.disc_transmittance(np.ascontiguousarray(origins[k]), sun, m.sun_angular_radius, m.bottom_radius,
+                                   m.top_radius, m.edges, m.layers, m.nlay, m.coef, f.vf, f.vi, f.rho, f.bmax,
+                                   f.bmin, f.xe, f.ye, f.re, m.fs, int(n_radial), int(n_angular), out[k])
+    return out
+
+
 def solar_disc_radiance(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, *, sun_zenith: float,
-                        altitude: float = 0.0, n_radial: int = 8, n_angular: int = 16) -> NDArray[np.float64]:
+                        altitude: float = 0.0, n_radial: int = 8, n_angular: int = 16,
+                        clouds: Any = None, sun_azimuth: float = 0.0) -> NDArray[np.float64]:
     """Directly transmitted solar radiance, averaged over the solar disc [W m^-2 sr^-1 nm^-1], shape (n,).
 
     ``E_sun(lambda) / Omega_sun * mean_disc T(lambda)``: the transmittance ``T`` of the straight path from the
     observer to each point of a uniform disc of the parameters' angular radius (no limb darkening, as in the
     parameters), by deterministic quadrature over the disc (``n_radial`` x ``n_angular`` points equal in solid
-    angle). Points below the planet's limb contribute 0. This is what :func:`sky_radiance` leaves out.
+    angle), through the cloud field ``clouds`` exactly (voxel by voxel; ``sun_azimuth`` [rad] then matters). Points
+    below the planet's limb contribute 0. This is what :func:`sky_radiance` leaves out.
     """
     wl = check_wavelengths(wavelengths)
-    sun = _sun_vector(sun_zenith, 0.0)
+    sun = _sun_vector(sun_zenith, sun_azimuth)
     r_obs = _observer_radius(atmosphere, altitude)
-    m = prepare_medium(atmosphere, wl)
-    out = np.zeros(wl.size)
-    kernels.disc_transmittance(r_obs, sun, m.sun_angular_radius, m.bottom_radius, m.top_radius, m.edges,
-                               m.layers, m.nlay, m.coef, int(n_radial), int(n_angular), out)
+    m = prepare_medium(atmosphere, wl, _check_clouds(clouds))
+    out = direct_transmittance(m, np.array([[0.0, 0.0, r_obs]]), sun, n_radial, n_angular)[0]
     omega = 2.0 * math.pi * (1.0 - math.cos(m.sun_angular_radius))
     return m.esun / omega * out

@@ -5,82 +5,116 @@ frame of the observer is the global frame (x east, y north, z up). The atmospher
 ``bottom_radius <= r <= top_radius``; the ground is the sphere ``r = bottom_radius``. A straight ray
 ``p + t d`` meets the sphere of radius ``R`` where ``t = -b -+ sqrt(b^2 - (r^2 - R^2))``, ``b = p . d``.
 
-Optical depth. The medium is three components (Rayleigh, aerosol, ozone) whose densities are the
-:class:`~skyscatter.atmosphere.DensityProfile` layers ``max(0, a exp(s h) + l h + c)``. Along a ray the
-column ``int rho(h(t)) dt`` is integrated piecewise: the ray is cut where it crosses the spheres of a set of
-"quadrature shells" (every layer boundary, every zero of a linear layer and altitudes one scale height apart for
-each exponential layer, two scale heights apart), and each piece is integrated by 4-point Gauss-Legendre
-quadrature. Inside a piece the integrand is analytic and varies by at most a factor ``e^2`` in the vertical; the
-relative error of a column is below 3e-7 for steep rays and below 2e-6 for grazing ones (where the integrand in
-``t`` is Gaussian-like; checked in the tests against adaptive quadrature), three orders of magnitude below the
-Monte Carlo error the reference is run at. It is deterministic, so shadow rays add no
-variance (ratio tracking would, exponentially in the optical depth of the sun path at low sun). The columns are
-per component and wavelength independent; the optical depth at any wavelength is ``sum_c k_c(lambda) col_c``.
+Medium. Two kinds of matter:
 
-Free paths are sampled by inverting this optical depth (``tau(t) = -ln(1 - xi)``, Newton with bisection safeguard
-inside the piece where the target is crossed), so the collision density ``sigma_t(x) T(x)`` is known exactly for
-every wavelength, which spectral MIS needs.
+* *shell components*, whose density depends on the altitude only: Rayleigh, the aerosol and ozone (indices 0,
+  1, 2, as in the Bruneton tables) and any further particle components of the medium (cloud layers, more
+  aerosol layers; indices 3 ...), each a :class:`~skyscatter.atmosphere.DensityProfile` of layers
+  ``max(0, a exp(s h) + l h + c)`` with an extinction and a scattering coefficient per wavelength at relative
+  density 1 and a phase function (Rayleigh, Cornette-Shanks, Henyey-Greenstein or a table per wavelength);
+* at most one *cloud field*, a 3D voxel grid (:mod:`.tracking`), with its own spectral scales and phase
+  function.
 
-Estimator (backward paths from the observer; Veach 1997, PhD thesis, Stanford, Ch. 8-9):
+Optical depth of the shells. Along a ray the column ``int rho_c(h(t)) dt`` of each component is integrated
+piecewise: the ray is cut where it crosses the spheres of a set of "quadrature shells" (every layer boundary,
+every zero of a linear layer and altitudes one scale height apart for each exponential layer, two scale heights
+apart), and each piece is integrated by 4-point Gauss-Legendre quadrature. Inside a piece the integrand is
+analytic and varies by at most a factor ``e^2`` in the vertical (it is constant in a cloud layer, whose base
+and top are shell boundaries); the relative error of a column is below 3e-7 for steep rays and below 2e-6 for
+grazing ones (checked in the tests against adaptive quadrature), three orders of magnitude below the Monte Carlo
+error the reference is run at. It is deterministic, so shadow rays through the shells add no variance. The
+columns are per component and wavelength independent; the optical depth at any wavelength is
+``sum_c k_c(lambda) col_c``. Free paths in the shells are sampled by inverting this optical depth (``tau(t) =
+-ln(1 - xi)``, Newton with bisection safeguard inside the piece where the target is crossed), so the collision
+density ``sigma_t(x) T(x)`` is known exactly for every wavelength, which spectral MIS needs. Through the cloud
+field, free paths are sampled by decomposition and delta tracking against a block majorant grid and shadow rays
+by residual ratio tracking (:mod:`.tracking`); the two are combined by decomposition: the shell free path
+``t_s`` is drawn first, the field is tracked up to ``t_s``, and whichever collides first is the collision.
 
-* forced first collision (Cashwell & Everett 1959): when the view ray leaves the atmosphere without hitting the
-  ground, its first collision is drawn from ``sigma_t T / (1 - T_total)`` on the ray, so no path is wasted on
-  clear sky;
+Estimator (backward paths from the observer; [Veach1997] Ch. 8-9):
+
+* forced first collision ([CashwellEverett1959]): when the view ray leaves the atmosphere without hitting the
+  ground and does not meet the cloud field's box, its first collision is drawn from ``sigma_t T / (1 -
+  T_total)`` on the ray, so no path is wasted on clear sky;
 * next-event estimation to the sun at every medium and ground vertex: a direction uniform over the solar disc
-  (angular radius from the parameters), the exact transmittance to the top of the atmosphere (zero when the
-  planet blocks it), phase function or ``albedo / pi * cos``. The sun is reached only by NEE, so the sky radiance
-  never contains the directly transmitted sun (reported separately, :func:`disc_transmittance`);
-* absorption (aerosol single-scattering albedo, ozone) enters as a weight, never as termination;
-* scattering direction: Rayleigh or aerosol lobe chosen by their scattering coefficients, the cosine drawn by
-  the exact inverse CDFs of :mod:`skyscatter.atmosphere.phase` (Rayleigh; Henyey-Greenstein for both aerosol
-  phase functions: a Cornette-Shanks aerosol is sampled as Henyey-Greenstein of the same ``g``, and its density
-  enters the path weight, i.e. the weight ``cornette_shanks_hg_weight`` in ``[3 / (2 (2 + g^2)), 3 / (2 + g^2)]``),
-  the direction built about the current one by ``direction_about_axis`` (Duff et al. 2017); Lambertian ground:
-  cosine-weighted hemisphere;
-* Russian roulette (Arvo & Kirk 1990) from the second vertex when the largest weight falls below 0.5, survival
-  probability ``w_max / 0.5``; a hard cap of 1000 vertices (never reached in the tests).
+  (angular radius from the parameters), the transmittance to the top of the atmosphere (zero when the planet
+  blocks it; through the field by ratio tracking), phase function or ``albedo / pi * cos``. The sun is reached
+  only by NEE, so the sky radiance never contains the directly transmitted sun (reported separately);
+* absorption (particle albedos, ozone) enters as a weight, never as termination;
+* directional importance sampling towards the sun (the "DDIS" of [BurasMayer2011] Sec. 3.3, here for backward
+  paths), optional: with probability ``ddis`` the new direction is drawn from the cloud's own phase function (the
+  hero's table) centred on the sun, otherwise from the medium's lobes, and every wavelength's direction density
+  is the mixture of the two. Unbiased; measured not to pay under overcast layers (0.6-0.7x the efficiency at
+  equal CPU time, docs/clouds.md), so the driver passes ``ddis = 0`` and the paths are those of plain sampling;
+* scattering direction: the lobe (Rayleigh, each particle component, the cloud field) chosen by the hero's
+  scattering coefficients at the collision point, the cosine drawn by the exact inverse CDFs of
+  :mod:`skyscatter.atmosphere.phase` (Rayleigh; Henyey-Greenstein; a Cornette-Shanks aerosol is sampled as
+  Henyey-Greenstein of the same ``g`` and its density enters the path weight, i.e. the weight
+  ``cornette_shanks_hg_weight`` in ``[3 / (2 (2 + g^2)), 3 / (2 + g^2)]``) or, for a tabulated phase function,
+  the exact inverse CDF of the hero wavelength's table (:mod:`skyscatter.atmosphere.phase_table`: linear in
+  ``cos theta`` between nodes, a closed-form root per segment; its diffraction peak is sampled, never
+  truncated), the direction built about the current one by ``direction_about_axis`` ([Duff2017]);
+  Lambertian ground: cosine-weighted hemisphere;
+* Russian roulette ([ArvoKirk1990]) from the second vertex when the largest weight falls below 0.5, survival
+  probability ``w_max / 0.5``; a hard cap of 100000 vertices (never reached in the tests; a path through a cloud
+  of optical depth 100 scatters some 10^3-10^4 times).
 
-Hero wavelengths (Wilkie et al. 2014, "Hero wavelength spectral sampling", Comput. Graph. Forum 33(4), 123-131,
-doi:10.1111/cgf.12419): one path serves all the wavelengths of its group. The hero (uniformly chosen per path)
+Hero wavelengths ([Wilkie2014]): one path serves all the wavelengths of its group. The hero (uniformly chosen per path)
 drives every decision; each wavelength's estimate is weighted with the balance heuristic over the group, i.e.
 ``F_i(path) / mean_k p_k(path)`` where ``p_k`` is the density the path would have had with wavelength ``k`` as
-hero (one-sample MIS, Veach 1997, Sec. 9.2.4). Plain ratio weights ``F_i / p_hero`` would be unbounded between
-320 and 720 nm (Rayleigh differs by a factor 25); the balance heuristic bounds them by ``n_group * F_i / p_i``.
-The shared cost (geometry, columns of every shadow ray) is paid once per path instead of once per wavelength.
+hero (one-sample MIS, Veach 1997, Sec. 9.2.4). The direction density under hero ``k`` is the mixture of the
+lobes' sampling densities weighted by ``k``'s scattering coefficients, and through the field ``p_k`` includes
+``k``'s probabilities of the null-collision decisions (:mod:`.tracking`). Plain ratio weights ``F_i / p_hero``
+would be unbounded between 320 and 720 nm (Rayleigh differs by a factor 25); the balance heuristic bounds them
+by ``n_group * F_i / p_i``. The shared cost (geometry, columns of every shadow ray) is paid once per path.
+
+Observers. Each entry ``j`` of a block has an origin (planet frame), a direction and a mode: 0 - the radiance
+arriving from ``-dirs[j]`` travelling along ... i.e. seen looking along ``dirs[j]``; 1 - a direction drawn per
+path from the cosine distribution about ``dirs[j]``, each path's estimate multiplied by pi, so that the mean is
+the irradiance on a plane facing ``dirs[j]``. The origin can be jittered per path uniformly over an x-y
+footprint (a pixel of a cloud domain).
 """
 
 from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from ..atmosphere.phase import (
-    aerosol_phase_scalar,
+    cornette_shanks_scalar,
     direction_about_axis,
     henyey_greenstein_inverse_cdf_scalar,
     henyey_greenstein_scalar,
     rayleigh_inverse_cdf_scalar,
     rayleigh_phase_scalar,
 )
+from ..atmosphere.phase_table import phase_table_inverse_cdf, phase_table_values
+from ..jit import helper, inline, kernel
 from .rng import next_uniform, sample_state, stream_key
+from .tracking import field_box_hit, field_density_at, field_free_path, field_transmittance
 
-__all__ = ["column_along", "disc_transmittance", "trace_block"]
+__all__ = ["column_along", "disc_transmittance", "trace_block", "LOBE_NONE", "LOBE_RAYLEIGH",
+           "LOBE_CORNETTE_SHANKS", "LOBE_HENYEY_GREENSTEIN", "LOBE_TABLE"]
 
-_jit = numba.njit(cache=True, nogil=True)
-_jit_inline = numba.njit(cache=True, nogil=True, inline="always")
-# Helpers that never allocate: _nrt=False (why: skyscatter.precomputed.sampling, docs/architecture.md).
-_hjit = numba.njit(cache=True, nogil=True, _nrt=False)
+# Small per-collision helpers with many array arguments are inlined (``inline``): a call passes 7 words per array
+# argument, about what their loops over a dozen wavelengths cost.
 
-# 4-point Gauss-Legendre nodes and weights on [-1, 1] (Abramowitz & Stegun 1964, Table 25.4)
+# 4-point Gauss-Legendre nodes and weights on [-1, 1] ([Abramowitz1964] Table 25.4)
 _GX = (-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526)
 _GW = (0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538)
-_MAX_VERTICES = 1000
+_MAX_VERTICES = 100_000
 _RR_THRESHOLD = 0.5
+#: Optical depth of the least extinguished wavelength at which a shadow ray stops (transmittance < 2e-22): deep
+#: in a thick cloud the sun is not marched to; in clear air it is never reached.
+_NEE_STOP = 50.0
+
+#: Lobe (phase function) codes of the components: an absorber, Rayleigh, Cornette-Shanks(g),
+#: Henyey-Greenstein(g), a table per wavelength.
+LOBE_NONE, LOBE_RAYLEIGH, LOBE_CORNETTE_SHANKS, LOBE_HENYEY_GREENSTEIN, LOBE_TABLE = range(5)
 
 
-@_jit_inline
+@inline
 def _density(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> float:
     """Relative density of component ``comp`` at altitude ``h`` [m] (DensityProfile semantics)."""
     start = 0.0
@@ -97,13 +131,15 @@ def _density(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> float
     return 0.0
 
 
-@_jit_inline
-def _densities(r: float, rb: float, layers: np.ndarray, nlay: np.ndarray) -> tuple[float, float, float]:
+@helper
+def _densities(r, rb, layers, nlay, out):
+    """Relative densities of every shell component at radius ``r`` [m] into ``out`` (n_comp,)."""
     h = r - rb
-    return _density(h, layers, nlay, 0), _density(h, layers, nlay, 1), _density(h, layers, nlay, 2)
+    for c in range(out.shape[0]):
+        out[c] = _density(h, layers, nlay, c)
 
 
-@_hjit
+@helper
 def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     """Distance [m] along the ray to the ground or out of the top of the atmosphere, and whether it is the ground."""
     r2 = px * px + py * py + pz * pz
@@ -117,46 +153,87 @@ def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     return (t if t > 0.0 else 0.0), False
 
 
-@_hjit
+@helper
 def _piece_columns(r2, b, a, c, rb, layers, nlay, out):
-    """Gauss-Legendre columns of the three components over ``[a, c]`` of a ray with ``|p|^2 = r2``, ``p.d = b``."""
+    """Gauss-Legendre columns of every component over ``[a, c]`` of a ray with ``|p|^2 = r2``, ``p.d = b``."""
     half = 0.5 * (c - a)
     mid = 0.5 * (c + a)
-    s0 = 0.0
-    s1 = 0.0
-    s2 = 0.0
+    nc = out.shape[0]
+    if nc == 3:
+        # the clear sky's three components, unrolled (a run-time trip count keeps LLVM from doing it)
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        for k in range(4):
+            t = mid + half * _GX[k]
+            h = math.sqrt(max(r2 + 2.0 * b * t + t * t, 0.0)) - rb
+            w = _GW[k]
+            s0 += w * _density(h, layers, nlay, 0)
+            s1 += w * _density(h, layers, nlay, 1)
+            s2 += w * _density(h, layers, nlay, 2)
+        out[0] = s0 * half
+        out[1] = s1 * half
+        out[2] = s2 * half
+        return
+    for q in range(nc):
+        out[q] = 0.0
     for k in range(4):
         t = mid + half * _GX[k]
-        rr = math.sqrt(max(r2 + 2.0 * b * t + t * t, 0.0))
-        d0, d1, d2 = _densities(rr, rb, layers, nlay)
-        s0 += _GW[k] * d0
-        s1 += _GW[k] * d1
-        s2 += _GW[k] * d2
-    out[0] = s0 * half
-    out[1] = s1 * half
-    out[2] = s2 * half
+        h = math.sqrt(max(r2 + 2.0 * b * t + t * t, 0.0)) - rb
+        w = _GW[k]
+        for q in range(nc):
+            out[q] += w * _density(h, layers, nlay, q)
+    for q in range(nc):
+        out[q] *= half
 
 
-@_hjit
-def _invert_in_piece(r2, b, a, c, rem, dtau, target, k0, k1, k2, rb, layers, nlay, tmp):
-    """Distance ``s`` in ``[a, c]`` where the optical depth from ``a`` reaches ``rem`` (``dtau`` over the whole
-    piece); Newton on the Gauss-Legendre integral with a bisection safeguard. ``tmp`` gets the columns over
-    ``[a, s]``."""
+@helper
+def _dot(k, cols):
+    if cols.shape[0] == 3:
+        return k[0] * cols[0] + k[1] * cols[1] + k[2] * cols[2]
+    s = 0.0
+    for q in range(cols.shape[0]):
+        s += k[q] * cols[q]
+    return s
+
+
+@helper
+def _dot_row(coef, i, cols):
+    """``coef[i] . cols`` without a view of the row (no reference counting in the kernels' loops)."""
+    if cols.shape[0] == 3:
+        return coef[i, 0] * cols[0] + coef[i, 1] * cols[1] + coef[i, 2] * cols[2]
+    s = 0.0
+    for q in range(cols.shape[0]):
+        s += coef[i, q] * cols[q]
+    return s
+
+
+@helper
+def _invert_in_piece(r2, b, a, c, rem, dtau, target, k, rb, layers, nlay, tmp):
+    """Distance ``s`` in ``[a, c]`` where the optical depth ``k . col`` from ``a`` reaches ``rem`` (``dtau`` over
+    the whole piece); Newton on the Gauss-Legendre integral with a bisection safeguard. ``tmp`` gets the columns
+    over ``[a, s]``."""
     lo = a
     hi = c
     s = a + (c - a) * (rem / dtau if dtau > 0.0 else 0.5)
+    nc = tmp.shape[0]
     for _ in range(60):
         _piece_columns(r2, b, a, s, rb, layers, nlay, tmp)
-        f = k0 * tmp[0] + k1 * tmp[1] + k2 * tmp[2] - rem
+        f = _dot(k, tmp) - rem
         if f > 0.0:
             hi = s
         else:
             lo = s
         if abs(f) <= 1e-12 * target + 1e-300 or hi - lo <= 1e-9 * (1.0 + s):
             break
-        rr = math.sqrt(max(r2 + 2.0 * b * s + s * s, 0.0))
-        d0, d1, d2 = _densities(rr, rb, layers, nlay)
-        deriv = k0 * d0 + k1 * d1 + k2 * d2
+        h = math.sqrt(max(r2 + 2.0 * b * s + s * s, 0.0)) - rb
+        if nc == 3:
+            deriv = (k[0] * _density(h, layers, nlay, 0) + k[1] * _density(h, layers, nlay, 1)
+                     + k[2] * _density(h, layers, nlay, 2))
+        else:
+            deriv = 0.0
+            for q in range(nc):
+                deriv += k[q] * _density(h, layers, nlay, q)
         s_new = s - f / deriv if deriv > 0.0 else 0.5 * (lo + hi)
         if not (lo < s_new < hi):
             s_new = 0.5 * (lo + hi)
@@ -164,14 +241,15 @@ def _invert_in_piece(r2, b, a, c, rem, dtau, target, k0, k1, k2, rb, layers, nla
     return s
 
 
-@_hjit
-def _march(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec):
-    """:func:`column_along`; also records, per piece ``k``, its end ``t``, the cumulative optical depth and the
-    cumulative columns in ``rec[k, 0:5]`` (``rec`` has at least ``2 len(edges) + 2`` rows). Returns
-    ``(t, reached, n_pieces)``."""
-    cols[0] = 0.0
-    cols[1] = 0.0
-    cols[2] = 0.0
+@helper
+def _march(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec):
+    """:func:`column_along`; also records, per piece ``j``, its end ``t``, the cumulative optical depth and the
+    cumulative columns in ``rec[j, 0]``, ``rec[j, 1]``, ``rec[j, 2:]`` (``rec`` has at least ``2 len(edges) + 2``
+    rows). Returns ``(t, reached, n_pieces)``: with ``reached`` the pieces recorded are those before the one
+    where the target is reached."""
+    nc = cols.shape[0]
+    for q in range(nc):
+        cols[q] = 0.0
     if t_end <= 0.0:
         return 0.0, False, 0
     r2 = px * px + py * py + pz * pz
@@ -220,80 +298,85 @@ def _march(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers,
                         i_out = ne
                     break
         _piece_columns(r2, b, a, c, rb, layers, nlay, tmp)
-        dtau = k0 * tmp[0] + k1 * tmp[1] + k2 * tmp[2]
+        dtau = _dot(k, tmp)
         if tau + dtau >= target:
-            s = _invert_in_piece(r2, b, a, c, target - tau, dtau, target, k0, k1, k2, rb, layers, nlay, tmp)
-            cols[0] += tmp[0]
-            cols[1] += tmp[1]
-            cols[2] += tmp[2]
+            s = _invert_in_piece(r2, b, a, c, target - tau, dtau, target, k, rb, layers, nlay, tmp)
+            for q in range(nc):
+                cols[q] += tmp[q]
             return s, True, npc
         tau += dtau
-        cols[0] += tmp[0]
-        cols[1] += tmp[1]
-        cols[2] += tmp[2]
         rec[npc, 0] = c
         rec[npc, 1] = tau
-        rec[npc, 2] = cols[0]
-        rec[npc, 3] = cols[1]
-        rec[npc, 4] = cols[2]
+        for q in range(nc):
+            cols[q] += tmp[q]
+            rec[npc, 2 + q] = cols[q]
         npc += 1
         if c >= t_end:
             return t_end, False, npc
         a = c
 
 
-@_jit
-def column_along(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp):
+@kernel
+def column_along(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp):
     """March along ``p + t d`` for ``0 <= t <= t_end`` [m] until the optical depth ``k . col`` reaches ``target``.
 
-    ``cols`` (3,) receives the columns [m] of the three components from ``t = 0`` to the returned distance;
-    ``tmp`` is a (3,) work array. Returns ``(t, reached)``; with ``target = inf`` it returns ``(t_end, False)``
-    and the total columns.
+    ``k`` (n_comp,) coefficients [m^-1]; ``cols`` (n_comp,) receives the columns [m] of the components from
+    ``t = 0`` to the returned distance; ``tmp`` is an (n_comp,) work array. Returns ``(t, reached)``; with
+    ``target = inf`` it returns ``(t_end, False)`` and the total columns.
     """
-    rec = np.empty((2 * edges.shape[0] + 2, 5))
-    t, reached, _ = _march(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp,
-                           rec)
+    rec = np.empty((2 * edges.shape[0] + 2, 2 + cols.shape[0]))
+    t, reached, _ = _march(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec)
     return t, reached
 
 
-@_hjit
-def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, layers, nlay, rec, npc, cols, tmp):
+@helper
+def _columns_at(px, py, pz, dx, dy, dz, t, rb, layers, nlay, rec, npc, cols, tmp):
+    """Columns from 0 to ``t`` on a ray whose first ``npc`` pieces are recorded in ``rec`` by :func:`_march`
+    (``t`` inside a recorded piece or in the one after them), without integrating the recorded pieces again."""
+    r2 = px * px + py * py + pz * pz
+    b = px * dx + py * dy + pz * dz
+    nc = cols.shape[0]
+    a = 0.0
+    k = 0
+    while k < npc and rec[k, 0] < t:
+        a = rec[k, 0]
+        k += 1
+    _piece_columns(r2, b, a, t, rb, layers, nlay, tmp)
+    for q in range(nc):
+        cols[q] = tmp[q] + (rec[k - 1, 2 + q] if k > 0 else 0.0)
+
+
+@helper
+def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k, rb, layers, nlay, rec, npc, cols, tmp):
     """Collision at hero optical depth ``target`` on a ray already marched to its end (pieces in ``rec``), without
     integrating it again: the same pieces, cumulative sums and inversion as :func:`_march`."""
     r2 = px * px + py * py + pz * pz
     b = px * dx + py * dy + pz * dz
+    nc = cols.shape[0]
     a = 0.0
     tau = 0.0
-    c0 = 0.0
-    c1 = 0.0
-    c2 = 0.0
-    for k in range(npc):
-        if rec[k, 1] >= target:
-            s = _invert_in_piece(r2, b, a, rec[k, 0], target - tau, rec[k, 1] - tau, target, k0, k1, k2, rb, layers,
+    for j in range(npc):
+        if rec[j, 1] >= target:
+            s = _invert_in_piece(r2, b, a, rec[j, 0], target - tau, rec[j, 1] - tau, target, k, rb, layers,
                                  nlay, tmp)
-            cols[0] = c0 + tmp[0]
-            cols[1] = c1 + tmp[1]
-            cols[2] = c2 + tmp[2]
+            for q in range(nc):
+                cols[q] = (rec[j - 1, 2 + q] if j > 0 else 0.0) + tmp[q]
             return s, True
-        a = rec[k, 0]
-        tau = rec[k, 1]
-        c0 = rec[k, 2]
-        c1 = rec[k, 3]
-        c2 = rec[k, 4]
-    cols[0] = c0
-    cols[1] = c1
-    cols[2] = c2
+        a = rec[j, 0]
+        tau = rec[j, 1]
+    for q in range(nc):
+        cols[q] = rec[npc - 1, 2 + q] if npc > 0 else 0.0
     return t_end, False
 
 
-@_hjit
+@helper
 def _sun_sample(sx, sy, sz, cos_max, u1, u2):
     """Direction uniform in solid angle over the cone of half-angle ``acos(cos_max)`` about the sun."""
     mu = 1.0 - u1 * (1.0 - cos_max)
     return direction_about_axis(sx, sy, sz, mu, 2.0 * math.pi * u2)
 
 
-@_hjit
+@helper
 def _normalise(f, p, n):
     m = 0.0
     for i in range(n):
@@ -305,51 +388,210 @@ def _normalise(f, p, n):
             p[i] = p[i] / m
 
 
-@_jit
-def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, mie_ssa, g, kind,
-                albedo, esun, seed, group, batch0, n_batches, batch_size, sums, sumsq):
-    """Trace ``n_batches`` batches of ``batch_size`` paths for each direction of a block; one wavelength group.
+@helper
+def _lobe_values(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, ph, qs):
+    """Phase function ``ph[c, i]`` [sr^-1] of every active lobe ``c`` (indices ``active``) at every wavelength ``i``
+    at ``mu``, and the density ``qs[c, i]`` by which the lobe is sampled (Henyey-Greenstein for a Cornette-Shanks
+    lobe, else ``ph``)."""
+    n = ph.shape[1]
+    for a in range(active.shape[0]):
+        c = active[a]
+        kind = lobe[c]
+        if kind == LOBE_TABLE:
+            phase_table_values(tmu, tval[lobe_tab[c]], mu, ph[c])
+            for i in range(n):
+                qs[c, i] = ph[c, i]
+            continue
+        if kind == LOBE_RAYLEIGH:
+            v = rayleigh_phase_scalar(mu)
+            w = v
+        elif kind == LOBE_CORNETTE_SHANKS:
+            v = cornette_shanks_scalar(mu, lobe_g[c])
+            w = henyey_greenstein_scalar(mu, lobe_g[c])
+        else:
+            v = henyey_greenstein_scalar(mu, lobe_g[c])
+            w = v
+        for i in range(n):
+            ph[c, i] = v
+            qs[c, i] = w
+
+
+@helper
+def _sample_lobe(kind, g, tab, hero, u, tmu, tval, tcdf):
+    """Cosine of the scattering angle drawn from lobe ``kind`` for the hero wavelength (uniform ``u``)."""
+    if kind == LOBE_RAYLEIGH:
+        return rayleigh_inverse_cdf_scalar(u)
+    if kind == LOBE_TABLE:
+        return phase_table_inverse_cdf(tmu, tval[tab], tcdf[tab], hero, u)
+    return henyey_greenstein_inverse_cdf_scalar(u, g)
+
+
+@helper
+def _optical_depths(coef_t, cols, out):
+    """``out[i] = sum_q coef_t[q, i] cols[q]``: the optical depth at every wavelength of a ray's columns (the loop
+    over wavelengths innermost, on contiguous rows)."""
+    n = out.shape[0]
+    if cols.shape[0] == 3:
+        # the clear sky: one fused loop (each loop over the wavelengths costs about as much as its body)
+        c0 = cols[0]
+        c1 = cols[1]
+        c2 = cols[2]
+        for i in range(n):
+            out[i] = coef_t[0, i] * c0 + coef_t[1, i] * c1 + coef_t[2, i] * c2
+        return
+    for i in range(n):
+        out[i] = 0.0
+    for q in range(cols.shape[0]):
+        cq = cols[q]
+        for i in range(n):
+            out[i] += coef_t[q, i] * cq
+
+
+@helper
+def _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt, sst):
+    """At a point: extinction ``stt[i]`` and scattering ``sst[i]`` [m^-1] per wavelength and the scattering
+    coefficient ``sc[c, i]`` of each lobe (shell components, then the field with density ``rho_f``)."""
+    rr = math.sqrt(px * px + py * py + pz * pz)
+    _densities(rr, rb, layers, nlay, dens)
+    nc = dens.shape[0]
+    n = stt.shape[0]
+    if nc == 3:
+        d0 = dens[0]
+        d1 = dens[1]
+        d2 = dens[2]
+        for i in range(n):
+            v0 = scat_t[0, i] * d0
+            v1 = scat_t[1, i] * d1
+            v2 = scat_t[2, i] * d2
+            v3 = fss[i] * rho_f
+            sc[0, i] = v0
+            sc[1, i] = v1
+            sc[2, i] = v2
+            sc[3, i] = v3
+            stt[i] = coef_t[0, i] * d0 + coef_t[1, i] * d1 + coef_t[2, i] * d2 + fs[i] * rho_f
+            sst[i] = v0 + v1 + v2 + v3
+        return
+    for i in range(n):
+        stt[i] = 0.0
+        sst[i] = 0.0
+    for q in range(nc):
+        d = dens[q]
+        for i in range(n):
+            stt[i] += coef_t[q, i] * d
+            v = scat_t[q, i] * d
+            sc[q, i] = v
+            sst[i] += v
+    for i in range(n):
+        v = fss[i] * rho_f
+        sc[nc, i] = v
+        stt[i] += fs[i] * rho_f
+        sst[i] += v
+
+
+@helper
+def _lobe_sum(active, sc, ph, out):
+    """``out[i] = sum_c sc[c, i] ph[c, i]`` over the active lobes."""
+    n = out.shape[0]
+    if active.shape[0] == 2:
+        c0 = active[0]
+        c1 = active[1]
+        for i in range(n):
+            out[i] = sc[c0, i] * ph[c0, i] + sc[c1, i] * ph[c1, i]
+        return
+    for i in range(n):
+        out[i] = 0.0
+    for a in range(active.shape[0]):
+        c = active[a]
+        for i in range(n):
+            out[i] += sc[c, i] * ph[c, i]
+
+
+@kernel
+def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, scat,
+                lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
+                fre, fs, fss, ddis, ddis_lobe, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
+    """Trace ``n_batches`` batches of ``batch_size`` paths for each entry of a block; one wavelength group.
 
     Parameters (all SI; arrays float64 unless stated)
     ----------
-    r_obs : observer distance from the planet centre [m] (>= rb).
-    dirs : (n, 3) unit view directions (ENU at the observer). dir_index : (n,) int64 global direction numbers.
+    origins : (n, 3) observer positions, planet frame [m]. jitter : (n, 2) x-y footprint [m] over which each
+    path's origin is drawn uniformly (0: fixed). dirs : (n, 3) unit directions (view direction, or the axis of the
+    cosine distribution). mode : (n,) int64, 0 radiance along ``dirs``, 1 irradiance on the plane facing
+    ``dirs`` (cosine-distributed directions, estimates times pi). dir_index : (n,) int64 global entry numbers.
     sun : (3,) unit vector to the sun centre. cos_sun : cosine of the solar angular radius.
-    rb, rt : planet and top-of-atmosphere radii [m]. edges : sorted radii [m] of the quadrature shells (rb < . < rt).
-    layers : (3, L, 5) density layers of Rayleigh, aerosol, ozone; nlay : (3,) int64 layer counts.
-    coef : (n_wl, 3) Rayleigh scattering, aerosol extinction, ozone absorption at relative density 1 [m^-1].
-    mie_ssa : aerosol single-scattering albedo; g, kind : aerosol phase asymmetry and code
-    (:func:`skyscatter.atmosphere.phase.aerosol_phase_kind`: 0 Cornette-Shanks, 1 Henyey-Greenstein).
+    rb, rt : planet and top-of-atmosphere radii [m]. edges : sorted radii [m] of the quadrature shells.
+    layers : (C, L, 5) density layers of the shell components; nlay : (C,) int64 layer counts.
+    coef, scat : (n_wl, C) extinction and scattering coefficients at relative density 1 [m^-1].
+    lobe, lobe_g, lobe_tab : (C + 1,) phase code (``LOBE_*``), asymmetry and table index of each shell component
+    and, last, of the cloud field. tmu (m,), tval and tcdf (n_tab, n_wl, m): the phase tables (ascending mu).
     albedo : (n_wl,) ground albedo; esun : (n_wl,) solar irradiance [W m^-2 nm^-1].
+    fvf ... fre : the packed cloud field (:class:`.tracking.PackedField`; ``fvf[PRESENT] = 0`` for none);
+    fs, fss : (n_wl,) its extinction and scattering per unit density [-].
+    ddis, ddis_lobe : probability of drawing a scattering direction about the sun instead (0: never), from the
+    phase function of lobe ``ddis_lobe`` (the cloud's) centred on the sun; see the module docstring.
     seed, group, batch0 : RNG counters (batch numbers batch0 .. batch0 + n_batches - 1).
-    sums, sumsq : (n, n_wl, n_batches) outputs: per batch, sum and sum of squares of the per-path radiance.
+    sums, sumsq : (n, n_wl, n_batches) outputs: per batch, sum and sum of squares of the per-path estimate.
+    vertices_out : (n, n_batches) output: per batch, the number of scattering and ground vertices of its paths.
     """
     n = coef.shape[0]
+    nc = coef.shape[1]
     ndir = dirs.shape[0]
     st = np.empty(1, dtype=np.uint64)
     f = np.empty(n)
     p = np.empty(n)
     contrib = np.empty(n)
-    cols = np.empty(3)
-    tot = np.empty(3)
-    tmp = np.empty(3)
-    sr = np.empty(n)
-    sm = np.empty(n)
+    cols = np.empty(nc)
+    tot = np.empty(nc)
+    tmp = np.empty(nc)
+    dens = np.empty(nc)
+    kh = np.empty(nc)
+    coef_t = np.ascontiguousarray(coef.T)
+    scat_t = np.ascontiguousarray(scat.T)
+    sc = np.empty((nc + 1, n))
+    ph = np.empty((nc + 1, n))
+    qs = np.empty((nc + 1, n))
+    tau = np.empty(n)
+    tau2 = np.empty(n)
+    val = np.empty(n)
+    val2 = np.empty(n)
+    ph2 = np.empty((nc + 1, n))
+    qs2 = np.empty((nc + 1, n))
+    ddis_active = np.full(1, max(ddis_lobe, 0), dtype=np.int64)
     stt = np.empty(n)
-    rec = np.empty((2 * edges.shape[0] + 2, 5))
+    sst = np.empty(n)
+    trf = np.empty(n)
+    fstate = np.zeros(6, dtype=np.int64)
+    rec = np.empty((2 * edges.shape[0] + 2, 2 + nc))
+    field = fvf[8] != 0.0
+    fsmax = 0.0
+    fsmin = np.inf
+    for i in range(n):
+        fsmax = max(fsmax, fs[i])
+        fsmin = min(fsmin, fs[i])
+    kmin = np.empty(nc)
+    for q in range(nc):
+        kmin[q] = coef[0, q]
+        for i in range(n):
+            kmin[q] = min(kmin[q], coef[i, q])
+    # lobes that scatter (not ozone, not an absent field): the only ones the phase sums visit
+    n_active = 0
+    for c in range(nc + 1):
+        if lobe[c] != LOBE_NONE:
+            n_active += 1
+    active = np.empty(n_active, dtype=np.int64)
+    n_active = 0
+    for c in range(nc + 1):
+        if lobe[c] != LOBE_NONE:
+            active[n_active] = c
+            n_active += 1
     sx, sy, sz = sun[0], sun[1], sun[2]
     for j in range(ndir):
-        d0x, d0y, d0z = dirs[j, 0], dirs[j, 1], dirs[j, 2]
-        ox, oy, oz = 0.0, 0.0, r_obs
-        if r_obs > rt:
-            b = r_obs * d0z
-            disc = b * b - (r_obs * r_obs - rt * rt)
-            if b >= 0.0 or disc < 0.0:
-                continue  # misses the atmosphere: zero radiance
-            t0 = -b - math.sqrt(disc)
-            ox, oy, oz = t0 * d0x, t0 * d0y, r_obs + t0 * d0z
+        ax, ay, az = dirs[j, 0], dirs[j, 1], dirs[j, 2]
+        cosine = mode[j] == 1
+        jx, jy = jitter[j, 0], jitter[j, 1]
         for bi in range(n_batches):
             key = stream_key(seed, dir_index[j], group, batch0 + bi)
+            nvert = 0
             for smp in range(batch_size):
                 st[0] = sample_state(key, smp)
                 for i in range(n):
@@ -357,7 +599,24 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                     p[i] = 1.0
                     contrib[i] = 0.0
                 hero = min(int(next_uniform(st) * n), n - 1)
-                kh0, kh1, kh2 = coef[hero, 0], coef[hero, 1], coef[hero, 2]
+                for q in range(nc):
+                    kh[q] = coef[hero, q]
+                ox, oy, oz = origins[j, 0], origins[j, 1], origins[j, 2]
+                if jx > 0.0 or jy > 0.0:
+                    ox += (next_uniform(st) - 0.5) * jx
+                    oy += (next_uniform(st) - 0.5) * jy
+                d0x, d0y, d0z = ax, ay, az
+                if cosine:
+                    u1 = next_uniform(st)
+                    d0x, d0y, d0z = direction_about_axis(ax, ay, az, math.sqrt(u1), 2.0 * math.pi * next_uniform(st))
+                r_o = math.sqrt(ox * ox + oy * oy + oz * oz)
+                if r_o > rt:
+                    b = ox * d0x + oy * d0y + oz * d0z
+                    disc = b * b - (r_o * r_o - rt * rt)
+                    if b >= 0.0 or disc < 0.0:
+                        continue  # misses the atmosphere: zero radiance
+                    t0 = -b - math.sqrt(disc)
+                    ox, oy, oz = ox + t0 * d0x, oy + t0 * d0y, oz + t0 * d0z
                 px, py, pz = ox, oy, oz
                 dx, dy, dz = d0x, d0y, d0z
                 first = True
@@ -366,22 +625,36 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                     t_end, ground = _exit_distance(px, py, pz, dx, dy, dz, rb, rt)
                     collided = False
                     forced = first and not ground
+                    if forced and field:
+                        ta, tb = field_box_hit(px, py, pz, dx, dy, dz, t_end, fvf)
+                        forced = ta >= tb
+                    rho_f = 0.0
                     if forced:
-                        _, _, npc = _march(px, py, pz, dx, dy, dz, t_end, np.inf, kh0, kh1, kh2, rb, edges,
-                                           layers, nlay, tot, tmp, rec)
-                        tau_tot = kh0 * tot[0] + kh1 * tot[1] + kh2 * tot[2]
+                        _, _, npc = _march(px, py, pz, dx, dy, dz, t_end, np.inf, kh, rb, edges, layers, nlay, tot,
+                                           tmp, rec)
+                        tau_tot = _dot(kh, tot)
                         if tau_tot <= 0.0:
                             break
                         u = next_uniform(st)
                         target = -math.log1p(u * math.expm1(-tau_tot))
-                        t, reached = _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, kh0, kh1, kh2, rb,
-                                                         layers, nlay, rec, npc, cols, tmp)
+                        t, reached = _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, kh, rb, layers,
+                                                         nlay, rec, npc, cols, tmp)
                         collided = True
                     else:
                         u = next_uniform(st)
                         target = -math.log1p(-u)
-                        t, reached, _ = _march(px, py, pz, dx, dy, dz, t_end, target, kh0, kh1, kh2, rb, edges,
-                                               layers, nlay, cols, tmp, rec)
+                        t, reached, npc = _march(px, py, pz, dx, dy, dz, t_end, target, kh, rb, edges, layers,
+                                                 nlay, cols, tmp, rec)
+                        if not reached:
+                            t = t_end
+                        if field:
+                            tv, hit, rv = field_free_path(px, py, pz, dx, dy, dz, t, hero, fs, fsmax, fvf, fvi, frho,
+                                                          fbmax, fbmin, fxe, fye, fre, f, p, st, fstate)
+                            if hit:
+                                _columns_at(px, py, pz, dx, dy, dz, tv, rb, layers, nlay, rec, npc, cols, tmp)
+                                t = tv
+                                reached = True
+                                rho_f = rv
                         if reached:
                             collided = True
                         elif not ground:
@@ -390,48 +663,87 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                         px += t * dx
                         py += t * dy
                         pz += t * dz
-                        rr = math.sqrt(px * px + py * py + pz * pz)
-                        d0, d1, d2 = _densities(rr, rb, layers, nlay)
+                        if field and rho_f == 0.0:
+                            rho_f = field_density_at(px, py, pz, fvf, fvi, frho)
+                        _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt, sst)
+                        _optical_depths(coef_t, cols, tau)
+                        if forced:
+                            _optical_depths(coef_t, tot, tau2)
                         for i in range(n):
-                            tr = math.exp(-(coef[i, 0] * cols[0] + coef[i, 1] * cols[1] + coef[i, 2] * cols[2]))
-                            sr[i] = coef[i, 0] * d0
-                            sm[i] = coef[i, 1] * mie_ssa * d1
-                            stt[i] = sr[i] + coef[i, 1] * d1 + coef[i, 2] * d2
+                            tr = math.exp(-tau[i])
                             pdf = stt[i] * tr
                             if forced:
-                                ttot = -math.expm1(-(coef[i, 0] * tot[0] + coef[i, 1] * tot[1] + coef[i, 2] * tot[2]))
+                                ttot = -math.expm1(-tau2[i])
                                 pdf = pdf / ttot if ttot > 0.0 else 0.0
                             f[i] *= tr
                             p[i] *= pdf
                         _normalise(f, p, n)
+                        if sst[hero] <= 0.0:
+                            break  # absorbed for the hero: no continuation can be sampled
                         # next-event estimation to the sun
                         wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
                         te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
                         if not blocked:
-                            _march(px, py, pz, wx, wy, wz, te, np.inf, 0.0, 0.0, 0.0, rb, edges, layers, nlay, tot,
-                                   tmp, rec)
-                            mu = wx * dx + wy * dy + wz * dz
-                            pr = rayleigh_phase_scalar(mu)
-                            pm = aerosol_phase_scalar(mu, g, kind)
-                            for i in range(n):
-                                tr = math.exp(-(coef[i, 0] * tot[0] + coef[i, 1] * tot[1] + coef[i, 2] * tot[2]))
-                                contrib[i] += f[i] * (sr[i] * pr + sm[i] * pm) * esun[i] * tr
-                        # scattering direction (lobe chosen by the hero's scattering coefficients)
-                        ssh = sr[hero] + sm[hero]
-                        qh = sr[hero] / ssh if ssh > 0.0 else 1.0
-                        if next_uniform(st) < qh:
-                            mu = rayleigh_inverse_cdf_scalar(next_uniform(st))
+                            live = True
+                            if field:
+                                field_transmittance(px, py, pz, wx, wy, wz, te, fs, fsmax, fsmin, fvf, fvi, frho,
+                                                    fbmax, fbmin, fxe, fye, fre, trf, st, fstate)
+                                live = False
+                                for i in range(n):
+                                    if trf[i] > 0.0:
+                                        live = True
+                            if live:
+                                # stop once even the least extinguished wavelength is blocked (exp(-50))
+                                _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers,
+                                                      nlay, tot, tmp, rec)
+                                live = not opaque
+                            if live:
+                                _lobe_values(wx * dx + wy * dy + wz * dz, active, lobe, lobe_g, lobe_tab, tmu, tval, ph,
+                                             qs)
+                                _lobe_sum(active, sc, ph, val)
+                                _optical_depths(coef_t, tot, tau)
+                                for i in range(n):
+                                    tr = math.exp(-tau[i])
+                                    if field:
+                                        tr *= trf[i]
+                                    contrib[i] += f[i] * val[i] * esun[i] * tr
+                        # scattering direction: lobe chosen by the hero's scattering coefficients, or (with
+                        # probability ddis) about the sun
+                        if ddis > 0.0 and next_uniform(st) < ddis:
+                            ms = _sample_lobe(lobe[ddis_lobe], lobe_g[ddis_lobe], lobe_tab[ddis_lobe], hero,
+                                              next_uniform(st), tmu, tval, tcdf)
+                            ex, ey, ez = direction_about_axis(sx, sy, sz, ms, 2.0 * math.pi * next_uniform(st))
+                            mu = min(max(ex * dx + ey * dy + ez * dz, -1.0), 1.0)
+                            dx, dy, dz = ex, ey, ez
                         else:
-                            mu = henyey_greenstein_inverse_cdf_scalar(next_uniform(st), g)
-                        dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
-                        pr = rayleigh_phase_scalar(mu)
-                        pm = aerosol_phase_scalar(mu, g, kind)
-                        ph = henyey_greenstein_scalar(mu, g)  # the aerosol lobe is sampled as HG for both kinds
-                        for i in range(n):
-                            ss = sr[i] + sm[i]
-                            q = sr[i] / ss if ss > 0.0 else 1.0
-                            f[i] *= sr[i] * pr + sm[i] * pm
-                            p[i] *= q * pr + (1.0 - q) * ph
+                            u = next_uniform(st) * sst[hero]
+                            pick = active[n_active - 1]
+                            acc = 0.0
+                            for a in range(n_active):
+                                c = active[a]
+                                acc += sc[c, hero]
+                                if u < acc:
+                                    pick = c
+                                    break
+                            mu = _sample_lobe(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st), tmu,
+                                              tval, tcdf)
+                            dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
+                        _lobe_values(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, ph, qs)
+                        _lobe_sum(active, sc, ph, val)
+                        _lobe_sum(active, sc, qs, val2)
+                        if ddis > 0.0:
+                            # each wavelength's density of that direction: the lobes' mixture or, with
+                            # probability ddis, the cloud's phase function of its own wavelength about the sun
+                            _lobe_values(dx * sx + dy * sy + dz * sz, ddis_active, lobe, lobe_g, lobe_tab, tmu, tval,
+                                         ph2, qs2)
+                            for i in range(n):
+                                f[i] *= val[i]
+                                lobes = val2[i] / sst[i] if sst[i] > 0.0 else 0.0
+                                p[i] *= (1.0 - ddis) * lobes + ddis * ph2[ddis_lobe, i]
+                        else:
+                            for i in range(n):
+                                f[i] *= val[i]
+                                p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
                         _normalise(f, p, n)
                     else:
                         # ground (Lambertian)
@@ -441,8 +753,9 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                         rr = math.sqrt(px * px + py * py + pz * pz)
                         nx, ny, nz = px / rr, py / rr, pz / rr
                         px, py, pz = nx * rb, ny * rb, nz * rb
+                        _optical_depths(coef_t, cols, tau)
                         for i in range(n):
-                            tr = math.exp(-(coef[i, 0] * cols[0] + coef[i, 1] * cols[1] + coef[i, 2] * cols[2]))
+                            tr = math.exp(-tau[i])
                             f[i] *= tr
                             p[i] *= tr
                         _normalise(f, p, n)
@@ -450,11 +763,26 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                         cs = wx * nx + wy * ny + wz * nz
                         if cs > 0.0:
                             te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
-                            _march(px, py, pz, wx, wy, wz, te, np.inf, 0.0, 0.0, 0.0, rb, edges, layers, nlay, tot,
-                                   tmp, rec)
-                            for i in range(n):
-                                tr = math.exp(-(coef[i, 0] * tot[0] + coef[i, 1] * tot[1] + coef[i, 2] * tot[2]))
-                                contrib[i] += f[i] * albedo[i] / math.pi * cs * esun[i] * tr
+                            live = True
+                            if field:
+                                field_transmittance(px, py, pz, wx, wy, wz, te, fs, fsmax, fsmin, fvf, fvi, frho,
+                                                    fbmax, fbmin, fxe, fye, fre, trf, st, fstate)
+                                live = False
+                                for i in range(n):
+                                    if trf[i] > 0.0:
+                                        live = True
+                            if live:
+                                # stop once even the least extinguished wavelength is blocked (exp(-50))
+                                _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers,
+                                                      nlay, tot, tmp, rec)
+                                live = not opaque
+                            if live:
+                                _optical_depths(coef_t, tot, tau)
+                                for i in range(n):
+                                    tr = math.exp(-tau[i])
+                                    if field:
+                                        tr *= trf[i]
+                                    contrib[i] += f[i] * albedo[i] / math.pi * cs * esun[i] * tr
                         # cosine-weighted hemisphere: weight albedo
                         u1 = next_uniform(st)
                         mu = math.sqrt(u1)
@@ -477,43 +805,304 @@ def trace_block(r_obs, dirs, dir_index, sun, cos_sun, rb, rt, edges, layers, nla
                             break
                         for i in range(n):
                             f[i] /= q
+                nvert += vertices
+                scale = math.pi if cosine else 1.0
                 for i in range(n):
-                    c = contrib[i]
+                    c = contrib[i] * scale
                     sums[j, i, bi] += c
                     sumsq[j, i, bi] += c * c
+            vertices_out[j, bi] += nvert
 
 
-@_jit
-def disc_transmittance(r_obs, sun, sun_radius, rb, rt, edges, layers, nlay, coef, n_radial, n_angular, out):
-    """Mean transmittance over the solar disc seen from ``(0, 0, r_obs)`` for each wavelength (``out`` (n_wl,)).
+@kernel
+def disc_transmittance(origin, sun, sun_radius, rb, rt, edges, layers, nlay, coef, fvf, fvi, frho, fbmax, fbmin, fxe,
+                       fye, fre, fs, n_radial, n_angular, out):
+    """Mean transmittance over the solar disc seen from ``origin`` (3,) for each wavelength (``out`` (n_wl,)).
 
     Deterministic midpoint quadrature over the disc, uniform in solid angle (``n_radial`` rings equal in
-    ``1 - cos``, ``n_angular`` sectors); directions whose ray hits the planet count as 0.
+    ``1 - cos``, ``n_angular`` sectors); directions whose ray hits the planet count as 0. Through a cloud field
+    packed with ``exact=True`` the field's transmittance is exact (regular tracking, no random numbers).
     """
     n = coef.shape[0]
-    cols = np.empty(3)
-    tmp = np.empty(3)
+    nc = coef.shape[1]
+    cols = np.empty(nc)
+    tmp = np.empty(nc)
+    kz = np.zeros(nc)
+    trf = np.empty(n)
+    st = np.zeros(1, dtype=np.uint64)
+    fstate = np.zeros(6, dtype=np.int64)
+    field = fvf[8] != 0.0
+    fsmax = 0.0
+    fsmin = np.inf
+    for i in range(n):
+        fsmax = max(fsmax, fs[i])
+        fsmin = min(fsmin, fs[i])
     for i in range(n):
         out[i] = 0.0
     cmax = math.cos(sun_radius)
+    r_o = math.sqrt(origin[0] ** 2 + origin[1] ** 2 + origin[2] ** 2)
     for a in range(n_radial):
         for k in range(n_angular):
             wx, wy, wz = _sun_sample(sun[0], sun[1], sun[2], cmax, (a + 0.5) / n_radial, (k + 0.5) / n_angular)
-            px, py, pz = 0.0, 0.0, r_obs
-            if r_obs > rt:
-                b = r_obs * wz
-                disc = b * b - (r_obs * r_obs - rt * rt)
+            px, py, pz = origin[0], origin[1], origin[2]
+            if r_o > rt:
+                b = px * wx + py * wy + pz * wz
+                disc = b * b - (r_o * r_o - rt * rt)
                 if b >= 0.0 or disc < 0.0:
                     for i in range(n):
                         out[i] += 1.0
                     continue
                 t0 = -b - math.sqrt(disc)
-                px, py, pz = t0 * wx, t0 * wy, r_obs + t0 * wz
+                px, py, pz = px + t0 * wx, py + t0 * wy, pz + t0 * wz
             te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
             if blocked:
                 continue
-            column_along(px, py, pz, wx, wy, wz, te, np.inf, 0.0, 0.0, 0.0, rb, edges, layers, nlay, cols, tmp)
+            column_along(px, py, pz, wx, wy, wz, te, np.inf, kz, rb, edges, layers, nlay, cols, tmp)
+            if field:
+                field_transmittance(px, py, pz, wx, wy, wz, te, fs, fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe,
+                                    fye, fre, trf, st, fstate)
             for i in range(n):
-                out[i] += math.exp(-(coef[i, 0] * cols[0] + coef[i, 1] * cols[1] + coef[i, 2] * cols[2]))
+                v = math.exp(-_dot_row(coef, i, cols))
+                out[i] += v * trf[i] if field else v
     for i in range(n):
         out[i] /= n_radial * n_angular
+
+
+@helper
+def _next_level(px, py, pz, dx, dy, dz, levels, t_end):
+    """First crossing after 0 of one of the level spheres (radii ``levels`` [m]) within ``[0, t_end]``: ``(t, k,
+    up)`` with ``k`` the level and ``up`` whether it is crossed outwards; ``(t_end, -1, False)`` when there is none.
+    Roots closer than ``1e-4 m + 1e-12 R`` to 0 belong to the sphere the point sits on and are skipped."""
+    r2 = px * px + py * py + pz * pz
+    b = px * dx + py * dy + pz * dz
+    best = t_end
+    k = -1
+    up = False
+    for j in range(levels.shape[0]):
+        radius = levels[j]
+        disc = b * b - (r2 - radius * radius)
+        if disc < 0.0:
+            continue
+        s = math.sqrt(disc)
+        eps = 1e-4 + 1e-12 * radius
+        t = -b - s
+        if t > eps:
+            if t <= best:
+                best = t
+                k = j
+                up = False
+            continue
+        t = -b + s
+        if t > eps and t <= best:
+            best = t
+            k = j
+            up = True
+    return best, k, up
+
+
+@helper
+def _pixel(px, py, dom):
+    """Index of the domain pixel (periodic) under the planet-frame point (px, py); ``dom`` = x0, y0, dx, dy, nx,
+    ny."""
+    nx = int(dom[4])
+    ny = int(dom[5])
+    ix = int(math.floor((px - dom[0]) / dom[2])) % nx
+    iy = int(math.floor((py - dom[1]) / dom[3])) % ny
+    return ix * ny + iy
+
+
+@kernel
+def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo,
+               fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, dom, levels, seed, group, batch0, n_batches,
+               batch_size, up, down, absorbed, vertices_out):
+    """Forward photons from the sun through a periodic domain: per pixel and level, the upward and downward
+    crossings of the level spheres, and the absorption in the column between the lowest and the highest level
+    (:mod:`.domain`).
+
+    Photons enter at the top of the atmosphere, uniformly over the domain's cell ``dom`` (x0, y0, dx, dy, nx, ny:
+    pixel corner [m], pixel size [m], pixel counts), travelling along ``-sun``; the same free paths, collision
+    densities, lobes and hero-wavelength weights as :func:`trace_block` (without next-event estimation). A free
+    path stops at each level sphere (``levels`` (L,) radii [m], ascending), where the crossing adds the photon's
+    weight to ``up`` or ``down`` at that level and the pixel under the crossing, and starts afresh (free paths
+    are memoryless); each collision adds ``f sigma_a`` to ``absorbed`` at the pixel under it. Outputs ``up``,
+    ``down`` (L, n_pixels, n_wl, 2) and ``absorbed`` (n_pixels, n_wl, 2): per batch the tallies are summed, then
+    their sum and sum of squares over batches are added to ``[..., 0]`` and ``[..., 1]``. ``vertices_out`` (1,)
+    counts the vertices.
+    """
+    n = coef.shape[0]
+    nc = coef.shape[1]
+    npix = absorbed.shape[0]
+    nlev = levels.shape[0]
+    r_base = levels[0]
+    r_top = levels[nlev - 1]
+    st = np.empty(1, dtype=np.uint64)
+    f = np.empty(n)
+    p = np.empty(n)
+    cols = np.empty(nc)
+    tmp = np.empty(nc)
+    dens = np.empty(nc)
+    kh = np.empty(nc)
+    coef_t = np.ascontiguousarray(coef.T)
+    scat_t = np.ascontiguousarray(scat.T)
+    sc = np.empty((nc + 1, n))
+    ph = np.empty((nc + 1, n))
+    qs = np.empty((nc + 1, n))
+    stt = np.empty(n)
+    sst = np.empty(n)
+    tau = np.empty(n)
+    val = np.empty(n)
+    val2 = np.empty(n)
+    bu = np.empty((nlev, npix, n))
+    bd = np.empty((nlev, npix, n))
+    ba = np.empty((npix, n))
+    fstate = np.zeros(6, dtype=np.int64)
+    rec = np.empty((2 * edges.shape[0] + 2, 2 + nc))
+    field = fvf[8] != 0.0
+    fsmax = 0.0
+    for i in range(n):
+        fsmax = max(fsmax, fs[i])
+    n_active = 0
+    for c in range(nc + 1):
+        if lobe[c] != LOBE_NONE:
+            n_active += 1
+    active = np.empty(n_active, dtype=np.int64)
+    n_active = 0
+    for c in range(nc + 1):
+        if lobe[c] != LOBE_NONE:
+            active[n_active] = c
+            n_active += 1
+    lx = dom[2] * dom[4]
+    ly = dom[3] * dom[5]
+    nvert = 0
+    for bi in range(n_batches):
+        key = stream_key(seed, 0, group, batch0 + bi)
+        for k in range(npix):
+            for i in range(n):
+                ba[k, i] = 0.0
+                for j in range(nlev):
+                    bu[j, k, i] = 0.0
+                    bd[j, k, i] = 0.0
+        for smp in range(batch_size):
+            st[0] = sample_state(key, smp)
+            for i in range(n):
+                f[i] = 1.0
+                p[i] = 1.0
+            hero = min(int(next_uniform(st) * n), n - 1)
+            for q in range(nc):
+                kh[q] = coef[hero, q]
+            x = dom[0] + next_uniform(st) * lx
+            y = dom[1] + next_uniform(st) * ly
+            px, py, pz = x, y, math.sqrt(rt * rt - x * x - y * y)
+            dx, dy, dz = -sun[0], -sun[1], -sun[2]
+            vertices = 0
+            while True:
+                t_end, ground = _exit_distance(px, py, pz, dx, dy, dz, rb, rt)
+                t_if, lev, outward = _next_level(px, py, pz, dx, dy, dz, levels, t_end)
+                u = next_uniform(st)
+                t, reached, npc = _march(px, py, pz, dx, dy, dz, t_if, -math.log1p(-u), kh, rb, edges, layers, nlay,
+                                         cols, tmp, rec)
+                if not reached:
+                    t = t_if
+                rho_f = 0.0
+                if field:
+                    tv, hit, rv = field_free_path(px, py, pz, dx, dy, dz, t, hero, fs, fsmax, fvf, fvi, frho, fbmax,
+                                                  fbmin, fxe, fye, fre, f, p, st, fstate)
+                    if hit:
+                        _columns_at(px, py, pz, dx, dy, dz, tv, rb, layers, nlay, rec, npc, cols, tmp)
+                        t = tv
+                        reached = True
+                        rho_f = rv
+                px += t * dx
+                py += t * dy
+                pz += t * dz
+                _optical_depths(coef_t, cols, tau)
+                if reached:
+                    if field and rho_f == 0.0:
+                        rho_f = field_density_at(px, py, pz, fvf, fvi, frho)
+                    _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt, sst)
+                    for i in range(n):
+                        tr = math.exp(-tau[i])
+                        f[i] *= tr
+                        p[i] *= stt[i] * tr
+                    _normalise(f, p, n)
+                    rr = math.sqrt(px * px + py * py + pz * pz)
+                    if r_base <= rr <= r_top:
+                        k = _pixel(px, py, dom)
+                        for i in range(n):
+                            ba[k, i] += f[i] * (stt[i] - sst[i])
+                    if sst[hero] <= 0.0:
+                        break
+                    u = next_uniform(st) * sst[hero]
+                    pick = active[n_active - 1]
+                    acc = 0.0
+                    for a in range(n_active):
+                        c = active[a]
+                        acc += sc[c, hero]
+                        if u < acc:
+                            pick = c
+                            break
+                    mu = _sample_lobe(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st), tmu, tval,
+                                      tcdf)
+                    dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
+                    _lobe_values(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, ph, qs)
+                    _lobe_sum(active, sc, ph, val)
+                    _lobe_sum(active, sc, qs, val2)
+                    for i in range(n):
+                        f[i] *= val[i]
+                        p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
+                    _normalise(f, p, n)
+                else:
+                    for i in range(n):
+                        tr = math.exp(-tau[i])
+                        f[i] *= tr
+                        p[i] *= tr
+                    _normalise(f, p, n)
+                    if lev >= 0:
+                        k = _pixel(px, py, dom)
+                        if outward:
+                            for i in range(n):
+                                bu[lev, k, i] += f[i]
+                        else:
+                            for i in range(n):
+                                bd[lev, k, i] += f[i]
+                    if lev < 0 or t_if >= t_end:
+                        if not ground:
+                            break  # out of the top of the atmosphere
+                        rr = math.sqrt(px * px + py * py + pz * pz)
+                        nx, ny, nz = px / rr, py / rr, pz / rr
+                        px, py, pz = nx * rb, ny * rb, nz * rb
+                        u1 = next_uniform(st)
+                        dx, dy, dz = direction_about_axis(nx, ny, nz, math.sqrt(u1), 2.0 * math.pi * next_uniform(st))
+                        for i in range(n):
+                            f[i] *= albedo[i]
+                    else:
+                        continue  # through the interface: same direction, no vertex
+                vertices += 1
+                if vertices >= _MAX_VERTICES:
+                    break
+                wmax = 0.0
+                for i in range(n):
+                    if f[i] > wmax:
+                        wmax = f[i]
+                if wmax <= 0.0:
+                    break
+                if vertices >= 2 and wmax < _RR_THRESHOLD:
+                    q = wmax / _RR_THRESHOLD
+                    if next_uniform(st) >= q:
+                        break
+                    for i in range(n):
+                        f[i] /= q
+            nvert += vertices
+        for k in range(npix):
+            for i in range(n):
+                for j in range(nlev):
+                    v = bu[j, k, i]
+                    up[j, k, i, 0] += v
+                    up[j, k, i, 1] += v * v
+                    v = bd[j, k, i]
+                    down[j, k, i, 0] += v
+                    down[j, k, i, 1] += v * v
+                v = ba[k, i]
+                absorbed[k, i, 0] += v
+                absorbed[k, i, 1] += v * v
+    vertices_out[0] += nvert

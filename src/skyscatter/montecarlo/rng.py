@@ -4,16 +4,16 @@ Every random number is a pure function of (seed, direction index, wavelength-gro
 index, draw number), so a Monte Carlo result depends only on the seed and the job, never on how the job was split
 into tasks, in which order they ran, or on how many threads or workers ran them.
 
-The key of a stream is built by chaining the SplitMix64 finaliser over the counters (Steele, Lea & Flood 2014,
-"Fast splittable pseudorandom number generators", OOPSLA, doi:10.1145/2660193.2660195; finaliser constants of
-Stafford's "Mix13"); the draws of one sample are successive outputs of SplitMix64 started at
+The key of a stream is built by chaining the SplitMix64 finaliser over the counters ([Steele2014]; finaliser
+constants of Stafford's "Mix13"); the draws of one sample are successive outputs of SplitMix64 started at
 ``mix(key, sample index)``. Doubles take the top 53 bits: ``(x >> 11) * 2^-53`` in [0, 1).
 """
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from ..jit import helper, kernel
 
 __all__ = ["mix64", "sample_state", "stream_key", "next_uniform", "uniforms"]
 
@@ -26,10 +26,9 @@ _S31 = np.uint64(31)
 _S11 = np.uint64(11)
 _INV53 = 1.0 / 9007199254740992.0
 
-_jit = numba.njit(cache=True, nogil=True)
 
 
-@_jit
+@helper
 def mix64(z: np.uint64) -> np.uint64:
     """SplitMix64 finaliser (a bijection of 64-bit integers)."""
     z = (z ^ (z >> _S30)) * _M1
@@ -37,7 +36,7 @@ def mix64(z: np.uint64) -> np.uint64:
     return z ^ (z >> _S31)
 
 
-@_jit
+@helper
 def stream_key(seed: int, direction: int, group: int, batch: int) -> np.uint64:
     """Key of the stream of one (direction, wavelength group, batch) for a seed."""
     k = mix64(np.uint64(seed) + _GOLDEN)
@@ -46,20 +45,20 @@ def stream_key(seed: int, direction: int, group: int, batch: int) -> np.uint64:
     return mix64(k ^ (np.uint64(batch) * _M2 + _GOLDEN))
 
 
-@_jit
+@helper
 def sample_state(key: np.uint64, sample: int) -> np.uint64:
     """Initial SplitMix64 state of sample number ``sample`` of a stream."""
     return mix64(key ^ (np.uint64(sample) * _GOLDEN + _M2))
 
 
-@_jit
+@helper
 def next_uniform(state: np.ndarray) -> float:
     """Advance ``state`` (a length-1 uint64 array) and return a double in [0, 1)."""
     state[0] = state[0] + _GOLDEN
     return float(mix64(state[0]) >> _S11) * _INV53
 
 
-@_jit
+@kernel
 def uniforms(seed: int, direction: int, group: int, batch: int, sample: int, n: int) -> np.ndarray:
     """The first ``n`` uniforms of one sample (for tests)."""
     st = np.empty(1, dtype=np.uint64)

@@ -119,11 +119,14 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
             path.parent.mkdir(parents=True, exist_ok=True)
             atm.save(path)
         except (OSError, OutputError) as exc:
-            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+            if isinstance(exc, OutputError):  # already names the file and the reason
+                what = f"the table cache: {exc}"
+            else:
+                what = f"the table cache {path}: {exc.strerror or exc}"
             if require_saved:
-                raise OutputError(f"could not write the table cache {path}: {reason}") from None
-            warnings.warn(f"could not write the table cache {path}: {reason}; the tables are used without "
-                          "being cached", RuntimeWarning, stacklevel=3)
+                raise OutputError(f"could not write {what}") from None
+            warnings.warn(f"could not write {what}; the tables are used without being cached", RuntimeWarning,
+                          stacklevel=3)
     if keep_in_memory:
         _MEMORY[key] = atm
     return atm, computed

@@ -36,14 +36,13 @@ than a fit.
   ``l - p > 0`` wherever ``p < 0``) is the least weight that keeps the blend non-negative. ``t`` is 0 where the
   quadratic is non-negative, moves continuously with the samples, and reaches the linear rule alone when the
   negative lobe is deep: an all-or-nothing switch between the rules made 13-26 % jumps in the sky's luminance
-  between directions 0.01 deg apart, 1-4 deg above the horizon at low sun (issue 11's seams), while the least
+  between directions 0.01 deg apart, 1-4 deg above the horizon at low sun (seams; docs/bruneton.md), while the least
   weight ``t0`` alone keeps the quadratic's rise beyond the 440 nm sample (a sunset triple then has
   ``rho(360 nm)`` 1400 times ``rho(440 nm)``: the invented violet). The factor 2 gives every triple whose
   quadratic is negative a blend that stays non-negative with margin. Both rules are linear, so the blend costs
   two small matrix products and a maximum per sample (:class:`ColourConversion`).
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations

@@ -8,8 +8,7 @@ radiance at the table wavelengths to XYZ and to other wavelengths (:mod:`.conver
 and broadcast here; the loops over rays are the numba kernels of :mod:`.lookup`, run on all cores by
 :func:`.parallel.parallel_for`.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
@@ -108,8 +107,30 @@ class TableLookups:
 
     @property
     def _mie_kind(self) -> int:
-        """Integer code of the aerosol phase function for the numba kernels."""
-        return aerosol_phase_kind(self.parameters.mie_phase_function)
+        """Integer code of the aerosol phase function for the numba kernels (:data:`.sampling.TABLE_PHASE` for a
+        tabulated one)."""
+        return self._aerosol_phase[0]
+
+    @property
+    def _mie_g(self) -> float:
+        return self._aerosol_phase[1]
+
+    @property
+    def _aerosol_phase(self) -> tuple[int, float, NDArray[np.float64], NDArray[np.float64]]:
+        """``(kind, g, phase_mu, phase_values)`` of the aerosol for the lookup kernels, built once: a tabulated
+        phase is the aerosol's phase table at the table wavelengths (single scattering exact to it)."""
+        cached = getattr(self, "_aerosol_phase_cache", None)
+        if cached is None:
+            analytic = self.parameters.aerosol_component.analytic_phase
+            if analytic is not None:
+                cached = (aerosol_phase_kind(analytic.kind), analytic.g, np.array([-1.0, 1.0]), np.zeros((1, 2)))
+            else:
+                from .sampling import TABLE_PHASE
+
+                arr = self.parameters.aerosol_phase_table(self.wavelengths).numba_arrays()
+                cached = (TABLE_PHASE, 0.0, arr.mu, arr.values)
+            self._aerosol_phase_cache = cached
+        return cached
 
     def _geometry(self) -> tuple[float, float, float]:
         p = self.parameters
@@ -183,8 +204,8 @@ class TableLookups:
         parallel_for(lookup.sky_kernel, n, pos, dirs, sun, sh, self.tables["transmittance"],
                      self.tables["single_rayleigh"], self.tables["single_mie"], self.tables["multiple"],
                      self.tables["irradiance"], self._albedo, self._solar, bottom, top,
-                     mu_s_min, self.parameters.mie_phase_g, self._mie_kind, self.parameters.sun_angular_radius,
-                     include_ground, rad, tr,
+                     mu_s_min, self._mie_g, self._mie_kind, *self._aerosol_phase[2:],
+                     self.parameters.sun_angular_radius, include_ground, rad, tr,
                      grain=2048)
         return rad, tr
 
@@ -233,6 +254,10 @@ class TableLookups:
         r = float(np.linalg.norm(pos))
         if not (bottom - 1.0 <= r <= top):
             return None
+        if self._aerosol_phase[3].shape[1] > 2:
+            # a tabulated aerosol phase depends on wavelength: the slices projected to colour channels before the
+            # phase is applied do not hold; the general kernel applies it per wavelength
+            return None
         lookup = _kernels()
 
         shape = d.shape[:-1]
@@ -248,7 +273,7 @@ class TableLookups:
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
         parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, self.tables["transmittance"],
                      self.tables["irradiance"], self._albedo, self._solar, projection,
-                     bottom, top, self.parameters.mie_phase_g, self._mie_kind, self.parameters.sun_angular_radius,
+                     bottom, top, self._mie_g, self._mie_kind, self.parameters.sun_angular_radius,
                      bool(include_ground), dirs, out, bad, grain=2048)
         if bad.any():
             return None
@@ -323,8 +348,8 @@ class TableLookups:
         s = np.zeros((n, self.wavelengths.size))
         tab = self.tables
         parallel_for(lookup.aerial_kernel, n, cam, pts, sun, sh, tab["transmittance"], tab["single_rayleigh"],
-                     tab["single_mie"], tab["multiple"], bottom, top, mu_s_min, self.parameters.mie_phase_g,
-                     self._mie_kind, t, s, grain=2048)
+                     tab["single_mie"], tab["multiple"], bottom, top, mu_s_min, self._mie_g,
+                     self._mie_kind, *self._aerosol_phase[2:], t, s, grain=2048)
         return t.reshape(*shape, -1), s.reshape(*shape, -1)
 
     def sun_transmittance(self, positions: ArrayLike, sun_direction: ArrayLike) -> NDArray[np.float64]:

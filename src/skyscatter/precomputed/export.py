@@ -19,8 +19,7 @@ B = 440 nm; the default 16-wavelength tables export 16 channels):
 * ``atmosphere.json`` - sizes, coordinate mappings, constants, per-channel coefficients, the radiance formula
   and the matrix from channels to CIE XYZ.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
@@ -33,7 +32,7 @@ import numpy as np
 
 from ..atmosphere.phase import rayleigh_phase
 from ..errors import OutputError
-from ..fileio import atomic_path
+from ..fileio import atomic_paths
 
 if TYPE_CHECKING:  # pragma: no cover
     from .tables import PrecomputedAtmosphere
@@ -69,20 +68,38 @@ _MAPPINGS = {
 
 
 def _write_raw(path: Path, array: np.ndarray) -> dict[str, Any]:
+    """Write ``array`` as little-endian float32 to ``path`` (a temporary of the export's group); its entry."""
     data = np.ascontiguousarray(array, dtype="<f4")
-    with atomic_path(path) as tmp:
-        data.tofile(tmp)
-    return {"file": path.name, "dtype": "float32", "byte_order": "little", "shape": list(data.shape),
+    with open(path, "wb") as fh:  # not ndarray.tofile, whose errors lose errno ("N requested and M written")
+        fh.write(memoryview(data).cast("B"))
+    return {"file": None, "dtype": "float32", "byte_order": "little", "shape": list(data.shape),
             "bytes": int(data.nbytes)}
 
 
+#: The files of an export, in writing order (``scattering_rgba.raw`` only for 3-channel tables).
+TEXTURES = ("transmittance", "irradiance", "scattering", "single_mie_scattering", "single_rayleigh_scattering",
+            "multiple_scattering", "scattering_rgba")
+
+
 def export_tables(atm: PrecomputedAtmosphere, folder: Path) -> Path:
-    """Write the textures of ``atm`` into ``folder`` (created if missing); return the JSON description's path."""
+    """Write the textures of ``atm`` and ``atmosphere.json`` into ``folder`` (created if missing), all together:
+    every file is written to a temporary beside its target and the group is renamed into place only when all are
+    written, so a failed or interrupted export (a full disk) leaves the folder as it was. Returns the JSON
+    description's path."""
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OutputError(f"cannot create output folder {folder}: {exc.strerror or exc}") from None
     order = np.argsort(-atm.wavelengths)
+    names = [n for n in TEXTURES if n != "scattering_rgba" or order.size == 3]
+    targets = [folder / f"{n}.raw" for n in names] + [folder / "atmosphere.json"]
+    with atomic_paths(*targets) as temps:
+        tmp = dict(zip(names + ["atmosphere.json"], temps, strict=True))
+        _export(atm, order, tmp)
+    return targets[-1]
+
+
+def _export(atm: PrecomputedAtmosphere, order: np.ndarray, tmp: dict[str, Path]) -> None:
     t = atm.tables
     sizes = atm.sizes
     files: dict[str, Any] = {}
@@ -92,11 +109,16 @@ def export_tables(atm: PrecomputedAtmosphere, folder: Path) -> Path:
         # (r, mu, mu_s, nu, c) -> (r, mu, nu, mu_s, c): x = i_nu * n_mu_s + i_mu_s
         return table[..., order].transpose(0, 1, 3, 2, 4).reshape(n_r, n_mu, n_n * n_s, order.size)
 
-    files["transmittance"] = _write_raw(folder / "transmittance.raw", t["transmittance"][..., order])
-    files["transmittance"].update(width=sizes.transmittance_mu, height=sizes.transmittance_r,
-                                  axes=["r", "mu", "channel"])
-    files["irradiance"] = _write_raw(folder / "irradiance.raw", t["irradiance"][..., order])
-    files["irradiance"].update(width=sizes.irradiance_mu_s, height=sizes.irradiance_r, axes=["r", "mu_s", "channel"])
+    def write(name: str, array: np.ndarray) -> dict[str, Any]:
+        entry = _write_raw(tmp[name], array)
+        entry["file"] = f"{name}.raw"
+        files[name] = entry
+        return entry
+
+    write("transmittance", t["transmittance"][..., order]).update(
+        width=sizes.transmittance_mu, height=sizes.transmittance_r, axes=["r", "mu", "channel"])
+    write("irradiance", t["irradiance"][..., order]).update(
+        width=sizes.irradiance_mu_s, height=sizes.irradiance_r, axes=["r", "mu_s", "channel"])
     from .kernels import texel_nu_kernel
     from .parallel import parallel_for
 
@@ -107,18 +129,16 @@ def export_tables(atm: PrecomputedAtmosphere, folder: Path) -> Path:
     combined = t["single_rayleigh"] + t["multiple"] / phase_r
     scat = packed(combined)
     mie = packed(t["single_mie"])
-    files["scattering"] = _write_raw(folder / "scattering.raw", scat)
-    files["single_mie_scattering"] = _write_raw(folder / "single_mie_scattering.raw", mie)
-    files["single_rayleigh_scattering"] = _write_raw(folder / "single_rayleigh_scattering.raw",
-                                                     packed(t["single_rayleigh"]))
-    files["multiple_scattering"] = _write_raw(folder / "multiple_scattering.raw", packed(t["multiple"]))
+    write("scattering", scat)
+    write("single_mie_scattering", mie)
+    write("single_rayleigh_scattering", packed(t["single_rayleigh"]))
+    write("multiple_scattering", packed(t["multiple"]))
     for name in ("scattering", "single_mie_scattering", "single_rayleigh_scattering", "multiple_scattering"):
         files[name].update(width=n_n * n_s, height=n_mu, depth=n_r, axes=["r", "mu", "nu * n_mu_s + mu_s", "channel"])
     if order.size == 3:
         rgba = np.concatenate([scat, mie[..., :1]], axis=-1)
-        files["scattering_rgba"] = _write_raw(folder / "scattering_rgba.raw", rgba)
-        files["scattering_rgba"].update(width=n_n * n_s, height=n_mu, depth=n_r,
-                                        axes=["r", "mu", "nu * n_mu_s + mu_s", "C* RGB + C_M red"])
+        write("scattering_rgba", rgba).update(width=n_n * n_s, height=n_mu, depth=n_r,
+                                              axes=["r", "mu", "nu * n_mu_s + mu_s", "C* RGB + C_M red"])
     wl = atm.wavelengths[order]
     description = {
         "format": "skyscatter-bruneton-luts",
@@ -149,7 +169,4 @@ def export_tables(atm: PrecomputedAtmosphere, folder: Path) -> Path:
         "parameters": p.to_dict(),
         "cache_key": atm.cache_key,
     }
-    out = folder / "atmosphere.json"
-    with atomic_path(out) as tmp:
-        tmp.write_text(json.dumps(description, indent=1), encoding="utf-8")
-    return out
+    tmp["atmosphere.json"].write_text(json.dumps(description, indent=1), encoding="utf-8")

@@ -32,19 +32,18 @@ Mappings (Sec. 4, "Parameterization", with the distance-based forms of Bruneton'
 * Irradiance table: ``x_r = (r - R_g) / (R_t - R_g)``, ``x_mu_s = (1 + mu_s) / 2``.
 
 The angular halves of the ``mu`` (sky) and ``mu_s`` mappings and the azimuth ``nu`` axis are skyscatter's
-(issue 11): the distance mappings alone leave 36-42 deg around the zenith in one cell, across which the
+(docs/bruneton.md): the distance mappings alone leave 36-42 deg around the zenith in one cell, across which the
 forward-peaked multiple scattering of aerosols was interpolated (+18 % to +44 % against DISORT,
 ``docs/bruneton.md``). Parameters of texels in the mixed halves are found by bisection in the angle.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
 
 import math
 
-import numba
+from ..jit import CONTRACT_ARCP, helper
 
 __all__ = [
     "acos_table",
@@ -66,22 +65,19 @@ __all__ = [
     "transmittance_params",
 ]
 
-#: numpy's error model: a float division by zero gives inf/NaN instead of raising, so numba emits no test and
-#: branch per division and the loops over rays can be vectorised (every division here is guarded explicitly).
-_jit = numba.njit(cache=True, fastmath={"arcp", "contract"}, error_model="numpy")
 
 #: Sun zenith cosines this close below the tables' limit ``mu_s_min`` count as at the limit: a sun exactly there
 #: (a texel's, or a caller's at ``max_sun_zenith``) must not be kept or dropped by the last bit of rounding.
 MU_S_LIMIT_TOLERANCE = 1e-12
 
-#: Coefficients of Abramowitz & Stegun (1964), Handbook of Mathematical Functions, Eq. 4.4.46 (from Hastings
+#: Coefficients of [Abramowitz1964] Eq. 4.4.46 (from Hastings
 #: 1955): ``acos(x) = sqrt(1 - x) (a0 + a1 x + ... + a7 x^7)`` for 0 <= x <= 1, absolute error <= 2e-8 rad as
 #: published (2.18e-8 with the printed 10-decimal coefficients, at x = 0; tests/test_precomputed_geometry.py).
 _A0, _A1, _A2, _A3 = 1.5707963050, -0.2145988016, 0.0889789874, -0.0501743046
 _A4, _A5, _A6, _A7 = 0.0308918810, -0.0170881256, 0.0066700901, -0.0012624911
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def acos_table(x: float) -> float:
     """Arc cosine [rad] of ``x`` in [-1, 1] to 2.2e-8 rad (Abramowitz & Stegun 4.4.46, ``acos(-x) = pi - acos(x)``)
     for the table coordinates.
@@ -95,12 +91,12 @@ def acos_table(x: float) -> float:
     return v if x >= 0.0 else math.pi - v
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def clamp(x: float, lo: float, hi: float) -> float:
     return min(max(x, lo), hi)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def distance_to_top(r: float, mu: float, top: float) -> float:
     """Distance [m] from radius ``r`` along direction cosine ``mu`` to the sphere of radius ``top`` (r <= top).
 
@@ -113,7 +109,7 @@ def distance_to_top(r: float, mu: float, top: float) -> float:
     return max(-r * mu + s, 0.0)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def distance_to_bottom(r: float, mu: float, bottom: float) -> float:
     """Distance [m] from radius ``r`` along ``mu`` to the first hit of the sphere ``bottom`` (r >= bottom).
 
@@ -127,7 +123,7 @@ def distance_to_bottom(r: float, mu: float, bottom: float) -> float:
     return max((r * r - bottom * bottom) / q, 0.0)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def point_along_ray(r: float, mu: float, d: float, bottom: float, top: float) -> tuple[float, float]:
     """Radius [m] and view zenith cosine at distance ``d`` [m] along the ray from radius ``r`` with cosine ``mu``:
     ``r_d = sqrt(d^2 + 2 r mu d + r^2)`` (clamped to the atmosphere) and ``mu_d = (r mu + d) / r_d`` (Bruneton &
@@ -136,13 +132,13 @@ def point_along_ray(r: float, mu: float, d: float, bottom: float, top: float) ->
     return r_d, clamp((r * mu + d) / r_d, -1.0, 1.0)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def ray_hits_ground(r: float, mu: float, bottom: float) -> bool:
     """True if the ray from radius ``r`` with direction cosine ``mu`` meets the planet."""
     return mu < 0.0 and r * r * (mu * mu - 1.0) + bottom * bottom >= 0.0
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def distance_to_boundary(r: float, mu: float, hits_ground: bool, bottom: float, top: float) -> float:
     """Distance [m] to the end of the ray: the ground if ``hits_ground`` else the top of the atmosphere."""
     if hits_ground:
@@ -150,7 +146,7 @@ def distance_to_boundary(r: float, mu: float, hits_ground: bool, bottom: float, 
     return distance_to_top(r, mu, top)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def lerp_index(p: float, lo: int, hi: int) -> tuple[int, float]:
     """Interpolation cell of index position ``p`` within texels ``lo..hi`` (0 <= lo < hi): (i0, weight of i0 + 1).
 
@@ -161,7 +157,7 @@ def lerp_index(p: float, lo: int, hi: int) -> tuple[int, float]:
     return i, pc - i
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def bilinear_weights(w0: float, w1: float) -> tuple[float, float, float, float]:
     """Weights of the four corners (00, 01, 10, 11) of a cell for fractional positions ``w0``, ``w1`` along its
     two axes (the weights that :func:`lerp_index` returns)."""
@@ -171,7 +167,7 @@ def bilinear_weights(w0: float, w1: float) -> tuple[float, float, float, float]:
 # --------------------------------------------------------------------------------------------- transmittance
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def transmittance_coord(r: float, mu: float, bottom: float, top: float, n_r: int, n_mu: int) -> tuple[float, float]:
     """Index positions (p_r, p_mu) of (r, mu) in the transmittance table (rays reaching the top)."""
     big_h = math.sqrt(top * top - bottom * bottom)
@@ -183,7 +179,7 @@ def transmittance_coord(r: float, mu: float, bottom: float, top: float, n_r: int
     return clamp(rho / big_h, 0.0, 1.0) * (n_r - 1), clamp(x_mu, 0.0, 1.0) * (n_mu - 1)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def transmittance_params(i_r: int, i_mu: int, bottom: float, top: float, n_r: int, n_mu: int) -> tuple[float, float]:
     """(r, mu) of texel (i_r, i_mu) of the transmittance table; inverse of :func:`transmittance_coord`."""
     big_h = math.sqrt(top * top - bottom * bottom)
@@ -201,7 +197,7 @@ def transmittance_params(i_r: int, i_mu: int, bottom: float, top: float, n_r: in
 # --------------------------------------------------------------------------------------------- irradiance
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def irradiance_coord(r: float, mu_s: float, bottom: float, top: float, n_r: int, n_mu_s: int) -> tuple[float, float]:
     """Index positions (p_r, p_mu_s) in the irradiance table."""
     x_r = clamp((r - bottom) / (top - bottom), 0.0, 1.0)
@@ -209,7 +205,7 @@ def irradiance_coord(r: float, mu_s: float, bottom: float, top: float, n_r: int,
     return x_r * (n_r - 1), x_mu_s * (n_mu_s - 1)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def irradiance_params(i_r: int, i_mu_s: int, bottom: float, top: float, n_r: int, n_mu_s: int) -> tuple[float, float]:
     """(r, mu_s) of texel (i_r, i_mu_s) of the irradiance table."""
     r = bottom + (top - bottom) * i_r / (n_r - 1)
@@ -220,7 +216,7 @@ def irradiance_params(i_r: int, i_mu_s: int, bottom: float, top: float, n_r: int
 # --------------------------------------------------------------------------------------------- scattering
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def _mu_s_a(mu_s: float, bottom: float, top: float) -> float:
     big_h = math.sqrt(top * top - bottom * bottom)
     d = distance_to_top(bottom, mu_s, top)
@@ -228,7 +224,7 @@ def _mu_s_a(mu_s: float, bottom: float, top: float) -> float:
     return (d - d_min) / (big_h - d_min)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def horizon_constants(r: float, bottom: float, top: float) -> tuple[float, float, float]:
     """``(rho, H, theta_h)`` at radius ``r``: distance to the horizon, ``sqrt(R_t^2 - R_g^2)`` and the zenith
     angle of the horizon [rad] (the constants of the ``mu`` mapping for one radius)."""
@@ -237,7 +233,7 @@ def horizon_constants(r: float, bottom: float, top: float) -> tuple[float, float
     return rho, big_h, acos_table(-rho / r)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def sky_mu_unit(r: float, mu: float, top: float, rho: float, big_h: float, theta_h: float) -> float:
     """Unit coordinate of a ray that misses the ground (constants of :func:`horizon_constants`): the mean of the
     2017 distance mapping ``(d - d_min) / (d_max - d_min)`` (dense at the horizon) and the zenith angle over the
@@ -253,7 +249,7 @@ def sky_mu_unit(r: float, mu: float, top: float, rho: float, big_h: float, theta
     return 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0))
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def ground_mu_unit(r: float, mu: float, bottom: float, rho: float) -> float:
     """Unit coordinate of a ray that meets the ground: 1 - (d - d_min) / (d_max - d_min), ``d`` the distance to
     the ground, ``d_min = r - R_g``, ``d_max = rho`` (0 grazing, 1 straight down)."""
@@ -263,13 +259,13 @@ def ground_mu_unit(r: float, mu: float, bottom: float, rho: float) -> float:
     return 1.0 - clamp(x, 0.0, 1.0)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def _sky_mu_x(r: float, mu: float, bottom: float, top: float) -> float:
     rho, big_h, theta_h = horizon_constants(r, bottom, top)
     return sky_mu_unit(r, mu, top, rho, big_h, theta_h)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def scattering_r_mu_coord(r: float, mu: float, hits_ground: bool, bottom: float, top: float,
                           n_r: int, n_mu: int) -> tuple[float, float]:
     """Index positions (p_r, p_mu) of a view ray in the 4D scattering tables."""
@@ -283,13 +279,13 @@ def scattering_r_mu_coord(r: float, mu: float, hits_ground: bool, bottom: float,
     return p_r, p_mu
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def mu_s_limit_a(mu_s_min: float, bottom: float, top: float) -> float:
     """The constant ``A`` of the ``mu_s`` mapping (``a`` at the largest tabulated sun zenith)."""
     return _mu_s_a(mu_s_min, bottom, top)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float, theta_max: float,
                             n_mu_s: int) -> float:
     """:func:`scattering_mu_s_coord` with ``A = mu_s_limit_a(mu_s_min)`` and ``theta_max = acos(mu_s_min)``
@@ -308,7 +304,7 @@ def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float
     return 0.5 * (x_d + x_a) * (n_mu_s - 1)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def scattering_mu_s_coord(mu_s: float, bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> float:
     """Index position of ``mu_s`` in the scattering tables (0 at ``mu_s_min``, n - 1 at the zenith).
 
@@ -321,7 +317,7 @@ def scattering_mu_s_coord(mu_s: float, bottom: float, top: float, mu_s_min: floa
                                    n_mu_s)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def scattering_nu_coord(mu: float, mu_s: float, nu: float, n_nu: int) -> float:
     """Index position of ``nu`` in the scattering tables: ``x_nu = 1 - phi / pi`` with ``phi`` the azimuth
     between the view and the sun, ``cos phi = (nu - mu mu_s) / sqrt((1 - mu^2)(1 - mu_s^2))``.
@@ -337,13 +333,13 @@ def scattering_nu_coord(mu: float, mu_s: float, nu: float, n_nu: int) -> float:
     return (1.0 - acos_table(cphi) / math.pi) * (n_nu - 1)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def scattering_nu_azimuth(i_nu: int, n_nu: int) -> float:
     """Azimuth ``phi`` [rad] between view and sun of texel index ``i_nu`` (``x_nu = 1 - phi / pi``)."""
     return math.pi * (1.0 - i_nu / (n_nu - 1))
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def scattering_nu_param(i_nu: int, mu: float, mu_s: float, n_nu: int) -> float:
     """``nu`` of texel index ``i_nu`` for view and sun zenith cosines ``mu``, ``mu_s``; inverse of
     :func:`scattering_nu_coord`."""
@@ -351,7 +347,7 @@ def scattering_nu_param(i_nu: int, mu: float, mu_s: float, n_nu: int) -> float:
     return clamp(mu * mu_s + s * math.cos(scattering_nu_azimuth(i_nu, n_nu)), -1.0, 1.0)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def scattering_r_mu_params(i_r: int, i_mu: int, bottom: float, top: float, n_r: int,
                            n_mu: int) -> tuple[float, float, bool]:
     """(r, mu, hits_ground) of texel indices (i_r, i_mu) of the scattering tables (the sky half inverted by
@@ -385,7 +381,7 @@ def scattering_r_mu_params(i_r: int, i_mu: int, bottom: float, top: float, n_r: 
     return r, clamp(math.cos(0.5 * (lo + hi)), -1.0, 1.0), False
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def scattering_mu_s_param(i_mu_s: int, bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> float:
     """``mu_s`` of texel index ``i_mu_s``; inverse of :func:`scattering_mu_s_coord` (bisection in the angle)."""
     x = float(i_mu_s)
@@ -405,14 +401,14 @@ def scattering_mu_s_param(i_mu_s: int, bottom: float, top: float, mu_s_min: floa
     return clamp(math.cos(0.5 * (lo + hi)), -1.0, 1.0)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def nu_range(mu: float, mu_s: float) -> tuple[float, float]:
     """Possible view-sun cosines for view and sun zenith cosines ``mu``, ``mu_s``."""
     s = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
     return max(mu * mu_s - s, -1.0), min(mu * mu_s + s, 1.0)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def scattering_params(i_r: int, i_mu: int, i_mu_s: int, i_nu: int, bottom: float, top: float, mu_s_min: float,
                       n_r: int, n_mu: int, n_mu_s: int, n_nu: int) -> tuple[float, float, float, float, bool]:
     """(r, mu, mu_s, nu, hits_ground) of a texel of the 4D tables; ``nu`` is clamped to the values that the

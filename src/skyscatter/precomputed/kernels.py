@@ -19,17 +19,16 @@ Ray integrals use product integration (:func:`.sampling.exp_segment_weights`): e
 coefficient is exponential between two samples and the rest of the integrand linear, which keeps 50 samples
 accurate for the 1.2 km aerosol layer on vertical rays where the plain trapezoidal rule is 8 % off.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from ..jit import CONTRACT_ARCP, CONTRACT_REASSOC, helper, kernel
 from .geometry import (
     MU_S_LIMIT_TOLERANCE,
     acos_table,
@@ -52,10 +51,12 @@ from .geometry import (
     transmittance_params,
 )
 from .sampling import (
+    TABLE_PHASE,
     aerosol_phase,
     density_at,
     exp_segment_weights,
     irradiance_lookup,
+    phase_table_values,
     r_mu_cell,
     rayleigh_phase,
     scattering_lookup,
@@ -64,10 +65,8 @@ from .sampling import (
     transmittance_to_top,
 )
 
-_kjit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
 
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def mu_s_texels(bottom, top, mu_s_min, n_mu_s):
     """``mu_s`` of every texel of the 4D tables (each found by bisection, so computed once per kernel call)."""
     out = np.empty(n_mu_s)
@@ -76,13 +75,13 @@ def mu_s_texels(bottom, top, mu_s_min, n_mu_s):
     return out
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@helper
 def ray_sample_distance(i, n_samples, d_end, mu, hits_ground):
     """Distance [m] of sample ``i`` of ``n_samples`` steps along a ray of length ``d_end``: quadratic spacing,
     dense at the ray's lower end where the aerosols are (the start for rays going up, the end for rays that meet
     the ground), uniform for other downward rays. With uniform steps a 70 deg slant path through an aerosol
     optical depth of 0.5 had one of 50 steps per scale height and its radiance came out 5-30 % high against
-    DISORT (issue 11)."""
+    DISORT (docs/bruneton.md)."""
     u = i / n_samples
     if hits_ground:
         return d_end * (1.0 - (1.0 - u) * (1.0 - u))
@@ -93,7 +92,7 @@ def ray_sample_distance(i, n_samples, d_end, mu, hits_ground):
 PI = math.pi
 
 
-@_kjit
+@kernel
 def optical_length_kernel(bottom, top, profiles, counts, n_samples, out, start, stop):
     """Optical length of each profile [m] from the texels of the transmittance table to the top.
 
@@ -115,7 +114,7 @@ def optical_length_kernel(bottom, top, profiles, counts, n_samples, out, start, 
                 out[i_r, i_mu, p] += w * density_at(profiles[p], counts[p], r_i - bottom)
 
 
-@_kjit
+@kernel
 def direct_irradiance_kernel(transmittance, bottom, top, alpha, out, start, stop):
     """Direct irradiance on a horizontal surface per unit solar irradiance into ``out`` (n_r, n_mu_s, n_wl).
 
@@ -136,7 +135,7 @@ def direct_irradiance_kernel(transmittance, bottom, top, alpha, out, start, stop
             out[i_r, i_s, k] = t[k] * cos_factor
 
 
-@_kjit
+@kernel
 def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
     """The (clamped) view-sun cosine of every texel of the 4D tables, into ``out`` (n_r, n_mu, n_mu_s, n_nu)."""
     n_r, n_mu, n_mu_s, n_nu = out.shape
@@ -151,7 +150,7 @@ def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
                 out[i_r, i_mu, i_s, i_n] = scattering_nu_param(i_n, mu, mu_s, n_nu)
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"arcp", "contract"}, error_model="numpy")
+@helper(fastmath=CONTRACT_ARCP)
 def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w, frac):
     """Transmittance-table ``mu`` cells and weights towards the sun, and the visible fraction of its disc, at a
     ray sample (distance ``d`` [m] from the texel's point at radius ``r``, radius ``r_i``) for every texel sun
@@ -164,7 +163,7 @@ def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, 
         cell[u], w[u] = lerp_index(p_mu, 0, n_tmu - 1)
 
 
-@_kjit
+@kernel
 def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profiles, counts, n_samples, ray, mie,
                              start, stop):
     """Single scattering integrals per unit solar irradiance and unit scattering coefficient.
@@ -258,14 +257,14 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
                     mie[i_r, i_mu, i_s, i_n, k] = acc_m[u, k]
 
 
-@numba.njit(cache=True, error_model="numpy")
+@helper
 def _quadratic_form(m, vx, vy, vz):
     """v^T m v for a symmetric 3 x 3 matrix."""
     return (m[0, 0] * vx * vx + m[1, 1] * vy * vy + m[2, 2] * vz * vz
             + 2.0 * (m[0, 1] * vx * vy + m[0, 2] * vx * vz + m[1, 2] * vy * vz))
 
 
-@numba.njit(cache=True, error_model="numpy")
+@kernel
 def sphere_quadrature(n_theta, hemisphere):
     """Midpoint-rule directions and solid angles [sr] on the sphere (or upper hemisphere), in a frame whose
     x axis points to the sun's azimuth: (n_theta * 2 n_theta, 3) directions and their weights."""
@@ -289,9 +288,10 @@ def sphere_quadrature(n_theta, hemisphere):
     return om, dom
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"}, error_model="numpy")
+@kernel(fastmath=CONTRACT_REASSOC)
 def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance, albedo, beta_r, beta_m, g, mie_kind,
-                              profiles, counts, bottom, top, mu_s_min, n_theta, out, start, stop):
+                              phase_mu, phase_full, phase_trunc, forward, profiles, counts, bottom, top, mu_s_min,
+                              n_theta, out, start, stop):
     """Scattering density J (Eq. 7) of one order per unit total scattering coefficient, ``J / (beta_R rho_R(r) +
     beta_M rho_M(r))`` at each texel's radius, into ``out`` (n_r, n_mu, n_mu_s, n_nu, n_wl) float32, for radius
     indices ``start..stop``: the incident radiance weighted by the Rayleigh and the aerosol phase functions in the
@@ -301,7 +301,7 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     scale height is 1.2 km) while this weighted radiance varies slowly: :func:`multiple_scattering_kernel`
     interpolates it between table radii and multiplies by the exact coefficient at each ray sample. Interpolating
     J itself overestimated it between radii (linear interpolation of a convex exponential): +5 to +7 % in the
-    converged multiple scattering of an aerosol optical depth of 0.5 against DISORT with 16 radii (issue 11).
+    converged multiple scattering of an aerosol optical depth of 0.5 against DISORT with 16 radii (docs/bruneton.md).
     Keeping the Rayleigh and aerosol parts apart (two tables, exact coefficients for each) agreed with this
     within 0.6 % there and made the multiple-scattering kernel 13 % slower.
 
@@ -320,14 +320,40 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     zenith; so the aerosol phase between every texel's view and every quadrature direction is one matrix per
     radius, and the Mie part of J for all sun zeniths and wavelengths is one matrix product (BLAS) with the
     quadrature radiance.
+
+    A tabulated aerosol phase (``mie_kind`` :data:`.sampling.TABLE_PHASE`; ``phase_mu`` (n,) ascending cosines,
+    ``phase_full`` (n_wl, n) the phase table, ``phase_trunc`` (n_wl, n_u) its delta-M truncation sampled at
+    ``n_u`` cosines evenly spaced from -1 to 1 (a smooth Legendre series: one index per direction pair instead of a
+    search), ``forward`` (n_wl,)
+    the truncated forward fraction ``f``; :meth:`skyscatter.atmosphere.phase_table.PhaseTable.delta_m`) depends on
+    wavelength and may have a diffraction peak far narrower than the quadrature's 180 / n_theta deg: the aerosol
+    part of J is ``(1 - f) sum_w p*(v . w) L(w) dw / norm* + f L(v)``, the truncated phase on the grid (normalised
+    per view as above) and the forward peak, a delta function, exactly: it scatters the texel's own incident
+    radiance ``L(v)`` on in its direction (Wiscombe 1977, doi:10.1175/1520-0469(1977)034<1408:TDMRYA>2.0.CO;2,
+    without scaling the optical depth: that light is not removed from the beam but re-emitted forward, which
+    the next orders carry). The single-scattered light of the first order uses the full table.
     """
     n_r, n_mu, n_s, n_n, n_l = s_a.shape
+    table = mie_kind == TABLE_PHASE
     om, dom = sphere_quadrature(n_theta, False)
     n_om = om.shape[0]
     n_v = n_mu * n_n
     inv_pi = 1.0 / PI
     radiance = np.zeros((n_s * n_l, n_om))
     phase_m = np.empty((n_om, n_v))
+    # tabulated phase: per wavelength (empty otherwise)
+    n_lt = n_l if table else 0
+    phase_t = np.empty((n_lt, n_om, n_v))
+    norm_t = np.empty((n_lt, n_v))
+    mie_t = np.empty((n_lt, n_s, n_v))
+    own = np.empty((n_lt, n_s, n_v))  # L(v) at each texel (the delta part)
+    rad_k = np.empty((n_s, n_om))
+    n_u = phase_trunc.shape[1]
+    half_u = 0.5 * (n_u - 1)
+    idx_t = np.zeros((n_om if table else 0, n_v), dtype=np.int64)
+    wt_t = np.zeros((n_om if table else 0, n_v))
+    pv = np.empty(n_l)
+    tmp2 = np.empty(n_l)
     view = np.empty((n_v, 3))
     norm_m = np.empty(n_v)
     norm_r = np.empty(n_v)
@@ -361,13 +387,33 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 view[v, 0] = vx
                 view[v, 1] = vy
                 view[v, 2] = mu
-                nm = 0.0
-                for w in range(n_om):
-                    pm = aerosol_phase(vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], g, mie_kind)
-                    phase_m[w, v] = pm
-                    nm += pm * dom[w]
-                norm_m[v] = nm
+                if table:
+                    # cell of v . w on the truncated phase's uniform cosine grid; the values per wavelength below
+                    for w in range(n_om):
+                        x = (clamp(vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], -1.0, 1.0) + 1.0) * half_u
+                        i = min(int(x), n_u - 2)
+                        idx_t[w, v] = i
+                        wt_t[w, v] = x - i
+                else:
+                    nm = 0.0
+                    for w in range(n_om):
+                        pm = aerosol_phase(vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], g, mie_kind)
+                        phase_m[w, v] = pm
+                        nm += pm * dom[w]
+                    norm_m[v] = nm
                 norm_r[v] = w0 + _quadratic_form(w2, vx, vy, mu)
+        if table:
+            for k in range(n_l):
+                for v in range(n_v):
+                    norm_t[k, v] = 0.0
+                for w in range(n_om):
+                    dw = dom[w]
+                    for v in range(n_v):
+                        i = idx_t[w, v]
+                        f = wt_t[w, v]
+                        p = (1.0 - f) * phase_trunc[k, i] + f * phase_trunc[k, i + 1]
+                        phase_t[k, w, v] = p
+                        norm_t[k, v] += p * dw
         m0[:] = 0.0
         m2[:] = 0.0
         for i_s in range(n_s):
@@ -383,8 +429,16 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 if first:
                     scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, rayleigh_phase(nu_w),
                                       buf)
-                    scattering_lookup(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min,
-                                      aerosol_phase(nu_w, g, mie_kind), buf)
+                    if table:
+                        for k in range(n_l):
+                            tmp2[k] = 0.0
+                        scattering_lookup(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, 1.0, tmp2)
+                        phase_table_values(phase_mu, phase_full, nu_w, pv)
+                        for k in range(n_l):
+                            buf[k] += pv[k] * tmp2[k]
+                    else:
+                        scattering_lookup(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min,
+                                          aerosol_phase(nu_w, g, mie_kind), buf)
                 else:
                     scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, 1.0, buf)
                 if hits:
@@ -401,7 +455,17 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                     for a in range(3):
                         for b in range(3):
                             m2[i_s, k, a, b] += om[w, a] * om[w, b] * lw
-        mie = np.dot(radiance, phase_m)  # (n_s n_l, n_v): sum over quadrature directions of L dw P_M
+        if table:
+            for k in range(n_l):
+                for i_s in range(n_s):
+                    for w in range(n_om):
+                        rad_k[i_s, w] = radiance[i_s * n_l + k, w]
+                mie_t[k] = np.dot(rad_k, phase_t[k])  # (n_s, n_v): sum over quadrature directions of L dw p*
+            _own_radiance(s_a, s_b, first, ground_irradiance, transmittance, albedo, phase_mu, phase_full, i_r,
+                          view, mu_s_tab, bottom, top, n_n, own, buf, e_buf, t_buf, tmp, pv)
+            mie = phase_m[:0]
+        else:
+            mie = np.dot(radiance, phase_m)  # (n_s n_l, n_v): sum over quadrature directions of L dw P_M
         rho_r = density_at(profiles[0], counts[0], r - bottom)
         rho_m = density_at(profiles[1], counts[1], r - bottom)
         for k in range(n_l):
@@ -415,21 +479,67 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                     vx, vy, vz = view[v, 0], view[v, 1], view[v, 2]
                     for k in range(n_l):
                         acc_r = m0[i_s, k] + _quadratic_form(m2[i_s, k], vx, vy, vz)
-                        out[i_r, i_mu, i_s, i_n, k] = (f_r[k] * acc_r / norm_r[v]
-                                                       + f_m[k] * mie[i_s * n_l + k, v] / norm_m[v])
+                        if table:
+                            acc_m = ((1.0 - forward[k]) * mie_t[k, i_s, v] / norm_t[k, v]
+                                     + forward[k] * own[k, i_s, v])
+                        else:
+                            acc_m = mie[i_s * n_l + k, v] / norm_m[v]
+                        out[i_r, i_mu, i_s, i_n, k] = f_r[k] * acc_r / norm_r[v] + f_m[k] * acc_m
 
 
-@_kjit
-def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, bottom, top, mu_s_min, n_theta, out, start, stop):
+@helper
+def _own_radiance(s_a, s_b, first, ground_irradiance, transmittance, albedo, phase_mu, phase_full, i_r, view,
+                  mu_s_tab, bottom, top, n_n, own, buf, e_buf, t_buf, tmp, pv):
+    """The previous order's radiance ``L(v)`` at every texel of radius index ``i_r``, in the texel's own view
+    direction (the light the forward delta of a truncated phase scatters on), into ``own`` (n_wl, n_s, n_v):
+    the table value at the texel (first order: ``s_a P_R + s_b P_M`` with the full phase table), plus the ground's
+    reflection for views that meet the ground (the lower half of the mu axis)."""
+    n_r, n_mu, n_s, _, n_l = s_a.shape
+    inv_pi = 1.0 / PI
+    r, _, _ = scattering_r_mu_params(i_r, n_mu // 2, bottom, top, n_r, n_mu)
+    for i_s in range(n_s):
+        mu_s = mu_s_tab[i_s]
+        sx = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        for v in range(view.shape[0]):
+            i_mu = v // n_n
+            i_n = v % n_n
+            vx, mu = view[v, 0], view[v, 2]
+            nu = clamp(vx * sx + mu * mu_s, -1.0, 1.0)
+            if first:
+                pr = rayleigh_phase(nu)
+                phase_table_values(phase_mu, phase_full, nu, pv)
+                for k in range(n_l):
+                    buf[k] = s_a[i_r, i_mu, i_s, i_n, k] * pr + s_b[i_r, i_mu, i_s, i_n, k] * pv[k]
+            else:
+                for k in range(n_l):
+                    buf[k] = s_a[i_r, i_mu, i_s, i_n, k]
+            if i_mu < n_mu // 2:
+                d_g = distance_to_bottom(r, mu, bottom)
+                mu_s_g = clamp((d_g * vx * sx + (r + d_g * mu) * mu_s) / bottom, -1.0, 1.0)
+                irradiance_lookup(ground_irradiance, bottom, mu_s_g, bottom, top, e_buf)
+                transmittance_segment(transmittance, r, mu, d_g, True, bottom, top, t_buf, tmp)
+                for k in range(n_l):
+                    buf[k] += t_buf[k] * albedo[k] * inv_pi * e_buf[k]
+            for k in range(n_l):
+                own[k, i_s, v] = buf[k]
+
+
+@kernel
+def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_mu, phase_full, bottom, top, mu_s_min, n_theta,
+                               out, start, stop):
     """Irradiance on a horizontal surface from one order of sky radiance (Eq. 15) into ``out`` (n_r, n_mu_s,
     n_wl).
 
     Radiance is ``s_a P_R + s_b P_M`` when ``first`` (single scattering) else ``s_a``; upper hemisphere
-    sampled with ``n_theta x 2 n_theta`` midpoint directions.
+    sampled with ``n_theta x 2 n_theta`` midpoint directions. A tabulated aerosol phase (``mie_kind``
+    :data:`.sampling.TABLE_PHASE`) is read per wavelength from ``phase_mu``, ``phase_full`` (the full table).
     """
     n_r, n_mu_s, n_l = out.shape
+    table = mie_kind == TABLE_PHASE
     om, dom = sphere_quadrature(n_theta, True)
     acc = np.zeros(n_l)
+    pv = np.empty(n_l)
+    tmp = np.empty(n_l)
     for idx in range(start, stop):
         i_r = idx // n_mu_s
         i_s = idx % n_mu_s
@@ -445,15 +555,22 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, bottom, top, mu_s_m
             if first:
                 scattering_lookup(s_a, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min,
                                   scale * rayleigh_phase(nu_w), acc)
-                scattering_lookup(s_b, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min,
-                                  scale * aerosol_phase(nu_w, g, mie_kind), acc)
+                if table:
+                    tmp[:] = 0.0
+                    scattering_lookup(s_b, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min, scale, tmp)
+                    phase_table_values(phase_mu, phase_full, nu_w, pv)
+                    for k in range(n_l):
+                        acc[k] += pv[k] * tmp[k]
+                else:
+                    scattering_lookup(s_b, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min,
+                                      scale * aerosol_phase(nu_w, g, mie_kind), acc)
             else:
                 scattering_lookup(s_a, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min, scale, acc)
         for k in range(n_l):
             out[i_r, i_s, k] = acc[k]
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"arcp", "contract"}, error_model="numpy")
+@helper(fastmath=CONTRACT_ARCP)
 def _sun_cells(r, d, r_i, mu_i, mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a, theta_max, n_s, n_n, cell, w_s,
                w_n):
     """(mu_s, nu) cells and weights at a ray sample (distance ``d`` [m] from the texel's point at radius ``r``,
@@ -474,7 +591,7 @@ def _sun_cells(r, d, r_i, mu_i, mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a
         w_n[u] = wn
 
 
-@_kjit
+@kernel
 def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles, counts, bottom, top,
                                mu_s_min, n_samples, out, start, stop):
     """Radiance of one order scattered towards each texel's point (Eq. 11 with the order's J) into ``out``

@@ -16,17 +16,16 @@ direction per ray; they return spectral quantities at the table wavelengths.
   ``(1 + n.n_bar) / 2`` for the sky part).
 * :func:`sun_kernel` - transmittance to the sun (times the visible fraction of its disc) from any position.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from ..jit import CONTRACT_ARCP, helper, inline, kernel
 from .geometry import (
     MU_S_LIMIT_TOLERANCE,
     bilinear_weights,
@@ -44,11 +43,14 @@ from .geometry import (
     transmittance_coord,
 )
 from .sampling import (
+    TABLE_PHASE,
     aerosol_phase,
     bilinear_read,
     irradiance_lookup,
     lookup4_cell,
+    lookup4_cell_spectral,
     mu_s_nu_cell,
+    phase_table_values,
     r_mu_cell,
     r_mu_s_cell,
     rayleigh_phase,
@@ -58,20 +60,13 @@ from .sampling import (
     transmittance_to_top,
 )
 
-_kjit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
-# Helpers: no allocation, no reference counting (see :mod:`.sampling`); the kernels (``_kjit``) allocate buffers.
-_jit = numba.njit(cache=True, fastmath={"arcp", "contract"}, error_model="numpy", _nrt=False)
-#: For a function that must be inlined where it is called in a loop that should vectorise: LLVM does not inline
-#: large numba functions, and a call inside a loop keeps it scalar.
-_ijit = numba.njit(cache=True, fastmath={"arcp", "contract"}, error_model="numpy", inline="always")
-
 PI = math.pi
 #: Half-width, in mu, of the band around the horizon where two rays just above and below it are blended
 #: (Bruneton's 2017 rewrite): the inscatter difference S|x - T S|xs loses precision there.
 HORIZON_EPSILON = 0.004
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def _enter_atmosphere(px, py, pz, vx, vy, vz, top):
     """Move a point outside the atmosphere to where the ray enters it: (x, y, z, distance, hits)."""
     r2 = px * px + py * py + pz * pz
@@ -87,10 +82,11 @@ def _enter_atmosphere(px, py, pz, vx, vy, vz, top):
     return px + d * vx, py + d * vy, pz + d * vz, d, True
 
 
-@_jit
-def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, out):
+@helper(fastmath=CONTRACT_ARCP)
+def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, out):
     """Inscattered radiance ``S_R P_R + S_M P_M + S_multiple`` from the tables at a point, into ``out``
-    (``p_r``, ``p_m``: phase functions at ``nu``); zero below the sun-zenith limit."""
+    (``p_r``, ``p_m``: phase functions at ``nu``; ``p_m_spec``, if not empty, the aerosol phase per wavelength,
+    used instead of ``p_m``); zero below the sun-zenith limit."""
     for k in range(out.shape[0]):
         out[k] = 0.0
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
@@ -100,11 +96,14 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r
     i_r, w_r, i_mu, w_mu = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
     lookup4_cell(ray, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_r, out)
-    lookup4_cell(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_m, out)
+    if p_m_spec.shape[0]:
+        lookup4_cell_spectral(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_m_spec, out)
+    else:
+        lookup4_cell(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_m, out)
     lookup4_cell(mult, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, 1.0, out)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def _sun_cos_factor(mu, alpha):
     """Cosine factor averaged over the solar disc (0 below the horizon, smooth across it)."""
     if mu < -alpha:
@@ -114,7 +113,7 @@ def _sun_cos_factor(mu, alpha):
     return (mu + alpha) * (mu + alpha) / (4.0 * alpha)
 
 
-@_ijit
+@inline(fastmath=CONTRACT_ARCP)
 def _ground_coords(px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top, alpha, n_tr, n_tmu, n_er, n_emu):
     """Table coordinates of the ground term of :func:`_ground_radiance` for the ray from (px, py, pz) [m] (radius
     ``r``, view zenith cosine ``mu``) along the unit (vx, vy, vz) that meets the ground, towards the unit sun
@@ -136,7 +135,7 @@ def _ground_coords(px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top, alpha
     return pa_r, pa_mu, pb_r, pb_mu, pe_r, pe_mu, ps_r, ps_mu, _sun_cos_factor(mu_s_g, alpha)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def _ground_from_coords(transmittance, irradiance, albedo, solar, pa_r, pa_mu, pb_r, pb_mu, pe_r, pe_mu, ps_r, ps_mu,
                         cf, t, tmp, e_sky, e_sun, out):
     """The ground's radiance (Eqs. 10, 14) seen through the atmosphere (Eq. 16) from the coordinates of
@@ -150,7 +149,7 @@ def _ground_from_coords(transmittance, irradiance, albedo, solar, pa_r, pa_mu, p
         out[k] = t[k] * albedo[k] / PI * (solar[k] * e_sun[k] * cf + e_sky[k])
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top,
                      alpha, t, tmp, e_sky, e_sun, out):
     """Radiance of the Lambertian ground lit by the sun and the sky (Eqs. 10, 14) where the ray from (px, py, pz)
@@ -162,7 +161,7 @@ def _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, v
                         c[8], t, tmp, e_sky, e_sun, out)
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def _ground_coords_block(m, gv, gmu, px, py, pz, sx, sy, sz, r, bottom, top, alpha, n_tr, n_tmu, n_er, n_emu, gc):
     """:func:`_ground_coords` for a block's first ``m`` ground rays (unit directions ``gv`` (3, >= m) by component,
     view zenith cosines ``gmu``) into ``gc`` (9, >= m), on SIMD lanes (ray index last: unit strides, see
@@ -173,15 +172,17 @@ def _ground_coords_block(m, gv, gmu, px, py, pz, sx, sy, sz, r, bottom, top, alp
                                     n_tr, n_tmu, n_er, n_emu)
 
 
-@_kjit
+@kernel
 def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, bottom, top,
-               mu_s_min, g, mie_kind, alpha, include_ground, rad_out, tr_out, start, stop):
+               mu_s_min, g, mie_kind, phase_mu, phase_values, alpha, include_ground, rad_out, tr_out, start, stop):
     """Radiance [W m^-2 sr^-1 nm^-1] and transmittance along rays ``start..stop``; see the module docstring.
 
     Writes ``rad_out`` and ``tr_out`` (n_rays, n_wavelengths), which the caller initialises to 0 and 1
-    (the values of rays that miss the atmosphere).
+    (the values of rays that miss the atmosphere). A tabulated aerosol phase (``mie_kind``
+    :data:`.sampling.TABLE_PHASE`) is read per wavelength from ``phase_mu``, ``phase_values``.
     """
     n_l = transmittance.shape[2]
+    p_m_spec = np.empty(n_l if mie_kind == TABLE_PHASE else 0)
     c = np.empty(n_l)
     t = np.empty(n_l)
     tmp = np.empty(n_l)
@@ -201,7 +202,9 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
         nu = clamp(vx * sx + vy * sy + vz * sz, -1.0, 1.0)
         hits = ray_hits_ground(rc, mu, bottom)
         p_r = rayleigh_phase(nu)
-        p_m = aerosol_phase(nu, g, mie_kind)
+        p_m = aerosol_phase(nu, g, mie_kind) if mie_kind != TABLE_PHASE else 0.0
+        if p_m_spec.shape[0]:
+            phase_table_values(phase_mu, phase_values, nu, p_m_spec)
         l_sh = shadow[q]
         if l_sh > 0.0:
             # Eq. 18: the first l_sh metres are in shadow; inscatter starts at xs = x + l v.
@@ -212,12 +215,13 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
                 for k in range(n_l):
                     c[k] = 0.0
             else:
-                _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, c)
+                _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec,
+                           c)
             transmittance_segment(transmittance, rc, mu, l_sh, hits, bottom, top, t, tmp)
             for k in range(n_l):
                 c[k] *= t[k]
         else:
-            _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, c)
+            _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, c)
         for k in range(n_l):
             rad_out[q, k] = c[k]
         if hits and include_ground:
@@ -272,7 +276,7 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
 OBSERVER_BLOCK = 256
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def _unit_block(dirs):
     """True if every direction of the block (flat x, y, z triples) is a unit vector to 1e-12 (NaN and infinite
     ones are not)."""
@@ -283,7 +287,7 @@ def _unit_block(dirs):
     return off == 0
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho, big_h, theta_h, g,
                      mie_kind, n_mu, n_nu, cell, w_mu, w_nu, p_r, p_m, kind):
     """Table cells, weights and phase factors of a block of rays from one observer (the first pass of
@@ -322,7 +326,7 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
     return special
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def _observer_gather(slices, n_nu, cell, w_mu, w_nu, p_r, p_m, out):
     """Bilinear interpolation of the observer slices (:func:`observer_slices` as (n_mu * n_nu, C, 4)) for a block
     of rays from :func:`_observer_coords`, phase factors applied: ``out`` (m, C).
@@ -357,7 +361,7 @@ def _observer_gather(slices, n_nu, cell, w_mu, w_nu, p_r, p_m, out):
             out[k, c] = v
 
 
-@_kjit
+@kernel
 def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, solar, projection, bottom, top,
                     g, mie_kind, alpha, include_ground, dirs, out, bad, start, stop):
     """:func:`sky_kernel`'s radiance (no shadows) for rays ``start..stop`` from one ``position`` inside the
@@ -440,22 +444,22 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
                 out[q, ch] += acc
 
 
-@_jit
+@helper(fastmath=CONTRACT_ARCP)
 def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, p_r, p_m,
-                        c, t, c2, tmp):
+                        p_m_spec, c, t, c2, tmp):
     """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``."""
-    _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, c)
+    _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, c)
     r_p, mu_p = point_along_ray(r, mu, d, bottom, top)
     mu_s_p = clamp((r * mu_s + d * nu) / r_p, -1.0, 1.0)
-    _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, p_r, p_m, c2)
+    _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, c2)
     transmittance_segment(transmittance, r, mu, d, hits, bottom, top, t, tmp)
     for k in range(c.shape[0]):
         c[k] = max(c[k] - t[k] * c2[k], 0.0)
 
 
-@_kjit
+@kernel
 def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, g, mie_kind,
-                  tr_out, in_out, start, stop):
+                  phase_mu, phase_values, tr_out, in_out, start, stop):
     """Transmittance and inscattered radiance between cameras and points (Eqs. 16-17), rays ``start..stop``.
 
     Writes ``tr_out`` (initialised to 1) and ``in_out`` (initialised to 0), each (n_rays, n_wavelengths).
@@ -467,6 +471,7 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
     c2 = np.empty(n_l)
     tmp = np.empty(n_l)
     lo_c = np.empty(n_l)
+    p_m_spec = np.empty(n_l if mie_kind == TABLE_PHASE else 0)
     for q in range(start, stop):
         dx = points[q, 0] - cams[q, 0]
         dy = points[q, 1] - cams[q, 1]
@@ -495,27 +500,29 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
         if d_lit <= 0.0:
             continue
         p_r = rayleigh_phase(nu)
-        p_m = aerosol_phase(nu, g, mie_kind)
+        p_m = aerosol_phase(nu, g, mie_kind) if mie_kind != TABLE_PHASE else 0.0
+        if p_m_spec.shape[0]:
+            phase_table_values(phase_mu, phase_values, nu, p_m_spec)
         mu_h = -math.sqrt(max(1.0 - (bottom / rc) ** 2, 0.0))
         if abs(mu - mu_h) < HORIZON_EPSILON:
             # Blend the rays just above and below the horizon: the two halves of the table disagree there.
             mu_lo = mu_h - HORIZON_EPSILON
             mu_hi = mu_h + HORIZON_EPSILON
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_lo, mu_s, nu, d_lit, True, bottom, top,
-                                mu_s_min, p_r, p_m, lo_c, t, c2, tmp)
+                                mu_s_min, p_r, p_m, p_m_spec, lo_c, t, c2, tmp)
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_hi, mu_s, nu, d_lit, False, bottom, top,
-                                mu_s_min, p_r, p_m, c, t, c2, tmp)
+                                mu_s_min, p_r, p_m, p_m_spec, c, t, c2, tmp)
             a = (mu - mu_lo) / (mu_hi - mu_lo)
             for k in range(n_l):
                 c[k] = (1.0 - a) * lo_c[k] + a * c[k]
         else:
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu, mu_s, nu, d_lit, hits, bottom, top,
-                                mu_s_min, p_r, p_m, c, t, c2, tmp)
+                                mu_s_min, p_r, p_m, p_m_spec, c, t, c2, tmp)
         for k in range(n_l):
             in_out[q, k] = c[k]
 
 
-@_kjit
+@kernel
 def irradiance_kernel(points, normals, suns, transmittance, irradiance, solar, bottom, top, alpha, sun_out, sky_out,
                       start, stop):
     """Sun and sky irradiance [W m^-2 nm^-1] on surfaces at ``points`` with unit ``normals``.
@@ -543,7 +550,7 @@ def irradiance_kernel(points, normals, suns, transmittance, irradiance, solar, b
             sky_out[q, k] = e[k] * occl
 
 
-@_kjit
+@kernel
 def sun_kernel(pos, suns, transmittance, bottom, top, alpha, out, start, stop):
     """Transmittance towards the sun (times the visible disc fraction) from each position into ``out``
     (n, n_wl), initialised to 1 by the caller."""

@@ -4,17 +4,21 @@ Shared by the precomputation kernels (:mod:`.kernels`) and the rendering kernels
 function writes its per-wavelength result into a caller-provided ``out`` array so that inner loops do not
 allocate.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations
 
 import math
 
-import numba
-
-from ..atmosphere.phase import aerosol_phase_scalar, cornette_shanks_scalar, rayleigh_phase_scalar
+from ..atmosphere.phase import (
+    AEROSOL_PHASE_FUNCTIONS,
+    aerosol_phase_scalar,
+    cornette_shanks_scalar,
+    rayleigh_phase_scalar,
+)
+from ..atmosphere.phase_table import phase_table_values
+from ..jit import helper
 from .geometry import (
     acos_table,
     bilinear_weights,
@@ -28,13 +32,6 @@ from .geometry import (
     transmittance_coord,
 )
 
-# These helpers never allocate; without the runtime (``_nrt=False``, numba's option for code that needs no
-# reference counting) a helper that passes its arrays on to another function does not incref and decref each of
-# them per call. With NRT, numba keeps those atomic updates wherever an array argument is handed to a call
-# (its pass that drops them gives up there), and in the kernels' inner loops two threads then contend for the
-# shared tables' counters: the ground term of a lookup took 0.30 us per ray and thread with them, 0.19 without.
-_jit = numba.njit(cache=True, fastmath=False, error_model="numpy", _nrt=False)
-
 PI = math.pi
 
 
@@ -43,9 +40,24 @@ PI = math.pi
 rayleigh_phase = rayleigh_phase_scalar
 mie_phase = cornette_shanks_scalar
 aerosol_phase = aerosol_phase_scalar
+#: ``mie_kind`` of a tabulated, wavelength-dependent aerosol phase function (after the analytic kinds): the kernels
+#: then read it per wavelength with ``phase_table_values`` (:mod:`skyscatter.atmosphere.phase_table`).
+TABLE_PHASE = len(AEROSOL_PHASE_FUNCTIONS)
 
 
-@_jit
+@helper
+def aerosol_phase_spectrum(nu, g, mie_kind, phase_mu, phase_values, out):
+    """``out[k]`` = the aerosol phase [sr^-1] at ``nu`` per wavelength: the table (``mie_kind ==``
+    :data:`TABLE_PHASE`; ``phase_mu`` ascending cosines, ``phase_values`` (n_wl, n)) or the analytic kind."""
+    if mie_kind == TABLE_PHASE:
+        phase_table_values(phase_mu, phase_values, nu, out)
+    else:
+        p = aerosol_phase(nu, g, mie_kind)
+        for k in range(out.shape[0]):
+            out[k] = p
+
+
+@helper
 def bilinear_read(table, p0, p1, out):
     """Bilinear read of a 2D table of spectra (n0, n1, n_wavelengths) at texel coordinates (p0, p1)."""
     n0, n1, n_l = table.shape
@@ -58,7 +70,7 @@ def bilinear_read(table, p0, p1, out):
         out[k] = a00 * t00[k] + a01 * t01[k] + a10 * t10[k] + a11 * t11[k]
 
 
-@_jit
+@helper
 def transmittance_to_top(table, r, mu, bottom, top, out):
     """Transmittance from (r, mu) to the top of the atmosphere, ignoring the ground (table lookup)."""
     n_r, n_mu, _ = table.shape
@@ -66,7 +78,7 @@ def transmittance_to_top(table, r, mu, bottom, top, out):
     bilinear_read(table, p_r, p_mu, out)
 
 
-@_jit
+@helper
 def transmittance_segment(table, r, mu, d, hits_ground, bottom, top, out, tmp):
     """Transmittance between the ray origin (r, mu) and the point at distance ``d`` [m] along the ray.
 
@@ -83,7 +95,7 @@ def transmittance_segment(table, r, mu, d, hits_ground, bottom, top, out, tmp):
     transmittance_ratio(out, tmp)
 
 
-@_jit
+@helper
 def transmittance_ratio(out, tmp):
     """``out /= tmp`` per wavelength, capped at 1 and 0 where ``tmp`` is 0: ``T(x, y) = T(x, v) / T(y, v)``
     (Sec. 4) from two transmittances to the top."""
@@ -91,7 +103,7 @@ def transmittance_ratio(out, tmp):
         out[k] = min(out[k] / tmp[k], 1.0) if tmp[k] > 0.0 else 0.0
 
 
-@_jit
+@helper
 def sun_visible_fraction(r, mu_s, bottom, alpha):
     """Fraction of the solar disc (angular radius ``alpha`` [rad]) above the planet's horizon seen from ``r``.
 
@@ -107,7 +119,7 @@ def sun_visible_fraction(r, mu_s, bottom, alpha):
     return 0.5 + (h * math.sqrt(1.0 - h * h) + (0.5 * PI - acos_table(h))) / PI
 
 
-@_jit
+@helper
 def transmittance_to_sun(table, r, mu_s, bottom, top, alpha, out):
     """Transmittance to the sun from radius ``r`` (sun zenith cosine ``mu_s``), times the visible disc fraction."""
     f = sun_visible_fraction(r, mu_s, bottom, alpha)
@@ -120,7 +132,7 @@ def transmittance_to_sun(table, r, mu_s, bottom, top, alpha, out):
         out[k] *= f
 
 
-@_jit
+@helper
 def irradiance_lookup(table, r, mu_s, bottom, top, out):
     """Bilinear read of an irradiance table (n_r, n_mu_s, n_wavelengths)."""
     n_r, n_m, _ = table.shape
@@ -128,7 +140,7 @@ def irradiance_lookup(table, r, mu_s, bottom, top, out):
     bilinear_read(table, p_r, p_m, out)
 
 
-@_jit
+@helper
 def r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu):
     """Interpolation cell (i_r, w_r, i_mu, w_mu) of a view ray in the 4D tables (mu stays in its half)."""
     p_r, p_mu = scattering_r_mu_coord(r, mu, hits_ground, bottom, top, n_r, n_mu)
@@ -141,7 +153,7 @@ def r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu):
     return i_r, w_r, i_mu, w_mu
 
 
-@_jit
+@helper
 def mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_mu_s, n_nu):
     """Interpolation cell (i_mu_s, w_mu_s, i_nu, w_nu) in the 4D tables (view zenith cosine ``mu``)."""
     p_s = scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_mu_s)
@@ -151,7 +163,7 @@ def mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_mu_s, n_nu):
     return i_s, w_s, i_n, w_n
 
 
-@_jit
+@helper
 def r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_mu_s):
     """Interpolation cell (i_r, w_r, i_mu_s, w_mu_s) of an observer radius and sun zenith cosine in the 4D
     tables (the axes that stay fixed for one observer)."""
@@ -161,7 +173,7 @@ def r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_mu_s):
     return i_r, w_r, i_s, w_s
 
 
-@_jit
+@helper
 def lookup4_cell(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scale, out):
     """``out += scale * table(cell)``: quadrilinear interpolation of a 4D table (..., n_wavelengths)."""
     n_l = table.shape[4]
@@ -186,7 +198,32 @@ def lookup4_cell(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scale, out):
                         out[k] += we * table[i_r + a, i_mu + b, i_s + c, i_n + e, k]
 
 
-@_jit
+@helper
+def lookup4_cell_spectral(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scales, out):
+    """``out[k] += scales[k] * table(cell)[k]``: :func:`lookup4_cell` with a scale per wavelength (a tabulated
+    aerosol phase)."""
+    n_l = table.shape[4]
+    for a in range(2):
+        wa = w_r if a else 1.0 - w_r
+        if wa == 0.0:
+            continue
+        for b in range(2):
+            wb = wa * (w_mu if b else 1.0 - w_mu)
+            if wb == 0.0:
+                continue
+            for c in range(2):
+                wc = wb * (w_s if c else 1.0 - w_s)
+                if wc == 0.0:
+                    continue
+                for e in range(2):
+                    we = wc * (w_n if e else 1.0 - w_n)
+                    if we == 0.0:
+                        continue
+                    for k in range(n_l):
+                        out[k] += we * scales[k] * table[i_r + a, i_mu + b, i_s + c, i_n + e, k]
+
+
+@helper
 def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min, scale, out):
     """``out += scale * S(r, mu, mu_s, nu)`` for a 4D table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths)."""
     n_r, n_mu, n_s, n_n, _ = table.shape
@@ -195,7 +232,7 @@ def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min
     lookup4_cell(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scale, out)
 
 
-@_jit
+@helper
 def density_at(profile, n_layers, h):
     """Relative density of a profile (rows: width, exp_term, exp_scale, linear_term, constant_term) at altitude h."""
     start = 0.0
@@ -207,7 +244,7 @@ def density_at(profile, n_layers, h):
     return 0.0
 
 
-@_jit
+@helper
 def exp_segment_weights(sa, sb, h):
     """Weights (c_a, c_b) with ``integral_0^h s(t) g(t) dt ~= c_a s_a g_a + c_b s_b g_b``.
 

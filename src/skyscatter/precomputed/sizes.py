@@ -22,8 +22,8 @@ __all__ = ["DEFAULT_ORDERS", "DEFAULT_TABLE_WAVELENGTHS", "NAMED_WAVELENGTHS", "
            "table_wavelengths"]
 
 #: Wavelengths [nm] of the default tables: 16 from 400 to 700 nm every 20 nm, the spectral mode (colour by the
-#: CIE observer, :mod:`.conversion`). Chosen by measured colour error per second of precomputation (issue 11,
-#: ``benchmarks/bruneton_colour_error.py``, ``docs/bruneton.md``): within delta-xy 0.005 and 2 % in luminance
+#: CIE observer, :mod:`.conversion`). Chosen by measured colour error per second of precomputation
+#: (``benchmarks/bruneton_colour_error.py``, ``docs/bruneton.md``): within delta-xy 0.005 and 2 % in luminance
 #: of 41 wavelengths (380-780 nm, 10 nm) at sun elevations 90 to -6 deg, sky and ground. The 20 nm spacing, not
 #: the range, sets the error: 20 wavelengths over 380-760 nm were no closer, 14 over 400-660 nm or 11 every
 #: 30 nm failed the bounds.

@@ -22,8 +22,7 @@ by ``P_R`` of the looked-up ``nu`` do not cancel, which skews multiple scatterin
 Tables are float32 with a trailing wavelength axis: transmittance (n_r, n_mu), irradiance (n_r, n_mu_s),
 scattering (n_r, n_mu, n_mu_s, n_nu); ``irradiance`` is the sky's (orders 1 and up), not the sun's.
 
-Reference: Bruneton & Neyret (2008), Precomputed Atmospheric Scattering, Comput. Graph. Forum 27(4),
-doi:10.1111/j.1467-8659.2008.01245.x.
+Reference: [Bruneton2008].
 """
 
 from __future__ import annotations

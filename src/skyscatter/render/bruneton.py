@@ -1,4 +1,4 @@
-"""Images of the precomputed atmosphere (Bruneton & Neyret 2008, doi:10.1111/j.1467-8659.2008.01245.x).
+"""Images of the precomputed atmosphere ([Bruneton2008]).
 
 * :func:`camera_view`, :func:`fisheye_view` - the sky (and planet) from any position: the ground, an
   aircraft, orbit; :func:`preview_png` to look at them.
@@ -171,7 +171,8 @@ def preview_png(image: ArrayLike, path: str | Path, *, exposure: float | None = 
 def bruneton_scene(terrain: Terrain, camera: PinholeCamera, sun_zenith: float, sun_azimuth: float, *,
                    atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None = None, albedo: float = 0.2,
                    sun_disc: bool = True, wavelengths: ArrayLike | None = None, shafts: bool = True,
-                   samples: int | None = None, refine: int | None = None, **medium: Any) -> Scene:
+                   samples: int | None = None, refine: int | None = None, table_wavelengths: str | None = None,
+                   **medium: Any) -> Scene:
     """A :class:`~skyscatter.render.Scene` lit and hazed by the precomputed atmosphere.
 
     Parameters
@@ -196,16 +197,20 @@ def bruneton_scene(terrain: Terrain, camera: PinholeCamera, sun_zenith: float, s
     samples, refine : int, optional
         Ray-marching steps and boundary bisections of the shadow-length estimate (defaults of
         :func:`skyscatter.render.shafts.shadow_lengths`).
+    table_wavelengths : {"spectral", "rgb"}, optional
+        The tables' wavelengths (BrunetonSky's ``wavelengths``; ``wavelengths`` here are the renderer's).
     **medium
         The atmosphere's options of :class:`~skyscatter.sky.bruneton.BrunetonSky` (``turbidity``,
-        ``aerosol_optical_depth``, ``angstrom_alpha``, ``ozone_column``, ``wavelengths`` "spectral"/"rgb"); the
-        atmosphere's ground albedo stays its own (``albedo`` here is the terrain's).
+        ``aerosol_optical_depth``, ``angstrom_alpha``, ``ozone_column``); the atmosphere's ground albedo stays
+        its own (``albedo`` here is the terrain's).
 
     Returns
     -------
     Scene
     """
     x, y, z = (float(v) for v in camera.position)
+    if table_wavelengths is not None:
+        medium["wavelengths"] = table_wavelengths
     sky = BrunetonSky(sun_zenith, sun_azimuth, altitude=max(z, 0.0), atmosphere=atmosphere, **medium)
     tracer = HeightfieldTracer(terrain) if shafts else None
     aerial = BrunetonAerialPerspective(

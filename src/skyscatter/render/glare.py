@@ -1,7 +1,6 @@
 """Scattering in the eye: glare (bloom) as a convolution with the point-spread function of Spencer et al. 1995.
 
-Spencer, Shirley, Zimmerman & Greenberg, "Physically-Based Glare Effects for Digital Images", SIGGRAPH 1995,
-Sec. 4-5: the eye's point-spread function is a weighted sum of four radial components of the angle theta
+[Spencer1995] Sec. 4-5: the eye's point-spread function is a weighted sum of four radial components of the angle theta
 [deg] from the source,
 
 * ``f0(theta) = 2.61e6 exp(-(theta / 0.02)^2)``            (the core: the eye's optics),
@@ -33,8 +32,7 @@ Discretisation choices (documented here because they decide the energy balance):
   error, which :func:`glare_kernel` reports (tests require < 1e-3); it is finally rescaled to sum to exactly
   1, so the convolution conserves the image's energy apart from light the PSF sends beyond the image border.
 
-Reference: Spencer, Shirley, Zimmerman & Greenberg (1995), Physically-based glare effects for digital images,
-SIGGRAPH 95, doi:10.1145/218380.218466.
+Reference: [Spencer1995].
 """
 
 from __future__ import annotations

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..aerial.base import DEFAULT_REFINE, DEFAULT_SHADOW_SAMPLES, ShadowCaster
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
+from ..jit import helper, inline, parallel_kernel
 from .terrain import Terrain
 
 __all__ = ["DEFAULT_MAX_DISTANCE", "HeightfieldTracer", "trace_ray"]
@@ -37,7 +38,7 @@ _INF = np.inf
 _MAX_OFFSET = 1e12
 
 
-@numba.njit(cache=True, inline="always")
+@inline
 def _cell_hit(h, ix, iy, wrap, nx, ny, gx, gy, oz, dgx, dgy, dz, tc0, tc1):
     """First t in [tc0, tc1] where the ray meets the bilinear patch of cell (ix, iy), or inf."""
     if wrap:
@@ -89,9 +90,9 @@ def _cell_hit(h, ix, iy, wrap, nx, ny, gx, gy, oz, dgx, dgy, dz, tc0, tc1):
     return tc0 + best
 
 
-# The walkers never allocate: _nrt=False (why: skyscatter.precomputed.sampling, docs/architecture.md); the light
+# The walkers never allocate: helpers without numba's runtime (skyscatter.jit, docs/architecture.md); the light
 # shafts call them once per shadow ray, one ray per sample.
-@numba.njit(cache=True, _nrt=False)
+@helper
 def _walk_cells(h, wrap, nx, ny, ncx, ncy, block, bx, by, gx, gy, oz, dgx, dgy, dz, t0, t1):
     """Walk the cells of block (bx, by) between t0 and t1; first hit or inf."""
     tm = t0
@@ -152,7 +153,7 @@ def _walk_cells(h, wrap, nx, ny, ncx, ncy, block, bx, by, gx, gy, oz, dgx, dgy, 
             return _INF
 
 
-@numba.njit(cache=True, _nrt=False)
+@helper
 def _walk_grid(h, bmax, wrap, block, gx, gy, oz, dgx, dgy, dz, ta, tb):
     """Two-level walk between ta and tb (grid coordinates in cells, t in metres); first hit or inf."""
     ny, nx = h.shape
@@ -222,7 +223,7 @@ def _walk_grid(h, bmax, wrap, block, gx, gy, oz, dgx, dgy, dz, ta, tb):
             return _INF
 
 
-@numba.njit(cache=True, nogil=True, _nrt=False)
+@helper
 def trace_ray(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax, ox, oy, oz, dx, dy, dz, tmin, tmax):
     """Distance [m] along one ray to the first point of the terrain surface, or ``inf`` (numba-compiled).
 
@@ -298,7 +299,7 @@ def trace_ray(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax, ox, oy, o
     return _INF
 
 
-@numba.njit(cache=True, parallel=True)
+@parallel_kernel
 def _trace_many(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax, origins, dirs, tmin, tmax, out):
     n = dirs.shape[0]
     stride = 0 if origins.shape[0] == 1 else 1

@@ -21,7 +21,7 @@ from ..fileio import atomic_path, atomic_paths, check_output_path
 from ..spectral import gamut_map_srgb
 from .tonemap import tonemap
 
-__all__ = ["read_exr", "write_exr", "write_exr_and_png", "write_png"]
+__all__ = ["read_exr", "write_exr", "write_exr_and_png", "write_hdr", "write_png"]
 
 
 #: Chromaticities (x, y) of the red, green, blue primaries and white of the files (IEC 61966-2-1 sRGB, D65).
@@ -73,7 +73,14 @@ def _save_exr(path: Path, pixels: NDArray[np.float32]) -> None:
 
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
               "chromaticities": SRGB_CHROMATICITIES}
-    OpenEXR.File(header, {"RGB": pixels}).write(str(path))
+    try:
+        OpenEXR.File(header, {"RGB": pixels}).write(str(path))
+    except RuntimeError as exc:
+        # OpenEXR reports I/O failures (a full disk, a file too large) as RuntimeError('Failed to write ... image
+        # file "<path>". No space left on device.'): an OSError for the atomic writer, which names the target.
+        text = str(exc)
+        reason = text.rsplit('". ', 1)[-1].rstrip(". ") if '". ' in text else text.replace(str(path), "the file")
+        raise OSError(None, reason or "the OpenEXR library could not write the file", str(path)) from exc
 
 
 def _save_png(path: Path, display: NDArray[np.float64]) -> None:
@@ -158,3 +165,61 @@ def write_png(
     with atomic_path(target) as tmp:
         _save_png(tmp, display)
     return target
+
+
+def write_hdr(path: str | os.PathLike[str], rgb: ArrayLike, *, comments: tuple[str, ...] | list[str] = ()) -> Path:
+    """Write an RGB image (H, W, 3) as a Radiance picture (RGBE, ``.hdr``/``.pic``), atomically; returns the path.
+
+    The values are written as they are (no colour conversion, no exposure): give Radiance RGB radiance
+    [W sr^-1 m^-2] (:func:`skyscatter.spectral.xyz_to_radiance_rgb`) for pictures Radiance renders with.
+    Non-finite or negative values are refused. Format ([Ward1994]; [RadianceSource2025] color.c): the header
+    ``#?RADIANCE``, ``FORMAT=32-bit_rle_rgbe``, an empty line and ``-Y H +X W``; then each scanline run-length
+    encoded per component (Radiance's "new" encoding; 8 to 32767 pixels wide, flat pixels otherwise), every
+    pixel a shared 8-bit exponent and three 8-bit mantissas (relative precision 1/256).
+    """
+    target = check_output_path(path)
+    a = np.asarray(_check_rgb(rgb), dtype=np.float64)
+    if not np.all(np.isfinite(a)) or np.any(a < 0):
+        raise InvalidParameterError("a Radiance picture holds finite values >= 0; gamut map or clip the image first")
+    with atomic_path(target) as tmp:
+        _save_hdr(tmp, a, comments)
+    return target
+
+
+def _rgbe(a: NDArray[np.float64]) -> NDArray[np.uint8]:
+    """(H, W, 3) floats -> (H, W, 4) RGBE bytes, as Radiance's ``setcolr``: mantissas ``floor(c * 255.9999 * m /
+    max)`` with ``max = m 2^e`` (m in [0.5, 1)), exponent ``e + 128``; 0 below 1e-32."""
+    v = a.max(axis=-1)
+    m, e = np.frexp(v)
+    lit = v > 1e-32
+    scale = np.where(lit, m * 255.9999 / np.where(lit, v, 1.0), 0.0)
+    out = np.zeros((*a.shape[:2], 4), dtype=np.uint8)
+    out[..., :3] = np.clip(np.floor(a * scale[..., None]), 0, 255).astype(np.uint8)
+    out[..., 3] = np.where(lit, e + 128, 0).astype(np.uint8)
+    return out
+
+
+def _save_hdr(path: Path, a: NDArray[np.float64], comments) -> None:
+    h, w = a.shape[:2]
+    pixels = _rgbe(a)
+    lines = ["#?RADIANCE", *(f"# {c}" for c in comments if c), "FORMAT=32-bit_rle_rgbe", "", f"-Y {h} +X {w}"]
+    if 8 <= w <= 0x7FFF:
+        # each scanline: 2 2 W>>8 W&255, then each component as literal runs of at most 128 bytes (count, bytes)
+        n = -(-w // 128)
+        padded = np.zeros((h, 4, n * 128), dtype=np.uint8)
+        padded[..., :w] = pixels.transpose(0, 2, 1)
+        counts = np.full(n, 128, dtype=np.uint8)
+        counts[-1] = w - 128 * (n - 1)
+        block = np.concatenate([np.broadcast_to(counts[None, None, :, None], (h, 4, n, 1)),
+                                padded.reshape(h, 4, n, 128)], axis=-1)
+        keep = np.zeros((n, 129), dtype=bool)
+        keep[:, 0] = True
+        keep[np.arange(129)[None, :] <= counts[:, None].astype(int)] = True
+        data = block.reshape(h, 4, n * 129)[..., keep.ravel()].reshape(h, 4 * (w + n))
+        start = np.broadcast_to(np.array([2, 2, w >> 8, w & 255], dtype=np.uint8), (h, 4))
+        body = np.concatenate([start, data], axis=1)
+    else:
+        body = pixels
+    with open(path, "wb") as fh:
+        fh.write(("\n".join(lines) + "\n").encode("ascii"))
+        fh.write(memoryview(np.ascontiguousarray(body)).cast("B"))

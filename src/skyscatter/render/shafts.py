@@ -1,6 +1,6 @@
 """Light shafts in a landscape: the length of each view ray that lies in the terrain's shadow.
 
-Bruneton & Neyret (2008), Sec. 5 (doi:10.1111/j.1467-8659.2008.01245.x), render light shafts by moving the
+Bruneton & Neyret ([Bruneton2008] Sec. 5) render light shafts by moving the
 total length ``l`` of a view ray that lies in terrain shadow to one end of the ray (Eqs. 17-18,
 :mod:`skyscatter.aerial.bruneton`). The paper finds ``l`` with a shadow-volume pass on the GPU; here it is
 estimated on the CPU (:func:`shadow_lengths`) by marching each view ray and casting a shadow ray towards the sun
@@ -19,20 +19,21 @@ from numpy.typing import ArrayLike, NDArray
 from ..aerial.base import DEFAULT_REFINE, DEFAULT_SHADOW_SAMPLES
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
+from ..jit import inline, parallel_kernel
 from .heightfield import HeightfieldTracer, trace_ray
 from .terrain import Terrain
 
 __all__ = ["DEFAULT_REFINE", "DEFAULT_SHADOW_SAMPLES", "shadow_lengths"]
 
 
-@numba.njit(cache=True, inline="always")
+@inline
 def _in_shadow(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax, px, py, pz, sx, sy, sz, t_min, t_max):
     """True if the point sees the terrain towards the sun (the tracer's shadow test)."""
     return trace_ray(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax, px, py, pz, sx, sy, sz,
                   t_min, t_max) != np.inf
 
 
-@numba.njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel
 def _shadow_lengths(h, bmax, wrap, block, spacing, x0, y0, base, hmin, hmax, origins, dirs, dist, sun,
                     samples, refine, t_min, t_max, end_offset, out):
     n = dirs.shape[0]

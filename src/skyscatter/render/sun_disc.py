@@ -53,6 +53,13 @@ _PER_RADIUS, _PER_PIXEL, _MAX_PER_PIXEL = 8, 2, 64
 _CHUNK = 1 << 20
 
 
+def _unit(zenith: NDArray[np.float64], azimuth: NDArray[np.float64]) -> NDArray[np.float64]:
+    """ENU unit vectors (..., 3) from zenith and azimuth [rad] (``conventions.direction_from_angles`` without its
+    input checks: the arguments here are computed, not given)."""
+    st = np.sin(zenith)
+    return np.stack([st * np.sin(azimuth), st * np.cos(azimuth), np.cos(zenith)], axis=-1)
+
+
 class _Projection:
     """A continuous map between image coordinates (x right, y down, in pixels; pixel (i, j) spans
     [j, j + 1) x [i, i + 1)) and unit ENU directions."""
@@ -97,7 +104,8 @@ class EquirectProjection(_Projection):
         return x, self.height * theta / math.pi, np.ones(theta.shape, dtype=bool)
 
     def from_pixel(self, x, y):
-        return direction_from_angles(math.pi * y / self.height, 2.0 * math.pi * (x / self.width - self.north_column))
+        return _unit(math.pi * np.asarray(y) / self.height, 2.0 * math.pi * (np.asarray(x) / self.width
+                                                                               - self.north_column))
 
     def solid_angle_density(self, x, y, d):
         return (2.0 * math.pi / self.width) * (math.pi / self.height) * np.sin(math.pi * np.asarray(y) / self.height)
@@ -121,7 +129,7 @@ class FisheyeProjection(_Projection):
     def from_pixel(self, x, y):
         px = 2.0 * np.asarray(x) / self.width - 1.0
         py = 2.0 * np.asarray(y) / self.width - 1.0
-        return direction_from_angles(np.hypot(px, py) * (math.pi / 2.0), np.arctan2(-px, -py))
+        return _unit(np.hypot(px, py) * (math.pi / 2.0), np.arctan2(-px, -py))
 
     def solid_angle_density(self, x, y, d):
         theta = np.arccos(np.clip(d[..., 2], -1.0, 1.0))
@@ -201,10 +209,11 @@ class DiscDeposit:
 
 def _basis(s: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Two unit vectors orthogonal to ``s`` and to each other."""
-    a = np.array([1.0, 0.0, 0.0]) if abs(s[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = np.cross(s, a)
-    e1 /= np.linalg.norm(e1)
-    return e1, np.cross(s, e1)
+    x, y, z = (float(v) for v in s)
+    e1 = np.array([0.0, z, -y]) if abs(x) < 0.9 else np.array([-z, 0.0, x])  # s x (1, 0, 0), s x (0, 1, 0)
+    e1 /= math.sqrt(float(e1 @ e1))
+    e2 = np.array([y * e1[2] - z * e1[1], z * e1[0] - x * e1[2], x * e1[1] - y * e1[0]])  # s x e1
+    return e1, e2
 
 
 def _bounding_box(s, radius, proj: _Projection) -> tuple[float, float, float, float] | None:
@@ -278,7 +287,8 @@ def disc_deposit(direction: NDArray[np.float64], angular_radius: float, proj: _P
         if not np.any(near):
             continue
         X, Y, d, cosang = X[near], Y[near], d[near], cosang[near]
-        rho = np.arctan2(np.linalg.norm(np.cross(d, s), axis=-1), cosang)
+        diff = d - s
+        rho = 2.0 * np.arcsin(np.minimum(0.5 * np.sqrt(np.einsum("ij,ij->i", diff, diff)), 1.0))  # exact near s
         dens = proj.solid_angle_density(X, Y, d)
         step = np.sqrt(dens * area)  # angular size of a sub-sample [rad]
         cover = np.clip((r - rho) / np.maximum(step, 1e-300) + 0.5, 0.0, 1.0)
@@ -332,12 +342,11 @@ def disc_deposit(direction: NDArray[np.float64], angular_radius: float, proj: _P
         return None
     keys = np.concatenate(keys_parts)
     vals = np.concatenate(vals_parts)
-    uniq, inv = np.unique(keys, return_inverse=True)
-    sums = np.bincount(inv, weights=vals)
-    pix, node_index = np.divmod(uniq, nodes)
-    upix, pinv = np.unique(pix, return_inverse=True)
-    weights = np.bincount(pinv * nodes + node_index, weights=sums, minlength=upix.size * nodes).reshape(upix.size,
-                                                                                                      nodes)
+    # per pixel and node: the pixels touched, then their weights (one sort of the pixel numbers)
+    pix_all, node_all = np.divmod(keys, nodes)
+    upix, pinv = np.unique(pix_all, return_inverse=True)
+    weights = np.bincount(pinv * nodes + node_all, weights=vals, minlength=upix.size * nodes).reshape(upix.size,
+                                                                                                    nodes)
     # The quadrature scaled to the disc's exact solid angle (when it saw the whole disc): flux exact to rounding.
     omega_disc = 2.0 * math.pi * (1.0 - math.cos(r))
     scale = omega_disc / total_all.sum() if not clipped else 1.0

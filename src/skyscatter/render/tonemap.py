@@ -13,8 +13,7 @@ for Digital Images", SIGGRAPH 2002), applied to luminance so hue is kept:
 
 The curve of step 2 is strictly increasing in ``Y_s``, so the operator is monotonic in luminance.
 
-Reference: Reinhard, Stark, Shirley & Ferwerda (2002), Photographic tone reproduction for digital images, ACM TOG
-21(3), doi:10.1145/566654.566575.
+Reference: [Reinhard2002].
 """
 
 from __future__ import annotations

@@ -15,8 +15,7 @@ model of DOE-2.1E as EnergyPlus carries it; that public restatement is what this
 * the component skies: the same reference, "Daylight Factor Calculation", section "Sky Luminance
   Distributions", and LBNL's DElight (``dskylu``, sky types 0-3), the C version of the DOE-2 daylighting code.
 
-The primary papers (Perez, Michalsky & Seals 1992, J. Illum. Eng. Soc. 21(2):84-92; Littlefair 1994, Solar
-Energy 53(4):315-322) were not available; the identification rests on the
+The primary papers ([Perez1992]; [Littlefair1994]) were not available; the identification rests on the
 same four components and the same two indices (docs/standard_skies.md lists what each source gives).
 
 **Weights.** With epsilon the sky clearness and delta the sky brightness (Perez et al. 1990, Eqs. 1-2), the sky

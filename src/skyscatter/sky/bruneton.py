@@ -1,7 +1,6 @@
 """The precomputed atmosphere of Bruneton & Neyret (2008) as a skyscatter sky model: :class:`BrunetonSky`.
 
-Bruneton, E., Neyret, F. (2008). Precomputed Atmospheric Scattering. Computer Graphics Forum 27(4),
-1079-1086, doi:10.1111/j.1467-8659.2008.01245.x. The tables come from :mod:`skyscatter.precomputed`.
+Reference: [Bruneton2008]. The tables come from :mod:`skyscatter.precomputed`.
 
 The observer stands at ``altitude`` above the planet's surface; the local East-North-Up frame is the
 planet-centred frame with the observer on its +z axis. Directions that meet the planet return the ground
@@ -34,13 +33,33 @@ MAX_ALTITUDE = 1.0e8
 def _medium_from_options(atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None, *,
                          turbidity: float | None = None, aerosol_optical_depth: float | None = None,
                          angstrom_alpha: float | None = None, albedo: float | None = None,
-                         ozone_column: float | None = None) -> AtmosphereParameters:
-    """The atmosphere described by the convenience options (on the Earth defaults or on ``atmosphere``)."""
+                         ozone_column: float | None = None, aerosol_type: str | None = None,
+                         atmosphere_file: str | None = None) -> AtmosphereParameters:
+    """The atmosphere described by the convenience options (on the Earth defaults, on ``atmosphere`` or on the
+    air of ``atmosphere_file``)."""
     if isinstance(atmosphere, PrecomputedAtmosphere):
         raise InvalidParameterError("give either precomputed tables (atmosphere=...) or the atmosphere's options "
                                     "(turbidity, aerosol_optical_depth, albedo, ozone_column), not both")
+    if atmosphere_file is not None:
+        if atmosphere is not None:
+            raise InvalidParameterError("give either atmosphere or atmosphere_file, not both")
+        atmosphere = AtmosphereParameters.load_json(atmosphere_file)
     if turbidity is not None and aerosol_optical_depth is not None:
         raise InvalidParameterError("give either turbidity or aerosol_optical_depth, not both")
+    if aerosol_type is not None:
+        if turbidity is not None or angstrom_alpha is not None:
+            raise InvalidParameterError("an aerosol type takes --aod (its optical depth at 550 nm), not turbidity "
+                                        "or angstrom_alpha")
+        from ..atmosphere.aerosol_types import OpacAerosol
+
+        base = atmosphere if isinstance(atmosphere, AtmosphereParameters) else AtmosphereParameters()
+        aerosol = OpacAerosol.preset(aerosol_type, aerosol_optical_depth, column_height=base.thickness)
+        changes_t: dict = {"aerosol": aerosol}
+        if albedo is not None:
+            changes_t["ground_albedo"] = albedo
+        if ozone_column is not None:
+            changes_t["ozone_column"] = ozone_column
+        return base.replace(**changes_t)
     if angstrom_alpha is not None and aerosol_optical_depth is None:
         raise InvalidParameterError("angstrom_alpha goes with aerosol_optical_depth")
     for name, value, low, high in (("albedo", albedo, 0.0, 1.0), ("ozone_column", ozone_column, 0.0, 1000.0)):
@@ -61,6 +80,8 @@ def _medium_from_options(atmosphere: PrecomputedAtmosphere | AtmosphereParameter
     else:
         aerosol = base
     changes.update(mie_angstrom_alpha=aerosol.mie_angstrom_alpha, mie_angstrom_beta=aerosol.mie_angstrom_beta)
+    if turbidity is not None or aerosol_optical_depth is not None:
+        changes["aerosol"] = None  # the Angstrom aerosol of the options replaces a component aerosol of the base
     return base.replace(**changes)
 
 
@@ -91,6 +112,12 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         Ground albedo, 0 to 1 (the Earth defaults: 0.1).
     ozone_column : float, optional
         Total ozone [Dobson units], 0 to 1000 (the Earth defaults: 300).
+    aerosol_type : str, optional
+        An OPAC aerosol type with Mie optics (:data:`skyscatter.atmosphere.aerosol_types.AEROSOL_TYPES`, Hess et
+        al. 1998), its optical depth at 550 nm ``aerosol_optical_depth`` (default: the type's own).
+    atmosphere_file : str, optional
+        A JSON file with the air (:meth:`AtmosphereParameters.load_json`, written by ``skyscatter
+        fit-atmosphere``); the other medium options change it.
     wavelengths : {"spectral", "rgb"}, optional
         Wavelengths of tables built from parameters: "spectral" (the default, 16 from 400 to 700 nm, colour
         within delta-xy 0.003 of a 41-wavelength computation) or "rgb" (3, about 30 % quicker to build, colour
@@ -117,11 +144,13 @@ class BrunetonSky(SunSkyMixin, SkyModel):
                  atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None = None,
                  turbidity: float | None = None, aerosol_optical_depth: float | None = None,
                  angstrom_alpha: float | None = None, albedo: float | None = None,
-                 ozone_column: float | None = None, wavelengths: str | None = None) -> None:
+                 ozone_column: float | None = None, aerosol_type: str | None = None,
+                 atmosphere_file: str | None = None, wavelengths: str | None = None) -> None:
         zen, azi = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=True)
         medium = {k: v for k, v in (("turbidity", turbidity), ("aerosol_optical_depth", aerosol_optical_depth),
                                     ("angstrom_alpha", angstrom_alpha), ("albedo", albedo),
-                                    ("ozone_column", ozone_column)) if v is not None}
+                                    ("ozone_column", ozone_column), ("aerosol_type", aerosol_type),
+                                    ("atmosphere_file", atmosphere_file)) if v is not None}
         given_atmosphere = atmosphere
         if medium:
             atmosphere = _medium_from_options(atmosphere, **medium)

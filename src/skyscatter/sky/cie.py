@@ -24,8 +24,7 @@ Spectra: these are luminance-only models; their spectrum is the CIE daylight ill
 the illuminance ``sun_illuminance_normal`` [lx] (default 0; set it to add a sun to images and to
 ``horizontal_illuminance(..., include_sun=True)``). Directions below the horizon have zero luminance.
 
-Reference: CIE S 011/E:2003 = ISO 15469:2004 (no DOI); Kittler (1967) as CIE 22-1973; Moon & Spencer (1942), Illum.
-Eng. 37:707-726.
+References: [CIE2003]; [Kittler1967] as [CIE1973]; [MoonSpencer1942].
 """
 
 from __future__ import annotations

@@ -14,7 +14,7 @@ Between bands the radiance is interpolated linearly, as ``arhosekskymodel_radian
 and linear-sRGB datasets use the same form with three "bands" each (X, Y, Z with ``683 Y`` the luminance in
 cd m^-2; R, G, B in the same radiometric scale).
 
-Sun (Hosek & Wilkie 2013, IEEE CG&A 33(3) 44-52, https://doi.org/10.1109/MCG.2013.18): per band and integer
+Sun ([HosekWilkie2013]): per band and integer
 turbidity, the radiance of the solar-disc centre is a piecewise cubic in the elevation of the view direction
 (45 segments with breaks at ``(k / 45)^3 pi / 2``), times a 5th-order limb-darkening polynomial in the cosine
 ``mu`` of the angle on the solar surface (``arhosekskymodel_solar_radiance_internal2``). Data version 1.4
@@ -25,12 +25,7 @@ Data: ``skyscatter/data/hosek_wilkie_2013.npz``, converted by ``tools/generate_h
 authors' headers (BSD-3-Clause, Copyright (c) 2012-2013 Lukas Hosek and Alexander Wilkie; licence text in
 ``skyscatter/data/hosek_wilkie_LICENSE.txt``).
 
-References
-----------
-L. Hosek and A. Wilkie, "An Analytic Model for Full Spectral Sky-Dome Radiance", ACM Trans. Graph. 31(4), 95
-(2012), https://doi.org/10.1145/2185520.2185591.
-L. Hosek and A. Wilkie, "Adding a Solar-Radiance Function to the Hosek-Wilkie Skylight Model", IEEE Computer
-Graphics and Applications 33(3), 44-52 (2013), https://doi.org/10.1109/MCG.2013.18.
+References: [HosekWilkie2012], [HosekWilkie2013].
 """
 
 from __future__ import annotations

@@ -14,8 +14,7 @@ not change with w. Its spectrum is flat (equal energy per nm, CIE illuminant E) 
 spectrum and XYZ are the same blend of the two parts. The solar disc is Preetham's sunlight times (1 - w): the
 sun fades behind the overcast. Valid turbidities are those of :class:`~skyscatter.PreethamSky` (1.65 to 11).
 
-Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
-doi:10.1145/311535.311545.
+Reference: [Preetham1999].
 """
 
 from __future__ import annotations

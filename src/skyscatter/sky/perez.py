@@ -37,8 +37,7 @@ Guards (on by default, ``guards=False`` turns them off; each is what Radiance's 
 
 Spectra: CIE D65 scaled to the luminance (``cct`` = 6504 K). Directions below the horizon are 0.
 
-Reference: Perez, Seals & Michalsky (1993), Solar Energy 50(3):235-245, doi:10.1016/0038-092X(93)90017-I; Perez et
-al. (1990), Solar Energy 44(5):271-289, doi:10.1016/0038-092X(90)90055-H.
+References: [Perez1993], [Perez1990].
 """
 
 from __future__ import annotations
@@ -136,9 +135,9 @@ def extraterrestrial_irradiance(day_of_year: ArrayLike | None) -> NDArray[np.flo
     """Extraterrestrial normal irradiance I_0 [W m^-2]: 1367 W m^-2 times Spencer's (1971) eccentricity factor.
 
     ``E_0 = 1.000110 + 0.034221 cos G + 0.001280 sin G + 0.000719 cos 2G + 0.000077 sin 2G`` with the day angle
-    ``G = 2 pi (day_of_year - 1) / 365`` (Spencer 1971, Search 2(5):172; Iqbal 1983, An Introduction to Solar
-    Radiation, Eq. 1.2.1); equal to ``pvlib.irradiance.get_extra_radiation(method="spencer")`` in the tests.
-    ``day_of_year`` is 1-366; None gives the mean Sun-Earth distance (I_0 = 1367 W m^-2).
+    ``G = 2 pi (day_of_year - 1) / 365`` ([Spencer1971]; [Iqbal1983] Eq. 1.2.1); equal to
+    ``pvlib.irradiance.get_extra_radiation(method="spencer")`` in the tests. ``day_of_year`` is 1-366; None gives the
+    mean Sun-Earth distance (I_0 = 1367 W m^-2).
     """
     if day_of_year is None:
         return SOLAR_CONSTANT

@@ -2,8 +2,7 @@
 
 Every analytic sky in skyscatter is a product of a *gradation* (how the sky brightens or darkens towards the
 horizon) and an *indicatrix* (how it brightens towards the sun). The most general published form is Hosek and
-Wilkie's extension (Hosek & Wilkie 2012, Eq. 9, doi:10.1145/2185520.2185591) of the Perez et al. (1993) formula
-(doi:10.1016/0038-092X(93)90017-I):
+Wilkie's extension ([HosekWilkie2012] Eq. 9) of the Perez et al. (1993) formula ([Perez1993]):
 
     F(theta, gamma) = (1 + A exp(B / (cos theta + o)))
                       * (C + D exp(E gamma) + F cos^2 gamma + G chi(H, gamma) + I sqrt(cos theta))
@@ -33,7 +32,7 @@ The kernel is written once, in numpy (:func:`gradation` and :func:`indicatrix`, 
 :func:`extended_perez`): every model and the sky matrix evaluate whole arrays of directions through it. numpy's
 vectorised exp/arccos/sqrt are faster per direction than numba's scalar libm calls on this formula, and the
 sky package then needs no compiled kernel at all: a command-line call pays neither numba's import nor its
-first-use set-up (about 0.35 s; issue 12, "a quick command line").
+first-use set-up (about 0.35 s; docs/architecture.md, "Start-up").
 """
 
 from __future__ import annotations

@@ -10,8 +10,7 @@ Appendix A.2 (zenith chromaticity matrices with the published 5-digit values, se
 Spectra are reconstructed from (x, y) with the CIE daylight basis (A.5) and scaled to the model's luminance.
 The sun is the A.1 spectral sunlight (:func:`skyscatter.sun.sunlight.sun_spectral_radiance`).
 
-Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
-doi:10.1145/311535.311545.
+Reference: [Preetham1999].
 """
 
 from __future__ import annotations

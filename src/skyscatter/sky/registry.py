@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..conventions import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_EXTRATERRESTRIAL_IRRADIANCE, check_daylight_limit
 from ..errors import InvalidParameterError
+from ..references import cite
 
 if TYPE_CHECKING:
     from .base import SkyModel
@@ -45,6 +46,12 @@ __all__ = [
 DICT_VERSION = 1
 
 
+def _aerosol_types() -> tuple[str, ...]:
+    from ..atmosphere.aerosol_types import AEROSOL_TYPES
+
+    return tuple(AEROSOL_TYPES)
+
+
 @dataclass(frozen=True)
 class Parameter:
     """One parameter of a sky model (a keyword argument of its class).
@@ -59,8 +66,9 @@ class Parameter:
         Value used when the parameter is not given (None: optional, the model decides).
     help : str
         One line for documentation and ``--help``.
-    kind : {"float", "int", "bool", "choice", "atmosphere", "object"}
-        Value type. ``"atmosphere"`` is an :class:`~skyscatter.atmosphere.AtmosphereParameters` or precomputed
+    kind : {"float", "int", "bool", "choice", "path", "atmosphere", "object"}
+        Value type (``"path"``: a file name). ``"atmosphere"`` is an
+        :class:`~skyscatter.atmosphere.AtmosphereParameters` or precomputed
         tables (serialised through the parameters' ``to_dict``); ``"object"`` a skyscatter object with
         ``to_dict`` / ``from_dict`` (such as a fitted dataset).
     low, high : float or None
@@ -144,6 +152,10 @@ class Parameter:
         if self.kind == "choice":
             if value not in self.choices:
                 raise InvalidParameterError(f"{where} must be {self.range_text()}; got {value!r}")
+            return value
+        if self.kind == "path":
+            if not isinstance(value, str) or not value:
+                raise InvalidParameterError(f"{where} must be a file name; got {value!r}")
             return value
         return value
 
@@ -367,8 +379,7 @@ register(ModelSpec(
     name="preetham",
     factory="skyscatter.sky.preetham:PreethamSky",
     summary="Preetham et al. 1999 analytic clear sky, spectral, with sun",
-    citation="Preetham, Shirley, Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99, "
-             "doi:10.1145/311535.311545",
+    citation=cite("Preetham1999"),
     parameters=(
         Parameter("turbidity", "1", 2.5, _TURBIDITY_HELP, low=1.65, high=11.0),
         Parameter("below_horizon", "", "zero", "radiance below the horizon: zero, or the horizon value",
@@ -382,7 +393,7 @@ register(ModelSpec(
     name="preetham-overcast",
     factory="skyscatter.sky.overcast_blend:PreethamOvercastBlendSky",
     summary="Preetham 1999 Sec. 5: the Preetham sky blended into the CIE overcast sky from T = 6 to 10",
-    citation="Preetham, Shirley, Smits (1999), Sec. 5, doi:10.1145/311535.311545",
+    citation=cite("Preetham1999", note="Sec. 5 of"),
     parameters=(
         Parameter("turbidity", "1", 8.0, _TURBIDITY_HELP + "; blended into overcast from 6 to 10",
                   low=1.65, high=11.0),
@@ -395,7 +406,7 @@ register(ModelSpec(
     name="cie",
     factory="skyscatter.sky.cie:CIEStandardSky",
     summary="CIE S 011/E:2003 standard general sky, 15 types, luminance only",
-    citation="CIE S 011/E:2003 (ISO 15469:2004), Spatial distribution of daylight - CIE standard general sky",
+    citation=cite("CIE2003"),
     parameters=(Parameter("sky_type", "1", 12, "CIE 2003 standard sky type (12: the CIE clear sky)", kind="int",
                           low=1, high=15), *_SCALE, _SUN_ILLUMINANCE),
 ))
@@ -403,7 +414,7 @@ register(ModelSpec(
     name="cie-overcast",
     factory="skyscatter.sky.cie:CIEOvercastSky",
     summary="CIE overcast sky (Moon & Spencer 1942), luminance only, no sun",
-    citation="Moon & Spencer (1942), Illumination from a non-uniform sky, Illum. Eng. 37:707-726; CIE S 003 (1955)",
+    citation=cite("MoonSpencer1942"),
     parameters=_SCALE,
     uses_sun=False,
 ))
@@ -411,7 +422,7 @@ register(ModelSpec(
     name="cie-clear",
     factory="skyscatter.sky.cie:CIEClearSky",
     summary="CIE 1973 clear sky (Kittler), luminance only",
-    citation="CIE 22-1973, Standardization of luminance distribution on clear skies (Kittler 1967)",
+    citation=cite("CIE1973", "Kittler1967"),
     parameters=(*_SCALE, _SUN_ILLUMINANCE),
 ))
 
@@ -437,8 +448,7 @@ register(ModelSpec(
     name="perez",
     factory="skyscatter.sky.perez:PerezSky",
     summary="Perez et al. 1993 all-weather sky (epsilon/delta or DNI/DHI), luminance only",
-    citation="Perez, Seals, Michalsky (1993), All-weather model for sky luminance distribution, Solar Energy "
-             "50(3):235-245, doi:10.1016/0038-092X(93)90017-I",
+    citation=cite("Perez1993"),
     parameters=_SKY_CONDITION,
 ))
 register(ModelSpec(
@@ -446,18 +456,15 @@ register(ModelSpec(
     factory="skyscatter.sky.asrc_cie:ASRCCIESky",
     summary="ASRC-CIE sky: CIE clear, turbid, intermediate and overcast skies weighted by epsilon/delta "
             "(or DNI/DHI), luminance only",
-    citation="Perez, Michalsky, Seals (1992), Modeling sky luminance angular distribution for real sky conditions, "
-             "J. Illum. Eng. Soc. 21(2):84-92; weights and components as restated in the EnergyPlus Engineering "
-             "Reference (DOE-2.1E daylighting), Time-Step Sky Luminance",
+    citation=cite("Perez1992", "EnergyPlusEngineering",
+                  note="The model of the first, with the weights and components restated in the second:"),
     parameters=_SKY_CONDITION,
 ))
 register(ModelSpec(
     name="hosek-wilkie",
     factory="skyscatter.sky.hosek_wilkie:HosekWilkieSky",
     summary="Hosek & Wilkie 2012 spectral clear sky (320-720 nm) with the 2013 solar disc",
-    citation="Hosek & Wilkie (2012), An Analytic Model for Full Spectral Sky-Dome Radiance, ACM TOG 31(4):95, "
-             "doi:10.1145/2185520.2185591; Hosek & Wilkie (2013), Adding a Solar-Radiance Function to the "
-             "Hosek-Wilkie Skylight Model, IEEE CG&A 33(3):44-52, doi:10.1109/MCG.2013.18",
+    citation=cite("HosekWilkie2012", "HosekWilkie2013"),
     parameters=(
         Parameter("turbidity", "1", 3.0, "turbidity of the published model", low=1.0, high=10.0),
         Parameter("albedo", "1", 0.1, "ground albedo, the same at every wavelength", low=0.0, high=1.0),
@@ -470,8 +477,7 @@ register(ModelSpec(
     name="bruneton",
     factory="skyscatter.sky.bruneton:BrunetonSky",
     summary="Bruneton & Neyret 2008 precomputed multiple scattering, from the ground to orbit",
-    citation="Bruneton, Neyret (2008), Precomputed Atmospheric Scattering, Computer Graphics Forum 27(4):1079-1086, "
-             "doi:10.1111/j.1467-8659.2008.01245.x",
+    citation=cite("Bruneton2008"),
     parameters=(
         Parameter("altitude", "m", 0.0, "observer altitude above the ground, from the ground to orbit", low=0.0,
                   high=1e8),
@@ -485,6 +491,12 @@ register(ModelSpec(
                   high=1.0),
         Parameter("ozone_column", "DU", None, "total ozone column (default 300)", low=0.0, high=1000.0,
                   flag="--ozone"),
+        Parameter("aerosol_type", "", None, "OPAC aerosol type with Mie optics (Hess et al. 1998; with --aod its "
+                  "optical depth at 550 nm, else the type's own)", kind="choice", choices=_aerosol_types(),
+                  flag="--aerosol"),
+        Parameter("atmosphere_file", "", None, "the air from a JSON file (written by 'skyscatter fit-atmosphere' "
+                  "or AtmosphereParameters.save_json); the other options change it", kind="path",
+                  flag="--atmosphere"),
         Parameter("wavelengths", "", None, "table wavelengths: spectral (default: 16, 400-700 nm, right colour) "
                   "or rgb (3: quicker to build, wrong colour at low sun)", kind="choice", choices=("spectral", "rgb")),
         Parameter("atmosphere", "", None, "the atmosphere (AtmosphereParameters or precomputed tables; default: "
@@ -498,8 +510,9 @@ register(ModelSpec(
     name="montecarlo",
     factory="skyscatter.sky.montecarlo:MonteCarloSky",
     summary="spectral Monte Carlo reference: all orders of scattering in the spherical atmosphere (slow)",
-    citation="Brute-force spectral path tracing as in Hosek & Wilkie (2012), Sec. 3, doi:10.1145/2185520.2185591, "
-             "with next-event estimation and hero wavelengths (Wilkie et al. 2014, doi:10.1111/cgf.12419)",
+    citation=cite("HosekWilkie2012", "Wilkie2014",
+                  note="Brute-force spectral path tracing (as in Sec. 3 of the first) with next-event estimation "
+                       "and hero wavelengths (the second):"),
     parameters=(
         Parameter("altitude", "m", 0.0, "observer altitude above the ground", low=0.0, high=1e8),
         Parameter("samples", "1", 1024, "paths per direction (the standard error falls as 1/sqrt(samples))",
@@ -507,6 +520,14 @@ register(ModelSpec(
         Parameter("seed", "1", 0, "seed of the counter-based random streams", kind="int", low=0, high=2**63 - 1),
         Parameter("atmosphere", "", None, "the medium (AtmosphereParameters; default: the Earth defaults)",
                   kind="atmosphere", cli=False),
+        Parameter("cloud_optical_depth", "1", 0.0, "optical depth at 550 nm of a uniform water cloud layer (0: none)",
+                  low=0.0, high=1000.0),
+        Parameter("cloud_base", "m", 1000.0, "altitude of the cloud layer's base", low=0.0, high=1e5),
+        Parameter("cloud_top", "m", 1500.0, "altitude of the cloud layer's top (above its base)", low=0.0, high=1e5),
+        Parameter("cloud_effective_radius", "m", 10e-6, "effective radius of the cloud droplets (Mie optics)",
+                  low=1e-6, high=50e-6),
+        Parameter("clouds", "", None, "a 3D cloud field (skyscatter.atmosphere.clouds.CloudField)", kind="object",
+                  cli=False),
     ),
     sun_below_horizon=True,
     spectral=True,

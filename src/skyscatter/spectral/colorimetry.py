@@ -19,20 +19,28 @@ __all__ = [
     "HDR_SCALE",
     "LUMINOUS_EFFICACY",
     "cie_cmfs",
+    "RADIANCE_EFFICACY",
+    "RADIANCE_LUMINANCE_WEIGHTS",
+    "RADIANCE_PRIMARIES",
+    "gamut_map_rgb",
     "gamut_map_srgb",
     "integration_weights",
     "linear_srgb_to_xyz",
+    "radiance_rgb_to_xyz",
     "spectrum_to_luminance",
     "spectrum_to_xyz",
     "xyY_to_xyz",
     "xyz_to_chromaticity",
     "xyz_to_linear_srgb",
+    "xyz_to_radiance_rgb",
 ]
 
 #: Maximum luminous efficacy of radiation K_m [lm/W] (CIE 1931 photopic).
 LUMINOUS_EFFICACY = 683.0
 #: Absolute scale of HDR images: linear sRGB whose Y equals luminance [cd m^-2] / 683, i.e. radiance-like
-#: units [W m^-2 sr^-1] weighted by the photopic curve, the scale Blender and Mitsuba treat as radiance.
+#: units [W m^-2 sr^-1] weighted by the photopic curve. Renderers read the values as their own radiance; their
+#: skies use other scales (Mitsuba's sunsky and Blender's Hosek-Wilkie sky are about 107 times dimmer): the
+#: factors are in docs/conventions.md, "The HDR scale against renderers and cameras".
 HDR_SCALE = 1.0 / LUMINOUS_EFFICACY
 
 # IEC 61966-2-1 sRGB primaries with D65 white (the matrix colour-science also uses for 'sRGB').
@@ -44,6 +52,43 @@ _XYZ_TO_SRGB = np.array(
     ]
 )
 _SRGB_TO_XYZ = np.linalg.inv(_XYZ_TO_SRGB)
+
+#: Radiance's luminous efficacy of its white [lm/W] (``WHTEFFICACY``, [RadianceSource2025] color.h): a Radiance RGB
+#: radiance [W sr^-1 m^-2] has luminance ``179 (0.265 R + 0.670 G + 0.065 B)`` [cd m^-2].
+RADIANCE_EFFICACY = 179.0
+#: Radiance's standard primaries and white, x, y of R, G, B and W ([RadianceSource2025] color.h, ``CIE_x_r`` ...
+#: ``CIE_y_w``): an equal-energy white.
+RADIANCE_PRIMARIES = (0.640, 0.330, 0.290, 0.600, 0.150, 0.060, 1.0 / 3.0, 1.0 / 3.0)
+#: Radiance's luminance weights of R, G, B (``CIE_rf``, ``CIE_gf``, ``CIE_bf``), the Y row of its primaries' matrix
+#: rounded to 3 digits (exact: 0.26511, 0.67011, 0.06479).
+RADIANCE_LUMINANCE_WEIGHTS = (0.265, 0.670, 0.065)
+
+
+def _rgb_to_xyz_matrix(primaries: tuple[float, ...]) -> NDArray[np.float64]:
+    """RGB -> XYZ for primaries (xr, yr, xg, yg, xb, yb, xw, yw), white (1, 1, 1) -> Y = 1 ([WyszeckiStiles1982]
+    3.7)."""
+    xr, yr, xg, yg, xb, yb, xw, yw = primaries
+    p = np.array([[xr / yr, xg / yg, xb / yb], [1.0, 1.0, 1.0],
+                  [(1 - xr - yr) / yr, (1 - xg - yg) / yg, (1 - xb - yb) / yb]])
+    white = np.array([xw / yw, 1.0, (1 - xw - yw) / yw])
+    return p * np.linalg.solve(p, white)
+
+
+_RADIANCE_TO_XYZ = _rgb_to_xyz_matrix(RADIANCE_PRIMARIES)
+_XYZ_TO_RADIANCE = np.linalg.inv(_RADIANCE_TO_XYZ)
+
+
+def xyz_to_radiance_rgb(xyz: ArrayLike) -> NDArray[np.float64]:
+    """CIE XYZ [cd m^-2] -> Radiance RGB radiance [W sr^-1 m^-2]: Radiance's primaries and equal-energy white,
+    divided by its 179 lm/W (so Radiance's ``179 (0.265 R + 0.670 G + 0.065 B)`` gives the luminance back, to
+    0.05 % from the rounding of its weights). Out-of-gamut colours have negative components
+    (:func:`gamut_map_rgb`)."""
+    return np.asarray(xyz, dtype=float) @ _XYZ_TO_RADIANCE.T / RADIANCE_EFFICACY
+
+
+def radiance_rgb_to_xyz(rgb: ArrayLike) -> NDArray[np.float64]:
+    """Radiance RGB radiance [W sr^-1 m^-2] -> CIE XYZ [cd m^-2] (the inverse of :func:`xyz_to_radiance_rgb`)."""
+    return np.asarray(rgb, dtype=float) @ _RADIANCE_TO_XYZ.T * RADIANCE_EFFICACY
 
 
 def _cmfs_table() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -156,19 +201,27 @@ def gamut_map_srgb(rgb: ArrayLike) -> NDArray[np.floating]:
     are returned unchanged; a colour with ``Y <= 0`` (not a physical light) becomes black. Luminance and
     dominant hue are kept; only saturation that sRGB cannot show is lost. float32 input stays float32.
     """
+    return gamut_map_rgb(rgb, _SRGB_LUMINANCE)
+
+
+def gamut_map_rgb(rgb: ArrayLike, luminance_weights: ArrayLike) -> NDArray[np.floating]:
+    """:func:`gamut_map_srgb` for any RGB space whose luminance is ``rgb @ luminance_weights`` (e.g.
+    :data:`RADIANCE_LUMINANCE_WEIGHTS`): out-of-gamut colours desaturated towards the grey of the same
+    luminance."""
     c = np.asarray(rgb)
     dtype = c.dtype if c.dtype == np.float32 else np.float64
     c = c.astype(np.float64, copy=False)
     if c.shape[-1:] != (3,):
-        raise InvalidParameterError(f"linear sRGB colours need a last axis of 3; got shape {c.shape}")
+        raise InvalidParameterError(f"linear RGB colours need a last axis of 3; got shape {c.shape}")
+    weights = np.asarray(luminance_weights, dtype=float)
     low = c.min(axis=-1)
     if not np.any(low < 0):
         return c.astype(dtype, copy=False)
-    y = c @ _SRGB_LUMINANCE
+    y = c @ weights
     out = c.copy()
     bad = low < 0
-    # the grey (g, g, g) of the same luminance; the white (1, 1, 1) has Y = sum of the row (1 to 4 digits)
-    g, lb = y[bad] / _SRGB_LUMINANCE.sum(), low[bad]
+    # the grey (g, g, g) of the same luminance; the white (1, 1, 1) has Y = sum of the weights
+    g, lb = y[bad] / weights.sum(), low[bad]
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(g > 0, g / (g - lb), 0.0)  # the lowest component g + t (low - g) becomes 0
     t = np.clip(t, 0.0, 1.0)

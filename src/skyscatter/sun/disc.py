@@ -1,7 +1,7 @@
 """The solar disc as seen from the Earth: its mean angular radius and solid angle.
 
-The angular radius is the sun's mean semi-diameter, 0.004675 rad = 0.2679 deg, the default of Bruneton's 2017
-reimplementation of Bruneton & Neyret (2008), doi:10.1111/j.1467-8659.2008.01245.x (``kSunAngularRadius``).
+The angular radius is the sun's mean semi-diameter, 0.004675 rad = 0.2679 deg, the default of [Bruneton2017], the
+reimplementation of [Bruneton2008] (``kSunAngularRadius``).
 The solid angle of a disc of angular radius r is that of a spherical cap, ``2 pi (1 - cos r)``.
 """
 

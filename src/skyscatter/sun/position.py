@@ -33,9 +33,7 @@ Two methods:
 
 Times must be timezone-aware: a naive time is ambiguous (local or UTC?) and is refused.
 
-Reference: Reda & Andreas (2004), Solar position algorithm for solar radiation applications, Solar Energy
-76(5):577-589, doi:10.1016/j.solener.2003.12.003; Preetham, Shirley & Smits (1999), A Practical Analytic Model for
-Daylight, SIGGRAPH 99, doi:10.1145/311535.311545.
+References: [RedaAndreas2004], [Preetham1999].
 """
 
 from __future__ import annotations

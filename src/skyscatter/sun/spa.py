@@ -1,20 +1,18 @@
 """The NREL Solar Position Algorithm (SPA) in numpy: topocentric sun zenith and azimuth for many times at once.
 
-Reda & Andreas (2004), Solar position algorithm for solar radiation applications, Solar Energy 76(5):577-589,
-doi:10.1016/j.solener.2003.12.003 (report NREL/TP-560-34302, revised 2008, whose step numbers and equation
-numbers are cited below); about 0.0003 deg uncertainty over the years -2000..6000. It follows Meeus (1998),
-Astronomical Algorithms: the Earth's heliocentric position from the abridged VSOP87 periodic terms (Table A4.2),
-nutation from Table A4.3, then the sun's geocentric and topocentric coordinates.
+[RedaAndreas2004] (report NREL/TP-560-34302, revised 2008, whose step numbers and equation numbers are
+cited below); about 0.0003 deg uncertainty over the years -2000..6000. It follows [Meeus1998]: the Earth's
+heliocentric position from the abridged VSOP87 periodic terms (Table A4.2), nutation from Table A4.3, then the sun's
+geocentric and topocentric coordinates.
 
 The periodic terms ship as ``skyscatter/data/nrel_spa_terms.csv`` (generated from pvlib's copy of the tables by
 ``tools/generate_spa_tables.py``, checked equal in the tests). The algorithm is written here from the report's
 equations so that the sun position needs neither pvlib nor pandas (importing pvlib costs about 0.7 s, more than
-a whole sky matrix; issue 12); tests/test_sun_position.py checks it against the report's worked example and
-against pvlib's implementation (``pvlib.spa.solar_position``) to 1e-8 deg.
+a whole sky matrix: docs/architecture.md, "Start-up"); tests/test_sun_position.py checks it against the report's
+worked example and against pvlib's implementation (``pvlib.spa.solar_position``) to 1e-8 deg.
 
-Delta T (TT - UT1) defaults to the polynomial expressions of Espenak & Meeus (2006), "Five Millennium Canon of
-Solar Eclipses: -1999 to +3000", NASA/TP-2006-214141, Sec. 2.6 (published on the NASA eclipse web site,
-"Polynomial Expressions for Delta T"), the same rule pvlib's ``calculate_deltat`` uses.
+Delta T (TT - UT1) defaults to the polynomial expressions of [EspenakMeeus2006] Sec. 2.6 (published on the NASA eclipse
+web site, "Polynomial Expressions for Delta T"), the same rule pvlib's ``calculate_deltat`` uses.
 """
 
 from __future__ import annotations

@@ -30,8 +30,7 @@ per-band differences are those of the two extraterrestrial spectra (tests/test_s
 Sun at or below the horizon (zenith >= pi/2): the transmittances and radiances are zero (the disc centre is
 not visible; the optical-mass formula is not used beyond the horizon).
 
-Reference: Preetham, Shirley & Smits (1999), A Practical Analytic Model for Daylight, SIGGRAPH 99,
-doi:10.1145/311535.311545.
+Reference: [Preetham1999].
 """
 
 from __future__ import annotations

@@ -1,0 +1,97 @@
+"""How skyscatter compiles its loops with numba: the four decorators every compiled function uses, and why.
+
+Loops that cannot be vectorised with numpy (rays through tables, paths through the medium, walks over a
+heightfield) are compiled with numba. Every compiled function uses one of these decorators, so that a reader
+sees by its decorator what a function is and which rules it follows:
+
+* :func:`kernel` - a loop called from Python, usually on a slice ``start..stop`` of its items by
+  :func:`skyscatter.precomputed.parallel.parallel_for` (``nogil``: the pool's threads run it at once). It may
+  allocate its buffers (numba's runtime, NRT, counts their references).
+* :func:`helper` - a function called from compiled code that never allocates: compiled without numba's runtime
+  (``_nrt=False``), so a call that passes arrays on does not increment and decrement their reference counts.
+  Those counts are atomic and, in the kernels' inner loops, contended between threads: the ground term of a sky
+  lookup took 0.30 us per ray and thread with them, 0.19 us without (docs/architecture.md, "numba kernels"). A
+  helper that allocates does not compile (numba says so): make it a :func:`kernel`.
+* :func:`inline` - a small helper inlined where it is called (numba inlines at its own level; LLVM does not inline
+  large numba functions, and a call left in a loop keeps the loop scalar). The inlined body is compiled with the
+  caller's options.
+* :func:`parallel_kernel` - a loop over ``numba.prange`` (numba's own threads, sized by
+  :func:`skyscatter.runtime.set_num_threads`), for whole images: the heightfield tracer, light shafts, the
+  analytic aerial perspective.
+
+Options shared by all: ``cache=True`` (compiled once per installation, into numba's cache folder; see
+:func:`skyscatter.fileio.ensure_numba_cache`), ``nogil=True`` and numpy's error model (``error_model="numpy"``):
+a float division by zero gives inf or NaN instead of raising, so numba emits no test and branch per division and
+loops can be vectorised; every division that can meet a zero is guarded in the code.
+
+Floating-point contraction and reordering (``fastmath``) are off unless a function asks for one of the two sets
+below; a set is chosen per function where it was measured to pay, and never includes ``nnan``, ``ninf`` or
+``nsz``, so the NaN and infinity checks of the kernels (bad directions are flagged, not traced) keep working:
+
+* :data:`CONTRACT_ARCP` (``contract``, ``arcp``) - fused multiply-adds (one rounding instead of two) and
+  ``x / y`` as ``x * (1 / y)`` with the reciprocal computed once outside a loop (at most one unit in the last
+  place per operation). Used by the table coordinates and lookups of :mod:`skyscatter.precomputed` (geometry,
+  lookup helpers, the sun cells of the precomputation), whose loops over directions are vectorised.
+* :data:`CONTRACT_REASSOC` (``contract``, ``reassoc``) - fused multiply-adds and reordered sums, so that a
+  sum over a loop runs in several SIMD lanes. Used by the scattering density of the precomputation, whose inner
+  sums over quadrature directions are its cost.
+
+The effect of both sets on speed and results is measured in docs/architecture.md ("numba kernels").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+import numba
+
+__all__ = ["CONTRACT_ARCP", "CONTRACT_REASSOC", "helper", "inline", "kernel", "parallel_kernel"]
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+#: ``fastmath`` set: fused multiply-adds and reciprocal multiplication (module docstring).
+CONTRACT_ARCP = frozenset({"contract", "arcp"})
+#: ``fastmath`` set: fused multiply-adds and reordered (SIMD) sums (module docstring).
+CONTRACT_REASSOC = frozenset({"contract", "reassoc"})
+
+_COMMON: dict[str, Any] = {"cache": True, "nogil": True, "error_model": "numpy"}
+
+
+def _fastmath(flags: frozenset[str] | None) -> bool | set[str]:
+    if flags is None:
+        return False
+    if flags not in (CONTRACT_ARCP, CONTRACT_REASSOC):
+        raise ValueError(f"fastmath must be None, CONTRACT_ARCP or CONTRACT_REASSOC; got {flags!r}")
+    return set(flags)
+
+
+def _decorator(fastmath: frozenset[str] | None, **options: Any) -> Callable[[F], F]:
+    dispatcher: Callable[[F], F] = numba.njit(**_COMMON, fastmath=_fastmath(fastmath), **options)
+    return dispatcher
+
+
+def kernel(func: F | None = None, *, fastmath: frozenset[str] | None = None) -> Any:
+    """Compile a loop called from Python (module docstring); ``@kernel`` or ``@kernel(fastmath=...)``."""
+    deco = _decorator(fastmath)
+    return deco if func is None else deco(func)
+
+
+def helper(func: F | None = None, *, fastmath: frozenset[str] | None = None) -> Any:
+    """Compile a non-allocating helper without numba's runtime (module docstring); ``@helper`` or
+    ``@helper(fastmath=...)``."""
+    deco = _decorator(fastmath, _nrt=False)
+    return deco if func is None else deco(func)
+
+
+def inline(func: F | None = None, *, fastmath: frozenset[str] | None = None) -> Any:
+    """Compile a helper that numba inlines into its callers (module docstring); ``@inline`` or
+    ``@inline(fastmath=...)`` (the options apply when it is called from Python)."""
+    deco = _decorator(fastmath, inline="always")
+    return deco if func is None else deco(func)
+
+
+def parallel_kernel(func: F | None = None, *, fastmath: frozenset[str] | None = None) -> Any:
+    """Compile a loop over ``numba.prange`` run on numba's threads (module docstring)."""
+    deco = _decorator(fastmath, parallel=True)
+    return deco if func is None else deco(func)

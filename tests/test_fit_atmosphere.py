@@ -1,0 +1,123 @@
+"""Retrieval of the air (skyscatter.fit.atmosphere) and ``skyscatter fit-atmosphere``.
+
+The measurements are made by something other than the fitted model: the Monte Carlo reference for a sky scan
+(4096 paths per direction, plus 2 % noise), and tables of other sizes and orders for DNI/DHI; the known air comes
+back. Measured (docs/aerosols.md): from the Monte Carlo scan (81 directions, 2 wavelengths, sun 40 deg) optical
+depth 0.2473 +- 0.0015 (true 0.25) and g 0.7030 +- 0.0022 (0.7) within 2 sigma; the ground albedo 0.223 +- 0.004
+(0.2) is 11 % high, outside its stated uncertainty: the tables' near-horizon error against the Monte Carlo (3 %
+RMS below 15 deg elevation at the fit's table sizes) is systematic, and the albedo, to which a scan is least
+sensitive, takes it up. The test holds that bound (15 %) rather than hide it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from skyscatter.atmosphere import AtmosphereParameters
+from skyscatter.conventions import direction_from_angles
+from skyscatter.errors import InvalidParameterError
+from skyscatter.fit.atmosphere import FIT_SIZES, AerosolOpticalDepth, Irradiance, SkyScan, fit_atmosphere
+
+TRUE = AtmosphereParameters.from_aerosol_optical_depth(0.25, 1.3, mie_phase_g=0.7, ground_albedo=0.2)
+SUN = (math.radians(40.0), math.radians(180.0))
+
+
+def _scan_directions():
+    zz, aa = np.meshgrid(np.radians(np.linspace(5.0, 80.0, 9)), np.radians(np.arange(0.0, 360.0, 40.0)))
+    return zz.ravel(), aa.ravel()
+
+
+@pytest.mark.slow
+def test_known_air_from_a_monte_carlo_sky_scan():
+    pytest.importorskip("dask")
+    from skyscatter.montecarlo.driver import sky_radiance
+
+    z, a = _scan_directions()
+    wl = np.array([440.0, 670.0])
+    mc = sky_radiance(TRUE, direction_from_angles(z, a), wl, sun_zenith=SUN[0], sun_azimuth=SUN[1], samples=4096,
+                      seed=3, scheduler="synchronous")
+    values = mc.radiance * np.exp(0.02 * np.random.default_rng(1).standard_normal(mc.radiance.shape))
+    fit = fit_atmosphere(SkyScan(z, a, values, *SUN, wl, 0.03))
+    for name, true in (("aerosol_optical_depth", 0.25), ("mie_phase_g", 0.7)):
+        assert abs(fit.values[name] - true) < 2 * fit.uncertainties[name]
+    assert abs(fit.values["ground_albedo"] / 0.2 - 1) < 0.15
+    assert set(fit.residuals) == {"sky: near sun", "sky: horizon", "sky: rest"}
+    assert all(v < 5.0 for v in fit.residuals.values()) and 5 <= fit.builds <= 60
+
+
+def test_known_air_from_direct_and_diffuse_irradiance():
+    from skyscatter.precomputed import PrecomputedAtmosphere
+
+    wl = np.array([440.0, 550.0, 670.0])
+    truth = PrecomputedAtmosphere.compute(TRUE, orders=6, wavelengths=wl, progress=False,
+                                          sizes=dict(FIT_SIZES, scattering_r=16, scattering_mu=64))
+    pos = np.array([0.0, 0.0, TRUE.bottom_radius])
+    sun = direction_from_angles(*SUN)
+    dni = truth.sun_transmittance(pos, sun) * TRUE.solar_irradiance_at(wl)
+    dhi = truth.ground_irradiance(pos, np.array([0.0, 0.0, 1.0]), sun)[1]
+    fit = fit_atmosphere(irradiance=Irradiance(wl, *SUN, dni, dhi, 0.01),
+                         free=("aerosol_optical_depth", "angstrom_alpha"),
+                         base=TRUE.replace(mie_angstrom_beta=0.02, mie_angstrom_alpha=0.5))
+    assert abs(fit.values["aerosol_optical_depth"] - 0.25) < max(2 * fit.uncertainties["aerosol_optical_depth"], 2e-3)
+    assert abs(fit.values["angstrom_alpha"] - 1.3) < max(2 * fit.uncertainties["angstrom_alpha"], 2e-2)
+
+
+def test_optical_depth_spectrum_alone():
+    wl = np.array([380.0, 440.0, 500.0, 675.0, 870.0])
+    tau = 0.3 * (wl / 550.0) ** -1.1
+    fit = fit_atmosphere(aod=AerosolOpticalDepth(wl, tau), free=("aerosol_optical_depth", "angstrom_alpha"))
+    assert abs(fit.values["aerosol_optical_depth"] - 0.3) < 1e-4 and abs(fit.values["angstrom_alpha"] - 1.1) < 1e-3
+    assert fit.builds == 0
+    with pytest.raises(InvalidParameterError):
+        fit_atmosphere(aod=AerosolOpticalDepth(wl, tau), free=("mie_phase_g",))
+    with pytest.raises(InvalidParameterError):
+        fit_atmosphere()
+    with pytest.raises(InvalidParameterError):
+        SkyScan([0.1, 0.2, 2.0], [0.0, 0.0, 0.0], [1.0, 1.0, 1.0], *SUN)
+
+
+def _cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "skyscatter", *args], capture_output=True, text=True, cwd=cwd)
+
+
+def test_cli_fit_atmosphere_writes_air_that_sky_reads(tmp_path):
+    csv = tmp_path / "aod.csv"
+    rows = ["kind,time,azimuth_deg,elevation_deg,wavelength_nm,value"]
+    for w in (440.0, 500.0, 675.0, 870.0):
+        rows.append(f"aod,,,,{w},{0.2 * (w / 550.0) ** -1.4:.6f}")
+    csv.write_text("\n".join(rows) + "\n")
+    out = tmp_path / "air.json"
+    r = _cli("fit-atmosphere", str(csv), "--free", "aerosol_optical_depth,angstrom_alpha", "--out", str(out),
+             cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "aerosol_optical_depth" in r.stdout and out.exists()
+    data = json.loads(out.read_text())
+    assert abs(data["fit"]["values"]["angstrom_alpha"] - 1.4) < 1e-3
+    air = AtmosphereParameters.load_json(str(out))
+    assert abs(air.mie_angstrom_alpha - 1.4) < 1e-3
+    r = _cli("sky", "--model", "bruneton", "--atmosphere", str(out), "--wavelengths", "rgb", "--width", "32",
+             "--out", str(tmp_path / "sky.exr"), cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "sky.exr").stat().st_size > 0 and (tmp_path / "sky.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("kind,azimuth_deg,elevation_deg,wavelength_nm\nradiance,0,40,550\n", "missing column"),
+    ("kind,sun_elevation_deg,sun_azimuth_deg,azimuth_deg,elevation_deg,wavelength_nm,value\n"
+     "radiance,40,180,0,40,550,nan\n", "not finite"),
+    ("kind,sun_elevation_deg,sun_azimuth_deg,azimuth_deg,elevation_deg,wavelength_nm,value\n"
+     "radiance,40,180,0,95,550,0.1\n", "elevation"),
+])
+def test_cli_bad_measurement_files(tmp_path, text, message):
+    csv = tmp_path / "bad.csv"
+    csv.write_text(text)
+    out = tmp_path / "air.json"
+    r = _cli("fit-atmosphere", str(csv), "--out", str(out), cwd=tmp_path)
+    assert r.returncode == 2 and message in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not out.exists()
