@@ -12,6 +12,14 @@ hour *ending* at that local standard time), 5 minute, 7 dry bulb [deg C], 8 dew 
 in W m^-2]. Missing-value codes of the dictionary: 9999 for radiation, 99.9 for dew point (kept as NaN; the
 sky models then use their default dew point).
 
+Optional fields, read leniently (a missing-value code, an empty or non-numeric cell or a value outside the range
+below becomes NaN, never an error, since the sky matrix of the luminance models does not need them; the spectral
+sky's retrieval, :mod:`skyscatter.fit.weather`, reports per hour what it used): 9 relative humidity [%, 0-110,
+missing 999], 10 station pressure [Pa, 31000-120000, missing 999999], 23 total and 24 opaque sky cover [tenths,
+0-10, missing 99], 29 precipitable water [mm, 0-100, missing 999], 30 aerosol optical depth [-, 0-0.998, missing
+0.999; the dictionary says "thousandths" but files carry the optical depth itself, e.g. 0.116, TMY3's broadband
+value], 33 albedo [-, 0-1, missing 999].
+
 Time steps: the DATA PERIODS header line declares the number of records per hour N (field 2; 1, 2, 3, 4, 5, 6,
 10, 12, 15, 20, 30 or 60, a divisor of 60). Every hour of the file must then hold exactly N records, one after
 the other with increasing minutes, and no hour may appear twice; the k-th record (k = 0 .. N-1) of the hour
@@ -65,6 +73,16 @@ _HEADER_KEYS = (
     "COMMENTS 1",
     "COMMENTS 2",
     "DATA PERIODS",
+)
+# (0-based field index, attribute, low, high, missing code): optional fields, read leniently (NaN when unusable)
+_OPTIONAL_FIELDS = (
+    (8, "relative_humidity", 0.0, 110.0, 999.0),
+    (9, "pressure", 31_000.0, 120_000.0, 999_999.0),
+    (22, "total_sky_cover", 0.0, 10.0, 99.0),
+    (23, "opaque_sky_cover", 0.0, 10.0, 99.0),
+    (28, "precipitable_water", 0.0, 100.0, 999.0),
+    (29, "aerosol_optical_depth", 0.0, 0.998, 0.999),
+    (32, "albedo", 0.0, 1.0, 999.0),
 )
 # (0-based field index, name, unit, low, high, missing code or None), ranges from the data dictionary
 _FIELDS = (
@@ -130,6 +148,9 @@ class EPWData:
         Hour means [W m^-2] (the file's Wh m^-2 per hour); NaN where missing.
     line_numbers : ndarray of int
         1-based line of each record in the file.
+    relative_humidity [%], pressure [Pa], total_sky_cover, opaque_sky_cover [tenths], precipitable_water [mm],
+    aerosol_optical_depth [-], albedo [-] : ndarray or None
+        The optional fields (NaN where missing or unusable; None when not read, e.g. a record built by hand).
     """
 
     path: Path
@@ -146,6 +167,13 @@ class EPWData:
     line_numbers: NDArray[np.int64]
     records_per_hour: int = 1
     step: NDArray[np.int64] | None = None
+    relative_humidity: NDArray[np.float64] | None = None
+    pressure: NDArray[np.float64] | None = None
+    total_sky_cover: NDArray[np.float64] | None = None
+    opaque_sky_cover: NDArray[np.float64] | None = None
+    precipitable_water: NDArray[np.float64] | None = None
+    aerosol_optical_depth: NDArray[np.float64] | None = None
+    albedo: NDArray[np.float64] | None = None
 
     def __len__(self) -> int:
         return int(self.hour.size)
@@ -201,13 +229,15 @@ class EPWData:
             return a.reshape(-1, n).mean(axis=1)
 
         first = slice(0, None, n)
+        optional = {name: (None if getattr(self, name) is None else mean(getattr(self, name)))
+                    for _, name, _, _, _ in _OPTIONAL_FIELDS}
         return EPWData(
             path=self.path, location=self.location, year=self.year[first], month=self.month[first],
             day=self.day[first], hour=self.hour[first], dry_bulb=mean(self.dry_bulb),
             dew_point=mean(self.dew_point), global_horizontal_irradiance=mean(self.global_horizontal_irradiance),
             direct_normal_irradiance=mean(self.direct_normal_irradiance),
             diffuse_horizontal_irradiance=mean(self.diffuse_horizontal_irradiance),
-            line_numbers=self.line_numbers[first], records_per_hour=1, step=None,
+            line_numbers=self.line_numbers[first], records_per_hour=1, step=None, **optional,
         )
 
     @property
@@ -399,10 +429,33 @@ def read_epw(path: str | os.PathLike[str]) -> EPWData:
         line_numbers=line_numbers,
         records_per_hour=per_hour,
         step=step,
+        **_optional_columns(texts),
     )
 
 
 _INT_COLUMNS = (0, 1, 2, 3, 4)  # year, month, day, hour, minute
+
+
+def _optional_columns(texts: list[str]) -> dict[str, NDArray[np.float64]]:
+    """The optional fields of every record, NaN where a cell is missing, not a number or out of range."""
+    cols = tuple(f[0] for f in _OPTIONAL_FIELDS)
+    try:
+        raw = np.loadtxt(texts, delimiter=",", usecols=cols, dtype=float, comments=None, ndmin=2)
+    except ValueError:  # some cell is not a number: cell by cell
+        raw = np.full((len(texts), len(cols)), np.nan)
+        for r, line in enumerate(texts):
+            cells = line.split(",")
+            for k, c in enumerate(cols):
+                try:
+                    raw[r, k] = float(cells[c])
+                except ValueError:
+                    pass
+    out = {}
+    for k, (_, name, low, high, missing) in enumerate(_OPTIONAL_FIELDS):
+        col = raw[:, k].copy()
+        col[(col == missing) | ~np.isfinite(col) | (col < low) | (col > high)] = np.nan
+        out[name] = col
+    return out
 _VALUE_COLUMNS = tuple(f[0] for f in _FIELDS)
 
 

@@ -43,7 +43,7 @@ _ASCII_CHUNK = 4096
 
 
 def write_radiance_matrix(path: str | os.PathLike[str], values: ArrayLike, *, header: list[str] | tuple[str, ...] = (),
-                          encoding: str = "float", atomic: bool = True) -> Path:
+                          encoding: str = "float", atomic: bool = True, allow_nan: bool = False) -> Path:
     """Write ``values`` (rows, columns, components) as a Radiance matrix file, atomically; returns the path.
 
     Parameters
@@ -60,6 +60,9 @@ def write_radiance_matrix(path: str | os.PathLike[str], values: ArrayLike, *, he
     atomic : bool
         Write through a temporary file renamed into place (default). False writes ``path`` directly: for a
         temporary of a group already written atomically (:func:`skyscatter.fileio.atomic_paths`).
+    allow_nan : bool
+        Let NaN through (a spectral sky matrix marks the hours it could not retrieve with NaN, so that nothing
+        downstream mistakes them for a sky); infinities are still refused.
 
     Raises
     ------
@@ -73,7 +76,7 @@ def write_radiance_matrix(path: str | os.PathLike[str], values: ArrayLike, *, he
     a = np.asarray(values, dtype=float)
     if a.ndim != 3 or min(a.shape) < 1:
         raise InvalidParameterError(f"a Radiance matrix is (rows, columns, components) with each >= 1; got {a.shape}")
-    if not np.all(np.isfinite(a)):
+    if not np.all(np.isfinite(a) | (allow_nan & np.isnan(a))):
         raise InvalidParameterError("a Radiance matrix must hold finite numbers; got NaN or infinite values")
     lines = ["#?RADIANCE"]
     for line in header:

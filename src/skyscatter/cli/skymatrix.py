@@ -34,7 +34,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     # Sky models an hour of weather data defines: those taking direct normal and diffuse horizontal irradiance.
     needed = {"direct_normal_irradiance", "diffuse_horizontal_irradiance"}
     weather_models = [s.name for s in registry.models() if needed <= {q.name for q in s.parameters}]
-    p.add_argument("epw", type=Path, help="hourly EnergyPlus weather file (.epw)")
+    p.add_argument("epw", type=Path, nargs="+",
+                   help="hourly EnergyPlus weather file (.epw); with --spectral also TMY3 or weather CSV files, "
+                   "several of them for a multi-site Zarr store")
     p.add_argument("--model", choices=weather_models, default="perez",
                    help="sky model of every hour, from its direct normal and diffuse horizontal irradiance: "
                    + "; ".join(f"{m}: {registry.get(m).summary}" for m in weather_models))
@@ -59,12 +61,49 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="also write a CSV: a time column (ISO 8601, mid-hour) and one luminance column per patch")
     p.add_argument("--include-sun", action="store_true",
                    help="add the direct sun, spread over the 4 nearest patches weighted by proximity as gendaymtx does")
-    p.add_argument("--samples", type=positive_int, default=3, metavar="N",
-                   help="average each patch over N x N equal-area cells (1: patch centre only, as gendaymtx)")
+    p.add_argument("--samples", type=positive_int, default=None, metavar="N",
+                   help="average each patch over N x N equal-area cells (1: patch centre only, as gendaymtx); "
+                   "default 3 (luminance) or 2 (--spectral, at most 4)")
     p.add_argument("--timestep", choices=["records", "hourly"], default="records",
                    help="sub-hourly files (N records per hour declared in the DATA PERIODS header): records = one "
                    "row per record, the sun at the middle of each record's interval (as gendaymtx, one row per "
                    "input time step); hourly = average each hour's records first, one row per hour")
+    g = p.add_argument_group(
+        "spectral sky (--spectral)",
+        "physical spectral sky per hour: the aerosol optical depth from DNI in clear hours (the DNI retrieval "
+        "wins over the file's aerosol field there), the aerosol albedo from DHI, precipitable water from the "
+        "file, through a family of precomputed tables (built once and cached: about 18 builds by default). "
+        "Cloudy hours are not retrieved yet (their sky is NaN, status says so). Writes an xarray Dataset (.nc "
+        "NetCDF or .zarr) with time x patch x wavelength radiance [W m^-2 sr^-1 nm^-1], the sun's direct normal "
+        "spectrum [W m^-2 nm^-1], and per hour the inputs used, the retrieved air and the DNI/DHI closure. "
+        "Example: skyscatter skymatrix --spectral a.epw --out a.nc --radiance a.mtx; many sites: skyscatter "
+        "skymatrix --spectral a.epw b.epw --out sites.zarr")
+    g.add_argument("--spectral", action="store_true", help="compute the physical spectral sky matrix")
+    g.add_argument("--bands", type=int, choices=[20, 41], default=20,
+                   help="output bands: 20 (20 nm over 380-780 nm, as gensdaymtx) or 41 (10 nm, centred 380-780 nm)")
+    g.add_argument("--radiance", type=output_path, default=None, metavar="PATH",
+                   help="also write Radiance's matrix (ground patch + patches x hours x bands, FORMAT=float) for "
+                   "rmtxop/dctimestep (one site only)")
+    g.add_argument("--radiance-rgb", type=output_path, default=None, metavar="PATH",
+                   help="also write the matrix as Radiance RGB radiance (NCOMP=3, 179 lm/W), which this Radiance's "
+                   "dctimestep needs (it takes 3 components only; rmtxop takes --radiance)")
+    g.add_argument("--report", type=output_path, default=None, metavar="PATH",
+                   help="also write a per-hour CSV report: status, reason, inputs used and their sources, retrieved "
+                   "aerosol, DNI and DHI closure (one site only)")
+    g.add_argument("--bad-hours", choices=["error", "flag"], default="error",
+                   help="impossible records (DNI above extraterrestrial, DHI > GHI, light with the sun below the "
+                   "horizon, missing fields): error, or flag the hour and leave its sky NaN")
+    g.add_argument("--tables", choices=["default", "coarse"], default="default",
+                   help="table preset of the family: default (paper sizes, 6 orders, 23 wavelengths) or coarse "
+                   "(a quick look: small tables, 4 orders, 8 wavelengths)")
+    g.add_argument("--aod-nodes", type=str, default=None, metavar="LIST",
+                   help="aerosol optical depth grid at 550 nm, comma-separated (default "
+                   "0,0.05,0.1,0.2,0.3,0.45,0.65,1,1.5)")
+    g.add_argument("--scheduler", default="threads", metavar="NAME",
+                   help="several sites: threads (Dask's threaded scheduler), local (a distributed LocalCluster) or "
+                   "a scheduler address tcp://host:port")
+    g.add_argument("--workers", type=positive_int, default=2, metavar="N",
+                   help="several sites: threads or worker processes")
     p.add_argument("--no-progress", dest="progress", action="store_false",
                    help="hide the progress bar (shown only when stderr is a terminal)")
     p.set_defaults(func=run)
@@ -79,6 +118,15 @@ def run(args: argparse.Namespace) -> int:
     from ..fileio import check_output_path
     from ..sky_matrix import skymatrix
 
+    if args.spectral:
+        return run_spectral(args)
+    if len(args.epw) != 1:
+        raise InvalidParameterError("several weather files need --spectral (one Zarr store with a site dimension)")
+    for name in ("radiance", "radiance_rgb", "report"):
+        if getattr(args, name) is not None:
+            raise InvalidParameterError(f"--{name.replace('_', '-')} goes with --spectral")
+    args.epw = args.epw[0]
+    args.samples = 3 if args.samples is None else args.samples
     if args.out is None:
         args.out = Path("skymatrix.mtx" if args.format == "radiance" else "skymatrix.npz")
     if args.format == "npz" and args.out.suffix.lower() != ".npz":
@@ -110,4 +158,115 @@ def run(args: argparse.Namespace) -> int:
     print(f"{patches} patches ({matrix.scheme.name}), {matrix.model} sky, sun "
           f"{'included' if matrix.include_sun else 'excluded'}; computed in {elapsed:.2f} s")
     print("wrote " + " and ".join(written))
+    return 0
+
+
+def _csv_report(ds, path: Path) -> None:
+    import numpy as np
+
+    from ..fileio import atomic_path
+
+    cols = ["status", "reason", "ghi", "dni", "dhi", "aerosol_optical_depth", "aerosol_source",
+            "aerosol_optical_depth_file", "single_scattering_albedo", "precipitable_water", "precipitable_water_source",
+            "ozone", "pressure", "dni_model", "dhi_matrix", "dni_closure", "dhi_closure"]
+    times = [str(t)[:19] + "Z" for t in ds["time"].values]
+    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+        fh.write("time," + ",".join(cols) + "\n")
+        arrays = [ds[c].values for c in cols]
+        for i, t in enumerate(times):
+            cells = []
+            for c, a in zip(cols, arrays, strict=True):
+                v = a[i]
+                if c == "reason":
+                    cells.append('"' + str(v).replace('"', "'") + '"')
+                elif isinstance(v, (str, np.str_)):
+                    cells.append(str(v))
+                elif c == "status":
+                    cells.append(str(int(v)))
+                else:
+                    cells.append("" if not np.isfinite(v) else f"{float(v):.6g}")
+            fh.write(t + "," + ",".join(cells) + "\n")
+
+
+def run_spectral(args: argparse.Namespace) -> int:
+    import sys
+
+    import numpy as np
+
+    from ..errors import InvalidParameterError
+    from ..fileio import check_output_path
+    from ..fit.spectral_matrix import (
+        save_dataset,
+        spectral_sky_matrix,
+        spectral_sky_matrix_sites,
+        write_radiance_matrix,
+    )
+    from ..fit.weather import DEFAULT_AOD_NODES, HOUR_STATUS, RetrievalOptions
+
+    if args.model != "perez" or args.include_sun or args.csv is not None or args.timestep != "records":
+        raise InvalidParameterError("--model, --include-sun, --csv and --timestep go with the luminance matrix, "
+                                    "not with --spectral (the sun is kept separately there)")
+    samples = 2 if args.samples is None else args.samples
+    if samples > 4:
+        raise InvalidParameterError(f"--samples must be at most 4 with --spectral; got {samples}")
+    nodes = DEFAULT_AOD_NODES
+    if args.aod_nodes is not None:
+        try:
+            nodes = tuple(float(x) for x in args.aod_nodes.split(","))
+        except ValueError:
+            raise InvalidParameterError(
+                f"--aod-nodes must be comma-separated numbers; got {args.aod_nodes!r}") from None
+    options = RetrievalOptions(aerosol_optical_depth_nodes=nodes, bad_hours=args.bad_hours, tables=args.tables)
+    if args.format != "npz" or args.ground_albedo is not None or args.night_irradiance != "dark":
+        raise InvalidParameterError("--format, --ground-albedo and --night-irradiance go with the luminance matrix; "
+                                    "with --spectral use --radiance / --radiance-rgb (the ground albedo is the "
+                                    "tables' 0.2) and --bad-hours")
+    out = args.out
+    if out is None:
+        out = Path("skymatrix.nc") if len(args.epw) == 1 else Path("sites.zarr")
+    progress = args.progress and sys.stderr.isatty()
+    t0 = time.perf_counter()
+    if len(args.epw) > 1:
+        if args.radiance is not None or args.report is not None or args.radiance_rgb is not None:
+            raise InvalidParameterError("--radiance and --report take one site; the multi-site store holds status "
+                                        "and closure per site and hour")
+        if out.suffix.lower() != ".zarr":
+            raise InvalidParameterError(
+                f"several sites are written to one Zarr store: --out must end in .zarr; got {out}")
+        ds = spectral_sky_matrix_sites(args.epw, out, scheme=args.patches, bands=args.bands, samples=samples,
+                                       options=options, scheduler=args.scheduler, workers=args.workers,
+                                       progress=args.progress)
+        done = int(ds["done"].values.sum())
+        print(f"{done} of {ds.sizes['site']} sites in {out} ({ds.sizes['patch']} patches, {ds.sizes['wavelength']} "
+              f"bands, {ds.sizes['hour']} hours); computed in {time.perf_counter() - t0:.1f} s")
+        return 0
+    if out.suffix.lower() not in (".nc", ".zarr"):
+        raise InvalidParameterError(f"--out must end in .nc or .zarr with --spectral; got {out}")
+    for opt, path in (("--out", out), ("--radiance", args.radiance), ("--radiance-rgb", args.radiance_rgb),
+                      ("--report", args.report)):
+        if path is not None:
+            check_output_path(path, option=opt)
+    ds = spectral_sky_matrix(args.epw[0], scheme=args.patches, bands=args.bands, samples=samples, options=options,
+                             progress=progress)
+    written = [str(save_dataset(ds, out))]
+    if args.radiance is not None:
+        written.append(str(write_radiance_matrix(ds, args.radiance)))
+    if args.radiance_rgb is not None:
+        written.append(str(write_radiance_matrix(ds, args.radiance_rgb, rgb=True)))
+    if args.report is not None:
+        _csv_report(ds, args.report)
+        written.append(str(args.report))
+    st = ds["status"].values
+    counts = ", ".join(f"{int((st == k).sum())} {v}" for k, v in HOUR_STATUS.items() if (st == k).any())
+    closure = ds["dhi_closure"].values[st == 1]
+    dni_c = ds["dni_closure"].values[st == 1]
+    print(f"{args.epw[0]}: {ds.sizes['time']} hours: {counts}")
+    if closure.size:
+        print(f"clear hours: DNI closure within {np.nanmax(np.abs(dni_c)) * 100:.2g} %, DHI closure of the matrix "
+              f"within {np.nanmax(np.abs(closure)) * 100:.2g} %")
+    if ds.attrs.get("notes"):
+        print("notes: " + ds.attrs["notes"])
+    print(f"{ds.sizes['patch']} patches ({ds.attrs['scheme']}), {ds.sizes['wavelength']} bands; computed in "
+          f"{time.perf_counter() - t0:.1f} s")
+    print("wrote " + ", ".join(written))
     return 0

@@ -66,21 +66,24 @@ def clear_memory_cache() -> None:
 
 def cached_atmosphere(params: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
                       wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
-                      progress: bool | None = None) -> PrecomputedAtmosphere:
+                      progress: bool | None = None, keep_in_memory: bool = True) -> PrecomputedAtmosphere:
     """Tables for ``params`` from memory, from the disk cache, or computed and then cached.
 
     Same arguments as :meth:`PrecomputedAtmosphere.compute` (default wavelengths: the 16 of the spectral mode;
     ``wavelengths="rgb"`` for the 3-wavelength mode; the wavelengths are part of the cache key, so tables cached
     under other defaults are not reused). If the cache folder cannot be written the tables are still returned
-    (with a warning).
+    (with a warning). ``keep_in_memory=False`` does not keep the tables in the process's memory cache (a
+    caller that holds many tables, such as :class:`~skyscatter.precomputed.family.TableFamily`, bounds its own
+    memory).
     """
-    return load_or_compute(params, orders=orders, wavelengths=wavelengths, sizes=sizes, progress=progress)[0]
+    return load_or_compute(params, orders=orders, wavelengths=wavelengths, sizes=sizes, progress=progress,
+                           keep_in_memory=keep_in_memory)[0]
 
 
 def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
                     wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
                     progress: bool | None = None, force: bool = False,
-                    require_saved: bool = False) -> tuple[PrecomputedAtmosphere, bool]:
+                    require_saved: bool = False, keep_in_memory: bool = True) -> tuple[PrecomputedAtmosphere, bool]:
     """Like :func:`cached_atmosphere`, also saying whether the tables were computed: ``(tables, computed)``.
 
     With ``force`` the tables are recomputed even if cached; the cache file is replaced only once the new
@@ -124,7 +127,8 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
                 raise OutputError(f"could not write {what}") from None
             warnings.warn(f"could not write {what}; the tables are used without being cached", RuntimeWarning,
                           stacklevel=3)
-    _MEMORY[key] = atm
+    if keep_in_memory:
+        _MEMORY[key] = atm
     return atm, computed
 
 

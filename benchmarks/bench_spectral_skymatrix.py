@@ -1,0 +1,108 @@
+"""Spectral sky matrix of a year beside Radiance's gensdaymtx, in the same run (issue 24, item 5).
+
+One site, 8760 hours (tests/weather_synth.py ``write_year_epw``: SPECTRL2 clear days, broken and overcast days),
+20 bands 380-780 nm, Reinhart MF 2: ``skyscatter skymatrix --spectral`` as a process and Radiance's
+``gensdaymtx -m 2`` (pyradiance) on the same file, alternated for ``--repeat`` rounds; wall time and peak RSS of
+each process (``resource.getrusage`` of the finished child). The tables (ours: the 18-node family, gensdaymtx:
+its ``atmos_data``) are built once before the timed rounds and reported separately. Then the multi-site Dask
+runner on 4 copies of the file with 1 and 2 threads (``--sites``).
+
+Usage: ``python benchmarks/bench_spectral_skymatrix.py [--repeat 2] [--sites 4] [--skip-gensdaymtx]``.
+Set SKYSCATTER_CACHE_DIR to a cache that holds (or may hold) the family. State the load average with the numbers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+
+def run(cmd: list[str], env: dict, cwd: Path | None = None) -> tuple[float, float]:
+    """(wall seconds, peak RSS MiB) of a child process."""
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, env=env, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    _, _, usage = os.wait4(proc.pid, 0)
+    wall = time.perf_counter() - t0
+    out, err = proc.communicate()
+    if proc.returncode not in (0, None) and usage is None:
+        raise RuntimeError(err.decode()[-400:])
+    return wall, usage.ru_maxrss / 1024.0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--sites", type=int, default=4)
+    ap.add_argument("--skip-gensdaymtx", action="store_true")
+    args = ap.parse_args()
+    from weather_synth import write_year_epw
+
+    work = Path(tempfile.mkdtemp(prefix="bench-spectral-"))
+    epw = write_year_epw(work / "year.epw")
+    env = dict(os.environ)
+    print(f"load average before: {os.getloadavg()}")
+    t0 = time.perf_counter()
+    import warnings
+
+    from skyscatter.fit.weather import default_family
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        default_family().build(progress=False)
+    print(f"family tables ready (built or loaded): {time.perf_counter() - t0:.1f} s")
+    ours = [sys.executable, "-m", "skyscatter", "skymatrix", "--spectral", str(epw), "--patches", "reinhart2",
+            "--out", str(work / "year.nc"), "--no-progress"]
+    rad_dir = Path(os.environ.get("SKYSCATTER_CACHE_DIR", work)) / "radiance"
+    rad_dir.mkdir(parents=True, exist_ok=True)
+    gens = None
+    if not args.skip_gensdaymtx:
+        import pyradiance
+
+        root = Path(pyradiance.__file__).parent
+        gens = [str(root / "bin" / "gensdaymtx"), "-m", "2", str(epw)]
+        genv = dict(env, RAYPATH=f".{os.pathsep}{root / 'lib'}")
+        t0 = time.perf_counter()
+        subprocess.run(gens[:1] + ["-m", "1", str(epw)], cwd=rad_dir, env=genv, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL, check=False)
+        print(f"gensdaymtx atmos_data ready (built or loaded, plus one Tregenza run): {time.perf_counter() - t0:.1f} s")
+    for r in range(args.repeat):
+        (work / "year.nc").unlink(missing_ok=True)
+        w, m = run(ours, env)
+        print(f"round {r + 1}: skyscatter skymatrix --spectral: {w:.1f} s wall, peak {m:.0f} MiB "
+              f"(load {os.getloadavg()[0]:.1f})")
+        if gens is not None:
+            with open(work / "g.mtx", "wb") as fh:
+                t0 = time.perf_counter()
+                p = subprocess.Popen(gens, cwd=rad_dir, env=genv, stdout=fh, stderr=subprocess.DEVNULL)
+                _, _, usage = os.wait4(p.pid, 0)
+                gw = time.perf_counter() - t0
+            print(f"round {r + 1}: gensdaymtx -m 2: {gw:.1f} s wall, peak {usage.ru_maxrss / 1024:.0f} MiB; "
+                  f"ratio ours / gensdaymtx {w / gw:.2f}")
+    if args.sites > 0:
+        sites = []
+        for k in range(args.sites):
+            dst = work / f"site{k}.epw"
+            shutil.copy(epw, dst)
+            sites.append(str(dst))
+        for workers in (1, 2):
+            store = work / f"sites{workers}.zarr"
+            cmd = [sys.executable, "-m", "skyscatter", "skymatrix", "--spectral", *sites, "--out", str(store),
+                   "--workers", str(workers), "--no-progress"]
+            w, m = run(cmd, dict(env, SKYSCATTER_NUM_THREADS="1"))
+            print(f"{args.sites} sites, Dask threads, {workers} worker(s), SKYSCATTER_NUM_THREADS=1: {w:.1f} s wall, "
+                  f"peak {m:.0f} MiB (load {os.getloadavg()[0]:.1f})")
+    print(f"load average after: {os.getloadavg()}")
+    shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,763 @@
+"""Spectral sky matrices from weather records: per hour, patch and wavelength band, the sky of the retrieved air.
+
+:func:`spectral_sky_matrix` takes a weather record, retrieves the atmosphere of every hour
+(:func:`skyscatter.fit.weather.retrieve_hourly_atmosphere`) and computes, through the retrieval's family of
+precomputed tables, the mean spectral radiance of every sky patch (Tregenza or Reinhart MF 1-4,
+:mod:`skyscatter.patches`) in every wavelength band, and the sun's direct normal spectral irradiance separately.
+The result is an :class:`xarray.Dataset` (dimensions ``time``, ``patch``, ``wavelength``; units and provenance
+in the attributes) that :func:`save_dataset` writes to NetCDF or Zarr and :func:`write_radiance_matrix` to
+Radiance's matrix format for ``rmtxop`` / ``dctimestep``; :func:`plane_irradiance` gives the spectral irradiance
+on any tilted plane from it. :func:`spectral_sky_matrix_sites` runs many records as Dask tasks into one Zarr
+store with a ``site`` dimension, resumably.
+
+**Bands.** ``bands=20`` (default): 20 bands of 20 nm over 380-780 nm (centres 390-770 nm), like Radiance's
+gensdaymtx; ``bands=41``: 41 bands of 10 nm centred on 380, 390, ..., 780 nm; or a list of band centres [nm]
+(edges half-way between them). A band value is the band mean of the spectral radiance
+``E0(lambda) r(lambda)``: the reduced radiance ``r = L / E0`` of the tables interpolated linearly in wavelength
+between the table wavelengths (:data:`~skyscatter.precomputed.family.FAMILY_WAVELENGTHS`) times the 1 nm ASTM
+G173 sun, so the sun's Fraunhofer structure is carried into every band. Water vapour and O2 absorption (not in
+the medium) multiply sun and sky per band with the sun's gas path (Bird & Riordan 1986, as in
+:mod:`skyscatter.fit.weather`); the variable ``sky_radiance_no_gas`` is not stored (set ``gases=False``).
+Radiances are scaled by the day's Sun-Earth distance (Spencer 1971).
+
+**Patches.** Each patch's radiance is the mean over ``samples x samples`` equal-area cells
+(:meth:`~skyscatter.patches.PatchScheme.sample_directions`); the observer sits on the tables' ground.
+
+**Hours.** Every record of the file is a time step (``time`` the middle of the hour, UTC). Night hours are 0;
+hours whose sky is not retrieved (``status`` other than clear, clear-not-closed or cloudy-retrieved, see
+:data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN, so that nothing downstream mistakes them for a sky; the
+``status`` and ``reason`` variables say why. ``dhi_matrix`` is the broadband diffuse horizontal irradiance of the
+matrix itself (patch radiances at the table wavelengths integrated over the patches' solid angles and carried
+to broadband as in the retrieval): ``dhi_matrix / dhi - 1`` is the closure of the matrix.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InvalidParameterError, OutputError
+from ..fileio import atomic_path, check_output_path
+from ..patches import PatchScheme, patch_scheme
+from ..radiance import write_radiance_matrix as _write_matrix
+from .weather import (
+    CLEAR,
+    CLEAR_OPEN,
+    HOUR_STATUS,
+    BroadbandClearSky,
+    HourlyAtmosphere,
+    RetrievalOptions,
+    default_family,
+    retrieve_hourly_atmosphere,
+)
+
+__all__ = [
+    "band_edges",
+    "ground_radiance",
+    "plane_irradiance",
+    "radiance_rgb",
+    "save_dataset",
+    "spectral_sky_matrix",
+    "spectral_sky_matrix_sites",
+    "write_radiance_matrix",
+]
+
+#: Radiance's spectral partition header of a 380-780 nm matrix (gensdaymtx's ``WAVELENGTH_SPLITS``).
+RADIANCE_WAVELENGTH_SPLITS = (780, 588, 480, 380)
+
+
+def band_edges(bands: int | Sequence[float] = 20) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(centres, edges)`` [nm] of the output bands: ``20`` (20 nm bands over 380-780 nm), ``41`` (10 nm bands
+    centred on 380-780 nm) or increasing band centres (edges half-way between, the outer ones mirrored)."""
+    if isinstance(bands, (int, np.integer)) and not isinstance(bands, bool):
+        if bands == 20:
+            edges = np.arange(380.0, 781.0, 20.0)
+        elif bands == 41:
+            edges = np.arange(375.0, 786.0, 10.0)
+        else:
+            raise InvalidParameterError(f"bands must be 20, 41 or a list of band centres [nm]; got {bands}")
+        return 0.5 * (edges[1:] + edges[:-1]), edges
+    c = np.asarray(bands, dtype=float)
+    if c.ndim != 1 or c.size < 2 or not np.all(np.isfinite(c)) or np.any(np.diff(c) <= 0):
+        raise InvalidParameterError("band centres must be at least two increasing wavelengths [nm]")
+    mid = 0.5 * (c[1:] + c[:-1])
+    edges = np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
+    return c, edges
+
+
+def _band_matrix(edges: NDArray[np.float64], table_wl: NDArray[np.float64], e0_table: NDArray[np.float64],
+                 model: BroadbandClearSky) -> tuple[NDArray[np.float64], NDArray[np.float64], list[NDArray]]:
+    """``(M, band_e0, masks)``: band mean of ``E0 r`` = ``L_table @ M.T`` (r linear between table wavelengths);
+    the band-mean E0; the fine-grid wavelengths of each band."""
+    wl, e0 = model.wavelengths, model.e0
+    if edges[0] < table_wl[0] - 1e-9 or edges[-1] > table_wl[-1] + 1e-9:
+        raise InvalidParameterError(f"bands {edges[0]:g}-{edges[-1]:g} nm reach beyond the tables' wavelengths "
+                                    f"{table_wl[0]:g}-{table_wl[-1]:g} nm")
+    n_b = edges.size - 1
+    m = np.zeros((n_b, table_wl.size))
+    band_e0 = np.zeros(n_b)
+    masks = []
+    for b in range(n_b):
+        x = np.unique(np.concatenate([[edges[b], edges[b + 1]], wl[(wl > edges[b]) & (wl < edges[b + 1])]]))
+        ex = np.interp(x, wl, e0)
+        w = np.zeros_like(x)
+        w[:-1] += np.diff(x) / 2
+        w[1:] += np.diff(x) / 2
+        w /= w.sum()
+        j = np.clip(np.searchsorted(table_wl, x, side="right") - 1, 0, table_wl.size - 2)
+        t = (x - table_wl[j]) / (table_wl[j + 1] - table_wl[j])
+        np.add.at(m[b], j, w * ex * (1 - t) / e0_table[j])
+        np.add.at(m[b], j + 1, w * ex * t / e0_table[j + 1])
+        band_e0[b] = float(np.sum(w * ex))
+        masks.append((wl >= edges[b]) & (wl <= edges[b + 1]))
+    return m, band_e0, masks
+
+
+def _band_means(values: NDArray[np.float64], weights_e0: NDArray[np.float64], masks) -> NDArray[np.float64]:
+    """Band means of ``values`` (n, n_fine) with the weights ``weights_e0`` (n_fine,) over each band's fine
+    wavelengths (quadrature weights for a mean over wavelength; times E0 for an E0-weighted mean)."""
+    out = np.empty((values.shape[0], len(masks)))
+    for b, sel in enumerate(masks):
+        w = weights_e0[sel]
+        out[:, b] = values[:, sel] @ w / w.sum()
+    return out
+
+
+def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2", bands: int | Sequence[float] = 20,
+                        samples: int = 2, options: RetrievalOptions | None = None, family=None,
+                        atmosphere: HourlyAtmosphere | None = None, gases: bool = True,
+                        progress: bool = False):
+    """Spectral sky matrix of a weather record as an :class:`xarray.Dataset` (module docstring).
+
+    Parameters
+    ----------
+    record : path or EPWData
+        EPW, TMY3 or CSV weather record (:func:`skyscatter.fit.weather.read_weather`).
+    scheme : str or PatchScheme
+        ``"tregenza"`` / ``"reinhart1"`` (145 patches), ``"reinhart2"`` (577, default), ``"reinhart4"`` (2305); also
+        ``"reinhart3"``-style names are refused.
+    bands : 20, 41 or sequence of float
+        Output bands (:func:`band_edges`).
+    samples : int
+        Equal-area cells per patch side (1-4, default 2).
+    options : RetrievalOptions, optional
+        Retrieval settings (default :class:`~skyscatter.fit.weather.RetrievalOptions`).
+    family : TableFamily, optional
+        Tables (default: the retrieval's default family, built and cached on first use: about 18 table builds).
+    atmosphere : HourlyAtmosphere, optional
+        A retrieval already done (then ``record``, ``options`` and ``family`` come from it).
+    gases : bool
+        Apply water vapour and O2 band absorption to sky and sun (default True).
+    progress : bool
+        tqdm bar over the hours.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``sky_radiance`` (time, patch, wavelength) [W m^-2 sr^-1 nm^-1] (float32), ``sun_irradiance`` (time,
+        wavelength) direct normal [W m^-2 nm^-1], the sun position, the retrieved atmosphere, inputs, status and
+        closure per hour; coordinates with units; provenance in ``attrs``.
+    """
+    import xarray as xr
+
+    from .. import __version__
+    from ..conventions import direction_from_angles
+
+    geom = scheme if isinstance(scheme, PatchScheme) else patch_scheme(scheme)
+    if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 4:
+        raise InvalidParameterError(f"samples must be a whole number in [1, 4]; got {samples!r}")
+    centres, edges = band_edges(bands)
+    if atmosphere is None:
+        atmosphere = retrieve_hourly_atmosphere(record, options, family=family)
+    h = atmosphere
+    fam = h.family
+    o = h.options
+    model = BroadbandClearSky(fam.base, o.angstrom_alpha)
+    table_wl = fam.wavelengths
+    e0t = fam.base.solar_irradiance_at(table_wl)
+    bmat, band_e0, masks = _band_matrix(edges, table_wl, e0t, model)
+    n, n_p, n_b, n_t = h.status.size, geom.n_patches, centres.size, table_wl.size
+    sky = np.zeros((n, n_p, n_b), dtype=np.float32)
+    sun = np.zeros((n, n_b))
+    dhi_matrix = np.full(n, np.nan)
+    rows = np.flatnonzero(h.has_sky)
+    not_sky = ~h.has_sky & (h.status != 0)
+    sky[not_sky] = np.nan
+    sun[not_sky] = np.nan
+    if rows.size:
+        dirs = geom.sample_directions(int(samples))  # (n_p, s^2, 3)
+        flat = np.ascontiguousarray(dirs.reshape(-1, 3))
+        cos_cells = np.maximum(dirs[..., 2], 0.0).mean(axis=1)  # mean cos over each patch
+        omega = geom.solid_angles
+        ground = np.array([0.0, 0.0, fam.base.bottom_radius])
+        sun_dirs = direction_from_angles(h.sun_zenith, h.sun_azimuth)
+        # the Sun-Earth distance scales the tables (mean distance) to the day
+        ecc = h.eccentricity
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=rows.size, unit="h", desc=f"spectral sky ({geom.name}, {n_b} bands)")
+
+        names = [ax.name for ax in fam.axes]
+        k_ssa = names.index("aerosol_single_scattering_albedo") if "aerosol_single_scattering_albedo" in names else None
+
+        def patch_pass(values: NDArray[np.float64]) -> NDArray[np.float32]:
+            """Band radiances (n_p * n_b) and horizontal sky irradiance at the table wavelengths (n_t) per hour."""
+
+            def evaluate(atm, sub):
+                out = np.empty((sub.size, n_p * n_b + n_t), dtype=np.float32)
+                for j, i in enumerate(rows[sub]):
+                    rad = atm.sky_radiance(ground, flat, sun_dirs[i]).reshape(n_p, -1, n_t).mean(axis=1)
+                    out[j, : n_p * n_b] = (rad @ bmat.T).reshape(-1)
+                    out[j, n_p * n_b:] = (omega * cos_cells) @ rad  # horizontal sky irradiance
+                return out
+
+            return fam.interpolate(values, evaluate, dtype=np.float32,
+                                   progress=(lambda k: bar.update(k)) if bar is not None else None)
+
+        def matrix_dhi(e_sky):
+            return model.broadband_diffuse(e_sky, h.sun_zenith[rows], h.precipitable_water[rows], h.pressure[rows],
+                                           h.ozone[rows], ecc[rows], table_wl)
+
+        values = np.stack([_axis_values(fam, a.name, h) for a in fam.axes], axis=1)[rows]
+        try:
+            if k_ssa is None:
+                res = patch_pass(values)
+                dhi_matrix[rows] = matrix_dhi(res[:, n_p * n_b:].astype(float))
+            else:
+                # The sky is linear in the albedo within its grid cell: compute it at the cell's two albedo nodes
+                # (each pass interpolates along the other axes only), then choose the albedo that makes the
+                # matrix's own DHI equal the record's (the retrieval closed DHI with the tables' irradiance; the
+                # patches are another quadrature of the same sky, a few per cent apart with the sun low).
+                nodes = np.asarray(fam.axes[k_ssa].values)
+                lower, _, _ = fam.cells(values)
+                lo_v, hi_v = nodes[lower[:, k_ssa]], nodes[lower[:, k_ssa] + 1]
+                v_lo, v_hi = values.copy(), values.copy()
+                v_lo[:, k_ssa], v_hi[:, k_ssa] = lo_v, hi_v
+                if bar is not None:
+                    bar.total = 2 * rows.size
+                    bar.refresh()
+                res = patch_pass(v_lo)
+                res_hi = patch_pass(v_hi)
+                d_lo = matrix_dhi(res[:, n_p * n_b:].astype(float))
+                d_hi = matrix_dhi(res_hi[:, n_p * n_b:].astype(float))
+                w = (values[:, k_ssa] - lo_v) / (hi_v - lo_v)
+                clear = h.status[rows] == CLEAR
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    w_close = (h.dhi[rows] - d_lo) / (d_hi - d_lo)
+                ok = clear & np.isfinite(w_close) & (d_hi > d_lo)
+                inside = ok & (w_close >= 0) & (w_close <= 1)
+                # at the grid's first or last cell an albedo beyond the cell is beyond the grid
+                w = np.where(inside, w_close, w)
+                out_of_grid = ok & ~inside
+                w = np.where(out_of_grid, np.clip(w_close, 0, 1), w)
+                for j in np.flatnonzero(out_of_grid):
+                    i = rows[j]
+                    h.status[i] = CLEAR_OPEN
+                    h.reason[i] = "the matrix's DHI needs an aerosol albedo outside the grid cell: clamped, not closed"
+                h.single_scattering_albedo[rows] = lo_v + w * (hi_v - lo_v)
+                res *= (1 - w)[:, None].astype(np.float32)
+                res += w[:, None].astype(np.float32) * res_hi
+                del res_hi
+                dhi_matrix[rows] = (1 - w) * d_lo + w * d_hi
+        finally:
+            if bar is not None:
+                bar.close()
+        bandsky = res[:, : n_p * n_b].reshape(rows.size, n_p, n_b)
+        gas_b = np.ones((rows.size, n_b))
+        if gases:
+            tg = model.gas_transmittance(h.sun_zenith[rows], h.precipitable_water[rows], h.pressure[rows])
+            gas_b = _band_means(tg, model.e0 * model.weights, masks)
+        bandsky *= (ecc[rows, None] * gas_b).astype(np.float32)[:, None, :]
+        sky[rows] = bandsky
+        direct = model.direct_normal_spectral(h.sun_zenith[rows], h.aerosol_optical_depth[rows],
+                                              h.precipitable_water[rows], h.pressure[rows], h.ozone[rows],
+                                              ecc[rows], weighted=False)
+        if not gases:
+            direct = direct / model.gas_transmittance(h.sun_zenith[rows], h.precipitable_water[rows],
+                                                      h.pressure[rows])
+        sun[rows] = _band_means(direct, model.weights, masks)  # band mean over wavelength
+    times = (np.round(h.unix_time).astype(np.int64)).astype("datetime64[s]").astype("datetime64[ns]")
+    loc = h.record.location
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dhi_closure = np.where(h.dhi > 0, dhi_matrix / h.dhi - 1.0, np.nan)
+    flux = "W m-2"
+    status_meanings = " ".join(HOUR_STATUS[k].replace(", ", "_").replace(" ", "_") for k in sorted(HOUR_STATUS))
+    data = {
+        "sky_radiance": (("time", "patch", "wavelength"), sky,
+                         {"units": "W m-2 sr-1 nm-1", "long_name": "patch-mean spectral sky radiance (band mean)",
+                          "note": "NaN: hour not retrieved (see status, reason); 0 at night; no solar disc"}),
+        "sun_irradiance": (("time", "wavelength"), sun,
+                           {"units": "W m-2 nm-1", "long_name": "direct normal spectral irradiance of the sun "
+                            "(band mean)"}),
+        "sun_zenith": ("time", h.sun_zenith, {"units": "rad", "long_name": "true (unrefracted) sun zenith, mid-hour"}),
+        "sun_azimuth": ("time", h.sun_azimuth, {"units": "rad", "long_name": "sun azimuth from north towards east"}),
+        "status": ("time", h.status.astype(np.int8),
+                   {"flag_values": np.array(sorted(HOUR_STATUS), dtype=np.int8), "flag_meanings": status_meanings}),
+        "reason": ("time", np.asarray([str(r) for r in h.reason], dtype=str)),
+        "aerosol_optical_depth": ("time", h.aerosol_optical_depth, {"units": "1", "long_name":
+                                  "retrieved vertical aerosol optical depth at 550 nm"}),
+        "aerosol_source": ("time", h.aerosol_source.astype(str)),
+        "aerosol_optical_depth_file": ("time", h.aerosol_optical_depth_file,
+                                       {"units": "1", "long_name": "the file's aerosol optical depth at 550 nm"}),
+        "single_scattering_albedo": ("time", h.single_scattering_albedo, {"units": "1"}),
+        "cloud_optical_depth": ("time", h.cloud_optical_depth, {"units": "1"}),
+        "cloud_cover": ("time", h.cloud_cover, {"units": "1"}),
+        "precipitable_water": ("time", h.precipitable_water, {"units": "cm"}),
+        "precipitable_water_source": ("time", h.precipitable_water_source.astype(str)),
+        "ozone": ("time", h.ozone, {"units": "DU"}),
+        "pressure": ("time", h.pressure, {"units": "Pa"}),
+        "ghi": ("time", h.ghi, {"units": flux, "long_name": "record: global horizontal irradiance"}),
+        "dni": ("time", h.dni, {"units": flux, "long_name": "record: direct normal irradiance"}),
+        "dhi": ("time", h.dhi, {"units": flux, "long_name": "record: diffuse horizontal irradiance"}),
+        "dni_model": ("time", h.dni_model, {"units": flux, "long_name": "broadband DNI of the retrieved sky"}),
+        "dhi_model": ("time", h.dhi_model, {"units": flux, "long_name": "broadband DHI of the retrieval"}),
+        "dhi_matrix": ("time", dhi_matrix, {"units": flux, "long_name": "broadband DHI of the matrix's patches"}),
+        "dni_closure": ("time", h.dni_closure, {"units": "1", "long_name": "dni_model / dni - 1"}),
+        "dhi_closure": ("time", dhi_closure, {"units": "1", "long_name": "dhi_matrix / dhi - 1"}),
+    }
+    coords = {
+        "time": ("time", times, {"long_name": "middle of the hour", "timezone": "UTC"}),
+        "patch": ("patch", np.arange(n_p)),
+        "patch_zenith": ("patch", geom.centre_zenith, {"units": "rad"}),
+        "patch_azimuth": ("patch", geom.azimuth_centre, {"units": "rad", "long_name": "from north towards east"}),
+        "patch_solid_angle": ("patch", geom.solid_angles, {"units": "sr"}),
+        "wavelength": ("wavelength", centres, {"units": "nm", "long_name": "band centre"}),
+        "wavelength_low": ("wavelength", edges[:-1], {"units": "nm"}),
+        "wavelength_high": ("wavelength", edges[1:], {"units": "nm"}),
+    }
+    attrs = {
+        "title": "skyscatter spectral sky matrix",
+        "skyscatter_version": __version__,
+        "source_file": str(h.record.path),
+        "latitude_deg": loc.latitude_deg, "longitude_deg": loc.longitude_deg,
+        "timezone_hours": loc.timezone_hours, "elevation_m": loc.elevation,
+        "scheme": geom.name, "samples": int(samples), "gases": int(bool(gases)),
+        "ground_albedo": float(fam.base.ground_albedo_at([550.0])[0]),
+        "family": json.dumps(fam.describe(), sort_keys=True),
+        "options": json.dumps({k: (v if isinstance(v, (int, float, str, tuple, list)) or v is None else repr(v))
+                               for k, v in vars(o).items() if k != "base"}, sort_keys=True, default=list),
+        "notes": "; ".join(h.notes),
+        "conventions": "ENU frame; azimuth from north towards east; patches in Radiance's order without its "
+                       "ground patch; status codes in flag_values/flag_meanings",
+        "references": "Bruneton & Neyret 2008 doi:10.1111/j.1467-8659.2008.01245.x; Bird & Riordan 1986 "
+                      "doi:10.1175/1520-0450(1986)025<0087:SSSMFD>2.0.CO;2",
+    }
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _axis_values(fam, name: str, h: HourlyAtmosphere) -> NDArray[np.float64]:
+    if name == "aerosol_optical_depth":
+        return np.nan_to_num(h.aerosol_optical_depth, nan=0.0)
+    if name == "aerosol_single_scattering_albedo":
+        return np.nan_to_num(h.single_scattering_albedo, nan=fam.base.mie_single_scattering_albedo)
+    if name == "cloud_optical_depth":
+        return np.nan_to_num(h.cloud_optical_depth, nan=0.0)
+    raise InvalidParameterError(f"no hourly value for the grid axis {name!r}")
+
+
+# --------------------------------------------------------------------------------------------- outputs
+
+
+def save_dataset(ds, path: str | os.PathLike[str]) -> Path:
+    """Write a spectral sky matrix to NetCDF (``.nc``, via h5netcdf, compressed) or Zarr (``.zarr``), atomically
+    (a failed write leaves nothing); returns the path."""
+    target = check_output_path(path)
+    suffix = target.suffix.lower()
+    if suffix == ".nc":
+        try:
+            import h5netcdf  # noqa: F401
+        except ImportError:
+            raise OutputError("writing NetCDF needs h5netcdf (pip install 'skyscatter[montecarlo]')") from None
+        enc = {v: {"compression": "gzip", "compression_opts": 4} for v in ("sky_radiance", "sun_irradiance")}
+        with atomic_path(target) as tmp:
+            try:
+                ds.to_netcdf(tmp, engine="h5netcdf", encoding=enc)
+            except OSError as exc:
+                raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from None
+        return target
+    if suffix == ".zarr":
+        import shutil
+
+        if target.exists():
+            raise OutputError(f"{target} exists; choose another path (a Zarr store is not overwritten)")
+        tmp = target.with_name(f".{target.name}.tmp-{os.getpid()}")
+        try:
+            with warnings.catch_warnings():  # fixed-width text (status reasons) has no Zarr v3 spec name yet
+                warnings.filterwarnings("ignore", message=".*does not have a Zarr V3 specification")
+                ds.to_zarr(tmp, mode="w-", consolidated=False)
+            os.replace(tmp, target)
+        except OSError as exc:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from None
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        return target
+    raise InvalidParameterError(f"{target}: the spectral matrix file must end in .nc (NetCDF) or .zarr (Zarr)")
+
+
+def ground_radiance(ds) -> NDArray[np.float64]:
+    """Radiance [W m^-2 sr^-1 nm^-1] of a Lambertian ground of the dataset's ``ground_albedo`` lit by the sky
+    and the sun, shape (time, wavelength): ``rho (E_sky + E_sun cos z) / pi`` (Radiance's ground patch)."""
+    sky = np.asarray(ds["sky_radiance"].values, dtype=float)
+    omega = ds["patch_solid_angle"].values
+    cosp = np.cos(ds["patch_zenith"].values)
+    e_sky = np.einsum("tpw,p->tw", sky, omega * cosp)
+    e_sun = ds["sun_irradiance"].values * np.maximum(np.cos(ds["sun_zenith"].values), 0.0)[:, None]
+    return float(ds.attrs["ground_albedo"]) * (e_sky + e_sun) / np.pi
+
+
+#: Radiance's standard RGB primaries (CIE xy of R, G, B) and its equal-energy white (``color.h``, ``CIE_x_r`` ...).
+RADIANCE_PRIMARIES = ((0.640, 0.330), (0.290, 0.600), (0.150, 0.060))
+#: Radiance's luminous efficacy of its RGB radiance units [lm W^-1] (WHTEFFICACY).
+RADIANCE_EFFICACY = 179.0
+
+
+def radiance_rgb_matrix() -> NDArray[np.float64]:
+    """3x3 matrix from CIE XYZ to Radiance RGB (its primaries, equal-energy white): ``rgb = M @ xyz``. With it
+    ``Y = 0.2651 R + 0.6701 G + 0.0648 B`` (Radiance's luminance formula, 179 lm/W per unit)."""
+    xy = np.array(RADIANCE_PRIMARIES)
+    prim = np.stack([xy[:, 0] / xy[:, 1], np.ones(3), (1 - xy[:, 0] - xy[:, 1]) / xy[:, 1]])  # columns = R, G, B
+    scale = np.linalg.solve(prim, np.ones(3))  # equal-energy white X = Y = Z = 1
+    return np.linalg.inv(prim * scale)
+
+
+def radiance_rgb(ds, values: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Band-mean spectral radiance (..., n_bands) [W m^-2 sr^-1 nm^-1] -> Radiance RGB radiance (..., 3)
+    [W m^-2 sr^-1 in Radiance's units: 179 lm/W], through the CIE 1931 observer at the band centres times the
+    band widths."""
+    from ..spectral.colorimetry import cie_cmfs
+
+    centres = ds["wavelength"].values
+    width = ds["wavelength_high"].values - ds["wavelength_low"].values
+    xyz = 683.0 * np.asarray(values, dtype=float) @ (cie_cmfs(centres) * width[:, None])
+    return xyz @ radiance_rgb_matrix().T / RADIANCE_EFFICACY
+
+
+def write_radiance_matrix(ds, path: str | os.PathLike[str], *, binary: bool = True, rgb: bool = False,
+                          command: str = "skyscatter skymatrix --spectral") -> Path:
+    """Write the sky matrix in Radiance's matrix format (what ``rmtxop``, ``dctimestep`` and ``rfluxmtx`` read).
+
+    Layout as gensdaymtx writes it: header ``#?RADIANCE``, ``NROWS`` = patches + 1 (the ground patch first,
+    then the sky patches in Radiance's order), ``NCOLS`` = hours, ``NCOMP`` = bands, ``WAVELENGTH_SPLITS= 780 588
+    480 380`` for the standard 380-780 nm range, ``FORMAT=float`` (little-endian) or ``ascii``;
+    each entry's components from the longest wavelength to the shortest (Radiance's spectral order), values the
+    band-mean spectral radiance [W m^-2 sr^-1 nm^-1] (written by
+    :func:`skyscatter.radiance.write_radiance_matrix`). ``rgb=True`` writes ``NCOMP=3`` Radiance RGB radiance
+    instead (:func:`radiance_rgb`, gendaymtx's form), which ``dctimestep`` needs (this Radiance's dctimestep takes 3
+    components only; ``rmtxop`` takes the spectral matrix). Hours that are not retrieved are written as NaN (they
+    propagate through ``rmtxop``/``dctimestep``: nothing takes them for a sky). Atomic.
+    """
+    target = check_output_path(path)
+    sky = np.asarray(ds["sky_radiance"].values, dtype=np.float32)  # (t, p, w)
+    ground = ground_radiance(ds).astype(np.float32)  # (t, w)
+    full = np.concatenate([ground[:, None, :], sky], axis=1)
+    # Radiance orders spectral components from the long wavelengths to the short; RGB stays R, G, B
+    full = radiance_rgb(ds, full).astype(np.float32) if rgb else full[:, :, ::-1]
+    rows = np.ascontiguousarray(full.transpose(1, 0, 2))  # (p+1, t, components)
+    wl_lo, wl_hi = float(ds["wavelength_low"].values[0]), float(ds["wavelength_high"].values[-1])
+    splits = (RADIANCE_WAVELENGTH_SPLITS if (abs(wl_lo - 380) < 6 and abs(wl_hi - 780) < 6)
+              else (wl_hi, wl_lo + 2 * (wl_hi - wl_lo) / 3, wl_lo + (wl_hi - wl_lo) / 3, wl_lo))
+    header = [command, f"LATLONG= {ds.attrs['latitude_deg']:.8f} {ds.attrs['longitude_deg']:.8f}"]
+    if not rgb:
+        header.append("WAVELENGTH_SPLITS= " + " ".join(f"{w:g}" for w in splits))
+    # NaN marks the hours without a sky (refused by the shared writer, which takes finite numbers)
+    return _write_matrix(target, rows, header=header, encoding="float" if binary else "ascii",
+                                        allow_nan=True)
+
+
+def plane_irradiance(ds, tilt: float, azimuth: float, *, samples: int = 4):
+    """Spectral irradiance on a tilted plane (the plane-of-array spectrum) from a spectral sky matrix.
+
+    ``E_sky = sum_p L_p Omega_p <max(0, d . n)>_p`` (the mean cosine over ``samples x samples`` cells of each
+    patch), ``E_ground = rho E_global,h (1 - cos tilt) / 2`` (an infinite Lambertian ground of the dataset's
+    albedo), ``E_direct = E_sun max(0, s . n)``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        From :func:`spectral_sky_matrix`.
+    tilt : float
+        Plane tilt from horizontal [rad], in [0, pi].
+    azimuth : float
+        Azimuth of the plane's normal [rad] from north towards east (pi: facing south).
+    samples : int
+        Cells per patch side for the mean cosine.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``sky``, ``ground``, ``direct`` and ``global`` (time, wavelength) [W m^-2 nm^-1].
+    """
+    import xarray as xr
+
+    from ..conventions import direction_from_angles
+
+    tilt = float(tilt)
+    azimuth = float(azimuth)
+    if not (np.isfinite(tilt) and 0.0 <= tilt <= np.pi) or not np.isfinite(azimuth):
+        raise InvalidParameterError("tilt must be in [0, pi] rad and azimuth finite [rad]")
+    geom = patch_scheme(ds.attrs["scheme"])
+    normal = direction_from_angles(tilt, azimuth)
+    cells = geom.sample_directions(int(samples))
+    mean_cos = np.maximum(cells @ normal, 0.0).mean(axis=1)
+    sky_l = np.asarray(ds["sky_radiance"].values, dtype=float)
+    e_sky = np.einsum("tpw,p->tw", sky_l, ds["patch_solid_angle"].values * mean_cos)
+    sun_dirs = direction_from_angles(np.minimum(ds["sun_zenith"].values, np.pi / 2), ds["sun_azimuth"].values)
+    e_sun_n = ds["sun_irradiance"].values
+    e_direct = e_sun_n * np.maximum(sun_dirs @ normal, 0.0)[:, None]
+    e_direct = np.where(ds["sun_zenith"].values[:, None] < np.pi / 2, e_direct, 0.0)
+    ground = ground_radiance(ds) * np.pi  # rho E_global,h
+    e_ground = ground * (1.0 - np.cos(tilt)) / 2.0
+    dims = ("time", "wavelength")
+    unit = {"units": "W m-2 nm-1"}
+    return xr.Dataset({"sky": (dims, e_sky, unit), "ground": (dims, e_ground, unit), "direct": (dims, e_direct, unit),
+                       "global": (dims, e_sky + e_ground + e_direct, unit)},
+                      coords={"time": ds["time"], "wavelength": ds["wavelength"]},
+                      attrs={"tilt_rad": tilt, "azimuth_rad": azimuth})
+
+
+# --------------------------------------------------------------------------------------------- many sites
+
+
+def _job_description(paths: Sequence[Path], scheme: str, bands, samples: int, options: RetrievalOptions) -> dict:
+    def digest(p: Path) -> str:
+        return hashlib.sha256(p.read_bytes()).hexdigest()
+
+    return {"sites": [str(p) for p in paths], "sha256": [digest(p) for p in paths], "scheme": scheme,
+            "bands": band_edges(bands)[0].tolist(), "samples": int(samples),
+            "options": {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(options).items()
+                        if k not in ("base", "sizes")}, "sizes": repr(options.sizes)}
+
+
+def _site_arrays(ds) -> dict[str, NDArray]:
+    return {"sky_radiance": ds["sky_radiance"].values, "sun_irradiance": ds["sun_irradiance"].values,
+            "status": ds["status"].values.astype(np.int8),
+            "unix_time": ds["time"].values.astype("datetime64[s]").astype(np.int64).astype(np.float64),
+            "sun_zenith": ds["sun_zenith"].values, "sun_azimuth": ds["sun_azimuth"].values,
+            "aerosol_optical_depth": ds["aerosol_optical_depth"].values,
+            "single_scattering_albedo": ds["single_scattering_albedo"].values,
+            "dni_closure": ds["dni_closure"].values, "dhi_closure": ds["dhi_closure"].values}
+
+
+def _checksum(arrays: dict[str, NDArray]) -> str:
+    h = hashlib.sha256()
+    for k in sorted(arrays):
+        h.update(k.encode())
+        h.update(np.ascontiguousarray(arrays[k]).tobytes())
+    return h.hexdigest()
+
+
+def spectral_sky_matrix_sites(records: Sequence[str | os.PathLike[str]], store: str | os.PathLike[str], *,
+                              scheme: str = "reinhart2", bands: int | Sequence[float] = 20, samples: int = 2,
+                              options: RetrievalOptions | None = None, scheduler: str | None = None,
+                              workers: int = 2, progress: bool = False):
+    """Spectral sky matrices of many weather records as Dask tasks, into one Zarr store with a ``site`` dimension.
+
+    The store is created (atomically, every site pending) with ``sky_radiance`` (site, hour, patch, wavelength),
+    ``sun_irradiance`` (site, hour, wavelength), ``unix_time`` (site, hour) [s], ``status`` and the retrieved
+    aerosol per site and hour (records shorter than the longest are padded with NaN), a ``done`` flag and a SHA-256
+    ``checksum`` per site. Each task computes one site and writes its region, then its checksum and flag. A rerun
+    on the same store (same inputs and settings; anything else is refused) verifies the finished sites'
+    checksums, recomputes those that do not match and the unfinished ones, and leaves the store byte-identical
+    to an uninterrupted run (the computation is deterministic).
+
+    Parameters
+    ----------
+    records : sequence of path
+        Weather files (EPW, TMY3 or CSV).
+    store : path
+        Zarr directory (``.zarr``).
+    scheduler : None, "threads", "processes", "local" or an address
+        None / ``"threads"``: Dask's threaded scheduler with ``workers`` threads (default); ``"local"``: a
+        ``distributed.LocalCluster`` of ``workers`` single-threaded worker processes; ``"tcp://host:port"``: an
+        existing Dask scheduler.
+    workers : int
+        Threads or processes (default 2).
+    progress : bool
+        Dask's progress bar.
+
+    Returns
+    -------
+    xarray.Dataset (opened lazily from the store)
+    """
+    import dask
+    import xarray as xr
+
+    paths = [Path(p) for p in records]
+    if not paths:
+        raise InvalidParameterError("give one or more weather records")
+    for p in paths:
+        if not p.is_file():
+            raise InvalidParameterError(f"{p}: no such weather file")
+    o = RetrievalOptions() if options is None else options
+    store_path = Path(store)
+    if store_path.suffix.lower() != ".zarr":
+        raise InvalidParameterError(f"{store_path}: the multi-site store must be a .zarr directory")
+    if isinstance(workers, bool) or int(workers) != workers or workers < 1:
+        raise InvalidParameterError(f"workers must be a whole number >= 1; got {workers!r}")
+    geom = patch_scheme(scheme)
+    centres, _ = band_edges(bands)
+    from .weather import read_weather
+
+    lengths = [len(read_weather(p).hourly()) for p in paths]
+    job = _job_description(paths, geom.name, bands, samples, o)
+    job_id = hashlib.sha256(json.dumps(job, sort_keys=True).encode()).hexdigest()
+    _open_or_create_sites(store_path, job, job_id, len(paths), max(lengths), geom.n_patches, centres)
+    ds0 = xr.open_zarr(store_path, consolidated=False)
+    done = ds0["done"].values.copy()
+    sums = ds0["checksum"].values.copy()
+    pending = []
+    for s in range(len(paths)):
+        if done[s]:
+            try:
+                intact = _checksum(_read_site(ds0, s, lengths[s])) == str(sums[s])
+            except Exception:  # noqa: BLE001 - a chunk that does not even decode is damaged too
+                intact = False
+            if intact:
+                continue
+        pending.append(s)
+    ds0.close()
+    default_family(o).build(progress=progress)  # the tables once, before the tasks share them from the disk cache
+
+    def run(s: int) -> int:
+        ds = spectral_sky_matrix(paths[s], scheme=geom, bands=bands, samples=samples, options=o)
+        _write_site(store_path, s, ds, max(lengths))
+        return s
+
+    tasks = [dask.delayed(run)(s) for s in pending]
+    if tasks:
+        _compute(tasks, scheduler, int(workers), progress)
+    return xr.open_zarr(store_path, consolidated=False)
+
+
+def _compute(tasks, scheduler, workers: int, progress: bool) -> None:
+    import dask
+
+    if scheduler in (None, "threads", "processes"):
+        kw = {"scheduler": scheduler or "threads", "num_workers": workers}
+        if progress:
+            from dask.diagnostics import ProgressBar
+
+            with ProgressBar():
+                dask.compute(*tasks, **kw)
+        else:
+            dask.compute(*tasks, **kw)
+        return
+    from distributed import Client, LocalCluster
+    from distributed import progress as dprogress
+
+    if scheduler == "local":
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cl, \
+                Client(cl) as client:
+            futures = client.compute(tasks)
+            if progress:
+                dprogress(futures)
+            client.gather(futures)
+        return
+    if not isinstance(scheduler, str) or "://" not in scheduler:
+        raise InvalidParameterError(f"scheduler must be 'threads', 'processes', 'local' or an address like "
+                                    f"tcp://host:8786; got {scheduler!r}")
+    with Client(scheduler) as client:
+        futures = client.compute(tasks)
+        if progress:
+            dprogress(futures)
+        client.gather(futures)
+
+
+def _open_or_create_sites(store: Path, job: dict, job_id: str, n_sites: int, n_hours: int, n_patches: int,
+                          centres: NDArray[np.float64]) -> None:
+    import shutil
+
+    import xarray as xr
+
+    if store.exists():
+        try:
+            ds = xr.open_zarr(store, consolidated=False)
+        except Exception as exc:  # noqa: BLE001 - any unreadable store is refused the same way
+            raise OutputError(f"{store} exists and is not a skyscatter multi-site store ({exc})") from None
+        if ds.attrs.get("job_sha256") != job_id:
+            raise OutputError(f"{store} holds another multi-site job (other files or settings); it is not "
+                              "overwritten; choose another path")
+        return
+    check_output_path(store)
+    dims4 = ("site", "hour", "patch", "wavelength")
+    nan4 = np.full((n_sites, n_hours, n_patches, centres.size), np.nan, dtype=np.float32)
+    per_hour = {k: (("site", "hour"), np.full((n_sites, n_hours), np.nan))
+                for k in ("sun_zenith", "sun_azimuth", "aerosol_optical_depth", "single_scattering_albedo",
+                          "dni_closure", "dhi_closure")}
+    ds = xr.Dataset(
+        {"sky_radiance": (dims4, nan4, {"units": "W m-2 sr-1 nm-1"}),
+         "sun_irradiance": (("site", "hour", "wavelength"), np.full((n_sites, n_hours, centres.size), np.nan),
+                            {"units": "W m-2 nm-1"}),
+         "unix_time": (("site", "hour"), np.full((n_sites, n_hours), np.nan),
+                       {"units": "s", "long_name": "middle of the hour, seconds since 1970-01-01T00:00 UTC"}),
+         "status": (("site", "hour"), np.full((n_sites, n_hours), -1, dtype=np.int8)),
+         **per_hour,
+         "done": ("site", np.zeros(n_sites, dtype=bool)),
+         "checksum": ("site", np.array([""] * n_sites, dtype="<U64"))},
+        coords={"site": np.arange(n_sites), "site_file": ("site", np.array(job["sites"])),
+                "wavelength": ("wavelength", centres, {"units": "nm"}), "patch": np.arange(n_patches)},
+        attrs={"title": "skyscatter spectral sky matrices of many sites", "job_sha256": job_id,
+               "job": json.dumps(job, sort_keys=True)})
+    enc = {"sky_radiance": {"chunks": (1, n_hours, n_patches, centres.size)},
+           "sun_irradiance": {"chunks": (1, n_hours, centres.size)}, "done": {"chunks": (1,)},
+           "checksum": {"chunks": (1,)}, "status": {"chunks": (1, n_hours)}, "unix_time": {"chunks": (1, n_hours)},
+           **{k: {"chunks": (1, n_hours)} for k in per_hour}}
+    tmp = store.with_name(f".{store.name}.tmp-{os.getpid()}")
+    try:
+        with warnings.catch_warnings():  # fixed-width text has no Zarr v3 spec name yet
+            warnings.filterwarnings("ignore", message=".*does not have a Zarr V3 specification")
+            ds.to_zarr(tmp, mode="w-", encoding=enc, consolidated=False)
+        os.replace(tmp, store)  # the store appears whole (every site pending) or not at all
+    except FileExistsError:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise OutputError(f"{store} was created by another run at the same time; run again to resume it") from None
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _read_site(ds, s: int, n: int) -> dict[str, NDArray]:
+    out = {}
+    for k in ("sky_radiance", "sun_irradiance", "status", "unix_time", "sun_zenith", "sun_azimuth",
+              "aerosol_optical_depth", "single_scattering_albedo", "dni_closure", "dhi_closure"):
+        out[k] = ds[k].isel(site=s, hour=slice(0, n)).values
+    out["status"] = out["status"].astype(np.int8)
+    out["sky_radiance"] = out["sky_radiance"].astype(np.float32)
+    return out
+
+
+def _write_site(store: Path, s: int, ds, n_hours: int) -> None:
+    import xarray as xr
+
+    arrays = _site_arrays(ds)
+    n = arrays["status"].size
+    arrays["sky_radiance"] = arrays["sky_radiance"].astype(np.float32)
+
+    def pad(a, fill):
+        if a.shape[0] == n_hours:
+            return a
+        extra = np.full((n_hours - a.shape[0], *a.shape[1:]), fill, dtype=a.dtype)
+        return np.concatenate([a, extra])
+
+    fills = {"status": -1}
+    dims = {"sky_radiance": ("site", "hour", "patch", "wavelength"), "sun_irradiance": ("site", "hour", "wavelength")}
+    data = {k: (dims.get(k, ("site", "hour")), pad(v, fills.get(k, np.nan))[None]) for k, v in arrays.items()}
+    xr.Dataset(data).to_zarr(store, region={"site": slice(s, s + 1), "hour": slice(None), "patch": slice(None),
+                                            "wavelength": slice(None)}, consolidated=False)
+    # checksum of what was written, then the flag: an interrupted site is recomputed on resume
+    flag = xr.Dataset({"checksum": ("site", np.array([_checksum({k: v[:n] for k, v in arrays.items()})],
+                                                     dtype="<U64")),
+                       "done": ("site", np.ones(1, dtype=bool))})
+    flag.to_zarr(store, region={"site": slice(s, s + 1)}, consolidated=False)

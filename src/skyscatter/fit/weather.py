@@ -1,0 +1,865 @@
+"""The atmosphere of every hour of a weather record, retrieved from its measured irradiance.
+
+For each daylit hour of an EPW file (or a TMY3 file or a CSV with the same columns, :func:`read_weather`)
+:func:`retrieve_hourly_atmosphere` finds the air that reproduces the record's broadband irradiance through the
+medium (:class:`~skyscatter.atmosphere.medium.AtmosphereParameters`) and a family of precomputed tables over a
+parameter grid (:class:`~skyscatter.precomputed.family.TableFamily`), and reports per hour what it used and
+how well the result reproduces the record.
+
+**Broadband model** (:class:`BroadbandClearSky`). The direct normal irradiance of a clear hour is
+
+    DNI = f_ecc sum_lambda w E0(lambda) exp(-sum_c tau_c(lambda) m_c) T_w(lambda) T_u(lambda)
+
+over the ASTM G173 extraterrestrial spectrum 280-4000 nm (:func:`~skyscatter.atmosphere.gas_absorption.
+broadband_solar_spectrum`, trapezoid weights w), with the medium's own vertical optical depths tau_c of
+Rayleigh scattering, aerosol extinction and ozone (ozone outside the medium's 360-830 nm data: Bird & Riordan
+1986, Eq. 2-9) along the medium's slant optical masses m_c (:func:`~skyscatter.atmosphere.gas_absorption.
+slant_optical_masses`, the geometry of the tables, no refraction), water vapour and mixed-gas band
+transmittances T_w, T_u (Bird & Riordan 1986, Eqs. 2-8 and 2-11; air mass the Rayleigh one) and Spencer's
+(1971) eccentricity factor f_ecc (:func:`skyscatter.sky.perez.extraterrestrial_irradiance`). The diffuse
+horizontal irradiance is the tables' sky irradiance on a horizontal plane at the table wavelengths, reduced by
+E0 there, carried to the fine grid by linear interpolation (and beyond 830 nm and below 360 nm by a power law
+through the two nearest table wavelengths), times E0 and the same gas transmittances (the diffuse light takes
+the sun's gas path, as in Bird & Riordan 1986, Sec. 3), summed. Pyrheliometers see about 2.5 deg around the
+sun: the circumsolar light they add to DNI is not modelled (it lowers the retrieved optical depth slightly).
+
+**Per hour** (``HOUR_STATUS``):
+
+1. *night*: the sun below the horizon at mid-hour or no light in the record -> dark.
+2. *invalid*: a record that cannot be right (DNI above the extraterrestrial value, DHI above GHI by more than
+   max(5 %, 10 W m^-2), irradiance with the sun more than 3 deg below the horizon, missing fields that cannot be
+   rebuilt from the other two, GHI = DHI + DNI cos(zenith)). ``bad_hours="error"`` (default) raises a
+   :class:`~skyscatter.errors.FileFormatError` naming the line; ``"flag"`` marks the hour and leaves its sky NaN.
+3. *clear*: total sky cover <= ``clear_sky_cover`` tenths (or no sky cover in the file), the sun at least 5 deg
+   up, a direct beam, and the aerosol optical depth from DNI (Newton's method on the broadband model,
+   monotonic in tau) within the grid. **The DNI retrieval wins over the file's aerosol optical depth field in
+   clear hours** (the field is usually a monthly climatology); the file's value is kept next to it for
+   comparison. The aerosol's single-scattering albedo then closes DHI (closed form: DHI is linear in the albedo
+   between the grid's albedo nodes); an albedo outside the grid means the hour is not clear-sky physics:
+   above the largest albedo (more diffuse light than clear air can give) it is treated as cloudy, below the
+   smallest it is *clear, not closed* (albedo clamped, closure reported).
+4. *cloudy*: the other daylit hours. Their aerosol is the median of the same day's clear hours (a measurement
+   of that day wins), else the file's optical depth where present (converted from TMY's broadband value at
+   700 nm, Molineaux et al. 1998, with the Angstrom exponent), else the 6 nearest clear hours within 3 days,
+   else ``default_aerosol_optical_depth``.
+   The cloud optical depth and cover come from :func:`retrieve_clouds`, the one function the fast cloudy sky
+   (issue 22) plugs into; until it exists such hours are *cloudy, not retrieved* and their sky is NaN.
+
+Precipitable water: the file's field, else Gueymard (1994) from temperature and relative humidity, else
+``default_precipitable_water``. Ozone: a CSV's ``ozone`` column, else ``default_ozone`` (EPW and TMY3 files do
+not carry it). The ground albedo of the tables is the base atmosphere's (the file's albedo is reported, not
+used: it would be one more grid axis).
+
+References: Bird & Riordan (1986), doi:10.1175/1520-0450(1986)025<0087:SSSMFD>2.0.CO;2; Gueymard (1994), "Analysis
+of monthly average atmospheric precipitable water and turbidity in Canada and Northern United States", Solar
+Energy 53(1), 57-71, doi:10.1016/0038-092X(94)90606-8; Molineaux, Ineichen & O'Neill (1998), "Equivalence of
+pyrheliometric and monochromatic aerosol optical depths at a single key wavelength", Appl. Opt. 37(30),
+7008-7018, doi:10.1364/AO.37.007008; Spencer (1971), Search 2(5), 172.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..atmosphere.gas_absorption import (
+    broadband_solar_spectrum,
+    mixed_gas_transmittance,
+    ozone_transmittance_bird_riordan,
+    slant_optical_masses,
+    water_vapour_transmittance,
+)
+from ..atmosphere.medium import AtmosphereParameters
+from ..epw import EPWData, EPWLocation, read_epw
+from ..errors import FileFormatError, InvalidParameterError
+from ..precomputed.family import FAMILY_WAVELENGTHS, GridAxis, TableFamily
+
+__all__ = [
+    "DEFAULT_AOD_NODES",
+    "DEFAULT_ALBEDO_NODES",
+    "HOUR_STATUS",
+    "BroadbandClearSky",
+    "CloudRetrieval",
+    "HourlyAtmosphere",
+    "RetrievalOptions",
+    "TABLE_PRESETS",
+    "default_family",
+    "precipitable_water_gueymard1994",
+    "read_weather",
+    "retrieve_clouds",
+    "retrieve_hourly_atmosphere",
+]
+
+#: Aerosol optical depth nodes [-] at 550 nm of the default family (dense where clear skies are).
+DEFAULT_AOD_NODES = (0.0, 0.05, 0.1, 0.2, 0.3, 0.45, 0.65, 1.0, 1.5)
+#: Aerosol single-scattering albedo nodes [-] of the default family.
+DEFAULT_ALBEDO_NODES = (0.8, 1.0)
+#: Scale height [m] of the default base medium's molecules: the column of the standard atmosphere, 101325 Pa /
+#: (m_air g) = 2.148e29 m^-2, over the sea-level number density 2.5469e25 m^-3 of the physical Rayleigh
+#: coefficient (:func:`~skyscatter.atmosphere.spectra.rayleigh_scattering_physical`), so that the Rayleigh optical
+#: depth is 0.0980 at 550 nm (Bodhaine et al. 1999, Table 3: 0.0973) rather than the 0.108 of the medium's
+#: default (Bruneton 2017's coefficient with H = 8 km).
+RAYLEIGH_SCALE_HEIGHT = 8434.0
+#: Ground albedo [-] of the default base medium (Radiance's gendaymtx default, ``-g 0.2``).
+DEFAULT_GROUND_ALBEDO = 0.2
+#: Status codes of :attr:`HourlyAtmosphere.status`.
+HOUR_STATUS = {0: "night", 1: "clear", 2: "clear, DHI not closed", 3: "cloudy, not retrieved",
+               4: "cloudy", 5: "invalid record"}
+NIGHT, CLEAR, CLEAR_OPEN, CLOUDY_OPEN, CLOUDY, INVALID = range(6)
+#: Wavelength [nm] of TMY's broadband aerosol optical depth (Molineaux et al. 1998's key wavelength).
+BROADBAND_AOD_WAVELENGTH = 700.0
+_MIN_CLEAR_ELEVATION = math.radians(5.0)
+
+
+# --------------------------------------------------------------------------------------------- inputs
+
+
+def precipitable_water_gueymard1994(temperature: ArrayLike, relative_humidity: ArrayLike) -> NDArray[np.float64]:
+    """Precipitable water [cm] from air temperature [deg C] and relative humidity [%] (Gueymard 1994, Eqs. 1-3):
+    ``w = 0.1 H_v rho_v`` with ``H_v = 0.4976 + 1.5265 T' + exp(13.6897 T' - 14.9188 T'^3)``, ``T' = T / 273.15``
+    and the vapour density ``rho_v = 216.7 RH / (100 T) e_s(T)``, ``e_s = exp(22.330 - 49.140 (100 / T) - 10.922
+    (100 / T)^2 - 0.39015 T / 100)`` (T in K); at least 0.1 cm."""
+    t = np.asarray(temperature, dtype=float) + 273.15
+    rh = np.asarray(relative_humidity, dtype=float)
+    tp = t / 273.15
+    hv = 0.4976 + 1.5265 * tp + np.exp(13.6897 * tp - 14.9188 * tp**3)
+    es = np.exp(22.330 - 49.140 * (100.0 / t) - 10.922 * (100.0 / t) ** 2 - 0.39015 * t / 100.0)
+    rho = 216.7 * rh / (100.0 * t) * es
+    return np.maximum(0.1 * hv * rho, 0.1)
+
+
+def read_weather(path: str | os.PathLike[str]) -> EPWData:
+    """Read a weather record: an EPW file (``.epw``), a TMY3 file (``.csv`` whose first line is the TMY3 header,
+    read with pvlib), or a CSV of the columns below.
+
+    CSV: lines starting with ``#`` may give ``# latitude = 48.1``, ``# longitude = 11.6`` [deg, east +],
+    ``# timezone = 1`` [h] and ``# elevation = 520`` [m] (all four required); then a header with ``year, month,
+    day, hour`` (hour 1-24 ending the hour, local standard time as in EPW), ``ghi, dni, dhi`` [W m^-2] and
+    optionally ``dry_bulb, dew_point`` [deg C], ``relative_humidity`` [%], ``pressure`` [Pa],
+    ``precipitable_water`` [mm], ``aerosol_optical_depth`` [-], ``total_sky_cover, opaque_sky_cover`` [tenths],
+    ``albedo`` [-] and ``ozone`` [DU]. Empty cells are missing values.
+    """
+    p = Path(path)
+    if p.suffix.lower() == ".epw":
+        return read_epw(p)
+    try:
+        with open(p, encoding="utf-8", errors="replace") as fh:
+            head = fh.readline()
+    except OSError as exc:
+        raise FileFormatError(f"{p}: cannot read ({exc.strerror or exc})") from None
+    if head.count(",") == 6 and not head.lstrip().startswith("#"):
+        return _read_tmy3(p)
+    return _read_csv(p)
+
+
+def _record(p: Path, location: EPWLocation, cols: dict[str, NDArray[np.float64]], ints: NDArray[np.int64],
+            lines: NDArray[np.int64], ozone: NDArray[np.float64] | None = None) -> EPWData:
+    n = ints.shape[0]
+
+    def get(name: str) -> NDArray[np.float64]:
+        v = cols.get(name)
+        return np.full(n, np.nan) if v is None else np.asarray(v, dtype=float)
+
+    rec = EPWData(path=p, location=location, year=ints[:, 0], month=ints[:, 1], day=ints[:, 2], hour=ints[:, 3],
+                  dry_bulb=get("dry_bulb"), dew_point=get("dew_point"), global_horizontal_irradiance=get("ghi"),
+                  direct_normal_irradiance=get("dni"), diffuse_horizontal_irradiance=get("dhi"),
+                  line_numbers=lines, relative_humidity=get("relative_humidity"), pressure=get("pressure"),
+                  total_sky_cover=get("total_sky_cover"), opaque_sky_cover=get("opaque_sky_cover"),
+                  precipitable_water=get("precipitable_water"), aerosol_optical_depth=get("aerosol_optical_depth"),
+                  albedo=get("albedo"))
+    object.__setattr__(rec, "ozone", ozone)
+    return rec
+
+
+def _read_tmy3(p: Path) -> EPWData:
+    try:
+        import pvlib
+    except ImportError:
+        raise FileFormatError(f"{p}: reading TMY3 files needs pvlib (pip install pvlib)") from None
+    try:
+        data, meta = pvlib.iotools.read_tmy3(str(p), map_variables=True)
+    except Exception as exc:  # pvlib raises many kinds for a malformed file
+        raise FileFormatError(f"{p}: not a readable TMY3 file ({exc})") from None
+    loc = EPWLocation(str(meta.get("Name", "")), str(meta.get("State", "")), "", "TMY3", str(meta.get("USAF", "")),
+                      float(meta["latitude"]), float(meta["longitude"]), float(meta["TZ"]),
+                      float(meta["altitude"]))
+    # pvlib's index is the end of each hour in local standard time (TMY3 convention, as EPW)
+    idx = data.index - np.timedelta64(1, "h")
+    ints = np.stack([idx.year, idx.month, idx.day, idx.hour + 1], axis=1).astype(np.int64)
+
+    def col(name: str, scale: float = 1.0):
+        return data[name].to_numpy(dtype=float) * scale if name in data else None
+
+    cols = {"ghi": col("ghi"), "dni": col("dni"), "dhi": col("dhi"), "dry_bulb": col("temp_air"),
+            "dew_point": col("temp_dew"), "relative_humidity": col("relative_humidity"),
+            "pressure": col("pressure", 100.0), "precipitable_water": col("precipitable_water", 10.0),
+            "aerosol_optical_depth": col("AOD"), "total_sky_cover": col("TotCld"), "opaque_sky_cover": col("OpqCld"),
+            "albedo": col("albedo")}
+    return _record(p, loc, {k: v for k, v in cols.items() if v is not None}, ints, np.arange(3, 3 + len(data)))
+
+
+_CSV_COLUMNS = ("ghi", "dni", "dhi", "dry_bulb", "dew_point", "relative_humidity", "pressure", "precipitable_water",
+                "aerosol_optical_depth", "total_sky_cover", "opaque_sky_cover", "albedo", "ozone")
+
+
+def _read_csv(p: Path) -> EPWData:
+    meta: dict[str, float] = {}
+    rows: list[tuple[int, list[str]]] = []
+    with open(p, encoding="utf-8", errors="replace", newline="") as fh:
+        for n, line in enumerate(fh, start=1):
+            s = line.strip()
+            if not s:
+                continue
+            if s.startswith("#"):
+                if "=" in s:
+                    k, v = s[1:].split("=", 1)
+                    try:
+                        meta[k.strip().lower()] = float(v)
+                    except ValueError:
+                        raise FileFormatError(
+                            f"{p}: line {n}: {k.strip()} must be a number; got {v.strip()!r}") from None
+                continue
+            rows.append((n, next(csv.reader([s]))))
+    need = ("latitude", "longitude", "timezone", "elevation")
+    missing = [k for k in need if k not in meta]
+    if missing:
+        raise FileFormatError(f"{p}: a weather CSV needs '# name = value' lines for {', '.join(missing)}")
+    if len(rows) < 2:
+        raise FileFormatError(f"{p}: no header and data rows")
+    header = [h.strip().lower() for h in rows[0][1]]
+    for k in ("year", "month", "day", "hour", "ghi", "dni", "dhi"):
+        if k not in header:
+            raise FileFormatError(f"{p}: line {rows[0][0]}: the header needs a column {k!r}")
+    body = rows[1:]
+    ints = np.zeros((len(body), 4), dtype=np.int64)
+    vals = {k: np.full(len(body), np.nan) for k in _CSV_COLUMNS if k in header}
+    for r, (n, cells) in enumerate(body):
+        if len(cells) != len(header):
+            raise FileFormatError(f"{p}: line {n}: {len(cells)} cells, the header has {len(header)}")
+        for j, k in enumerate(("year", "month", "day", "hour")):
+            try:
+                ints[r, j] = int(cells[header.index(k)])
+            except ValueError:
+                raise FileFormatError(f"{p}: line {n}: {k} must be a whole number") from None
+        for k in vals:
+            c = cells[header.index(k)].strip()
+            if c:
+                try:
+                    vals[k][r] = float(c)
+                except ValueError:
+                    raise FileFormatError(f"{p}: line {n}: {k} {c!r} is not a number") from None
+    if np.any((ints[:, 3] < 1) | (ints[:, 3] > 24)) or np.any((ints[:, 1] < 1) | (ints[:, 1] > 12)):
+        raise FileFormatError(f"{p}: hours must be 1-24 (ending the hour) and months 1-12")
+    loc = EPWLocation(p.stem, "", "", "CSV", "", meta["latitude"], meta["longitude"], meta["timezone"],
+                      meta["elevation"])
+    ozone = vals.pop("ozone", None)
+    return _record(p, loc, vals, ints, np.array([n for n, _ in body], dtype=np.int64), ozone)
+
+
+# --------------------------------------------------------------------------------------------- broadband model
+
+
+class BroadbandClearSky:
+    """Broadband direct and diffuse irradiance of the medium (module docstring, "Broadband model").
+
+    Parameters
+    ----------
+    base : AtmosphereParameters
+        The medium (its Rayleigh, ozone profile and cross-sections, aerosol profile and spectral shape).
+    angstrom_alpha : float
+        Angstrom exponent of the aerosol optical depth's spectral shape.
+    """
+
+    def __init__(self, base: AtmosphereParameters, angstrom_alpha: float) -> None:
+        self.base = base
+        self.alpha = float(angstrom_alpha)
+        wl, e0 = broadband_solar_spectrum()
+        self.wavelengths = wl
+        self.weights = np.zeros_like(wl)
+        dw = np.diff(wl)
+        self.weights[:-1] += dw / 2
+        self.weights[1:] += dw / 2
+        self.e0 = e0
+        thick = base.thickness
+        self.tau_rayleigh = base.rayleigh_scattering_at(wl) * base.rayleigh_density.column(thick)
+        ozone = np.zeros_like(wl)
+        inside = (wl >= 360.0) & (wl <= 830.0)
+        per_du = base.replace(ozone_column=1.0)
+        ozone[inside] = per_du.ozone_absorption_at(wl[inside]) * base.ozone_density.column(thick)
+        self.tau_ozone_per_du = ozone  # [DU^-1] inside the medium's data; Bird & Riordan's form outside
+        self.ozone_inside = inside
+        self.aerosol_shape = (wl / 550.0) ** -self.alpha
+
+    def gas_transmittance(self, zenith: ArrayLike, precipitable_water: ArrayLike,
+                          pressure: ArrayLike) -> NDArray[np.float64]:
+        """Water vapour x mixed-gas band transmittance along the sun's path on the fine grid, shape (n, n_fine)
+        (zenith [rad], W [cm], p [Pa]; air mass the medium's Rayleigh one)."""
+        m = slant_optical_masses(self.base, np.asarray(zenith, dtype=float))
+        return (water_vapour_transmittance(self.wavelengths, precipitable_water, m.rayleigh)
+                * mixed_gas_transmittance(self.wavelengths, m.rayleigh, pressure))
+
+    def _gas(self, zenith, precipitable_water, pressure, ozone):
+        m = slant_optical_masses(self.base, zenith)
+        tg = (water_vapour_transmittance(self.wavelengths, precipitable_water, m.rayleigh)
+              * mixed_gas_transmittance(self.wavelengths, m.rayleigh, pressure))
+        o3 = np.asarray(ozone, dtype=float)
+        t_o = np.exp(-(o3 * m.ozone)[:, None] * self.tau_ozone_per_du)
+        outside = ozone_transmittance_bird_riordan(self.wavelengths, o3, m.ozone)
+        t_o = np.where(self.ozone_inside, t_o, outside)
+        return m, tg * t_o
+
+    def direct_normal(self, zenith: ArrayLike, aerosol_optical_depth: ArrayLike, precipitable_water: ArrayLike,
+                      pressure: ArrayLike, ozone: ArrayLike, eccentricity: ArrayLike) -> NDArray[np.float64]:
+        """Broadband DNI [W m^-2] for each hour (zenith [rad], AOD at 550 nm [-], W [cm], p [Pa], O3 [DU],
+        eccentricity factor [-]); all arrays of shape (n,)."""
+        return self.direct_normal_spectral(zenith, aerosol_optical_depth, precipitable_water, pressure, ozone,
+                                           eccentricity).sum(axis=1)
+
+    def direct_normal_spectral(self, zenith: ArrayLike, aerosol_optical_depth: ArrayLike,
+                               precipitable_water: ArrayLike, pressure: ArrayLike, ozone: ArrayLike,
+                               eccentricity: ArrayLike, *, weighted: bool = True) -> NDArray[np.float64]:
+        """Direct normal spectral irradiance on the fine grid :attr:`wavelengths`, shape (n, n_fine):
+        [W m^-2 nm^-1], or with ``weighted`` (default) times the trapezoid weights [W m^-2] (sums to DNI)."""
+        a, ma = self._direct_parts(zenith, precipitable_water, pressure, ozone, eccentricity)
+        tau = np.asarray(aerosol_optical_depth, dtype=float)
+        out = a * np.exp(-(tau * ma)[:, None] * self.aerosol_shape)
+        return out if weighted else out / np.where(self.weights > 0, self.weights, 1.0)
+
+    def _direct_parts(self, zenith, precipitable_water, pressure, ozone, eccentricity):
+        z = np.asarray(zenith, dtype=float)
+        m, tg = self._gas(z, precipitable_water, pressure, ozone)
+        a = (np.asarray(eccentricity, dtype=float)[:, None] * self.weights * self.e0 * tg
+             * np.exp(-m.rayleigh[:, None] * self.tau_rayleigh))
+        return a, m.aerosol
+
+    def retrieve_aerosol(self, dni: ArrayLike, zenith: ArrayLike, precipitable_water: ArrayLike,
+                         pressure: ArrayLike, ozone: ArrayLike, eccentricity: ArrayLike, *,
+                         tau_max: float = 10.0) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Aerosol optical depth at 550 nm [-] that gives ``dni`` [W m^-2] in each hour, and whether it exists
+        in [0, tau_max] (False: DNI above the aerosol-free value, or below the value at ``tau_max``).
+
+        DNI(tau) is a sum of decaying exponentials (convex, decreasing): Newton's method from tau = 0 converges
+        monotonically; 30 steps, to 1e-10 in DNI relative."""
+        a, ma = self._direct_parts(zenith, precipitable_water, pressure, ozone, eccentricity)
+        target = np.asarray(dni, dtype=float)
+        k = ma[:, None] * self.aerosol_shape
+        clean = a.sum(axis=1)
+        dirty = np.einsum("hf,hf->h", a, np.exp(-tau_max * k))
+        ok = (target <= clean) & (target >= dirty) & (target > 0)
+        tau = np.zeros(target.size)
+        for _ in range(30):
+            e = a * np.exp(-tau[:, None] * k)
+            f = e.sum(axis=1) - target
+            df = -(e * k).sum(axis=1)
+            step = np.where(ok, f / np.where(df < 0, df, -1.0), 0.0)
+            tau = np.clip(tau - step, 0.0, tau_max)
+            if np.all(np.abs(f[ok]) <= 1e-10 * np.maximum(target[ok], 1.0)):
+                break
+        return np.where(ok, tau, np.nan), ok
+
+    def diffuse_weights(self, zenith: ArrayLike, precipitable_water: ArrayLike, pressure: ArrayLike,
+                        ozone: ArrayLike, eccentricity: ArrayLike,
+                        table_wavelengths: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(Q, e0_table)``: broadband diffuse = ``sum_k Q[h, k] x[h, k]`` for a spectral diffuse irradiance
+        ``x`` at the table wavelengths, inside their range (linear interpolation of ``x / E0``); and the
+        extrapolation is done by :meth:`broadband_diffuse`."""
+        z = np.asarray(zenith, dtype=float)
+        _, tg = self._gas(z, precipitable_water, pressure, ozone)
+        wlt = np.asarray(table_wavelengths, dtype=float)
+        e0t = self.base.solar_irradiance_at(wlt)
+        return (np.asarray(eccentricity, dtype=float)[:, None] * self.weights * self.e0 * tg), e0t
+
+    def broadband_diffuse(self, spectral: NDArray[np.float64], zenith, precipitable_water, pressure, ozone,
+                          eccentricity, table_wavelengths: ArrayLike) -> NDArray[np.float64]:
+        """Broadband diffuse irradiance [W m^-2] per hour from a spectral one (n, n_table) [W m^-2 nm^-1] at the
+        table wavelengths (mean Sun-Earth distance, as the tables): reduced by the table E0, interpolated
+        linearly, extended by power laws beyond the table range, times E0, gases and eccentricity, summed."""
+        wlt = np.asarray(table_wavelengths, dtype=float)
+        q, e0t = self.diffuse_weights(zenith, precipitable_water, pressure, ozone, eccentricity, wlt)
+        r = np.maximum(np.asarray(spectral, dtype=float) / e0t, 1e-30)
+        wl = self.wavelengths
+        inside = (wl >= wlt[0]) & (wl <= wlt[-1])
+        out = np.empty((r.shape[0], wl.size))
+        # linear interpolation matrix (fine inside wavelengths x table wavelengths)
+        j = np.clip(np.searchsorted(wlt, wl[inside], side="right") - 1, 0, wlt.size - 2)
+        t = (wl[inside] - wlt[j]) / (wlt[j + 1] - wlt[j])
+        out[:, inside] = r[:, j] * (1 - t) + r[:, j + 1] * t
+        for sel, (a, b) in ((wl > wlt[-1], (-2, -1)), (wl < wlt[0], (1, 0))):
+            p = np.log(r[:, a] / r[:, b]) / np.log(wlt[b] / wlt[a])  # r ~ lambda^-p through the two nodes
+            p = np.clip(p, 0.0, 6.0)
+            out[:, sel] = r[:, b, None] * (wl[sel] / wlt[b]) ** -p[:, None]
+        return np.einsum("hf,hf->h", q, out)
+
+
+# --------------------------------------------------------------------------------------------- clouds
+
+
+@dataclass(frozen=True)
+class CloudRetrieval:
+    """What :func:`retrieve_clouds` found for the cloudy hours (arrays of shape (n,)): cloud optical depth at
+    550 nm [-] and cover [0-1] (NaN where not retrieved), ``retrieved`` flags and one ``reason`` for the rest."""
+
+    optical_depth: NDArray[np.float64]
+    cover: NDArray[np.float64]
+    retrieved: NDArray[np.bool_]
+    reason: str
+
+
+def retrieve_clouds(ghi: NDArray[np.float64], dhi: NDArray[np.float64], zenith: NDArray[np.float64],
+                    aerosol_optical_depth: NDArray[np.float64], total_sky_cover: NDArray[np.float64],
+                    opaque_sky_cover: NDArray[np.float64]) -> CloudRetrieval:
+    """Cloud optical depth and cover of cloudy hours from GHI and DHI [W m^-2] (and the file's sky cover
+    [tenths] as a prior), by inverting the fast cloudy sky of issue 22.
+
+    This is the one place where that inversion plugs in. The fast cloudy sky does not exist yet: every hour is
+    returned as not retrieved, with the reason; callers leave those skies NaN and say so.
+    """
+    n = np.asarray(ghi).size
+    return CloudRetrieval(np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, dtype=bool),
+                          "cloud optical depth not retrieved: the fast cloudy sky (issue 22) is not available yet")
+
+
+# --------------------------------------------------------------------------------------------- retrieval
+
+
+@dataclass(frozen=True)
+class RetrievalOptions:
+    """Settings of :func:`retrieve_hourly_atmosphere` (see the module docstring).
+
+    Parameters
+    ----------
+    angstrom_alpha : float
+        Angstrom exponent of the aerosol (default 1.3).
+    aerosol_optical_depth_nodes, single_scattering_albedo_nodes : tuple of float
+        The family's grid (:data:`DEFAULT_AOD_NODES`, :data:`DEFAULT_ALBEDO_NODES`).
+    clear_sky_cover : float
+        Largest total sky cover [tenths] of a clear hour (default 3).
+    default_aerosol_optical_depth : float
+        Cloudy hours' AOD at 550 nm when neither the file nor clear hours give one (default 0.1).
+    default_precipitable_water : float
+        [cm] when the file gives neither the field nor temperature and humidity (default 1.4).
+    default_ozone : float
+        [DU] (default 300).
+    bad_hours : {"error", "flag"}
+        Impossible records: raise (default) or mark and leave dark-NaN.
+    base : AtmosphereParameters, optional
+        The medium the grid modifies (default: Earth with physical Rayleigh scattering over the standard
+        atmosphere's column, :data:`RAYLEIGH_SCALE_HEIGHT`, the Angstrom aerosol of ``angstrom_alpha`` (Cornette-Shanks
+        phase, g = 0.8, 1.2 km scale height) and a ground albedo of 0.2, gendaymtx's default).
+    tables : {"default", "coarse"}
+        Table preset of the family (:data:`TABLE_PRESETS`): ``"default"`` (the paper's sizes, 6 orders, the 23
+        wavelengths of :data:`~skyscatter.precomputed.family.FAMILY_WAVELENGTHS`) or ``"coarse"`` (small tables,
+        4 orders, 8 wavelengths: a quick look, about 10x cheaper to build, percent-level less accurate).
+    sizes : mapping, optional
+        Table sizes overriding the preset's.
+    orders : int, optional
+        Scattering orders overriding the preset's.
+    """
+
+    angstrom_alpha: float = 1.3
+    aerosol_optical_depth_nodes: tuple[float, ...] = DEFAULT_AOD_NODES
+    single_scattering_albedo_nodes: tuple[float, ...] = DEFAULT_ALBEDO_NODES
+    clear_sky_cover: float = 3.0
+    default_aerosol_optical_depth: float = 0.1
+    default_precipitable_water: float = 1.4
+    default_ozone: float = 300.0
+    bad_hours: str = "error"
+    base: AtmosphereParameters | None = None
+    tables: str = "default"
+    sizes: Any = None
+    orders: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.tables not in TABLE_PRESETS:
+            raise InvalidParameterError(f"tables must be one of {', '.join(TABLE_PRESETS)}; got {self.tables!r}")
+        for name in ("aerosol_optical_depth_nodes", "single_scattering_albedo_nodes"):
+            v = np.asarray(getattr(self, name), dtype=float)
+            if v.ndim != 1 or v.size < 2 or not np.all(np.isfinite(v)) or np.any(np.diff(v) <= 0):
+                raise InvalidParameterError(f"{name} must be two or more increasing numbers")
+            object.__setattr__(self, name, tuple(float(x) for x in v))
+        if self.aerosol_optical_depth_nodes[0] < 0 or self.aerosol_optical_depth_nodes[-1] > 10:
+            raise InvalidParameterError("aerosol optical depth nodes must lie in [0, 10]")
+        if self.single_scattering_albedo_nodes[0] < 0 or self.single_scattering_albedo_nodes[-1] > 1:
+            raise InvalidParameterError("single-scattering albedo nodes must lie in [0, 1]")
+        if self.bad_hours not in ("error", "flag"):
+            raise InvalidParameterError(f"bad_hours must be 'error' or 'flag'; got {self.bad_hours!r}")
+        if not -1.0 <= float(self.angstrom_alpha) <= 4.0:
+            raise InvalidParameterError(f"angstrom_alpha must be in [-1, 4]; got {self.angstrom_alpha!r}")
+        for name in ("default_aerosol_optical_depth", "default_precipitable_water", "default_ozone"):
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and v >= 0):
+                raise InvalidParameterError(f"{name} must be >= 0; got {v!r}")
+        if not 0.0 <= float(self.clear_sky_cover) <= 10.0:
+            raise InvalidParameterError(f"clear_sky_cover must be in [0, 10] tenths; got {self.clear_sky_cover!r}")
+
+    def base_atmosphere(self) -> AtmosphereParameters:
+        """The family's base medium."""
+        if self.base is not None:
+            return self.base
+        from ..atmosphere.profiles import DensityProfile
+        from ..atmosphere.spectra import rayleigh_scattering_physical
+
+        return AtmosphereParameters.from_aerosol_optical_depth(
+            0.1, float(self.angstrom_alpha), ground_albedo=DEFAULT_GROUND_ALBEDO,
+            rayleigh_scattering=rayleigh_scattering_physical(),
+            rayleigh_density=DensityProfile.exponential(RAYLEIGH_SCALE_HEIGHT))
+
+
+#: Small tables of the "coarse" preset (about 10x cheaper to build than the paper's sizes).
+COARSE_SIZES = {"transmittance_mu": 64, "transmittance_r": 16, "irradiance_mu_s": 16, "irradiance_r": 8,
+                "scattering_r": 8, "scattering_mu": 32, "scattering_mu_s": 16, "scattering_nu": 8,
+                "ray_samples": 20, "density_sphere_samples": 8, "irradiance_sphere_samples": 8}
+#: Table presets of :class:`RetrievalOptions` (``tables``): sizes, orders and table wavelengths [nm].
+TABLE_PRESETS = {
+    "default": {"sizes": None, "orders": 6, "wavelengths": FAMILY_WAVELENGTHS},
+    "coarse": {"sizes": COARSE_SIZES, "orders": 4,
+               "wavelengths": (360.0, 390.0, 450.0, 550.0, 650.0, 770.0, 800.0, 830.0)},
+}
+
+
+def default_family(options: RetrievalOptions | None = None) -> TableFamily:
+    """The table family of a retrieval: aerosol optical depth x single-scattering albedo over the base medium,
+    with the options' table preset, for ground observers (every node kept in memory: 4.5 MB each by default)."""
+    o = RetrievalOptions() if options is None else options
+    preset = TABLE_PRESETS[o.tables]
+    return TableFamily([GridAxis("aerosol_optical_depth", tuple(o.aerosol_optical_depth_nodes)),
+                        GridAxis("aerosol_single_scattering_albedo", tuple(o.single_scattering_albedo_nodes))],
+                       base=o.base_atmosphere(), wavelengths=preset["wavelengths"],
+                       sizes=o.sizes if o.sizes is not None else preset["sizes"],
+                       orders=o.orders if o.orders is not None else preset["orders"], ground_only=True,
+                       max_in_memory=len(o.aerosol_optical_depth_nodes) * len(o.single_scattering_albedo_nodes))
+
+
+@dataclass(eq=False)
+class HourlyAtmosphere:
+    """The retrieved atmosphere of every hour of a record (arrays of shape (n_hours,)).
+
+    ``status`` codes are keys of :data:`HOUR_STATUS`; ``reason`` says why an hour is not clear-retrieved.
+    Inputs as used (after fallbacks) and their ``*_source``; the retrieved ``aerosol_optical_depth`` (550 nm,
+    vertical) and ``single_scattering_albedo``; ``cloud_optical_depth`` and ``cloud_cover`` (NaN until
+    retrieved); the model's ``dni_model``/``dhi_model`` [W m^-2] and the relative closure
+    ``model / record - 1`` (NaN where not computed); ``dhi_albedo_slope`` d DHI / d albedo [W m^-2] of the clear
+    hours (for a closure step on another discretisation of the same sky, :mod:`.spectral_matrix`).
+    """
+
+    record: EPWData
+    unix_time: NDArray[np.float64]
+    sun_zenith: NDArray[np.float64]
+    sun_azimuth: NDArray[np.float64]
+    ghi: NDArray[np.float64]
+    dni: NDArray[np.float64]
+    dhi: NDArray[np.float64]
+    eccentricity: NDArray[np.float64]
+    precipitable_water: NDArray[np.float64]
+    precipitable_water_source: NDArray[np.str_]
+    pressure: NDArray[np.float64]
+    ozone: NDArray[np.float64]
+    ozone_source: NDArray[np.str_]
+    aerosol_optical_depth: NDArray[np.float64]
+    aerosol_source: NDArray[np.str_]
+    aerosol_optical_depth_file: NDArray[np.float64]
+    single_scattering_albedo: NDArray[np.float64]
+    cloud_optical_depth: NDArray[np.float64]
+    cloud_cover: NDArray[np.float64]
+    status: NDArray[np.int64]
+    reason: NDArray[np.object_]
+    dni_model: NDArray[np.float64]
+    dhi_model: NDArray[np.float64]
+    dhi_albedo_slope: NDArray[np.float64]
+    options: RetrievalOptions
+    family: TableFamily
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def dni_closure(self) -> NDArray[np.float64]:
+        """DNI of the retrieved sky / record - 1 [-]."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(self.dni > 0, self.dni_model / self.dni - 1.0, np.nan)
+
+    @property
+    def dhi_closure(self) -> NDArray[np.float64]:
+        """DHI of the retrieved sky / record - 1 [-]."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(self.dhi > 0, self.dhi_model / self.dhi - 1.0, np.nan)
+
+    @property
+    def has_sky(self) -> NDArray[np.bool_]:
+        """Hours whose sky can be computed (clear, clear-not-closed, cloudy retrieved)."""
+        return np.isin(self.status, (CLEAR, CLEAR_OPEN, CLOUDY))
+
+    def summary(self) -> dict[str, Any]:
+        """Counts per status and closure statistics of the hours with a sky."""
+        out: dict[str, Any] = {HOUR_STATUS[k]: int(np.sum(self.status == k)) for k in HOUR_STATUS}
+        for name, c in (("dni", self.dni_closure), ("dhi", self.dhi_closure)):
+            sel = np.isfinite(c) & np.isin(self.status, (CLEAR, CLOUDY))
+            out[f"{name}_closure_max_abs"] = float(np.max(np.abs(c[sel]))) if np.any(sel) else None
+        return out
+
+
+def _fail(record: EPWData, i: int, what: str) -> FileFormatError:
+    return FileFormatError(f"{record.path}: line {int(record.line_numbers[i])}: {what}")
+
+
+def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options: RetrievalOptions | None = None,
+                               *, family: TableFamily | None = None, progress: bool = False) -> HourlyAtmosphere:
+    """Retrieve the atmosphere of every hour of a weather record (module docstring).
+
+    Parameters
+    ----------
+    record : EPWData or path
+        An hourly record (:func:`read_weather`; a sub-hourly EPW is averaged to hours).
+    options : RetrievalOptions, optional
+    family : TableFamily, optional
+        The tables (default :func:`default_family` of the options); built and cached on first use.
+    progress : bool
+        Progress bar while the family's tables are built.
+
+    Raises
+    ------
+    FileFormatError
+        An impossible record with ``bad_hours="error"`` (the message names the line), or a time zone that
+        disagrees with the longitude by more than 3 h.
+    """
+    from ..sky.perez import SOLAR_CONSTANT, extraterrestrial_irradiance
+    from ..sun.position import sun_position_unix
+
+    o = RetrievalOptions() if options is None else options
+    rec = record if isinstance(record, EPWData) else read_weather(record)
+    rec = rec.hourly()
+    fam = default_family(o) if family is None else family
+    loc = rec.location
+    notes: list[str] = []
+    # the standard meridian of the time zone against the longitude (15 deg per hour)
+    if abs(loc.longitude_deg / 15.0 - loc.timezone_hours) > 3.0:
+        raise FileFormatError(
+            f"{rec.path}: the time zone {loc.timezone_hours:+g} h does not fit the longitude "
+            f"{loc.longitude_deg:.2f} deg (its solar time zone is about {loc.longitude_deg / 15.0:+.1f} h): every "
+            "sun position would be hours off; fix the LOCATION line (east longitudes and time zones positive)")
+    unix = rec.unix_times()
+    n = unix.size
+    steps = np.diff(unix)
+    if steps.size and np.any(np.abs(steps - 3600.0) > 1.0):
+        gaps = int(np.sum(np.maximum(np.round(steps / 3600.0) - 1, 0)))
+        notes.append(f"the record is not continuous: {gaps} hour(s) missing between records (kept as absent)")
+    pos = sun_position_unix(loc.latitude, loc.longitude, unix, altitude=loc.elevation, apparent=False)
+    zen = np.atleast_1d(np.asarray(pos.zenith, dtype=float))
+    azi = np.atleast_1d(np.asarray(pos.azimuth, dtype=float))
+    doy = rec.day_of_year
+    ecc = np.asarray(extraterrestrial_irradiance(doy), dtype=float) / SOLAR_CONSTANT
+    ghi = rec.global_horizontal_irradiance.copy()
+    dni = rec.direct_normal_irradiance.copy()
+    dhi = rec.diffuse_horizontal_irradiance.copy()
+    cosz = np.cos(zen)
+    status = np.full(n, NIGHT, dtype=np.int64)
+    reason = np.full(n, "", dtype=object)
+
+    # ---- missing fields rebuilt from the other two (GHI = DHI + DNI cos z)
+    up = cosz > 0.0
+    m_dni, m_dhi, m_ghi = np.isnan(dni), np.isnan(dhi), np.isnan(ghi)
+    fix = m_dni & ~m_dhi & ~m_ghi & (cosz > 0.1)
+    dni[fix] = np.maximum(ghi[fix] - dhi[fix], 0.0) / cosz[fix]
+    fix2 = m_dhi & ~m_dni & ~m_ghi
+    dhi[fix2] = np.maximum(ghi[fix2] - dni[fix2] * np.maximum(cosz[fix2], 0.0), 0.0)
+    fix3 = m_ghi & ~m_dni & ~m_dhi
+    ghi[fix3] = dhi[fix3] + dni[fix3] * np.maximum(cosz[fix3], 0.0)
+    for mask, what in ((fix, "DNI"), (fix2, "DHI"), (fix3, "GHI")):
+        reason[mask] = f"{what} missing, rebuilt from the other two"
+    if np.any(fix | fix2 | fix3):
+        notes.append(f"{int(np.sum(fix | fix2 | fix3))} hour(s) with one missing irradiance field rebuilt")
+
+    # ---- impossible records
+    e_ext = ecc * SOLAR_CONSTANT
+    checks = (
+        (np.isnan(dni) | np.isnan(dhi) | np.isnan(ghi), "irradiance missing (9999) and not rebuildable"),
+        (dni > e_ext * 1.0001, "direct normal irradiance above the extraterrestrial value"),
+        (dhi > np.maximum(1.05 * ghi, ghi + 10.0), "diffuse horizontal irradiance above the global"),
+        ((zen > math.radians(93.0)) & ((np.nan_to_num(ghi) > 1.0) | (np.nan_to_num(dni) > 1.0)),
+         "irradiance with the sun more than 3 deg below the horizon"),
+    )
+    bad = np.zeros(n, dtype=bool)
+    for mask, what in checks:
+        new = mask & ~bad
+        if np.any(new):
+            i = int(np.argmax(new))
+            if o.bad_hours == "error":
+                detail = (f" (DNI {dni[i]:.0f} > {e_ext[i]:.0f} W m^-2)" if "extraterrestrial" in what else
+                          f" ({dhi[i]:.0f} > {ghi[i]:.0f} W m^-2)" if "above the global" in what else
+                          f" (sun zenith {math.degrees(zen[i]):.1f} deg)" if "below the horizon" in what else "")
+                raise _fail(rec, i, what + detail + "; pass bad_hours='flag' (CLI --bad-hours flag) to mark such "
+                            "hours and leave their sky empty")
+            reason[new] = what
+            bad |= new
+    status[bad] = INVALID
+    if np.any(bad):
+        notes.append(f"{int(bad.sum())} impossible hour(s) flagged (sky left NaN)")
+    lit = ~bad & up & ((ghi > 0) | (dhi > 0))
+    dark_with_light = ~bad & ~up & (ghi > 0)
+    reason[dark_with_light] = "light in the record with the sun just below the horizon: left dark"
+
+    # ---- precipitable water, pressure, ozone
+    pw = np.full(n, float(o.default_precipitable_water))
+    pw_src = np.full(n, "default", dtype="<U10")
+    if rec.relative_humidity is not None:
+        t = rec.dry_bulb
+        ok = np.isfinite(t) & np.isfinite(rec.relative_humidity)
+        pw[ok] = precipitable_water_gueymard1994(t[ok], rec.relative_humidity[ok])
+        pw_src[ok] = "gueymard94"
+    if rec.precipitable_water is not None:
+        ok = np.isfinite(rec.precipitable_water)
+        pw[ok] = rec.precipitable_water[ok] / 10.0
+        pw_src[ok] = "file"
+    pressure = np.full(n, 101325.0 * (1 - 2.25577e-5 * loc.elevation) ** 5.25588)  # standard atmosphere
+    if rec.pressure is not None:
+        ok = np.isfinite(rec.pressure)
+        pressure[ok] = rec.pressure[ok]
+    ozone = np.full(n, float(o.default_ozone))
+    o3_src = np.full(n, "default", dtype="<U8")
+    file_ozone = getattr(rec, "ozone", None)
+    if file_ozone is not None:
+        ok = np.isfinite(file_ozone)
+        ozone[ok] = file_ozone[ok]
+        o3_src[ok] = "file"
+    aod_file = (np.full(n, np.nan) if rec.aerosol_optical_depth is None else
+                rec.aerosol_optical_depth * (BROADBAND_AOD_WAVELENGTH / 550.0) ** float(o.angstrom_alpha))
+
+    # ---- clear hours: AOD from DNI, albedo from DHI
+    model = BroadbandClearSky(fam.base, o.angstrom_alpha)
+    aod_axis = next(a for a in fam.axes if a.name == "aerosol_optical_depth")
+    ssa_axis = next((a for a in fam.axes if a.name == "aerosol_single_scattering_albedo"), None)
+    cover = rec.total_sky_cover if rec.total_sky_cover is not None else np.full(n, np.nan)
+    candidate = lit & (zen < math.pi / 2 - _MIN_CLEAR_ELEVATION) & (dni > 0) & ~(cover > o.clear_sky_cover)
+    aod = np.full(n, np.nan)
+    aod_src = np.full(n, "", dtype="<U12")
+    ssa = np.full(n, np.nan)
+    dni_model = np.full(n, np.nan)
+    dhi_model = np.full(n, np.nan)
+    slope = np.full(n, np.nan)
+    ci = np.flatnonzero(candidate)
+    tau_max = aod_axis.values[-1]
+    if ci.size:
+        tau, ok = model.retrieve_aerosol(dni[ci], zen[ci], pw[ci], pressure[ci], ozone[ci], ecc[ci],
+                                         tau_max=tau_max)
+        too_clean = ~ok & (dni[ci] > 0) & (model.direct_normal(zen[ci], np.zeros(ci.size), pw[ci], pressure[ci],
+                                                               ozone[ci], ecc[ci]) < dni[ci])
+        reason[ci[too_clean]] = "DNI above the aerosol-free clear sky: AOD 0 cannot reproduce it"
+        reason[ci[~ok & ~too_clean]] = f"DNI below the clear sky of AOD {tau_max:g}: clouds or haze beyond the grid"
+        good = ci[ok]
+        aod[good] = tau[ok]
+        aod_src[good] = "dni"
+        # DHI at the albedo nodes, at the retrieved AOD (interpolated along the AOD axis only)
+        if good.size:
+            d_nodes = _diffuse_at_albedo_nodes(fam, model, good, aod, zen, azi, pw, pressure, ozone, ecc)
+            if ssa_axis is not None and len(ssa_axis.values) > 1:
+                s_nodes = np.asarray(ssa_axis.values)
+                lo, hi = d_nodes[:, 0], d_nodes[:, -1]
+                # linear in the albedo between the two end nodes (the default grid has exactly two)
+                w = (dhi[good] - lo) / np.where(hi > lo, hi - lo, np.nan)
+                s = s_nodes[0] + w * (s_nodes[-1] - s_nodes[0])
+                clear = np.isfinite(s) & (s >= s_nodes[0]) & (s <= s_nodes[-1])
+                too_bright = np.isfinite(s) & (s > s_nodes[-1])
+                too_dark = np.isfinite(s) & (s < s_nodes[0])
+                ssa[good] = np.clip(s, s_nodes[0], s_nodes[-1])
+                status[good[clear]] = CLEAR
+                status[good[too_dark]] = CLEAR_OPEN
+                reason[good[too_dark]] = (f"DHI below the clear sky with aerosol albedo {s_nodes[0]:g}: "
+                                          "albedo clamped, DHI not closed")
+                reason[good[too_bright]] = "DHI above the clear sky with aerosol albedo 1: treated as cloudy"
+                frac = np.clip((ssa[good] - s_nodes[0]) / (s_nodes[-1] - s_nodes[0]), 0, 1)
+                dhi_model[good] = lo + frac * (hi - lo)
+                slope[good] = (hi - lo) / (s_nodes[-1] - s_nodes[0])
+            else:
+                ssa[good] = fam.base.mie_single_scattering_albedo if ssa_axis is None else ssa_axis.values[0]
+                status[good] = CLEAR
+                dhi_model[good] = d_nodes[:, 0]
+            dni_model[good] = model.direct_normal(zen[good], aod[good], pw[good], pressure[good], ozone[good],
+                                                  ecc[good])
+
+    # ---- cloudy hours
+    cloudy = lit & ~np.isin(status, (CLEAR, CLEAR_OPEN))
+    cl = np.flatnonzero(cloudy)
+    if cl.size:
+        _cloudy_aerosol(rec, cl, status, aod, aod_src, aod_file, float(o.default_aerosol_optical_depth), unix)
+        aod[cl] = np.minimum(aod[cl], tau_max)
+        ssa[cl] = fam.base.mie_single_scattering_albedo if fam.base.aerosol is None else np.nan
+        opaque = rec.opaque_sky_cover if rec.opaque_sky_cover is not None else np.full(n, np.nan)
+        clouds = retrieve_clouds(ghi[cl], dhi[cl], zen[cl], aod[cl], cover[cl], opaque[cl])
+        status[cl] = np.where(clouds.retrieved, CLOUDY, CLOUDY_OPEN)
+        reason[cl[~clouds.retrieved]] = [
+            (r + "; " if r else "") + clouds.reason for r in reason[cl[~clouds.retrieved]]]
+        cod = np.full(n, np.nan)
+        ccv = np.full(n, np.nan)
+        cod[cl], ccv[cl] = clouds.optical_depth, clouds.cover
+    else:
+        cod = np.full(n, np.nan)
+        ccv = np.full(n, np.nan)
+    return HourlyAtmosphere(
+        record=rec, unix_time=unix, sun_zenith=zen, sun_azimuth=azi, ghi=ghi, dni=dni, dhi=dhi, eccentricity=ecc,
+        precipitable_water=pw, precipitable_water_source=pw_src, pressure=pressure, ozone=ozone,
+        ozone_source=o3_src, aerosol_optical_depth=aod, aerosol_source=aod_src,
+        aerosol_optical_depth_file=aod_file, single_scattering_albedo=ssa, cloud_optical_depth=cod,
+        cloud_cover=ccv, status=status, reason=reason, dni_model=dni_model, dhi_model=dhi_model,
+        dhi_albedo_slope=slope, options=o,
+        family=fam, notes=notes)
+
+
+def _diffuse_at_albedo_nodes(fam: TableFamily, model: BroadbandClearSky, rows, aod, zen, azi, pw, pressure, ozone,
+                             ecc) -> NDArray[np.float64]:
+    """Broadband DHI [W m^-2] of hours ``rows`` at their AOD and at each albedo node, shape (len(rows), n_albedo)."""
+    from ..conventions import direction_from_angles
+
+    k_aod = [a.name for a in fam.axes].index("aerosol_optical_depth")
+    k_ssa = next((k for k, a in enumerate(fam.axes) if a.name == "aerosol_single_scattering_albedo"), None)
+    ssa_values = fam.axes[k_ssa].values if k_ssa is not None else (0.0,)
+    sun = direction_from_angles(zen[rows], azi[rows])
+    ground = np.array([0.0, 0.0, fam.base.bottom_radius])
+    up = np.array([0.0, 0.0, 1.0])
+    out = np.zeros((rows.size, len(ssa_values)))
+    for j, s in enumerate(ssa_values):
+        vals = np.zeros((rows.size, len(fam.axes)))
+        vals[:, k_aod] = aod[rows]
+        if k_ssa is not None:
+            vals[:, k_ssa] = s
+        for k, a in enumerate(fam.axes):
+            if k not in (k_aod, k_ssa):
+                vals[:, k] = a.values[0]
+
+        def sky_irradiance(atm, sub):
+            return atm.ground_irradiance(ground, up, sun[sub])[1]
+
+        spectral = fam.interpolate(vals, sky_irradiance)
+        out[:, j] = model.broadband_diffuse(spectral, zen[rows], pw[rows], pressure[rows], ozone[rows], ecc[rows],
+                                            fam.wavelengths)
+    return out
+
+
+def _cloudy_aerosol(rec, rows, status, aod, src, aod_file, default, unix) -> None:
+    """AOD of cloudy hours: the same day's clear hours (median), else the file's field, else the clear hours
+    within 3 days (median of the 6 nearest), else the default."""
+    clear = np.flatnonzero(np.isin(status, (CLEAR, CLEAR_OPEN)) & np.isfinite(aod))
+    day = np.floor(unix / 86400.0 + rec.location.timezone_hours / 24.0).astype(np.int64)
+    for i in rows:
+        same = clear[day[clear] == day[i]]
+        if same.size:
+            aod[i], src[i] = float(np.median(aod[same])), "same day"
+            continue
+        if np.isfinite(aod_file[i]):
+            aod[i], src[i] = aod_file[i], "file"
+            continue
+        if clear.size:
+            near = clear[np.abs(unix[clear] - unix[i]) <= 3 * 86400.0]
+            if near.size:
+                aod[i], src[i] = float(np.median(aod[near[np.argsort(np.abs(unix[near] - unix[i]))[:6]]])), "nearby"
+                continue
+        aod[i], src[i] = default, "default"
+
+
+def _warn(message: str) -> None:
+    warnings.warn(message, RuntimeWarning, stacklevel=3)
