@@ -1,7 +1,6 @@
 """Aerosol types of the OPAC climatology, with Mie optics: components, humidity growth and presets.
 
-Source of every number: M. Hess, P. Koepke & I. Schult (1998), "Optical Properties of Aerosols and Clouds: The
-Software Package OPAC", Bull. Amer. Meteor. Soc. 79(5), 831-844, doi:10.1175/1520-0477(1998)079<0831:OPOAAC>2.0.CO;2.
+Source of every number: [Hess1998], the OPAC climatology.
 
 **Components** (Table 1; data file ``opac_components.csv``): log-normal modes (number mode radius ``r_mod``, width
 ``sigma``, radius limits ``r_min``-``r_max``) with a refractive index per wavelength; the four hygroscopic

@@ -1,12 +1,11 @@
 """Mie optics of particle populations: cross-sections, albedo and phase tables over size distributions.
 
 For each radius node of a size distribution (:mod:`.size_distributions`) the Mie solution for a homogeneous
-sphere comes from miepython (S. Prahl, https://github.com/scottprahl/miepython, MIT licence; Wiscombe 1979,
-"Mie scattering calculations: advances in technique and fast, vector-speed computer codes", NCAR/TN-140+STR,
-doi:10.5065/D6ZP4414, the algorithm it follows): the extinction and scattering efficiencies ``Q_e``, ``Q_s`` and
-the amplitude functions ``S_1(theta)``, ``S_2(theta)`` on the phase-table grid. They are averaged over the
-number distribution ``n(r)`` (Hansen & Travis 1974, Space Sci. Rev. 16, 527, doi:10.1007/BF00168069, Eqs.
-2.41-2.47; Bohren & Huffman 1983, "Absorption and Scattering of Light by Small Particles", Eqs. 3.9, 4.74):
+sphere comes from miepython ([Miepython2026], MIT licence; [Wiscombe1979], the algorithm it follows): the
+extinction and scattering efficiencies ``Q_e``, ``Q_s`` and the amplitude functions ``S_1(theta)``,
+``S_2(theta)`` on the phase-table grid. They are averaged over the
+number distribution ``n(r)`` ([HansenTravis1974] Eqs.
+2.41-2.47; [BohrenHuffman1983] Eqs. 3.9, 4.74):
 
 * ``C_e = <pi r^2 Q_e>``, ``C_s = <pi r^2 Q_s>`` [m^2 per particle], single-scattering albedo ``C_s / C_e``;
 * phase function ``p(theta) = <(|S_1|^2 + |S_2|^2) / (2 k^2)> / C_s`` [sr^-1] (unpolarised incident light, ``k =
@@ -18,7 +17,7 @@ Why miepython: MIT-licensed, maintained (3.x releases in 2025-2026), vectorised 
 numba when ``MIEPYTHON_USE_JIT=1`` (set here before its first import unless the user set it: 5 us per size
 instead of 0.4 ms), validated by its authors against Wiscombe's test cases. PyMieScatt (MIT too) has had no
 release since 2020 and is pure Python (about 50x slower per size here). The second code the tests compare with is
-the Mie code behind OPAC (Hess et al. 1998), through its published component optics.
+the Mie code behind OPAC [Hess1998], through its published component optics.
 
 Results are cached in memory per (distribution, refractive index, wavelengths, angles, nodes) for the life of
 the process (:func:`mie_optics` is an ``lru_cache`` of 256 entries), so that a mixture, a retrieval or a
@@ -197,7 +196,7 @@ def _mie_optics_compute(distribution: SizeDistribution, refractive_index: Refrac
                 coef[3 * nb + q, :nt] = b_n.imag[:nt] * scale[:nt]
                 top = max(top, nt)
             # amplitudes S_1 = sum_n (2n+1)/(n(n+1)) (a_n pi_n + b_n tau_n), S_2 with pi and tau swapped
-            # (Bohren & Huffman 1983, Eq. 4.74): two real matrix products for the whole block
+            # ([BohrenHuffman1983] Eq. 4.74): two real matrix products for the whole block
             cp = coef[:, :top] @ pi_n[:top]
             ct = coef[:, :top] @ tau_n[:top]
             a_re_p, a_im_p, b_re_p, b_im_p = cp[:nb], cp[nb:2 * nb], cp[2 * nb:3 * nb], cp[3 * nb:]

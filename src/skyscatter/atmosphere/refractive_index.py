@@ -1,13 +1,12 @@
 """Complex refractive indices of particle materials as functions of wavelength [nm].
 
-``m = n + i k`` with ``k >= 0`` for an absorbing material (the sign convention of Bohren & Huffman 1983,
-"Absorption and Scattering of Light by Small Particles", Sec. 2.5, with time dependence ``exp(-i omega t)``;
-OPAC and miepython write ``n - i k`` for the same material, and :mod:`.mie_optics` converts).
+``m = n + i k`` with ``k >= 0`` for an absorbing material (the sign convention of [BohrenHuffman1983] Sec. 2.5,
+with time dependence ``exp(-i omega t)``; OPAC and miepython write ``n - i k`` for the same material, and
+:mod:`.mie_optics` converts).
 
 * :class:`RefractiveIndex` - a table of ``n`` and ``k`` interpolated linearly in wavelength (or a constant).
-* :func:`water_refractive_index` - liquid water at 25 C, Hale & Querry (1973), Appl. Opt. 12, 555,
-  doi:10.1364/AO.12.000555, Table I, 250-1200 nm (data file ``water_refractive_index_hale_querry1973``, from the
-  refractiveindex.info database, CC0).
+* :func:`water_refractive_index` - liquid water at 25 C, [HaleQuerry1973] Table I, 250-1200 nm (data file
+  ``water_refractive_index_hale_querry1973``, from the refractiveindex.info database, CC0).
 """
 
 from __future__ import annotations

@@ -2,21 +2,18 @@
 
 Each distribution is a number density per unit radius normalised to one particle over all radii (0 to
 infinity); the radius limits ``r_min``, ``r_max`` then remove the particles outside them without renormalising,
-the convention of OPAC (Hess et al. 1998, Sec. 3c: with it the cross-sections of OPAC's components are
+the convention of OPAC ([Hess1998] Sec. 3c: with it the cross-sections of OPAC's components are
 reproduced to 0.2 %, tests/test_mie_optics.py, where renormalising on the range made the water-soluble and soot
 components 4 % and 13 % too strong). :meth:`radius_nodes` gives the nodes and weights that :mod:`.mie_optics`
 integrates cross-sections with.
 
 * :class:`LogNormalMode` - ``n(r) = exp(-(ln r - ln r_mod)^2 / (2 ln^2 sigma)) / (sqrt(2 pi) ln sigma r)``: the
-  modes of aerosol climatologies (Hess, Koepke & Schult 1998, "Optical Properties of Aerosols and Clouds: The
-  Software Package OPAC", Bull. Amer. Meteor. Soc. 79, 831, doi:10.1175/1520-0477(1998)079<0831:OPOAAC>2.0.CO;2,
-  Eq. 3), with ``r_mod`` the number median radius and ``sigma > 1`` the geometric standard deviation, optionally
-  truncated to ``[r_min, r_max]`` as OPAC does.
-* :class:`ModifiedGammaMode` - ``n(r) = a r^alpha exp(-b r^gamma)`` (Deirmendjian 1969, "Electromagnetic
-  Scattering on Spherical Polydispersions", Eq. 2.3; OPAC's cloud droplets, Hess et al. 1998, Eq. 4), for cloud
+  modes of aerosol climatologies ([Hess1998] Eq. 3), with ``r_mod`` the number median radius and ``sigma > 1``
+  the geometric standard deviation, optionally truncated to ``[r_min, r_max]`` as OPAC does.
+* :class:`ModifiedGammaMode` - ``n(r) = a r^alpha exp(-b r^gamma)`` ([Deirmendjian1969] Eq. 2.3; OPAC's cloud
+  droplets, [Hess1998] Eq. 4), for cloud
   droplets; :meth:`ModifiedGammaMode.from_effective` builds the gamma distribution (``gamma = 1``) of a given
-  effective radius ``r_eff = <r^3> / <r^2>`` and effective variance ``v_eff`` (Hansen & Travis 1974, "Light
-  scattering in planetary atmospheres", Space Sci. Rev. 16, 527, doi:10.1007/BF00168069, Eqs. 2.53-2.56:
+  effective radius ``r_eff = <r^3> / <r^2>`` and effective variance ``v_eff`` ([HansenTravis1974] Eqs. 2.53-2.56:
   ``alpha = (1 - 3 v_eff) / v_eff``, ``b = 1 / (r_eff v_eff)``).
 
 **Nodes.** Trapezoidal rule in ``ln r`` over the range that carries the scattering: for a log-normal mode from

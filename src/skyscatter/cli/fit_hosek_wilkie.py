@@ -63,8 +63,8 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidParameterError(f"--out must name an .npz file; got {args.out}")
     check_output_path(args.out, option="--out")
     if not 6 <= args.elevations <= MAX_ELEVATIONS:
-        raise InvalidParameterError(f"--elevations must be 6 (one per control point) to {MAX_ELEVATIONS}; got "
-                                    f"{args.elevations}")
+        raise InvalidParameterError(f"--elevations must be at least 6 (one per control point) and at most "
+                                    f"{MAX_ELEVATIONS}; got {args.elevations}")
     changes = dict(ground_albedo=args.ground_albedo)
     if args.turbidity is not None:
         params = AtmosphereParameters.from_turbidity(args.turbidity, **changes)

@@ -77,13 +77,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     cloud = p.add_argument_group("cloud layer", "a horizontally uniform water cloud in every cell (Mie droplets, "
                                  "modified-gamma sizes of effective variance 0.1)")
     cloud.add_argument("--cloud-optical-depth", type=float_in(0.0, 1000.0), default=0.0, metavar="TAU",
-                       help="optical depth of the cloud layer at 550 nm (0: no cloud)")
+                       help="optical depth of the cloud layer at 550 nm, 0 to 1000 (0: no cloud)")
     cloud.add_argument("--cloud-base", type=float_in(0.0, 1e5), default=1000.0, metavar="M",
-                       help="altitude of the cloud base [m]")
+                       help="altitude of the cloud base [m], 0 to 100000")
     cloud.add_argument("--cloud-top", type=float_in(0.0, 1e5), default=1500.0, metavar="M",
-                       help="altitude of the cloud top [m]")
+                       help="altitude of the cloud top [m], above the base")
     cloud.add_argument("--cloud-effective-radius", type=float_in(1.0, 50.0), default=10.0, metavar="UM",
-                       help="effective radius of the droplets [um]")
+                       help="effective radius of the droplets [um], 1 to 50")
     p.add_argument("--scheduler", default=None, metavar="ADDR",
                    help="'synchronous', or a dask.distributed scheduler address (tcp://host:8786; needs the "
                    "montecarlo extra); default: local threads ($SKYSCATTER_NUM_THREADS)")

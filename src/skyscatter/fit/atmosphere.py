@@ -8,7 +8,7 @@ Measurements (any combination):
 * :class:`Irradiance` - direct normal and diffuse horizontal spectral irradiance [W m^-2 nm^-1] at wavelengths;
 * :class:`AerosolOpticalDepth` - a sun photometer's aerosol optical depth spectrum.
 
-The model is the precomputed atmosphere of Bruneton & Neyret (2008), doi:10.1111/j.1467-8659.2008.01245.x, built
+The model is the precomputed atmosphere of [Bruneton2008], built
 for each trial air at the measurement wavelengths with the reduced :data:`FIT_SIZES` and 4 orders (about 1-1.5 s
 per build on 2 busy cores at 3 wavelengths); sky radiance from :meth:`~.PrecomputedAtmosphere.sky_radiance`,
 luminance from :meth:`~.PrecomputedAtmosphere.sky_luminance` (this needs 16 table wavelengths), the direct
@@ -26,7 +26,7 @@ iteration; :attr:`AtmosphereFit.builds` reports the total.
 
 Uncertainties are the square roots of the diagonal of the covariance ``s^2 (J^T J)^-1`` at the solution, with
 ``J`` the Jacobian of the weighted residuals and ``s^2 = max(1, chi^2 / (m - n))``: the stated noise, inflated by
-the misfit when the model cannot reach the measurements (Press et al. 2007, "Numerical Recipes", 3rd ed., Sec.
+the misfit when the model cannot reach the measurements ([Press2007] Sec.
 15.4-15.5). The residual of the sky scan is reported by region: within 20 deg of the sun, below 15 deg elevation
 (the horizon) and the rest (relative RMS, %).
 """

@@ -329,9 +329,9 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     wavelength and may have a diffraction peak far narrower than the quadrature's 180 / n_theta deg: the aerosol
     part of J is ``(1 - f) sum_w p*(v . w) L(w) dw / norm* + f L(v)``, the truncated phase on the grid (normalised
     per view as above) and the forward peak, a delta function, exactly: it scatters the texel's own incident
-    radiance ``L(v)`` on in its direction (Wiscombe 1977, doi:10.1175/1520-0469(1977)034<1408:TDMRYA>2.0.CO;2,
-    without scaling the optical depth: that light is not removed from the beam but re-emitted forward, which
-    the next orders carry). The single-scattered light of the first order uses the full table.
+    radiance ``L(v)`` on in its direction ([Wiscombe1977], without scaling the optical depth: that light is not
+    removed from the beam but re-emitted forward, which the next orders carry). The single-scattered light of the
+    first order uses the full table.
     """
     n_r, n_mu, n_s, n_n, n_l = s_a.shape
     table = mie_kind == TABLE_PHASE
