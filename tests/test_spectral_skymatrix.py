@@ -402,8 +402,10 @@ def test_cli_spectral(epw, tmp_path, capsys):
     rep = tmp_path / "r.csv"
     common = ["--tables", "coarse", "--aod-nodes", ",".join(map(str, AOD_NODES)), "--patches", "tregenza",
               "--samples", "1", "--no-progress"]
-    assert main(["skymatrix", "--spectral", str(epw), "--out", str(out), "--radiance", str(rad), "--report",
-                 str(rep), *common]) == 0
+    rgb = tmp_path / "s_rgb.mtx"
+    assert main(["skymatrix", "--spectral", str(epw), "--out", str(out), "--radiance", str(rad), "--radiance-rgb",
+                 str(rgb), "--report", str(rep), "--bad-hours", "flag", *common]) == 0
+    assert b"NCOMP=3" in rgb.read_bytes()[:400]
     text = capsys.readouterr().out
     assert "clear" in text and "DHI closure" in text
     ds = xr.open_dataset(out, engine="h5netcdf")
@@ -416,6 +418,13 @@ def test_cli_spectral(epw, tmp_path, capsys):
     shutil.copy(epw, b)
     assert main(["skymatrix", "--spectral", str(epw), str(b), "--out", str(store), "--workers", "1", *common]) == 0
     assert bool(xr.open_zarr(store, consolidated=False)["done"].all())
+    local = tmp_path / "local.zarr"
+    assert main(["skymatrix", "--spectral", str(epw), str(b), "--out", str(local), "--scheduler", "local",
+                 "--workers", "1", *common]) == 0
+    assert bool(xr.open_zarr(local, consolidated=False)["done"].all())
+    wide = tmp_path / "w.zarr"
+    assert main(["skymatrix", "--spectral", str(epw), "--out", str(wide), "--bands", "41", *common]) == 0
+    assert xr.open_zarr(wide, consolidated=False).sizes["wavelength"] == 41
     assert main(["skymatrix", "--spectral", str(epw), "--out", str(tmp_path / "x.npz"), *common]) == 2
     assert main(["skymatrix", str(epw), str(b), "--out", str(tmp_path / "y.npz")]) == 2
     err = capsys.readouterr().err

@@ -79,7 +79,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "Example: skyscatter skymatrix --spectral a.epw --out a.nc --radiance a.mtx; many sites: skyscatter "
         "skymatrix --spectral a.epw b.epw --out sites.zarr")
     g.add_argument("--spectral", action="store_true", help="compute the physical spectral sky matrix")
-    g.add_argument("--bands", type=int, choices=[20, 41], default=20,
+    g.add_argument("--bands", choices=["20", "41"], default="20",
                    help="output bands: 20 (20 nm over 380-780 nm, as gensdaymtx) or 41 (10 nm, centred 380-780 nm)")
     g.add_argument("--radiance", type=output_path, default=None, metavar="PATH",
                    help="also write Radiance's matrix (ground patch + patches x hours x bands, FORMAT=float) for "
@@ -233,7 +233,7 @@ def run_spectral(args: argparse.Namespace) -> int:
         if out.suffix.lower() != ".zarr":
             raise InvalidParameterError(
                 f"several sites are written to one Zarr store: --out must end in .zarr; got {out}")
-        ds = spectral_sky_matrix_sites(args.epw, out, scheme=args.patches, bands=args.bands, samples=samples,
+        ds = spectral_sky_matrix_sites(args.epw, out, scheme=args.patches, bands=int(args.bands), samples=samples,
                                        options=options, scheduler=args.scheduler, workers=args.workers,
                                        progress=args.progress)
         done = int(ds["done"].values.sum())
@@ -246,7 +246,7 @@ def run_spectral(args: argparse.Namespace) -> int:
                       ("--report", args.report)):
         if path is not None:
             check_output_path(path, option=opt)
-    ds = spectral_sky_matrix(args.epw[0], scheme=args.patches, bands=args.bands, samples=samples, options=options,
+    ds = spectral_sky_matrix(args.epw[0], scheme=args.patches, bands=int(args.bands), samples=samples, options=options,
                              progress=progress)
     written = [str(save_dataset(ds, out))]
     if args.radiance is not None:

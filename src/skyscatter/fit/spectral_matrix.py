@@ -55,7 +55,6 @@ from .weather import (
     BroadbandClearSky,
     HourlyAtmosphere,
     RetrievalOptions,
-    default_family,
     retrieve_hourly_atmosphere,
 )
 
@@ -628,7 +627,8 @@ def spectral_sky_matrix_sites(records: Sequence[str | os.PathLike[str]], store: 
                 continue
         pending.append(s)
     ds0.close()
-    default_family(o).build(progress=progress)  # the tables once, before the tasks share them from the disk cache
+    # The family's tables are built on first use inside the tasks (only the nodes the records need); two tasks
+    # that need the same missing node at once both build it and one atomic write wins (the cache's rule).
 
     def run(s: int) -> int:
         ds = spectral_sky_matrix(paths[s], scheme=geom, bands=bands, samples=samples, options=o)
