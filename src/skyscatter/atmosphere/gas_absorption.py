@@ -8,14 +8,12 @@ ASTM G173 sun 280-1100 nm). A weather file's direct normal and diffuse horizonta
 infrared, and the sun's spectrum up to 4000 nm. Those come from here:
 
 * :func:`water_vapour_transmittance`, :func:`mixed_gas_transmittance` and :func:`ozone_transmittance_bird_riordan`
-  - Bird & Riordan (1986), "Simple solar spectral model for direct and diffuse irradiance on horizontal and
-  tilted planes at the Earth's surface for cloudless atmospheres", J. Climate Appl. Meteor. 25(1), 87-97,
-  doi:10.1175/1520-0450(1986)025<0087:SSSMFD>2.0.CO;2, Eqs. 2-8, 2-9 and 2-11 with their Table 1 coefficients
+  - Bird & Riordan (1986) [BirdRiordan1986], Eqs. 2-8, 2-9 and 2-11 with their Table 1 coefficients
   (data file ``bird_riordan1986_gas_absorption.csv``, 122 wavelengths 300-4000 nm, interpolated linearly between
   them). These are band transmittances (the water and O2 bands are not Beer-law at that resolution), so they
   multiply the medium's transmittance rather than entering the medium as absorption coefficients. The ozone
   form is used only outside the medium's ozone data (below 360 nm and above 830 nm);
-* :func:`broadband_solar_spectrum` - ASTM G173-03 extraterrestrial spectrum 280-4000 nm (the medium's
+* :func:`broadband_solar_spectrum` - ASTM G173-03 [ASTMG173] extraterrestrial spectrum 280-4000 nm (the medium's
   280-1100 nm table and ``solar_spectrum_astm_g173_nir.csv`` above it);
 * :func:`slant_optical_masses` - the relative optical masses of the medium's own density profiles along a
   straight path through the spherical shell (no refraction, as in the precomputed tables), per component.

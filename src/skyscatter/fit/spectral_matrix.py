@@ -73,6 +73,12 @@ __all__ = [
 RADIANCE_WAVELENGTH_SPLITS = (780, 588, 480, 380)
 
 
+def _references() -> str:
+    from ..references import cite
+
+    return cite("Bruneton2008", "BirdRiordan1986")
+
+
 def band_edges(bands: int | Sequence[float] = 20) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``(centres, edges)`` [nm] of the output bands: ``20`` (20 nm bands over 380-780 nm), ``41`` (10 nm bands
     centred on 380-780 nm) or increasing band centres (edges half-way between, the outer ones mirrored)."""
@@ -348,8 +354,7 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
         "notes": "; ".join(h.notes),
         "conventions": "ENU frame; azimuth from north towards east; patches in Radiance's order without its "
                        "ground patch; status codes in flag_values/flag_meanings",
-        "references": "Bruneton & Neyret 2008 doi:10.1111/j.1467-8659.2008.01245.x; Bird & Riordan 1986 "
-                      "doi:10.1175/1520-0450(1986)025<0087:SSSMFD>2.0.CO;2",
+        "references": _references(),
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
 

@@ -43,18 +43,14 @@ sun: the circumsolar light they add to DNI is not modelled (it lowers the retrie
    700 nm, Molineaux et al. 1998, with the Angstrom exponent), else the 6 nearest clear hours within 3 days,
    else ``default_aerosol_optical_depth``.
    The cloud optical depth and cover come from :func:`retrieve_clouds`, the one function the fast cloudy sky
-   (issue 22) plugs into; until it exists such hours are *cloudy, not retrieved* and their sky is NaN.
+   (the cloudy-skies work) plugs into; until it exists such hours are *cloudy, not retrieved* and their sky is NaN.
 
 Precipitable water: the file's field, else Gueymard (1994) from temperature and relative humidity, else
 ``default_precipitable_water``. Ozone: a CSV's ``ozone`` column, else ``default_ozone`` (EPW and TMY3 files do
 not carry it). The ground albedo of the tables is the base atmosphere's (the file's albedo is reported, not
 used: it would be one more grid axis).
 
-References: Bird & Riordan (1986), doi:10.1175/1520-0450(1986)025<0087:SSSMFD>2.0.CO;2; Gueymard (1994), "Analysis
-of monthly average atmospheric precipitable water and turbidity in Canada and Northern United States", Solar
-Energy 53(1), 57-71, doi:10.1016/0038-092X(94)90606-8; Molineaux, Ineichen & O'Neill (1998), "Equivalence of
-pyrheliometric and monochromatic aerosol optical depths at a single key wavelength", Appl. Opt. 37(30),
-7008-7018, doi:10.1364/AO.37.007008; Spencer (1971), Search 2(5), 172.
+References: [BirdRiordan1986], [Gueymard1994], [Molineaux1998], [Spencer1971], [Bruneton2008].
 """
 
 from __future__ import annotations
@@ -417,14 +413,14 @@ def retrieve_clouds(ghi: NDArray[np.float64], dhi: NDArray[np.float64], zenith: 
                     aerosol_optical_depth: NDArray[np.float64], total_sky_cover: NDArray[np.float64],
                     opaque_sky_cover: NDArray[np.float64]) -> CloudRetrieval:
     """Cloud optical depth and cover of cloudy hours from GHI and DHI [W m^-2] (and the file's sky cover
-    [tenths] as a prior), by inverting the fast cloudy sky of issue 22.
+    [tenths] as a prior), by inverting the fast cloudy sky of the cloudy-skies work.
 
     This is the one place where that inversion plugs in. The fast cloudy sky does not exist yet: every hour is
     returned as not retrieved, with the reason; callers leave those skies NaN and say so.
     """
     n = np.asarray(ghi).size
     return CloudRetrieval(np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, dtype=bool),
-                          "cloud optical depth not retrieved: the fast cloudy sky (issue 22) is not available yet")
+                          "cloud optical depth not retrieved: the fast cloudy sky is not available yet")
 
 
 # --------------------------------------------------------------------------------------------- retrieval
