@@ -169,7 +169,7 @@ def test_retrieval_recovers_spectrl2_aerosol(hourly):
     cloudy = np.flatnonzero((st == CLOUDY_OPEN) & (np.arange(st.size) >= 24))
     assert cloudy.size >= 28
     np.testing.assert_allclose(hourly.aerosol_optical_depth[cloudy], FILE_AOD_BROADBAND * (700 / 550) ** 1.3)
-    assert all("issue 22" in str(r) for r in hourly.reason[cloudy])
+    assert all("cloud optical depth not retrieved" in str(r) for r in hourly.reason[cloudy])
     assert np.all(st[(hourly.ghi == 0) & (hourly.dhi == 0)] == NIGHT)
 
 
