@@ -14,6 +14,7 @@ Sections (``python benchmarks/validate_clouds.py SECTION [--scale S]``; ``all`` 
 * ``overcast`` - the luminance gradation under a thick stratus (optical depth 30, base 500 m, top 1000 m,
   Earth air, ground albedo 0.2) against the CIE overcast sky (1 + 2 sin h) / 3, and the correlated colour
   temperature of the diffuse light at sun elevations 60, 30, 10 deg.
+* ``overcast-cct`` - the colour temperatures of ``overcast`` alone (forward photons: a minute, not an hour).
 
 ``--scale`` multiplies the paths (default 1). Prints a report; machine and load average stated.
 """
@@ -270,38 +271,61 @@ def overcast(scale):
         dirs = np.array([[math.cos(h) * math.sin(a), math.cos(h) * math.cos(a), math.sin(h)]
                          for h in elev for a in az])
         L, err = sky.radiance_and_error(dirs, wl)
-        from skyscatter.spectral import spectrum_to_xyz, xyz_to_chromaticity
+        from skyscatter.spectral import spectrum_to_xyz
 
         xyz = spectrum_to_xyz(L, wl)
         Y = xyz[:, 1].reshape(elev.size, az.size).mean(axis=1)
         grad = Y / Y[-1]
         cie = (1 + 2 * np.sin(elev)) / 3
-        import colour
-
-        # the diffuse light on the ground by forward photons (an empty periodic field marks the domain), its CCT
-        # (Hernandez 1999 through colour-science)
-        hg = AnalyticParticles("x", DensityProfile.uniform(), 1.0, 1.0, "henyey-greenstein", 0.85)
-        empty = CloudField(np.zeros((1, 1, 1)), 1000.0, 0.0, 100.0, hg, origin=(0.0, 0.0))
-        d = domain_quantities(atm.replace(particles=(sky.cloud_layer,)), empty, wl,
-                              sun_zenith=math.radians(90 - sun_elev), up_views=None, samples=4 * n, seed=42)
-        e0 = atm.solar_irradiance_at(wl) * math.sin(math.radians(sun_elev))
-        diffuse = (d.transmittance[0, 0] - d.direct_transmittance[0, 0]) * e0
-        xy = np.asarray(xyz_to_chromaticity(spectrum_to_xyz(diffuse, wl)))[:2]
-        cct = colour.temperature.xy_to_CCT(xy, method="Hernandez 1999")
+        cct = diffuse_cct(atm, sky.cloud_layer, wl, sun_elev, 4 * n, seed=42)
         print(f"overcast tau 30, sun {sun_elev:.0f} deg ({time.perf_counter() - t0:.0f} s): L/L_zenith at h = "
               f"{', '.join(f'{math.degrees(h):.0f}:{v:.3f}' for h, v in zip(elev, grad, strict=True))}; CIE "
               f"{', '.join(f'{v:.3f}' for v in cie)}; max |MC/CIE - 1| {np.max(np.abs(grad / cie - 1)):.1%}; "
-              f"diffuse global CCT {float(np.squeeze(cct)):.0f} K; median rel stderr {np.median(err / L):.2%}")
+              f"diffuse global CCT {cct:.0f} K; median rel stderr {np.median(err / L):.2%}")
+
+
+def diffuse_cct(atm, layer, wl, sun_elev, photons, seed):
+    """Correlated colour temperature [K] of the diffuse light on the ground under ``layer`` (forward photons; an
+    empty periodic field marks the domain; Hernandez 1999 through colour-science)."""
+    import colour
+
+    from skyscatter.spectral import spectrum_to_xyz, xyz_to_chromaticity
+
+    hg = AnalyticParticles("x", DensityProfile.uniform(), 1.0, 1.0, "henyey-greenstein", 0.85)
+    empty = CloudField(np.zeros((1, 1, 1)), 1000.0, 0.0, 100.0, hg, origin=(0.0, 0.0))
+    d = domain_quantities(atm.replace(particles=(layer,)), empty, wl, sun_zenith=math.radians(90 - sun_elev),
+                          up_views=None, samples=photons, seed=seed)
+    e0 = atm.solar_irradiance_at(wl) * math.sin(math.radians(sun_elev))
+    diffuse = (d.transmittance[0, 0] - d.direct_transmittance[0, 0]) * e0
+    xy = np.asarray(xyz_to_chromaticity(spectrum_to_xyz(diffuse, wl)))[:2]
+    return float(np.squeeze(colour.temperature.xy_to_CCT(xy, method="Hernandez 1999")))
+
+
+def overcast_cct(scale):
+    """The colour part of ``overcast`` alone (forward photons only, no sky radiance: seconds, not the gradation's
+    tens of minutes): CCT of the diffuse light at sun elevations 60, 30, 10 deg, two seeds each for the spread."""
+    from skyscatter.sky.montecarlo import MonteCarloSky
+
+    wl = np.arange(380.0, 781.0, 25.0)
+    n = int(4 * 8192 * scale)
+    atm = AtmosphereParameters(ground_albedo=0.2)
+    for sun_elev in (60.0, 30.0, 10.0):
+        t0 = time.perf_counter()
+        layer = MonteCarloSky(math.radians(90.0 - sun_elev), atmosphere=atm, cloud_optical_depth=30.0,
+                              cloud_base=500.0, cloud_top=1000.0).cloud_layer
+        ccts = [diffuse_cct(atm, layer, wl, sun_elev, n, seed) for seed in (42, 43)]
+        print(f"overcast tau 30, sun {sun_elev:.0f} deg: diffuse global CCT {ccts[0]:.0f} K (seed 42), "
+              f"{ccts[1]:.0f} K (seed 43); {n} photons each ({time.perf_counter() - t0:.0f} s)", flush=True)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("section", choices=["i3rc", "disort5", "waterclouds", "overcast", "all"])
+    ap.add_argument("section", choices=["i3rc", "disort5", "waterclouds", "overcast", "overcast-cct", "all"])
     ap.add_argument("--scale", type=float, default=1.0)
     args = ap.parse_args()
     print(f"machine: {len(os.sched_getaffinity(0))} cores, load average {os.getloadavg()[0]:.1f} at start")
     for name in (["i3rc", "disort5", "waterclouds", "overcast"] if args.section == "all" else [args.section]):
-        globals()[name](args.scale)
+        globals()[name.replace("-", "_")](args.scale)
     print(f"load average at the end {os.getloadavg()[0]:.1f}")
 
 

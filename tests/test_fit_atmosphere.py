@@ -121,3 +121,18 @@ def test_cli_bad_measurement_files(tmp_path, text, message):
     r = _cli("fit-atmosphere", str(csv), "--out", str(out), cwd=tmp_path)
     assert r.returncode == 2 and message in r.stderr and len(r.stderr.strip().splitlines()) == 1
     assert not out.exists()
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--aerosol", "urban", "--aod", "-0.1"], "--aod -0.1"),
+    (["--aerosol", "volcanic"], "invalid choice: 'volcanic'"),
+    (["--atmosphere", "missing.json"], "cannot read the atmosphere file missing.json"),
+    (["--atmosphere", "bad.json"], "atmosphere parameters are incomplete or malformed"),
+])
+def test_cli_bad_air_options_write_nothing(tmp_path, args, message):
+    """The air's options where they are read (sky --model bruneton): a negative optical depth, an unknown OPAC
+    type, a missing or malformed --atmosphere file: one line, exit 2, no image."""
+    (tmp_path / "bad.json").write_text('{"ground_albedo": 0.2}')
+    r = _cli("sky", "--model", "bruneton", *args, "--width", "16", "--out", "sky.exr", cwd=tmp_path)
+    assert r.returncode == 2 and message in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert not (tmp_path / "sky.exr").exists() and not (tmp_path / "sky.png").exists()
