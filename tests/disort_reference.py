@@ -133,3 +133,62 @@ def disort_radiance(params, wavelength: float, sun_zenith: float, view_zenith, v
         for j in range(va.size):
             out[idx, j] = res.intensities(k, 0, j)
     return out
+
+
+def disort_cloud(atm, layer, wl, sun_zen, view_zen, view_azi, albedo, n_layers=100, n_streams=64):
+    """disortpp: Rayleigh (if any) and a cloud layer (``CloudLayer``: its extinction, albedo and the Legendre
+    moments of its phase table, 400) over a Lambertian ground of ``albedo``; plane-parallel, 64 streams, delta-M
+    and the Nakajima-Tanaka correction. Returns the downward radiance at the ground per unit solar irradiance
+    [sr^-1], (n_view_zenith, n_view_azimuth), and the diffuse downward flux at the ground / (mu0 F0)."""
+    import disortpp
+
+    n_mom = 400
+    cloud_top = layer.top
+    # layers: fine through the cloud (20 layers) and above/below it
+    edges = np.unique(np.concatenate([np.linspace(atm.thickness, cloud_top, n_layers - 30 + 1),
+                                      np.linspace(cloud_top, layer.base, 21), np.linspace(layer.base, 0.0, 11)]))[::-1]
+    z_hi, z_lo = edges[:-1], edges[1:]
+    beta_r = float(atm.rayleigh_scattering_at([wl])[0])
+    tau_r = beta_r * _layer_integral(atm.rayleigh_density, z_lo, z_hi)
+    sigma_c = float(layer.extinction_at([wl])[0])
+    ssa_c = float(layer.single_scattering_albedo_at([wl])[0])
+    overlap = np.clip(np.minimum(z_hi, layer.top) - np.maximum(z_lo, layer.base), 0.0, None)
+    tau_c = sigma_c * overlap
+    tau = tau_r + tau_c
+    sca = tau_r + tau_c * ssa_c
+    chi_c = layer.phase_table([wl]).legendre_moments(n_mom + 1)[0]
+    chi_r = np.zeros(n_mom + 1)
+    chi_r[0], chi_r[2] = 1.0, 0.1
+    with np.errstate(invalid="ignore", divide="ignore"):
+        f_r = np.where(sca > 0, tau_r / sca, 1.0)
+    moments = f_r[:, None] * chi_r[None, :] + (1.0 - f_r)[:, None] * chi_c[None, :]
+    tau = np.maximum(tau, 1e-12)
+    ssa = np.clip(sca / tau, 0.0, 1.0 - 1e-9)
+    vz = np.asarray(view_zen, dtype=float)
+    mu = -np.cos(vz)
+    order = np.argsort(mu)
+    cfg = disortpp.DisortConfig(tau.size, n_streams, n_mom)
+    cfg.flags.use_user_mu = True
+    cfg.flags.use_user_tau = True
+    cfg.flags.use_lambertian_surface = True
+    cfg.flags.intensity_corr_nakajima = True
+    cfg.num_user_tau = 1
+    cfg.num_user_mu = vz.size
+    cfg.num_phi = len(view_azi)
+    cfg.allocate()
+    cfg.delta_tau = [float(t) for t in tau]
+    cfg.single_scat_albedo = [float(s) for s in ssa]
+    cfg.phase_function_moments = [[float(c) for c in row] for row in moments]
+    cfg.tau_user = [float(tau.sum())]
+    cfg.mu_user = [float(m) for m in mu[order]]
+    cfg.phi_user = [float(math.degrees(a)) for a in view_azi]
+    cfg.bc.direct_beam_flux = 1.0
+    cfg.bc.direct_beam_mu = math.cos(sun_zen)
+    cfg.bc.direct_beam_phi = 0.0
+    cfg.bc.surface_albedo = float(albedo)
+    res = disortpp.DisortSolver().solve(cfg)
+    rad = np.empty((vz.size, len(view_azi)))
+    for k, idx in enumerate(order):
+        for j in range(len(view_azi)):
+            rad[idx, j] = res.intensities(k, 0, j)
+    return rad, res.flux_down[0] / math.cos(sun_zen)

@@ -45,7 +45,8 @@ _MAX_CAMERA_Z = 1e5
 _SCENE_OPTIONS = ("sun_elevation", "sun_azimuth", "lat", "lon", "time", "aerial", "model")
 #: Parameters of the precomputed atmosphere that ``--model bruneton`` takes (``--turbidity`` is shared with the
 #: skies; the ground's albedo is the terrain's ``--albedo``).
-_BRUNETON_OPTIONS = ("turbidity", "aerosol_optical_depth", "angstrom_alpha", "ozone_column", "wavelengths")
+_BRUNETON_OPTIONS = ("turbidity", "aerosol_optical_depth", "angstrom_alpha", "ozone_column", "aerosol_type",
+                     "atmosphere_file", "wavelengths")
 #: Default turbidity of the haze for skies that have none of their own (the CIE and Perez skies).
 DEFAULT_HAZE_TURBIDITY = 2.5
 

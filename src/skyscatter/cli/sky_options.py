@@ -79,7 +79,8 @@ def _add_option(group, cli_flag: str, entries: list[tuple[str, Any]]) -> None:
     for model, p in entries:
         shown = p.default if isinstance(p.default, (int, float)) and not isinstance(p.default, bool) else None
         unit = "" if p.unit in ("1", "") else f" [{p.unit}]"
-        text = f"{p.help}{unit}: {p.range_text(with_unit=False)}" + (
+        allowed = p.range_text(with_unit=False)  # empty for a file name: no dangling colon
+        text = f"{p.help}{unit}" + (f": {allowed}" if allowed else "") + (
             f" (default {shown:g})" if shown is not None else "")
         texts.setdefault(text, []).append(model)
     kwargs: dict[str, Any] = dict(dest=first.name, default=argparse.SUPPRESS,
