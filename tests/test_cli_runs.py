@@ -257,10 +257,11 @@ RUNS = {
                             "--night-irradiance", "dark", "--format", "npz"], _npz("skymatrix.npz", 2305)),
     # spectral (issue 24): the test EPW's sky cover is 5 tenths in every hour, so no hour is clear and no table is
     # built; tests/test_spectral_skymatrix.py runs the same options on a file with clear hours
-    "skymatrix-spectral": (["skymatrix", "--spectral", EPW, "--tables", "coarse", "--aod-nodes", "0,0.5", "--bands",
-                            "41", "--patches", "tregenza", "--samples", "1", "--radiance", "s.mtx", "--radiance-rgb",
-                            "r.mtx", "--report", "h.csv", "--bad-hours", "flag", "--out", "s.nc"],
-                           _files("s.nc", "s.mtx", "r.mtx", "h.csv")),
+    "skymatrix-spectral-cloudy": (["skymatrix", "--spectral", EPW, "--tables", "coarse", "--aod-nodes", "0,0.5",
+                                   "--bands", "41", "--patches", "tregenza", "--samples", "1", "--radiance", "s.mtx",
+                                   "--radiance-rgb", "r.mtx", "--report", "h.csv", "--bad-hours", "flag",
+                                   "--out", "s.nc"],
+                                  _files("s.nc", "s.mtx", "r.mtx", "h.csv")),
     "skymatrix-spectral-sites": (["skymatrix", "--spectral", EPW, EPW, "--tables", "default", "--bad-hours", "error",
                                   "--scheduler", "threads", "--workers", "1", "--out", "sites.zarr"],
                                  _stdout("2 of 2 sites")),
