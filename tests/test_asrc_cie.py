@@ -326,16 +326,26 @@ def _run(capsys, *args):
 
 
 def test_cli_sky(capsys, tmp_path):
+    """The map the command writes is the ASRC-CIE sky of the same hour: its luminance at the pixel centres of the
+    upper half (sun disc off) is ``ASRCCIESky.luminance`` there, within the EXR's half floats (1e-3)."""
+    from skyscatter.conventions import equirect_directions
     from skyscatter.render import read_exr
+    from skyscatter.spectral import HDR_SCALE, linear_srgb_to_xyz
 
     out = tmp_path / "a.exr"
     code, stdout, err = _run(capsys, "sky", "--model", "asrc-cie", "--dni", "300", "--dhi", "180",
                              "--sun-elevation", "35", "--sun-azimuth", "200", "--width", "32", "--out", out,
-                             "--png", tmp_path / "a.png")
+                             "--png", tmp_path / "a.png", "--no-sun-disc")
     assert code == 0, err
     img = read_exr(out)
     assert img.shape == (16, 32, 3) and np.all(np.isfinite(img)) and img.max() > 0
     assert (tmp_path / "a.png").stat().st_size > 0
+    sky = ASRCCIESky(math.radians(55), math.radians(200), direct_normal_irradiance=300,
+                     diffuse_horizontal_irradiance=180)
+    assert 0 < sky.weights["intermediate"] < 1  # a blend, not a pure component
+    d = equirect_directions(32)[:8]
+    mapped = linear_srgb_to_xyz(img[:8].astype(np.float64))[..., 1] / HDR_SCALE
+    np.testing.assert_allclose(mapped, sky.luminance(d), rtol=1e-3)
 
 
 def test_cli_illuminance(capsys):
