@@ -191,7 +191,7 @@ def test_components_against_gensky(option, eps, delta, alt, az, tmp_path, rng):
     """Each pure component against Radiance (pyradiance's gensky + rtrace), relative to the zenith, altitudes
     10-90 deg: the CIE intermediate sky of skybright.cal (-i), the CIE clear sky (-s, no sun source) and the
     overcast sky (-c). Tolerance 1e-4: the 6-digit sun direction gensky prints (measured over suns at 2-85 deg:
-    2.6e-5 for -i, 3.8e-5 for -s, 7e-7 for -c). gensky lowers suns above 87 deg to 87 deg; our skies do not."""
+    2.6e-5 for -i, 4.9e-5 for -s, 7e-7 for -c). gensky lowers suns above 87 deg to 87 deg; our skies do not."""
     pytest.importorskip("pyradiance")
     sky = ASRCCIESky(math.radians(90 - alt), math.radians(az), epsilon=eps, delta=delta)
     assert max(sky.weights.values()) == 1.0
@@ -326,16 +326,26 @@ def _run(capsys, *args):
 
 
 def test_cli_sky(capsys, tmp_path):
+    """The map the command writes is the ASRC-CIE sky of the same hour: its luminance at the pixel centres of the
+    upper half (sun disc off) is ``ASRCCIESky.luminance`` there, within the EXR's half floats (1e-3)."""
+    from skyscatter.conventions import equirect_directions
     from skyscatter.render import read_exr
+    from skyscatter.spectral import HDR_SCALE, linear_srgb_to_xyz
 
     out = tmp_path / "a.exr"
     code, stdout, err = _run(capsys, "sky", "--model", "asrc-cie", "--dni", "300", "--dhi", "180",
                              "--sun-elevation", "35", "--sun-azimuth", "200", "--width", "32", "--out", out,
-                             "--png", tmp_path / "a.png")
+                             "--png", tmp_path / "a.png", "--no-sun-disc")
     assert code == 0, err
     img = read_exr(out)
     assert img.shape == (16, 32, 3) and np.all(np.isfinite(img)) and img.max() > 0
     assert (tmp_path / "a.png").stat().st_size > 0
+    sky = ASRCCIESky(math.radians(55), math.radians(200), direct_normal_irradiance=300,
+                     diffuse_horizontal_irradiance=180)
+    assert 0 < sky.weights["intermediate"] < 1  # a blend, not a pure component
+    d = equirect_directions(32)[:8]
+    mapped = linear_srgb_to_xyz(img[:8].astype(np.float64))[..., 1] / HDR_SCALE
+    np.testing.assert_allclose(mapped, sky.luminance(d), rtol=1e-3)
 
 
 def test_cli_illuminance(capsys):

@@ -380,8 +380,10 @@ def save_dataset(ds, path: str | os.PathLike[str]) -> Path:
     if suffix == ".nc":
         try:
             import h5netcdf  # noqa: F401
+            import h5py  # noqa: F401  (h5netcdf's backend, not installed by h5netcdf itself)
         except ImportError:
-            raise OutputError("writing NetCDF needs h5netcdf (pip install 'skyscatter[montecarlo]')") from None
+            raise OutputError("writing NetCDF needs h5netcdf and h5py, dependencies of skyscatter that are "
+                              "missing here (pip install h5netcdf h5py); or write a .zarr store") from None
         enc = {v: {"compression": "gzip", "compression_opts": 4} for v in ("sky_radiance", "sun_irradiance")}
         with atomic_path(target) as tmp:
             try:
