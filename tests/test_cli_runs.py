@@ -144,6 +144,18 @@ def _luts(folder_name, channels):
     return check
 
 
+def _realtime(folder_name, formats):
+    def check(folder: Path, out: str) -> None:
+        from skyscatter.realtime import load_realtime
+
+        for fmt in formats:
+            data = load_realtime(folder / folder_name, fmt=fmt)  # checks version, every file and its size
+            assert data.textures["rayleigh"].shape[-1] == 4 and np.isfinite(data.textures["multiple"]).all()
+            assert data.textures["transmittance"].max() <= 1.0 + 1e-6
+        assert not (folder / folder_name / "atmosphere.json").exists() or "raw" in formats
+    return check
+
+
 def _dataset(name, n_wl):
     def check(folder: Path, out: str) -> None:
         from skyscatter.sky.hosek_wilkie import HosekWilkieDataset, HosekWilkieSky
@@ -308,6 +320,8 @@ RUNS = {
     "export-luts-cache": (["export-luts", "--out-dir", "luts16", *TINY_FLAGS, "--wavelengths", "400:700:20",
                            "--turbidity", "2", "--albedo", "0.15", "--ozone", "320", "--mie-g", "0.75",
                            "--max-sun-zenith", "105"], _luts("luts16", 16)),
+    "export-luts-realtime": (["export-luts", "--out-dir", "rt", *TINY_FLAGS, "--formats", "rgba32f,rgba16f,exr"],
+                             _realtime("rt", ("rgba32f", "rgba16f", "exr"))),
     # reference
     "reference-turbidity": (["reference", "r.zarr", "--sun-elevation", "30,-3", "--turbidity", "2,4", "--albedo",
                              "0.1", "--wavelengths", "450,550", "--directions", "3", "--samples", "8", "--seed",
