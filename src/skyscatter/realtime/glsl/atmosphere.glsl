@@ -40,6 +40,17 @@ const float HORIZON_EPSILON = 0.004;
 // (a - b)(a + b), so that float32 keeps them near the ground and the horizon.
 
 float SafeSqrt(float a) { return sqrt(max(a, 0.0)); }
+
+// Arc cosine [rad] to 2.2e-8 rad ([Abramowitz1964] Eq. 4.4.46, Acos(-x) = pi - Acos(x)), the rule of the Python
+// lookups: GPU acos is often far less accurate (SwiftShader's is off by up to ~1e-4 rad), and the mu mapping is
+// steep near the horizon at the top of the atmosphere (the limb seen from orbit).
+float Acos(float x) {
+  float a = min(abs(x), 1.0);
+  float p = ((((((-0.0012624911 * a + 0.0066700901) * a - 0.0170881256) * a + 0.0308918810) * a - 0.0501743046) * a
+              + 0.0889789874) * a - 0.2145988016) * a + 1.5707963050;
+  float v = sqrt(1.0 - a) * p;
+  return x >= 0.0 ? v : PI - v;
+}
 float TexCoord(float p, int n) { return (p + 0.5) / float(n); }
 
 // Distance [m] from radius r along direction cosine mu to the top of the atmosphere ([Bruneton2008] Sec. 4: the
@@ -87,7 +98,7 @@ vec2 IrradianceUv(float r, float mu_s) {
 // Fig. 4): rays that meet the ground fill index positions 0 .. n/2 - 1 (grazing to straight down) with
 // 1 - (d - d_min) / (d_max - d_min), d the distance to the ground, d_min = r - R_g, d_max = rho; the other rays fill
 // n/2 .. n - 1 (zenith to horizon) with the mean of (d - d_min) / (d_max - d_min) (d to the top, d_min = R_t - r,
-// d_max = rho + H) and theta / theta_h (zenith angle over the horizon's, theta_h = acos(-rho / r)). Linear filtering
+// d_max = rho + H) and theta / theta_h (zenith angle over the horizon's, theta_h = Acos(-rho / r)). Linear filtering
 // never mixes the halves: their positions stay within [0, n/2 - 1] and [n/2, n - 1].
 vec2 ScatteringMuRCoords(float r, float mu, bool hits_ground) {
   float H = sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS));
@@ -104,7 +115,7 @@ vec2 ScatteringMuRCoords(float r, float mu, bool hits_ground) {
     float d_min = TOP_RADIUS - r;
     float d_max = rho + H;
     float x_d = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
-    float x_a = acos(clamp(mu, -1.0, 1.0)) / acos(clamp(-rho / r, -1.0, 1.0));
+    float x_a = Acos(clamp(mu, -1.0, 1.0)) / Acos(clamp(-rho / r, -1.0, 1.0));
     p_mu = half_n + 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0)) * (half_n - 1.0);
   }
   return vec2(TexCoord(p_mu, SCATTERING_N_MU),
@@ -119,12 +130,12 @@ float MuSDistanceUnit(float mu_s) {
 }
 
 // Index position of mu_s: the mean of max(1 - a / A, 0) / (1 + a) ([Bruneton2017], A = a(MU_S_MIN)) and
-// 1 - theta_s / theta_max (theta_max = acos(MU_S_MIN)); 0 at MU_S_MIN, n - 1 at the zenith.
+// 1 - theta_s / theta_max (theta_max = Acos(MU_S_MIN)); 0 at MU_S_MIN, n - 1 at the zenith.
 float ScatteringMuSIndex(float mu_s) {
   float a = MuSDistanceUnit(mu_s);
   float big_a = MuSDistanceUnit(MU_S_MIN);
   float x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0);
-  float x_a = clamp(1.0 - acos(clamp(mu_s, -1.0, 1.0)) / acos(MU_S_MIN), 0.0, 1.0);
+  float x_a = clamp(1.0 - Acos(clamp(mu_s, -1.0, 1.0)) / Acos(MU_S_MIN), 0.0, 1.0);
   return 0.5 * (x_d + x_a) * float(SCATTERING_N_MU_S - 1);
 }
 
@@ -134,9 +145,42 @@ float ScatteringNuIndex(float mu, float mu_s, float nu) {
   float s = SafeSqrt((1.0 - mu * mu) * (1.0 - mu_s * mu_s));
   if (s < 1e-9) return 0.5 * float(SCATTERING_N_NU - 1);
   float cphi = clamp((nu - mu * mu_s) / s, -1.0, 1.0);
-  return (1.0 - acos(cphi) / PI) * float(SCATTERING_N_NU - 1);
+  return (1.0 - Acos(cphi) / PI) * float(SCATTERING_N_NU - 1);
 }
 // END MAPPINGS ---------------------------------------------------------------------------------------------------
+
+// Texture reads. GPUs interpolate with a fixed-point fraction (8 bits is common; SwiftShader too), which where the
+// tables change steeply within a texel (the limb of the atmosphere seen from orbit) is visible; define
+// SKYSCATTER_EXACT_FILTERING before this file to interpolate in float32 by hand from texelFetch (4 or 8 fetches
+// instead of 1). Both follow GL's LINEAR + CLAMP_TO_EDGE rule: texel i centred at (i + 0.5) / n.
+#ifdef SKYSCATTER_EXACT_FILTERING
+vec4 Texture2D(highp sampler2D t, vec2 uv) {
+  ivec2 n = textureSize(t, 0);
+  vec2 x = uv * vec2(n) - 0.5;
+  vec2 f = floor(x);
+  vec2 w = x - f;
+  ivec2 i0 = clamp(ivec2(f), ivec2(0), n - 1);
+  ivec2 i1 = clamp(ivec2(f) + 1, ivec2(0), n - 1);
+  return mix(mix(texelFetch(t, i0, 0), texelFetch(t, ivec2(i1.x, i0.y), 0), w.x),
+             mix(texelFetch(t, ivec2(i0.x, i1.y), 0), texelFetch(t, i1, 0), w.x), w.y);
+}
+vec4 Texture3D(highp sampler3D t, vec3 uvw) {
+  ivec3 n = textureSize(t, 0);
+  vec3 x = uvw * vec3(n) - 0.5;
+  vec3 f = floor(x);
+  vec3 w = x - f;
+  ivec3 i0 = clamp(ivec3(f), ivec3(0), n - 1);
+  ivec3 i1 = clamp(ivec3(f) + 1, ivec3(0), n - 1);
+  vec4 a = mix(mix(texelFetch(t, i0, 0), texelFetch(t, ivec3(i1.x, i0.y, i0.z), 0), w.x),
+               mix(texelFetch(t, ivec3(i0.x, i1.y, i0.z), 0), texelFetch(t, ivec3(i1.x, i1.y, i0.z), 0), w.x), w.y);
+  vec4 b = mix(mix(texelFetch(t, ivec3(i0.x, i0.y, i1.z), 0), texelFetch(t, ivec3(i1.x, i0.y, i1.z), 0), w.x),
+               mix(texelFetch(t, ivec3(i0.x, i1.y, i1.z), 0), texelFetch(t, i1, 0), w.x), w.y);
+  return mix(a, b, w.z);
+}
+#else
+vec4 Texture2D(highp sampler2D t, vec2 uv) { return texture(t, uv); }
+vec4 Texture3D(highp sampler3D t, vec3 uvw) { return texture(t, uvw); }
+#endif
 
 // Phase functions [sr^-1]: Rayleigh [Bruneton2008] Eq. 2; Cornette-Shanks Eq. 4; Henyey-Greenstein.
 float RayleighPhase(float nu) { return 3.0 / (16.0 * PI) * (1.0 + nu * nu); }
@@ -151,24 +195,31 @@ float MiePhase(float nu) {
 // tabulated). RGB: the transmittance of sunlight, (M (E_sun T)) / (M E_sun) per channel, M the spectrum -> linear
 // sRGB matrix: exact for the sun's light, an approximation for other spectra.
 vec3 GetTransmittanceToTop(float r, float mu) {
-  return texture(transmittance_texture, TransmittanceUv(r, mu)).rgb;
+  return Texture2D(transmittance_texture, TransmittanceUv(r, mu)).rgb;
 }
 
 // Transmittance between (r, mu) and the point at distance d along the ray: T(x, y) = T(x, v) / T(y, v), or with the
-// reversed ray T(y, -v) / T(x, -v) for rays that meet the ground ([Bruneton2008] Sec. 4), capped at 1.
+// reversed ray T(y, -v) / T(x, -v) for rays that meet the ground ([Bruneton2008] Sec. 4), capped at 1. A channel
+// of reddened sunlight can be near zero or negative (a spectrum outside the sRGB gamut: grazing rays); there the
+// ratio of that channel means nothing and the luminance's ratio (A) is used.
+float TransmittanceRatio(float a, float b, float a_y, float b_y) {
+  if (b > 1e-3 * b_y) return min(a / b, 1.0);
+  return b_y > 0.0 ? min(a_y / b_y, 1.0) : 0.0;
+}
+
 vec3 GetTransmittance(float r, float mu, float d, bool hits_ground) {
   float r_d = clamp(SafeSqrt(d * d + 2.0 * r * mu * d + r * r), BOTTOM_RADIUS, TOP_RADIUS);
   float mu_d = clamp((r * mu + d) / r_d, -1.0, 1.0);
-  vec3 a, b;
+  vec4 a, b;
   if (hits_ground) {
-    a = GetTransmittanceToTop(r_d, -mu_d);
-    b = GetTransmittanceToTop(r, -mu);
+    a = Texture2D(transmittance_texture, TransmittanceUv(r_d, -mu_d));
+    b = Texture2D(transmittance_texture, TransmittanceUv(r, -mu));
   } else {
-    a = GetTransmittanceToTop(r, mu);
-    b = GetTransmittanceToTop(r_d, mu_d);
+    a = Texture2D(transmittance_texture, TransmittanceUv(r, mu));
+    b = Texture2D(transmittance_texture, TransmittanceUv(r_d, mu_d));
   }
-  return vec3(b.r > 0.0 ? min(a.r / b.r, 1.0) : 0.0, b.g > 0.0 ? min(a.g / b.g, 1.0) : 0.0,
-              b.b > 0.0 ? min(a.b / b.b, 1.0) : 0.0);
+  return vec3(TransmittanceRatio(a.r, b.r, a.a, b.a), TransmittanceRatio(a.g, b.g, a.a, b.a),
+              TransmittanceRatio(a.b, b.b, a.a, b.a));
 }
 
 // Fraction of the solar disc above the planet's horizon seen from r: a circular segment,
@@ -203,9 +254,9 @@ vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, ou
   float n_x = float(SCATTERING_N_NU * SCATTERING_N_MU_S);
   vec3 uvw0 = vec3((i_n * float(SCATTERING_N_MU_S) + p_s + 0.5) / n_x, vw.x, vw.y);
   vec3 uvw1 = vec3(uvw0.x + float(SCATTERING_N_MU_S) / n_x, vw.x, vw.y);
-  mie = mix(texture(mie_texture, uvw0).rgb, texture(mie_texture, uvw1).rgb, w_n);
-  multiple = mix(texture(multiple_texture, uvw0).rgb, texture(multiple_texture, uvw1).rgb, w_n);
-  return mix(texture(rayleigh_texture, uvw0).rgb, texture(rayleigh_texture, uvw1).rgb, w_n);
+  mie = mix(Texture3D(mie_texture, uvw0).rgb, Texture3D(mie_texture, uvw1).rgb, w_n);
+  multiple = mix(Texture3D(multiple_texture, uvw0).rgb, Texture3D(multiple_texture, uvw1).rgb, w_n);
+  return mix(Texture3D(rayleigh_texture, uvw0).rgb, Texture3D(rayleigh_texture, uvw1).rgb, w_n);
 }
 
 // Inscattered radiance S[L](x, v, s) = S_R[L0] P_R(nu) + S_M[L0] P_M(nu) + S[L*] ([Bruneton2008] Eqs. 7-8 with the
@@ -222,7 +273,10 @@ bool EnterAtmosphere(inout vec3 camera, vec3 view_ray, out float entered) {
   float r = length(camera);
   if (r <= TOP_RADIUS) return true;
   float rmu = dot(camera, view_ray);
-  float disc = rmu * rmu - (r - TOP_RADIUS) * (r + TOP_RADIUS);
+  // R_t^2 - p^2, p the distance from the planet's centre to the ray's line: as a product, which float32 keeps for
+  // rays that graze the top (rmu^2 - r^2 + R_t^2 loses 6 digits there)
+  float p = length(cross(camera, view_ray));
+  float disc = (TOP_RADIUS - p) * (TOP_RADIUS + p);
   if (disc < 0.0 || rmu >= 0.0) return false;
   float d = -rmu - sqrt(disc);
   if (d < 0.0) return false;
@@ -255,7 +309,7 @@ vec3 GetSunAndSkyIrradiance(vec3 point, vec3 normal, vec3 sun_direction, out vec
   vec3 up = point / r;
   float rc = clamp(r, BOTTOM_RADIUS, TOP_RADIUS);
   float mu_s = clamp(dot(up, sun_direction), -1.0, 1.0);
-  sky_irradiance = texture(irradiance_texture, IrradianceUv(rc, mu_s)).rgb * 0.5 * (1.0 + dot(normal, up));
+  sky_irradiance = Texture2D(irradiance_texture, IrradianceUv(rc, mu_s)).rgb * 0.5 * (1.0 + dot(normal, up));
   return SOLAR_IRRADIANCE * GetTransmittanceToSun(rc, mu_s) * max(dot(normal, sun_direction), 0.0);
 }
 
@@ -280,7 +334,7 @@ vec3 GetGroundRadiance(vec3 camera, vec3 view_ray, vec3 sun_direction, vec3 albe
   vec3 t = GetTransmittance(r, mu, d, true);
   vec3 g = camera + d * view_ray;
   float mu_s_g = clamp(dot(g, sun_direction) / length(g), -1.0, 1.0);
-  vec3 e_sky = texture(irradiance_texture, IrradianceUv(BOTTOM_RADIUS, mu_s_g)).rgb;
+  vec3 e_sky = Texture2D(irradiance_texture, IrradianceUv(BOTTOM_RADIUS, mu_s_g)).rgb;
   vec3 t_sun = GetTransmittanceToTop(BOTTOM_RADIUS, mu_s_g);
   return t * albedo / PI * (SOLAR_IRRADIANCE * t_sun * SunCosineFactor(mu_s_g) + e_sky);
 }
@@ -290,7 +344,7 @@ vec3 GetGroundRadiance(vec3 camera, vec3 view_ray, vec3 sun_direction, vec3 albe
 vec3 GetSolarRadiance(vec3 camera, vec3 sun_direction) {
   float r = length(camera);
   float rmu = dot(camera, sun_direction);
-  if (r > TOP_RADIUS && rmu < 0.0 && rmu * rmu - (r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS) >= 0.0) return vec3(0.0);
+  if (r > TOP_RADIUS && rmu < 0.0 && length(cross(camera, sun_direction)) <= BOTTOM_RADIUS) return vec3(0.0);
   float entered;
   if (!EnterAtmosphere(camera, sun_direction, entered)) return SOLAR_IRRADIANCE / SUN_SOLID_ANGLE;
   r = length(camera);
