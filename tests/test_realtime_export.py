@@ -182,3 +182,27 @@ def test_loader_refuses_another_version_a_missing_and_a_truncated_file(luts, tmp
 def test_export_refuses_unknown_formats(atm, tmp_path):
     with pytest.raises(InvalidParameterError, match="rgba32f"):
         export_realtime(atm, tmp_path, formats=("jpeg",))
+
+
+def test_server_serves_the_viewer_and_only_the_exports_files(luts, tmp_path):
+    import urllib.error
+    import urllib.request
+
+    from skyscatter.realtime.server import serve
+
+    (luts / "secret.txt").write_text("not for the page")
+    with serve(luts) as server:
+        assert server.url.startswith("http://127.0.0.1:")
+
+        def get(path):
+            with urllib.request.urlopen(server.url + path.lstrip("/"), timeout=10) as r:
+                return r.read()
+
+        page = get("/").decode()
+        assert 'src="/viewer/viewer.js"' in page and "://" not in page.split("<body>")[1]
+        assert b"GetSkyRadianceToPoint" in get("/glsl/atmosphere.glsl")
+        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 1
+        assert len(get("/luts/rayleigh.rgba32f")) == (luts / "rayleigh.rgba32f").stat().st_size
+        for path in ("/luts/secret.txt", "/luts/../secret.txt", "/etc/passwd", "/viewer/../export.py"):
+            with pytest.raises(urllib.error.HTTPError, match="404"):
+                get(path)

@@ -39,7 +39,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--luts", type=Path, default=None, metavar="DIR",
                    help="export folder holding skyscatter_realtime.json (default: export the cached tables)")
     p.add_argument("--port", type=_port, default=8642, metavar="N",
-                   help="TCP port on 127.0.0.1 (0: any free port); default 8642")
+                   help="TCP port on 127.0.0.1 (0: any free port)")
     p.add_argument("--no-browser", action="store_true", help="do not open a browser; only print the address")
     p.add_argument("--check", action="store_true",
                    help="serve, fetch the page, its script, the shaders, the manifest and every texture over HTTP "
