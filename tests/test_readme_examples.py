@@ -20,7 +20,8 @@ import pytest
 from skyscatter.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-SMALL = {"demo": ["--width", "32", "--height", "18"], "sky": ["--width", "64"], "reference": ["--samples", "16"]}
+SMALL = {"demo": ["--width", "32", "--height", "18"], "sky": ["--width", "64"], "reference": ["--samples", "16"],
+         "view": ["--check", "--port", "0"]}  # view: serve, fetch everything over HTTP and exit (no browser)
 
 
 def readme_commands() -> list[str]:
@@ -36,7 +37,7 @@ def readme_commands() -> list[str]:
 
 
 def _needs_tables(args: list[str]) -> bool:
-    return args[0] in ("precompute", "export-luts") or "bruneton" in args
+    return args[0] in ("precompute", "export-luts", "view") or "bruneton" in args
 
 
 @pytest.mark.parametrize(
