@@ -206,3 +206,27 @@ def test_server_serves_the_viewer_and_only_the_exports_files(luts, tmp_path):
         for path in ("/luts/secret.txt", "/luts/../secret.txt", "/etc/passwd", "/viewer/../export.py"):
             with pytest.raises(urllib.error.HTTPError, match="404"):
                 get(path)
+
+
+def test_optical_depth_texture_and_segment_rule(atm, luts):
+    """The optical_depth texture is the band average of -ln T at its texels; the manifest's segment rule gives the
+    sunlight transmittance of a short segment high in the sky (well conditioned: the ratio) to float32 rounding."""
+    data = load_realtime(luts)
+    ns = data.mappings()
+    m = fold_matrix(atm)
+    solar = atm.parameters.solar_irradiance_at(atm.wavelengths)
+    w = np.maximum(np.vstack([m, [0.2126, 0.7152, 0.0722] @ m]), 0) * solar
+    w /= w.sum(axis=1, keepdims=True)
+    tau = -np.log(np.maximum(atm.tables["transmittance"].astype(np.float64), 1e-30))
+    np.testing.assert_allclose(data.textures["optical_depth"], tau @ w.T, rtol=1e-6, atol=1e-6)
+    r = atm.parameters.bottom_radius + 5000.0
+    for mu in (0.3, 0.7, 1.0):
+        d = 3000.0
+        r_d = math.sqrt(d * d + 2 * r * mu * d + r * r)
+        mu_d = (r * mu + d) / r_d
+        uv_a, uv_b = ns["transmittance_uv"](r, mu), ns["transmittance_uv"](r_d, mu_d)
+        got = ns["segment_transmittance"](
+            _sample(data.textures["transmittance"], uv_a)[:3], _sample(data.textures["transmittance"], uv_b)[:3],
+            _sample(data.textures["optical_depth"], uv_a)[:3], _sample(data.textures["optical_depth"], uv_b)[:3])
+        t_seg = np.minimum(atm.transmittance(r, mu) / atm.transmittance(r_d, mu_d), 1.0)
+        np.testing.assert_allclose(got, (m @ (solar * t_seg)) / (m @ solar), atol=2e-3)

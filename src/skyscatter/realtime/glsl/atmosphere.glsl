@@ -23,6 +23,7 @@
 // RGBA16F filters everywhere).
 
 uniform highp sampler2D transmittance_texture;   // RGB: sunlight-weighted transmittance to the top; A: luminance's
+uniform highp sampler2D optical_depth_texture;   // RGB: optical depth to the top averaged over each channel; A: Y's
 uniform highp sampler2D irradiance_texture;      // RGB: sky irradiance on a horizontal surface; A: its Y
 uniform highp sampler3D rayleigh_texture;        // RGB: single Rayleigh scattering S_R[L0] without phase; A: Y
 uniform highp sampler3D mie_texture;             // RGB: single Mie scattering S_M[L0] without phase; A: Y
@@ -199,27 +200,34 @@ vec3 GetTransmittanceToTop(float r, float mu) {
 }
 
 // Transmittance between (r, mu) and the point at distance d along the ray: T(x, y) = T(x, v) / T(y, v), or with the
-// reversed ray T(y, -v) / T(x, -v) for rays that meet the ground ([Bruneton2008] Sec. 4), capped at 1. A channel
-// of reddened sunlight can be near zero or negative (a spectrum outside the sRGB gamut: grazing rays); there the
-// ratio of that channel means nothing and the luminance's ratio (A) is used.
-float TransmittanceRatio(float a, float b, float a_y, float b_y) {
-  if (b > 1e-3 * b_y) return min(a / b, 1.0);
-  return b_y > 0.0 ? min(a_y / b_y, 1.0) : 0.0;
+// reversed ray T(y, -v) / T(x, -v) for rays that meet the ground ([Bruneton2008] Sec. 4), capped at 1. The ratio of
+// two sunlight transmittances is ill-conditioned where the far one is small in a channel (long grazing paths: a
+// reddened beam, whose sRGB blue can even be negative); there the channel's band-averaged optical depths give it,
+// exp(-(tau(x) - tau(y))) (the manifest's segment_transmittance rule).
+// The two blend linearly for far-end transmittances between 0.02 and 0.1 (no seam where the rule changes).
+float SegmentChannel(float a, float b, float tau_a, float tau_b) {
+  float from_depth = exp(-max(tau_a - tau_b, 0.0));
+  float s = clamp((b - 0.02) / 0.08, 0.0, 1.0);
+  return s > 0.0 ? mix(from_depth, clamp(a / b, 0.0, 1.0), s) : from_depth;
 }
 
 vec3 GetTransmittance(float r, float mu, float d, bool hits_ground) {
   float r_d = clamp(SafeSqrt(d * d + 2.0 * r * mu * d + r * r), BOTTOM_RADIUS, TOP_RADIUS);
   float mu_d = clamp((r * mu + d) / r_d, -1.0, 1.0);
-  vec4 a, b;
+  vec2 uv_a, uv_b;
   if (hits_ground) {
-    a = Texture2D(transmittance_texture, TransmittanceUv(r_d, -mu_d));
-    b = Texture2D(transmittance_texture, TransmittanceUv(r, -mu));
+    uv_a = TransmittanceUv(r_d, -mu_d);
+    uv_b = TransmittanceUv(r, -mu);
   } else {
-    a = Texture2D(transmittance_texture, TransmittanceUv(r, mu));
-    b = Texture2D(transmittance_texture, TransmittanceUv(r_d, mu_d));
+    uv_a = TransmittanceUv(r, mu);
+    uv_b = TransmittanceUv(r_d, mu_d);
   }
-  return vec3(TransmittanceRatio(a.r, b.r, a.a, b.a), TransmittanceRatio(a.g, b.g, a.a, b.a),
-              TransmittanceRatio(a.b, b.b, a.a, b.a));
+  vec3 a = Texture2D(transmittance_texture, uv_a).rgb;
+  vec3 b = Texture2D(transmittance_texture, uv_b).rgb;
+  vec3 ta = Texture2D(optical_depth_texture, uv_a).rgb;
+  vec3 tb = Texture2D(optical_depth_texture, uv_b).rgb;
+  return vec3(SegmentChannel(a.r, b.r, ta.r, tb.r), SegmentChannel(a.g, b.g, ta.g, tb.g),
+              SegmentChannel(a.b, b.b, ta.b, tb.b));
 }
 
 // Fraction of the solar disc above the planet's horizon seen from r: a circular segment,

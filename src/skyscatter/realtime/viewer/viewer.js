@@ -6,8 +6,9 @@
 
 const MANIFEST_FORMAT = "skyscatter-realtime-luts";
 const MANIFEST_VERSION = 1;
-const TEXTURES = ["transmittance", "irradiance", "rayleigh", "mie", "multiple"];
-const SAMPLERS = {transmittance: "transmittance_texture", irradiance: "irradiance_texture",
+const TEXTURES = ["transmittance", "optical_depth", "irradiance", "rayleigh", "mie", "multiple"];
+const SAMPLERS = {transmittance: "transmittance_texture", optical_depth: "optical_depth_texture",
+                  irradiance: "irradiance_texture",
                   rayleigh: "rayleigh_texture", mie: "mie_texture", multiple: "multiple_texture"};
 
 const VERTEX = `#version 300 es
@@ -85,6 +86,29 @@ void main() {
     if (u_show_sun && !hit && dot(v, u_sun) > cos(SUN_ANGULAR_RADIUS)) radiance += GetSolarRadiance(u_camera, u_sun);
   }
   frag_color = vec4(radiance, 1.0);
+}`;
+
+// Library functions evaluated for a list of cases (tests and scripts): case i reads its three input vectors from
+// column i of u_inputs (rows 0-2) and writes two results into rows 0 and 1 of the output.
+const PROBE_MAIN = `
+uniform highp sampler2D u_inputs;
+uniform int u_kind;
+out vec4 frag_color;
+void main() {
+  int i = int(gl_FragCoord.x);
+  int row = int(gl_FragCoord.y);
+  vec3 a = texelFetch(u_inputs, ivec2(i, 0), 0).xyz;
+  vec3 b = texelFetch(u_inputs, ivec2(i, 1), 0).xyz;
+  vec3 c = texelFetch(u_inputs, ivec2(i, 2), 0).xyz;
+  vec3 first, second;
+  if (u_kind == 0) {          // aerial perspective: camera, point, sun -> inscatter, transmittance
+    first = GetSkyRadianceToPoint(a, b, c, second);
+  } else if (u_kind == 1) {   // irradiance: point, normal, sun -> sun irradiance, sky irradiance
+    first = GetSunAndSkyIrradiance(a, b, c, second);
+  } else {                    // sky: camera, view direction, sun -> radiance, transmittance
+    first = GetSkyRadiance(a, b, c, second);
+  }
+  frag_color = vec4(row == 0 ? first : second, 1.0);
 }`;
 
 const TONEMAP = `#version 300 es
@@ -248,6 +272,7 @@ async function start() {
   const sky = program(gl, header + manifest.glsl_constants + library + SKY_MAIN, "sky");
   const skyExact = program(gl, header + exact + manifest.glsl_constants + library + SKY_MAIN, "sky (exact filtering)");
   const tonemap = program(gl, TONEMAP, "tone mapping");
+  let probe = null;
   const c = manifest.constants;
   let target = null;
 
@@ -317,6 +342,40 @@ async function start() {
     let text = "";
     for (let i = 0; i < bytes.length; i += 0x8000) text += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
     return btoa(text);
+  };
+  // Evaluate a library function for cases [[a, b, c], ...] (kind "aerial", "irradiance" or "sky"); returns
+  // [[first, second], ...] as arrays of 3 numbers (float32 on the GPU).
+  viewer.probe = (kind, cases) => {
+    if (!probe) probe = program(gl, header + manifest.glsl_constants + library + PROBE_MAIN, "probe");
+    const n = cases.length;
+    const input = new Float32Array(n * 3 * 4);
+    cases.forEach((c, i) => { for (let r = 0; r < 3; r++) input.set(c[r], (r * n + i) * 4); });
+    const out = floatTarget(gl, n, 2);  // first: it binds its texture to the active unit
+    const tex = gl.createTexture();
+    gl.activeTexture(gl.TEXTURE0 + TEXTURES.length);
+    gl.bindTexture(gl.TEXTURE_2D, tex);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, n, 3, 0, gl.RGBA, gl.FLOAT, input);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, out.fbo);
+    gl.viewport(0, 0, n, 2);
+    gl.useProgram(probe);
+    TEXTURES.forEach((name, unit) => {
+      gl.activeTexture(gl.TEXTURE0 + unit);
+      gl.bindTexture(textures[name].target, textures[name].tex);
+      gl.uniform1i(gl.getUniformLocation(probe, SAMPLERS[name]), unit);
+    });
+    gl.uniform1i(gl.getUniformLocation(probe, "u_inputs"), TEXTURES.length);
+    gl.uniform1i(gl.getUniformLocation(probe, "u_kind"), {aerial: 0, irradiance: 1, sky: 2}[kind]);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+    const pixels = new Float32Array(n * 2 * 4);
+    gl.readPixels(0, 0, n, 2, gl.RGBA, gl.FLOAT, pixels);
+    gl.deleteTexture(tex);
+    gl.deleteTexture(out.tex);
+    gl.deleteFramebuffer(out.fbo);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    return cases.map((_, i) => [Array.from(pixels.subarray(i * 4, i * 4 + 3)),
+                                Array.from(pixels.subarray((n + i) * 4, (n + i) * 4 + 3))]);
   };
   viewer.frameTime = (frames) => {
     const one = new Uint8Array(4);
