@@ -36,7 +36,8 @@ VIEWS = {
 
 
 def _load() -> str:
-    return "load average %.2f %.2f %.2f" % os.getloadavg()
+    one, five, fifteen = os.getloadavg()
+    return f"load average {one:.2f} {five:.2f} {fifteen:.2f}"
 
 
 def bench_export(repeat: int, folder: Path) -> None:

@@ -263,7 +263,8 @@ def test_library_aerial_perspective_matches_the_python_lookup(viewer, atm, luts)
     # points on the ground (the sphere) or 0-3 km above it, dist away horizontally
     height = rng.choice([0.0, 1000.0, 3000.0], n)
     ang = dist / bottom
-    points = np.stack([np.sin(ang) * np.sin(az), np.sin(ang) * np.cos(az), np.cos(ang)], -1) * (bottom + height)[:, None]
+    unit = np.stack([np.sin(ang) * np.sin(az), np.sin(ang) * np.cos(az), np.cos(ang)], -1)
+    points = unit * (bottom + height)[:, None]
     got = viewer.evaluate("([k, c]) => window.skyscatterViewer.probe(k, c)",
                           ["aerial", [[list(a), list(b), list(c)] for a, b, c in zip(cams, points, suns, strict=True)]])
     t_spec, s_spec = atm.aerial_perspective(cams, points, suns)

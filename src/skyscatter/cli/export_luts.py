@@ -59,8 +59,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         formatter_class=HELP_FORMATTER,
     )
     p.add_argument("--out-dir", type=_folder, required=True, default=argparse.SUPPRESS, metavar="DIR",
-                   help="output folder (created if missing); the default tables take 76 MB as rgba32f + rgba16f, 270 MB "
-                        "as raw (16 wavelengths)")
+                   help="output folder (created if missing); the default tables take 76 MB as rgba32f + rgba16f, "
+                        "270 MB as raw (16 wavelengths)")
     p.add_argument("--from", dest="source", type=Path, default=None, metavar="FILE.npz",
                    help="tables saved by 'skyscatter precompute --out' (the atmosphere options are then ignored)")
     p.add_argument("--formats", type=_formats, default=",".join(DEFAULT_FORMATS), metavar="LIST",
