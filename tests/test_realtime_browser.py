@@ -58,6 +58,12 @@ VIEWS = {
 }
 
 
+#: (RMS, worst) that the design reaches per view where it is not float32 rounding (1e-4, 1e-4): measured 4.2e-4,
+#: 1.3e-3 (10 km), 3.4e-4, 6.5e-4 (orbit), 1.4e-4, 1.9e-3 (fisheye), 5.5e-4, 1.2e-2 (equirect).
+TIGHT = {"10km-sun30": (2e-3, 5e-3), "orbit-sun30": (2e-3, 5e-3), "fisheye-sun30": (1e-3, 5e-3),
+         "equirect-sun4": (2e-3, 2e-2)}
+
+
 @pytest.fixture(scope="module")
 def atm():
     return PrecomputedAtmosphere.compute(orders=3, sizes=SIZES, progress=False)
@@ -154,7 +160,12 @@ def test_browser_renders_the_python_image(name, viewer, atm):
     viewer.screenshot(path=str(ARTEFACTS / f"{name}.png"))
     with open(ARTEFACTS / "figures.jsonl", "a", encoding="utf-8") as fh:
         fh.write(json.dumps({"view": name, "rms": rms, "worst": worst, "pixels": int(e.size)}) + "\n")
-    assert rms < 0.01 and worst < 0.05, (name, rms, worst)
+    assert rms < 0.01 and worst < 0.05, (name, rms, worst)  # the requirement
+    # and what the design gives (docs/realtime.md), so that a small error in a mapping shows: from the ground every
+    # term folds exactly (float32 rounding); from altitude the ground's light is a product of folded colours;
+    # fisheye and equirect take sin/cos of the GPU per pixel
+    tight = TIGHT.get(name, (1e-4, 1e-4))
+    assert rms < tight[0] and worst < tight[1], (name, rms, worst, tight)
 
 
 def test_half_float_textures_render_within_half_precision(browser, luts, atm):

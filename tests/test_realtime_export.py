@@ -230,3 +230,14 @@ def test_optical_depth_texture_and_segment_rule(atm, luts):
             _sample(data.textures["optical_depth"], uv_a)[:3], _sample(data.textures["optical_depth"], uv_b)[:3])
         t_seg = np.minimum(atm.transmittance(r, mu) / atm.transmittance(r_d, mu_d), 1.0)
         np.testing.assert_allclose(got, (m @ (solar * t_seg)) / (m @ solar), atol=2e-3)
+
+
+def test_view_refuses_a_folder_without_a_manifest_in_one_line(tmp_path, capsys):
+    from skyscatter.cli import main
+
+    assert main(["view", "--luts", str(tmp_path), "--port", "0", "--check"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no real-time manifest" in err[0]
+    assert main(["export-luts", "--out-dir", str(tmp_path / "x"), "--formats", "png"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "rgba32f" in err[0]
