@@ -201,6 +201,8 @@ def test_server_serves_the_viewer_and_only_the_exports_files(luts, tmp_path):
         page = get("/").decode()
         assert 'src="/viewer/viewer.js"' in page and "://" not in page.split("<body>")[1]
         assert b"GetSkyRadianceToPoint" in get("/glsl/atmosphere.glsl")
+        for path in ("/", "/viewer/viewer.js", "/viewer/style.css"):  # nothing loaded from the network
+            assert b"http://" not in get(path) and b"https://" not in get(path) and b"//cdn" not in get(path)
         assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 1
         assert len(get("/luts/rayleigh.rgba32f")) == (luts / "rayleigh.rgba32f").stat().st_size
         for path in ("/luts/secret.txt", "/luts/../secret.txt", "/etc/passwd", "/viewer/../export.py"):
