@@ -55,9 +55,9 @@ def test_export_luts_reports_only_what_it_wrote(tmp_path, capsys):
     for name, wl in (("rgb.npz", "rgb"), ("four.npz", [680.0, 550.0, 500.0, 440.0])):
         PrecomputedAtmosphere.compute(orders=1, sizes=tiny, wavelengths=wl, progress=False).save(tmp_path / name)
     luts = tmp_path / "luts"
-    assert main(["export-luts", "--out-dir", str(luts), "--from", str(tmp_path / "rgb.npz")]) == 0
+    assert main(["export-luts", "--out-dir", str(luts), "--from", str(tmp_path / "rgb.npz"), "--formats", "raw"]) == 0
     assert "scattering_rgba.raw" in capsys.readouterr().out
-    assert main(["export-luts", "--out-dir", str(luts), "--from", str(tmp_path / "four.npz")]) == 0
+    assert main(["export-luts", "--out-dir", str(luts), "--from", str(tmp_path / "four.npz"), "--formats", "raw"]) == 0
     out, err = capsys.readouterr()
     assert "scattering_rgba.raw" not in out
     assert "scattering_rgba.raw" in err and "earlier export" in err

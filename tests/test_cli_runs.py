@@ -144,6 +144,18 @@ def _luts(folder_name, channels):
     return check
 
 
+def _realtime(folder_name, formats):
+    def check(folder: Path, out: str) -> None:
+        from skyscatter.realtime import load_realtime
+
+        for fmt in formats:
+            data = load_realtime(folder / folder_name, fmt=fmt)  # checks version, every file and its size
+            assert data.textures["rayleigh"].shape[-1] == 4 and np.isfinite(data.textures["multiple"]).all()
+            assert data.textures["transmittance"].max() <= 1.0 + 1e-6
+        assert not (folder / folder_name / "atmosphere.json").exists() or "raw" in formats
+    return check
+
+
 def _dataset(name, n_wl):
     def check(folder: Path, out: str) -> None:
         from skyscatter.sky.hosek_wilkie import HosekWilkieDataset, HosekWilkieSky
@@ -308,10 +320,19 @@ RUNS = {
     "precompute-cache-force": (["precompute", *TINY_FLAGS, "--wavelengths", "680,550,440", "--force"],
                                _stdout("wrote")),
     "export-luts-from": (["precompute", "--out", "t.npz", *TINY_FLAGS, "--wavelengths", "rgb", "&&", "export-luts",
-                          "--out-dir", "luts", "--from", "t.npz"], _luts("luts", 3)),
-    "export-luts-cache": (["export-luts", "--out-dir", "luts16", *TINY_FLAGS, "--wavelengths", "400:700:20",
+                          "--out-dir", "luts", "--from", "t.npz", "--formats", "raw"], _luts("luts", 3)),
+    "export-luts-cache": (["export-luts", "--out-dir", "luts16", *TINY_FLAGS, "--formats", "raw,rgba32f",
+                           "--wavelengths", "400:700:20",
                            "--turbidity", "2", "--albedo", "0.15", "--ozone", "320", "--mie-g", "0.75",
                            "--max-sun-zenith", "105"], _luts("luts16", 16)),
+    "export-luts-realtime": (["export-luts", "--out-dir", "rt", *TINY_FLAGS, "--formats", "rgba32f,rgba16f,exr"],
+                             _realtime("rt", ("rgba32f", "rgba16f", "exr"))),
+    # view (--check: serve on 127.0.0.1, fetch the page and every file over HTTP, exit)
+    "view-luts": (["export-luts", "--out-dir", "rt", *TINY_FLAGS, "--formats", "rgba32f", "&&", "view", "--luts", "rt",
+                   "--port", "0", "--no-browser", "--check"], _stdout("manifest (version 1) and 6 textures")),
+    "view-cache": (["view", *TINY_FLAGS, "--turbidity", "3", "--albedo", "0.2", "--ozone", "280", "--mie-g", "0.7",
+                    "--max-sun-zenith", "104", "--wavelengths", "spectral", "--port", "0", "--check"],
+                   _stdout("manifest (version 1) and 12 textures")),
     # reference
     "reference-turbidity": (["reference", "r.zarr", "--sun-elevation", "30,-3", "--turbidity", "2,4", "--albedo",
                              "0.1", "--wavelengths", "450,550", "--directions", "3", "--samples", "8", "--seed",

@@ -220,8 +220,8 @@ def test_cli_precompute_and_export(monkeypatch, tmp_path, capsys):
     out = capsys.readouterr().out
     assert "order 2 multiple" in out and "wrote" in out
     assert PrecomputedAtmosphere.load(tmp_path / "t.npz").orders == 2
-    assert _cli(["export-luts", "--out-dir", str(tmp_path / "luts"), "--from", str(tmp_path / "t.npz")],
-                monkeypatch, tmp_path) == 0
+    assert _cli(["export-luts", "--out-dir", str(tmp_path / "luts"), "--from", str(tmp_path / "t.npz"), "--formats",
+                 "raw"], monkeypatch, tmp_path) == 0
     desc = json.loads((tmp_path / "luts" / "atmosphere.json").read_text())
     assert desc["sizes"]["scattering"] == [4, 16, 4, 4]
     assert _cli(["precompute", *small], monkeypatch, tmp_path) == 0

@@ -31,7 +31,8 @@ from packaging.utils import canonicalize_name
 from skyscatter.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-SMALL = {"demo": ["--width", "32", "--height", "18"], "sky": ["--width", "64"], "reference": ["--samples", "16"]}
+SMALL = {"demo": ["--width", "32", "--height", "18"], "sky": ["--width", "64"], "reference": ["--samples", "16"],
+         "view": ["--check", "--port", "0"]}  # view: serve, fetch everything over HTTP and exit (no browser)
 
 
 def readme_commands() -> list[str]:
@@ -95,7 +96,7 @@ def first_install(monkeypatch):
 
 
 def _needs_tables(args: list[str]) -> bool:
-    return args[0] in ("precompute", "export-luts") or "bruneton" in args
+    return args[0] in ("precompute", "export-luts", "view") or "bruneton" in args
 
 
 @pytest.mark.parametrize(

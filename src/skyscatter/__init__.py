@@ -43,6 +43,7 @@ _SUBMODULES = {
     "patches",
     "photometry",
     "precomputed",
+    "realtime",
     "render",
     "sky",
     "spectral",

@@ -21,7 +21,7 @@ from .. import __version__
 from ..errors import SkyscatterError
 
 # Subcommand modules in the order ``--help`` lists them.
-_COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo", "precompute", "export_luts", "reference",
+_COMMANDS = ["sun", "sky", "illuminance", "skymatrix", "demo", "precompute", "export_luts", "view", "reference",
              "fit_hosek_wilkie", "fit_atmosphere"]
 # Each module registers one subcommand, named like the module with '-' for '_'.
 _MODULE_OF = {name.replace("_", "-"): name for name in _COMMANDS}

@@ -1,0 +1,438 @@
+"""Engine-ready textures of the precomputed atmosphere: the spectral tables folded into colour, packed as RGBA.
+
+The 4D inscattering tables hold spectra (16 wavelengths by default), more channels than a GPU texture holds (4).
+As in Bruneton's 2017 rewrite [Bruneton2017] the spectral precomputation is folded into colour after the fact:
+the radiance a lookup returns is a sum of table values times phase factors that do not depend on wavelength
+([Bruneton2008] Sec. 4, "Angular precision": ``L = S_R P_R + S_M P_M + S_multiple``), and the conversion to colour
+is a matrix ``M`` (3 x n_wavelengths: the CIE 1931 observer integral of :func:`.precomputed.conversion.xyz_matrix`,
+then XYZ to linear sRGB, times the HDR scale ``1 / 683``), so ``M L = (M S_R) P_R + (M S_M) P_M + M S_multiple``:
+folding each table with ``M`` gives *exactly* the colour of the spectral lookup, at any sun elevation (the colour of
+a twilight sky is an integral over the spectrum, which 3 wavelengths cannot give, docs/bruneton.md).
+
+Products of spectra do not fold exactly. The transmittance is folded as the transmittance *of sunlight*,
+``T_c = (M (E_sun T))_c / (M E_sun)_c``, which makes the sun's disc and the sunlight on the ground exact; the light
+of the ground seen through the air (``T_view albedo (E_sun T_sun + E_sky)``) is then a product of three folded
+factors. Measured on the default tables against the spectral product: 0.05 % RMS, worst 0.5 % from 10 km, worst
+7.6 % from orbit with the sun 4 deg below the horizon, where the ground is lit by reddened twilight
+(docs/realtime.md). The transmittance between two points is a ratio, ``T(x, y) = T(x) / T(y)`` ([Bruneton2008]
+Sec. 4), which the ratio of two folded transmittances gets wrong where ``T(y)`` is small in a channel (long grazing
+paths: up to 150 % off, or negative); there the ratio of the band-averaged optical depths is used,
+``exp(-(tau_c(x) - tau_c(y)))``, ``tau_c = sum w_c(lambda) tau(lambda)`` with ``w_c`` the positive part of the colour
+row times the solar spectrum, normalised: a ratio taken exactly in the log domain, off by the spread of ``tau``
+across the band (rule :data:`SEGMENT_RULE`).
+
+Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = texture coordinate 0):
+
+* ``transmittance`` 2D, width n_mu x height n_r: RGB sunlight transmittance to the top, A the same for luminance.
+* ``optical_depth`` 2D, same layout: RGB the optical depth to the top averaged over each channel's band, A over the
+  luminance's; for the transmittance between two points where a ratio of sunlight transmittances is ill-conditioned.
+* ``irradiance`` 2D, width n_mu_s x height n_r: RGB sky irradiance on a horizontal surface [HDR scale], A its Y.
+* ``rayleigh``, ``mie``, ``multiple`` 3D, width n_nu * n_mu_s (x = i_nu * n_mu_s + i_mu_s), height n_mu, depth n_r:
+  single Rayleigh and single Mie scattering without their phase functions, multiple scattering with it; A = Y.
+
+in ``.rgba32f`` (float32), ``.rgba16f`` (IEEE half) and ``.exr`` (OpenEXR, float32 R, G, B, A; a 3D texture's
+depth slices stacked vertically) form, with ``skyscatter_realtime.json``: the version, sizes, constants, units, the
+HDR scale, and every mapping as code (Python source evaluated by the tests against the library's own lookups, the
+GLSL of :data:`GLSL_LIBRARY`).
+
+Reference: [Bruneton2008], [Bruneton2017].
+"""
+
+from __future__ import annotations
+
+import json
+from importlib import resources
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InvalidParameterError, OutputError
+from ..fileio import atomic_paths
+from ..spectral import HDR_SCALE, xyz_to_linear_srgb
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..precomputed import PrecomputedAtmosphere
+
+__all__ = ["FORMATS", "MANIFEST_FORMAT", "MANIFEST_NAME", "MANIFEST_VERSION", "PYTHON_MAPPINGS", "TEXTURE_NAMES",
+           "engine_textures", "export_realtime", "fold_matrix", "glsl_constants", "glsl_library", "glsl_mappings"]
+
+MANIFEST_NAME = "skyscatter_realtime.json"
+MANIFEST_FORMAT = "skyscatter-realtime-luts"
+#: Raised whenever a file's layout or meaning changes; readers refuse other versions.
+MANIFEST_VERSION = 1
+#: File formats: suffix and description.
+FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
+           "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
+TEXTURE_NAMES = ("transmittance", "optical_depth", "irradiance", "rayleigh", "mie", "multiple")
+#: The segment rule (module docstring): where the far end's sunlight transmittance in a channel is below 0.02 the
+#: optical depths give the segment's transmittance, above 0.1 the ratio, blended linearly between (a switch at one
+#: threshold leaves a seam). Measured on the default tables, 395 segments of 0.5-50 km from 0, 2 and 10 km at
+#: -1..20 deg, single thresholds: 0.05 gave absolute error median 0.25 %, 95th percentile 2.5 %, worst 7 % (ratio
+#: alone: worst 152 %; optical depths alone: median 2.9 %); 0.02 / 0.1 gave worst 13 % / 7.2 %.
+SEGMENT_RULE = ("T(x, y)_c = mix(exp(-max(tau_c(x) - tau_c(y), 0)), clamp(T_c(x) / T_c(y), 0, 1), s), "
+                "s = clamp((T_c(y) - 0.02) / 0.08, 0, 1); T: the transmittance texture, tau: the optical_depth "
+                "texture (rgb); x the nearer end, both read along the ray towards the top (rays that meet the ground: "
+                "both reversed)")
+#: Largest finite IEEE half.
+HALF_MAX = 65504.0
+
+#: The texture-coordinate mappings as Python (standard library only), the same functions as the GLSL library's
+#: mapping section; ``exec`` it with the manifest's constants (``BOTTOM_RADIUS`` ... ``SCATTERING_N_NU``) defined.
+PYTHON_MAPPINGS = '''
+import math
+
+def safe_sqrt(a):
+    return math.sqrt(max(a, 0.0))
+
+def tex_coord(p, n):
+    """Index position p in [0, n - 1] to a texture coordinate: texel i is centred at (i + 0.5) / n."""
+    return (p + 0.5) / n
+
+def clamp(x, lo, hi):
+    return min(max(x, lo), hi)
+
+def distance_to_top(r, mu):
+    disc = (TOP_RADIUS - r) * (TOP_RADIUS + r) + r * r * mu * mu
+    s = safe_sqrt(disc)
+    if mu > 0.0:
+        return max((TOP_RADIUS - r) * (TOP_RADIUS + r) / (r * mu + s), 0.0)
+    return max(-r * mu + s, 0.0)
+
+def distance_to_bottom(r, mu):
+    disc = r * r * mu * mu - (r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS)
+    q = -r * mu + safe_sqrt(disc)
+    return 0.0 if q <= 0.0 else max((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS) / q, 0.0)
+
+def ray_hits_ground(r, mu):
+    return mu < 0.0 and r * r * mu * mu - (r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS) >= 0.0
+
+def transmittance_uv(r, mu):
+    """(u, v) in the transmittance texture (width mu, height r) of the ray (r [m], mu) to the top."""
+    big_h = math.sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS))
+    rho = safe_sqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS))
+    d = distance_to_top(r, mu)
+    d_min, d_max = TOP_RADIUS - r, rho + big_h
+    x_mu = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
+    return (tex_coord(clamp(x_mu, 0.0, 1.0) * (TRANSMITTANCE_N_MU - 1), TRANSMITTANCE_N_MU),
+            tex_coord(clamp(rho / big_h, 0.0, 1.0) * (TRANSMITTANCE_N_R - 1), TRANSMITTANCE_N_R))
+
+def irradiance_uv(r, mu_s):
+    """(u, v) in the irradiance texture (width mu_s, height r)."""
+    x_r = clamp((r - BOTTOM_RADIUS) / (TOP_RADIUS - BOTTOM_RADIUS), 0.0, 1.0)
+    x_mu_s = clamp(0.5 * (mu_s + 1.0), 0.0, 1.0)
+    return (tex_coord(x_mu_s * (IRRADIANCE_N_MU_S - 1), IRRADIANCE_N_MU_S),
+            tex_coord(x_r * (IRRADIANCE_N_R - 1), IRRADIANCE_N_R))
+
+def scattering_mu_r_coords(r, mu, hits_ground):
+    """(v, w) in the 3D scattering textures: the mu coordinate (height) and the r coordinate (depth)."""
+    big_h = math.sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS))
+    rho = safe_sqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS))
+    half = SCATTERING_N_MU // 2
+    if hits_ground:
+        d = distance_to_bottom(r, mu)
+        d_min = r - BOTTOM_RADIUS
+        x = (d - d_min) / (rho - d_min) if rho > d_min else 0.0
+        p_mu = (1.0 - clamp(x, 0.0, 1.0)) * (half - 1)
+    else:
+        d = distance_to_top(r, mu)
+        d_min, d_max = TOP_RADIUS - r, rho + big_h
+        x_d = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
+        x_a = math.acos(clamp(mu, -1.0, 1.0)) / math.acos(clamp(-rho / r, -1.0, 1.0))
+        p_mu = half + 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0)) * (half - 1)
+    return (tex_coord(p_mu, SCATTERING_N_MU),
+            tex_coord(clamp(rho / big_h, 0.0, 1.0) * (SCATTERING_N_R - 1), SCATTERING_N_R))
+
+def mu_s_distance_unit(mu_s):
+    big_h = math.sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS))
+    d_min = TOP_RADIUS - BOTTOM_RADIUS
+    return (distance_to_top(BOTTOM_RADIUS, mu_s) - d_min) / (big_h - d_min)
+
+def scattering_mu_s_index(mu_s):
+    """Index position of mu_s along an nu slice (0 at MU_S_MIN, n_mu_s - 1 at the zenith)."""
+    a = mu_s_distance_unit(mu_s)
+    big_a = mu_s_distance_unit(MU_S_MIN)
+    x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0)
+    x_a = clamp(1.0 - math.acos(clamp(mu_s, -1.0, 1.0)) / math.acos(MU_S_MIN), 0.0, 1.0)
+    return 0.5 * (x_d + x_a) * (SCATTERING_N_MU_S - 1)
+
+def scattering_nu_index(mu, mu_s, nu):
+    """Index position of nu (x_nu = 1 - phi / pi, phi the view-sun azimuth)."""
+    s = safe_sqrt((1.0 - mu * mu) * (1.0 - mu_s * mu_s))
+    if s < 1e-9:
+        return 0.5 * (SCATTERING_N_NU - 1)
+    cphi = clamp((nu - mu * mu_s) / s, -1.0, 1.0)
+    return (1.0 - math.acos(cphi) / math.pi) * (SCATTERING_N_NU - 1)
+
+def scattering_uvw(r, mu, mu_s, nu, hits_ground):
+    """The two texture coordinates (u, v, w) of the nu slices around nu and the weight of the second: a lookup is
+    (1 - w) texture(uvw0) + w texture(uvw1), each trilinear."""
+    v, w = scattering_mu_r_coords(r, mu, hits_ground)
+    p_s = scattering_mu_s_index(max(mu_s, MU_S_MIN))
+    p_n = clamp(scattering_nu_index(mu, mu_s, nu), 0.0, SCATTERING_N_NU - 1)
+    i_n = min(math.floor(p_n), SCATTERING_N_NU - 2)
+    n_x = SCATTERING_N_NU * SCATTERING_N_MU_S
+    u0 = (i_n * SCATTERING_N_MU_S + p_s + 0.5) / n_x
+    return (u0, v, w), (u0 + SCATTERING_N_MU_S / n_x, v, w), p_n - i_n
+
+def segment_transmittance(t_x, t_y, tau_x, tau_y):
+    """Transmittance between x and y per channel from the two texture reads at each end (x nearer, both towards the
+    top): the ratio of sunlight transmittances where it is well conditioned, else the optical depths'."""
+    out = []
+    for a, b, ta, tb in zip(t_x, t_y, tau_x, tau_y):
+        from_depth = math.exp(-max(ta - tb, 0.0))
+        s = min(max((b - 0.02) / 0.08, 0.0), 1.0)  # linear blend for b in 0.02..0.1: no seam
+        out.append(from_depth + s * (min(max(a / b, 0.0), 1.0) - from_depth) if s > 0.0 else from_depth)
+    return out
+
+def rayleigh_phase(nu):
+    return 3.0 / (16.0 * math.pi) * (1.0 + nu * nu)
+
+def mie_phase(nu):
+    g = MIE_G
+    den = max(1.0 + g * g - 2.0 * g * nu, 1e-12)
+    if MIE_PHASE_KIND == 1:
+        return (1.0 - g * g) / (4.0 * math.pi * den * math.sqrt(den))
+    return 3.0 * (1.0 - g * g) * (1.0 + nu * nu) / (8.0 * math.pi * (2.0 + g * g) * den * math.sqrt(den))
+
+def inscattered_radiance(rayleigh, mie, multiple, nu):
+    """Radiance [HDR scale] from the three scattering lookups: S_R P_R + S_M P_M + S_multiple."""
+    return [a * rayleigh_phase(nu) + b * mie_phase(nu) + c for a, b, c in zip(rayleigh, mie, multiple)]
+'''
+
+
+def glsl_library() -> str:
+    """The GLSL ES 3.00 library (``skyscatter/realtime/glsl/atmosphere.glsl``) as text."""
+    return resources.files(__package__).joinpath("glsl/atmosphere.glsl").read_text(encoding="utf-8")
+
+
+def glsl_mappings() -> str:
+    """The mapping section of :func:`glsl_library` (between its BEGIN and END MAPPINGS lines)."""
+    text = glsl_library()
+    start = text.index("// BEGIN MAPPINGS")
+    end = text.index("\n", text.index("// END MAPPINGS"))
+    return text[start:end + 1]
+
+
+def fold_matrix(atm: PrecomputedAtmosphere) -> NDArray[np.float64]:
+    """Matrix (3, n_wavelengths) from spectral radiance at the table wavelengths [W m^-2 sr^-1 nm^-1] to linear sRGB
+    in skyscatter's HDR scale (Y = luminance / 683): the CIE 1931 integral of the tables' colour rule
+    (:func:`skyscatter.precomputed.conversion.xyz_matrix`; for tables of fewer than 15 wavelengths its quadratic or
+    piecewise-linear rule without the negative-lobe guard, which is not linear) then XYZ to linear sRGB."""
+    return xyz_to_linear_srgb(atm.xyz_matrix.T).T * HDR_SCALE
+
+
+def _analytic_phase(atm: PrecomputedAtmosphere):
+    """The aerosol's analytic phase function (kind, g), as the lookups use it; refuses a tabulated one."""
+    analytic = atm.parameters.aerosol_component.analytic_phase
+    if analytic is None:
+        raise InvalidParameterError(
+            "the real-time textures need an analytic aerosol phase function (cornette-shanks or henyey-greenstein): "
+            "a tabulated, wavelength-dependent phase cannot be applied after the tables are folded into colour")
+    return analytic
+
+
+def _sun_weighted(spectra: NDArray[np.float32], weights: NDArray[np.float64], m: NDArray[np.float64]) -> NDArray:
+    """``(M (w X))_c / (M w)_c`` for spectra X (..., n) and a weighting spectrum w: X's value for light of w's
+    spectrum, per colour channel, and the same for luminance (4 channels)."""
+    m4 = np.vstack([m, _y_row(m)])
+    num = (spectra.astype(np.float64) * weights) @ m4.T
+    return num / (m4 @ weights)
+
+
+def _y_row(m: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Row (n,) giving the HDR-scale luminance Y of a spectrum from the sRGB rows ``m`` (Rec. 709 luminance)."""
+    return np.array([0.2126, 0.7152, 0.0722]) @ m
+
+
+def _with_y(rgb: NDArray[np.float64]) -> NDArray[np.float32]:
+    y = rgb @ np.array([0.2126, 0.7152, 0.0722])
+    return np.concatenate([rgb, y[..., None]], axis=-1).astype(np.float32)
+
+
+def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]]:
+    """The five RGBA textures of the module docstring as float32 arrays: 2D (height, width, 4), 3D
+    (depth, height, width, 4).
+
+    Raises
+    ------
+    InvalidParameterError
+        For tables with a tabulated (wavelength-dependent) aerosol phase function.
+    """
+    _analytic_phase(atm)
+    m = fold_matrix(atm)
+    t = atm.tables
+    solar = atm.parameters.solar_irradiance_at(atm.wavelengths)
+    n_r, n_mu, n_s, n_n = atm.sizes.scattering_shape
+    tau = -np.log(np.maximum(t["transmittance"].astype(np.float64), 1e-30))  # T = 0 -> optical depth 69
+    w = np.maximum(np.vstack([m, _y_row(m)]), 0.0) * solar
+    w /= w.sum(axis=1, keepdims=True)
+    out = {"transmittance": _sun_weighted(t["transmittance"], solar, m).astype(np.float32),
+           "optical_depth": (tau @ w.T).astype(np.float32),
+           "irradiance": _with_y(t["irradiance"].astype(np.float64) @ m.T)}
+    m4 = np.vstack([m, _y_row(m)]).astype(np.float32)  # R, G, B and Y rows
+    for name, key in (("rayleigh", "single_rayleigh"), ("mie", "single_mie"), ("multiple", "multiple")):
+        # einsum, not matmul: a (1M, 16) x (16, 4) product is 4x quicker without BLAS's threads
+        rgba = np.einsum("ij,kj->ik", t[key].reshape(-1, atm.wavelengths.size), m4)
+        # (r, mu, mu_s, nu, 4) -> (r, mu, nu, mu_s, 4): x = i_nu * n_mu_s + i_mu_s
+        out[name] = rgba.reshape(n_r, n_mu, n_s, n_n, 4).transpose(0, 1, 3, 2, 4).reshape(n_r, n_mu, n_n * n_s, 4)
+    return {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in out.items()}
+
+
+def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
+    from ..atmosphere.phase import aerosol_phase_kind
+    from ..sun.disc import solar_disc_solid_angle
+
+    p = atm.parameters
+    phase = _analytic_phase(atm)
+    m = fold_matrix(atm)
+    solar = p.solar_irradiance_at(atm.wavelengths)
+    albedo = p.ground_albedo_at(atm.wavelengths)
+    n_r, n_mu, n_s, n_n = atm.sizes.scattering_shape
+    return {
+        "BOTTOM_RADIUS": float(p.bottom_radius), "TOP_RADIUS": float(p.top_radius), "MU_S_MIN": float(p.mu_s_min),
+        "SUN_ANGULAR_RADIUS": float(p.sun_angular_radius),
+        "SUN_SOLID_ANGLE": solar_disc_solid_angle(p.sun_angular_radius),
+        "MIE_G": float(phase.g), "MIE_PHASE_KIND": aerosol_phase_kind(phase.kind),
+        "SOLAR_IRRADIANCE": [float(v) for v in m @ solar],
+        "GROUND_ALBEDO": [float(v) for v in (m @ (albedo * solar)) / (m @ solar)],
+        "TRANSMITTANCE_N_R": atm.sizes.transmittance_r, "TRANSMITTANCE_N_MU": atm.sizes.transmittance_mu,
+        "IRRADIANCE_N_R": atm.sizes.irradiance_r, "IRRADIANCE_N_MU_S": atm.sizes.irradiance_mu_s,
+        "SCATTERING_N_R": n_r, "SCATTERING_N_MU": n_mu, "SCATTERING_N_MU_S": n_s, "SCATTERING_N_NU": n_n,
+    }
+
+
+def glsl_constants(constants: dict[str, Any]) -> str:
+    """GLSL declarations of the constants the library expects (``const float ...;``), from a manifest's
+    ``constants``."""
+    lines = []
+    for name, value in constants.items():
+        if isinstance(value, list):
+            lines.append(f"const vec3 {name} = vec3({', '.join(_glsl_float(v) for v in value)});")
+        elif isinstance(value, int):
+            lines.append(f"const int {name} = {value};")
+        else:
+            lines.append(f"const float {name} = {_glsl_float(value)};")
+    return "\n".join(lines) + "\n"
+
+
+def _glsl_float(v: float) -> str:
+    text = repr(float(v))
+    return text if ("." in text or "e" in text) else text + ".0"
+
+
+def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
+    meaning = {
+        "transmittance": "RGB: transmittance of sunlight from (r, mu) to the top of the atmosphere, (M (E_sun T)) / "
+                         "(M E_sun) per channel [1]; A: the same for luminance",
+        "optical_depth": "RGB: optical depth from (r, mu) to the top averaged over each channel's band, sum_l w_c(l) "
+                         "tau(l), w_c = max(M_c, 0) E_sun normalised [1]; A: the same for luminance",
+        "irradiance": "RGB: sky irradiance on a horizontal surface at (r, mu_s) [W m^-2, HDR scale]; A: its Y",
+        "rayleigh": "RGB: single Rayleigh scattering S_R[L0] without its phase function [W m^-2, HDR scale; times "
+                    "P_R [sr^-1] gives radiance]; A: its Y",
+        "mie": "RGB: single Mie scattering S_M[L0] without its phase function [W m^-2, HDR scale]; A: its Y",
+        "multiple": "RGB: multiple scattering S[L*], orders >= 2, phase included [W m^-2 sr^-1, HDR scale]; A: its Y",
+    }[name]
+    entry: dict[str, Any] = {"meaning": meaning, "channels": 4}
+    if len(shape) == 3:
+        entry.update(dimensions=2, width=shape[1], height=shape[0],
+                     axes={"x": "mu_s" if name == "irradiance" else "mu", "y": "r"})
+    else:
+        entry.update(dimensions=3, width=shape[2], height=shape[1], depth=shape[0],
+                     axes={"x": "i_nu * SCATTERING_N_MU_S + i_mu_s", "y": "mu", "z": "r"})
+    return entry
+
+
+def _write_raw(path: Path, array: NDArray, dtype: str) -> int:
+    data = np.ascontiguousarray(array, dtype=dtype)
+    with open(path, "wb") as fh:
+        fh.write(memoryview(data).cast("B"))
+    return int(data.nbytes)
+
+
+def _write_exr(path: Path, array: NDArray[np.float32]) -> None:
+    import OpenEXR
+
+    flat = np.ascontiguousarray(array.reshape(-1, array.shape[-2], 4), dtype=np.float32)
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    try:
+        OpenEXR.File(header, {"RGBA": flat}).write(str(path))
+    except RuntimeError as exc:
+        raise OSError(None, str(exc).replace(str(path), "the file"), str(path)) from exc
+
+
+def export_realtime(atm: PrecomputedAtmosphere, folder: str | Path, *,
+                    formats: tuple[str, ...] = ("rgba32f", "rgba16f")) -> Path:
+    """Write the engine-ready textures of ``atm`` in ``formats`` (keys of :data:`FORMATS`) and the manifest into
+    ``folder`` (created if missing), all or nothing (:func:`skyscatter.fileio.atomic_paths`). Returns the manifest's
+    path.
+
+    Raises
+    ------
+    InvalidParameterError
+        For an unknown format, a tabulated aerosol phase, or (half floats) a value beyond the half range.
+    OutputError
+        If the folder cannot be created or a file cannot be written.
+    """
+    import skyscatter
+
+    formats = tuple(dict.fromkeys(formats))
+    unknown = [f for f in formats if f not in FORMATS]
+    if unknown or not formats:
+        raise InvalidParameterError(f"real-time formats must be among {', '.join(FORMATS)}; got {list(formats)}")
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create output folder {folder}: {exc.strerror or exc}") from None
+    textures = engine_textures(atm)
+    if "rgba16f" in formats:
+        worst = max(float(np.abs(a).max()) for a in textures.values())
+        if not worst < HALF_MAX:
+            raise InvalidParameterError(f"a texture value ({worst:.4g}) exceeds the half-float range ({HALF_MAX}); "
+                                        "export rgba32f or exr instead")
+    constants = _constants(atm)
+    entries = {name: _texture_entry(name, arr.shape) for name, arr in textures.items()}
+    names = [(name, fmt) for name in TEXTURE_NAMES for fmt in formats]
+    targets = [folder / f"{name}.{fmt}" for name, fmt in names] + [folder / MANIFEST_NAME]
+    with atomic_paths(*targets) as temps:
+        for (name, fmt), tmp in zip(names, temps[:-1], strict=True):
+            arr = textures[name]
+            if fmt == "exr":
+                _write_exr(tmp, arr)
+                size = tmp.stat().st_size
+            else:
+                size = _write_raw(tmp, arr, "<f4" if fmt == "rgba32f" else "<f2")
+            entries[name].setdefault("files", {})[fmt] = {"file": f"{name}.{fmt}", "bytes": size}
+        manifest = {
+            "format": MANIFEST_FORMAT,
+            "version": MANIFEST_VERSION,
+            "written_by": f"skyscatter {skyscatter.__version__}",
+            "references": ["Bruneton2008", "Bruneton2017"],
+            "colour": "linear sRGB (IEC 61966-2-1 primaries, D65 white), no chromatic adaptation",
+            "hdr_scale": {"rule": "Y = luminance [cd m^-2] / 683", "luminance_from_rgb": [0.2126, 0.7152, 0.0722],
+                          "cd_m2_per_unit_Y": 683.0},
+            "units": {"length": "m", "positions": "planet-centred, the planet's centre at the origin",
+                      "angles": "rad", "radiance": "W m^-2 sr^-1 (photopically weighted: Y = luminance / 683)",
+                      "irradiance": "W m^-2 (photopically weighted: Y = illuminance / 683)"},
+            "byte_order": "little",
+            "texel_layout": "C order, RGBA interleaved, x fastest, row 0 (y = 0) first; 3D: z slowest",
+            "formats": {f: FORMATS[f] for f in formats},
+            "constants": constants,
+            "textures": entries,
+            "filtering": "LINEAR with CLAMP_TO_EDGE on every axis; nu is interpolated by hand between two lookups",
+            "mappings": {"python": PYTHON_MAPPINGS, "glsl": glsl_mappings()},
+            "glsl_constants": glsl_constants(constants),
+            "segment_transmittance": SEGMENT_RULE,
+            "radiance": {"sky": "rayleigh * rayleigh_phase(nu) + mie * mie_phase(nu) + multiple (no solar disc)",
+                         "sun_disc": "SOLAR_IRRADIANCE / SUN_SOLID_ANGLE * transmittance_to_sun",
+                         "ground": "T_view * GROUND_ALBEDO / pi * (SOLAR_IRRADIANCE * T_sun * cos + E_sky)"},
+            "atmosphere_parameters": atm.parameters.to_dict(),
+            "orders": atm.orders,
+            "table_wavelengths_nm": [float(w) for w in atm.wavelengths],
+            "fold_matrix": fold_matrix(atm).tolist(),
+            "cache_key": atm.cache_key,
+        }
+        temps[-1].write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+    return targets[-1]

@@ -1,0 +1,407 @@
+// skyscatter real-time atmosphere: GLSL ES 3.00 functions reading the textures of `skyscatter export-luts`
+// (manifest skyscatter_realtime.json, format "skyscatter-realtime-luts" version 1).
+//
+// Reference: E. Bruneton, F. Neyret, Precomputed Atmospheric Scattering, EGSR 2008 [Bruneton2008], equation numbers
+// below are the paper's; the distance-based texture mappings and the horizon blend follow Bruneton's 2017 rewrite
+// [Bruneton2017]; skyscatter's own mappings (the angular halves of mu and mu_s, the azimuth axis for nu) are those
+// of skyscatter.precomputed.geometry, written here from the manifest's Python code.
+//
+// Before this file, declare (the manifest's "glsl_constants" string does it):
+//   const float BOTTOM_RADIUS, TOP_RADIUS            [m]  planet radius and top of the atmosphere
+//   const float MU_S_MIN                                   cosine of the largest sun zenith angle in the tables
+//   const float SUN_ANGULAR_RADIUS                    [rad]
+//   const float SUN_SOLID_ANGLE                       [sr]   2 pi (1 - cos SUN_ANGULAR_RADIUS)
+//   const float MIE_G; const int MIE_PHASE_KIND              asymmetry; 0 Cornette-Shanks, 1 Henyey-Greenstein
+//   const vec3 SOLAR_IRRADIANCE                              sun at the top of the atmosphere, linear sRGB, HDR scale
+//   const vec3 GROUND_ALBEDO                                 Lambertian ground, linear sRGB (sunlight-weighted)
+//   const int TRANSMITTANCE_N_R, TRANSMITTANCE_N_MU, IRRADIANCE_N_R, IRRADIANCE_N_MU_S,
+//             SCATTERING_N_R, SCATTERING_N_MU, SCATTERING_N_MU_S, SCATTERING_N_NU   texel counts
+// Units: lengths in metres, positions planet-centred (the planet's centre at the origin), directions unit vectors.
+// Colour: linear sRGB (IEC 61966-2-1 primaries, D65) with Y = luminance [cd m^-2] / 683 (skyscatter's HDR scale):
+// radiance-like values in W m^-2 sr^-1 weighted by the photopic curve; irradiance in W m^-2 likewise.
+// Textures: bind with LINEAR filtering and CLAMP_TO_EDGE on every axis (RGBA32F needs OES_texture_float_linear;
+// RGBA16F filters everywhere).
+
+uniform highp sampler2D transmittance_texture;   // RGB: sunlight-weighted transmittance to the top; A: luminance's
+uniform highp sampler2D optical_depth_texture;   // RGB: optical depth to the top averaged over each channel; A: Y's
+uniform highp sampler2D irradiance_texture;      // RGB: sky irradiance on a horizontal surface; A: its Y
+uniform highp sampler3D rayleigh_texture;        // RGB: single Rayleigh scattering S_R[L0] without phase; A: Y
+uniform highp sampler3D mie_texture;             // RGB: single Mie scattering S_M[L0] without phase; A: Y
+uniform highp sampler3D multiple_texture;        // RGB: multiple scattering S[L*] (orders >= 2, phase included); A: Y
+
+const float PI = 3.14159265358979;
+//: sun zenith cosines this close below MU_S_MIN count as at the limit (as skyscatter.precomputed.geometry)
+const float MU_S_LIMIT_TOLERANCE = 1e-6;
+//: half-width in mu of the band around the horizon blended in GetSkyRadianceToPoint ([Bruneton2017])
+const float HORIZON_EPSILON = 0.004;
+
+// BEGIN MAPPINGS -------------------------------------------------------------------------------------------------
+// Texel i of an axis of n texels holds the value at index position p = i (the first and last texels hold the ends
+// of each range); a texture coordinate is (p + 0.5) / n. Differences of squares are written as products,
+// (a - b)(a + b), so that float32 keeps them near the ground and the horizon.
+
+float SafeSqrt(float a) { return sqrt(max(a, 0.0)); }
+
+// Arc cosine [rad] to 2.2e-8 rad ([Abramowitz1964] Eq. 4.4.46, acos(-x) = pi - acos(x)), the rule of the Python
+// lookups: a GPU's acos may be less accurate than float32 allows (on SwiftShader this one cut the difference of
+// ground views with the Python renderer by 2-6x).
+float Acos(float x) {
+  float a = min(abs(x), 1.0);
+  float p = ((((((-0.0012624911 * a + 0.0066700901) * a - 0.0170881256) * a + 0.0308918810) * a - 0.0501743046) * a
+              + 0.0889789874) * a - 0.2145988016) * a + 1.5707963050;
+  float v = sqrt(1.0 - a) * p;
+  return x >= 0.0 ? v : PI - v;
+}
+float TexCoord(float p, int n) { return (p + 0.5) / float(n); }
+
+// Distance [m] from radius r along direction cosine mu to the top of the atmosphere ([Bruneton2008] Sec. 4: the
+// root of t^2 + 2 r mu t + r^2 - R_t^2 = 0), without cancellation.
+float DistanceToTop(float r, float mu) {
+  float disc = (TOP_RADIUS - r) * (TOP_RADIUS + r) + r * r * mu * mu;
+  float s = SafeSqrt(disc);
+  if (mu > 0.0) return max((TOP_RADIUS - r) * (TOP_RADIUS + r) / (r * mu + s), 0.0);
+  return max(-r * mu + s, 0.0);
+}
+
+// Distance [m] to the first hit of the planet (meaningful when RayHitsGround).
+float DistanceToBottom(float r, float mu) {
+  float disc = r * r * mu * mu - (r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS);
+  float q = -r * mu + SafeSqrt(disc);
+  return q <= 0.0 ? 0.0 : max((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS) / q, 0.0);
+}
+
+bool RayHitsGround(float r, float mu) {
+  return mu < 0.0 && r * r * mu * mu - (r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS) >= 0.0;
+}
+
+// Transmittance texture: x_mu = (d - d_min) / (d_max - d_min), d the distance to the top, d_min = R_t - r,
+// d_max = rho + H; x_r = rho / H, rho = sqrt(r^2 - R_g^2), H = sqrt(R_t^2 - R_g^2). Width: mu, height: r.
+vec2 TransmittanceUv(float r, float mu) {
+  float H = sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS));
+  float rho = SafeSqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS));
+  float d = DistanceToTop(r, mu);
+  float d_min = TOP_RADIUS - r;
+  float d_max = rho + H;
+  float x_mu = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
+  return vec2(TexCoord(clamp(x_mu, 0.0, 1.0) * float(TRANSMITTANCE_N_MU - 1), TRANSMITTANCE_N_MU),
+              TexCoord(clamp(rho / H, 0.0, 1.0) * float(TRANSMITTANCE_N_R - 1), TRANSMITTANCE_N_R));
+}
+
+// Irradiance texture: x_mu_s = (1 + mu_s) / 2 (width), x_r = (r - R_g) / (R_t - R_g) (height).
+vec2 IrradianceUv(float r, float mu_s) {
+  float x_r = clamp((r - BOTTOM_RADIUS) / (TOP_RADIUS - BOTTOM_RADIUS), 0.0, 1.0);
+  float x_mu_s = clamp(0.5 * (mu_s + 1.0), 0.0, 1.0);
+  return vec2(TexCoord(x_mu_s * float(IRRADIANCE_N_MU_S - 1), IRRADIANCE_N_MU_S),
+              TexCoord(x_r * float(IRRADIANCE_N_R - 1), IRRADIANCE_N_R));
+}
+
+// Scattering textures, (v, w) = (mu, r) coordinates. r: x_r = rho / H. mu is split at the horizon ([Bruneton2008]
+// Fig. 4): rays that meet the ground fill index positions 0 .. n/2 - 1 (grazing to straight down) with
+// 1 - (d - d_min) / (d_max - d_min), d the distance to the ground, d_min = r - R_g, d_max = rho; the other rays fill
+// n/2 .. n - 1 (zenith to horizon) with the mean of (d - d_min) / (d_max - d_min) (d to the top, d_min = R_t - r,
+// d_max = rho + H) and theta / theta_h (zenith angle over the horizon's, theta_h = Acos(-rho / r)). Linear filtering
+// never mixes the halves: their positions stay within [0, n/2 - 1] and [n/2, n - 1].
+vec2 ScatteringMuRCoords(float r, float mu, bool hits_ground) {
+  float H = sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS));
+  float rho = SafeSqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS));
+  float half_n = float(SCATTERING_N_MU / 2);
+  float p_mu;
+  if (hits_ground) {
+    float d = DistanceToBottom(r, mu);
+    float d_min = r - BOTTOM_RADIUS;
+    float x = rho > d_min ? (d - d_min) / (rho - d_min) : 0.0;
+    p_mu = (1.0 - clamp(x, 0.0, 1.0)) * (half_n - 1.0);
+  } else {
+    float d = DistanceToTop(r, mu);
+    float d_min = TOP_RADIUS - r;
+    float d_max = rho + H;
+    float x_d = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
+    float x_a = Acos(clamp(mu, -1.0, 1.0)) / Acos(clamp(-rho / r, -1.0, 1.0));
+    p_mu = half_n + 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0)) * (half_n - 1.0);
+  }
+  return vec2(TexCoord(p_mu, SCATTERING_N_MU),
+              TexCoord(clamp(rho / H, 0.0, 1.0) * float(SCATTERING_N_R - 1), SCATTERING_N_R));
+}
+
+// a(mu_s) = (d - d_min) / (d_max - d_min), d the distance from the ground to the top along mu_s, d_min = R_t - R_g,
+// d_max = H.
+float MuSDistanceUnit(float mu_s) {
+  float H = sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS));
+  return (DistanceToTop(BOTTOM_RADIUS, mu_s) - (TOP_RADIUS - BOTTOM_RADIUS)) / (H - (TOP_RADIUS - BOTTOM_RADIUS));
+}
+
+// Index position of mu_s: the mean of max(1 - a / A, 0) / (1 + a) ([Bruneton2017], A = a(MU_S_MIN)) and
+// 1 - theta_s / theta_max (theta_max = Acos(MU_S_MIN)); 0 at MU_S_MIN, n - 1 at the zenith.
+float ScatteringMuSIndex(float mu_s) {
+  float a = MuSDistanceUnit(mu_s);
+  float big_a = MuSDistanceUnit(MU_S_MIN);
+  float x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0);
+  float x_a = clamp(1.0 - Acos(clamp(mu_s, -1.0, 1.0)) / Acos(MU_S_MIN), 0.0, 1.0);
+  return 0.5 * (x_d + x_a) * float(SCATTERING_N_MU_S - 1);
+}
+
+// Index position of nu: x_nu = 1 - phi / pi, phi the azimuth between view and sun,
+// cos phi = (nu - mu mu_s) / sqrt((1 - mu^2)(1 - mu_s^2)).
+float ScatteringNuIndex(float mu, float mu_s, float nu) {
+  float s = SafeSqrt((1.0 - mu * mu) * (1.0 - mu_s * mu_s));
+  if (s < 1e-9) return 0.5 * float(SCATTERING_N_NU - 1);
+  float cphi = clamp((nu - mu * mu_s) / s, -1.0, 1.0);
+  return (1.0 - Acos(cphi) / PI) * float(SCATTERING_N_NU - 1);
+}
+// END MAPPINGS ---------------------------------------------------------------------------------------------------
+
+// Texture reads. GPUs interpolate with a fixed-point fraction (8 bits is common; SwiftShader too), which where the
+// tables change steeply within a texel (the limb of the atmosphere seen from orbit) is visible; define
+// SKYSCATTER_EXACT_FILTERING before this file to interpolate in float32 by hand from texelFetch (4 or 8 fetches
+// instead of 1). Both follow GL's LINEAR + CLAMP_TO_EDGE rule: texel i centred at (i + 0.5) / n.
+#ifdef SKYSCATTER_EXACT_FILTERING
+vec4 Texture2D(highp sampler2D t, vec2 uv) {
+  ivec2 n = textureSize(t, 0);
+  vec2 x = uv * vec2(n) - 0.5;
+  vec2 f = floor(x);
+  vec2 w = x - f;
+  ivec2 i0 = clamp(ivec2(f), ivec2(0), n - 1);
+  ivec2 i1 = clamp(ivec2(f) + 1, ivec2(0), n - 1);
+  return mix(mix(texelFetch(t, i0, 0), texelFetch(t, ivec2(i1.x, i0.y), 0), w.x),
+             mix(texelFetch(t, ivec2(i0.x, i1.y), 0), texelFetch(t, i1, 0), w.x), w.y);
+}
+vec4 Texture3D(highp sampler3D t, vec3 uvw) {
+  ivec3 n = textureSize(t, 0);
+  vec3 x = uvw * vec3(n) - 0.5;
+  vec3 f = floor(x);
+  vec3 w = x - f;
+  ivec3 i0 = clamp(ivec3(f), ivec3(0), n - 1);
+  ivec3 i1 = clamp(ivec3(f) + 1, ivec3(0), n - 1);
+  vec4 a = mix(mix(texelFetch(t, i0, 0), texelFetch(t, ivec3(i1.x, i0.y, i0.z), 0), w.x),
+               mix(texelFetch(t, ivec3(i0.x, i1.y, i0.z), 0), texelFetch(t, ivec3(i1.x, i1.y, i0.z), 0), w.x), w.y);
+  vec4 b = mix(mix(texelFetch(t, ivec3(i0.x, i0.y, i1.z), 0), texelFetch(t, ivec3(i1.x, i0.y, i1.z), 0), w.x),
+               mix(texelFetch(t, ivec3(i0.x, i1.y, i1.z), 0), texelFetch(t, i1, 0), w.x), w.y);
+  return mix(a, b, w.z);
+}
+#else
+vec4 Texture2D(highp sampler2D t, vec2 uv) { return texture(t, uv); }
+vec4 Texture3D(highp sampler3D t, vec3 uvw) { return texture(t, uvw); }
+#endif
+
+// Phase functions [sr^-1]: Rayleigh [Bruneton2008] Eq. 2; Cornette-Shanks Eq. 4; Henyey-Greenstein.
+float RayleighPhase(float nu) { return 3.0 / (16.0 * PI) * (1.0 + nu * nu); }
+float MiePhase(float nu) {
+  float g = MIE_G;
+  float den = max(1.0 + g * g - 2.0 * g * nu, 1e-12);
+  if (MIE_PHASE_KIND == 1) return (1.0 - g * g) / (4.0 * PI * den * sqrt(den));
+  return 3.0 * (1.0 - g * g) * (1.0 + nu * nu) / (8.0 * PI * (2.0 + g * g) * den * sqrt(den));
+}
+
+// Transmittance T(x, top) along (r, mu) to the top of the atmosphere, ignoring the ground ([Bruneton2008] Eq. 5,
+// tabulated). RGB: the transmittance of sunlight, (M (E_sun T)) / (M E_sun) per channel, M the spectrum -> linear
+// sRGB matrix: exact for the sun's light, an approximation for other spectra.
+vec3 GetTransmittanceToTop(float r, float mu) {
+  return Texture2D(transmittance_texture, TransmittanceUv(r, mu)).rgb;
+}
+
+// Transmittance between (r, mu) and the point at distance d along the ray: T(x, y) = T(x, v) / T(y, v), or with the
+// reversed ray T(y, -v) / T(x, -v) for rays that meet the ground ([Bruneton2008] Sec. 4), capped at 1. The ratio of
+// two sunlight transmittances is ill-conditioned where the far one is small in a channel (long grazing paths: a
+// reddened beam, whose sRGB blue can even be negative); there the channel's band-averaged optical depths give it,
+// exp(-(tau(x) - tau(y))) (the manifest's segment_transmittance rule).
+// The two blend linearly for far-end transmittances between 0.02 and 0.1 (no seam where the rule changes).
+float SegmentChannel(float a, float b, float tau_a, float tau_b) {
+  float from_depth = exp(-max(tau_a - tau_b, 0.0));
+  float s = clamp((b - 0.02) / 0.08, 0.0, 1.0);
+  return s > 0.0 ? mix(from_depth, clamp(a / b, 0.0, 1.0), s) : from_depth;
+}
+
+vec3 GetTransmittance(float r, float mu, float d, bool hits_ground) {
+  float r_d = clamp(SafeSqrt(d * d + 2.0 * r * mu * d + r * r), BOTTOM_RADIUS, TOP_RADIUS);
+  float mu_d = clamp((r * mu + d) / r_d, -1.0, 1.0);
+  vec2 uv_a, uv_b;
+  if (hits_ground) {
+    uv_a = TransmittanceUv(r_d, -mu_d);
+    uv_b = TransmittanceUv(r, -mu);
+  } else {
+    uv_a = TransmittanceUv(r, mu);
+    uv_b = TransmittanceUv(r_d, mu_d);
+  }
+  vec3 a = Texture2D(transmittance_texture, uv_a).rgb;
+  vec3 b = Texture2D(transmittance_texture, uv_b).rgb;
+  vec3 ta = Texture2D(optical_depth_texture, uv_a).rgb;
+  vec3 tb = Texture2D(optical_depth_texture, uv_b).rgb;
+  return vec3(SegmentChannel(a.r, b.r, ta.r, tb.r), SegmentChannel(a.g, b.g, ta.g, tb.g),
+              SegmentChannel(a.b, b.b, ta.b, tb.b));
+}
+
+// Fraction of the solar disc above the planet's horizon seen from r: a circular segment,
+// 1/2 + (h sqrt(1 - h^2) + asin h) / pi, h the disc centre's elevation above the horizon in disc radii.
+float SunVisibleFraction(float r, float mu_s) {
+  float sin_h = BOTTOM_RADIUS / r;
+  float cos_h = -SafeSqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS)) / r;
+  float h = clamp((mu_s - cos_h) / (max(sin_h, 1e-6) * SUN_ANGULAR_RADIUS), -1.0, 1.0);
+  return 0.5 + (h * SafeSqrt(1.0 - h * h) + asin(h)) / PI;
+}
+
+// Transmittance to the sun times the visible fraction of its disc ([Bruneton2008] Eq. 9's T(x, x_0)).
+vec3 GetTransmittanceToSun(float r, float mu_s) {
+  float f = SunVisibleFraction(r, mu_s);
+  return f <= 0.0 ? vec3(0.0) : GetTransmittanceToTop(r, mu_s) * f;
+}
+
+// The three scattering textures at (r, mu, mu_s, nu): quadrilinear interpolation, trilinear by the texture unit in
+// (mu_s, mu, r) and linear by hand along nu (the nu slices lie side by side along x: x = i_nu * n_mu_s + i_mu_s,
+// [Bruneton2008] Sec. 6). Returns single Rayleigh (no phase); single Mie (no phase) and multiple scattering in the
+// out parameters. Zero below the tables' sun limit MU_S_MIN.
+vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, out vec3 mie, out vec3 multiple) {
+  mie = vec3(0.0);
+  multiple = vec3(0.0);
+  if (mu_s < MU_S_MIN - MU_S_LIMIT_TOLERANCE) return vec3(0.0);
+  mu_s = max(mu_s, MU_S_MIN);
+  vec2 vw = ScatteringMuRCoords(r, mu, hits_ground);
+  float p_s = ScatteringMuSIndex(mu_s);
+  float p_n = clamp(ScatteringNuIndex(mu, mu_s, nu), 0.0, float(SCATTERING_N_NU - 1));
+  float i_n = min(floor(p_n), float(SCATTERING_N_NU - 2));
+  float w_n = p_n - i_n;
+  float n_x = float(SCATTERING_N_NU * SCATTERING_N_MU_S);
+  vec3 uvw0 = vec3((i_n * float(SCATTERING_N_MU_S) + p_s + 0.5) / n_x, vw.x, vw.y);
+  vec3 uvw1 = vec3(uvw0.x + float(SCATTERING_N_MU_S) / n_x, vw.x, vw.y);
+  mie = mix(Texture3D(mie_texture, uvw0).rgb, Texture3D(mie_texture, uvw1).rgb, w_n);
+  multiple = mix(Texture3D(multiple_texture, uvw0).rgb, Texture3D(multiple_texture, uvw1).rgb, w_n);
+  return mix(Texture3D(rayleigh_texture, uvw0).rgb, Texture3D(rayleigh_texture, uvw1).rgb, w_n);
+}
+
+// Inscattered radiance S[L](x, v, s) = S_R[L0] P_R(nu) + S_M[L0] P_M(nu) + S[L*] ([Bruneton2008] Eqs. 7-8 with the
+// single scattering kept apart, Sec. 4 "Angular precision").
+vec3 GetInscatter(float r, float mu, float mu_s, float nu, bool hits_ground) {
+  vec3 mie, multiple;
+  vec3 rayleigh = GetScattering(r, mu, mu_s, nu, hits_ground, mie, multiple);
+  return rayleigh * RayleighPhase(nu) + mie * MiePhase(nu) + multiple;
+}
+
+// Moves a camera outside the atmosphere to where its ray enters it; false if the ray misses the atmosphere.
+bool EnterAtmosphere(inout vec3 camera, vec3 view_ray, out float entered) {
+  entered = 0.0;
+  float r = length(camera);
+  if (r <= TOP_RADIUS) return true;
+  float rmu = dot(camera, view_ray);
+  // R_t^2 - p^2, p the distance from the planet's centre to the ray's line: as a product, which float32 keeps for
+  // rays that graze the top (rmu^2 - r^2 + R_t^2 loses 6 digits there)
+  float p = length(cross(camera, view_ray));
+  float disc = (TOP_RADIUS - p) * (TOP_RADIUS + p);
+  if (disc < 0.0 || rmu >= 0.0) return false;
+  float d = -rmu - sqrt(disc);
+  if (d < 0.0) return false;
+  camera += d * view_ray;
+  entered = d;
+  return true;
+}
+
+// Sky radiance along view_ray from camera, without the sun's disc and the ground's own light ([Bruneton2008]
+// Eq. 16's S[L]|x); transmittance to the end of the ray (the ground or the top) in the out parameter.
+vec3 GetSkyRadiance(vec3 camera, vec3 view_ray, vec3 sun_direction, out vec3 transmittance) {
+  transmittance = vec3(1.0);
+  float entered;
+  if (!EnterAtmosphere(camera, view_ray, entered)) return vec3(0.0);
+  float r = length(camera);
+  float rc = clamp(r, BOTTOM_RADIUS, TOP_RADIUS);
+  float mu = clamp(dot(camera, view_ray) / r, -1.0, 1.0);
+  float mu_s = clamp(dot(camera, sun_direction) / r, -1.0, 1.0);
+  float nu = clamp(dot(view_ray, sun_direction), -1.0, 1.0);
+  bool hits = RayHitsGround(rc, mu);
+  transmittance = hits ? GetTransmittance(rc, mu, DistanceToBottom(rc, mu), true) : GetTransmittanceToTop(rc, mu);
+  return GetInscatter(rc, mu, mu_s, nu, hits);
+}
+
+// Sun and sky irradiance on a surface at point with unit normal ([Bruneton2008] Eq. 14): the sun
+// E_sun T(x, sun) max(n.s, 0) (disc fraction included) and the sky's horizontal irradiance times the ambient
+// occlusion of a tilted plane, (1 + n.up) / 2.
+vec3 GetSunAndSkyIrradiance(vec3 point, vec3 normal, vec3 sun_direction, out vec3 sky_irradiance) {
+  float r = length(point);
+  vec3 up = point / r;
+  float rc = clamp(r, BOTTOM_RADIUS, TOP_RADIUS);
+  float mu_s = clamp(dot(up, sun_direction), -1.0, 1.0);
+  sky_irradiance = Texture2D(irradiance_texture, IrradianceUv(rc, mu_s)).rgb * 0.5 * (1.0 + dot(normal, up));
+  return SOLAR_IRRADIANCE * GetTransmittanceToSun(rc, mu_s) * max(dot(normal, sun_direction), 0.0);
+}
+
+// Cosine factor of the sun averaged over its disc: 0 below the horizon, (mu + a)^2 / (4 a) across it, mu above.
+float SunCosineFactor(float mu) {
+  float a = SUN_ANGULAR_RADIUS;
+  if (mu < -a) return 0.0;
+  if (mu > a) return mu;
+  return (mu + a) * (mu + a) / (4.0 * a);
+}
+
+// Radiance of the Lambertian ground of the given albedo where view_ray (from camera, inside the atmosphere, radius r,
+// cosine mu) meets the planet, lit by sun and sky ([Bruneton2008] Eqs. 10 and 14: albedo / pi (E_sun T cos + E_sky)),
+// times the transmittance back to the camera (Eq. 16's T(x, x_s) R[L]).
+vec3 GetGroundRadiance(vec3 camera, vec3 view_ray, vec3 sun_direction, vec3 albedo) {
+  float entered;
+  if (!EnterAtmosphere(camera, view_ray, entered)) return vec3(0.0);
+  float r = clamp(length(camera), BOTTOM_RADIUS, TOP_RADIUS);
+  float mu = clamp(dot(camera, view_ray) / length(camera), -1.0, 1.0);
+  if (!RayHitsGround(r, mu)) return vec3(0.0);
+  float d = DistanceToBottom(r, mu);
+  vec3 t = GetTransmittance(r, mu, d, true);
+  vec3 g = camera + d * view_ray;
+  float mu_s_g = clamp(dot(g, sun_direction) / length(g), -1.0, 1.0);
+  vec3 e_sky = Texture2D(irradiance_texture, IrradianceUv(BOTTOM_RADIUS, mu_s_g)).rgb;
+  vec3 t_sun = GetTransmittanceToTop(BOTTOM_RADIUS, mu_s_g);
+  return t * albedo / PI * (SOLAR_IRRADIANCE * t_sun * SunCosineFactor(mu_s_g) + e_sky);
+}
+
+// Radiance of the sun's disc seen from camera (mean over the disc, [Bruneton2008] Eq. 9): E_sun / Omega_sun times
+// the transmittance to the sun; zero where the planet hides it.
+vec3 GetSolarRadiance(vec3 camera, vec3 sun_direction) {
+  float r = length(camera);
+  float rmu = dot(camera, sun_direction);
+  if (r > TOP_RADIUS && rmu < 0.0 && length(cross(camera, sun_direction)) <= BOTTOM_RADIUS) return vec3(0.0);
+  float entered;
+  if (!EnterAtmosphere(camera, sun_direction, entered)) return SOLAR_IRRADIANCE / SUN_SOLID_ANGLE;
+  r = length(camera);
+  float mu_s = clamp(dot(camera, sun_direction) / r, -1.0, 1.0);
+  return SOLAR_IRRADIANCE / SUN_SOLID_ANGLE * GetTransmittanceToSun(clamp(r, BOTTOM_RADIUS, TOP_RADIUS), mu_s);
+}
+
+vec3 InscatterToPoint(float r, float mu, float mu_s, float nu, float d, bool hits, out vec3 t) {
+  vec3 c = GetInscatter(r, mu, mu_s, nu, hits);
+  float r_p = clamp(SafeSqrt(d * d + 2.0 * r * mu * d + r * r), BOTTOM_RADIUS, TOP_RADIUS);
+  float mu_p = clamp((r * mu + d) / r_p, -1.0, 1.0);
+  float mu_s_p = clamp((r * mu_s + d * nu) / r_p, -1.0, 1.0);
+  vec3 c2 = GetInscatter(r_p, mu_p, mu_s_p, nu, hits);
+  t = GetTransmittance(r, mu, d, hits);
+  return max(c - t * c2, vec3(0.0));
+}
+
+// Aerial perspective between camera and point ([Bruneton2008] Eq. 16's last terms): an object's radiance L reaches
+// the camera as transmittance * L + (returned) inscatter S|x - T(x, p) S|p. Rays within HORIZON_EPSILON of the
+// horizon blend the rays just above and below it, where the two halves of the tables disagree ([Bruneton2017]).
+vec3 GetSkyRadianceToPoint(vec3 camera, vec3 point, vec3 sun_direction, out vec3 transmittance) {
+  transmittance = vec3(1.0);
+  vec3 delta = point - camera;
+  float dist = length(delta);
+  if (dist <= 0.0) return vec3(0.0);
+  vec3 v = delta / dist;
+  float entered;
+  if (!EnterAtmosphere(camera, v, entered)) return vec3(0.0);
+  float d = dist - entered;
+  if (d <= 0.0) return vec3(0.0);
+  float r = length(camera);
+  float rc = clamp(r, BOTTOM_RADIUS, TOP_RADIUS);
+  float mu = clamp(dot(camera, v) / r, -1.0, 1.0);
+  float mu_s = clamp(dot(camera, sun_direction) / r, -1.0, 1.0);
+  float nu = clamp(dot(v, sun_direction), -1.0, 1.0);
+  bool hits = RayHitsGround(rc, mu);
+  float mu_h = -SafeSqrt(1.0 - (BOTTOM_RADIUS / rc) * (BOTTOM_RADIUS / rc));
+  vec3 c;
+  if (abs(mu - mu_h) < HORIZON_EPSILON) {
+    float mu_lo = mu_h - HORIZON_EPSILON;
+    float mu_hi = mu_h + HORIZON_EPSILON;
+    vec3 t_lo;
+    vec3 lo = InscatterToPoint(rc, mu_lo, mu_s, nu, d, true, t_lo);
+    vec3 hi = InscatterToPoint(rc, mu_hi, mu_s, nu, d, false, t_lo);
+    c = mix(lo, hi, (mu - mu_lo) / (mu_hi - mu_lo));
+  } else {
+    vec3 t_unused;
+    c = InscatterToPoint(rc, mu, mu_s, nu, d, hits, t_unused);
+  }
+  transmittance = GetTransmittance(rc, mu, d, hits);
+  return c;
+}

@@ -1,0 +1,245 @@
+"""Engine-ready textures (skyscatter.realtime): the manifest's mapping code and the folded RGBA textures, read the
+way a GPU reads them (linear filtering, clamp to edge), against the library's own spectral lookups; the loader's
+refusals; half floats and EXR against float32."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from skyscatter.conventions import direction_from_angles
+from skyscatter.errors import FileFormatError, InvalidParameterError
+from skyscatter.precomputed import PrecomputedAtmosphere
+from skyscatter.realtime import MANIFEST_NAME, export_realtime, load_realtime
+from skyscatter.realtime.export import fold_matrix, glsl_library, glsl_mappings
+from skyscatter.spectral import HDR_SCALE, xyz_to_linear_srgb
+
+SMALL = dict(transmittance_mu=32, transmittance_r=8, irradiance_mu_s=8, irradiance_r=4, scattering_r=6,
+             scattering_mu=16, scattering_mu_s=6, scattering_nu=4)
+
+
+@pytest.fixture(scope="module")
+def atm():
+    return PrecomputedAtmosphere.compute(orders=2, sizes=SMALL, progress=False)
+
+
+@pytest.fixture(scope="module")
+def luts(atm, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("rt")
+    export_realtime(atm, folder, formats=("rgba32f", "rgba16f", "exr"))
+    return folder
+
+
+def _sample(tex, coords):
+    """GL LINEAR + CLAMP_TO_EDGE read of an RGBA texture (2D (h, w, 4) with coords (u, v); 3D (d, h, w, 4) with
+    (u, v, w)), texel i centred at (i + 0.5) / n."""
+    shape = tex.shape[:-1][::-1]  # sizes along u, v(, w)
+    idx, wts = [], []
+    for c, n in zip(coords, shape, strict=True):
+        x = c * n - 0.5
+        i0 = math.floor(x)
+        w = x - i0
+        idx.append((min(max(i0, 0), n - 1), min(max(i0 + 1, 0), n - 1)))
+        wts.append((1.0 - w, w))
+    out = np.zeros(4)
+    if len(shape) == 2:
+        for a in range(2):
+            for b in range(2):
+                out += wts[0][a] * wts[1][b] * tex[idx[1][b], idx[0][a]]
+        return out
+    for a in range(2):
+        for b in range(2):
+            for c in range(2):
+                out += wts[0][a] * wts[1][b] * wts[2][c] * tex[idx[2][c], idx[1][b], idx[0][a]]
+    return out
+
+
+def _gpu_sky(ns, tex, r, mu, mu_s, nu):
+    """Sky radiance (RGB) and its Y as a shader computes it, from the manifest's Python mappings."""
+    if mu_s < ns["MU_S_MIN"]:
+        return np.zeros(4)
+    hits = ns["ray_hits_ground"](r, mu)
+    uvw0, uvw1, w = ns["scattering_uvw"](r, mu, mu_s, nu, hits)
+    parts = [(1 - w) * _sample(tex[n], uvw0) + w * _sample(tex[n], uvw1) for n in ("rayleigh", "mie", "multiple")]
+    return np.array(ns["inscattered_radiance"](*parts, nu))
+
+
+def test_manifest_mappings_and_textures_give_the_spectral_lookup(atm, luts):
+    data = load_realtime(luts)
+    ns = data.mappings()
+    rng = np.random.default_rng(7)
+    p = atm.parameters
+    m = fold_matrix(atm)
+    worst = 0.0
+    for alt in (0.0, 1500.0, 12e3, 45e3):
+        pos = np.array([0.0, 0.0, p.bottom_radius + alt])
+        for _ in range(3):
+            sun = direction_from_angles(rng.uniform(0.0, 1.75), rng.uniform(0, 2 * np.pi))
+            dirs = direction_from_angles(rng.uniform(0.0, np.pi, 40), rng.uniform(0, 2 * np.pi, 40))
+            want = atm.sky_radiance(pos, dirs, sun, include_ground=False) @ m.T
+            r = float(pos[2])
+            for d, ref in zip(dirs, want, strict=True):
+                got = _gpu_sky(ns, data.textures, r, d[2], sun[2], float(d @ sun))
+                scale = max(np.abs(ref).max(), 1e-6)
+                worst = max(worst, float(np.abs(got[:3] - ref).max() / scale))
+                assert abs(got[3] - ref @ [0.2126, 0.7152, 0.0722]) <= 2e-5 * scale + 1e-9
+    # float32 textures: the mapping code and the GPU read reproduce the float64 lookup to rounding
+    assert worst < 2e-5, worst
+
+
+def test_transmittance_and_irradiance_textures(atm, luts):
+    data = load_realtime(luts)
+    ns = data.mappings()
+    p = atm.parameters
+    m = fold_matrix(atm)
+    solar = p.solar_irradiance_at(atm.wavelengths)
+    for alt in (0.0, 3e3, 30e3):
+        r = p.bottom_radius + alt
+        for mu in (-0.05, 0.0, 0.1, 0.5, 1.0):
+            t = atm.transmittance(r, mu) if not ns["ray_hits_ground"](r, mu) else None
+            if t is None:
+                continue
+            want = (m @ (solar * t)) / (m @ solar)
+            got = _sample(data.textures["transmittance"], ns["transmittance_uv"](r, mu))
+            np.testing.assert_allclose(got[:3], want, rtol=2e-6, atol=1e-7)
+        for el in (30.0, 4.0, -4.0):
+            sun = direction_from_angles(np.radians(90 - el), 0.3)
+            point = np.array([0.0, 0.0, r])
+            _, e_sky = atm.ground_irradiance(point, [0.0, 0.0, 1.0], sun)
+            got = _sample(data.textures["irradiance"], ns["irradiance_uv"](r, sun[2]))
+            np.testing.assert_allclose(got[:3], m @ e_sky, rtol=2e-6, atol=1e-9)
+
+
+def test_fold_matrix_is_the_libraries_colour(atm):
+    """The fold matrix applied to a spectrum gives the linear sRGB of the library's XYZ (the HDR scale included)."""
+    spec = np.linspace(0.01, 0.03, atm.wavelengths.size)
+    np.testing.assert_allclose(fold_matrix(atm) @ spec, xyz_to_linear_srgb(atm.to_xyz(spec)) * HDR_SCALE,
+                               rtol=1e-12)
+
+
+def test_half_and_exr_match_float32(luts):
+    f32 = load_realtime(luts).textures
+    f16 = load_realtime(luts, fmt="rgba16f").textures
+    exr = load_realtime(luts, fmt="exr").textures
+    for name, a in f32.items():
+        np.testing.assert_array_equal(exr[name], a)
+        big = np.abs(a) > 1e-4 * np.abs(a).max()  # half keeps 11 bits; its subnormals start at 6e-8
+        np.testing.assert_allclose(f16[name][big], a[big], rtol=2 ** -10)
+
+
+def test_manifest_states_version_units_scale_and_code(luts):
+    manifest = json.loads((luts / MANIFEST_NAME).read_text())
+    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 1
+    assert manifest["hdr_scale"]["cd_m2_per_unit_Y"] == 683.0
+    assert manifest["mappings"]["glsl"] == glsl_mappings() and manifest["mappings"]["glsl"] in glsl_library()
+    for name in ("transmittance_uv", "irradiance_uv", "scattering_uvw"):
+        assert f"def {name}(" in manifest["mappings"]["python"]
+    for glsl in ("TransmittanceUv", "IrradianceUv", "ScatteringMuRCoords", "ScatteringMuSIndex",
+                 "ScatteringNuIndex"):
+        assert glsl in manifest["mappings"]["glsl"]
+    for name, entry in manifest["textures"].items():
+        f = entry["files"]["rgba32f"]
+        assert (luts / f["file"]).stat().st_size == f["bytes"] == 16 * entry["width"] * entry["height"] * entry.get(
+            "depth", 1), name
+
+
+def _copy(luts, tmp_path):
+    import shutil
+
+    dst = tmp_path / "copy"
+    shutil.copytree(luts, dst)
+    return dst
+
+
+def test_loader_refuses_another_version_a_missing_and_a_truncated_file(luts, tmp_path):
+    bad = _copy(luts, tmp_path)
+    manifest = json.loads((bad / MANIFEST_NAME).read_text())
+    manifest["version"] = 99
+    (bad / MANIFEST_NAME).write_text(json.dumps(manifest))
+    with pytest.raises(FileFormatError, match="version 99"):
+        load_realtime(bad)
+    manifest["version"] = 1
+    (bad / MANIFEST_NAME).write_text(json.dumps(manifest))
+    (bad / "mie.rgba32f").unlink()
+    with pytest.raises(FileFormatError, match="mie.rgba32f: texture file missing"):
+        load_realtime(bad)
+    data = (luts / "rayleigh.rgba32f").read_bytes()
+    (bad / "mie.rgba32f").write_bytes(data[: len(data) // 2])
+    with pytest.raises(FileFormatError, match="truncated"):
+        load_realtime(bad)
+    (bad / MANIFEST_NAME).write_text('{"format": "something-else"}')
+    with pytest.raises(FileFormatError, match="not a skyscatter real-time manifest"):
+        load_realtime(bad)
+    with pytest.raises(FileFormatError, match="no real-time manifest"):
+        load_realtime(tmp_path / "nowhere")
+    with pytest.raises(InvalidParameterError):
+        load_realtime(luts, fmt="png")
+
+
+def test_export_refuses_unknown_formats(atm, tmp_path):
+    with pytest.raises(InvalidParameterError, match="rgba32f"):
+        export_realtime(atm, tmp_path, formats=("jpeg",))
+
+
+def test_server_serves_the_viewer_and_only_the_exports_files(luts, tmp_path):
+    import urllib.error
+    import urllib.request
+
+    from skyscatter.realtime.server import serve
+
+    (luts / "secret.txt").write_text("not for the page")
+    with serve(luts) as server:
+        assert server.url.startswith("http://127.0.0.1:")
+
+        def get(path):
+            with urllib.request.urlopen(server.url + path.lstrip("/"), timeout=10) as r:
+                return r.read()
+
+        page = get("/").decode()
+        assert 'src="/viewer/viewer.js"' in page and "://" not in page.split("<body>")[1]
+        assert b"GetSkyRadianceToPoint" in get("/glsl/atmosphere.glsl")
+        for path in ("/", "/viewer/viewer.js", "/viewer/style.css"):  # nothing loaded from the network
+            assert b"http://" not in get(path) and b"https://" not in get(path) and b"//cdn" not in get(path)
+        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 1
+        assert len(get("/luts/rayleigh.rgba32f")) == (luts / "rayleigh.rgba32f").stat().st_size
+        for path in ("/luts/secret.txt", "/luts/../secret.txt", "/etc/passwd", "/viewer/../export.py"):
+            with pytest.raises(urllib.error.HTTPError, match="404"):
+                get(path)
+
+
+def test_optical_depth_texture_and_segment_rule(atm, luts):
+    """The optical_depth texture is the band average of -ln T at its texels; the manifest's segment rule gives the
+    sunlight transmittance of a short segment high in the sky (well conditioned: the ratio) to float32 rounding."""
+    data = load_realtime(luts)
+    ns = data.mappings()
+    m = fold_matrix(atm)
+    solar = atm.parameters.solar_irradiance_at(atm.wavelengths)
+    w = np.maximum(np.vstack([m, [0.2126, 0.7152, 0.0722] @ m]), 0) * solar
+    w /= w.sum(axis=1, keepdims=True)
+    tau = -np.log(np.maximum(atm.tables["transmittance"].astype(np.float64), 1e-30))
+    np.testing.assert_allclose(data.textures["optical_depth"], tau @ w.T, rtol=1e-6, atol=1e-6)
+    r = atm.parameters.bottom_radius + 5000.0
+    for mu in (0.3, 0.7, 1.0):
+        d = 3000.0
+        r_d = math.sqrt(d * d + 2 * r * mu * d + r * r)
+        mu_d = (r * mu + d) / r_d
+        uv_a, uv_b = ns["transmittance_uv"](r, mu), ns["transmittance_uv"](r_d, mu_d)
+        got = ns["segment_transmittance"](
+            _sample(data.textures["transmittance"], uv_a)[:3], _sample(data.textures["transmittance"], uv_b)[:3],
+            _sample(data.textures["optical_depth"], uv_a)[:3], _sample(data.textures["optical_depth"], uv_b)[:3])
+        t_seg = np.minimum(atm.transmittance(r, mu) / atm.transmittance(r_d, mu_d), 1.0)
+        np.testing.assert_allclose(got, (m @ (solar * t_seg)) / (m @ solar), atol=2e-3)
+
+
+def test_view_refuses_a_folder_without_a_manifest_in_one_line(tmp_path, capsys):
+    from skyscatter.cli import main
+
+    assert main(["view", "--luts", str(tmp_path), "--port", "0", "--check"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no real-time manifest" in err[0]
+    assert main(["export-luts", "--out-dir", str(tmp_path / "x"), "--formats", "png"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "rgba32f" in err[0]
