@@ -55,12 +55,13 @@ without numba's runtime (docs/architecture.md, numba rules).
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FileFormatError, InvalidParameterError
+from ..lazy import lazy_namespace
 
 __all__ = [
     "PhaseTable",
@@ -535,14 +536,21 @@ class PhaseTable:
 
 # ------------------------------------------------------------------ numba functions (built on first use)
 
-_NUMBA = ("phase_table_segment", "phase_table_value", "phase_table_values", "phase_table_inverse_cdf")
+if TYPE_CHECKING:
+    from ._phase_numba import (
+        phase_table_inverse_cdf as phase_table_inverse_cdf,
+    )
+    from ._phase_numba import (
+        phase_table_segment as phase_table_segment,
+    )
+    from ._phase_numba import (
+        phase_table_value as phase_table_value,
+    )
+    from ._phase_numba import (
+        phase_table_values as phase_table_values,
+    )
 
+_LAZY = {name: "_phase_numba" for name in (
+    "phase_table_segment", "phase_table_value", "phase_table_values", "phase_table_inverse_cdf")}
 
-def __getattr__(name: str) -> Any:
-    if name in _NUMBA:
-        from . import _phase_numba
-
-        value = getattr(_phase_numba, name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_namespace(globals(), _LAZY)[0]

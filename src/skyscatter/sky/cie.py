@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..atmosphere.tables import load_table
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
+from ..quadrature import plane_integral
 from ..spectral import as_wavelengths
 from .base import LuminanceOnlySky, SolarDisc, SunSkyMixin, check_sun_angles
 from .perez_family import cie_parameters, extended_perez, kittler_parameters
@@ -264,8 +265,6 @@ class _ScaledCIESky(LuminanceOnlySky):
 
     def relative_diffuse_illuminance(self) -> float:
         """``integral (L / L_z) cos theta dOmega`` over the sky [sr]; D_v = L_z times this."""
-        from ..photometry import plane_integral
-
         return plane_integral(self.relative_luminance)
 
     def _set_scale(self, zenith_luminance, diffuse_illuminance, **parameters) -> None:

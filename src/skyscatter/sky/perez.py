@@ -49,6 +49,7 @@ from ..atmosphere.airmass import relative_optical_mass
 from ..atmosphere.tables import load_table
 from ..conventions import as_directions, direction_from_angles
 from ..errors import InvalidParameterError
+from ..quadrature import plane_integral
 from .base import LuminanceOnlySky, SunSkyMixin, check_sun_angles
 from .cie import LuminanceSunMixin
 from .perez_family import perez_f
@@ -567,8 +568,6 @@ class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
         self.direct_normal_irradiance = float(p.direct_normal_irradiance)
         self.precipitable_water = float(p.water)
         self._model_sun = direction_from_angles(self.model_sun_zenith, self.sun_azimuth)
-        from ..photometry import plane_integral
-
         self.uniform = False
         integral = plane_integral(self.relative_luminance)
         if not integral > 0:
