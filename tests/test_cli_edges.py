@@ -102,8 +102,8 @@ def test_demo_bruneton_table_wavelengths_reach_the_tables(monkeypatch):
     monkeypatch.setattr(rb, "BrunetonSky", fake_sky)
     with pytest.raises(Stop):
         rb.bruneton_scene(_terrain(), _camera(), 1.0, 0.0,
-                          wavelengths=[500.0, 600.0], table_wavelengths="rgb", ozone_column=250.0)
-    assert seen["wavelengths"] == "rgb" and seen["ozone_column"] == 250.0
+                          wavelengths=[500.0, 600.0], tables="rgb", ozone_column=250.0)
+    assert seen["tables"] == "rgb" and seen["ozone_column"] == 250.0
 
 
 def _terrain():

@@ -77,7 +77,7 @@ def test_provider_matches_aerial_perspective(atm):
     np.testing.assert_array_equal(provider.transmittance(d, s, 800.0, atm.wavelengths), tau)
     np.testing.assert_array_equal(provider.inscattered(d, s, 800.0, atm.wavelengths), l_in)
     # The same through a BrunetonSky (its sun, its atmosphere).
-    sky = BrunetonSky(math.acos(sun[2]), math.atan2(sun[0], sun[1]), atmosphere=atm)
+    sky = BrunetonSky(math.acos(sun[2]), math.atan2(sun[0], sun[1]), precomputed=atm)
     np.testing.assert_allclose(BrunetonAerialPerspective(sky).evaluate(d, s, 800.0, atm.wavelengths)[1], l_ref,
                                rtol=1e-9)
 

@@ -18,7 +18,7 @@ def _folder(text: str) -> Path:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    from .precompute import add_atmosphere_options
+    from .precompute import add_table_options
 
     p = subparsers.add_parser(
         "export-luts",
@@ -41,7 +41,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="output folder (created if missing); about 270 MB for the default 16-wavelength tables")
     p.add_argument("--from", dest="source", type=Path, default=None, metavar="FILE.npz",
                    help="tables saved by 'skyscatter precompute --out' (the atmosphere options are then ignored)")
-    add_atmosphere_options(p)
+    add_table_options(p)
     p.set_defaults(func=run)
 
 
@@ -50,17 +50,17 @@ def run(args: argparse.Namespace) -> int:
     from ..precomputed import PrecomputedAtmosphere
     from ..precomputed.cache import cached_atmosphere
     from .common import one_line_warnings
-    from .precompute import atmosphere_from_args
+    from .precompute import tables_from_args
 
     # The output folder first: refuse it before a table build that can take a minute.
     ensure_output_folder(args.out_dir, what="--out-dir")
     if args.source is not None:
         atm = PrecomputedAtmosphere.load(args.source)
     else:
-        params, sizes = atmosphere_from_args(args)
+        params, sizes, table_options = tables_from_args(args)
         with one_line_warnings():
-            atm = cached_atmosphere(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
-                                    progress=not args.no_progress and sys.stderr.isatty())
+            atm = cached_atmosphere(params, sizes=sizes, progress=not args.no_progress and sys.stderr.isatty(),
+                                    **table_options)
     description = atm.export(args.out_dir)
     import json
 

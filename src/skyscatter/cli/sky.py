@@ -53,10 +53,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="pinhole: horizontal field of view [deg]")
     g.add_argument("--no-sun-disc", dest="sun_disc", action="store_false",
                    help="leave the solar disc out of the image")
-    g.add_argument("--ground-albedo", type=float_in(0.0, 1.0), default=0.2, metavar="RHO",
-                   help="albedo of the neutral Lambertian ground drawn below the horizon; not used by bruneton, "
-                   "which draws its own ground with its atmosphere's albedo (0.1, the Earth default; other values "
-                   "from Python with AtmosphereParameters(ground_albedo=...))")
+    g.add_argument("--terrain-albedo", type=float_in(0.0, 1.0), default=None, metavar="RHO",
+                   help="albedo of the neutral Lambertian ground drawn below the horizon (default 0.2); not used by "
+                   "bruneton, which draws its own ground with its atmosphere's --ground-albedo")
     add_image_output_options(p, default_out="sky.exr")
     p.set_defaults(func=run)
 
@@ -76,6 +75,7 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidParameterError(f"{', '.join(given)}: not with --format radiance (a Radiance sky is an "
                                         "equirect picture of the whole sphere, width x width/2, with the sun as "
                                         "a light source)")
+    _terrain_albedo(args)
     # The precomputed atmosphere ignores refraction, so it wants the geometric sun (docs/bruneton.md).
     zenith, azimuth = sun_angles_from_args(args, apparent=args.model != "bruneton")
     model = build_sky_from_args(args, zenith, azimuth)
@@ -85,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
         from ..render.radiance_sky import write_radiance_sky
 
         try:
-            files = write_radiance_sky(output_file(args), model, width=args.width, ground_albedo=args.ground_albedo,
+            files = write_radiance_sky(output_file(args), model, width=args.width, ground_albedo=args.terrain_albedo,
                                        png_path=png_path(args), exposure_ev=args.exposure)
         finally:
             if bar is not None:
@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
             pitch=math.radians(args.pitch),
             fov=math.radians(args.fov),
             sun_disc=args.sun_disc,
-            ground_albedo=args.ground_albedo,
+            ground_albedo=args.terrain_albedo,
             layout=args.layout,
         )
     finally:
@@ -115,6 +115,24 @@ def run(args: argparse.Namespace) -> int:
     print(f"{model!r}: sun zenith {math.degrees(zenith):.2f} deg, azimuth {math.degrees(azimuth):.2f} deg")
     print(f"wrote {out} and {png} ({image.shape[1]} x {image.shape[0]}, rendered in {elapsed:.2f} s)")
     return 0
+
+
+def _terrain_albedo(args: argparse.Namespace) -> None:
+    """--terrain-albedo (default 0.2); --ground-albedo with a model that has no ground is its old spelling."""
+    from ..sky import registry
+
+    takes_ground = any(p.name == "ground_albedo" for p in registry.get(args.model).parameters)
+    if not takes_ground and getattr(args, "ground_albedo", None) is not None:
+        import sys
+
+        print("skyscatter: warning: --ground-albedo for the ground drawn below the horizon is deprecated and will be "
+              "removed in the next release; use --terrain-albedo (--ground-albedo is the atmosphere's ground, of "
+              "the models that have one)", file=sys.stderr)
+        if args.terrain_albedo is None:
+            args.terrain_albedo = args.ground_albedo
+        del args.ground_albedo
+    if args.terrain_albedo is None:
+        args.terrain_albedo = 0.2
 
 
 def _format_seconds(seconds: float) -> str:

@@ -49,7 +49,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
 from ..atmosphere import AtmosphereParameters
-from ..atmosphere.turbidity import ANGSTROM_ALPHA, angstrom_beta, angstrom_beta_from_optical_depth
 from ..errors import InvalidParameterError, MissingDependencyError, OutputError
 from .driver import (
     DEFAULT_GROUP_SIZE,
@@ -115,12 +114,10 @@ class ReferenceJob:
         """Medium of aerosol index ``k`` and albedo index ``m``."""
         a = float(self.aerosol[k])
         if self.aerosol_kind == "turbidity":
-            # Preetham et al. 1999, Appendix A.1 (as AtmosphereParameters.from_turbidity)
-            changes = dict(mie_angstrom_alpha=ANGSTROM_ALPHA, mie_angstrom_beta=float(angstrom_beta(a)))
-        else:
-            # vertical aerosol optical depth at 550 nm with the base Angstrom exponent
-            changes = dict(mie_angstrom_beta=angstrom_beta_from_optical_depth(a, self.atmosphere.mie_angstrom_alpha))
-        return self.atmosphere.replace(ground_albedo=float(self.albedos[m]), **changes)
+            options = dict(turbidity=a)
+        else:  # vertical aerosol optical depth at 550 nm with the base Angstrom exponent
+            options = dict(aerosol_optical_depth=a, angstrom_alpha=self.atmosphere.mie_angstrom_alpha)
+        return AtmosphereParameters.from_options(self.atmosphere, ground_albedo=float(self.albedos[m]), **options)
 
     def description(self) -> dict[str, Any]:
         """JSON-able description; equal descriptions mean equal results."""

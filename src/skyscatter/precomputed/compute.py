@@ -300,20 +300,20 @@ def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int,
 
 def compute_tables(params: AtmosphereParameters, *, orders: int = DEFAULT_ORDERS,
                    wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
-                   progress: bool | None = None,
+                   progress: bool | None = None, tables: str | None = None,
                    chunk_size: int | None = None) -> tuple[F64, TableSizes, dict[str, F32], dict[str, float]]:
     """Algorithm 4.1: ``(wavelengths, sizes, tables, timings)`` after validating the arguments (those of
     :meth:`.PrecomputedAtmosphere.compute`); ``tables`` maps the names of :data:`.storage.TABLE_NAMES` to float32
     arrays with a trailing wavelength axis, ``timings`` each step's seconds (summed over wavelength chunks)."""
     if not isinstance(params, AtmosphereParameters):
-        raise InvalidParameterError(f"params must be AtmosphereParameters; got {type(params).__name__}")
+        raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(params).__name__}")
     if isinstance(orders, bool) or not isinstance(orders, (int, np.integer)) or not 1 <= orders <= 50:
         raise InvalidParameterError(f"orders must be a whole number in [1, 50]; got {orders!r}")
     if params.particles:
         raise InvalidParameterError(
             "the precomputed tables take one aerosol (AtmosphereParameters.aerosol) and no further particle "
             "components (cloud layers): use the Monte Carlo reference for those")
-    wl = table_wavelengths(wavelengths)
+    wl = table_wavelengths(wavelengths, tables)
     params.check_wavelengths(wl)
     check_colour_range(params, wl)
     sz = TableSizes.coerce(sizes)

@@ -2,7 +2,7 @@
 Sec. 6), with a JSON description.
 
 Files (little-endian float32, no header, C order, channels interleaved per texel; channels sorted by
-decreasing wavelength, so tables in the 3-wavelength mode (``wavelengths="rgb"``) are R = 680 nm, G = 550 nm,
+decreasing wavelength, so tables in the 3-wavelength mode (``tables="rgb"``) are R = 680 nm, G = 550 nm,
 B = 440 nm; the default 16-wavelength tables export 16 channels):
 
 * ``transmittance.raw`` - 2D, width ``n_mu`` x height ``n_r`` (row 0 at the ground).
