@@ -123,12 +123,13 @@ class Parameter:
             return None
         where = f"{model}: {self.name}" if model else self.name
         if self.kind in ("float", "int"):
-            if isinstance(value, (bool, str)):
-                raise InvalidParameterError(f"{where} must be a number [{self.unit}]; got {value!r}")
+            what = "a whole number" if self.kind == "int" else f"a number [{self.unit}]"
+            if isinstance(value, (bool, np.bool_, str)):
+                raise InvalidParameterError(f"{where} must be {what}; got {value!r}")
             try:
                 number = float(value)
             except (TypeError, ValueError):
-                raise InvalidParameterError(f"{where} must be a number [{self.unit}]; got {value!r}") from None
+                raise InvalidParameterError(f"{where} must be {what}; got {value!r}") from None
             if not math.isfinite(number):
                 raise InvalidParameterError(f"{where} must be finite; got {value!r}")
             if self.kind == "int":

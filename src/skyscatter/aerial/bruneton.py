@@ -45,6 +45,7 @@ from ..precomputed.cache import resolve_atmosphere
 from ..sky.base import SkyModel
 from ..sky.bruneton import BrunetonSky
 from ..spectral import as_wavelengths
+from ..validation import whole_number
 from .base import DEFAULT_REFINE, DEFAULT_SHADOW_SAMPLES, AerialPerspective, ShadowCaster, check_path, check_rays
 
 __all__ = ["BrunetonAerialPerspective", "aerial_perspective", "aerial_perspective_shafts", "sky_radiance_shafts",
@@ -175,11 +176,8 @@ class BrunetonAerialPerspective(AerialPerspective):
                 raise InvalidParameterError(f"camera_xy must be finite [m]; got {camera_xy!r}")
             camera_xy = (cx, cy)
         self.camera_xy = camera_xy
-        for name, value, low in (("samples", samples, 1), ("refine", refine, 0)):
-            if isinstance(value, bool) or int(value) != value or value < low:
-                raise InvalidParameterError(f"{name} must be a whole number >= {low}; got {value!r}")
-        self.samples = int(samples)
-        self.refine = int(refine)
+        self.samples = whole_number("samples", samples, 1, integral_floats=True)
+        self.refine = whole_number("refine", refine, 0, integral_floats=True)
         self._matrices: dict[bytes, NDArray[np.float64] | None] = {}
 
     @property

@@ -48,6 +48,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FileFormatError, InvalidParameterError, OutputError
+from ..validation import whole_number
 from .particles import ParticleComponent, register_particle_kind
 
 __all__ = ["CloudField", "CloudLayer", "REFERENCE_WAVELENGTH", "MAX_VOXELS", "perlin_fbm", "worley_fbm"]
@@ -300,8 +301,7 @@ class CloudField:
         if nx * ny * nz > MAX_VOXELS:
             raise InvalidParameterError(f"resolution gives {nx * ny * nz} voxels; at most {MAX_VOXELS}")
         fs = _number("feature size", feature_size, 1.0, 1e7)
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise InvalidParameterError(f"seed must be a whole number >= 0; got {seed!r}")
+        seed = whole_number("seed", seed, 0)
         ext = _procedural_extinction(c, nx, ny, nz, sx, sy, t - b, fs, tau, int(seed))
         return cls(ext, (sx, sy), b, t, particles, origin=origin, periodic=periodic)
 

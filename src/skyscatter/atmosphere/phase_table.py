@@ -62,6 +62,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FileFormatError, InvalidParameterError
 from ..lazy import lazy_namespace
+from ..validation import whole_number
 
 __all__ = [
     "PhaseTable",
@@ -466,9 +467,7 @@ class PhaseTable:
         ``chi_l = 2 pi int_{-1}^{1} p(mu) P_l(mu) dmu`` (module docstring): ``chi_0 = 1``, ``chi_1 = g``; DISORT's
         ``PMOM`` (Stamnes et al. 1988).
         """
-        if isinstance(n_moments, bool) or int(n_moments) != n_moments or n_moments < 1:
-            raise InvalidParameterError(f"number of Legendre moments must be a whole number >= 1; got {n_moments!r}")
-        n = int(n_moments)
+        n = whole_number("number of Legendre moments", n_moments, 1, integral_floats=True)
         mu = self._mu
         a, b = mu[:-1], mu[1:]
         pl = _legendre_table(mu, n + 2)  # P_0 .. P_{n+1} at the nodes
@@ -505,9 +504,7 @@ class PhaseTable:
         the original is small; those values are set to 0 and the table renormalised unless ``clip_negative`` is
         False (then InvalidParameterError).
         """
-        if isinstance(n_streams, bool) or int(n_streams) != n_streams or n_streams < 2:
-            raise InvalidParameterError(f"delta-M needs a whole number of streams >= 2; got {n_streams!r}")
-        m = int(n_streams)
+        m = whole_number("the number of delta-M streams", n_streams, 2, integral_floats=True)
         chi = self.legendre_moments(m + 1)
         f = chi[:, m].copy()
         if np.any(f >= 1.0):

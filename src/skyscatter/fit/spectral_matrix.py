@@ -48,6 +48,7 @@ from ..errors import InvalidParameterError, OutputError
 from ..fileio import atomic_path, check_output_path
 from ..patches import PatchScheme, patch_scheme
 from ..radiance import write_radiance_matrix as _write_matrix
+from ..validation import whole_number
 from .weather import (
     CLEAR,
     CLEAR_OPEN,
@@ -177,8 +178,7 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
     from ..conventions import direction_from_angles
 
     geom = scheme if isinstance(scheme, PatchScheme) else patch_scheme(scheme)
-    if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 4:
-        raise InvalidParameterError(f"samples must be a whole number in [1, 4]; got {samples!r}")
+    whole_number("samples", samples, 1, 4, integral_floats=True)
     centres, edges = band_edges(bands)
     if atmosphere is None:
         atmosphere = retrieve_hourly_atmosphere(record, options, family=family)
@@ -608,8 +608,7 @@ def spectral_sky_matrix_sites(records: Sequence[str | os.PathLike[str]], store: 
     store_path = Path(store)
     if store_path.suffix.lower() != ".zarr":
         raise InvalidParameterError(f"{store_path}: the multi-site store must be a .zarr directory")
-    if isinstance(workers, bool) or int(workers) != workers or workers < 1:
-        raise InvalidParameterError(f"workers must be a whole number >= 1; got {workers!r}")
+    whole_number("workers", workers, 1, integral_floats=True)
     geom = patch_scheme(scheme)
     centres, _ = band_edges(bands)
     from .weather import read_weather

@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import __version__
 from ..atmosphere import AtmosphereParameters
 from ..errors import InvalidParameterError, MissingDependencyError, OutputError
+from ..validation import whole_number
 from .driver import (
     DEFAULT_GROUP_SIZE,
     batch_layout,
@@ -85,8 +86,7 @@ LOCK_SUFFIX = ".skyscatter-lock"
 def equal_area_directions(n: int) -> NDArray[np.float64]:
     """``n`` directions spread evenly over the upper hemisphere (spherical Fibonacci lattice, equal area per point;
     [Gonzalez2010]), unit ENU vectors (n, 3)."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise InvalidParameterError(f"number of directions must be an integer >= 1; got {n!r}")
+    n = whole_number("number of directions", n, 1)
     i = np.arange(n) + 0.5
     z = 1.0 - i / n  # uniform in cos(zenith) on (0, 1]: equal area on the hemisphere
     phi = i * math.pi * (3.0 - math.sqrt(5.0))
@@ -146,13 +146,6 @@ class ReferenceJob:
                            nb, bs)
 
 
-def _whole(name: str, value: Any, lo: int, hi: int, unit: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
-        what = f" [{unit}]" if unit else ""
-        raise InvalidParameterError(f"{name} must be a whole number from {lo} to {hi:.6g}{what}; got {value!r}")
-    return int(value)
-
-
 def _axis(name: str, values: ArrayLike, lo: float, hi: float, unit: str) -> NDArray[np.float64]:
     v = np.atleast_1d(np.asarray(values, dtype=float))
     if v.ndim != 1 or v.size == 0:
@@ -179,9 +172,9 @@ def make_job(*, sun_elevations: ArrayLike, albedos: ArrayLike, wavelengths: Arra
     if not isinstance(atm, AtmosphereParameters):
         raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(atm).__name__}")
     wl = check_wavelengths(wavelengths)
-    samples = _whole("samples", samples, 1, MAX_SAMPLES, "paths per direction")
-    seed = _whole("seed", seed, 0, 2**63 - 1, "")
-    group_size = _whole("group_size", group_size, 1, 1024, "wavelengths per path")
+    samples = whole_number("samples (paths per direction)", samples, 1, MAX_SAMPLES)
+    seed = whole_number("seed", seed, 0, 2**63 - 1)
+    group_size = whole_number("group_size (wavelengths per path)", group_size, 1, 1024)
     try:
         alt = float(altitude)
     except (TypeError, ValueError):

@@ -46,6 +46,7 @@ from tqdm.auto import tqdm
 
 from ..atmosphere.phase import aerosol_phase_kind
 from ..errors import InvalidParameterError
+from ..validation import whole_number
 from . import conversion, kernels
 from .parallel import parallel_for
 from .parameters import SOLAR_BAND_WIDTH, AtmosphereParameters
@@ -307,8 +308,7 @@ def compute_tables(params: AtmosphereParameters, *, orders: int = DEFAULT_ORDERS
     arrays with a trailing wavelength axis, ``timings`` each step's seconds (summed over wavelength chunks)."""
     if not isinstance(params, AtmosphereParameters):
         raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(params).__name__}")
-    if isinstance(orders, bool) or not isinstance(orders, (int, np.integer)) or not 1 <= orders <= 50:
-        raise InvalidParameterError(f"orders must be a whole number in [1, 50]; got {orders!r}")
+    whole_number("orders", orders, 1, 50)
     if params.particles:
         raise InvalidParameterError(
             "the precomputed tables take one aerosol (AtmosphereParameters.aerosol) and no further particle "
@@ -319,8 +319,7 @@ def compute_tables(params: AtmosphereParameters, *, orders: int = DEFAULT_ORDERS
     sz = TableSizes.coerce(sizes)
     if chunk_size is None:
         chunk_size = max(1, int(CHUNK_MEMORY // (24 * math.prod(sz.scattering_shape))))
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
-        raise InvalidParameterError(f"chunk_size must be a whole number >= 1; got {chunk_size!r}")
+    whole_number("chunk_size", chunk_size, 1)
     medium = Medium.of(params, wl, sz)
     chunks = [np.arange(i, min(i + chunk_size, wl.size)) for i in range(0, wl.size, chunk_size)]
     with Bookkeeping(orders * len(chunks), progress) as book:

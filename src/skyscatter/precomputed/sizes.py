@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..deprecation import warn_renamed
 from ..errors import InvalidParameterError
+from ..validation import whole_number
 
 __all__ = ["DEFAULT_ORDERS", "DEFAULT_TABLE_WAVELENGTHS", "NAMED_WAVELENGTHS", "RGB_TABLE_WAVELENGTHS", "TableSizes",
            "table_wavelengths"]
@@ -76,9 +77,7 @@ class TableSizes:
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 2:
-                raise InvalidParameterError(f"table size {f.name} must be a whole number >= 2; got {v!r}")
-            object.__setattr__(self, f.name, int(v))
+            object.__setattr__(self, f.name, whole_number(f"table size {f.name}", v, 2))
         if self.scattering_mu % 2 or self.scattering_mu < 4:
             raise InvalidParameterError(
                 "scattering_mu must be even and >= 4 (half of it on each side of the horizon); "

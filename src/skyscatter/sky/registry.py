@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from ..atmosphere.options import ATMOSPHERE_OPTIONS, atmosphere_option
-from ..conventions import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_EXTRATERRESTRIAL_IRRADIANCE
+from ..conventions import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_EXTRATERRESTRIAL_IRRADIANCE, MAX_SKY_LUMINANCE
 from ..deprecation import rename
 from ..errors import InvalidParameterError
 from ..references import cite
@@ -260,7 +260,8 @@ _SUN_LIMIT = "the extraterrestrial solar value at perihelion, which nothing at t
 _TURBIDITY_HELP = "atmospheric turbidity T (haze + molecules over molecules alone)"
 _SCALE = (
     Parameter("zenith_luminance", "cd m^-2", None, "zenith luminance (default: 10000 lx diffuse)",
-              low=0.0),
+              low=0.0, high=MAX_SKY_LUMINANCE, why="the luminance of the solar disc outside the atmosphere, which no "
+              "part of the sky exceeds"),
     Parameter("diffuse_illuminance", "lx", None, "horizontal diffuse illuminance to scale the sky to", low=0.0,
               high=MAX_EXTRATERRESTRIAL_ILLUMINANCE, why=_SUN_LIMIT),
 )
