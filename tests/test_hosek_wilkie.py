@@ -374,15 +374,15 @@ def test_cli_sky_and_illuminance(tmp_path, capsys):
     from skyscatter.render import read_exr
 
     out = tmp_path / "hw.exr"
-    code = main(["sky", "--model", "hosek-wilkie", "--turbidity", "4", "--albedo", "0.3", "--width", "32",
+    code = main(["sky", "--model", "hosek-wilkie", "--turbidity", "4", "--ground-albedo", "0.3", "--width", "32",
                  "--sun-elevation", "30", "--out", str(out), "--png", str(tmp_path / "hw.png")])
     assert code == 0, capsys.readouterr().err
     img = read_exr(out)
     assert img.shape == (16, 32, 3) and np.all(np.isfinite(img)) and img.max() > 0
     assert main(["illuminance", "--model", "hosek-wilkie", "--sun-elevation", "30", "--json"]) == 0
     capsys.readouterr()
-    assert main(["sky", "--model", "hosek-wilkie", "--albedo", "1.5", "--out", str(out)]) == 2
-    assert "--albedo 1.5: albedo 1.5 is outside 0 to 1" in capsys.readouterr().err
+    assert main(["sky", "--model", "hosek-wilkie", "--ground-albedo", "1.5", "--out", str(out)]) == 2
+    assert "--ground-albedo 1.5: ground_albedo 1.5 is outside 0 to 1" in capsys.readouterr().err
     assert main(["illuminance", "--model", "hosek-wilkie", "--turbidity", "0.5"]) == 2
     err = capsys.readouterr().err
     assert "turbidity 0.5 is outside 1 to 10" in err and len(err.strip().splitlines()) == 1

@@ -28,7 +28,9 @@ Perez parameters and the patch geometry, savable as ``.npz`` and ``.csv``.
 
 from __future__ import annotations
 
+import datetime as dt
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -274,8 +276,6 @@ class SkyMatrix:
     @property
     def times(self):
         """Middle of each hour (record): tz-aware ``pandas.DatetimeIndex`` in the file's standard time."""
-        import datetime as dt
-
         import pandas as pd
 
         ns = np.round(self.unix_time * 1e3).astype(np.int64) * 1_000_000  # whole milliseconds, exactly
@@ -534,7 +534,6 @@ def _report_light_at_night(epw: EPWData, night: NDArray[np.int64], mode: str, un
            "LOCATION line?)")
     if mode == "error":
         raise FileFormatError(f"{epw.path}: {first}: light although {why}")
-    import warnings
 
     from .epw import EPWWarning
 

@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FileFormatError, InvalidParameterError
+from ..fileio import atomic_path
 from . import phase as _phase
 from .particles import AnalyticParticles, ParticleComponent, particle_component_from_dict
 from .phase_table import PhaseTable
@@ -533,8 +534,6 @@ class AtmosphereParameters:
     def save_json(self, path: str, extra: dict[str, Any] | None = None) -> None:
         """Write ``{"atmosphere": to_dict(), **extra}`` as JSON to ``path`` atomically (``skyscatter
         fit-atmosphere`` adds its fit report as ``extra``); :meth:`load_json` reads it back."""
-        from ..fileio import atomic_path
-
         with atomic_path(path) as tmp:
             tmp.write_text(json.dumps({"atmosphere": self.to_dict(), **(extra or {})}, indent=1, sort_keys=True))
 

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..errors import InvalidParameterError
+from ..fileio import atomic_paths, check_output_path, ensure_output_folder
 from .atmosphere_options import NAMES as ATMOSPHERE_NAMES
 from .atmosphere_options import add_atmosphere_options, add_deprecated_option
 from .common import HELP_FORMATTER, add_sun_options, finite_float, float_in, positive_int, sun_angles_from_args
@@ -297,8 +299,6 @@ def _old_sky_option(args: argparse.Namespace) -> None:
 
 def _check_out_dir(out_dir: Path) -> None:
     """Create the output folder if missing (as ``export-luts`` does); refuse a file or a read-only folder."""
-    from ..fileio import ensure_output_folder
-
     ensure_output_folder(out_dir, what="--out-dir")
 
 
@@ -312,16 +312,12 @@ def _targets(out_dir: Path, panels: list[_Panel], figure: str) -> list[Path]:
 
 def _check_targets(targets: list[Path]) -> None:
     """Refuse, before any rendering, targets that cannot be replaced by a regular file."""
-    from ..fileio import check_output_path
-
     for target in targets:
         check_output_path(target)
 
 
 def _write_all(jobs: list[tuple[Path, Any]]) -> None:
     """Write every (target, writer) pair, all or none (:func:`skyscatter.fileio.atomic_paths`)."""
-    from ..fileio import atomic_paths
-
     with atomic_paths(*(target for target, _ in jobs)) as temps:
         for (_, writer), tmp in zip(jobs, temps, strict=True):
             writer(tmp)
@@ -333,7 +329,6 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     from tqdm import tqdm
 
-    from ..errors import InvalidParameterError
     from ..render.camera import PinholeCamera
     from ..render.image_io import write_exr, write_png
     from ..render.scene import DEFAULT_CAMERA_HEIGHT, Scene

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..fileio import ensure_output_folder
 from .common import HELP_FORMATTER
 
 
@@ -46,7 +47,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..fileio import ensure_output_folder
     from ..precomputed import PrecomputedAtmosphere
     from ..precomputed.cache import cached_atmosphere
     from .common import one_line_warnings

@@ -9,6 +9,7 @@ import sys
 import time
 
 from ..errors import InvalidParameterError
+from ..fileio import check_output_path
 from .atmosphere_options import add_atmosphere_options, atmosphere_from_args
 from .common import HELP_FORMATTER, float_list, output_path, positive_int
 
@@ -51,7 +52,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..fileio import check_output_path
     from ..fit import fit_hosek_wilkie, fit_sun_elevations
     from ..precomputed.cache import load_or_compute
 

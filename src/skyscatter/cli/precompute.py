@@ -8,6 +8,7 @@ import sys
 import time
 
 from ..errors import InvalidParameterError
+from ..fileio import check_output_path
 from .atmosphere_options import add_atmosphere_options, add_deprecated_option, atmosphere_from_args
 from .common import HELP_FORMATTER, float_in, float_list, one_line_warnings, output_path, positive_int
 
@@ -115,7 +116,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..fileio import check_output_path
     from ..precomputed import PrecomputedAtmosphere
     from ..precomputed.cache import check_cache_dir, load_or_compute
 

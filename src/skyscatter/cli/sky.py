@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
 
+from ..errors import InvalidParameterError
 from .common import (
     HELP_FORMATTER,
     add_image_output_options,
@@ -61,7 +63,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..errors import InvalidParameterError
     from ..render import sky_image, write_exr_and_png
 
     check_output_paths(args)
@@ -145,8 +146,6 @@ def _format_seconds(seconds: float) -> str:
 
 def _monte_carlo_progress(model, args: argparse.Namespace):
     """Say how long the Monte Carlo sky will take (from a pilot run) and attach a progress bar to it."""
-    import sys
-
     from tqdm import tqdm
 
     from ..runtime import num_threads

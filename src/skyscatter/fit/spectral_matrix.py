@@ -36,6 +36,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -44,6 +45,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..conventions import direction_from_angles
 from ..errors import InvalidParameterError, OutputError
 from ..fileio import atomic_path, check_output_path
 from ..patches import PatchScheme, patch_scheme
@@ -175,7 +177,6 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
     import xarray as xr
 
     from .. import __version__
-    from ..conventions import direction_from_angles
 
     geom = scheme if isinstance(scheme, PatchScheme) else patch_scheme(scheme)
     whole_number("samples", samples, 1, 4, integral_floats=True)
@@ -505,8 +506,6 @@ def plane_irradiance(ds, tilt: float, azimuth: float, *, samples: int = 4):
     """
     import xarray as xr
 
-    from ..conventions import direction_from_angles
-
     tilt = float(tilt)
     azimuth = float(azimuth)
     if not (np.isfinite(tilt) and 0.0 <= tilt <= np.pi) or not np.isfinite(azimuth):
@@ -681,8 +680,6 @@ def _compute(tasks, scheduler, workers: int, progress: bool) -> None:
 
 def _open_or_create_sites(store: Path, job: dict, job_id: str, n_sites: int, n_hours: int, n_patches: int,
                           centres: NDArray[np.float64]) -> None:
-    import shutil
-
     import xarray as xr
 
     if store.exists():

@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import __version__
 from ..atmosphere import AtmosphereParameters
 from ..errors import InvalidParameterError, MissingDependencyError, OutputError
+from ..fileio import ensure_output_folder
 from ..validation import whole_number
 from .driver import (
     DEFAULT_GROUP_SIZE,
@@ -279,8 +280,6 @@ def _remove_stale_temporary_stores(store: Path) -> None:
 def check_store_path(store: str | os.PathLike[str]) -> Path:
     """Refuse a store path that cannot be created or resumed, before any work: empty, an existing file, a missing
     or read-only folder."""
-    from ..fileio import ensure_output_folder
-
     text = os.fspath(store)
     if not str(text).strip():
         raise OutputError("the store path is empty; name a folder such as ref.zarr")

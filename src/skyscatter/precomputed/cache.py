@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike
 
 from ..deprecation import renamed_keywords
 from ..errors import FileFormatError, InvalidParameterError, OutputError
+from ..fileio import ensure_output_folder
 from .parameters import AtmosphereParameters
 from .sizes import DEFAULT_ORDERS, TableSizes, table_wavelengths
 from .storage import cache_key
@@ -49,8 +50,6 @@ def check_cache_dir() -> Path:
 
     The message names the folder, says what is wrong and how to choose another (``SKYSCATTER_CACHE_DIR``).
     """
-    from ..fileio import ensure_output_folder
-
     return ensure_output_folder(cache_dir(), what="the table cache folder",
                                 hint="set SKYSCATTER_CACHE_DIR to a writable folder")
 

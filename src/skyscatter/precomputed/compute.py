@@ -301,10 +301,11 @@ def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int,
 
 def compute_tables(params: AtmosphereParameters, *, orders: int = DEFAULT_ORDERS,
                    wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
-                   progress: bool | None = None, tables: str | None = None,
+                   progress: bool | None = None, preset: str | None = None,
                    chunk_size: int | None = None) -> tuple[F64, TableSizes, dict[str, F32], dict[str, float]]:
     """Algorithm 4.1: ``(wavelengths, sizes, tables, timings)`` after validating the arguments (those of
-    :meth:`.PrecomputedAtmosphere.compute`); ``tables`` maps the names of :data:`.storage.TABLE_NAMES` to float32
+    :meth:`.PrecomputedAtmosphere.compute`, whose ``tables`` preset is ``preset`` here); ``tables`` maps the names
+    of :data:`.storage.TABLE_NAMES` to float32
     arrays with a trailing wavelength axis, ``timings`` each step's seconds (summed over wavelength chunks)."""
     if not isinstance(params, AtmosphereParameters):
         raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(params).__name__}")
@@ -313,7 +314,7 @@ def compute_tables(params: AtmosphereParameters, *, orders: int = DEFAULT_ORDERS
         raise InvalidParameterError(
             "the precomputed tables take one aerosol (AtmosphereParameters.aerosol) and no further particle "
             "components (cloud layers): use the Monte Carlo reference for those")
-    wl = table_wavelengths(wavelengths, tables)
+    wl = table_wavelengths(wavelengths, preset)
     params.check_wavelengths(wl)
     check_colour_range(params, wl)
     sz = TableSizes.coerce(sizes)

@@ -37,7 +37,9 @@ when loaded) and is exact for ground observers only: anything above the ground m
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
+import warnings
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -46,7 +48,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidParameterError
+from ..errors import FileFormatError, InvalidParameterError, OutputError
 from .cache import cached_atmosphere
 from .parameters import AtmosphereParameters
 from .sizes import DEFAULT_ORDERS, TableSizes
@@ -199,10 +201,6 @@ class TableFamily:
         return atm
 
     def _ground_node(self, params: AtmosphereParameters, progress: bool | None) -> PrecomputedAtmosphere:
-        import dataclasses
-        import warnings
-
-        from ..errors import FileFormatError, OutputError
         from .cache import cache_path
         from .storage import cache_key
 

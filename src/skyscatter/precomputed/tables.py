@@ -124,7 +124,7 @@ class PrecomputedAtmosphere(TableLookups):
         from .compute import compute_tables  # numba and the kernels load when tables are first computed
 
         atmosphere = AtmosphereParameters() if atmosphere is None else atmosphere
-        wl, sz, arrays, timings = compute_tables(atmosphere, orders=orders, wavelengths=wavelengths, tables=tables,
+        wl, sz, arrays, timings = compute_tables(atmosphere, orders=orders, wavelengths=wavelengths, preset=tables,
                                                  sizes=sizes, progress=progress, chunk_size=chunk_size)
         return cls(atmosphere, wl, sz, orders, arrays, timings)
 

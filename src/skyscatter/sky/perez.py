@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..atmosphere.airmass import relative_optical_mass
 from ..atmosphere.tables import load_table
-from ..conventions import as_directions, direction_from_angles
+from ..conventions import as_directions, check_daylight_limit, direction_from_angles
 from ..errors import InvalidParameterError
 from ..quadrature import plane_integral
 from .base import LuminanceOnlySky, SunSkyMixin, check_sun_angles
@@ -375,7 +375,6 @@ def _finite(name: str, value, unit: str, *, low: float | None = None, strict_low
         raise InvalidParameterError(f"{name} must be {rel} {low:g} [{unit}]; got {v:g}")
     if high is not None and v > high:
         raise InvalidParameterError(f"{name} must be at most {high:g} [{unit}]{why}; got {v:g}")
-    from ..conventions import check_daylight_limit
 
     check_daylight_limit(name, v, unit)
     return v

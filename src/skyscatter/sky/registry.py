@@ -16,6 +16,7 @@ caller's own package, for a model that lives outside skyscatter).
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
@@ -80,8 +81,6 @@ def _decode(p: Parameter, value: Any) -> Any:
 
 def _encode_atmosphere(value: Any) -> dict[str, Any]:
     """AtmosphereParameters -> its dict; precomputed tables -> their parameters plus the table settings."""
-    import dataclasses
-
     from ..atmosphere import AtmosphereParameters
 
     if isinstance(value, AtmosphereParameters):
