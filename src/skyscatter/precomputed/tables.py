@@ -62,9 +62,9 @@ class PrecomputedAtmosphere(TableLookups):
     :class:`.evaluation.TableLookups`.
     """
 
-    def __init__(self, params: AtmosphereParameters, wavelengths: ArrayLike, sizes: TableSizes, orders: int,
+    def __init__(self, atmosphere: AtmosphereParameters, wavelengths: ArrayLike, sizes: TableSizes, orders: int,
                  tables: Mapping[str, NDArray[np.float32]], timings: Mapping[str, float] | None = None) -> None:
-        self.parameters = params
+        self.parameters = atmosphere
         self.wavelengths = np.asarray(wavelengths, dtype=float)
         self.sizes = sizes
         self.orders = int(orders)
@@ -81,15 +81,15 @@ class PrecomputedAtmosphere(TableLookups):
         for name, shape in expected.items():
             if self.tables[name].shape != shape:
                 raise FileFormatError(f"table {name} has shape {self.tables[name].shape}, expected {shape}")
-        self._solar = params.solar_irradiance_at(self.wavelengths)
-        self._albedo = params.ground_albedo_at(self.wavelengths)
+        self._solar = atmosphere.solar_irradiance_at(self.wavelengths)
+        self._albedo = atmosphere.ground_albedo_at(self.wavelengths)
         self._xyz_matrix: NDArray[np.float64] | None = None
         self._colour = None  # the ColourConversion, built on first use
 
     # ------------------------------------------------------------------ computation
 
     @classmethod
-    @renamed_keywords(params="atmosphere")
+    @renamed_keywords(atmosphere="atmosphere")
     def compute(cls, atmosphere: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
                 tables: str | None = None, wavelengths: ArrayLike | None = None,
                 sizes: TableSizes | Mapping[str, int] | None = None, progress: bool | None = None,
