@@ -101,7 +101,7 @@ README_TOUR = """
     perez = skyscatter.PerezSky(sun.zenith, sun.azimuth, direct_normal_irradiance=650.0,
                                 diffuse_horizontal_irradiance=110.0)
     skyscatter.photometry.horizontal_illuminance(perez, include_sun=True)
-    bruneton = skyscatter.BrunetonSky(sun.zenith, sun.azimuth, turbidity=3.0)
+    bruneton = skyscatter.BrunetonSky(sun.zenith, sun.azimuth, turbidity=3.0, ground_albedo=0.2, tables="rgb")
 """
 
 

@@ -47,8 +47,9 @@ ATMOSPHERE_OPTIONS: tuple[Parameter, ...] = (
               low=-0.99, high=0.99, flag="--mie-g"),
     Parameter("aerosol_type", "", None, "OPAC aerosol type with Mie optics (Hess et al. 1998; with --aod its "
               "optical depth at 550 nm, else the type's own)", kind="choice", choices=(), flag="--aerosol"),
-    Parameter("atmosphere_file", "", None, "the air from a JSON file (written by 'skyscatter fit-atmosphere' or "
-              "AtmosphereParameters.save_json); the other options change it", kind="path", flag="--atmosphere"),
+    Parameter("atmosphere_file", "", None, "the air from a JSON file [.json] (written by 'skyscatter "
+              "fit-atmosphere' or AtmosphereParameters.save_json); the other options change it", kind="path",
+              flag="--atmosphere"),
 )
 
 
