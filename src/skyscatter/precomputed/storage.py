@@ -55,7 +55,7 @@ def cache_key(atmosphere: AtmosphereParameters, orders: int, wavelengths: NDArra
         del described["mie_phase_function"]
     blob = json.dumps(
         {
-            "atmosphere": described,
+            "params": described,  # the key of every cache written so far: not renamed
             "orders": int(orders),
             "wavelengths": [float(w) for w in wavelengths],
             "sizes": dataclasses.asdict(sizes),

@@ -89,7 +89,7 @@ class PrecomputedAtmosphere(TableLookups):
     # ------------------------------------------------------------------ computation
 
     @classmethod
-    @renamed_keywords(atmosphere="atmosphere")
+    @renamed_keywords(params="atmosphere")
     def compute(cls, atmosphere: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
                 tables: str | None = None, wavelengths: ArrayLike | None = None,
                 sizes: TableSizes | Mapping[str, int] | None = None, progress: bool | None = None,
