@@ -75,7 +75,7 @@ def test_unknown_named_wavelength_set_is_refused():
     from skyscatter.errors import InvalidParameterError
 
     with pytest.raises(InvalidParameterError, match="not a known set.*rgb.*spectral"):
-        PrecomputedAtmosphere.compute(orders=1, sizes=TINY, wavelengths="blue", progress=False)
+        PrecomputedAtmosphere.compute(orders=1, sizes=TINY, tables="blue", progress=False)
 
 
 def test_subset_equals_separate_computation():

@@ -210,8 +210,8 @@ def test_render_with_bruneton_provider(atm, ridge):
     cam = PinholeCamera.from_degrees((900.0, 0.0, 60.0), 270.0, 3.0, 70.0)
     sun_zenith, sun_azimuth = math.pi / 2 - SUN_ELEVATION, math.radians(270.0)
     terrain = ridge.terrain
-    with_shafts = bruneton_scene(terrain, cam, sun_zenith, sun_azimuth, atmosphere=atm).render(64, 36)
-    without = bruneton_scene(terrain, cam, sun_zenith, sun_azimuth, atmosphere=atm, shafts=False).render(64, 36)
+    with_shafts = bruneton_scene(terrain, cam, sun_zenith, sun_azimuth, precomputed=atm).render(64, 36)
+    without = bruneton_scene(terrain, cam, sun_zenith, sun_azimuth, precomputed=atm, shafts=False).render(64, 36)
     for res in (with_shafts, without):
         assert res.rgb.shape == (36, 64, 3)
         assert np.all(np.isfinite(res.rgb)) and np.all(res.rgb >= 0)
