@@ -123,6 +123,21 @@ def test_bruneton_scene_old_keywords(monkeypatch):
     assert seen["tables"] == "rgb" and len(record) == 2
 
 
+def test_scene_old_albedo():
+    from skyscatter.render.camera import PinholeCamera
+    from skyscatter.render.scene import Scene
+    from skyscatter.render.terrain import Terrain
+    from skyscatter.sky import PreethamSky
+
+    sky = PreethamSky(2.5, 0.8, 3.0)
+    terrain = Terrain.from_north_up(np.zeros((8, 8)), 50.0)
+    camera = PinholeCamera((200.0, 200.0, 100.0), 0.0, -0.3, 1.0)
+    new = Scene(sky, terrain=terrain, camera=camera, aerial=None, terrain_albedo=0.3, sun_disc=False).render(8, 6)
+    with pytest.warns(DeprecationWarning, match="use terrain_albedo"):
+        old = Scene(sky, terrain=terrain, camera=camera, aerial=None, albedo=0.3, sun_disc=False).render(8, 6)
+    np.testing.assert_array_equal(old.rgb, new.rgb)
+
+
 def _cli(capsys, *args):
     code = main(list(args))
     out, err = capsys.readouterr()

@@ -379,8 +379,8 @@ def run(args: argparse.Namespace) -> int:
             scenes.append(bruneton_scene(terrain, camera, *panel.bruneton_sun, terrain_albedo=args.terrain_albedo,
                                          sun_disc=args.sun_disc, wavelengths=wavelengths, **medium))
             continue
-        scenes.append(Scene(panel.sky, terrain=terrain, camera=camera, aerial=panel.aerial, albedo=args.terrain_albedo,
-                            sun_disc=args.sun_disc, wavelengths=wavelengths))
+        scenes.append(Scene(panel.sky, terrain=terrain, camera=camera, aerial=panel.aerial,
+                            terrain_albedo=args.terrain_albedo, sun_disc=args.sun_disc, wavelengths=wavelengths))
 
     _check_out_dir(args.out_dir)
     _check_targets(targets)

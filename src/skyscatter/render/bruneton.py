@@ -227,5 +227,5 @@ def bruneton_scene(terrain: Terrain, camera: PinholeCamera, sun_zenith: float, s
         samples=DEFAULT_SHADOW_SAMPLES if samples is None else samples,
         refine=DEFAULT_REFINE if refine is None else refine,
     )
-    return Scene(sky, terrain=terrain, camera=camera, aerial=aerial, albedo=terrain_albedo, sun_disc=sun_disc,
+    return Scene(sky, terrain=terrain, camera=camera, aerial=aerial, terrain_albedo=terrain_albedo, sun_disc=sun_disc,
                  wavelengths=wavelengths)
