@@ -58,7 +58,7 @@ def main() -> int:
     print(f"machine: {platform.machine()}, {os.cpu_count()} CPUs, python {platform.python_version()}, "
           f"load average {os.getloadavg()[0]:.1f}")
     atm = cached_atmosphere()
-    sky = BrunetonSky(math.radians(50.0), math.radians(140.0), atmosphere=atm)
+    sky = BrunetonSky(math.radians(50.0), math.radians(140.0), precomputed=atm)
     n = 1_000_000
     up = directions(n)
     whole = sphere(up)

@@ -55,7 +55,7 @@ def main(n: int = 262144, n_scalar: int = 4000) -> None:
           f"{os.cpu_count()} cpus, load average {os.getloadavg()[0]:.1f}")
     d = directions(n)
     zen, azi, t, a = ZEN, AZI, T, A
-    sky = HosekWilkieSky(zen, azi, turbidity=t, albedo=a)
+    sky = HosekWilkieSky(zen, azi, turbidity=t, ground_albedo=a)
     sky.spectral_radiance(d[:10], BANDS)
     report("skyscatter HosekWilkieSky.spectral_radiance (11 bands)", n,
            *best_of(lambda: sky.spectral_radiance(d, BANDS)))
@@ -64,7 +64,7 @@ def main(n: int = 262144, n_scalar: int = 4000) -> None:
     report("skyscatter HosekWilkieSky.spectral_radiance (11 bands)", n_scalar,
            *best_of(lambda: sky.spectral_radiance(d[:n_scalar], BANDS)))
     report("skyscatter HosekWilkieSky() construction (per sky)", 1,
-           *best_of(lambda: HosekWilkieSky(zen, azi, turbidity=t, albedo=a)))
+           *best_of(lambda: HosekWilkieSky(zen, azi, turbidity=t, ground_albedo=a)))
     try:
         import mitsuba as mi
     except ImportError:

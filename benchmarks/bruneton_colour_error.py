@@ -93,12 +93,12 @@ def main() -> int:
     worst = {name: [0.0, 0.0] for name in modes}
     for el in ELEVATIONS:
         zen, azi = math.radians(90.0 - el), 0.0
-        xyz_ref = spectrum_to_xyz(BrunetonSky(zen, azi, atmosphere=ref).table_radiance(d), ref.wavelengths)
+        xyz_ref = spectrum_to_xyz(BrunetonSky(zen, azi, precomputed=ref).table_radiance(d), ref.wavelengths)
         y_ref = xyz_ref[:, 1]
         lit = y_ref > 1e-6 * y_ref.max()
         cells, zenith = [], [chromaticity(xyz_ref[-1])]
         for name, atm in modes.items():
-            xyz = BrunetonSky(zen, azi, atmosphere=atm).xyz(d)
+            xyz = BrunetonSky(zen, azi, precomputed=atm).xyz(d)
             dxy = np.hypot(*(chromaticity(xyz) - chromaticity(xyz_ref)).T)
             dlum = np.abs(xyz[:, 1] / y_ref - 1.0)
             parts = [(dxy[lit & ~ground].max(), dxy[lit & ground].max()),

@@ -82,7 +82,7 @@ def langley(atm: AtmosphereParameters, turbidity: float, albedo: float, wl: np.n
     hw_avg, hw_centre, ours = [], [], []
     for e in els:
         sz = math.radians(90.0 - e)
-        s = HosekWilkieSky(sz, 0.0, turbidity=turbidity, albedo=albedo)
+        s = HosekWilkieSky(sz, 0.0, turbidity=turbidity, ground_albedo=albedo)
         hw_avg.append(s.sun_spectral_radiance(wl) * om_hw)
         centre = np.array([[0.0, math.sin(sz), math.cos(sz)]])
         hw_centre.append(s.solar_radiance(centre, wl)[0] * om_hw)
@@ -168,7 +168,7 @@ def main(argv: list[str] | None = None) -> None:
                 sz = math.radians(90.0 - e)
                 mc = montecarlo.sky_radiance(atm, d, wl, sun_zenith=sz, sun_azimuth=0.0, samples=args.samples,
                                              seed=args.seed)
-                hw = HosekWilkieSky(sz, 0.0, turbidity=t, albedo=args.albedo).spectral_radiance(d, wl)
+                hw = HosekWilkieSky(sz, 0.0, turbidity=t, ground_albedo=args.albedo).spectral_radiance(d, wl)
                 results[f"{t:g}/{e:g}"] = {"dirs": d.tolist(), "region": reg.tolist(), "mc": mc.radiance.tolist(),
                                            "stderr": mc.stderr.tolist(), "hw": hw.tolist(), "seconds": mc.seconds}
                 print(f"T={t:g} el={e:g}: {d.shape[0]} directions, {mc.seconds:.1f} s, median rel. stderr "

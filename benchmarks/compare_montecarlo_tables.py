@@ -5,7 +5,7 @@ wavelengths (440, 550, 680 nm), sun elevations +60 .. -6 deg and 15 view directi
 azimuths 0, 90 and 180 deg from the sun), it prints a Markdown table of the relative difference
 ``tables / MC - 1`` and its Monte Carlo standard error, and draws ``docs/images/montecarlo_vs_tables.png``.
 Tables: the default orders (6 and the geometric tail) and sizes, computed at exactly these three wavelengths
-(``wavelengths="rgb"``: per-wavelength radiance, no colour rule involved; cached on disk). Re-run after a change
+(``tables="rgb"``: per-wavelength radiance, no colour rule involved; cached on disk). Re-run after a change
 to the tables:
 ``python benchmarks/compare_montecarlo_tables.py [--samples N] [--out docs/images/montecarlo_vs_tables.png]``.
 """
@@ -53,7 +53,7 @@ def main() -> None:
     results = {}
     t0 = time.perf_counter()
     for name, params in cases.items():
-        tables = cached_atmosphere(params, wavelengths="rgb", progress=False)
+        tables = cached_atmosphere(params, tables="rgb", progress=False)
         pos = np.array([0.0, 0.0, params.bottom_radius])
         for se in SUN_ELEVATIONS:
             zen = math.radians(90.0 - se)

@@ -50,7 +50,7 @@ def main(out_dir: Path) -> None:
         z = np.radians(90 - e)
         src = make(z, 0.3)
         fitted = HosekWilkieSky(z, 0.3, dataset=ds)
-        published = HosekWilkieSky(z, 0.3, turbidity=1.0, albedo=0.1)
+        published = HosekWilkieSky(z, 0.3, turbidity=1.0, ground_albedo=0.1)
         a = sky_fit_error(fitted, src, WL)
         b = horizon_band_error(fitted, src, WL)
         c = sky_fit_error(published, src, WL)
@@ -90,7 +90,7 @@ def main(out_dir: Path) -> None:
         d = direction_from_angles(np.abs(vza), np.where(vza < 0, np.pi, 0.0))
         for sky, label in ((make(z, 0.0), "precomputed (Bruneton)"),
                            (HosekWilkieSky(z, 0.0, dataset=ds), "fitted form"),
-                           (HosekWilkieSky(z, 0.0, turbidity=1.0, albedo=0.1), "published HW T=1")):
+                           (HosekWilkieSky(z, 0.0, turbidity=1.0, ground_albedo=0.1), "published HW T=1")):
             axx.semilogy(np.degrees(vza), sky.spectral_radiance(d, [550.0])[:, 0], label=label)
         axx.set(xlabel="view zenith angle in the solar vertical [deg] (sun side > 0)",
                 ylabel="radiance at 550 nm [W m-2 sr-1 nm-1]", title=f"sun elevation {e:g} deg")

@@ -53,8 +53,8 @@ def _xy(xyz):
 def _errors(reference, atm, elevation):
     d = _directions()
     zen = math.radians(90.0 - elevation)
-    ref = spectrum_to_xyz(BrunetonSky(zen, 0.0, atmosphere=reference).table_radiance(d), W41)
-    xyz = BrunetonSky(zen, 0.0, atmosphere=atm).xyz(d)
+    ref = spectrum_to_xyz(BrunetonSky(zen, 0.0, precomputed=reference).table_radiance(d), W41)
+    xyz = BrunetonSky(zen, 0.0, precomputed=atm).xyz(d)
     assert np.all(ref[:, 1] > 0)
     return np.hypot(*(_xy(xyz) - _xy(ref)).T).max(), np.abs(xyz[:, 1] / ref[:, 1] - 1).max()
 
@@ -65,7 +65,7 @@ def test_default_is_spectral_and_rgb_is_named():
     atm = PrecomputedAtmosphere.compute(orders=1, sizes=TINY, progress=False)
     np.testing.assert_array_equal(atm.wavelengths, DEFAULT_TABLE_WAVELENGTHS)
     assert atm.spectral_mode
-    rgb = PrecomputedAtmosphere.compute(orders=1, sizes=TINY, wavelengths="rgb", progress=False)
+    rgb = PrecomputedAtmosphere.compute(orders=1, sizes=TINY, tables="rgb", progress=False)
     np.testing.assert_array_equal(rgb.wavelengths, RGB_TABLE_WAVELENGTHS)
     assert not rgb.spectral_mode
     assert rgb.cache_key != atm.cache_key  # the wavelengths are in the cache key: new defaults rebuild
@@ -75,7 +75,7 @@ def test_unknown_named_wavelength_set_is_refused():
     from skyscatter.errors import InvalidParameterError
 
     with pytest.raises(InvalidParameterError, match="not a known set.*rgb.*spectral"):
-        PrecomputedAtmosphere.compute(orders=1, sizes=TINY, wavelengths="blue", progress=False)
+        PrecomputedAtmosphere.compute(orders=1, sizes=TINY, tables="blue", progress=False)
 
 
 def test_subset_equals_separate_computation():
@@ -101,7 +101,7 @@ def test_three_wavelength_mode_misses_the_bounds_in_twilight(reference):
 
 
 def _zenith_xy(atm, elevation=-4.0):
-    return _xy(BrunetonSky(math.radians(90.0 - elevation), 0.0, atmosphere=atm).xyz([0.0, 0.0, 1.0]))
+    return _xy(BrunetonSky(math.radians(90.0 - elevation), 0.0, precomputed=atm).xyz([0.0, 0.0, 1.0]))
 
 
 def _linear_srgb(xy):
@@ -119,7 +119,7 @@ def test_twilight_zenith_is_blue_not_magenta(reference):
     r, g, b = _linear_srgb(xy)
     assert r < g < b and xy[0] < 0.3, (xy, (r, g, b))
     ref_xy = _xy(spectrum_to_xyz(
-        BrunetonSky(math.radians(94.0), 0.0, atmosphere=reference).table_radiance([0.0, 0.0, 1.0]), W41))
+        BrunetonSky(math.radians(94.0), 0.0, precomputed=reference).table_radiance([0.0, 0.0, 1.0]), W41))
     r, g, b = _linear_srgb(ref_xy)
     assert r < g < b, (ref_xy, (r, g, b))
     xy3 = _zenith_xy(_subset(reference, RGB_TABLE_WAVELENGTHS))
@@ -146,8 +146,8 @@ def test_spectral_radiance_is_the_table_spectrum(reference):
     within 2 % (measured: 0.9 % at most; in twilight, sun -4 deg, up to 6.7 % at 490-570 nm, in the Chappuis
     band, which the colour bounds above absorb)."""
     atm = _subset(reference, DEFAULT_TABLE_WAVELENGTHS)
-    sky = BrunetonSky(math.radians(60.0), 0.0, atmosphere=atm)
-    ref_sky = BrunetonSky(math.radians(60.0), 0.0, atmosphere=reference)
+    sky = BrunetonSky(math.radians(60.0), 0.0, precomputed=atm)
+    ref_sky = BrunetonSky(math.radians(60.0), 0.0, precomputed=reference)
     d = _directions()
     np.testing.assert_allclose(sky.spectral_radiance(d, DEFAULT_TABLE_WAVELENGTHS), sky.table_radiance(d), rtol=1e-12)
     spec = sky.spectral_radiance(d, W41)

@@ -63,7 +63,7 @@ def test_custom_panel_from_dem(tmp_path, capsys):
     np.save(tmp_path / "dem.npy", dem)
     out_dir = tmp_path / "out"
     out_dir.mkdir()
-    code, out, err = run(capsys, "--dem", str(tmp_path / "dem.npy"), "--dem-spacing", "100", "--sky", "cie-overcast",
+    code, out, err = run(capsys, "--dem", str(tmp_path / "dem.npy"), "--dem-spacing", "100", "--model", "cie-overcast",
                          "--turbidity", "8", "--out-dir", str(out_dir), "--width", "16", "--height", "10")
     assert code == 0, err
     img = read_exr(out_dir / "landscape.exr")
@@ -163,7 +163,7 @@ def test_overcast_sky_with_constant_density_haze_is_not_black(tmp_path, capsys):
     """CIE overcast has no sun; the constant-density haze is lit by the sky, so the distant terrain fades
     towards the sky's brightness instead of to black."""
     code, out, err = run(capsys, "--out-dir", str(tmp_path), "--width", "24", "--height", "14", "--no-glare",
-                         "--sky", "cie-overcast", "--turbidity", "10", "--aerial", "constant")
+                         "--model", "cie-overcast", "--turbidity", "10", "--aerial", "constant")
     assert code == 0, err
     img = read_exr(tmp_path / "landscape.exr").astype(float)
     lum = img @ np.array([0.2126, 0.7152, 0.0722])
@@ -190,7 +190,7 @@ def test_help_shows_each_default_once(capsys):
 def test_bruneton_model_refuses_preetham_options(tmp_path, capsys):
     from skyscatter.cli import main
 
-    for extra in (["--aerial", "numeric"], ["--sky", "cie-clear"]):
+    for extra in (["--aerial", "numeric"], ["--sky-type", "3"]):
         code = main(["demo", "--model", "bruneton", *extra, "--out-dir", str(tmp_path)])
         err = capsys.readouterr().err
         assert code == 2 and "does not apply to --model bruneton" in err and len(err.strip().splitlines()) == 1
@@ -211,10 +211,10 @@ def test_bruneton_model_takes_the_atmosphere_options():
     """Issue 11 item 5: demo --model bruneton takes the precomputed atmosphere's options (turbidity or aerosol
     optical depth and Angstrom exponent, ozone, table wavelengths), range-checked by the registry's spec."""
     demo, args = _demo_args("--model", "bruneton", "--aod", "0.3", "--angstrom-alpha", "1.1", "--ozone", "250",
-                            "--wavelengths", "rgb")
+                            "--tables", "rgb")
     (panel,) = demo._panels(args, "custom")
     assert panel.bruneton_medium == {"aerosol_optical_depth": 0.3, "angstrom_alpha": 1.1, "ozone_column": 250.0,
-                                     "wavelengths": "rgb"}
+                                     "tables": "rgb"}
     demo, args = _demo_args("--model", "bruneton", "--turbidity", "4")
     assert demo._panels(args, "custom")[0].bruneton_medium == {"turbidity": 4.0}
 

@@ -52,8 +52,8 @@ def test_export_luts_reports_only_what_it_wrote(tmp_path, capsys):
 
     tiny = dict(transmittance_mu=16, transmittance_r=4, irradiance_mu_s=4, irradiance_r=4, scattering_r=4,
                 scattering_mu=8, scattering_mu_s=4, scattering_nu=2)
-    for name, wl in (("rgb.npz", "rgb"), ("four.npz", [680.0, 550.0, 500.0, 440.0])):
-        PrecomputedAtmosphere.compute(orders=1, sizes=tiny, wavelengths=wl, progress=False).save(tmp_path / name)
+    for name, wl in (("rgb.npz", dict(tables="rgb")), ("four.npz", dict(wavelengths=[680.0, 550.0, 500.0, 440.0]))):
+        PrecomputedAtmosphere.compute(orders=1, sizes=tiny, progress=False, **wl).save(tmp_path / name)
     luts = tmp_path / "luts"
     assert main(["export-luts", "--out-dir", str(luts), "--from", str(tmp_path / "rgb.npz"), "--formats", "raw"]) == 0
     assert "scattering_rgba.raw" in capsys.readouterr().out
@@ -102,8 +102,8 @@ def test_demo_bruneton_table_wavelengths_reach_the_tables(monkeypatch):
     monkeypatch.setattr(rb, "BrunetonSky", fake_sky)
     with pytest.raises(Stop):
         rb.bruneton_scene(_terrain(), _camera(), 1.0, 0.0,
-                          wavelengths=[500.0, 600.0], table_wavelengths="rgb", ozone_column=250.0)
-    assert seen["wavelengths"] == "rgb" and seen["ozone_column"] == 250.0
+                          wavelengths=[500.0, 600.0], tables="rgb", ozone_column=250.0)
+    assert seen["tables"] == "rgb" and seen["ozone_column"] == 250.0
 
 
 def _terrain():

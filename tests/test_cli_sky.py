@@ -126,9 +126,9 @@ def test_bruneton_takes_the_atmosphere_options_and_refuses_mixtures(capsys):
 
 def test_bruneton_medium_options_build_the_atmosphere_they_name():
     from skyscatter.atmosphere import AtmosphereParameters
-    from skyscatter.sky.bruneton import _medium_from_options
 
-    p = _medium_from_options(None, aerosol_optical_depth=0.2, angstrom_alpha=1.0, albedo=0.3, ozone_column=0.0)
+    _medium_from_options = AtmosphereParameters.from_options
+    p = _medium_from_options(None, aerosol_optical_depth=0.2, angstrom_alpha=1.0, ground_albedo=0.3, ozone_column=0.0)
     # Angstrom's law: tau(550 nm) = beta 0.55^-alpha
     assert p.mie_angstrom_beta * 0.55 ** -1.0 == pytest.approx(0.2, rel=1e-12)
     assert (p.ozone_column, float(p.ground_albedo_at([550.0])[0])) == (0.0, 0.3)

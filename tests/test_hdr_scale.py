@@ -28,7 +28,7 @@ MITSUBA_FACTOR = 106.75
 def test_our_map_is_mitsuba_sunsky_times_the_stated_factor(tmp_path, capsys, elevation, azimuth, turbidity):
     mi.set_variant("scalar_rgb")
     exr = tmp_path / "sky.exr"
-    code = main(["sky", "--model", "hosek-wilkie", "--turbidity", str(turbidity), "--albedo", "0.1",
+    code = main(["sky", "--model", "hosek-wilkie", "--turbidity", str(turbidity), "--ground-albedo", "0.1",
                  "--sun-elevation", str(elevation), "--sun-azimuth", str(azimuth), "--layout", "mitsuba",
                  "--width", "1024", "--no-sun-disc", "--out", str(exr)])
     assert code == 0, capsys.readouterr().err

@@ -38,7 +38,7 @@ def _rows(kind: int) -> np.ndarray:
 
 
 def _sky(row: np.ndarray) -> HosekWilkieSky:
-    return HosekWilkieSky(row[3], row[4], turbidity=row[1], albedo=row[2])
+    return HosekWilkieSky(row[3], row[4], turbidity=row[1], ground_albedo=row[2])
 
 
 def _raw(row: np.ndarray, which: str = "spectral") -> float:
@@ -196,7 +196,7 @@ def test_sun_on_the_horizon_is_the_first_control_point():
     params, rad = ds.configuration(0.0, 3.0, 0.0)
     np.testing.assert_array_equal(params, ds.params[:, 0, 2, 0])
     np.testing.assert_array_equal(rad, ds.radiance[:, 0, 2, 0])
-    sky = HosekWilkieSky(np.pi / 2, 0.0, turbidity=3.0, albedo=0.0)
+    sky = HosekWilkieSky(np.pi / 2, 0.0, turbidity=3.0, ground_albedo=0.0)
     assert np.all(np.isfinite(sky.spectral_radiance(direction_from_angles(np.radians(60), 0.0))))
 
 
@@ -208,7 +208,7 @@ def test_sun_below_the_horizon_raises():
 
 
 def test_directions_below_the_horizon_are_zero_not_nan():
-    sky = HosekWilkieSky(np.radians(80), 1.0, turbidity=3.0, albedo=0.3)
+    sky = HosekWilkieSky(np.radians(80), 1.0, turbidity=3.0, ground_albedo=0.3)
     d = direction_from_angles(np.radians([90.0, 90.5, 91.0, 120.0, 180.0]), 1.0)
     for v in (sky.spectral_radiance(d, BANDS), sky.xyz(d), sky.rgb(d), sky.solar_radiance(d, BANDS)):
         assert np.all(np.isfinite(v))
@@ -233,7 +233,7 @@ def test_turbidity_exactly_10_edge_branch():
     np.testing.assert_allclose(ds.configuration(0.7, 10.0, 1.0)[0], expected, rtol=1e-14)
     near = ds.configuration(0.7, 10.0 - 1e-9, 1.0)[0]
     np.testing.assert_allclose(near, expected, rtol=1e-7, atol=1e-9)  # continuous into the edge
-    sky = HosekWilkieSky(np.pi / 2 - 0.7, 0.0, turbidity=10.0, albedo=1.0)
+    sky = HosekWilkieSky(np.pi / 2 - 0.7, 0.0, turbidity=10.0, ground_albedo=1.0)
     sun = sky.sun_spectral_radiance(BANDS)
     assert np.all(np.isfinite(sun)) and np.all(sun > 0)
 
@@ -241,7 +241,7 @@ def test_turbidity_exactly_10_edge_branch():
 @pytest.mark.parametrize("a", [-0.01, 1.01, np.nan])
 def test_albedo_outside_0_1_raises(a):
     with pytest.raises(InvalidParameterError, match="albedo"):
-        HosekWilkieSky(0.5, 0.0, albedo=a)
+        HosekWilkieSky(0.5, 0.0, ground_albedo=a)
 
 
 def test_v14_sun_brightness_fix():
@@ -251,7 +251,7 @@ def test_v14_sun_brightness_fix():
     the authors simulated with (``originalSolarRadianceTable``) and is more than half of it in the visible
     (clean air transmits 60-90 %); the pre-1.4 coefficients would give several times that radiance.
     """
-    sky = HosekWilkieSky(0.0, 0.0, turbidity=1.0, albedo=0.0)
+    sky = HosekWilkieSky(0.0, 0.0, turbidity=1.0, ground_albedo=0.0)
     centre = sky.solar_radiance(sky.sun_direction, BANDS)
     ratio = centre / ORIGINAL_SOLAR_RADIANCE
     assert np.all(ratio < 1.0)
@@ -315,7 +315,7 @@ def test_random_valid_inputs_give_finite_non_negative_radiance():
     rng = np.random.default_rng(7)
     for _ in range(50):
         sky = HosekWilkieSky(np.arccos(rng.uniform(0, 1)), rng.uniform(0, 2 * np.pi),
-                             turbidity=rng.uniform(1, 10), albedo=rng.uniform(0, 1))
+                             turbidity=rng.uniform(1, 10), ground_albedo=rng.uniform(0, 1))
         d = direction_from_angles(np.arccos(rng.uniform(0, 1, 200)), rng.uniform(0, 2 * np.pi, 200))
         v = sky.spectral_radiance(d, BANDS)
         assert np.all(np.isfinite(v)) and np.all(v >= 0)
@@ -331,7 +331,7 @@ def test_luminance_from_xyz_dataset_close_to_integral_of_spectral_model():
     rng = np.random.default_rng(3)
     d = direction_from_angles(np.arccos(rng.uniform(0.05, 1, 300)), rng.uniform(0, 2 * np.pi, 300))
     for zen, t in ((np.radians(20), 2.0), (np.radians(75), 6.0)):
-        sky = HosekWilkieSky(zen, 0.0, turbidity=t, albedo=0.2)
+        sky = HosekWilkieSky(zen, 0.0, turbidity=t, ground_albedo=0.2)
         y_spec = spectrum_to_xyz(sky.spectral_radiance(d, REFERENCE_WAVELENGTHS), REFERENCE_WAVELENGTHS)[:, 1]
         ratio = y_spec / sky.luminance(d)
         assert np.all(np.abs(ratio - 1) < 0.06)
@@ -365,8 +365,8 @@ def test_registry_builds_hosek_wilkie():
     from skyscatter.sky.registry import SKY_MODELS, build_sky
 
     assert "hosek-wilkie" in SKY_MODELS
-    sky = build_sky("hosek-wilkie", 0.5, 1.0, turbidity=4.0, albedo=None)
-    assert isinstance(sky, HosekWilkieSky) and sky.turbidity == 4.0 and sky.albedo == 0.1
+    sky = build_sky("hosek-wilkie", 0.5, 1.0, turbidity=4.0, ground_albedo=None)
+    assert isinstance(sky, HosekWilkieSky) and sky.turbidity == 4.0 and sky.ground_albedo == 0.1
 
 
 def test_cli_sky_and_illuminance(tmp_path, capsys):
@@ -374,15 +374,15 @@ def test_cli_sky_and_illuminance(tmp_path, capsys):
     from skyscatter.render import read_exr
 
     out = tmp_path / "hw.exr"
-    code = main(["sky", "--model", "hosek-wilkie", "--turbidity", "4", "--albedo", "0.3", "--width", "32",
+    code = main(["sky", "--model", "hosek-wilkie", "--turbidity", "4", "--ground-albedo", "0.3", "--width", "32",
                  "--sun-elevation", "30", "--out", str(out), "--png", str(tmp_path / "hw.png")])
     assert code == 0, capsys.readouterr().err
     img = read_exr(out)
     assert img.shape == (16, 32, 3) and np.all(np.isfinite(img)) and img.max() > 0
     assert main(["illuminance", "--model", "hosek-wilkie", "--sun-elevation", "30", "--json"]) == 0
     capsys.readouterr()
-    assert main(["sky", "--model", "hosek-wilkie", "--albedo", "1.5", "--out", str(out)]) == 2
-    assert "--albedo 1.5: albedo 1.5 is outside 0 to 1" in capsys.readouterr().err
+    assert main(["sky", "--model", "hosek-wilkie", "--ground-albedo", "1.5", "--out", str(out)]) == 2
+    assert "--ground-albedo 1.5: ground_albedo 1.5 is outside 0 to 1" in capsys.readouterr().err
     assert main(["illuminance", "--model", "hosek-wilkie", "--turbidity", "0.5"]) == 2
     err = capsys.readouterr().err
     assert "turbidity 0.5 is outside 1 to 10" in err and len(err.strip().splitlines()) == 1

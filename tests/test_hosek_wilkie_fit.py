@@ -20,7 +20,7 @@ from skyscatter.sky.perez_family import hosek_wilkie_f, hosek_wilkie_f_jacobian
 
 
 def _published_t3(zenith: float, azimuth: float) -> HosekWilkieSky:
-    return HosekWilkieSky(zenith, azimuth, turbidity=3.0, albedo=0.1)
+    return HosekWilkieSky(zenith, azimuth, turbidity=3.0, ground_albedo=0.1)
 
 
 @pytest.fixture(scope="module")

@@ -66,7 +66,7 @@ def test_spectral_sky_matches_mitsuba(zen_deg, t, a):
     mi.set_variant("scalar_spectral")
     rng = np.random.default_rng(int(zen_deg * 10))
     zen, azi = np.radians(zen_deg), rng.uniform(0, 2 * np.pi)
-    sky = HosekWilkieSky(zen, azi, turbidity=t, albedo=a)
+    sky = HosekWilkieSky(zen, azi, turbidity=t, ground_albedo=a)
     em = _emitter(sky.sun_direction, t, a, sun_scale=0.0)
     dirs = _directions(rng, azi)
     ours = sky.spectral_radiance(dirs, WAVELENGTHS)
@@ -79,7 +79,7 @@ def test_rgb_sky_matches_mitsuba(zen_deg, t, a):
     mi.set_variant("scalar_rgb")
     rng = np.random.default_rng(int(zen_deg * 10) + 1)
     zen, azi = np.radians(zen_deg), rng.uniform(0, 2 * np.pi)
-    sky = HosekWilkieSky(zen, azi, turbidity=t, albedo=a)
+    sky = HosekWilkieSky(zen, azi, turbidity=t, ground_albedo=a)
     em = _emitter(sky.sun_direction, t, a, sun_scale=0.0)
     dirs = _directions(rng, azi)
     theirs = np.array([_eval(em, d) for d in dirs]) / mi.MI_CIE_Y_NORMALIZATION
@@ -91,7 +91,7 @@ def test_solar_disc_centre_matches_mitsuba_complex_sun(zen_deg, t, a):
     """Disc centre agrees; off centre Mitsuba's limb darkening is our profile stretched to its 0.5358 deg disc."""
     mi.set_variant("scalar_spectral")
     zen, azi = np.radians(zen_deg), 0.4
-    sky = HosekWilkieSky(zen, azi, turbidity=t, albedo=a)
+    sky = HosekWilkieSky(zen, azi, turbidity=t, ground_albedo=a)
     em = _emitter(sky.sun_direction, t, a, sky_scale=0.0, complex_sun=True)
     wl = WAVELENGTHS[:4]
     np.testing.assert_allclose(_eval(em, sky.sun_direction, wl), sky.solar_radiance(sky.sun_direction, wl),

@@ -31,7 +31,7 @@ def _langley(turbidity: float, centre: bool) -> tuple[np.ndarray, np.ndarray]:
     e = []
     for el in ELEVATIONS:
         sz = math.radians(90.0 - el)
-        sky = HosekWilkieSky(sz, 0.0, turbidity=turbidity, albedo=0.1)
+        sky = HosekWilkieSky(sz, 0.0, turbidity=turbidity, ground_albedo=0.1)
         if centre:
             e.append(sky.solar_radiance(np.array([[0.0, math.sin(sz), math.cos(sz)]]), VISIBLE)[0])
         else:
@@ -96,7 +96,7 @@ def test_published_sky_brighter_than_monte_carlo_with_authors_settings() -> None
     wl = np.array([680.0])
     mc = montecarlo.sky_radiance(atm, dirs, wl, sun_zenith=sz, samples=1024, seed=3, scheduler="synchronous")
     e_ratio = ORIGINAL_SOLAR_RADIANCE[-2] * OMEGA_HW / atm.solar_irradiance_at(wl)
-    hw = HosekWilkieSky(sz, 0.0, turbidity=1.0, albedo=0.1).spectral_radiance(dirs, wl)
+    hw = HosekWilkieSky(sz, 0.0, turbidity=1.0, ground_albedo=0.1).spectral_radiance(dirs, wl)
     ratio = (hw / (mc.radiance * e_ratio))[:, 0]
     assert np.all(mc.stderr[:, 0] / mc.radiance[:, 0] < 0.035)
     np.testing.assert_allclose(ratio, [1.421, 1.580, 1.751], rtol=0.105)

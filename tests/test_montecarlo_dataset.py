@@ -105,5 +105,5 @@ def test_cli_reference(tmp_path, capsys):
     assert xr.open_zarr(hg, consolidated=False).attrs["mie_phase_function"] == "henyey-greenstein"
     assert xr.open_zarr(store, consolidated=False).attrs["mie_phase_function"] == "cornette-shanks"
     assert main(["reference", str(tmp_path / "b.zarr"), "--wavelengths", "100", "--no-progress"]) == 2
-    assert main(["reference", str(tmp_path / "b.zarr"), "--albedo", "x"]) == 2
+    assert main(["reference", str(tmp_path / "b.zarr"), "--ground-albedo", "x"]) == 2
     assert main(["reference", str(tmp_path / "b.zarr"), "--turbidity", "2", "--aod", "0.1"]) == 2

@@ -93,7 +93,7 @@ def test_unwritable_cache_still_returns_tables(tmp_path, monkeypatch):
     monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(blocker / "sub"))
     clear_memory_cache()
     with pytest.warns(RuntimeWarning, match="could not write"):
-        atm = cached_atmosphere(orders=1, sizes=TINY, wavelengths="rgb")
+        atm = cached_atmosphere(orders=1, sizes=TINY, tables="rgb")
     assert atm.tables["transmittance"].shape == (8, 32, 3)
     clear_memory_cache()
 

@@ -77,7 +77,7 @@ def test_provider_matches_aerial_perspective(atm):
     np.testing.assert_array_equal(provider.transmittance(d, s, 800.0, atm.wavelengths), tau)
     np.testing.assert_array_equal(provider.inscattered(d, s, 800.0, atm.wavelengths), l_in)
     # The same through a BrunetonSky (its sun, its atmosphere).
-    sky = BrunetonSky(math.acos(sun[2]), math.atan2(sun[0], sun[1]), atmosphere=atm)
+    sky = BrunetonSky(math.acos(sun[2]), math.atan2(sun[0], sun[1]), precomputed=atm)
     np.testing.assert_allclose(BrunetonAerialPerspective(sky).evaluate(d, s, 800.0, atm.wavelengths)[1], l_ref,
                                rtol=1e-9)
 
@@ -210,8 +210,8 @@ def test_render_with_bruneton_provider(atm, ridge):
     cam = PinholeCamera.from_degrees((900.0, 0.0, 60.0), 270.0, 3.0, 70.0)
     sun_zenith, sun_azimuth = math.pi / 2 - SUN_ELEVATION, math.radians(270.0)
     terrain = ridge.terrain
-    with_shafts = bruneton_scene(terrain, cam, sun_zenith, sun_azimuth, atmosphere=atm).render(64, 36)
-    without = bruneton_scene(terrain, cam, sun_zenith, sun_azimuth, atmosphere=atm, shafts=False).render(64, 36)
+    with_shafts = bruneton_scene(terrain, cam, sun_zenith, sun_azimuth, precomputed=atm).render(64, 36)
+    without = bruneton_scene(terrain, cam, sun_zenith, sun_azimuth, precomputed=atm, shafts=False).render(64, 36)
     for res in (with_shafts, without):
         assert res.rgb.shape == (36, 64, 3)
         assert np.all(np.isfinite(res.rgb)) and np.all(res.rgb >= 0)

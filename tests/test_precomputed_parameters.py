@@ -128,7 +128,7 @@ def test_solar_spectrum_too_narrow_for_colour_conversion_is_refused():
     wl = np.arange(380.0, 781.0, 10.0)
     narrow = AtmosphereParameters(solar_irradiance=TabulatedSpectrum(tuple(wl), tuple(np.full(wl.size, 1.5))))
     with pytest.raises(InvalidParameterError, match=r"covers 380-780 nm.*must cover 355-835 nm"):
-        PrecomputedAtmosphere.compute(narrow, orders=1, progress=False, wavelengths="rgb")
+        PrecomputedAtmosphere.compute(narrow, orders=1, progress=False, tables="rgb")
     tiny = dict(transmittance_mu=16, transmittance_r=4, irradiance_mu_s=4, irradiance_r=4, scattering_r=4,
                 scattering_mu=8, scattering_mu_s=4, scattering_nu=4)
     atm = PrecomputedAtmosphere.compute(narrow, orders=1, wavelengths=np.arange(390.0, 771.0, 20.0), sizes=tiny,

@@ -23,7 +23,7 @@ def small_earth(orders: int = 4) -> PrecomputedAtmosphere:
     """Earth-default tables at SMALL_SIZES and the 3 wavelengths of the seeds' check values (680, 550, 440 nm),
     computed once per test session (in memory only)."""
     return PrecomputedAtmosphere.compute(AtmosphereParameters(), orders=orders, sizes=SMALL_SIZES, progress=False,
-                                         wavelengths="rgb")
+                                         tables="rgb")
 
 
 def ray_end(r: float, mu: float, params: AtmosphereParameters) -> tuple[float, bool]:

@@ -28,7 +28,7 @@ def _directions(n=400, seed=3):
 
 
 def test_protocol_shapes_and_values(atm):
-    sky = BrunetonSky(math.radians(40), math.radians(135), atmosphere=atm)
+    sky = BrunetonSky(math.radians(40), math.radians(135), precomputed=atm)
     assert isinstance(sky, SkyModel) and sky.renders_ground and sky.has_sun
     d = _directions().reshape(20, 20, 3)
     wl = np.arange(380.0, 781.0, 10.0)
@@ -47,7 +47,7 @@ def test_protocol_shapes_and_values(atm):
 
 def test_symmetric_about_the_solar_meridian(atm):
     """The sky is a mirror image about the vertical plane through the sun (atol 1e-9 relative)."""
-    sky = BrunetonSky(math.radians(55), math.radians(200), atmosphere=atm)
+    sky = BrunetonSky(math.radians(55), math.radians(200), precomputed=atm)
     zen = np.radians(np.linspace(2, 170, 25))
     off = np.radians(np.linspace(5, 175, 19))
     z, o = np.meshgrid(zen, off)
@@ -59,44 +59,44 @@ def test_symmetric_about_the_solar_meridian(atm):
 
 
 def test_sun_limits_and_bad_input(atm):
-    BrunetonSky(math.radians(101.9), 0.0, atmosphere=atm)
+    BrunetonSky(math.radians(101.9), 0.0, precomputed=atm)
     with pytest.raises(SunBelowHorizonError, match=r"precomputed limit.*max_sun_zenith=math.radians"):
-        BrunetonSky(math.radians(103.0), 0.0, atmosphere=atm)
+        BrunetonSky(math.radians(103.0), 0.0, precomputed=atm)
     with pytest.raises(SunBelowHorizonError, match="inside the atmosphere"):
-        BrunetonSky(math.radians(103.0), 0.0, altitude=59e3, atmosphere=atm)
+        BrunetonSky(math.radians(103.0), 0.0, altitude=59e3, precomputed=atm)
     with pytest.raises(InvalidParameterError, match="altitude"):
-        BrunetonSky(0.5, 0.0, altitude=-1.0, atmosphere=atm)
+        BrunetonSky(0.5, 0.0, altitude=-1.0, precomputed=atm)
     with pytest.raises(InvalidParameterError, match="atmosphere"):
         BrunetonSky(0.5, 0.0, atmosphere="earth")
 
 
 def test_sun_disc_radiance(atm):
     """Solar disc after transmission: E_sun / Omega_sun * T (Eq. 9); dark once the sun has set."""
-    sky = BrunetonSky(0.0, 0.0, atmosphere=atm)
+    sky = BrunetonSky(0.0, 0.0, precomputed=atm)
     t = atm.transmittance(R, 1.0)
     expected = atm.parameters.solar_irradiance_at(atm.wavelengths) / sky.sun_solid_angle * t
     np.testing.assert_allclose(sky.sun_table_radiance(), expected, rtol=1e-6)
     assert sky.sun_xyz()[1] > 1e9  # about 1.6e9 cd m^-2 for the sun at the zenith
-    assert np.all(BrunetonSky(math.radians(95), 0.0, atmosphere=atm).sun_table_radiance() == 0)
+    assert np.all(BrunetonSky(math.radians(95), 0.0, precomputed=atm).sun_table_radiance() == 0)
     # from 100 km the same sun, 5 deg below the local horizon, is still visible above the limb
-    assert np.all(BrunetonSky(math.radians(95), 0.0, altitude=100e3, atmosphere=atm).sun_table_radiance() > 0)
+    assert np.all(BrunetonSky(math.radians(95), 0.0, altitude=100e3, precomputed=atm).sun_table_radiance() > 0)
 
 
 def test_views_from_altitude_and_orbit(atm):
     """From orbit: space is black above the limb, the planet below shows the lit ground; at dusk the night side
     is much darker than the day side."""
-    orbit = BrunetonSky(math.radians(40), 0.0, altitude=400e3, atmosphere=atm)
+    orbit = BrunetonSky(math.radians(40), 0.0, altitude=400e3, precomputed=atm)
     assert orbit.luminance(np.array([0.0, 0.0, 1.0])) == 0.0
     down = orbit.luminance(np.array([0.0, 0.0, -1.0]))
     assert down > 100.0
-    dusk = BrunetonSky(math.radians(100), 0.0, altitude=400e3, atmosphere=atm)
+    dusk = BrunetonSky(math.radians(100), 0.0, altitude=400e3, precomputed=atm)
     assert dusk.luminance(np.array([0.0, 0.0, -1.0])) < 1e-3 * down
     # the limb towards the sun glows: looking just above the horizon of the planet
     limb = -math.acos(R / (R + 400e3))
     d = np.array([0.0, math.cos(limb + 0.01), math.sin(limb + 0.01)])
     assert dusk.luminance(d) > dusk.luminance(np.array([0.0, 0.0, -1.0]))
     # from 10 km the ground below is seen through the atmosphere: darker than the horizon sky
-    plane = BrunetonSky(math.radians(50), 0.0, altitude=10e3, atmosphere=atm)
+    plane = BrunetonSky(math.radians(50), 0.0, altitude=10e3, precomputed=atm)
     assert plane.luminance(np.array([0.0, 0.0, -1.0])) > 0
 
 
@@ -113,7 +113,7 @@ def test_earth_shadow_at_dusk(atm):
       With 4 orders and no tail of the later orders the belt came out too red (0.55): the bound was 0.7 then.
     A sky without the Earth's shadow (lit down to the horizon) brightens and reddens towards the horizon.
     """
-    sky = BrunetonSky(math.radians(93), math.radians(270), atmosphere=atm)
+    sky = BrunetonSky(math.radians(93), math.radians(270), precomputed=atm)
     from skyscatter.conventions import direction_from_angles
 
     el = np.array([1.0, 2.0, 3.0, 8.0, 10.0, 12.0, 15.0, 20.0, 30.0])
@@ -136,18 +136,18 @@ def test_sun_below_the_observers_horizon_seen_from_orbit(atm):
     from skyscatter.conventions import equirect_directions
 
     d = equirect_directions(48, 24)
-    lum = {z: BrunetonSky(math.radians(z), 0.0, altitude=4e5, atmosphere=atm).luminance(d)
+    lum = {z: BrunetonSky(math.radians(z), 0.0, altitude=4e5, precomputed=atm).luminance(d)
            for z in (101.7, 101.9, 102.1)}
     # 0.2 deg steps move the terminator: the change across 102 deg is like the change just before it
     step_before = np.abs(lum[101.9] - lum[101.7]).sum()
     step_across = np.abs(lum[102.1] - lum[101.9]).sum()
     assert 0 < step_across < 1.5 * step_before < 0.1 * lum[101.9].sum()
-    peaks = [BrunetonSky(math.radians(z), 0.0, altitude=4e5, atmosphere=atm).luminance(d).max()
+    peaks = [BrunetonSky(math.radians(z), 0.0, altitude=4e5, precomputed=atm).luminance(d).max()
              for z in (105.0, 109.0, 112.0, 150.0)]
     assert peaks[0] > peaks[1] > peaks[2] > 0 and peaks[3] == 0
-    sun = BrunetonSky(math.radians(105.0), 0.0, altitude=4e5, atmosphere=atm).sun_xyz()
+    sun = BrunetonSky(math.radians(105.0), 0.0, altitude=4e5, precomputed=atm).sun_xyz()
     assert sun[1] > 1e8  # the disc is still above the limb
-    assert np.all(BrunetonSky(math.radians(115.0), 0.0, altitude=4e5, atmosphere=atm).sun_xyz() == 0)
+    assert np.all(BrunetonSky(math.radians(115.0), 0.0, altitude=4e5, precomputed=atm).sun_xyz() == 0)
 
 
 def test_positions_inside_the_planet_are_refused(atm):
@@ -177,7 +177,7 @@ def test_aerial_perspective_and_light_shafts(atm):
     shafts = atm.sky_radiance(cam, np.array([1.0, 0.0, 0.05]) / np.hypot(1, 0.05), sun, shadow_length=5e3)
     assert np.all(shafts < sky)
     # the same through BrunetonSky's local frame (observer 100 m above the surface point at the origin)
-    sky = BrunetonSky(math.acos(0.8), 0.0, altitude=100.0, atmosphere=atm)
+    sky = BrunetonSky(math.acos(0.8), 0.0, altitude=100.0, precomputed=atm)
     t_local, s_local = sky.aerial_perspective(dist[:, None] * np.array([1.0, 0.0, 0.0]) + [0.0, 0.0, 100.0])
     np.testing.assert_allclose(t_local, t, rtol=1e-12)
     np.testing.assert_allclose(s_local, s, rtol=1e-12)
@@ -330,7 +330,7 @@ def test_no_seams_between_neighbouring_view_elevations(atm, sun_elevation):
     The 0.5 deg on either side of the horizon itself are left out (the ground's edge)."""
     from scipy.ndimage import uniform_filter1d
 
-    sky = BrunetonSky(math.radians(90.0 - sun_elevation), 0.0, atmosphere=atm)
+    sky = BrunetonSky(math.radians(90.0 - sun_elevation), 0.0, precomputed=atm)
     az = np.radians([0.0, 2.0, 10.0, 30.0, 90.0, 180.0])
     el = np.radians(np.arange(-2.0, 20.0 + 1e-9, 0.01))
     a, e = np.meshgrid(az, el, indexing="ij")
@@ -374,24 +374,24 @@ def test_observer_slices_equal_the_4d_lookup(atm, altitude, sun_elevation):
 
 
 def test_wavelengths_option_chooses_the_tables(atm, monkeypatch):
-    """BrunetonSky(wavelengths="rgb" | "spectral") asks the cache for those tables; not with tables given."""
+    """BrunetonSky(tables="rgb" | "spectral") asks the cache for those tables; not with tables given."""
     import skyscatter.precomputed.cache as cache
 
     asked = []
 
     def fake(params=None, **kwargs):
-        asked.append(kwargs.get("wavelengths"))
+        asked.append(kwargs.get("tables"))
         return atm
 
     monkeypatch.setattr(cache, "cached_atmosphere", fake)
-    sky = BrunetonSky(0.5, 0.0, wavelengths="rgb", ozone_column=250.0)
+    sky = BrunetonSky(0.5, 0.0, tables="rgb", ozone_column=250.0)
     BrunetonSky(0.5, 0.0)
     assert asked == ["rgb", None]
-    assert sky.model_parameters()["wavelengths"] == "rgb"
+    assert sky.model_parameters()["tables"] == "rgb"
     with pytest.raises(InvalidParameterError, match="not with precomputed tables"):
-        BrunetonSky(0.5, 0.0, atmosphere=atm, wavelengths="rgb")
+        BrunetonSky(0.5, 0.0, precomputed=atm, tables="rgb")
     with pytest.raises(InvalidParameterError, match="'spectral' or 'rgb'"):
-        BrunetonSky(0.5, 0.0, wavelengths="blue")
+        BrunetonSky(0.5, 0.0, tables="blue")
 
 
 def test_sun_exactly_at_the_tables_limit_is_not_dark(atm):
@@ -404,7 +404,7 @@ def test_sun_exactly_at_the_tables_limit_is_not_dark(atm):
     limit = atm.parameters.max_sun_zenith
     d = np.array([[0.0, 0.3, 1.0], [0.2, -0.9, 0.3], [0.0, 0.99, 0.05]])
     for altitude in (0.0, 1000.0):
-        lum = [BrunetonSky(limit - k * 1e-9, 0.0, atmosphere=atm, altitude=altitude).luminance(d) for k in (0, 1, 2)]
+        lum = [BrunetonSky(limit - k * 1e-9, 0.0, precomputed=atm, altitude=altitude).luminance(d) for k in (0, 1, 2)]
         assert np.all(lum[0] > 0.0)
         np.testing.assert_allclose(lum[0], 2.0 * lum[1] - lum[2], rtol=1e-6)
 

@@ -272,7 +272,7 @@ def test_fig7_parameters_against_cie_clear_sky():
 def test_spectral_mode_agrees_with_three_wavelengths():
     """The 3-wavelength luminance (quadratic reconstruction in lambda^-4, docs) agrees with the observer
     integral of 16 wavelengths (spectral mode) within 3 % in daylight."""
-    a3 = PrecomputedAtmosphere.compute(EARTH, sizes=TINY, progress=False, wavelengths="rgb")
+    a3 = PrecomputedAtmosphere.compute(EARTH, sizes=TINY, progress=False, tables="rgb")
     wl = np.arange(380.0, 760.0, 25.0)
     a16 = PrecomputedAtmosphere.compute(EARTH, sizes=TINY, wavelengths=wl, progress=False)
     assert a16.spectral_mode and not a3.spectral_mode
@@ -306,7 +306,7 @@ def test_save_load_round_trip_and_corruption(tmp_path):
 
 
 def test_export_layout(tmp_path):
-    atm = PrecomputedAtmosphere.compute(EARTH, orders=2, sizes=TINY, progress=False, wavelengths="rgb")
+    atm = PrecomputedAtmosphere.compute(EARTH, orders=2, sizes=TINY, progress=False, tables="rgb")
     desc = json.loads(atm.export(tmp_path / "luts").read_text())
     n_r, n_mu, n_s, n_n = atm.sizes.scattering_shape
     scat = np.fromfile(tmp_path / "luts" / "scattering.raw", dtype="<f4").reshape(n_r, n_mu, n_n * n_s, 3)

@@ -50,7 +50,7 @@ def _entries(folder: Path) -> list[str]:
     (["--wavelengths", "200"], "360-830 nm"),
     (["--turbidity", "30"], "turbidit"),
     (["--aod", "-1"], "aerosol optical depth"),
-    (["--albedo", "2"], "albedo"),
+    (["--ground-albedo", "2"], "albedo"),
     (["--sun-elevation", "100"], "sun elevation"),
     (["--scheduler", "nonsense"], "scheduler"),
 ])

@@ -41,7 +41,7 @@ def test_flat_ground_luminance_is_albedo_times_global_illuminance_over_pi(sky):
     """Lambertian ground: L = rho E_v / pi with E_v from skyscatter.photometry (an independent quadrature)."""
     terrain = Terrain(np.zeros((11, 11)), 100.0)
     camera = PinholeCamera.from_degrees((500.0, 500.0, 50.0), 0.0, -60.0, 40.0)
-    image = Scene(sky, terrain=terrain, camera=camera, aerial=None, albedo=0.3, sun_disc=False).render(16, 12)
+    image = Scene(sky, terrain=terrain, camera=camera, aerial=None, terrain_albedo=0.3, sun_disc=False).render(16, 12)
     assert np.all(np.isfinite(image.distance))
     e_v = horizontal_illuminance(sky, include_sun=True)
     np.testing.assert_allclose(_luminance(image.rgb), 0.3 * e_v / np.pi, rtol=5e-3)
@@ -58,7 +58,7 @@ def test_tilted_ground_uses_tilted_sky_irradiance_and_ground_reflection(sky):
     cx = cy = 1000.0
     camera = PinholeCamera((cx, cy, float(terrain.height_at(cx, cy)) + 400.0), facing, math.radians(-50.0),
                            math.radians(20.0))
-    image = Scene(sky, terrain=terrain, camera=camera, aerial=None, albedo=0.25, sun_disc=False).render(8, 6)
+    image = Scene(sky, terrain=terrain, camera=camera, aerial=None, terrain_albedo=0.25, sun_disc=False).render(8, 6)
     e_tilted = tilted_illuminance(sky, tilt, facing, include_sun=True)
     e_h = horizontal_illuminance(sky, include_sun=True)
     expected = 0.25 / np.pi * (e_tilted + 0.25 * e_h * (1 - math.cos(tilt)) / 2)
@@ -204,7 +204,7 @@ def test_errors_camera_under_terrain_and_bad_sizes(sky):
         with pytest.raises(InvalidParameterError, match="positive whole number"):
             scene.render(w, h)
     with pytest.raises(InvalidParameterError, match="albedo"):
-        Scene(sky, terrain=terrain, camera=PinholeCamera((20.0, 20.0, 150.0), 0.0), albedo=1.5)
+        Scene(sky, terrain=terrain, camera=PinholeCamera((20.0, 20.0, 150.0), 0.0), terrain_albedo=1.5)
     with pytest.raises(InvalidParameterError, match="aerial"):
         Scene(sky, terrain=terrain, camera=PinholeCamera((20.0, 20.0, 150.0), 0.0), aerial="fog")
     with pytest.raises(InvalidParameterError, match="positive length"):
@@ -238,7 +238,8 @@ def test_rendered_shadow_of_a_wall_matches_the_geometry():
     terrain = Terrain(h, 10.0, base_height=0.0)
     camera = PinholeCamera((300.0, 200.0, 1500.0), math.radians(90.0), math.radians(-89.9), math.radians(20.0))
     width, height = 48, 48
-    image = Scene(sky, terrain=terrain, camera=camera, aerial=None, albedo=0.3, sun_disc=False).render(width, height)
+    image = Scene(sky, terrain=terrain, camera=camera, aerial=None, terrain_albedo=0.3,
+                  sun_disc=False).render(width, height)
     d = camera.ray_directions(width, height)
     p = np.asarray(camera.position) + image.distance[..., None].astype(float) * d
     lum = _luminance(image.rgb)

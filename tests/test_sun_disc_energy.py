@@ -140,7 +140,7 @@ def test_bruneton_views_carry_the_transmitted_sun(view):
     from skyscatter.render.bruneton import camera_view, fisheye_view
 
     sky = registry.build("bruneton", math.radians(60.0), math.radians(100.0))
-    atm = sky.atmosphere
+    atm = sky.precomputed
     if view == "camera":
         kw = dict(heading=math.radians(100.0), pitch=math.radians(30.0), fov=math.radians(3.0), width=96, height=96)
         both = [camera_view(atm, math.radians(60.0), math.radians(100.0), output="xyz", include_sun=s, **kw)

@@ -154,7 +154,7 @@ def tiny_tables():
 
     tiny = dict(transmittance_mu=16, transmittance_r=4, irradiance_mu_s=4, irradiance_r=4, scattering_r=4,
                 scattering_mu=8, scattering_mu_s=4, scattering_nu=2)
-    return PrecomputedAtmosphere.compute(orders=1, sizes=tiny, wavelengths="rgb", progress=False)
+    return PrecomputedAtmosphere.compute(orders=1, sizes=tiny, tables="rgb", progress=False)
 
 
 @pytest.mark.parametrize("code", ERRNOS, ids=errno.errorcode.get)

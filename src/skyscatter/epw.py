@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import datetime as dt
 import os
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -294,7 +295,6 @@ def _read_bounded(p: Path) -> bytes:
         raise FileFormatError(f"{p}: no such file") from None
     except OSError as exc:
         raise FileFormatError(f"{p}: cannot read: {exc.strerror or exc}") from None
-    import stat
 
     if stat.S_ISDIR(st.st_mode):
         raise FileFormatError(f"{p}: is a folder, not an EPW file")

@@ -16,6 +16,9 @@ import contextlib
 import errno
 import os
 import re
+import stat
+import sys
+import warnings
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -285,7 +288,6 @@ def _private_dir(path: str) -> bool:
         st = os.lstat(path)
     except OSError:
         return False
-    import stat
 
     return (stat.S_ISDIR(st.st_mode) and st.st_uid == os.getuid() and not st.st_mode & 0o022
             and _writable_dir(path))
@@ -302,8 +304,6 @@ def ensure_numba_cache(package_dir: str | os.PathLike[str]) -> str | None:
     taken by someone else) and warns once (:class:`NumbaCacheWarning`). A ``NUMBA_CACHE_DIR`` set by the user
     is always kept. Returns the folder chosen, or None when nothing needed changing.
     """
-    import sys
-
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
     if _writable_dir(os.path.join(os.fspath(package_dir), "__pycache__")):
@@ -324,7 +324,6 @@ def ensure_numba_cache(package_dir: str | os.PathLike[str]) -> str | None:
     config = sys.modules.get("numba.core.config")
     if config is not None:  # numba imported before skyscatter: it has read its settings already
         config.CACHE_DIR = fallback
-    import warnings
 
     # warn_explicit with a file name that has no source line: the warning prints as one line.
     warnings.warn_explicit(

@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from .conventions import as_directions, direction_from_angles
 from .errors import InvalidParameterError
 from .sky.base import SkyModel
+from .validation import whole_number
 
 __all__ = ["SCHEMES", "TREGENZA_BAND_COUNTS", "PatchScheme", "patch_luminance", "patch_scheme"]
 
@@ -113,7 +114,7 @@ class PatchScheme:
         Cells split each patch evenly in sin(altitude) and in azimuth, so they have equal solid angles and the
         plain mean over a patch's cells is the midpoint rule for the patch's mean value.
         """
-        s = _check_samples(samples)
+        s = whole_number("samples per patch side", samples, 1, 64, integral_floats=True)
         t = (np.arange(s) + 0.5) / s
         u_lo = np.sin(self.altitude_low)[:, None]
         u_hi = np.sin(self.altitude_high)[:, None]
@@ -126,11 +127,6 @@ class PatchScheme:
         zen = np.arccos(np.clip(uu, -1.0, 1.0))
         return direction_from_angles(zen, aa)
 
-
-def _check_samples(samples: int) -> int:
-    if isinstance(samples, bool) or int(samples) != samples or samples < 1 or samples > 64:
-        raise InvalidParameterError(f"samples must be a whole number in [1, 64] per patch side; got {samples!r}")
-    return int(samples)
 
 
 @cache
@@ -183,7 +179,7 @@ def patch_luminance(sky: SkyModel, scheme: str | PatchScheme, *, samples: int = 
     if not isinstance(sky, SkyModel):
         raise InvalidParameterError(f"expected a sky model (skyscatter.sky.SkyModel); got {type(sky).__name__}")
     geom = scheme if isinstance(scheme, PatchScheme) else patch_scheme(scheme)
-    s = _check_samples(samples)
+    s = whole_number("samples per patch side", samples, 1, 64, integral_floats=True)
     if s == 1:
         return np.asarray(sky.luminance(geom.centre_directions), dtype=float)
     dirs = geom.sample_directions(s)

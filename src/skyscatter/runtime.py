@@ -18,6 +18,7 @@ import sys
 import threading
 
 from .errors import InvalidParameterError
+from .validation import whole_number
 
 __all__ = ["num_threads", "set_num_threads"]
 
@@ -58,8 +59,7 @@ def num_threads() -> int:
 def set_num_threads(n: int) -> None:
     """Use ``n`` >= 1 threads from now on, in every pool skyscatter runs (numba's included)."""
     global _threads
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise InvalidParameterError(f"the number of threads must be a whole number >= 1; got {n!r}")
+    n = whole_number("the number of threads", n, 1)
     with _lock:
         _threads = n
         _apply_to_numba(n)

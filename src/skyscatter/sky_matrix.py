@@ -28,7 +28,9 @@ Perez parameters and the patch geometry, savable as ``.npz`` and ``.csv``.
 
 from __future__ import annotations
 
+import datetime as dt
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,6 +46,7 @@ from .patches import PatchScheme, patch_scheme
 from .radiance import write_radiance_matrix
 from .sky.perez_family import gradation, indicatrix
 from .spectral import RADIANCE_EFFICACY
+from .validation import whole_number
 
 __all__ = ["MODELS", "NORMALISATION_NODES", "SUN_PATCHES", "SkyMatrix", "add_sun_to_patches",
            "asrc_cie_patch_luminance", "perez_patch_luminance", "skymatrix"]
@@ -273,8 +276,6 @@ class SkyMatrix:
     @property
     def times(self):
         """Middle of each hour (record): tz-aware ``pandas.DatetimeIndex`` in the file's standard time."""
-        import datetime as dt
-
         import pandas as pd
 
         ns = np.round(self.unix_time * 1e3).astype(np.int64) * 1_000_000  # whole milliseconds, exactly
@@ -533,7 +534,6 @@ def _report_light_at_night(epw: EPWData, night: NDArray[np.int64], mode: str, un
            "LOCATION line?)")
     if mode == "error":
         raise FileFormatError(f"{epw.path}: {first}: light although {why}")
-    import warnings
 
     from .epw import EPWWarning
 
@@ -618,10 +618,8 @@ def skymatrix(
     from .sun.position import sun_position_unix
 
     geom = _check_scheme(scheme)
-    if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 16:
-        raise InvalidParameterError(f"samples must be a whole number in [1, 16]; got {samples!r}")
-    if isinstance(chunk_hours, bool) or int(chunk_hours) != chunk_hours or chunk_hours < 1:
-        raise InvalidParameterError(f"chunk_hours must be a whole number >= 1; got {chunk_hours!r}")
+    whole_number("samples", samples, 1, 16, integral_floats=True)
+    whole_number("chunk_hours", chunk_hours, 1, integral_floats=True)
     if timestep not in ("records", "hourly"):
         raise InvalidParameterError(f"timestep must be 'records' or 'hourly'; got {timestep!r}")
     if model not in MODELS:

@@ -38,12 +38,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..conventions import as_directions
+from ..deprecation import warn_renamed
 from ..errors import InvalidParameterError
 from ..precomputed import AtmosphereParameters, PrecomputedAtmosphere
 from ..precomputed.cache import resolve_atmosphere
 from ..sky.base import SkyModel
 from ..sky.bruneton import BrunetonSky
 from ..spectral import as_wavelengths
+from ..validation import whole_number
 from .base import DEFAULT_REFINE, DEFAULT_SHADOW_SAMPLES, AerialPerspective, ShadowCaster, check_path, check_rays
 
 __all__ = ["BrunetonAerialPerspective", "aerial_perspective", "aerial_perspective_shafts", "sky_radiance_shafts",
@@ -152,10 +154,10 @@ class BrunetonAerialPerspective(AerialPerspective):
                  refine: int = DEFAULT_REFINE) -> None:
         if isinstance(sky, BrunetonSky):
             self.sky = sky
-            self.atmosphere = sky.atmosphere
+            self.precomputed = sky.precomputed
             default_sun = sky.sun_direction
         else:
-            self.atmosphere = resolve_atmosphere(sky)
+            self.precomputed = resolve_atmosphere(sky)
             default_sun = None
         if sun_direction is None:
             if default_sun is None:
@@ -174,12 +176,16 @@ class BrunetonAerialPerspective(AerialPerspective):
                 raise InvalidParameterError(f"camera_xy must be finite [m]; got {camera_xy!r}")
             camera_xy = (cx, cy)
         self.camera_xy = camera_xy
-        for name, value, low in (("samples", samples, 1), ("refine", refine, 0)):
-            if isinstance(value, bool) or int(value) != value or value < low:
-                raise InvalidParameterError(f"{name} must be a whole number >= {low}; got {value!r}")
-        self.samples = int(samples)
-        self.refine = int(refine)
+        self.samples = whole_number("samples", samples, 1, integral_floats=True)
+        self.refine = whole_number("refine", refine, 0, integral_floats=True)
         self._matrices: dict[bytes, NDArray[np.float64] | None] = {}
+
+    @property
+    def atmosphere(self) -> PrecomputedAtmosphere:
+        """Deprecated: the tables, now :attr:`precomputed`."""
+        warn_renamed("BrunetonAerialPerspective.atmosphere (the tables)", "BrunetonAerialPerspective.precomputed",
+                     "BrunetonAerialPerspective", stacklevel=3)
+        return self.precomputed
 
     @property
     def shafts(self) -> bool:
@@ -191,7 +197,7 @@ class BrunetonAerialPerspective(AerialPerspective):
         """Optical-depth matrix (:func:`transmittance_matrix`) for ``wl``, or None to pass table values through."""
         key = wl.tobytes()
         if key not in self._matrices:
-            atm = self.atmosphere
+            atm = self.precomputed
             if wl.shape == atm.wavelengths.shape and np.allclose(wl, atm.wavelengths, rtol=0, atol=1e-9):
                 self._matrices[key] = None
             else:
@@ -203,17 +209,17 @@ class BrunetonAerialPerspective(AerialPerspective):
         if m is None:
             return tau, inscatter
         depth = -np.log(np.clip(tau, 1e-300, 1.0))
-        return np.exp(-np.maximum(depth @ m.T, 0.0)), self.atmosphere.resample(inscatter, wl)
+        return np.exp(-np.maximum(depth @ m.T, 0.0)), self.precomputed.resample(inscatter, wl)
 
     # -- geometry ---------------------------------------------------------------------------------------
     def _planet(self, height: NDArray[np.float64]) -> NDArray[np.float64]:
         cam = np.zeros(height.shape + (3,))
-        cam[..., 2] = self.atmosphere.parameters.bottom_radius + height
+        cam[..., 2] = self.precomputed.parameters.bottom_radius + height
         return cam
 
     def _clip_to_sphere(self, d, s, height):
         """Distances cut where the straight ray from the camera meets the planet's sphere."""
-        bottom = self.atmosphere.parameters.bottom_radius
+        bottom = self.precomputed.parameters.bottom_radius
         r = bottom + height
         mu = d[..., 2]
         disc = r * r * (mu * mu - 1.0) + bottom * bottom
@@ -261,7 +267,7 @@ class BrunetonAerialPerspective(AerialPerspective):
         points = cam + s[..., None] * d
         if shadow is not None:
             shadow = np.minimum(shadow, s)
-        tau, inscatter = self.atmosphere.aerial_perspective(cam, points, self.sun_direction, shadow_length=shadow)
+        tau, inscatter = self.precomputed.aerial_perspective(cam, points, self.sun_direction, shadow_length=shadow)
         return self._to_wavelengths(tau, inscatter, wl)
 
     def evaluate(self, directions: ArrayLike, distances: ArrayLike, observer_height: ArrayLike,
@@ -306,5 +312,5 @@ class BrunetonAerialPerspective(AerialPerspective):
         if self.shafts:
             reach = np.full(d.shape[:-1], self.terrain.max_distance)
             shadow = self.shadow_length(o, d, reach)
-        rad = self.atmosphere.sky_radiance(cam, d, self.sun_direction, shadow_length=shadow)
-        return rad if self._spectral(wl) is None else self.atmosphere.resample(rad, wl)
+        rad = self.precomputed.sky_radiance(cam, d, self.sun_direction, shadow_length=shadow)
+        return rad if self._spectral(wl) is None else self.precomputed.resample(rad, wl)

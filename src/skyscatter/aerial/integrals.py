@@ -52,6 +52,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 from ..jit import helper, inline, parallel_kernel
+from ..validation import whole_number
 
 __all__ = [
     "ALPHA_HAZE",
@@ -423,12 +424,12 @@ def in_scattering_integrals(cos_theta: ArrayLike, distance: ArrayLike, observer_
     """
     if method not in _METHODS:
         raise InvalidParameterError(f"method must be one of {sorted(_METHODS)}; got {method!r}")
-    if segments == "auto":
+    if isinstance(segments, str):
+        if segments != "auto":
+            raise InvalidParameterError(f"segments must be 'auto' or a whole number in [1, 10000]; got {segments!r}")
         nseg = 0
-    elif isinstance(segments, int | np.integer) and not isinstance(segments, bool) and 1 <= segments <= 10_000:
-        nseg = int(segments)
     else:
-        raise InvalidParameterError(f"segments must be 'auto' or a whole number in [1, 10000]; got {segments!r}")
+        nseg = whole_number("segments ('auto' or)", segments, 1, 10_000)
     c, s, h = _prepare(cos_theta, distance, observer_height)
     b1 = _coefficients(beta_haze, "beta_haze")
     b2 = _coefficients(beta_molecules, "beta_molecules")

@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..atmosphere import mie_total_scattering, rayleigh_total_scattering
 from ..errors import InvalidParameterError
 from ..sky.base import SkyModel
+from ..validation import whole_number
 from .base import AerialPerspective, check_path, check_rays
 from .integrals import ALPHA_HAZE, ALPHA_MOLECULES, extinction, in_scattering_integrals
 from .scattering import ScatteringTable
@@ -83,13 +84,10 @@ class PreethamAerialPerspective(AerialPerspective):
         self.sky = sky
         self.method = method
         self.turbidity = resolve_turbidity(sky, turbidity)
-        if not (segments == "auto" if isinstance(segments, str) else
-                (isinstance(segments, int | np.integer) and not isinstance(segments, bool)
-                 and 1 <= segments <= 10_000)):
-            raise InvalidParameterError(
-                f"segments must be 'auto' or a whole number in [1, 10000]; got {segments!r}"
-            )
-        self.segments = segments if isinstance(segments, str) else int(segments)
+        if isinstance(segments, str) and segments != "auto":
+            raise InvalidParameterError(f"segments must be 'auto' or a whole number in [1, 10000]; got {segments!r}")
+        self.segments = segments if isinstance(segments, str) else whole_number("segments ('auto' or)", segments, 1,
+                                                                                  10_000)
         self.include_sun = include_sun
         self.include_sky = include_sky
         self.alpha_haze = float(alpha_haze)

@@ -39,6 +39,7 @@ and halving the amplitude stay periodic.
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 import os
 from pathlib import Path
@@ -48,6 +49,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FileFormatError, InvalidParameterError, OutputError
+from ..fileio import atomic_path, check_output_path
+from ..validation import whole_number
 from .particles import ParticleComponent, register_particle_kind
 
 __all__ = ["CloudField", "CloudLayer", "REFERENCE_WAVELENGTH", "MAX_VOXELS", "perlin_fbm", "worley_fbm"]
@@ -300,8 +303,7 @@ class CloudField:
         if nx * ny * nz > MAX_VOXELS:
             raise InvalidParameterError(f"resolution gives {nx * ny * nz} voxels; at most {MAX_VOXELS}")
         fs = _number("feature size", feature_size, 1.0, 1e7)
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise InvalidParameterError(f"seed must be a whole number >= 0; got {seed!r}")
+        seed = whole_number("seed", seed, 0)
         ext = _procedural_extinction(c, nx, ny, nz, sx, sy, t - b, fs, tau, int(seed))
         return cls(ext, (sx, sy), b, t, particles, origin=origin, periodic=periodic)
 
@@ -309,8 +311,6 @@ class CloudField:
 
     def to_dataset(self):
         """The field as an xarray Dataset (variable ``extinction`` (x, y, z) [m^-1], cell-centre coordinates)."""
-        import json
-
         import xarray as xr
 
         x, y, z = self.coordinates()
@@ -328,8 +328,6 @@ class CloudField:
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the field to ``path``: NetCDF 4 (``.nc``, h5netcdf) or a Zarr store (``.zarr``), atomically."""
-        from ..fileio import atomic_path, check_output_path
-
         target = Path(path)
         ds = self.to_dataset()
         if target.suffix == ".nc":
@@ -351,8 +349,6 @@ class CloudField:
         """Read a field written by :meth:`save` (or any NetCDF/Zarr with a variable ``extinction`` on ``(x, y,
         z)`` cell-centre coordinates [m], uniformly spaced, and attributes ``base`` and ``top`` [m]; ``periodic``
         defaults to 1). ``particles`` replaces the stored optics (required when the file has none)."""
-        import json
-
         import xarray as xr
 
         p = Path(path)

@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FileFormatError, InvalidParameterError
+from ..fileio import atomic_path
 from . import phase as _phase
 from .particles import AnalyticParticles, ParticleComponent, particle_component_from_dict
 from .phase_table import PhaseTable
@@ -54,7 +55,6 @@ from .spectra import (
     ozone_cross_section_serdyuchenko,
     solar_spectrum_astm_g173,
 )
-from .turbidity import ANGSTROM_ALPHA, angstrom_beta
 
 __all__ = [
     "AtmosphereParameters",
@@ -219,6 +219,18 @@ class AtmosphereParameters:
     # ------------------------------------------------------------------ constructors
 
     @classmethod
+    def from_options(cls, base: AtmosphereParameters | None = None, **options: Any) -> AtmosphereParameters:
+        """The atmosphere a user's options describe (``turbidity``, ``aerosol_optical_depth``, ``angstrom_alpha``,
+        ``ground_albedo``, ``ozone_column``, ``mie_phase_g``, ``aerosol_type``, ``atmosphere_file``): ``base``
+        (default: the Earth defaults) with each option given changed. The one way every caller builds an
+        atmosphere from options: :func:`skyscatter.atmosphere.options.atmosphere_from_options`, whose list
+        :data:`~skyscatter.atmosphere.options.ATMOSPHERE_OPTIONS` states each option's range once.
+        """
+        from .options import atmosphere_from_options  # deferred: options.py imports this module
+
+        return atmosphere_from_options(base, **options)
+
+    @classmethod
     def from_aerosol_optical_depth(cls, aerosol_optical_depth: float, angstrom_alpha: float = 1.3,
                                    **changes: Any) -> AtmosphereParameters:
         """Earth defaults with a vertical aerosol optical depth ``tau`` at 550 nm and Angstrom exponent ``alpha``.
@@ -226,21 +238,8 @@ class AtmosphereParameters:
         Angstrom's law ``tau(lambda) = beta (lambda / 1 um)^-alpha`` ([Angstrom1929])
         gives ``beta = tau (0.55)^alpha``; ``tau`` in [0, 10], ``alpha`` in [-1, 4] (default 1.3, Preetham 1999 A.1).
         """
-        checked = []
-        for name, value, low, high in (("aerosol_optical_depth", aerosol_optical_depth, 0.0, 10.0),
-                                       ("angstrom_alpha", angstrom_alpha, -1.0, 4.0)):
-            try:
-                v = float(value)
-            except (TypeError, ValueError):
-                raise InvalidParameterError(f"{name} must be a number; got {value!r}") from None
-            if not (math.isfinite(v) and low <= v <= high):
-                raise InvalidParameterError(f"{name} must be in [{low:g}, {high:g}]; got {value!r}")
-            checked.append(v)
-        tau, alpha = checked
-        from .turbidity import angstrom_beta_from_optical_depth
-
-        return cls(mie_angstrom_alpha=alpha, mie_angstrom_beta=angstrom_beta_from_optical_depth(tau, alpha),
-                   **changes)
+        return cls.from_options(cls(**changes), aerosol_optical_depth=aerosol_optical_depth,
+                                angstrom_alpha=angstrom_alpha)
 
     @classmethod
     def with_aerosol_type(cls, name: str, aerosol_optical_depth: float | None = None,
@@ -266,13 +265,7 @@ class AtmosphereParameters:
         (:func:`skyscatter.atmosphere.turbidity.angstrom_beta`), so the vertical aerosol optical depth is
         ``beta (lambda / 1 um)^-1.3``; spread over ``mie_density``. Valid for 1 <= T <= 20 (beta > 0).
         """
-        try:
-            t = float(turbidity)
-        except (TypeError, ValueError):
-            raise InvalidParameterError(f"turbidity must be a number in [1, 20]; got {turbidity!r}") from None
-        if not (math.isfinite(t) and 1.0 <= t <= 20.0):
-            raise InvalidParameterError(f"turbidity must be in [1, 20]; got {turbidity!r}")
-        return cls(mie_angstrom_alpha=ANGSTROM_ALPHA, mie_angstrom_beta=float(angstrom_beta(t)), **changes)
+        return cls.from_options(cls(**changes), turbidity=turbidity)
 
     def replace(self, **changes: Any) -> AtmosphereParameters:
         """A copy with some fields changed (validated again)."""
@@ -541,8 +534,6 @@ class AtmosphereParameters:
     def save_json(self, path: str, extra: dict[str, Any] | None = None) -> None:
         """Write ``{"atmosphere": to_dict(), **extra}`` as JSON to ``path`` atomically (``skyscatter
         fit-atmosphere`` adds its fit report as ``extra``); :meth:`load_json` reads it back."""
-        from ..fileio import atomic_path
-
         with atomic_path(path) as tmp:
             tmp.write_text(json.dumps({"atmosphere": self.to_dict(), **(extra or {})}, indent=1, sort_keys=True))
 

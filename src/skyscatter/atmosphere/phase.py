@@ -45,12 +45,13 @@ Sampling (cosines of the scattering angle; the azimuth about the incident direct
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
+from ..lazy import lazy_namespace
 
 __all__ = [
     "AEROSOL_PHASE_FUNCTIONS",
@@ -331,15 +332,31 @@ def sample_aerosol_phase(size: int | tuple[int, ...], g: float, kind: str = "cor
 
 # ------------------------------------------------------------------ numba scalar versions (built on first use)
 
-_SCALARS = ("rayleigh_phase_scalar", "henyey_greenstein_scalar", "cornette_shanks_scalar", "aerosol_phase_scalar",
-            "rayleigh_inverse_cdf_scalar", "henyey_greenstein_inverse_cdf_scalar", "direction_about_axis")
+if TYPE_CHECKING:
+    from ._phase_numba import (
+        aerosol_phase_scalar as aerosol_phase_scalar,
+    )
+    from ._phase_numba import (
+        cornette_shanks_scalar as cornette_shanks_scalar,
+    )
+    from ._phase_numba import (
+        direction_about_axis as direction_about_axis,
+    )
+    from ._phase_numba import (
+        henyey_greenstein_inverse_cdf_scalar as henyey_greenstein_inverse_cdf_scalar,
+    )
+    from ._phase_numba import (
+        henyey_greenstein_scalar as henyey_greenstein_scalar,
+    )
+    from ._phase_numba import (
+        rayleigh_inverse_cdf_scalar as rayleigh_inverse_cdf_scalar,
+    )
+    from ._phase_numba import (
+        rayleigh_phase_scalar as rayleigh_phase_scalar,
+    )
 
+_LAZY = {name: "_phase_numba" for name in (
+    "rayleigh_phase_scalar", "henyey_greenstein_scalar", "cornette_shanks_scalar", "aerosol_phase_scalar",
+    "rayleigh_inverse_cdf_scalar", "henyey_greenstein_inverse_cdf_scalar", "direction_about_axis")}
 
-def __getattr__(name: str) -> Any:
-    if name in _SCALARS:
-        from . import _phase_numba
-
-        value = getattr(_phase_numba, name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_namespace(globals(), _LAZY)[0]

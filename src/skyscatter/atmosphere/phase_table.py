@@ -55,12 +55,14 @@ without numba's runtime (docs/architecture.md, numba rules).
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FileFormatError, InvalidParameterError
+from ..lazy import lazy_namespace
+from ..validation import whole_number
 
 __all__ = [
     "PhaseTable",
@@ -465,9 +467,7 @@ class PhaseTable:
         ``chi_l = 2 pi int_{-1}^{1} p(mu) P_l(mu) dmu`` (module docstring): ``chi_0 = 1``, ``chi_1 = g``; DISORT's
         ``PMOM`` (Stamnes et al. 1988).
         """
-        if isinstance(n_moments, bool) or int(n_moments) != n_moments or n_moments < 1:
-            raise InvalidParameterError(f"number of Legendre moments must be a whole number >= 1; got {n_moments!r}")
-        n = int(n_moments)
+        n = whole_number("number of Legendre moments", n_moments, 1, integral_floats=True)
         mu = self._mu
         a, b = mu[:-1], mu[1:]
         pl = _legendre_table(mu, n + 2)  # P_0 .. P_{n+1} at the nodes
@@ -504,9 +504,7 @@ class PhaseTable:
         the original is small; those values are set to 0 and the table renormalised unless ``clip_negative`` is
         False (then InvalidParameterError).
         """
-        if isinstance(n_streams, bool) or int(n_streams) != n_streams or n_streams < 2:
-            raise InvalidParameterError(f"delta-M needs a whole number of streams >= 2; got {n_streams!r}")
-        m = int(n_streams)
+        m = whole_number("the number of delta-M streams", n_streams, 2, integral_floats=True)
         chi = self.legendre_moments(m + 1)
         f = chi[:, m].copy()
         if np.any(f >= 1.0):
@@ -535,14 +533,21 @@ class PhaseTable:
 
 # ------------------------------------------------------------------ numba functions (built on first use)
 
-_NUMBA = ("phase_table_segment", "phase_table_value", "phase_table_values", "phase_table_inverse_cdf")
+if TYPE_CHECKING:
+    from ._phase_numba import (
+        phase_table_inverse_cdf as phase_table_inverse_cdf,
+    )
+    from ._phase_numba import (
+        phase_table_segment as phase_table_segment,
+    )
+    from ._phase_numba import (
+        phase_table_value as phase_table_value,
+    )
+    from ._phase_numba import (
+        phase_table_values as phase_table_values,
+    )
 
+_LAZY = {name: "_phase_numba" for name in (
+    "phase_table_segment", "phase_table_value", "phase_table_values", "phase_table_inverse_cdf")}
 
-def __getattr__(name: str) -> Any:
-    if name in _NUMBA:
-        from . import _phase_numba
-
-        value = getattr(_phase_numba, name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_namespace(globals(), _LAZY)[0]

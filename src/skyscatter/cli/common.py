@@ -12,6 +12,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from ..errors import InvalidParameterError
+from ..fileio import check_output_path
 
 
 class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -188,8 +189,6 @@ def png_path(args: argparse.Namespace) -> Path:
 def check_output_paths(args: argparse.Namespace) -> None:
     """Refuse bad --out/--png paths before any work: empty, a folder, wrong suffix, same file, missing or
     read-only folder (:func:`skyscatter.fileio.check_output_path`)."""
-    from ..fileio import check_output_path
-
     out = output_file(args)
     check_output_path(out, option="--out")
     png = png_path(args)

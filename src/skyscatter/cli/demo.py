@@ -21,6 +21,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..errors import InvalidParameterError
+from ..fileio import atomic_paths, check_output_path, ensure_output_folder
+from .atmosphere_options import NAMES as ATMOSPHERE_NAMES
+from .atmosphere_options import add_atmosphere_options, add_deprecated_option
 from .common import HELP_FORMATTER, add_sun_options, finite_float, float_in, positive_int, sun_angles_from_args
 from .sky_options import add_model_options, add_parameter_options, build_sky_from_args, parameter_values
 
@@ -42,25 +46,26 @@ FIG8_CAMERA_XY = (-26_000.0, -16_000.0)
 _MAX_CAMERA_XY = 1e7
 _MAX_CAMERA_Z = 1e5
 
-_SCENE_OPTIONS = ("sun_elevation", "sun_azimuth", "lat", "lon", "time", "aerial", "model")
-#: Parameters of the precomputed atmosphere that ``--model bruneton`` takes (``--turbidity`` is shared with the
-#: skies; the ground's albedo is the terrain's ``--albedo``).
-_BRUNETON_OPTIONS = ("turbidity", "aerosol_optical_depth", "angstrom_alpha", "ozone_column", "aerosol_type",
-                     "atmosphere_file", "wavelengths")
+_SCENE_OPTIONS = ("sun_elevation", "sun_azimuth", "lat", "lon", "time", "aerial")
+#: Parameters of the precomputed atmosphere that ``--model bruneton`` takes: the atmosphere's options
+#: (:data:`skyscatter.atmosphere.options.ATMOSPHERE_OPTIONS`; ``--turbidity`` is shared with the skies and
+#: ``--ground-albedo`` with the skies that have a ground, such as hosek-wilkie) and its tables. The terrain's albedo
+#: is ``--terrain-albedo``.
+_BRUNETON_OPTIONS = (*ATMOSPHERE_NAMES, "tables")
 #: Default turbidity of the haze for skies that have none of their own (the CIE and Perez skies).
 DEFAULT_HAZE_TURBIDITY = 2.5
 
 
 def _scene_options(args: argparse.Namespace) -> list[str]:
     """Names of the scene options given: the fixed ones and every sky-model parameter from the registry."""
-    names = [k for k in _SCENE_OPTIONS if getattr(args, k, None) is not None]
-    if getattr(args, "sky_given", False):
-        names.insert(0, "sky")
+    names = [k for k in (*_SCENE_OPTIONS, "ground_albedo") if getattr(args, k, None) is not None]
+    if getattr(args, "model", None) is not None:
+        names.insert(0, "model")
     from ..sky import registry
 
     for spec in registry.models():
         for p in spec.parameters:
-            own_option = p.name in getattr(args, "_model_shared", ())  # e.g. the terrain's --albedo
+            own_option = p.name in getattr(args, "_model_shared", ())  # --ground-albedo, listed above
             if p.cli and not own_option and getattr(args, p.name, None) is not None and p.name not in names:
                 names.append(p.name)
     return names
@@ -75,7 +80,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "morning T=2, evening T=2, evening T=6, overcast T=10) and Figure 8 (looking east before sunset, T=6: "
         "CIE clear sky of one colour with Ward-Larson's ambient aerial perspective, then the Preetham model), "
         "one EXR (linear sRGB, Y = luminance/683) and one PNG per panel plus fig7.png and fig8.png, in the "
-        "current folder. Giving --sky, --turbidity, a sun option or --aerial renders one custom panel "
+        "current folder. Giving --model, --turbidity, a sun option or --aerial renders one custom panel "
         "(landscape.exr/.png) instead. Nothing is written unless every image renders and every file can be "
         "written.",
         formatter_class=HELP_FORMATTER,
@@ -99,24 +104,25 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     s = p.add_argument_group("custom scene (any of these renders one custom panel)")
     from ..sky import registry
 
-    add_model_options(s, [m for m in registry.names() if m != "bruneton"], default=None, flag="--sky",
-                      dest="model_sky", shown_default="preetham", shared=("albedo",))
+    add_model_options(s, registry.names(), default=None, shown_default="preetham", shared=("ground_albedo",),
+                      parameters_of=[m for m in registry.names() if m != "bruneton"], deprecated=False)
+    add_deprecated_option(s, "--sky", "--model", "sky_old", choices=[m for m in registry.names() if m != "bruneton"])
     s.description = (f"--turbidity is the sky's and the haze's turbidity; with a sky that has none (cie*, perez, "
-                     f"asrc-cie) it is the haze's alone (1.65 to 11, default {DEFAULT_HAZE_TURBIDITY}).")
+                     f"asrc-cie) it is the haze's alone (1.65 to 11, default {DEFAULT_HAZE_TURBIDITY}). --model "
+                     "bruneton renders the precomputed multiple scattering of Bruneton & Neyret 2008 (cached after "
+                     "the first run, about 15 s): sky, sunlight, aerial perspective, and light shafts from the "
+                     "mountains' shadow; --aerial and the other skies' parameters do not apply to it.")
     s.add_argument("--aerial", choices=["analytic", "numeric", "constant", "ward-larson", "none"], default=None,
                    help="aerial perspective: analytic (Preetham 1999 closed form), numeric (quadrature), "
                    "constant (constant density; lit by the sun only, or by the sky for the sunless cie-overcast "
                    "sky), ward-larson (ambient), none (default analytic)")
-    s.add_argument("--model", choices=["preetham", "bruneton"], default=None,
-                   help="atmosphere model: preetham (the sky and aerial perspective above); bruneton (precomputed "
-                   "multiple scattering of Bruneton & Neyret 2008 with the Earth defaults, cached after the "
-                   "first run (about 15 s): sky, sunlight, aerial perspective, and light shafts from the "
-                   "mountains' shadow; --sky, its parameters and --aerial do not apply) (default preetham: the "
-                   "sky chosen by --sky)")
-    b = p.add_argument_group("precomputed atmosphere (--model bruneton; --turbidity also applies)",
+    b = p.add_argument_group("precomputed atmosphere (--model bruneton; --turbidity also applies, and --ground-albedo "
+                             "also to the skies with a ground)",
                              "The Earth defaults unless changed; each atmosphere's tables are computed once "
                              "(about 15 s) and cached.")
-    add_parameter_options(b, "bruneton", [n for n in _BRUNETON_OPTIONS if n != "turbidity"])
+    add_atmosphere_options(b, [n for n in ATMOSPHERE_NAMES if n != "turbidity"])
+    add_parameter_options(b, "bruneton", ["tables"])
+    add_deprecated_option(b, "--wavelengths", "--tables", "tables", choices=["spectral", "rgb"])
     add_sun_options(p, default_elevation=EVENING_SUN[0], default_azimuth=EVENING_SUN[1])
     c = p.add_argument_group("camera and terrain")
     c.add_argument("--dem", type=Path, default=None, metavar="PATH",
@@ -124,9 +130,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "needs --dem-spacing) or GeoTIFF .tif/.tiff (needs the optional tifffile package)")
     c.add_argument("--dem-spacing", type=float_in(1e-3, 1e6), default=None, metavar="M",
                    help="sample spacing of the elevation model [m] (GeoTIFF: default from the file)")
-    c.add_argument("--albedo", type=float_in(0.0, 1.0), default=0.2, metavar="RHO",
-                   help="Lambertian albedo of the terrain (and of the ground in sky models that take one, such as "
-                   "hosek-wilkie)")
+    c.add_argument("--terrain-albedo", type=float_in(0.0, 1.0), default=0.2, metavar="RHO",
+                   help="Lambertian albedo of the terrain (the atmosphere's ground is --ground-albedo)")
+    add_deprecated_option(c, "--albedo", "--terrain-albedo", "terrain_albedo", type=float_in(0.0, 1.0))
     c.add_argument("--camera-x", type=float_in(-_MAX_CAMERA_XY, _MAX_CAMERA_XY), default=None, metavar="M",
                    help="camera east coordinate [m], within +-1e7 (default on the built-in landscape: 12000 for "
                    "figure 7 and custom panels, -26000 for figure 8; the centre of a DEM)")
@@ -241,7 +247,7 @@ def _panels(args: argparse.Namespace, figure: str) -> list[_Panel]:
             from ..errors import InvalidParameterError
 
             for opt in _scene_options(args):
-                if opt in ("sky", "aerial") or opt not in _SCENE_OPTIONS + _BRUNETON_OPTIONS:
+                if opt == "aerial" or opt not in ("model", *_SCENE_OPTIONS, *_BRUNETON_OPTIONS):
                     flag = "--" + opt.replace("_", "-")
                     raise InvalidParameterError(f"{flag} does not apply to --model bruneton (the precomputed "
                                                 "atmosphere gives the sky and the aerial perspective)")
@@ -252,14 +258,14 @@ def _panels(args: argparse.Namespace, figure: str) -> list[_Panel]:
             return panels
         from ..sky import registry
 
+        model = args.model = args.model or "preetham"
+        own = {p.name for p in registry.get(model).parameters}
         for p in registry.get("bruneton").parameters:
-            if p.name in _BRUNETON_OPTIONS and p.name != "turbidity" and getattr(args, p.name, None) is not None:
+            if (p.name in _BRUNETON_OPTIONS and p.name not in (*own, "turbidity")  # the haze's without the sky's
+                    and getattr(args, p.name, None) is not None):
                 from ..errors import InvalidParameterError
 
                 raise InvalidParameterError(f"{p.cli_flag} applies to --model bruneton (the precomputed atmosphere)")
-        from ..sky import registry
-
-        model = args.model_sky = args.model_sky or "preetham"
         haze = None
         if not any(p.name == "turbidity" for p in registry.get(model).parameters):
             # --turbidity is the haze's alone for skies without one (checked as the Preetham range)
@@ -274,10 +280,25 @@ def _panels(args: argparse.Namespace, figure: str) -> list[_Panel]:
     return panels
 
 
+def _old_sky_option(args: argparse.Namespace) -> None:
+    """--sky (deprecated) chose the sky when --model chose the atmosphere (preetham: the sky of --sky)."""
+    old = getattr(args, "sky_old", None)
+    if old is None:
+        return
+    if args.model == "bruneton":
+        from ..errors import InvalidParameterError
+
+        raise InvalidParameterError("--sky does not apply to --model bruneton (the precomputed atmosphere gives the "
+                                    "sky and the aerial perspective)")
+    if args.model not in (None, "preetham", old):
+        from ..errors import InvalidParameterError
+
+        raise InvalidParameterError(f"give the sky once: --model {args.model} (--sky is its old spelling)")
+    args.model = old
+
+
 def _check_out_dir(out_dir: Path) -> None:
     """Create the output folder if missing (as ``export-luts`` does); refuse a file or a read-only folder."""
-    from ..fileio import ensure_output_folder
-
     ensure_output_folder(out_dir, what="--out-dir")
 
 
@@ -291,16 +312,12 @@ def _targets(out_dir: Path, panels: list[_Panel], figure: str) -> list[Path]:
 
 def _check_targets(targets: list[Path]) -> None:
     """Refuse, before any rendering, targets that cannot be replaced by a regular file."""
-    from ..fileio import check_output_path
-
     for target in targets:
         check_output_path(target)
 
 
 def _write_all(jobs: list[tuple[Path, Any]]) -> None:
     """Write every (target, writer) pair, all or none (:func:`skyscatter.fileio.atomic_paths`)."""
-    from ..fileio import atomic_paths
-
     with atomic_paths(*(target for target, _ in jobs)) as temps:
         for (_, writer), tmp in zip(jobs, temps, strict=True):
             writer(tmp)
@@ -312,7 +329,6 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     from tqdm import tqdm
 
-    from ..errors import InvalidParameterError
     from ..render.camera import PinholeCamera
     from ..render.image_io import write_exr, write_png
     from ..render.scene import DEFAULT_CAMERA_HEIGHT, Scene
@@ -320,7 +336,7 @@ def run(args: argparse.Namespace) -> int:
     from ..render.tonemap import tonemap
     from ..spectral import wavelength_grid
 
-    args.sky_given = getattr(args, "model_sky", None) is not None
+    _old_sky_option(args)
     scene_given = bool(_scene_options(args))
     figure = args.figure or ("custom" if scene_given else "all")
     if figure != "custom" and scene_given:
@@ -359,12 +375,12 @@ def run(args: argparse.Namespace) -> int:
 
             medium = dict(panel.bruneton_medium or {})
             # --wavelengths chooses the tables' wavelengths; the renderer's come from --wavelength-step
-            scenes.append(bruneton_scene(terrain, camera, *panel.bruneton_sun, albedo=args.albedo,
-                                         sun_disc=args.sun_disc, wavelengths=wavelengths,
-                                         table_wavelengths=medium.pop("wavelengths", None), **medium))
+            # --tables chooses the tables' wavelengths; the renderer's come from --wavelength-step
+            scenes.append(bruneton_scene(terrain, camera, *panel.bruneton_sun, terrain_albedo=args.terrain_albedo,
+                                         sun_disc=args.sun_disc, wavelengths=wavelengths, **medium))
             continue
-        scenes.append(Scene(panel.sky, terrain=terrain, camera=camera, aerial=panel.aerial, albedo=args.albedo,
-                            sun_disc=args.sun_disc, wavelengths=wavelengths))
+        scenes.append(Scene(panel.sky, terrain=terrain, camera=camera, aerial=panel.aerial,
+                            terrain_albedo=args.terrain_albedo, sun_disc=args.sun_disc, wavelengths=wavelengths))
 
     _check_out_dir(args.out_dir)
     _check_targets(targets)

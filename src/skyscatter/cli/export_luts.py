@@ -4,9 +4,11 @@ the engine-ready RGBA textures of :mod:`skyscatter.realtime` with their manifest
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
+from ..fileio import ensure_output_folder
 from .common import HELP_FORMATTER
 
 
@@ -34,7 +36,7 @@ def _formats(text: str) -> tuple[str, ...]:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    from .precompute import add_atmosphere_options
+    from .precompute import add_table_options
 
     p = subparsers.add_parser(
         "export-luts",
@@ -66,28 +68,25 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--formats", type=_formats, default=",".join(DEFAULT_FORMATS), metavar="LIST",
                    help="comma-separated: raw (the spectral tables above), rgba32f, rgba16f (engine-ready RGBA "
                         "float32 / half textures, raw little-endian), exr (the same as OpenEXR float32)")
-    add_atmosphere_options(p)
+    add_table_options(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
-
-    from ..fileio import ensure_output_folder
     from ..precomputed import PrecomputedAtmosphere
     from ..precomputed.cache import cached_atmosphere
     from .common import one_line_warnings
-    from .precompute import atmosphere_from_args
+    from .precompute import tables_from_args
 
     # The output folder first: refuse it before a table build that can take a minute.
     ensure_output_folder(args.out_dir, what="--out-dir")
     if args.source is not None:
         atm = PrecomputedAtmosphere.load(args.source)
     else:
-        params, sizes = atmosphere_from_args(args)
+        params, sizes, table_options = tables_from_args(args)
         with one_line_warnings():
-            atm = cached_atmosphere(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
-                                    progress=not args.no_progress and sys.stderr.isatty())
+            atm = cached_atmosphere(params, sizes=sizes, progress=not args.no_progress and sys.stderr.isatty(),
+                                    **table_options)
     realtime = tuple(f for f in args.formats if f != "raw")
     if realtime:
         from ..realtime import export_realtime

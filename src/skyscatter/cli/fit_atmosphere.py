@@ -23,6 +23,7 @@ import math
 from pathlib import Path
 
 from ..errors import FileFormatError, InvalidParameterError
+from ..fileio import check_output_path
 from .common import HELP_FORMATTER, float_in
 
 KINDS = ("radiance", "luminance", "dni", "dhi", "aod")
@@ -189,7 +190,6 @@ def read_measurements(path: Path, lat: float | None, lon: float | None):
 def run(args: argparse.Namespace) -> int:
     import dataclasses
 
-    from ..fileio import check_output_path
     from ..fit.atmosphere import fit_atmosphere
 
     if args.out.suffix != ".json":

@@ -9,7 +9,9 @@ import sys
 import time
 
 from ..errors import InvalidParameterError
-from .common import HELP_FORMATTER, float_in, float_list, output_path, positive_int
+from ..fileio import check_output_path
+from .atmosphere_options import add_atmosphere_options, atmosphere_from_args
+from .common import HELP_FORMATTER, float_list, output_path, positive_int
 
 #: Most sun elevations a fit samples (the published model has 6 control points; 90 is one per degree).
 MAX_ELEVATIONS = 90
@@ -38,11 +40,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=output_path, required=True, metavar="FILE.npz",
                    help="dataset file to write [.npz]; read it with HosekWilkieDataset.load")
     g = p.add_argument_group("atmosphere", "Earth defaults of the precomputed atmosphere unless changed.")
-    g.add_argument("--turbidity", type=float_in(1.0, 20.0), default=None, metavar="T",
-                   help="aerosols from turbidity, 1 to 20 (Preetham 1999 A.1: Angstrom alpha 1.3, beta 0.04608 T - "
-                        "0.04586) instead of the default (vertical aerosol optical depth 0.0053, alpha 0)")
-    g.add_argument("--ground-albedo", type=float_in(0.0, 1.0), default=0.1, metavar="A",
-                   help="ground albedo, 0 to 1 (Lambertian, same at every wavelength)")
+    add_atmosphere_options(g)
     f = p.add_argument_group("fit")
     f.add_argument("--fit-wavelengths", type=_wavelength_list, default=[440.0, 550.0, 680.0], metavar="LIST",
                    help="wavelengths to fit [nm], increasing, 300 to 1000, a list like 440,550,680 or "
@@ -54,9 +52,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..fileio import check_output_path
     from ..fit import fit_hosek_wilkie, fit_sun_elevations
-    from ..precomputed import AtmosphereParameters
     from ..precomputed.cache import load_or_compute
 
     if args.out.suffix != ".npz":
@@ -65,17 +61,13 @@ def run(args: argparse.Namespace) -> int:
     if not 6 <= args.elevations <= MAX_ELEVATIONS:
         raise InvalidParameterError(f"--elevations must be at least 6 (one per control point) and at most "
                                     f"{MAX_ELEVATIONS}; got {args.elevations}")
-    changes = dict(ground_albedo=args.ground_albedo)
-    if args.turbidity is not None:
-        params = AtmosphereParameters.from_turbidity(args.turbidity, **changes)
-    else:
-        params = AtmosphereParameters(**changes)
+    params = atmosphere_from_args(args)
     t0 = time.perf_counter()
     atm, _ = load_or_compute(params, progress=sys.stderr.isatty())
     from ..sky.bruneton import BrunetonSky
 
     def make(zenith: float, azimuth: float):
-        return BrunetonSky(zenith, azimuth, atmosphere=atm)
+        return BrunetonSky(zenith, azimuth, precomputed=atm)
 
     ds = fit_hosek_wilkie(make, args.fit_wavelengths, sun_elevations=fit_sun_elevations(args.elevations),
                           provenance={"atmosphere": json.loads(params.canonical_json())})

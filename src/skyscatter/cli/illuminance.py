@@ -6,6 +6,7 @@ import argparse
 import json
 import math
 
+from ..errors import InvalidParameterError
 from .common import (
     HELP_FORMATTER,
     add_sun_options,
@@ -42,7 +43,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..errors import InvalidParameterError
     from ..photometry import (
         horizontal_illuminance,
         sun_normal_illuminance,

@@ -8,6 +8,8 @@ import sys
 import time
 
 from ..errors import InvalidParameterError
+from ..fileio import check_output_path
+from .atmosphere_options import add_atmosphere_options, add_deprecated_option, atmosphere_from_args
 from .common import HELP_FORMATTER, float_in, float_list, one_line_warnings, output_path, positive_int
 
 
@@ -26,7 +28,8 @@ def _sizes(n: int, name: str):
 
 
 def _wavelengths(text: str) -> list[float] | str:
-    """'spectral' or 'rgb' (the named sets), '680,550,440' or a range 'START:STOP:STEP' [nm] (inclusive)."""
+    """A list '680,550,440' or a range 'START:STOP:STEP' [nm] (inclusive); a set's name ('spectral', 'rgb') is the
+    deprecated spelling of --tables."""
     t = text.strip()
     if t in ("spectral", "rgb"):
         return t
@@ -38,30 +41,26 @@ def _wavelengths(text: str) -> list[float] | str:
     return values
 
 
-def add_atmosphere_options(p: argparse.ArgumentParser) -> None:
-    """Options describing the atmosphere and the tables (shared with ``export-luts``)."""
+def add_table_options(p: argparse.ArgumentParser) -> None:
+    """Options describing the atmosphere (generated from the one list) and the tables (shared with
+    ``export-luts``)."""
     g = p.add_argument_group("atmosphere", "The Earth defaults of Bruneton & Neyret 2008 (as in Bruneton's 2017 "
-                          "implementation) unless changed.")
-    g.add_argument("--turbidity", type=float_in(1.0, 20.0), default=None, metavar="T",
-                   help="aerosols from turbidity (Preetham 1999 A.1: Angstrom alpha 1.3, beta 0.04608 T - 0.04586)"
-                        " instead of the default (vertical aerosol optical depth 0.0053, alpha 0)")
-    g.add_argument("--albedo", type=float_in(0.0, 1.0), default=0.1, metavar="A",
-                   help="ground albedo (Lambertian, same at every wavelength)")
-    g.add_argument("--ozone", type=float_in(0.0, 1000.0), default=300.0, metavar="DU",
-                   help="total ozone column [Dobson units]")
-    g.add_argument("--mie-g", type=float_in(-0.99, 0.99), default=0.8, metavar="G",
-                   help="aerosol phase asymmetry (Cornette-Shanks g)")
-    g.add_argument("--max-sun-zenith", type=float_in(102.0, 180.0), default=102.0, metavar="DEG",
-                   help="largest sun zenith angle tabulated [deg]; the sky is dark beyond it")
+                             "implementation) unless changed.")
+    add_atmosphere_options(g)
+    add_deprecated_option(g, "--albedo", "--ground-albedo", "ground_albedo", type=float_in(0.0, 1.0), metavar="A")
     t = p.add_argument_group("tables")
+    t.add_argument("--max-sun-zenith", type=float_in(102.0, 180.0), default=102.0, metavar="DEG",
+                   help="largest sun zenith angle tabulated [deg]; the sky is dark beyond it")
     t.add_argument("--orders", type=positive_int, default=6, metavar="N",
                    help="scattering orders computed one by one; from 3 on the later orders are added as their "
                         "geometric tail (docs/bruneton.md)")
-    t.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="LIST",
-                   help="wavelengths [nm]: 'spectral' (the default: 400:700:20, 16 wavelengths, colour within "
-                        "delta-xy 0.003 of a 41-wavelength computation), 'rgb' (680,550,440: faster, wrong colour "
-                        "at low sun), a list '680,550,440' or a range '380:780:10'; 15 or more give the spectral "
-                        "mode (XYZ by integration with the CIE observer)")
+    t.add_argument("--tables", choices=["spectral", "rgb"], default=None,
+                   help="named set of table wavelengths: spectral (the default: 400:700:20, 16 wavelengths, colour "
+                        "within delta-xy 0.003 of a 41-wavelength computation) or rgb (680,550,440: faster, wrong "
+                        "colour at low sun)")
+    t.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="NM",
+                   help="the table wavelengths [nm] instead of --tables: a list '680,550,440' or a range "
+                        "'380:780:10'; 15 or more give the spectral mode (XYZ by integration with the CIE observer)")
     t.add_argument("--transmittance-size", type=_sizes(2, "transmittance size"), default="256x64", metavar="MUxR",
                    help="transmittance table: view-zenith x radius samples")
     t.add_argument("--irradiance-size", type=_sizes(2, "irradiance size"), default="64x16", metavar="MUSxR",
@@ -72,24 +71,29 @@ def add_atmosphere_options(p: argparse.ArgumentParser) -> None:
     t.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-def atmosphere_from_args(args: argparse.Namespace):
-    """(AtmosphereParameters, TableSizes) from the options of :func:`add_atmosphere_options`."""
+def tables_from_args(args: argparse.Namespace):
+    """(AtmosphereParameters, TableSizes, table keywords) from the options of :func:`add_table_options`; the
+    keywords (``tables`` or ``wavelengths``, ``orders``) go to :func:`~skyscatter.precomputed.cached_atmosphere`."""
     import math
 
-    from ..precomputed import AtmosphereParameters, TableSizes
+    from ..precomputed import TableSizes
 
-    changes = dict(ground_albedo=args.albedo, ozone_column=args.ozone, mie_phase_g=args.mie_g,
-                   max_sun_zenith=math.radians(args.max_sun_zenith))
-    if args.turbidity is not None:
-        params = AtmosphereParameters.from_turbidity(args.turbidity, **changes)
-    else:
-        params = AtmosphereParameters(**changes)
+    params = atmosphere_from_args(args, max_sun_zenith=math.radians(args.max_sun_zenith))
     mu, r = args.transmittance_size
     mus, r_e = args.irradiance_size
     sr, smu, smus, snu = args.scattering_size
     sizes = TableSizes(transmittance_mu=mu, transmittance_r=r, irradiance_mu_s=mus, irradiance_r=r_e,
                        scattering_r=sr, scattering_mu=smu, scattering_mu_s=smus, scattering_nu=snu)
-    return params, sizes
+    tables, wavelengths = args.tables, args.wavelengths
+    if isinstance(wavelengths, str):  # the spelling before --tables
+        print(f"skyscatter: warning: --wavelengths {wavelengths} is deprecated and will be removed in the next "
+              f"release; use --tables {wavelengths}", file=sys.stderr)
+        if tables is not None:
+            raise InvalidParameterError("give --tables only (--wavelengths takes wavelengths [nm])")
+        tables, wavelengths = wavelengths, None
+    if tables is not None and wavelengths is not None:
+        raise InvalidParameterError("give either --tables (a named set) or --wavelengths [nm], not both")
+    return params, sizes, {"tables": tables, "wavelengths": wavelengths, "orders": args.orders}
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -107,16 +111,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=output_path, default=None, metavar="FILE.npz",
                    help="write the tables to this .npz file instead of the cache")
     p.add_argument("--force", action="store_true", help="recompute even if the cache already holds the tables")
-    add_atmosphere_options(p)
+    add_table_options(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..fileio import check_output_path
     from ..precomputed import PrecomputedAtmosphere
     from ..precomputed.cache import check_cache_dir, load_or_compute
 
-    params, sizes = atmosphere_from_args(args)
+    params, sizes, table_options = tables_from_args(args)
     if args.out is not None and args.out.suffix != ".npz":
         raise InvalidParameterError(f"--out must name an .npz file; got {args.out}")
     if args.out is not None:
@@ -130,12 +133,11 @@ def run(args: argparse.Namespace) -> int:
 
         # --force recomputes first and then replaces the file atomically: an interrupted run keeps the old one.
         with one_line_warnings():
-            atm, computed = load_or_compute(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
-                                            progress=progress, force=args.force, require_saved=True)
+            atm, computed = load_or_compute(params, sizes=sizes, progress=progress, force=args.force,
+                                            require_saved=True, **table_options)
         target = cache_path(atm.cache_key)
     else:
-        atm = PrecomputedAtmosphere.compute(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
-                                            progress=progress)
+        atm = PrecomputedAtmosphere.compute(params, sizes=sizes, progress=progress, **table_options)
         target = atm.save(args.out)
         computed = True
     wall = time.perf_counter() - t0

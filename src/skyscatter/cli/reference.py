@@ -7,7 +7,9 @@ import math
 import sys
 import time
 
+from ..atmosphere.options import atmosphere_option
 from ..atmosphere.phase import AEROSOL_PHASE_FUNCTIONS
+from .atmosphere_options import add_deprecated_option
 from .common import HELP_FORMATTER, float_in, float_list, output_path
 
 
@@ -53,13 +55,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "START:STOP:STEP")
     aer = p.add_mutually_exclusive_group()
     aer.add_argument("--turbidity", type=float_list("turbidity", "1-20"), default=None, metavar="T",
-                     help="turbidities, 1 to 20 (Preetham 1999 A.1 Angstrom beta, alpha 1.3), a list; 2.5 when "
-                     "neither --turbidity nor --aod is given")
+                     help=f"turbidities, {atmosphere_option('turbidity').range_text()} (Preetham 1999 A.1 Angstrom "
+                     "beta, alpha 1.3), a list; 2.5 when neither --turbidity nor --aod is given")
     aer.add_argument("--aod", type=float_list("aerosol optical depth", "at 550 nm"), default=None, metavar="TAU",
-                     help="vertical aerosol optical depths at 550 nm, 0 to 10 (Angstrom alpha 0 of the Earth "
+                     help="vertical aerosol optical depths at 550 nm, "
+                     f"{atmosphere_option('aerosol_optical_depth').range_text()} (Angstrom alpha 0 of the Earth "
                      "defaults), a list")
-    p.add_argument("--albedo", type=float_list("albedo", "0-1"), default="0.1", metavar="A",
-                   help="ground albedos, 0 to 1 (Lambertian, grey), a list")
+    p.add_argument("--ground-albedo", dest="albedo", type=float_list("ground albedo", "0-1"), default="0.1",
+                   metavar="A",
+                   help=f"albedos of the atmosphere's ground, {atmosphere_option('ground_albedo').range_text()} "
+                   "(Lambertian, grey), a list")
+    add_deprecated_option(p, "--albedo", "--ground-albedo", "albedo", type=float_list("ground albedo", "0-1"))
     p.add_argument("--wavelengths", type=float_list("wavelengths", "nm"), default="380:780:40", metavar="NM",
                    help="wavelengths [nm], 360 to 830 (the ozone cross-sections), a list or START:STOP:STEP")
     p.add_argument("--directions", type=_whole_in(1, MAX_DIRECTIONS), default=200, metavar="N",

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
 
+from ..errors import InvalidParameterError
 from .common import (
     HELP_FORMATTER,
     add_image_output_options,
@@ -53,16 +55,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="pinhole: horizontal field of view [deg]")
     g.add_argument("--no-sun-disc", dest="sun_disc", action="store_false",
                    help="leave the solar disc out of the image")
-    g.add_argument("--ground-albedo", type=float_in(0.0, 1.0), default=0.2, metavar="RHO",
-                   help="albedo of the neutral Lambertian ground drawn below the horizon; not used by bruneton, "
-                   "which draws its own ground with its atmosphere's albedo (0.1, the Earth default; other values "
-                   "from Python with AtmosphereParameters(ground_albedo=...))")
+    g.add_argument("--terrain-albedo", type=float_in(0.0, 1.0), default=None, metavar="RHO",
+                   help="albedo of the neutral Lambertian ground drawn below the horizon (default 0.2); not used by "
+                   "bruneton, which draws its own ground with its atmosphere's --ground-albedo")
     add_image_output_options(p, default_out="sky.exr")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..errors import InvalidParameterError
     from ..render import sky_image, write_exr_and_png
 
     check_output_paths(args)
@@ -76,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidParameterError(f"{', '.join(given)}: not with --format radiance (a Radiance sky is an "
                                         "equirect picture of the whole sphere, width x width/2, with the sun as "
                                         "a light source)")
+    _terrain_albedo(args)
     # The precomputed atmosphere ignores refraction, so it wants the geometric sun (docs/bruneton.md).
     zenith, azimuth = sun_angles_from_args(args, apparent=args.model != "bruneton")
     model = build_sky_from_args(args, zenith, azimuth)
@@ -85,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
         from ..render.radiance_sky import write_radiance_sky
 
         try:
-            files = write_radiance_sky(output_file(args), model, width=args.width, ground_albedo=args.ground_albedo,
+            files = write_radiance_sky(output_file(args), model, width=args.width, ground_albedo=args.terrain_albedo,
                                        png_path=png_path(args), exposure_ev=args.exposure)
         finally:
             if bar is not None:
@@ -104,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
             pitch=math.radians(args.pitch),
             fov=math.radians(args.fov),
             sun_disc=args.sun_disc,
-            ground_albedo=args.ground_albedo,
+            ground_albedo=args.terrain_albedo,
             layout=args.layout,
         )
     finally:
@@ -117,6 +118,24 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _terrain_albedo(args: argparse.Namespace) -> None:
+    """--terrain-albedo (default 0.2); --ground-albedo with a model that has no ground is its old spelling."""
+    from ..sky import registry
+
+    takes_ground = any(p.name == "ground_albedo" for p in registry.get(args.model).parameters)
+    if not takes_ground and getattr(args, "ground_albedo", None) is not None:
+        import sys
+
+        print("skyscatter: warning: --ground-albedo for the ground drawn below the horizon is deprecated and will be "
+              "removed in the next release; use --terrain-albedo (--ground-albedo is the atmosphere's ground, of "
+              "the models that have one)", file=sys.stderr)
+        if args.terrain_albedo is None:
+            args.terrain_albedo = args.ground_albedo
+        del args.ground_albedo
+    if args.terrain_albedo is None:
+        args.terrain_albedo = 0.2
+
+
 def _format_seconds(seconds: float) -> str:
     if seconds < 90:
         return f"{seconds:.0f} s"
@@ -127,8 +146,6 @@ def _format_seconds(seconds: float) -> str:
 
 def _monte_carlo_progress(model, args: argparse.Namespace):
     """Say how long the Monte Carlo sky will take (from a pilot run) and attach a progress bar to it."""
-    import sys
-
     from tqdm import tqdm
 
     from ..runtime import num_threads

@@ -44,13 +44,15 @@ def _specs(models: Iterable[str]):
 
 def add_model_options(parser, models: list[str] | None = None, default: str | None = "preetham",
                       *, flag: str = "--model", dest: str = "model", shown_default: str | None = None,
-                      shared: tuple[str, ...] = ()) -> None:
+                      shared: tuple[str, ...] = (), parameters_of: list[str] | None = None,
+                      deprecated: bool = True) -> None:
     """``--model`` (one of ``models``, default: every registered model) and those models' parameters.
 
-    ``parser`` is a parser or an argument group; ``flag`` and ``dest`` name the model option (the demo calls it
-    ``--sky``, since its ``--model`` chooses the atmosphere). ``shared`` names parameters the command already has
-    as options of its own (the demo's ``albedo``, the terrain's): no option is added for them, and their value
-    goes to the models that take them.
+    ``parser`` is a parser or an argument group; ``flag`` and ``dest`` name the model option. ``shared`` names
+    parameters the command already has as options of its own: no option is added for them, and their value goes
+    to the models that take them. ``parameters_of`` limits the parameters added to those of some models (the
+    demo gives the precomputed atmosphere's in a group of their own). With ``deprecated``, the old spellings of
+    the models' parameters (``ModelSpec.renamed``: ``--albedo``, ``--wavelengths``) are accepted with a warning.
     """
     from ..sky import registry
 
@@ -63,18 +65,30 @@ def add_model_options(parser, models: list[str] | None = None, default: str | No
     nested = isinstance(parser, argparse.ArgumentParser)
     group = parser.add_argument_group("model parameters (each applies to the models named)") if nested else parser
     by_flag: dict[str, list[tuple[str, Any]]] = {}
-    for spec in specs:
+    old_flags: dict[str, Any] = {}
+    for spec in specs if parameters_of is None else _specs(parameters_of):
         for p in spec.parameters:
             if p.cli and p.name not in shared:
                 by_flag.setdefault(p.cli_flag, []).append((spec.name, p))
-    for cli_flag, entries in by_flag.items():
-        _add_option(group, cli_flag, entries)
+        for old, new in spec.renamed.items():
+            if spec.parameter(new).cli and new not in shared:
+                old_flags.setdefault("--" + old.replace("_", "-"), spec.parameter(new))
+    for entries in by_flag.values():
+        add_option(group, entries)
+    if deprecated:
+        from .atmosphere_options import add_deprecated_option
+
+        for old_flag, p in old_flags.items():
+            kind = {"choices": list(p.choices)} if p.kind == "choice" else {"type": _PARSERS.get(p.kind, str)}
+            add_deprecated_option(group, old_flag, p.cli_flag, p.name, default=argparse.SUPPRESS, **kind)
     parser.set_defaults(_models=names, _model_dest=dest, _model_flag=flag, _model_shared=tuple(shared))
 
 
-def _add_option(group, cli_flag: str, entries: list[tuple[str, Any]]) -> None:
-    """One option for a parameter shared by the models in ``entries`` ((model name, Parameter) pairs)."""
+def add_option(group, entries: list[tuple[str, Any]], *, label: bool = True) -> None:
+    """One option for a parameter shared by the models in ``entries`` ((model name, Parameter) pairs); ``label``
+    names the models in the help text."""
     first = entries[0][1]
+    cli_flag = first.cli_flag
     texts: dict[str, list[str]] = {}  # one text per distinct description, listing the models it applies to
     for model, p in entries:
         shown = p.default if isinstance(p.default, (int, float)) and not isinstance(p.default, bool) else None
@@ -84,7 +98,7 @@ def _add_option(group, cli_flag: str, entries: list[tuple[str, Any]]) -> None:
             f" (default {shown:g})" if shown is not None else "")
         texts.setdefault(text, []).append(model)
     kwargs: dict[str, Any] = dict(dest=first.name, default=argparse.SUPPRESS,
-                                  help="; ".join(f"{', '.join(m)}: {t}" for t, m in texts.items()))
+                                  help="; ".join(f"{', '.join(m)}: {t}" if label else t for t, m in texts.items()))
     if first.kind == "choice":
         kwargs["choices"] = list(first.choices)
     else:
@@ -100,7 +114,7 @@ def add_parameter_options(group, model: str, names: Iterable[str]) -> None:
     spec = registry.get(model)
     for p in spec.parameters:
         if p.name in names:
-            _add_option(group, p.cli_flag, [(model, p)])
+            add_option(group, [(model, p)])
 
 
 def parameter_values(args: argparse.Namespace, model: str, names: Iterable[str]) -> dict[str, Any]:

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
+from ..errors import InvalidParameterError
+from ..fileio import atomic_path, check_output_path
 from .common import HELP_FORMATTER, float_in, output_path, positive_int
 
 
@@ -110,12 +113,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import sys
-
     import numpy as np
 
-    from ..errors import InvalidParameterError
-    from ..fileio import check_output_path
     from ..sky_matrix import skymatrix
 
     if args.spectral:
@@ -164,8 +163,6 @@ def run(args: argparse.Namespace) -> int:
 def _csv_report(ds, path: Path) -> None:
     import numpy as np
 
-    from ..fileio import atomic_path
-
     cols = ["status", "reason", "ghi", "dni", "dhi", "aerosol_optical_depth", "aerosol_source",
             "aerosol_optical_depth_file", "single_scattering_albedo", "precipitable_water", "precipitable_water_source",
             "ozone", "pressure", "dni_model", "dhi_matrix", "dni_closure", "dhi_closure"]
@@ -189,12 +186,8 @@ def _csv_report(ds, path: Path) -> None:
 
 
 def run_spectral(args: argparse.Namespace) -> int:
-    import sys
-
     import numpy as np
 
-    from ..errors import InvalidParameterError
-    from ..fileio import check_output_path
     from ..fit.spectral_matrix import (
         save_dataset,
         spectral_sky_matrix,

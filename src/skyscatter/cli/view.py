@@ -20,7 +20,7 @@ def _port(text: str) -> int:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    from .precompute import add_atmosphere_options
+    from .precompute import add_table_options
 
     p = subparsers.add_parser(
         "view",
@@ -44,7 +44,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--check", action="store_true",
                    help="serve, fetch the page, its script, the shaders, the manifest and every texture over HTTP "
                         "from 127.0.0.1, report what was served and exit (no browser)")
-    add_atmosphere_options(p)
+    add_table_options(p)
     p.set_defaults(func=run)
 
 
@@ -54,15 +54,15 @@ def _luts_folder(args: argparse.Namespace) -> Path:
     from ..realtime import MANIFEST_NAME, export_realtime
     from ..realtime.loader import read_manifest
     from .common import one_line_warnings
-    from .precompute import atmosphere_from_args
+    from .precompute import tables_from_args
 
     if args.luts is not None:
         read_manifest(args.luts)  # refuse a wrong folder before serving it
         return args.luts
-    params, sizes = atmosphere_from_args(args)
+    params, sizes, table_options = tables_from_args(args)
     with one_line_warnings():
-        atm = cached_atmosphere(params, orders=args.orders, wavelengths=args.wavelengths, sizes=sizes,
-                                progress=not args.no_progress and sys.stderr.isatty())
+        atm = cached_atmosphere(params, sizes=sizes, progress=not args.no_progress and sys.stderr.isatty(),
+                                **table_options)
     folder = Path(cache_dir()) / "realtime" / atm.cache_key[:32]
     try:
         ok = read_manifest(folder).get("cache_key") == atm.cache_key

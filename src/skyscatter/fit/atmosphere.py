@@ -218,20 +218,15 @@ def _air(base: AtmosphereParameters, names: tuple[str, ...], x: NDArray[np.float
          aerosol_type: str | None, start: dict[str, float]) -> AtmosphereParameters:
     v = dict(start)
     v.update(zip(names, (float(t) for t in x), strict=True))
-    changes: dict[str, Any] = {"ground_albedo": v["ground_albedo"]}
-    if aerosol_type is not None:
+    if aerosol_type is not None:  # the relative humidity is the fit's own (not a user option of the air)
         from ..atmosphere.aerosol_types import OpacAerosol
 
-        changes["aerosol"] = OpacAerosol.preset(aerosol_type, v["aerosol_optical_depth"], v["relative_humidity"],
-                                                base.thickness)
-    else:
-        from ..atmosphere.turbidity import angstrom_beta_from_optical_depth
-
-        changes.update(aerosol=None, mie_angstrom_alpha=v["angstrom_alpha"],
-                       mie_angstrom_beta=angstrom_beta_from_optical_depth(v["aerosol_optical_depth"],
-                                                                          v["angstrom_alpha"]),
-                       mie_phase_g=v["mie_phase_g"], mie_single_scattering_albedo=v["mie_single_scattering_albedo"])
-    return base.replace(**changes)
+        return base.replace(ground_albedo=v["ground_albedo"], aerosol=OpacAerosol.preset(
+            aerosol_type, v["aerosol_optical_depth"], v["relative_humidity"], base.thickness))
+    air = AtmosphereParameters.from_options(base, aerosol_optical_depth=v["aerosol_optical_depth"],
+                                            angstrom_alpha=v["angstrom_alpha"], ground_albedo=v["ground_albedo"],
+                                            mie_phase_g=v["mie_phase_g"])
+    return air.replace(mie_single_scattering_albedo=v["mie_single_scattering_albedo"])
 
 
 def _start_values(base: AtmosphereParameters, aerosol_type: str | None,

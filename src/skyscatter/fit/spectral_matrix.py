@@ -36,6 +36,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -44,10 +45,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..conventions import direction_from_angles
 from ..errors import InvalidParameterError, OutputError
 from ..fileio import atomic_path, check_output_path
 from ..patches import PatchScheme, patch_scheme
 from ..radiance import write_radiance_matrix as _write_matrix
+from ..validation import whole_number
 from .weather import (
     CLEAR,
     CLEAR_OPEN,
@@ -174,11 +177,9 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
     import xarray as xr
 
     from .. import __version__
-    from ..conventions import direction_from_angles
 
     geom = scheme if isinstance(scheme, PatchScheme) else patch_scheme(scheme)
-    if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 4:
-        raise InvalidParameterError(f"samples must be a whole number in [1, 4]; got {samples!r}")
+    whole_number("samples", samples, 1, 4, integral_floats=True)
     centres, edges = band_edges(bands)
     if atmosphere is None:
         atmosphere = retrieve_hourly_atmosphere(record, options, family=family)
@@ -507,8 +508,6 @@ def plane_irradiance(ds, tilt: float, azimuth: float, *, samples: int = 4):
     """
     import xarray as xr
 
-    from ..conventions import direction_from_angles
-
     tilt = float(tilt)
     azimuth = float(azimuth)
     if not (np.isfinite(tilt) and 0.0 <= tilt <= np.pi) or not np.isfinite(azimuth):
@@ -610,8 +609,7 @@ def spectral_sky_matrix_sites(records: Sequence[str | os.PathLike[str]], store: 
     store_path = Path(store)
     if store_path.suffix.lower() != ".zarr":
         raise InvalidParameterError(f"{store_path}: the multi-site store must be a .zarr directory")
-    if isinstance(workers, bool) or int(workers) != workers or workers < 1:
-        raise InvalidParameterError(f"workers must be a whole number >= 1; got {workers!r}")
+    whole_number("workers", workers, 1, integral_floats=True)
     geom = patch_scheme(scheme)
     centres, _ = band_edges(bands)
     from .weather import read_weather
@@ -684,8 +682,6 @@ def _compute(tasks, scheduler, workers: int, progress: bool) -> None:
 
 def _open_or_create_sites(store: Path, job: dict, job_id: str, n_sites: int, n_hours: int, n_patches: int,
                           centres: NDArray[np.float64]) -> None:
-    import shutil
-
     import xarray as xr
 
     if store.exists():

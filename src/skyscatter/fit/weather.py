@@ -74,6 +74,7 @@ from ..atmosphere.gas_absorption import (
     water_vapour_transmittance,
 )
 from ..atmosphere.medium import AtmosphereParameters
+from ..conventions import direction_from_angles
 from ..epw import EPWData, EPWLocation, read_epw
 from ..errors import FileFormatError, InvalidParameterError
 from ..precomputed.family import FAMILY_WAVELENGTHS, GridAxis, TableFamily
@@ -809,8 +810,6 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
 def _diffuse_at_albedo_nodes(fam: TableFamily, model: BroadbandClearSky, rows, aod, zen, azi, pw, pressure, ozone,
                              ecc) -> NDArray[np.float64]:
     """Broadband DHI [W m^-2] of hours ``rows`` at their AOD and at each albedo node, shape (len(rows), n_albedo)."""
-    from ..conventions import direction_from_angles
-
     k_aod = [a.name for a in fam.axes].index("aerosol_optical_depth")
     k_ssa = next((k for k, a in enumerate(fam.axes) if a.name == "aerosol_single_scattering_albedo"), None)
     ssa_values = fam.axes[k_ssa].values if k_ssa is not None else (0.0,)

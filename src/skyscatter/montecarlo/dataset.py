@@ -49,8 +49,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
 from ..atmosphere import AtmosphereParameters
-from ..atmosphere.turbidity import ANGSTROM_ALPHA, angstrom_beta, angstrom_beta_from_optical_depth
 from ..errors import InvalidParameterError, MissingDependencyError, OutputError
+from ..fileio import ensure_output_folder
+from ..validation import whole_number
 from .driver import (
     DEFAULT_GROUP_SIZE,
     batch_layout,
@@ -86,8 +87,7 @@ LOCK_SUFFIX = ".skyscatter-lock"
 def equal_area_directions(n: int) -> NDArray[np.float64]:
     """``n`` directions spread evenly over the upper hemisphere (spherical Fibonacci lattice, equal area per point;
     [Gonzalez2010]), unit ENU vectors (n, 3)."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise InvalidParameterError(f"number of directions must be an integer >= 1; got {n!r}")
+    n = whole_number("number of directions", n, 1)
     i = np.arange(n) + 0.5
     z = 1.0 - i / n  # uniform in cos(zenith) on (0, 1]: equal area on the hemisphere
     phi = i * math.pi * (3.0 - math.sqrt(5.0))
@@ -115,12 +115,10 @@ class ReferenceJob:
         """Medium of aerosol index ``k`` and albedo index ``m``."""
         a = float(self.aerosol[k])
         if self.aerosol_kind == "turbidity":
-            # Preetham et al. 1999, Appendix A.1 (as AtmosphereParameters.from_turbidity)
-            changes = dict(mie_angstrom_alpha=ANGSTROM_ALPHA, mie_angstrom_beta=float(angstrom_beta(a)))
-        else:
-            # vertical aerosol optical depth at 550 nm with the base Angstrom exponent
-            changes = dict(mie_angstrom_beta=angstrom_beta_from_optical_depth(a, self.atmosphere.mie_angstrom_alpha))
-        return self.atmosphere.replace(ground_albedo=float(self.albedos[m]), **changes)
+            options = dict(turbidity=a)
+        else:  # vertical aerosol optical depth at 550 nm with the base Angstrom exponent
+            options = dict(aerosol_optical_depth=a, angstrom_alpha=self.atmosphere.mie_angstrom_alpha)
+        return AtmosphereParameters.from_options(self.atmosphere, ground_albedo=float(self.albedos[m]), **options)
 
     def description(self) -> dict[str, Any]:
         """JSON-able description; equal descriptions mean equal results."""
@@ -149,13 +147,6 @@ class ReferenceJob:
                            nb, bs)
 
 
-def _whole(name: str, value: Any, lo: int, hi: int, unit: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
-        what = f" [{unit}]" if unit else ""
-        raise InvalidParameterError(f"{name} must be a whole number from {lo} to {hi:.6g}{what}; got {value!r}")
-    return int(value)
-
-
 def _axis(name: str, values: ArrayLike, lo: float, hi: float, unit: str) -> NDArray[np.float64]:
     v = np.atleast_1d(np.asarray(values, dtype=float))
     if v.ndim != 1 or v.size == 0:
@@ -182,9 +173,9 @@ def make_job(*, sun_elevations: ArrayLike, albedos: ArrayLike, wavelengths: Arra
     if not isinstance(atm, AtmosphereParameters):
         raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(atm).__name__}")
     wl = check_wavelengths(wavelengths)
-    samples = _whole("samples", samples, 1, MAX_SAMPLES, "paths per direction")
-    seed = _whole("seed", seed, 0, 2**63 - 1, "")
-    group_size = _whole("group_size", group_size, 1, 1024, "wavelengths per path")
+    samples = whole_number("samples (paths per direction)", samples, 1, MAX_SAMPLES)
+    seed = whole_number("seed", seed, 0, 2**63 - 1)
+    group_size = whole_number("group_size (wavelengths per path)", group_size, 1, 1024)
     try:
         alt = float(altitude)
     except (TypeError, ValueError):
@@ -289,8 +280,6 @@ def _remove_stale_temporary_stores(store: Path) -> None:
 def check_store_path(store: str | os.PathLike[str]) -> Path:
     """Refuse a store path that cannot be created or resumed, before any work: empty, an existing file, a missing
     or read-only folder."""
-    from ..fileio import ensure_output_folder
-
     text = os.fspath(store)
     if not str(text).strip():
         raise OutputError("the store path is empty; name a folder such as ref.zarr")

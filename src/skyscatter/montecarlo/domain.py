@@ -43,6 +43,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..atmosphere import AtmosphereParameters
 from ..conventions import direction_from_angles
 from ..errors import InvalidParameterError
+from ..validation import whole_number
 from .driver import (
     DEFAULT_GROUP_SIZE,
     _check_clouds,
@@ -224,10 +225,6 @@ def _views(name: str, views: ArrayLike | None) -> NDArray[np.float64]:
     return v
 
 
-def _positive_int(name: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise InvalidParameterError(f"{name} must be a whole number >= 1; got {value!r}")
-    return int(value)
 
 
 def _on_sphere(x: NDArray[np.float64], y: NDArray[np.float64], radius: float) -> NDArray[np.float64]:
@@ -272,7 +269,7 @@ def domain_quantities(atmosphere: AtmosphereParameters, clouds: Any, wavelengths
         As :func:`~skyscatter.montecarlo.sky_radiance`.
     """
     from ..atmosphere.clouds import CloudField
-    from .driver import _check_samples
+    from .driver import check_samples
 
     t0 = time.perf_counter()
     if not isinstance(clouds, CloudField):
@@ -280,13 +277,13 @@ def domain_quantities(atmosphere: AtmosphereParameters, clouds: Any, wavelengths
     if not clouds.periodic:
         raise InvalidParameterError("domain quantities need a periodic cloud field (CloudField(..., periodic=True))")
     wl = check_wavelengths(wavelengths)
-    n_samples = _check_samples(samples)
+    n_samples = check_samples(samples)
     sun = _sun_vector(sun_zenith, sun_azimuth)
     mu0 = float(sun[2])
     if not mu0 > 1e-6:
         raise InvalidParameterError("domain quantities need the sun above the horizon (sun_zenith < pi/2)")
     ups, downs = _views("up_views", up_views), _views("down_views", down_views)
-    npts = _positive_int("direct_points", direct_points)
+    npts = whole_number("direct_points", direct_points, 1)
     medium = prepare_medium(atmosphere, wl, clouds, majorant_block)
     nx, ny, _ = clouds.shape
     dx, dy, _ = clouds.voxel_size

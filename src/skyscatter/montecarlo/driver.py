@@ -28,6 +28,7 @@ from ..atmosphere import AtmosphereParameters
 from ..atmosphere.phase import aerosol_phase_kind
 from ..conventions import direction_from_angles
 from ..errors import InvalidDirectionError, InvalidParameterError, MissingDependencyError
+from ..validation import whole_number
 from . import kernels, tracking
 
 __all__ = ["MonteCarloResult", "Medium", "prepare_medium", "sky_radiance", "solar_disc_radiance"]
@@ -291,10 +292,9 @@ def _check_scalar(name: str, value: Any, lo: float, hi: float, unit: str) -> flo
     return v
 
 
-def _check_samples(samples: Any) -> int:
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
-        raise InvalidParameterError(f"samples must be an integer >= 1; got {samples!r}")
-    return int(samples)
+def check_samples(samples: Any) -> int:
+    """Paths per direction: a whole number >= 1."""
+    return whole_number("samples", samples, 1)
 
 
 def batch_layout(samples: int) -> tuple[int, int]:
@@ -552,7 +552,7 @@ def trace(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float
     Returns ``(mean, stderr, samples_used, mean_vertices)``: per entry and wavelength the mean per-path estimate
     and its standard error, the paths per entry and the mean number of scattering and ground vertices per path.
     """
-    n_samples = _check_samples(samples)
+    n_samples = check_samples(samples)
     seed = int(seed)
     if seed < 0:
         raise InvalidParameterError(f"seed must be >= 0; got {seed}")
@@ -633,7 +633,7 @@ def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavele
     t_start = time.perf_counter()
     dirs = check_directions(directions)
     wl = check_wavelengths(wavelengths)
-    _check_samples(samples)
+    check_samples(samples)
     sun = _sun_vector(sun_zenith, sun_azimuth)
     r_obs = _observer_radius(atmosphere, altitude)
     medium = prepare_medium(atmosphere, wl, _check_clouds(clouds), majorant_block)

@@ -11,9 +11,7 @@ the aerial perspective from the tables is in :mod:`skyscatter.aerial.bruneton`, 
 with light shafts in :mod:`skyscatter.render.bruneton`.
 """
 
-import importlib
-from typing import Any
-
+from ..lazy import lazy_namespace
 from .cache import CacheRebuildWarning, cache_dir, cached_atmosphere, resolve_atmosphere
 from .parameters import (
     AtmosphereParameters,
@@ -44,11 +42,8 @@ __all__ = [
     "resolve_atmosphere",
 ]
 
-
-def __getattr__(name: str) -> Any:
-    # Backwards-compatibility alias: BrunetonSky moved to skyscatter.sky.bruneton (one module per sky model in
-    # skyscatter.sky); ``from skyscatter.precomputed import BrunetonSky`` keeps working. Imported lazily by name
-    # because the sky layer sits above this one (skyscatter.sky.bruneton imports this package).
-    if name == "BrunetonSky":
-        return importlib.import_module("skyscatter.sky.bruneton").BrunetonSky
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+# Backwards-compatibility alias: BrunetonSky moved to skyscatter.sky.bruneton (one module per sky model in
+# skyscatter.sky); ``from skyscatter.precomputed import BrunetonSky`` keeps working. Imported on first use because
+# the sky layer sits above this one (skyscatter.sky.bruneton imports this package); for the same reason type
+# checkers see it as Any here (the documented name is skyscatter.sky.BrunetonSky).
+__getattr__ = lazy_namespace(globals(), {"BrunetonSky": ".sky.bruneton"})[0]

@@ -17,7 +17,9 @@ from pathlib import Path
 
 from numpy.typing import ArrayLike
 
+from ..deprecation import renamed_keywords
 from ..errors import FileFormatError, InvalidParameterError, OutputError
+from ..fileio import ensure_output_folder
 from .parameters import AtmosphereParameters
 from .sizes import DEFAULT_ORDERS, TableSizes, table_wavelengths
 from .storage import cache_key
@@ -48,8 +50,6 @@ def check_cache_dir() -> Path:
 
     The message names the folder, says what is wrong and how to choose another (``SKYSCATTER_CACHE_DIR``).
     """
-    from ..fileio import ensure_output_folder
-
     return ensure_output_folder(cache_dir(), what="the table cache folder",
                                 hint="set SKYSCATTER_CACHE_DIR to a writable folder")
 
@@ -64,26 +64,30 @@ def clear_memory_cache() -> None:
     _MEMORY.clear()
 
 
-def cached_atmosphere(params: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
-                      wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
-                      progress: bool | None = None, keep_in_memory: bool = True) -> PrecomputedAtmosphere:
-    """Tables for ``params`` from memory, from the disk cache, or computed and then cached.
+@renamed_keywords(params="atmosphere")
+def cached_atmosphere(atmosphere: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
+                      tables: str | None = None, wavelengths: ArrayLike | None = None,
+                      sizes: TableSizes | Mapping[str, int] | None = None, progress: bool | None = None,
+                      keep_in_memory: bool = True) -> PrecomputedAtmosphere:
+    """Tables for ``atmosphere`` from memory, from the disk cache, or computed and then cached.
 
-    Same arguments as :meth:`PrecomputedAtmosphere.compute` (default wavelengths: the 16 of the spectral mode;
-    ``wavelengths="rgb"`` for the 3-wavelength mode; the wavelengths are part of the cache key, so tables cached
+    Same arguments as :meth:`PrecomputedAtmosphere.compute` (default: the 16 wavelengths of the spectral mode;
+    ``tables="rgb"`` for the 3-wavelength mode; the wavelengths are part of the cache key, so tables cached
     under other defaults are not reused). If the cache folder cannot be written the tables are still returned
     (with a warning). ``keep_in_memory=False`` does not keep the tables in the process's memory cache (a
     caller that holds many tables, such as :class:`~skyscatter.precomputed.family.TableFamily`, bounds its own
     memory).
     """
-    return load_or_compute(params, orders=orders, wavelengths=wavelengths, sizes=sizes, progress=progress,
-                           keep_in_memory=keep_in_memory)[0]
+    return load_or_compute(atmosphere, orders=orders, tables=tables, wavelengths=wavelengths, sizes=sizes,
+                           progress=progress, keep_in_memory=keep_in_memory)[0]
 
 
-def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
-                    wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
-                    progress: bool | None = None, force: bool = False,
-                    require_saved: bool = False, keep_in_memory: bool = True) -> tuple[PrecomputedAtmosphere, bool]:
+@renamed_keywords(params="atmosphere")
+def load_or_compute(atmosphere: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
+                    tables: str | None = None, wavelengths: ArrayLike | None = None,
+                    sizes: TableSizes | Mapping[str, int] | None = None, progress: bool | None = None,
+                    force: bool = False, require_saved: bool = False,
+                    keep_in_memory: bool = True) -> tuple[PrecomputedAtmosphere, bool]:
     """Like :func:`cached_atmosphere`, also saying whether the tables were computed: ``(tables, computed)``.
 
     With ``force`` the tables are recomputed even if cached; the cache file is replaced only once the new
@@ -91,8 +95,8 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
     (the caller asked for the cache file itself, as ``skyscatter precompute`` does) an unusable cache folder
     is an :class:`~skyscatter.errors.OutputError`, raised before any computation, instead of a warning.
     """
-    params = AtmosphereParameters() if params is None else params
-    wl = table_wavelengths(wavelengths)
+    params = AtmosphereParameters() if atmosphere is None else atmosphere
+    wl = table_wavelengths(wavelengths, tables)
     sz = TableSizes.coerce(sizes)
     key = cache_key(params, orders, wl, sz)
     hit = None if force else _MEMORY.get(key)
@@ -132,29 +136,28 @@ def load_or_compute(params: AtmosphereParameters | None = None, *, orders: int =
     return atm, computed
 
 
+@renamed_keywords(wavelengths="tables")
 def resolve_atmosphere(atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None, *,
-                       wavelengths: str | None = None) -> PrecomputedAtmosphere:
-    """Tables for an argument that may be tables, parameters or None (the Earth defaults).
+                       tables: str | None = None) -> PrecomputedAtmosphere:
+    """Tables for an argument that may be tables, an atmosphere or None (the Earth defaults).
 
-    Tables are returned as they are; parameters (or None) get their tables from :func:`cached_atmosphere`,
-    with ``wavelengths`` ``"spectral"`` (the default) or ``"rgb"``.
+    Tables are returned as they are; an atmosphere (or None) gets its tables from :func:`cached_atmosphere`,
+    with ``tables`` ``"spectral"`` (the default) or ``"rgb"``.
 
     Raises
     ------
     InvalidParameterError
-        Anything else, or ``wavelengths`` given with tables (which have theirs).
+        Anything else, or ``tables`` given with tables (which have their wavelengths).
     """
-    if wavelengths not in (None, "spectral", "rgb"):
-        raise InvalidParameterError(f"wavelengths must be 'spectral' or 'rgb'; got {wavelengths!r}")
+    if tables not in (None, "spectral", "rgb"):
+        raise InvalidParameterError(f"tables must be 'spectral' or 'rgb'; got {tables!r}")
     if isinstance(atmosphere, PrecomputedAtmosphere):
-        if wavelengths is not None:
-            raise InvalidParameterError("wavelengths goes with atmosphere parameters, not with precomputed tables "
-                                        "(they have their own wavelengths)")
+        if tables is not None:
+            raise InvalidParameterError("tables goes with an atmosphere, not with precomputed tables (they have "
+                                        "their own wavelengths)")
         return atmosphere
     if atmosphere is None or isinstance(atmosphere, AtmosphereParameters):
-        if wavelengths is None:
-            return cached_atmosphere(atmosphere)
-        return cached_atmosphere(atmosphere, wavelengths=wavelengths)
+        return cached_atmosphere(atmosphere, tables=tables)
     raise InvalidParameterError(
         f"atmosphere must be a PrecomputedAtmosphere, AtmosphereParameters or None; got {type(atmosphere).__name__}"
     )

@@ -46,6 +46,7 @@ from tqdm.auto import tqdm
 
 from ..atmosphere.phase import aerosol_phase_kind
 from ..errors import InvalidParameterError
+from ..validation import whole_number
 from . import conversion, kernels
 from .parallel import parallel_for
 from .parameters import SOLAR_BAND_WIDTH, AtmosphereParameters
@@ -65,11 +66,11 @@ F32 = NDArray[np.float32]
 F64 = NDArray[np.float64]
 
 
-def density_profiles(params: AtmosphereParameters) -> tuple[F64, NDArray[np.int64]]:
+def density_profiles(atmosphere: AtmosphereParameters) -> tuple[F64, NDArray[np.int64]]:
     """The Rayleigh, Mie and ozone density profiles as one (3, n_layers, 5) array for the kernels (layers of
     :meth:`.DensityProfile.as_array`, zero-padded) and the number of layers of each."""
-    profs = [params.rayleigh_density.as_array(), params.aerosol_component.density.as_array(),
-             params.ozone_density.as_array()]
+    profs = [atmosphere.rayleigh_density.as_array(), atmosphere.aerosol_component.density.as_array(),
+             atmosphere.ozone_density.as_array()]
     n_max = max(p.shape[0] for p in profs)
     arr = np.zeros((3, n_max, 5))
     for i, p in enumerate(profs):
@@ -117,15 +118,16 @@ class Medium:
     solar_irradiance: F64
 
     @classmethod
-    def of(cls, params: AtmosphereParameters, wavelengths: F64, sizes: TableSizes | None = None) -> Medium:
-        """``params`` sampled at ``wavelengths`` [nm] (``sizes`` set the delta-M truncation of a tabulated phase)."""
-        profiles, counts = density_profiles(params)
-        kind, g, phase = aerosol_phase_arrays(params, wavelengths, sizes)
-        return cls(params.bottom_radius, params.top_radius, params.mu_s_min, params.sun_angular_radius,
+    def of(cls, atmosphere: AtmosphereParameters, wavelengths: F64, sizes: TableSizes | None = None) -> Medium:
+        """``atmosphere`` sampled at ``wavelengths`` [nm] (``sizes`` set the delta-M truncation of a tabulated
+        phase)."""
+        profiles, counts = density_profiles(atmosphere)
+        kind, g, phase = aerosol_phase_arrays(atmosphere, wavelengths, sizes)
+        return cls(atmosphere.bottom_radius, atmosphere.top_radius, atmosphere.mu_s_min, atmosphere.sun_angular_radius,
                    g, kind, *phase, profiles, counts,
-                   params.rayleigh_scattering_at(wavelengths), params.mie_extinction_at(wavelengths),
-                   params.mie_scattering_at(wavelengths), params.ozone_absorption_at(wavelengths),
-                   params.ground_albedo_at(wavelengths), params.solar_irradiance_at(wavelengths))
+                   atmosphere.rayleigh_scattering_at(wavelengths), atmosphere.mie_extinction_at(wavelengths),
+                   atmosphere.mie_scattering_at(wavelengths), atmosphere.ozone_absorption_at(wavelengths),
+                   atmosphere.ground_albedo_at(wavelengths), atmosphere.solar_irradiance_at(wavelengths))
 
     def channels(self, ch: NDArray[np.intp]) -> Medium:
         """The same medium at the wavelengths of indices ``ch`` (a chunk)."""
@@ -140,7 +142,7 @@ class Medium:
                       self.ground_albedo[ch], self.solar_irradiance[ch])
 
 
-def aerosol_phase_arrays(params: AtmosphereParameters, wavelengths: F64,
+def aerosol_phase_arrays(atmosphere: AtmosphereParameters, wavelengths: F64,
                          sizes: TableSizes | None = None) -> tuple[int, float, tuple[F64, F64, F64, F64]]:
     """``(mie_kind, g, (phase_mu, phase_full, phase_trunc, forward))`` of the aerosol for the kernels.
 
@@ -149,12 +151,12 @@ def aerosol_phase_arrays(params: AtmosphereParameters, wavelengths: F64,
     and the delta-M truncation for :data:`DELTA_M_STREAMS_PER_SAMPLE` x ``sizes.density_sphere_samples``
     streams (Medium's docstring).
     """
-    analytic = params.aerosol_component.analytic_phase
+    analytic = atmosphere.aerosol_component.analytic_phase
     if analytic is not None:
         empty = np.zeros((1, 2))
         return aerosol_phase_kind(analytic.kind), analytic.g, (np.array([-1.0, 1.0]), empty, empty, np.zeros(1))
     sz = TableSizes() if sizes is None else sizes
-    table = params.aerosol_phase_table(wavelengths)
+    table = atmosphere.aerosol_phase_table(wavelengths)
     trunc, f = table.delta_m(DELTA_M_STREAMS_PER_SAMPLE * sz.density_sphere_samples)
     arr = table.numba_arrays()
     # the truncated phase on an even cosine grid (the kernel indexes it without a search; linear between
@@ -298,30 +300,29 @@ def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int,
     return single_r, single_m, multiple, irradiance
 
 
-def compute_tables(params: AtmosphereParameters, *, orders: int = DEFAULT_ORDERS,
+def compute_tables(atmosphere: AtmosphereParameters, *, orders: int = DEFAULT_ORDERS,
                    wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
-                   progress: bool | None = None,
+                   progress: bool | None = None, preset: str | None = None,
                    chunk_size: int | None = None) -> tuple[F64, TableSizes, dict[str, F32], dict[str, float]]:
     """Algorithm 4.1: ``(wavelengths, sizes, tables, timings)`` after validating the arguments (those of
-    :meth:`.PrecomputedAtmosphere.compute`); ``tables`` maps the names of :data:`.storage.TABLE_NAMES` to float32
+    :meth:`.PrecomputedAtmosphere.compute`, whose ``tables`` preset is ``preset`` here); ``tables`` maps the names
+    of :data:`.storage.TABLE_NAMES` to float32
     arrays with a trailing wavelength axis, ``timings`` each step's seconds (summed over wavelength chunks)."""
-    if not isinstance(params, AtmosphereParameters):
-        raise InvalidParameterError(f"params must be AtmosphereParameters; got {type(params).__name__}")
-    if isinstance(orders, bool) or not isinstance(orders, (int, np.integer)) or not 1 <= orders <= 50:
-        raise InvalidParameterError(f"orders must be a whole number in [1, 50]; got {orders!r}")
-    if params.particles:
+    if not isinstance(atmosphere, AtmosphereParameters):
+        raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(atmosphere).__name__}")
+    whole_number("orders", orders, 1, 50)
+    if atmosphere.particles:
         raise InvalidParameterError(
             "the precomputed tables take one aerosol (AtmosphereParameters.aerosol) and no further particle "
             "components (cloud layers): use the Monte Carlo reference for those")
-    wl = table_wavelengths(wavelengths)
-    params.check_wavelengths(wl)
-    check_colour_range(params, wl)
+    wl = table_wavelengths(wavelengths, preset)
+    atmosphere.check_wavelengths(wl)
+    check_colour_range(atmosphere, wl)
     sz = TableSizes.coerce(sizes)
     if chunk_size is None:
         chunk_size = max(1, int(CHUNK_MEMORY // (24 * math.prod(sz.scattering_shape))))
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
-        raise InvalidParameterError(f"chunk_size must be a whole number >= 1; got {chunk_size!r}")
-    medium = Medium.of(params, wl, sz)
+    whole_number("chunk_size", chunk_size, 1)
+    medium = Medium.of(atmosphere, wl, sz)
     chunks = [np.arange(i, min(i + chunk_size, wl.size)) for i in range(0, wl.size, chunk_size)]
     with Bookkeeping(orders * len(chunks), progress) as book:
         with book.timed("transmittance"):
@@ -340,7 +341,7 @@ def compute_tables(params: AtmosphereParameters, *, orders: int = DEFAULT_ORDERS
 # ------------------------------------------------------------------ checks and bookkeeping
 
 
-def check_colour_range(params: AtmosphereParameters, wavelengths: F64) -> None:
+def check_colour_range(atmosphere: AtmosphereParameters, wavelengths: F64) -> None:
     """Refuse a solar spectrum too narrow for the colour conversion of the few-wavelength mode.
 
     Below 15 wavelengths, XYZ integrates spectra rebuilt over the CIE observer's range, which needs the solar
@@ -350,10 +351,10 @@ def check_colour_range(params: AtmosphereParameters, wavelengths: F64) -> None:
         return
     grid = conversion.FINE_GRID
     try:
-        params.solar_irradiance_at(grid)
+        atmosphere.solar_irradiance_at(grid)
     except InvalidParameterError:
         lo, hi = grid.min() - SOLAR_BAND_WIDTH / 2, grid.max() + SOLAR_BAND_WIDTH / 2
-        spec = params.solar_irradiance
+        spec = atmosphere.solar_irradiance
         covers = f"covers {spec.range[0]:g}-{spec.range[1]:g} nm" if hasattr(spec, "range") else "does not"
         raise InvalidParameterError(
             f"solar_irradiance {covers}; with fewer than {conversion.SPECTRAL_MODE_MIN_WAVELENGTHS} table "

@@ -86,7 +86,7 @@ def _lagrange_basis(nodes: NDArray[np.float64], x: NDArray[np.float64]) -> NDArr
 
 
 def reconstruction_matrix(table_wavelengths: ArrayLike, wavelengths: ArrayLike,
-                          params: AtmosphereParameters) -> NDArray[np.float64]:
+                          atmosphere: AtmosphereParameters) -> NDArray[np.float64]:
     """Matrix (n_out, n_table) turning radiance at ``table_wavelengths`` into radiance at ``wavelengths`` [nm].
 
     ``L(lambda) = E_sun(lambda) * rho(lambda)`` with ``rho`` interpolating ``L_k / E_sun(lambda_k)`` (module
@@ -97,8 +97,8 @@ def reconstruction_matrix(table_wavelengths: ArrayLike, wavelengths: ArrayLike,
     """
     tw = np.asarray(table_wavelengths, dtype=float)
     if tw.size >= SPECTRAL_MODE_MIN_WAVELENGTHS:
-        return _spectral_reconstruction(tw, np.asarray(wavelengths, dtype=float), params)
-    return _reconstruction(tw, wavelengths, params, piecewise_linear=False)
+        return _spectral_reconstruction(tw, np.asarray(wavelengths, dtype=float), atmosphere)
+    return _reconstruction(tw, wavelengths, atmosphere, piecewise_linear=False)
 
 
 def _solar_ratio(e_out: NDArray[np.float64], basis: NDArray[np.float64],
@@ -110,7 +110,7 @@ def _solar_ratio(e_out: NDArray[np.float64], basis: NDArray[np.float64],
 
 
 def _spectral_reconstruction(tw: NDArray[np.float64], wl: NDArray[np.float64],
-                             params: AtmosphereParameters) -> NDArray[np.float64]:
+                             atmosphere: AtmosphereParameters) -> NDArray[np.float64]:
     """Spectral mode: ``rho`` linear in ``lambda`` between table wavelengths, zero outside their range."""
     order = np.argsort(tw)
     flat = wl.ravel()
@@ -120,11 +120,11 @@ def _spectral_reconstruction(tw: NDArray[np.float64], wl: NDArray[np.float64],
     inside = basis.any(axis=1)
     e_out = np.zeros(flat.size)
     if np.any(inside):  # the solar spectrum is only needed (and may only be tabulated) inside the range
-        e_out[inside] = params.solar_irradiance_at(flat[inside])
-    return _solar_ratio(e_out, basis, params.solar_irradiance_at(tw))
+        e_out[inside] = atmosphere.solar_irradiance_at(flat[inside])
+    return _solar_ratio(e_out, basis, atmosphere.solar_irradiance_at(tw))
 
 
-def _reconstruction(table_wavelengths: ArrayLike, wavelengths: ArrayLike, params: AtmosphereParameters, *,
+def _reconstruction(table_wavelengths: ArrayLike, wavelengths: ArrayLike, atmosphere: AtmosphereParameters, *,
                     piecewise_linear: bool) -> NDArray[np.float64]:
     tw = np.asarray(table_wavelengths, dtype=float)
     wl = np.asarray(wavelengths, dtype=float)
@@ -135,10 +135,10 @@ def _reconstruction(table_wavelengths: ArrayLike, wavelengths: ArrayLike, params
     basis = np.zeros((wl.size, tw.size))
     polynomial = tw.size <= 3 and not piecewise_linear
     basis[:, order] = _lagrange_basis(x_nodes, x) if polynomial else _hat_basis(x_nodes, x)
-    return _solar_ratio(params.solar_irradiance_at(wl), basis, params.solar_irradiance_at(tw))
+    return _solar_ratio(atmosphere.solar_irradiance_at(wl), basis, atmosphere.solar_irradiance_at(tw))
 
 
-def xyz_matrix(table_wavelengths: ArrayLike, params: AtmosphereParameters) -> NDArray[np.float64]:
+def xyz_matrix(table_wavelengths: ArrayLike, atmosphere: AtmosphereParameters) -> NDArray[np.float64]:
     """Matrix (3, n_table): ``xyz = M @ L`` gives CIE 1931 XYZ [cd m^-2] of radiance at the table wavelengths.
 
     The spectrum of :func:`reconstruction_matrix` (both modes) integrated with the CIE 1931 observer on a 1 nm
@@ -149,8 +149,8 @@ def xyz_matrix(table_wavelengths: ArrayLike, params: AtmosphereParameters) -> ND
     if tw.size >= SPECTRAL_MODE_MIN_WAVELENGTHS:
         lo, hi = tw.min(), tw.max()
         grid = np.unique(np.concatenate([[lo, hi], FINE_GRID[(FINE_GRID > lo) & (FINE_GRID < hi)]]))
-        return _observer_matrix(grid).T @ reconstruction_matrix(tw, grid, params)
-    return _observer_matrix(FINE_GRID).T @ reconstruction_matrix(tw, FINE_GRID, params)
+        return _observer_matrix(grid).T @ reconstruction_matrix(tw, grid, atmosphere)
+    return _observer_matrix(FINE_GRID).T @ reconstruction_matrix(tw, FINE_GRID, atmosphere)
 
 
 def _observer_matrix(grid: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -165,23 +165,23 @@ class ColourConversion:
     ----------
     table_wavelengths : array_like
         Wavelengths of the tables [nm].
-    params : AtmosphereParameters
+    atmosphere : AtmosphereParameters
         Gives the solar spectrum that ``rho = L / E_sun`` is interpolated against.
     """
 
-    def __init__(self, table_wavelengths: ArrayLike, params: AtmosphereParameters) -> None:
+    def __init__(self, table_wavelengths: ArrayLike, atmosphere: AtmosphereParameters) -> None:
         self.table_wavelengths = np.asarray(table_wavelengths, dtype=float)
-        self.params = params
+        self.atmosphere = atmosphere
         tw = self.table_wavelengths
         self.spectral = tw.size >= SPECTRAL_MODE_MIN_WAVELENGTHS
         self.guarded = 2 <= tw.size <= 3
-        self.xyz_polynomial = xyz_matrix(tw, params)
+        self.xyz_polynomial = xyz_matrix(tw, atmosphere)
         if self.guarded:
-            linear = _reconstruction(tw, FINE_GRID, params, piecewise_linear=True)
+            linear = _reconstruction(tw, FINE_GRID, atmosphere, piecewise_linear=True)
             self.xyz_linear = _observer_matrix(FINE_GRID).T @ linear
             # Where the blend is kept non-negative: every 5 nm over the observer's range.
-            self._check_polynomial = reconstruction_matrix(tw, FINE_GRID[::5], params)
-            self._check_linear = _reconstruction(tw, FINE_GRID[::5], params, piecewise_linear=True)
+            self._check_polynomial = reconstruction_matrix(tw, FINE_GRID[::5], atmosphere)
+            self._check_linear = _reconstruction(tw, FINE_GRID[::5], atmosphere, piecewise_linear=True)
 
     def linear_weight(self, radiance: ArrayLike) -> NDArray[np.float64]:
         """Weight ``t`` (...,) of the piecewise-linear rule in the blend of the module docstring: twice the least
@@ -223,12 +223,12 @@ class ColourConversion:
         """Radiance (..., n_table) at the table wavelengths to (..., n) at ``wavelengths`` [nm], never negative."""
         rad = np.asarray(radiance, dtype=float)
         wl = np.atleast_1d(np.asarray(wavelengths, dtype=float))
-        out = rad @ reconstruction_matrix(self.table_wavelengths, wl, self.params).T
+        out = rad @ reconstruction_matrix(self.table_wavelengths, wl, self.atmosphere).T
         if self.guarded:
             t = self.linear_weight(rad)
             blend = t > 0.0
             if np.any(blend):
-                linear = _reconstruction(self.table_wavelengths, wl, self.params, piecewise_linear=True)
+                linear = _reconstruction(self.table_wavelengths, wl, self.atmosphere, piecewise_linear=True)
                 tb = t[blend][:, None]
                 out[blend] = (1.0 - tb) * out[blend] + tb * (rad[blend] @ linear.T)
         return np.maximum(out, 0.0)

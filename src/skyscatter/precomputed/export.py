@@ -2,7 +2,7 @@
 Sec. 6), with a JSON description.
 
 Files (little-endian float32, no header, C order, channels interleaved per texel; channels sorted by
-decreasing wavelength, so tables in the 3-wavelength mode (``wavelengths="rgb"``) are R = 680 nm, G = 550 nm,
+decreasing wavelength, so tables in the 3-wavelength mode (``tables="rgb"``) are R = 680 nm, G = 550 nm,
 B = 440 nm; the default 16-wavelength tables export 16 channels):
 
 * ``transmittance.raw`` - 2D, width ``n_mu`` x height ``n_r`` (row 0 at the ground).
@@ -139,7 +139,7 @@ def _export(atm: PrecomputedAtmosphere, order: np.ndarray, tmp: dict[str, Path])
         rgba = np.concatenate([scat, mie[..., :1]], axis=-1)
         write("scattering_rgba", rgba).update(width=n_n * n_s, height=n_mu, depth=n_r,
                                               axes=["r", "mu", "nu * n_mu_s + mu_s", "C* RGB + C_M red"])
-    wl = atm.wavelengths[order]
+    wl = atm.wavelengths[order]  # channel order; the medium is evaluated at the (increasing) table wavelengths
     description = {
         "format": "skyscatter-bruneton-luts",
         "reference": "E. Bruneton, F. Neyret, Precomputed Atmospheric Scattering, EGSR 2008",
@@ -157,12 +157,9 @@ def _export(atm: PrecomputedAtmosphere, order: np.ndarray, tmp: dict[str, Path])
             "sun_angular_radius": p.sun_angular_radius,
             "mie_phase_g": p.mie_phase_g,
             "mie_phase_function": p.mie_phase_function,
-            "solar_irradiance": [float(v) for v in p.solar_irradiance_at(wl)],
-            "rayleigh_scattering": [float(v) for v in p.rayleigh_scattering_at(wl)],
-            "mie_scattering": [float(v) for v in p.mie_scattering_at(wl)],
-            "mie_extinction": [float(v) for v in p.mie_extinction_at(wl)],
-            "ozone_absorption": [float(v) for v in p.ozone_absorption_at(wl)],
-            "ground_albedo": [float(v) for v in p.ground_albedo_at(wl)],
+            **{name: [float(v) for v in getattr(p, f"{name}_at")(atm.wavelengths)[order]]
+               for name in ("solar_irradiance", "rayleigh_scattering", "mie_scattering", "mie_extinction",
+                            "ozone_absorption", "ground_albedo")},
         },
         "mappings": _MAPPINGS,
         "channels_to_xyz": atm.xyz_matrix[:, order].tolist(),

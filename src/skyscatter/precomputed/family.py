@@ -37,7 +37,9 @@ when loaded) and is exact for ground observers only: anything above the ground m
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
+import warnings
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -46,7 +48,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidParameterError
+from ..errors import FileFormatError, InvalidParameterError, OutputError
 from .cache import cached_atmosphere
 from .parameters import AtmosphereParameters
 from .sizes import DEFAULT_ORDERS, TableSizes
@@ -60,24 +62,24 @@ __all__ = ["AXIS_SETTERS", "FAMILY_WAVELENGTHS", "GridAxis", "TableFamily", "reg
 FAMILY_WAVELENGTHS = (360.0, *(float(w) for w in range(390, 771, 20)), 800.0, 830.0)
 
 
-def _aerosol_optical_depth(params: AtmosphereParameters, value: float) -> AtmosphereParameters:
-    if params.aerosol is not None:
+def _aerosol_optical_depth(atmosphere: AtmosphereParameters, value: float) -> AtmosphereParameters:
+    if atmosphere.aerosol is not None:
         raise InvalidParameterError("the aerosol_optical_depth axis scales the Angstrom aerosol (mie_* fields); "
                                     "this base atmosphere has a particle-component aerosol")
     if not 0.0 <= value <= 10.0:
         raise InvalidParameterError(f"aerosol optical depth nodes must be in [0, 10]; got {value:g}")
-    alpha = params.mie_angstrom_alpha
-    return params.replace(mie_angstrom_beta=float(value) * 0.55**alpha)
+    alpha = atmosphere.mie_angstrom_alpha
+    return atmosphere.replace(mie_angstrom_beta=float(value) * 0.55**alpha)
 
 
-def _aerosol_albedo(params: AtmosphereParameters, value: float) -> AtmosphereParameters:
-    if params.aerosol is not None:
+def _aerosol_albedo(atmosphere: AtmosphereParameters, value: float) -> AtmosphereParameters:
+    if atmosphere.aerosol is not None:
         raise InvalidParameterError("the aerosol_single_scattering_albedo axis sets the Angstrom aerosol's albedo; "
                                     "a particle-component aerosol has its own")
-    return params.replace(mie_single_scattering_albedo=float(value))
+    return atmosphere.replace(mie_single_scattering_albedo=float(value))
 
 
-#: Axis name -> ``setter(params, value) -> params`` (see the module docstring).
+#: Axis name -> ``setter(atmosphere, value) -> atmosphere`` (see the module docstring).
 AXIS_SETTERS: dict[str, Callable[[AtmosphereParameters, float], AtmosphereParameters]] = {
     "aerosol_optical_depth": _aerosol_optical_depth,
     "aerosol_single_scattering_albedo": _aerosol_albedo,
@@ -85,7 +87,7 @@ AXIS_SETTERS: dict[str, Callable[[AtmosphereParameters, float], AtmosphereParame
 
 
 def register_axis(name: str, setter: Callable[[AtmosphereParameters, float], AtmosphereParameters]) -> None:
-    """Make ``name`` usable as a :class:`GridAxis`: ``setter(params, value)`` returns the atmosphere at that
+    """Make ``name`` usable as a :class:`GridAxis`: ``setter(atmosphere, value)`` returns the atmosphere at that
     value of the parameter (validated there)."""
     if not isinstance(name, str) or not name:
         raise InvalidParameterError("an axis needs a name")
@@ -189,40 +191,36 @@ class TableFamily:
         if atm is not None:
             self._loaded.move_to_end(key)
             return atm
-        params = self.parameters(key)
-        atm = (self._ground_node(params, progress) if self.ground_only else
-               cached_atmosphere(params, orders=self.orders, wavelengths=self.wavelengths, sizes=self.sizes,
+        atmosphere = self.parameters(key)
+        atm = (self._ground_node(atmosphere, progress) if self.ground_only else
+               cached_atmosphere(atmosphere, orders=self.orders, wavelengths=self.wavelengths, sizes=self.sizes,
                                  progress=progress, keep_in_memory=False))
         self._loaded[key] = atm
         while len(self._loaded) > self.max_in_memory:
             self._loaded.popitem(last=False)
         return atm
 
-    def _ground_node(self, params: AtmosphereParameters, progress: bool | None) -> PrecomputedAtmosphere:
-        import dataclasses
-        import warnings
-
-        from ..errors import FileFormatError, OutputError
+    def _ground_node(self, atmosphere: AtmosphereParameters, progress: bool | None) -> PrecomputedAtmosphere:
         from .cache import cache_path
         from .storage import cache_key
 
-        full_key = cache_key(params, self.orders, self.wavelengths, self.sizes)
+        full_key = cache_key(atmosphere, self.orders, self.wavelengths, self.sizes)
         path = cache_path(full_key).with_name(f"family-ground-{full_key[:24]}.npz")
         if path.exists():
             try:
                 atm = PrecomputedAtmosphere.load(path)
-                if atm.parameters.canonical_json() == params.canonical_json() and atm.orders == self.orders \
+                if atm.parameters.canonical_json() == atmosphere.canonical_json() and atm.orders == self.orders \
                         and np.array_equal(atm.wavelengths, self.wavelengths):
                     return atm
             except (FileFormatError, OSError):
                 pass  # rebuilt below
-        full = cached_atmosphere(params, orders=self.orders, wavelengths=self.wavelengths, sizes=self.sizes,
+        full = cached_atmosphere(atmosphere, orders=self.orders, wavelengths=self.wavelengths, sizes=self.sizes,
                                  progress=progress, keep_in_memory=False)
         tables = dict(full.tables)
         for name in ("single_rayleigh", "single_mie", "multiple"):
             tables[name] = np.repeat(full.tables[name][:1], 2, axis=0)
         sizes = dataclasses.replace(self.sizes, scattering_r=2)
-        atm = PrecomputedAtmosphere(params, full.wavelengths, sizes, full.orders, tables, full.timings)
+        atm = PrecomputedAtmosphere(atmosphere, full.wavelengths, sizes, full.orders, tables, full.timings)
         try:
             atm.save(path)
         except (OSError, OutputError) as exc:

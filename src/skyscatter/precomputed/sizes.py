@@ -16,7 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..deprecation import warn_renamed
 from ..errors import InvalidParameterError
+from ..validation import whole_number
 
 __all__ = ["DEFAULT_ORDERS", "DEFAULT_TABLE_WAVELENGTHS", "NAMED_WAVELENGTHS", "RGB_TABLE_WAVELENGTHS", "TableSizes",
            "table_wavelengths"]
@@ -75,9 +77,7 @@ class TableSizes:
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 2:
-                raise InvalidParameterError(f"table size {f.name} must be a whole number >= 2; got {v!r}")
-            object.__setattr__(self, f.name, int(v))
+            object.__setattr__(self, f.name, whole_number(f"table size {f.name}", v, 2))
         if self.scattering_mu % 2 or self.scattering_mu < 4:
             raise InvalidParameterError(
                 "scattering_mu must be even and >= 4 (half of it on each side of the horizon); "
@@ -116,19 +116,29 @@ class TableSizes:
         return self.scattering_r, self.scattering_mu, self.scattering_mu_s, self.scattering_nu
 
 
-def table_wavelengths(wavelengths: ArrayLike | str | None) -> NDArray[np.float64]:
-    """The table wavelengths [nm], sorted and unique, from a list, a name of :data:`NAMED_WAVELENGTHS` or None
-    (the default, ``"spectral"``)."""
-    if wavelengths is None:
-        return np.array(DEFAULT_TABLE_WAVELENGTHS)
+def table_wavelengths(wavelengths: ArrayLike | str | None = None, tables: str | None = None) -> NDArray[np.float64]:
+    """The table wavelengths [nm], sorted and unique: ``wavelengths`` [nm], or the named set ``tables`` (a key of
+    :data:`NAMED_WAVELENGTHS`: ``"spectral"``, ``"rgb"``), or neither (the default, ``"spectral"``).
+
+    A name given as ``wavelengths`` is the deprecated spelling of ``tables`` (DeprecationWarning).
+    """
     if isinstance(wavelengths, str):
-        named = NAMED_WAVELENGTHS.get(wavelengths.strip().lower())
+        if tables is not None:
+            raise InvalidParameterError("give the named set as tables= only")
+        warn_renamed("wavelengths=<name of a set>", "tables=<name>", "precomputed tables", stacklevel=4)
+        wavelengths, tables = None, wavelengths
+    if tables is not None:
+        if wavelengths is not None:
+            raise InvalidParameterError("give either tables (a named set of wavelengths) or wavelengths [nm], not both")
+        named = NAMED_WAVELENGTHS.get(tables.strip().lower()) if isinstance(tables, str) else None
         if named is None:
             raise InvalidParameterError(
-                f"wavelengths {wavelengths!r} is not a known set; use one of {sorted(NAMED_WAVELENGTHS)} or a list "
-                "of wavelengths [nm]"
+                f"tables {tables!r} is not a known set; use one of {sorted(NAMED_WAVELENGTHS)} (or give the "
+                "wavelengths [nm] as wavelengths=)"
             )
         return np.array(named)
+    if wavelengths is None:
+        return np.array(DEFAULT_TABLE_WAVELENGTHS)
     wl = np.atleast_1d(np.asarray(wavelengths, dtype=float)).ravel()
     if wl.size == 0 or not np.all(np.isfinite(wl)) or np.any(wl <= 0):
         raise InvalidParameterError("wavelengths must be a non-empty list of positive finite values [nm]")

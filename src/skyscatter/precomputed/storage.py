@@ -44,17 +44,18 @@ def checksum(arr: NDArray[Any]) -> str:
     return h.hexdigest()
 
 
-def cache_key(params: AtmosphereParameters, orders: int, wavelengths: NDArray[np.float64], sizes: TableSizes) -> str:
+def cache_key(atmosphere: AtmosphereParameters, orders: int, wavelengths: NDArray[np.float64],
+              sizes: TableSizes) -> str:
     """SHA-256 (hex) of the parameters, orders, wavelengths, sizes, library version and table format."""
     from .. import __version__  # the package's __init__ imports this package's modules: read at call time
 
-    described = params.to_dict()
+    described = atmosphere.to_dict()
     if described.get("mie_phase_function") == "cornette-shanks":
         # the phase function the tables had before the field existed: keep the keys of existing caches
         del described["mie_phase_function"]
     blob = json.dumps(
         {
-            "params": described,
+            "params": described,  # the key of every cache written so far: not renamed
             "orders": int(orders),
             "wavelengths": [float(w) for w in wavelengths],
             "sizes": dataclasses.asdict(sizes),
@@ -128,9 +129,9 @@ def read_tables(cls: type[PrecomputedAtmosphere], path: str | os.PathLike[str], 
         if checksum(arrays[name]) != meta["checksums"].get(name):
             raise FileFormatError(f"{p}: checksum mismatch in table {name!r} (file damaged)")
     try:
-        params = AtmosphereParameters.from_dict(meta["parameters"])
+        atmosphere = AtmosphereParameters.from_dict(meta["parameters"])
         sizes = TableSizes(**meta["sizes"])
-        atm = cls(params, meta["wavelengths"], sizes, meta["orders"], arrays, meta.get("timings"))
+        atm = cls(atmosphere, meta["wavelengths"], sizes, meta["orders"], arrays, meta.get("timings"))
     except (KeyError, TypeError, InvalidParameterError) as exc:
         raise FileFormatError(f"{p}: inconsistent table description ({exc})") from None
     if atm.cache_key != meta.get("key"):

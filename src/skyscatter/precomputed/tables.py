@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..deprecation import renamed_keywords
 from ..errors import FileFormatError
 from .evaluation import TableLookups
 from .parameters import AtmosphereParameters
@@ -61,9 +62,9 @@ class PrecomputedAtmosphere(TableLookups):
     :class:`.evaluation.TableLookups`.
     """
 
-    def __init__(self, params: AtmosphereParameters, wavelengths: ArrayLike, sizes: TableSizes, orders: int,
+    def __init__(self, atmosphere: AtmosphereParameters, wavelengths: ArrayLike, sizes: TableSizes, orders: int,
                  tables: Mapping[str, NDArray[np.float32]], timings: Mapping[str, float] | None = None) -> None:
-        self.parameters = params
+        self.parameters = atmosphere
         self.wavelengths = np.asarray(wavelengths, dtype=float)
         self.sizes = sizes
         self.orders = int(orders)
@@ -80,32 +81,37 @@ class PrecomputedAtmosphere(TableLookups):
         for name, shape in expected.items():
             if self.tables[name].shape != shape:
                 raise FileFormatError(f"table {name} has shape {self.tables[name].shape}, expected {shape}")
-        self._solar = params.solar_irradiance_at(self.wavelengths)
-        self._albedo = params.ground_albedo_at(self.wavelengths)
+        self._solar = atmosphere.solar_irradiance_at(self.wavelengths)
+        self._albedo = atmosphere.ground_albedo_at(self.wavelengths)
         self._xyz_matrix: NDArray[np.float64] | None = None
         self._colour = None  # the ColourConversion, built on first use
 
     # ------------------------------------------------------------------ computation
 
     @classmethod
-    def compute(cls, params: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
-                wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
-                progress: bool | None = None, chunk_size: int | None = None) -> PrecomputedAtmosphere:
+    @renamed_keywords(params="atmosphere")
+    def compute(cls, atmosphere: AtmosphereParameters | None = None, *, orders: int = DEFAULT_ORDERS,
+                tables: str | None = None, wavelengths: ArrayLike | None = None,
+                sizes: TableSizes | Mapping[str, int] | None = None, progress: bool | None = None,
+                chunk_size: int | None = None) -> PrecomputedAtmosphere:
         """Run Algorithm 4.1 (Bruneton & Neyret 2008) and return the tables.
 
         Parameters
         ----------
-        params : AtmosphereParameters, optional
+        atmosphere : AtmosphereParameters, optional
             The atmosphere (default: Earth, see :class:`AtmosphereParameters`).
         orders : int
             Scattering orders computed one by one (>= 1; default 6); from 3 on, the orders beyond the last are
             added as their geometric tail (:mod:`.compute`, "Orders"). Bruneton & Neyret's 4 orders without
             the tail leave out 4-14 % of the Earth sky's radiance and up to 43 % with haze over a bright ground.
-        wavelengths : array_like or str, optional
-            Wavelengths [nm]. Default (or ``"spectral"``): :data:`DEFAULT_TABLE_WAVELENGTHS`, 16 wavelengths
-            400-700 nm, the spectral mode (15 or more wavelengths: colour and spectra interpolated between the
-            table wavelengths, :mod:`.conversion`). ``"rgb"`` (or ``(440, 550, 680)``): the faster 3-wavelength
-            mode, colour rebuilt from 3 samples (less accurate in twilight; ``docs/bruneton.md``).
+        tables : {"spectral", "rgb"}, optional
+            A named set of table wavelengths. ``"spectral"`` (the default): :data:`DEFAULT_TABLE_WAVELENGTHS`,
+            16 wavelengths 400-700 nm, the spectral mode (15 or more wavelengths: colour and spectra interpolated
+            between the table wavelengths, :mod:`.conversion`). ``"rgb"`` (``(440, 550, 680)``): the faster
+            3-wavelength mode, colour rebuilt from 3 samples (less accurate in twilight; ``docs/bruneton.md``).
+        wavelengths : array_like, optional
+            The table wavelengths [nm] instead of a named set. (A name here is the deprecated spelling of
+            ``tables``.)
         sizes : TableSizes or mapping, optional
             Table resolutions (default: 256 x 64, 64 x 16, 32 x 128 x 32 x 8).
         progress : bool, optional
@@ -117,10 +123,10 @@ class PrecomputedAtmosphere(TableLookups):
         """
         from .compute import compute_tables  # numba and the kernels load when tables are first computed
 
-        params = AtmosphereParameters() if params is None else params
-        wl, sz, tables, timings = compute_tables(params, orders=orders, wavelengths=wavelengths, sizes=sizes,
-                                                 progress=progress, chunk_size=chunk_size)
-        return cls(params, wl, sz, orders, tables, timings)
+        atmosphere = AtmosphereParameters() if atmosphere is None else atmosphere
+        wl, sz, arrays, timings = compute_tables(atmosphere, orders=orders, wavelengths=wavelengths, preset=tables,
+                                                 sizes=sizes, progress=progress, chunk_size=chunk_size)
+        return cls(atmosphere, wl, sz, orders, arrays, timings)
 
     # ------------------------------------------------------------------ identity
 

@@ -6,41 +6,45 @@ writers does not import the landscape renderer, the aerial perspective and scipy
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from typing import TYPE_CHECKING
+
+from ..lazy import lazy_namespace
 
 # Submodules named like the function they define are imported here, so that the package attribute is the
 # function (importing a submodule later would otherwise leave the module object under that name).
 from .sky_image import pixel_solid_angles, sky_image  # noqa: F401
 from .tonemap import tonemap  # noqa: F401
 
-# public name -> module that defines it
+if TYPE_CHECKING:  # the names below, as type checkers see them (imported on first use at run time)
+    from .camera import PinholeCamera as PinholeCamera
+    from .glare import apply_glare as apply_glare
+    from .image_io import read_exr as read_exr
+    from .image_io import write_exr as write_exr
+    from .image_io import write_exr_and_png as write_exr_and_png
+    from .image_io import write_hdr as write_hdr
+    from .image_io import write_png as write_png
+    from .radiance_sky import write_radiance_sky as write_radiance_sky
+    from .scene import RenderResult as RenderResult
+    from .scene import Scene as Scene
+    from .terrain import Terrain as Terrain
+    from .terrain import default_terrain as default_terrain
+
+# public name -> submodule that defines it
 _LAZY = {
-    "PinholeCamera": "skyscatter.render.camera",
-    "apply_glare": "skyscatter.render.glare",
-    "read_exr": "skyscatter.render.image_io",
-    "write_exr": "skyscatter.render.image_io",
-    "write_exr_and_png": "skyscatter.render.image_io",
-    "write_hdr": "skyscatter.render.image_io",
-    "write_png": "skyscatter.render.image_io",
-    "write_radiance_sky": "skyscatter.render.radiance_sky",
-    "RenderResult": "skyscatter.render.scene",
-    "Scene": "skyscatter.render.scene",
-    "Terrain": "skyscatter.render.terrain",
-    "default_terrain": "skyscatter.render.terrain",
+    "PinholeCamera": "camera",
+    "apply_glare": "glare",
+    "read_exr": "image_io",
+    "write_exr": "image_io",
+    "write_exr_and_png": "image_io",
+    "write_hdr": "image_io",
+    "write_png": "image_io",
+    "write_radiance_sky": "radiance_sky",
+    "RenderResult": "scene",
+    "Scene": "scene",
+    "Terrain": "terrain",
+    "default_terrain": "terrain",
 }
 
 __all__ = sorted([*_LAZY, "pixel_solid_angles", "sky_image", "tonemap"])
 
-
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'skyscatter.render' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_namespace(globals(), _LAZY)

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..aerial.base import DEFAULT_REFINE, DEFAULT_SHADOW_SAMPLES
 from ..aerial.bruneton import BrunetonAerialPerspective
 from ..conventions import as_directions, direction_from_angles, fisheye_directions, pinhole_directions
+from ..deprecation import renamed_keywords
 from ..errors import InvalidParameterError
 from ..fileio import atomic_path
 from ..precomputed import AtmosphereParameters, PrecomputedAtmosphere
@@ -41,7 +42,8 @@ __all__ = ["bruneton_scene", "camera_view", "fisheye_view", "preview_png", "rend
 _OUTPUTS = ("rgb", "xyz", "spectral")
 
 
-def render_directions(atmosphere: PrecomputedAtmosphere, position: ArrayLike, directions: ArrayLike,
+@renamed_keywords(atmosphere="precomputed")
+def render_directions(precomputed: PrecomputedAtmosphere, position: ArrayLike, directions: ArrayLike,
                       sun_direction: ArrayLike, *, output: str = "rgb",
                       include_sun: bool = True) -> NDArray[np.float64]:
     """Radiance seen from one ``position`` [m, planet-centred] along ``directions`` (..., 3).
@@ -59,42 +61,43 @@ def render_directions(atmosphere: PrecomputedAtmosphere, position: ArrayLike, di
     d = as_directions(directions)
     sun = as_directions(sun_direction)
     pos = np.asarray(position, dtype=float)
-    if output != "spectral" and atmosphere.spectral_mode:
+    if output != "spectral" and precomputed.spectral_mode:
         # XYZ straight from the lookups (linear in the spectrum here): the disc is added in XYZ.
-        xyz = atmosphere.sky_xyz(pos, d, sun)
+        xyz = precomputed.sky_xyz(pos, d, sun)
         if include_sun:
-            _add_disc(atmosphere, pos, d, sun, xyz, atmosphere.to_xyz(atmosphere.sun_radiance(pos, sun)))
+            _add_disc(precomputed, pos, d, sun, xyz, precomputed.to_xyz(precomputed.sun_radiance(pos, sun)))
         return xyz if output == "xyz" else xyz_to_linear_srgb(xyz) * HDR_SCALE
-    rad = atmosphere.sky_radiance(pos, d, sun)
+    rad = precomputed.sky_radiance(pos, d, sun)
     if include_sun:
-        _add_disc(atmosphere, pos, d, sun, rad, atmosphere.sun_radiance(pos, sun))
+        _add_disc(precomputed, pos, d, sun, rad, precomputed.sun_radiance(pos, sun))
     if output == "spectral":
         return rad
-    xyz = atmosphere.to_xyz(rad)
+    xyz = precomputed.to_xyz(rad)
     if output == "xyz":
         return xyz
     return xyz_to_linear_srgb(xyz) * HDR_SCALE
 
 
-def _add_disc(atmosphere: PrecomputedAtmosphere, position: NDArray[np.float64], directions: NDArray[np.float64],
+def _add_disc(precomputed: PrecomputedAtmosphere, position: NDArray[np.float64], directions: NDArray[np.float64],
               sun: NDArray[np.float64], image: NDArray[np.float64], disc: NDArray[np.float64]) -> None:
     """Add the solar disc's value ``disc`` (spectrum or XYZ) to ``image`` on directions inside the disc."""
-    cos_r = math.cos(atmosphere.parameters.sun_angular_radius)
+    cos_r = math.cos(precomputed.parameters.sun_angular_radius)
     inside = (directions @ sun) >= cos_r
     if np.any(inside):
         # A direction inside the disc sees the sun only if its ray does not meet the planet first.
         rmu = directions[inside] @ position
-        blocked = (rmu < 0) & (rmu**2 - position @ position + atmosphere.parameters.bottom_radius**2 >= 0)
+        blocked = (rmu < 0) & (rmu**2 - position @ position + precomputed.parameters.bottom_radius**2 >= 0)
         image[inside] += np.where(blocked[:, None], 0.0, disc[None, :])
 
 
-def _observer(atmosphere: PrecomputedAtmosphere, altitude: float) -> NDArray[np.float64]:
+def _observer(precomputed: PrecomputedAtmosphere, altitude: float) -> NDArray[np.float64]:
     if not (math.isfinite(altitude) and altitude >= 0):
         raise InvalidParameterError(f"altitude must be finite and >= 0 m; got {altitude!r}")
-    return np.array([0.0, 0.0, atmosphere.parameters.bottom_radius + altitude])
+    return np.array([0.0, 0.0, precomputed.parameters.bottom_radius + altitude])
 
 
-def camera_view(atmosphere: PrecomputedAtmosphere, sun_zenith: float, sun_azimuth: float, *, altitude: float = 0.0,
+@renamed_keywords(atmosphere="precomputed")
+def camera_view(precomputed: PrecomputedAtmosphere, sun_zenith: float, sun_azimuth: float, *, altitude: float = 0.0,
                 heading: float = 0.0, pitch: float = 0.0, fov: float = math.radians(90.0), width: int = 512,
                 height: int = 384, output: str = "rgb", include_sun: bool = True) -> NDArray[np.float64]:
     """Pinhole camera image (height, width, 3) from ``altitude`` [m].
@@ -105,41 +108,42 @@ def camera_view(atmosphere: PrecomputedAtmosphere, sun_zenith: float, sun_azimut
     """
     dirs = pinhole_directions(width, height, heading=heading, pitch=pitch, fov=fov)
     sun = direction_from_angles(sun_zenith, sun_azimuth)
-    pos = _observer(atmosphere, altitude)
-    img = render_directions(atmosphere, pos, dirs, sun, output=output, include_sun=False)
+    pos = _observer(precomputed, altitude)
+    img = render_directions(precomputed, pos, dirs, sun, output=output, include_sun=False)
     if include_sun:
-        _draw_disc(atmosphere, pos, sun, img, PinholeProjection(width, height, heading, pitch, fov), output)
+        _draw_disc(precomputed, pos, sun, img, PinholeProjection(width, height, heading, pitch, fov), output)
     return img
 
 
-def fisheye_view(atmosphere: PrecomputedAtmosphere, sun_zenith: float, sun_azimuth: float, *, altitude: float = 0.0,
+@renamed_keywords(atmosphere="precomputed")
+def fisheye_view(precomputed: PrecomputedAtmosphere, sun_zenith: float, sun_azimuth: float, *, altitude: float = 0.0,
                  size: int = 256, output: str = "rgb", include_sun: bool = True) -> NDArray[np.float64]:
     """Upper-hemisphere fisheye (equidistant, zenith at the centre, north up, east left); 0 outside the circle."""
     dirs, inside = fisheye_directions(size)
     sun = direction_from_angles(sun_zenith, sun_azimuth)
-    pos = _observer(atmosphere, altitude)
-    img = render_directions(atmosphere, pos, dirs, sun, output=output, include_sun=False)
+    pos = _observer(precomputed, altitude)
+    img = render_directions(precomputed, pos, dirs, sun, output=output, include_sun=False)
     img[~inside] = 0.0
     if include_sun:
-        _draw_disc(atmosphere, pos, sun, img, FisheyeProjection(size), output)
+        _draw_disc(precomputed, pos, sun, img, FisheyeProjection(size), output)
     return img
 
 
-def _draw_disc(atmosphere: PrecomputedAtmosphere, position: NDArray[np.float64], sun: NDArray[np.float64],
+def _draw_disc(precomputed: PrecomputedAtmosphere, position: NDArray[np.float64], sun: NDArray[np.float64],
                image: NDArray[np.float64], proj, output: str) -> None:
     """Add the solar disc to an image, energy-true at any resolution (:mod:`.sun_disc`); the planet in front of
     a pixel's centre hides that pixel's share."""
-    deposit = disc_deposit(sun, atmosphere.parameters.sun_angular_radius, proj)
+    deposit = disc_deposit(sun, precomputed.parameters.sun_angular_radius, proj)
     if deposit is None:
         return
-    value = atmosphere.sun_radiance(position, sun)
+    value = precomputed.sun_radiance(position, sun)
     if output != "spectral":
-        value = atmosphere.to_xyz(value)
+        value = precomputed.to_xyz(value)
     add = deposit.values(value[None, :])
     x, y = deposit.cols + 0.5, deposit.rows + 0.5
     d = proj.from_pixel(x.astype(float), y.astype(float))
     rmu = d @ position
-    blocked = (rmu < 0) & (rmu**2 - position @ position + atmosphere.parameters.bottom_radius**2 >= 0)
+    blocked = (rmu < 0) & (rmu**2 - position @ position + precomputed.parameters.bottom_radius**2 >= 0)
     add[blocked] = 0.0
     if output == "rgb":
         add = xyz_to_linear_srgb(add) * HDR_SCALE
@@ -168,11 +172,12 @@ def preview_png(image: ArrayLike, path: str | Path, *, exposure: float | None = 
     return target
 
 
+@renamed_keywords(albedo="terrain_albedo", table_wavelengths="tables")
 def bruneton_scene(terrain: Terrain, camera: PinholeCamera, sun_zenith: float, sun_azimuth: float, *,
-                   atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None = None, albedo: float = 0.2,
-                   sun_disc: bool = True, wavelengths: ArrayLike | None = None, shafts: bool = True,
-                   samples: int | None = None, refine: int | None = None, table_wavelengths: str | None = None,
-                   **medium: Any) -> Scene:
+                   atmosphere: AtmosphereParameters | None = None, precomputed: PrecomputedAtmosphere | None = None,
+                   terrain_albedo: float = 0.2, sun_disc: bool = True, wavelengths: ArrayLike | None = None,
+                   shafts: bool = True, samples: int | None = None, refine: int | None = None,
+                   tables: str | None = None, **medium: Any) -> Scene:
     """A :class:`~skyscatter.render.Scene` lit and hazed by the precomputed atmosphere.
 
     Parameters
@@ -184,10 +189,13 @@ def bruneton_scene(terrain: Terrain, camera: PinholeCamera, sun_zenith: float, s
     sun_zenith, sun_azimuth : float
         Sun angles [rad] (azimuth from north towards east); the sun may be below the horizon down to the
         atmosphere's ``max_sun_zenith`` (then there are no terrain shadows, only the Earth's).
-    atmosphere : PrecomputedAtmosphere or AtmosphereParameters, optional
-        Tables (default: the cached Earth tables, computed once, about 20 s).
-    albedo : float
-        Lambertian albedo of the terrain [-].
+    atmosphere : AtmosphereParameters, optional
+        The atmosphere (default: the Earth defaults; tables cached, computed once, about 20 s).
+    precomputed : PrecomputedAtmosphere, optional
+        Tables instead of ``atmosphere``.
+    terrain_albedo : float
+        Lambertian albedo of the terrain [-] (the atmosphere's ground albedo, which lights the sky from below, is
+        the atmosphere's own: the ``ground_albedo`` option).
     sun_disc : bool
         Draw the solar disc.
     wavelengths : array_like, optional
@@ -197,26 +205,27 @@ def bruneton_scene(terrain: Terrain, camera: PinholeCamera, sun_zenith: float, s
     samples, refine : int, optional
         Ray-marching steps and boundary bisections of the shadow-length estimate (defaults of
         :func:`skyscatter.render.shafts.shadow_lengths`).
-    table_wavelengths : {"spectral", "rgb"}, optional
-        The tables' wavelengths (BrunetonSky's ``wavelengths``; ``wavelengths`` here are the renderer's).
+    tables : {"spectral", "rgb"}, optional
+        Which tables to build from the atmosphere (:class:`~skyscatter.sky.bruneton.BrunetonSky`'s ``tables``).
     **medium
-        The atmosphere's options of :class:`~skyscatter.sky.bruneton.BrunetonSky` (``turbidity``,
-        ``aerosol_optical_depth``, ``angstrom_alpha``, ``ozone_column``); the atmosphere's ground albedo stays
-        its own (``albedo`` here is the terrain's).
+        The atmosphere's options (:data:`skyscatter.atmosphere.options.ATMOSPHERE_OPTIONS`: ``turbidity``,
+        ``aerosol_optical_depth``, ``angstrom_alpha``, ``ground_albedo``, ``ozone_column``, ...).
+
+    Deprecated spellings (until the next release): ``albedo`` for ``terrain_albedo``, ``table_wavelengths`` for
+    ``tables``, tables passed as ``atmosphere``.
 
     Returns
     -------
     Scene
     """
     x, y, z = (float(v) for v in camera.position)
-    if table_wavelengths is not None:
-        medium["wavelengths"] = table_wavelengths
-    sky = BrunetonSky(sun_zenith, sun_azimuth, altitude=max(z, 0.0), atmosphere=atmosphere, **medium)
+    sky = BrunetonSky(sun_zenith, sun_azimuth, altitude=max(z, 0.0), atmosphere=atmosphere, precomputed=precomputed,
+                      tables=tables, **medium)
     tracer = HeightfieldTracer(terrain) if shafts else None
     aerial = BrunetonAerialPerspective(
         sky, terrain=tracer, camera_xy=(x, y),
         samples=DEFAULT_SHADOW_SAMPLES if samples is None else samples,
         refine=DEFAULT_REFINE if refine is None else refine,
     )
-    return Scene(sky, terrain=terrain, camera=camera, aerial=aerial, albedo=albedo, sun_disc=sun_disc,
+    return Scene(sky, terrain=terrain, camera=camera, aerial=aerial, terrain_albedo=terrain_albedo, sun_disc=sun_disc,
                  wavelengths=wavelengths)

@@ -37,6 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..aerial.base import AerialPerspective, PathFunctions, as_aerial_perspective
 from ..aerial.scattering import hemisphere_quadrature
 from ..conventions import direction_from_angles
+from ..deprecation import renamed_keywords
 from ..errors import InvalidParameterError
 from ..sky.base import SkyModel
 from ..spectral import HDR_SCALE, as_wavelengths, spectrum_to_xyz, xyz_to_linear_srgb
@@ -120,8 +121,9 @@ class Scene:
         itself unless the model changes it, e.g. light shafts).
     turbidity : float, optional
         Haze turbidity for the default aerial perspective (default ``sky.turbidity``).
-    albedo : float or array_like
-        Lambertian albedo of the terrain [-], a number or one value per wavelength; default 0.2.
+    terrain_albedo : float or array_like
+        Lambertian albedo of the terrain [-], a number or one value per wavelength; default 0.2 (``albedo`` is its
+        deprecated spelling).
     sun_disc : bool
         Draw the solar disc where rays miss the terrain (default True).
     wavelengths : array_like, optional
@@ -134,9 +136,10 @@ class Scene:
         camera at or below the terrain surface.
     """
 
+    @renamed_keywords(albedo="terrain_albedo")
     def __init__(self, sky: SkyModel, *, terrain: Terrain | None = None, camera: PinholeCamera | None = None,
                  aerial: AerialPerspective | PathFunctions | str | None = "preetham",
-                 turbidity: float | None = None, albedo: float | ArrayLike = 0.2,
+                 turbidity: float | None = None, terrain_albedo: float | ArrayLike = 0.2,
                  sun_disc: bool = True, wavelengths: ArrayLike | None = None) -> None:
         if not isinstance(sky, SkyModel):
             raise InvalidParameterError(f"Scene needs a sky model (skyscatter.sky.SkyModel); got {type(sky).__name__}")
@@ -144,11 +147,12 @@ class Scene:
         self.terrain = default_terrain() if terrain is None else terrain
         self.camera = default_camera(self.terrain) if camera is None else camera
         self.wavelengths = as_wavelengths(wavelengths)
+        albedo = terrain_albedo
         a = np.asarray(albedo, dtype=float)
         if a.ndim not in (0, 1) or (a.ndim == 1 and a.shape != self.wavelengths.shape):
-            raise InvalidParameterError("albedo must be a number or one value per wavelength")
+            raise InvalidParameterError("terrain_albedo must be a number or one value per wavelength")
         if not np.all(np.isfinite(a)) or np.any(a < 0) or np.any(a > 1):
-            raise InvalidParameterError(f"albedo must be within [0, 1]; got {albedo!r}")
+            raise InvalidParameterError(f"terrain_albedo must be within [0, 1]; got {albedo!r}")
         self.albedo = np.broadcast_to(a, self.wavelengths.shape).astype(float)
         if isinstance(aerial, str):
             if aerial != "preetham":

@@ -20,6 +20,7 @@ from ..aerial.base import DEFAULT_REFINE, DEFAULT_SHADOW_SAMPLES
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
 from ..jit import inline, parallel_kernel
+from ..validation import whole_number
 from .heightfield import HeightfieldTracer, trace_ray
 from .terrain import Terrain
 
@@ -130,9 +131,8 @@ def shadow_lengths(tracer: HeightfieldTracer | Terrain, origins: ArrayLike, dire
         tracer = HeightfieldTracer(tracer)
     if not isinstance(tracer, HeightfieldTracer):
         raise InvalidParameterError(f"tracer must be a HeightfieldTracer or Terrain; got {type(tracer).__name__}")
-    for name, value, low in (("samples", samples, 1), ("refine", refine, 0)):
-        if isinstance(value, bool) or int(value) != value or value < low:
-            raise InvalidParameterError(f"{name} must be a whole number >= {low}; got {value!r}")
+    whole_number("samples", samples, 1, integral_floats=True)
+    whole_number("refine", refine, 0, integral_floats=True)
     d = as_directions(directions)
     shape = d.shape[:-1]
     s = np.asarray(distances, dtype=float)

@@ -70,6 +70,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..conventions import as_directions
+from ..quadrature import plane_integral
 from .base import LuminanceOnlySky, SunSkyMixin
 from .cie import LuminanceSunMixin, overcast_relative_luminance
 from .perez import DEFAULT_DEW_POINT, perez_sky_condition
@@ -277,8 +278,6 @@ class ASRCCIESky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
         self.precipitable_water = float(p.water)
         self._weights = asrc_cie_weights(self.epsilon, self.delta)
         self.weights = {k: float(v) for k, v in zip(COMPONENTS, self._weights, strict=True)}
-        from ..photometry import plane_integral  # deferred: photometry imports the sky package
-
         self.zenith_luminance = self.diffuse_illuminance / plane_integral(self.relative_luminance)
 
     def __repr__(self) -> str:

@@ -17,72 +17,18 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..deprecation import renamed_keywords, warn_renamed
 from ..errors import InvalidParameterError, SunBelowHorizonError
 from ..precomputed import AtmosphereParameters, PrecomputedAtmosphere
 from ..precomputed.cache import resolve_atmosphere
 from ..spectral import DEFAULT_WAVELENGTHS, as_wavelengths
+from . import registry
 from .base import SkyModel, SunSkyMixin, check_sun_angles
 
 __all__ = ["BrunetonSky"]
 
-#: Highest observer altitude accepted [m] (10^5 km).
+#: Highest observer altitude accepted [m] (10^5 km; the registry's range of ``altitude``).
 MAX_ALTITUDE = 1.0e8
-
-
-
-def _medium_from_options(atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None, *,
-                         turbidity: float | None = None, aerosol_optical_depth: float | None = None,
-                         angstrom_alpha: float | None = None, albedo: float | None = None,
-                         ozone_column: float | None = None, aerosol_type: str | None = None,
-                         atmosphere_file: str | None = None) -> AtmosphereParameters:
-    """The atmosphere described by the convenience options (on the Earth defaults, on ``atmosphere`` or on the
-    air of ``atmosphere_file``)."""
-    if isinstance(atmosphere, PrecomputedAtmosphere):
-        raise InvalidParameterError("give either precomputed tables (atmosphere=...) or the atmosphere's options "
-                                    "(turbidity, aerosol_optical_depth, albedo, ozone_column), not both")
-    if atmosphere_file is not None:
-        if atmosphere is not None:
-            raise InvalidParameterError("give either atmosphere or atmosphere_file, not both")
-        atmosphere = AtmosphereParameters.load_json(atmosphere_file)
-    if turbidity is not None and aerosol_optical_depth is not None:
-        raise InvalidParameterError("give either turbidity or aerosol_optical_depth, not both")
-    if aerosol_type is not None:
-        if turbidity is not None or angstrom_alpha is not None:
-            raise InvalidParameterError("an aerosol type takes --aod (its optical depth at 550 nm), not turbidity "
-                                        "or angstrom_alpha")
-        from ..atmosphere.aerosol_types import OpacAerosol
-
-        base = atmosphere if isinstance(atmosphere, AtmosphereParameters) else AtmosphereParameters()
-        aerosol = OpacAerosol.preset(aerosol_type, aerosol_optical_depth, column_height=base.thickness)
-        changes_t: dict = {"aerosol": aerosol}
-        if albedo is not None:
-            changes_t["ground_albedo"] = albedo
-        if ozone_column is not None:
-            changes_t["ozone_column"] = ozone_column
-        return base.replace(**changes_t)
-    if angstrom_alpha is not None and aerosol_optical_depth is None:
-        raise InvalidParameterError("angstrom_alpha goes with aerosol_optical_depth")
-    for name, value, low, high in (("albedo", albedo, 0.0, 1.0), ("ozone_column", ozone_column, 0.0, 1000.0)):
-        if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value)
-                                      and low <= value <= high):
-            raise InvalidParameterError(f"{name} must be in [{low:g}, {high:g}]; got {value!r}")
-    base = atmosphere if isinstance(atmosphere, AtmosphereParameters) else AtmosphereParameters()
-    changes: dict = {}
-    if albedo is not None:
-        changes["ground_albedo"] = albedo
-    if ozone_column is not None:
-        changes["ozone_column"] = ozone_column
-    if turbidity is not None:
-        aerosol = AtmosphereParameters.from_turbidity(turbidity)
-    elif aerosol_optical_depth is not None:
-        aerosol = AtmosphereParameters.from_aerosol_optical_depth(
-            aerosol_optical_depth, 1.3 if angstrom_alpha is None else angstrom_alpha)
-    else:
-        aerosol = base
-    changes.update(mie_angstrom_alpha=aerosol.mie_angstrom_alpha, mie_angstrom_beta=aerosol.mie_angstrom_beta)
-    if turbidity is not None or aerosol_optical_depth is not None:
-        changes["aerosol"] = None  # the Angstrom aerosol of the options replaces a component aerosol of the base
-    return base.replace(**changes)
 
 
 class BrunetonSky(SunSkyMixin, SkyModel):
@@ -100,16 +46,19 @@ class BrunetonSky(SunSkyMixin, SkyModel):
     altitude : float
         Observer altitude above the surface [m], >= 0; above the top of the atmosphere (60 km for the Earth)
         the view is from space.
-    atmosphere : PrecomputedAtmosphere or AtmosphereParameters, optional
-        Precomputed tables, or parameters whose tables are taken from the disk cache (computed the first
-        time, about 10-30 s on 2 cores, with a warning saying so); default: the Earth defaults.
+    atmosphere : AtmosphereParameters, optional
+        The atmosphere, whose tables are taken from the disk cache (computed the first time, about 10-30 s on
+        2 cores, with a warning saying so); default: the Earth defaults.
+    precomputed : PrecomputedAtmosphere, optional
+        Precomputed tables instead (they hold their atmosphere; not with ``atmosphere``, the medium options or
+        ``tables``).
     turbidity : float, optional
         Aerosols from turbidity, 1 to 20 (Preetham 1999 A.1: Angstrom alpha 1.3, beta 0.04608 T - 0.04586).
     aerosol_optical_depth : float, optional
         Vertical aerosol optical depth at 550 nm, 0 to 10, with ``angstrom_alpha`` (default 1.3); instead of
         ``turbidity``.
-    albedo : float, optional
-        Ground albedo, 0 to 1 (the Earth defaults: 0.1).
+    ground_albedo : float, optional
+        Albedo of the atmosphere's ground, 0 to 1 (the Earth defaults: 0.1).
     ozone_column : float, optional
         Total ozone [Dobson units], 0 to 1000 (the Earth defaults: 300).
     aerosol_type : str, optional
@@ -118,18 +67,22 @@ class BrunetonSky(SunSkyMixin, SkyModel):
     atmosphere_file : str, optional
         A JSON file with the air (:meth:`AtmosphereParameters.load_json`, written by ``skyscatter
         fit-atmosphere``); the other medium options change it.
-    wavelengths : {"spectral", "rgb"}, optional
-        Wavelengths of tables built from parameters: "spectral" (the default, 16 from 400 to 700 nm, colour
-        within delta-xy 0.003 of a 41-wavelength computation) or "rgb" (3, about 30 % quicker to build, colour
-        wrong at low sun: ``docs/bruneton.md``). Not with precomputed tables, which have their own.
+    mie_phase_g : float, optional
+        Asymmetry g of the aerosol phase function, -0.99 to 0.99 (the Earth defaults: 0.8).
+    tables : {"spectral", "rgb"}, optional
+        Which tables to build from the atmosphere: "spectral" (the default, 16 wavelengths from 400 to 700 nm,
+        colour within delta-xy 0.003 of a 41-wavelength computation) or "rgb" (3, about 30 % quicker to build,
+        colour wrong at low sun: ``docs/bruneton.md``). Not with ``precomputed`` tables, which have their own.
 
-    The medium options change the Earth defaults (or the ``atmosphere`` parameters given); each atmosphere's
-    tables are computed once and cached.
+    The medium options (:data:`skyscatter.atmosphere.options.ATMOSPHERE_OPTIONS`, applied by
+    :meth:`AtmosphereParameters.from_options`) change the Earth defaults (or ``atmosphere``); each atmosphere's
+    tables are computed once and cached. Deprecated spellings (until the next release): ``albedo`` for
+    ``ground_albedo``, ``wavelengths`` for ``tables``, and tables passed as ``atmosphere`` (now ``precomputed``).
 
     Notes
     -----
     Tables from parameters have the default wavelengths (16, 400-700 nm: the spectral mode); for the faster
-    3-wavelength mode pass tables from ``cached_atmosphere(params, wavelengths="rgb")``. In the spectral mode
+    3-wavelength mode pass ``tables="rgb"``. In the spectral mode
     ``spectral_radiance`` is the tables' own spectrum: the table radiance at the table wavelengths,
     ``E_sun(lambda)`` times ``L / E_sun`` interpolated linearly in wavelength between them, and zero outside
     the table range; ``xyz`` is the CIE 1931 observer integral of that spectrum. With 3 wavelengths both are
@@ -140,30 +93,36 @@ class BrunetonSky(SunSkyMixin, SkyModel):
     model_name = "bruneton"
     renders_ground = True
 
+    @renamed_keywords(albedo="ground_albedo", wavelengths="tables")
     def __init__(self, sun_zenith: float, sun_azimuth: float, *, altitude: float = 0.0,
-                 atmosphere: PrecomputedAtmosphere | AtmosphereParameters | None = None,
+                 atmosphere: AtmosphereParameters | None = None, precomputed: PrecomputedAtmosphere | None = None,
                  turbidity: float | None = None, aerosol_optical_depth: float | None = None,
-                 angstrom_alpha: float | None = None, albedo: float | None = None,
-                 ozone_column: float | None = None, aerosol_type: str | None = None,
-                 atmosphere_file: str | None = None, wavelengths: str | None = None) -> None:
+                 angstrom_alpha: float | None = None, ground_albedo: float | None = None,
+                 ozone_column: float | None = None, mie_phase_g: float | None = None, aerosol_type: str | None = None,
+                 atmosphere_file: str | None = None, tables: str | None = None) -> None:
         zen, azi = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=True)
+        if isinstance(atmosphere, PrecomputedAtmosphere):  # the spelling before the glossary
+            if precomputed is not None:
+                raise InvalidParameterError("give the tables as precomputed= only")
+            warn_renamed("atmosphere=<tables>", "precomputed=<tables>", "BrunetonSky")
+            atmosphere, precomputed = None, atmosphere
         medium = {k: v for k, v in (("turbidity", turbidity), ("aerosol_optical_depth", aerosol_optical_depth),
-                                    ("angstrom_alpha", angstrom_alpha), ("albedo", albedo),
-                                    ("ozone_column", ozone_column), ("aerosol_type", aerosol_type),
-                                    ("atmosphere_file", atmosphere_file)) if v is not None}
-        given_atmosphere = atmosphere
-        if medium:
-            atmosphere = _medium_from_options(atmosphere, **medium)
-        try:
-            alt = float(altitude)
-        except (TypeError, ValueError):
-            raise InvalidParameterError(f"altitude must be a number [m]; got {altitude!r}") from None
-        if not (math.isfinite(alt) and alt >= 0.0):
-            raise InvalidParameterError(f"altitude must be finite and >= 0 m; got {altitude!r}")
-        if alt > MAX_ALTITUDE:
-            raise InvalidParameterError(f"altitude must be at most {MAX_ALTITUDE:g} m (a quarter of the way to the "
-                                        f"Moon; the tables resolve nothing finer there); got {altitude!r}")
-        atm = resolve_atmosphere(atmosphere, wavelengths=wavelengths)
+                                    ("angstrom_alpha", angstrom_alpha), ("ground_albedo", ground_albedo),
+                                    ("ozone_column", ozone_column), ("mie_phase_g", mie_phase_g),
+                                    ("aerosol_type", aerosol_type), ("atmosphere_file", atmosphere_file))
+                  if v is not None}
+        alt = registry.get(self.model_name).parameter("altitude").check(altitude, self.model_name)
+        if precomputed is not None:
+            if not isinstance(precomputed, PrecomputedAtmosphere):
+                raise InvalidParameterError(f"precomputed must be a PrecomputedAtmosphere; got "
+                                            f"{type(precomputed).__name__}")
+            if atmosphere is not None or medium or tables is not None:
+                raise InvalidParameterError("the atmosphere, its options and tables= are not with precomputed tables "
+                                            "(they hold their atmosphere and wavelengths)")
+            atm = precomputed
+        else:
+            params = AtmosphereParameters.from_options(atmosphere, **medium)
+            atm = resolve_atmosphere(params, tables=tables)
         limit = atm.parameters.max_sun_zenith
         top_altitude = atm.parameters.top_radius - atm.parameters.bottom_radius
         # Inside the atmosphere every lookup starts at the observer, with the observer's sun zenith: beyond
@@ -181,10 +140,18 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         self.sun_zenith = zen
         self.sun_azimuth = azi
         self.altitude = alt
-        self.atmosphere = atm
+        #: The tables (:class:`~skyscatter.precomputed.PrecomputedAtmosphere`); their atmosphere is
+        #: ``precomputed.parameters``.
+        self.precomputed = atm
         self.sun_angular_radius = atm.parameters.sun_angular_radius
-        self._remember(altitude=alt, atmosphere=given_atmosphere, **medium,
-                       **({} if wavelengths is None else {"wavelengths": wavelengths}))
+        self._remember(altitude=alt, atmosphere=atmosphere, precomputed=precomputed, **medium,
+                       **({} if tables is None else {"tables": tables}))
+
+    @property
+    def atmosphere(self) -> PrecomputedAtmosphere:
+        """Deprecated: the tables, now :attr:`precomputed` (their atmosphere is ``precomputed.parameters``)."""
+        warn_renamed("BrunetonSky.atmosphere (the tables)", "BrunetonSky.precomputed", "BrunetonSky", stacklevel=3)
+        return self.precomputed
 
     def __repr__(self) -> str:
         return (f"BrunetonSky(sun_zenith={self.sun_zenith:.6g}, sun_azimuth={self.sun_azimuth:.6g}, "
@@ -193,11 +160,11 @@ class BrunetonSky(SunSkyMixin, SkyModel):
     @cached_property
     def position(self) -> NDArray[np.float64]:
         """Observer position [m] in the planet-centred frame (on the +z axis)."""
-        return np.array([0.0, 0.0, self.atmosphere.parameters.bottom_radius + self.altitude])
+        return np.array([0.0, 0.0, self.precomputed.parameters.bottom_radius + self.altitude])
 
     def table_radiance(self, directions: ArrayLike) -> NDArray[np.float64]:
         """Spectral radiance [W m^-2 sr^-1 nm^-1] at the table wavelengths, shape (..., n_table_wavelengths)."""
-        return self.atmosphere.sky_radiance(self.position, directions, self.sun_direction)
+        return self.precomputed.sky_radiance(self.position, directions, self.sun_direction)
 
     def spectral_radiance(self, directions: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
         """Spectral radiance [W m^-2 sr^-1 nm^-1] of sky and ground (no solar disc), (..., n_wavelengths).
@@ -207,15 +174,15 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         table range are zero (see the class notes).
         """
         wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
-        return self.atmosphere.resample(self.table_radiance(directions), wl)
+        return self.precomputed.resample(self.table_radiance(directions), wl)
 
     def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
         """CIE 1931 XYZ [cd m^-2] of sky and ground in ``directions`` (..., 3)."""
-        return self.atmosphere.sky_xyz(self.position, directions, self.sun_direction)
+        return self.precomputed.sky_xyz(self.position, directions, self.sun_direction)
 
     def luminance(self, directions: ArrayLike) -> NDArray[np.float64]:
         """Luminance [cd m^-2] of sky and ground in ``directions`` (...)."""
-        return self.atmosphere.sky_luminance(self.position, directions, self.sun_direction)
+        return self.precomputed.sky_luminance(self.position, directions, self.sun_direction)
 
     def aerial_perspective(self, points: ArrayLike, *, shadow_length: ArrayLike | None = None
                            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -234,20 +201,20 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         -------
         transmittance, inscatter : ndarray, shape (..., n_table_wavelengths)
             ``L = transmittance * L_object + inscatter`` [W m^-2 sr^-1 nm^-1] at the table wavelengths; use
-            ``self.atmosphere.to_xyz`` for colour.
+            ``self.precomputed.to_xyz`` for colour.
         """
-        pts = np.asarray(points, dtype=float) + np.array([0.0, 0.0, self.atmosphere.parameters.bottom_radius])
-        return self.atmosphere.aerial_perspective(self.position, pts, self.sun_direction, shadow_length=shadow_length)
+        pts = np.asarray(points, dtype=float) + np.array([0.0, 0.0, self.precomputed.parameters.bottom_radius])
+        return self.precomputed.aerial_perspective(self.position, pts, self.sun_direction, shadow_length=shadow_length)
 
     def sun_table_radiance(self) -> NDArray[np.float64]:
         """Mean radiance of the solar disc at the table wavelengths [W m^-2 sr^-1 nm^-1] (after transmission)."""
-        return self.atmosphere.sun_radiance(self.position, self.sun_direction)
+        return self.precomputed.sun_radiance(self.position, self.sun_direction)
 
     def sun_spectral_radiance(self, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
         """Mean spectral radiance of the solar disc [W m^-2 sr^-1 nm^-1] seen by the observer (Eq. 9)."""
         wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
-        return self.atmosphere.resample(self.sun_table_radiance(), wl)
+        return self.precomputed.resample(self.sun_table_radiance(), wl)
 
     def sun_xyz(self) -> NDArray[np.float64]:
         """CIE XYZ [cd m^-2] of the solar disc after transmission."""
-        return self.atmosphere.to_xyz(self.sun_table_radiance())
+        return self.precomputed.to_xyz(self.sun_table_radiance())

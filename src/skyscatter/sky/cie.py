@@ -39,7 +39,9 @@ from numpy.typing import ArrayLike, NDArray
 from ..atmosphere.tables import load_table
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
+from ..quadrature import plane_integral
 from ..spectral import as_wavelengths
+from . import registry
 from .base import LuminanceOnlySky, SolarDisc, SunSkyMixin, check_sun_angles
 from .perez_family import cie_parameters, extended_perez, kittler_parameters
 
@@ -84,26 +86,16 @@ SKY_TYPE_DESCRIPTIONS = {
 
 def cie_sky_parameters(sky_type: int) -> tuple[float, float, float, float, float]:
     """Gradation (a, b) and indicatrix (c, d, e) parameters of CIE 2003 sky type 1-15 (ISO 15469, Table 1)."""
-    t = _check_sky_type(sky_type)
+    t = _check("cie", "sky_type", sky_type)
     table = load_table("cie2003_sky_types")
     i = int(np.flatnonzero(table["type"] == t)[0])
     return tuple(float(table[k][i]) for k in "abcde")  # type: ignore[return-value]
 
 
-def _check_sky_type(sky_type: int) -> int:
-    if isinstance(sky_type, bool | np.bool_):
-        raise InvalidParameterError(f"sky_type must be a whole number 1-15; got {sky_type!r}")
-    if not isinstance(sky_type, int | np.integer):
-        try:
-            as_float = float(sky_type)
-        except (TypeError, ValueError):
-            raise InvalidParameterError(f"sky_type must be a whole number 1-15; got {sky_type!r}") from None
-        if not as_float.is_integer():
-            raise InvalidParameterError(f"sky_type must be a whole number 1-15; got {sky_type!r}")
-        sky_type = int(as_float)
-    if not 1 <= int(sky_type) <= 15:
-        raise InvalidParameterError(f"sky_type must be one of the CIE 2003 types 1-15; got {sky_type}")
-    return int(sky_type)
+def _check(model: str, name: str, value):
+    """``value`` checked against the registry's range of ``name`` (the rule stated once, with its reason)."""
+    spec = registry.get(model)
+    return spec.parameter(name).check(value, spec.name)
 
 
 def cie_gradation(cos_zenith: ArrayLike, a: float, b: float) -> NDArray[np.float64]:
@@ -170,48 +162,6 @@ def kittler_clear_relative_luminance(
         1.0, sun_zenith, k)
 
 
-def _check_scale(zenith_luminance, diffuse_illuminance) -> tuple[float | None, float | None]:
-    if zenith_luminance is not None and diffuse_illuminance is not None:
-        raise InvalidParameterError(
-            "give either zenith_luminance [cd m^-2] or diffuse_illuminance [lx] to scale the sky, not both"
-        )
-    out = []
-    for name, unit, value in (
-        ("zenith_luminance", "cd m^-2", zenith_luminance),
-        ("diffuse_illuminance", "lx", diffuse_illuminance),
-    ):
-        if value is None:
-            out.append(None)
-            continue
-        try:
-            v = float(value)
-        except (TypeError, ValueError):
-            raise InvalidParameterError(f"{name} must be a number [{unit}]; got {value!r}") from None
-        if not (np.isfinite(v) and v >= 0.0):
-            raise InvalidParameterError(f"{name} must be a finite number >= 0 [{unit}]; got {v}")
-        _check_upper(name, v, unit)
-        out.append(v)
-    return out[0], out[1]
-
-
-def _check_sun_illuminance(value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"sun_illuminance_normal must be a number [lx]; got {value!r}") from None
-    if not (np.isfinite(v) and v >= 0.0):
-        raise InvalidParameterError(f"sun_illuminance_normal must be a finite number >= 0 [lx]; got {v}")
-    _check_upper("sun_illuminance_normal", v, "lx")
-    return v
-
-
-def _check_upper(name: str, value: float, unit: str) -> None:
-    """Refuse a scale above its physical limit (:func:`skyscatter.conventions.check_daylight_limit`)."""
-    from ..conventions import check_daylight_limit
-
-    check_daylight_limit(name, value, unit)
-
-
 class LuminanceSunMixin:
     """Solar disc of a luminance-only sky from its normal illuminance ``sun_illuminance_normal`` [lx].
 
@@ -264,13 +214,15 @@ class _ScaledCIESky(LuminanceOnlySky):
 
     def relative_diffuse_illuminance(self) -> float:
         """``integral (L / L_z) cos theta dOmega`` over the sky [sr]; D_v = L_z times this."""
-        from ..photometry import plane_integral
-
         return plane_integral(self.relative_luminance)
 
     def _set_scale(self, zenith_luminance, diffuse_illuminance, **parameters) -> None:
         """Set L_z from the given scale and record the model's parameters (``parameters``: the others)."""
-        lz, dv = _check_scale(zenith_luminance, diffuse_illuminance)
+        if zenith_luminance is not None and diffuse_illuminance is not None:
+            raise InvalidParameterError(
+                "give either zenith_luminance [cd m^-2] or diffuse_illuminance [lx] to scale the sky, not both")
+        lz = _check(self.model_name, "zenith_luminance", zenith_luminance)
+        dv = _check(self.model_name, "diffuse_illuminance", diffuse_illuminance)
         self._remember(**parameters, zenith_luminance=lz, diffuse_illuminance=None if lz is not None else dv)
         if lz is None:
             dv = DEFAULT_DIFFUSE_ILLUMINANCE if dv is None else dv
@@ -346,7 +298,7 @@ class CIEClearSky(LuminanceSunMixin, SunSkyMixin, _ScaledCIESky):
         sun_illuminance_normal: float = 0.0,
     ) -> None:
         self.sun_zenith, self.sun_azimuth = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=False)
-        self.sun_illuminance_normal = _check_sun_illuminance(sun_illuminance_normal)
+        self.sun_illuminance_normal = _check(self.model_name, "sun_illuminance_normal", sun_illuminance_normal)
         self._set_scale(zenith_luminance, diffuse_illuminance, sun_illuminance_normal=self.sun_illuminance_normal)
 
     def __repr__(self) -> str:
@@ -396,10 +348,10 @@ class CIEStandardSky(LuminanceSunMixin, SunSkyMixin, _ScaledCIESky):
         diffuse_illuminance: float | None = None,
         sun_illuminance_normal: float = 0.0,
     ) -> None:
-        self.sky_type = _check_sky_type(sky_type)
+        self.sky_type = _check(self.model_name, "sky_type", sky_type)
         self.parameters = cie_sky_parameters(self.sky_type)
         self.sun_zenith, self.sun_azimuth = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=False)
-        self.sun_illuminance_normal = _check_sun_illuminance(sun_illuminance_normal)
+        self.sun_illuminance_normal = _check(self.model_name, "sun_illuminance_normal", sun_illuminance_normal)
         self._extended = cie_parameters(*self.parameters)
         self._norm = float(extended_perez(1.0, self.sun_zenith, self._extended))
         self._set_scale(zenith_luminance, diffuse_illuminance, sky_type=self.sky_type,

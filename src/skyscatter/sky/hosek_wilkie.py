@@ -43,9 +43,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..conventions import as_directions
+from ..deprecation import renamed_keywords, warn_renamed
 from ..errors import FileFormatError, InvalidParameterError
 from ..fileio import atomic_path
 from ..spectral import as_wavelengths
+from . import registry
 from .base import SkyModel, SunSkyMixin, check_sun_angles
 from .perez_family import HOSEK_WILKIE_OFFSET, gradation, indicatrix
 
@@ -367,11 +369,12 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
     turbidity : float
         Linke-like turbidity of the published model, 1 to 10 (default 3). Values outside raise
         :class:`~skyscatter.errors.InvalidParameterError` (the reference code reads outside its tables).
-    albedo : float
-        Ground albedo, 0 to 1 (default 0.1), the same for every band.
+    ground_albedo : float
+        Albedo of the atmosphere's ground, 0 to 1 (default 0.1), the same for every band (``albedo`` is its
+        deprecated spelling).
     dataset : HosekWilkieDataset, optional
         Coefficients to use instead of the published ones (e.g. from :func:`skyscatter.fit.fit_hosek_wilkie`).
-        ``turbidity`` and ``albedo`` then index the dataset's own axes (they are ignored for axes of length 1).
+        ``turbidity`` and ``ground_albedo`` then index the dataset's own axes (they are ignored for axes of length 1).
         Such a sky has no solar disc (``has_sun`` False): the 2013 solar function belongs to the published
         atmosphere; its ``xyz`` integrates the spectral model.
 
@@ -389,19 +392,25 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
 
     model_name = "hosek-wilkie"
 
+    @renamed_keywords(albedo="ground_albedo")
     def __init__(
         self,
         sun_zenith: float,
         sun_azimuth: float,
         *,
         turbidity: float = 3.0,
-        albedo: float = 0.1,
+        ground_albedo: float = 0.1,
         dataset: HosekWilkieDataset | None = None,
     ) -> None:
         self.sun_zenith, self.sun_azimuth = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=False)
         self.sun_elevation = np.pi / 2.0 - self.sun_zenith
-        self.turbidity = _check_range("turbidity", turbidity, 1.0, 10.0) if dataset is None else turbidity
-        self.albedo = _check_range("albedo", albedo, 0.0, 1.0) if dataset is None else albedo
+        albedo = ground_albedo
+        if dataset is None:  # the published data's ranges, stated once in the registry
+            spec = registry.get(self.model_name)
+            turbidity = spec.parameter("turbidity").check(turbidity, spec.name)
+            albedo = spec.parameter("ground_albedo").check(albedo, spec.name)
+        self.turbidity = turbidity
+        self.ground_albedo = albedo
         self.dataset = dataset
         if dataset is None:
             data = _published()
@@ -415,9 +424,15 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
             self._bands = dataset.wavelengths
             t = turbidity if dataset.turbidities.size > 1 else None
             a = albedo if dataset.albedos.size > 1 else None
-            self.turbidity, self.albedo = t, a  # None: not an axis of this dataset
+            self.turbidity, self.ground_albedo = t, a  # None: not an axis of this dataset
             self._params, self._radiance = dataset.configuration(self.sun_elevation, t, a)
-        self._remember(turbidity=self.turbidity, albedo=self.albedo, dataset=dataset)
+        self._remember(turbidity=self.turbidity, ground_albedo=self.ground_albedo, dataset=dataset)
+
+    @property
+    def albedo(self) -> float | None:
+        """Deprecated: :attr:`ground_albedo`."""
+        warn_renamed("HosekWilkieSky.albedo", "HosekWilkieSky.ground_albedo", "HosekWilkieSky", stacklevel=3)
+        return self.ground_albedo
 
     sun_angular_radius = SOLAR_RADIUS
 
@@ -430,7 +445,7 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         extra = "" if self.dataset is None else ", dataset=<fitted>"
         return (
             f"HosekWilkieSky(sun_zenith={self.sun_zenith:.6g}, sun_azimuth={self.sun_azimuth:.6g}, "
-            f"turbidity={self.turbidity!r}, albedo={self.albedo!r}{extra})"
+            f"turbidity={self.turbidity!r}, ground_albedo={self.ground_albedo!r}{extra})"
         )
 
     # -- sky ----------------------------------------------------------------------------------------------
@@ -626,15 +641,3 @@ def _mean_mu_powers() -> NDArray[np.float64]:
     s2 = np.sin(SOLAR_RADIUS) ** 2
     weight = w * mu / np.sqrt(1.0 - s2 * (1.0 - mu * mu))
     return np.array([np.sum(weight * mu**k) for k in range(6)]) / np.sum(weight)
-
-
-def _check_range(name: str, value: Any, low: float, high: float) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise InvalidParameterError(f"{name} must be a number in [{low:g}, {high:g}]; got {value!r}") from exc
-    if not (np.isfinite(v) and low <= v <= high):
-        raise InvalidParameterError(
-            f"Hosek-Wilkie {name} must be in [{low:g}, {high:g}] (the range of the published data); got {v:g}"
-        )
-    return v

@@ -22,6 +22,8 @@ from ..atmosphere import AtmosphereParameters
 from ..conventions import as_directions
 from ..errors import InvalidParameterError
 from ..spectral import DEFAULT_WAVELENGTHS, REFERENCE_WAVELENGTHS, as_wavelengths
+from ..validation import whole_number
+from . import registry
 from .base import SkyModel, SunSkyMixin, check_sun_angles
 
 __all__ = ["MonteCarloSky"]
@@ -86,16 +88,10 @@ class MonteCarloSky(SunSkyMixin, SkyModel):
         if clouds is not None and not isinstance(clouds, CloudField):
             raise InvalidParameterError(f"clouds must be a CloudField or None; got {type(clouds).__name__}")
         atm = base_atm if layer is None else base_atm.replace(particles=(*base_atm.particles, layer))
-        try:
-            alt = float(altitude)
-        except (TypeError, ValueError):
-            raise InvalidParameterError(f"altitude must be a number [m]; got {altitude!r}") from None
-        if not (math.isfinite(alt) and 0.0 <= alt <= 1e8):
-            raise InvalidParameterError(f"altitude must be finite, 0 to 1e8 m; got {altitude!r}")
-        if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 1 <= samples <= 10**8:
-            raise InvalidParameterError(f"samples must be an integer, 1 to 1e8; got {samples!r}")
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**63:
-            raise InvalidParameterError(f"seed must be an integer, 0 to 2^63 - 1; got {seed!r}")
+        spec = registry.get(self.model_name)  # the ranges, stated once
+        alt = spec.parameter("altitude").check(altitude, spec.name)
+        samples = whole_number("samples", samples, 1, spec.parameter("samples").high)
+        seed = whole_number("seed", seed, 0, spec.parameter("seed").high)
         self.sun_zenith = zen
         self.sun_azimuth = azi
         self.atmosphere = atm

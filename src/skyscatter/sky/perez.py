@@ -47,8 +47,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..atmosphere.airmass import relative_optical_mass
 from ..atmosphere.tables import load_table
-from ..conventions import as_directions, direction_from_angles
+from ..conventions import as_directions, check_daylight_limit, direction_from_angles
 from ..errors import InvalidParameterError
+from ..quadrature import plane_integral
 from .base import LuminanceOnlySky, SunSkyMixin, check_sun_angles
 from .cie import LuminanceSunMixin
 from .perez_family import perez_f
@@ -374,7 +375,6 @@ def _finite(name: str, value, unit: str, *, low: float | None = None, strict_low
         raise InvalidParameterError(f"{name} must be {rel} {low:g} [{unit}]; got {v:g}")
     if high is not None and v > high:
         raise InvalidParameterError(f"{name} must be at most {high:g} [{unit}]{why}; got {v:g}")
-    from ..conventions import check_daylight_limit
 
     check_daylight_limit(name, v, unit)
     return v
@@ -567,8 +567,6 @@ class PerezSky(LuminanceSunMixin, SunSkyMixin, LuminanceOnlySky):
         self.direct_normal_irradiance = float(p.direct_normal_irradiance)
         self.precipitable_water = float(p.water)
         self._model_sun = direction_from_angles(self.model_sun_zenith, self.sun_azimuth)
-        from ..photometry import plane_integral
-
         self.uniform = False
         integral = plane_integral(self.relative_luminance)
         if not integral > 0:

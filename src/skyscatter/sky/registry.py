@@ -16,15 +16,18 @@ caller's own package, for a model that lives outside skyscatter).
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
-import math
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from ..conventions import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_EXTRATERRESTRIAL_IRRADIANCE, check_daylight_limit
+from ..atmosphere.options import ATMOSPHERE_OPTIONS, atmosphere_option
+from ..conventions import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_EXTRATERRESTRIAL_IRRADIANCE, MAX_SKY_LUMINANCE
+from ..deprecation import rename
 from ..errors import InvalidParameterError
 from ..references import cite
+from ..validation import Parameter
 
 if TYPE_CHECKING:
     from .base import SkyModel
@@ -46,152 +49,38 @@ __all__ = [
 DICT_VERSION = 1
 
 
-def _aerosol_types() -> tuple[str, ...]:
-    from ..atmosphere.aerosol_types import AEROSOL_TYPES
+def _encode(p: Parameter, value: Any) -> Any:
+    """Plain JSON-able form of a parameter's value (atmospheres through their ``to_dict``)."""
+    if value is None:
+        return None
+    if p.kind == "atmosphere":
+        return _encode_atmosphere(value)
+    if p.kind == "object":
+        if not hasattr(value, "to_dict"):
+            raise InvalidParameterError(f"{p.name}: a {type(value).__name__} cannot be described as data")
+        cls = type(value)
+        return {"class": f"{cls.__module__}:{cls.__qualname__}", "data": value.to_dict()}
+    if p.kind == "float":
+        return float(value)
+    if p.kind == "int":
+        return int(value)
+    return value
 
-    return tuple(AEROSOL_TYPES)
 
-
-@dataclass(frozen=True)
-class Parameter:
-    """One parameter of a sky model (a keyword argument of its class).
-
-    Attributes
-    ----------
-    name : str
-        Keyword name in the Python API.
-    unit : str
-        SI unit, ``"1"`` for dimensionless numbers, ``""`` for non-numeric values.
-    default : Any
-        Value used when the parameter is not given (None: optional, the model decides).
-    help : str
-        One line for documentation and ``--help``.
-    kind : {"float", "int", "bool", "choice", "path", "atmosphere", "object"}
-        Value type (``"path"``: a file name). ``"atmosphere"`` is an
-        :class:`~skyscatter.atmosphere.AtmosphereParameters` or precomputed
-        tables (serialised through the parameters' ``to_dict``); ``"object"`` a skyscatter object with
-        ``to_dict`` / ``from_dict`` (such as a fitted dataset).
-    low, high : float or None
-        Inclusive valid range of numeric values (None: unbounded on that side).
-    choices : tuple
-        Allowed values of a ``"choice"`` parameter.
-    flag : str or None
-        Command-line flag; default ``--name-with-dashes``. ``cli=False`` keeps the parameter out of the CLI.
-    low_open : bool
-        True when ``low`` itself is excluded (the value must be greater than ``low``).
-    why : str
-        Where the range comes from (a physical limit, the publication's validity), quoted in error messages.
-    """
-
-    name: str
-    unit: str
-    default: Any = None
-    help: str = ""
-    kind: str = "float"
-    low: float | None = None
-    high: float | None = None
-    choices: tuple = ()
-    flag: str | None = None
-    cli: bool = True
-    low_open: bool = False
-    why: str = ""
-
-    @property
-    def cli_flag(self) -> str:
-        return self.flag or "--" + self.name.replace("_", "-")
-
-    def range_text(self, *, with_unit: bool = True) -> str:
-        """Human-readable valid range with unit, e.g. ``"1.65 to 11"`` or ``">= 0 lx"``."""
-        unit = "" if self.unit in ("1", "") or not with_unit else f" {self.unit}"
-        if self.kind == "choice":
-            return "one of " + ", ".join(map(str, self.choices))
-        if self.low is not None and self.high is not None:
-            return f"{'above ' if self.low_open else ''}{self.low:g} to {self.high:g}{unit}"
-        if self.low is not None:
-            return f"{'>' if self.low_open else '>='} {self.low:g}{unit}"
-        if self.high is not None:
-            return f"<= {self.high:g}{unit}"
-        return f"any finite value{unit}" if self.kind in ("float", "int") else ""
-
-    def check(self, value: Any, model: str, *, ranges: bool = True) -> Any:
-        """Validate one value (type, finiteness and, with ``ranges``, the range); return it converted.
-
-        The model classes enforce their ranges themselves (some have documented escape hatches, such as
-        ``PreethamSky(strict=False)``); the command line checks the ranges here first so that it can refuse a value
-        before any work, and the conformance suite checks that spec and class agree.
-        """
-        if value is None:
-            return None
-        where = f"{model}: {self.name}"
-        if self.kind in ("float", "int"):
-            if isinstance(value, bool) or isinstance(value, str):
-                raise InvalidParameterError(f"{where} must be a number [{self.unit}]; got {value!r}")
-            try:
-                number = float(value)
-            except (TypeError, ValueError):
-                raise InvalidParameterError(f"{where} must be a number [{self.unit}]; got {value!r}") from None
-            if not math.isfinite(number):
-                raise InvalidParameterError(f"{where} must be finite; got {value!r}")
-            if self.kind == "int":
-                if number != int(number):
-                    raise InvalidParameterError(f"{where} must be a whole number; got {value!r}")
-                number = int(number)
-            below = self.low is not None and (number <= self.low if self.low_open else number < self.low)
-            outside = below or (self.high is not None and number > self.high)
-            if ranges and outside:
-                if self.high is not None and number > self.high:
-                    check_daylight_limit(self.name, number, self.unit)  # the physical limit, named with its source
-                reason = f" ({self.why})" if self.why else ""
-                unit = "" if self.unit in ("1", "") else f" {self.unit}"
-                raise InvalidParameterError(f"{where} {number:g}{unit} is outside {self.range_text()}{reason}")
-            return number
-        if self.kind == "bool":
-            if not isinstance(value, bool):
-                raise InvalidParameterError(f"{where} must be True or False; got {value!r}")
-            return value
-        if self.kind == "choice":
-            if value not in self.choices:
-                raise InvalidParameterError(f"{where} must be {self.range_text()}; got {value!r}")
-            return value
-        if self.kind == "path":
-            if not isinstance(value, str) or not value:
-                raise InvalidParameterError(f"{where} must be a file name; got {value!r}")
-            return value
+def _decode(p: Parameter, value: Any) -> Any:
+    """Inverse of :func:`_encode`."""
+    if value is None or p.kind not in ("atmosphere", "object"):
         return value
-
-    def encode(self, value: Any) -> Any:
-        """Plain JSON-able form of a value (atmospheres through their ``to_dict``)."""
-        if value is None:
-            return None
-        if self.kind == "atmosphere":
-            return _encode_atmosphere(value)
-        if self.kind == "object":
-            if not hasattr(value, "to_dict"):
-                raise InvalidParameterError(f"{self.name}: a {type(value).__name__} cannot be described as data")
-            cls = type(value)
-            return {"class": f"{cls.__module__}:{cls.__qualname__}", "data": value.to_dict()}
-        if self.kind == "float":
-            return float(value)
-        if self.kind == "int":
-            return int(value)
-        return value
-
-    def decode(self, value: Any) -> Any:
-        """Inverse of :meth:`encode`."""
-        if value is None or self.kind not in ("atmosphere", "object"):
-            return value
-        if self.kind == "object":
-            if not isinstance(value, Mapping) or not str(value.get("class", "")).startswith("skyscatter."):
-                raise InvalidParameterError(f"{self.name}: expected an encoded skyscatter object")
-            module, _, name = value["class"].partition(":")
-            return getattr(importlib.import_module(module), name).from_dict(value["data"])
-        return _decode_atmosphere(self.name, value)
+    if p.kind == "object":
+        if not isinstance(value, Mapping) or not str(value.get("class", "")).startswith("skyscatter."):
+            raise InvalidParameterError(f"{p.name}: expected an encoded skyscatter object")
+        module, _, name = value["class"].partition(":")
+        return getattr(importlib.import_module(module), name).from_dict(value["data"])
+    return _decode_atmosphere(p.name, value)
 
 
 def _encode_atmosphere(value: Any) -> dict[str, Any]:
     """AtmosphereParameters -> its dict; precomputed tables -> their parameters plus the table settings."""
-    import dataclasses
-
     from ..atmosphere import AtmosphereParameters
 
     if isinstance(value, AtmosphereParameters):
@@ -238,6 +127,9 @@ class ModelSpec:
         True when the spectra are computed (not a luminance times a fixed relative spectrum).
     cost : {"cheap", "tables", "expensive"}
         How costly an evaluation is; the conformance suite samples expensive models more sparsely.
+    renamed : mapping
+        Old parameter name -> new one: the old spelling is still read (by :func:`build` and :func:`from_dict`,
+        so saved skies load) with a DeprecationWarning, for one release.
     """
 
     name: str
@@ -249,6 +141,7 @@ class ModelSpec:
     sun_below_horizon: bool = False
     spectral: bool = False
     cost: str = "cheap"
+    renamed: Mapping[str, str] = field(default_factory=dict)
 
     def parameter(self, name: str) -> Parameter:
         for p in self.parameters:
@@ -315,7 +208,7 @@ def build(name: str, sun_zenith: float | None = None, sun_azimuth: float | None 
     finiteness here; the model class checks its ranges (with its own, more specific messages).
     """
     spec = get(name)
-    given = {k: v for k, v in parameters.items() if v is not None}
+    given = rename({k: v for k, v in parameters.items() if v is not None}, spec.renamed, spec.name)
     kwargs = spec.defaults()
     for key, value in given.items():
         kwargs[key] = spec.parameter(key).check(value, spec.name, ranges=False)
@@ -343,7 +236,8 @@ def from_dict(data: Mapping[str, Any]) -> SkyModel:
     raw = data.get("parameters", {}) or {}
     if not isinstance(raw, Mapping):
         raise InvalidParameterError("the 'parameters' entry of a sky dictionary must be a mapping")
-    kwargs = {k: spec.parameter(k).decode(v) for k, v in raw.items()}
+    raw = rename(dict(raw), spec.renamed, f"{spec.name} sky dictionary")
+    kwargs = {k: _decode(spec.parameter(k), v) for k, v in raw.items()}
     return build(spec.name, data.get("sun_zenith"), data.get("sun_azimuth"), **kwargs)
 
 
@@ -355,7 +249,7 @@ def to_dict(sky: SkyModel) -> dict[str, Any]:
     if spec.uses_sun:
         out["sun_zenith"] = float(sky.sun_zenith)  # type: ignore[attr-defined]
         out["sun_azimuth"] = float(sky.sun_azimuth)  # type: ignore[attr-defined]
-    out["parameters"] = {k: spec.parameter(k).encode(v) for k, v in values.items() if v is not None}
+    out["parameters"] = {k: _encode(spec.parameter(k), v) for k, v in values.items() if v is not None}
     return out
 
 
@@ -365,7 +259,8 @@ _SUN_LIMIT = "the extraterrestrial solar value at perihelion, which nothing at t
 _TURBIDITY_HELP = "atmospheric turbidity T (haze + molecules over molecules alone)"
 _SCALE = (
     Parameter("zenith_luminance", "cd m^-2", None, "zenith luminance (default: 10000 lx diffuse)",
-              low=0.0),
+              low=0.0, high=MAX_SKY_LUMINANCE, why="the luminance of the solar disc outside the atmosphere, which no "
+              "part of the sky exceeds"),
     Parameter("diffuse_illuminance", "lx", None, "horizontal diffuse illuminance to scale the sky to", low=0.0,
               high=MAX_EXTRATERRESTRIAL_ILLUMINANCE, why=_SUN_LIMIT),
 )
@@ -466,11 +361,14 @@ register(ModelSpec(
     summary="Hosek & Wilkie 2012 spectral clear sky (320-720 nm) with the 2013 solar disc",
     citation=cite("HosekWilkie2012", "HosekWilkie2013"),
     parameters=(
-        Parameter("turbidity", "1", 3.0, "turbidity of the published model", low=1.0, high=10.0),
-        Parameter("albedo", "1", 0.1, "ground albedo, the same at every wavelength", low=0.0, high=1.0),
+        Parameter("turbidity", "1", 3.0, "turbidity of the published model", low=1.0, high=10.0,
+                  why="the range of the published data"),
+        Parameter("ground_albedo", "1", 0.1, "albedo of the atmosphere's ground, the same at every wavelength",
+                  low=0.0, high=1.0, why="the range of the published data"),
         Parameter("dataset", "", None, "fitted coefficients (skyscatter.fit) instead of the published ones",
                   kind="object", cli=False),
     ),
+    renamed={"albedo": "ground_albedo"},
     spectral=True,
 ))
 register(ModelSpec(
@@ -480,28 +378,17 @@ register(ModelSpec(
     citation=cite("Bruneton2008"),
     parameters=(
         Parameter("altitude", "m", 0.0, "observer altitude above the ground, from the ground to orbit", low=0.0,
-                  high=1e8),
-        Parameter("turbidity", "1", None, "aerosols from turbidity (Preetham 1999 A.1; default: the Earth "
-                  "defaults' light aerosol)", low=1.0, high=20.0),
-        Parameter("aerosol_optical_depth", "1", None, "vertical aerosol optical depth at 550 nm (instead of "
-                  "--turbidity)", low=0.0, high=10.0, flag="--aod"),
-        Parameter("angstrom_alpha", "1", None, "Angstrom exponent of the aerosol optical depth (with --aod; "
-                  "default 1.3)", low=-1.0, high=4.0),
-        Parameter("albedo", "1", None, "ground albedo, the same at every wavelength (default 0.1)", low=0.0,
-                  high=1.0),
-        Parameter("ozone_column", "DU", None, "total ozone column (default 300)", low=0.0, high=1000.0,
-                  flag="--ozone"),
-        Parameter("aerosol_type", "", None, "OPAC aerosol type with Mie optics (Hess et al. 1998; with --aod its "
-                  "optical depth at 550 nm, else the type's own)", kind="choice", choices=_aerosol_types(),
-                  flag="--aerosol"),
-        Parameter("atmosphere_file", "", None, "the air from a JSON file (written by 'skyscatter fit-atmosphere' "
-                  "or AtmosphereParameters.save_json); the other options change it", kind="path",
-                  flag="--atmosphere"),
-        Parameter("wavelengths", "", None, "table wavelengths: spectral (default: 16, 400-700 nm, right colour) "
-                  "or rgb (3: quicker to build, wrong colour at low sun)", kind="choice", choices=("spectral", "rgb")),
-        Parameter("atmosphere", "", None, "the atmosphere (AtmosphereParameters or precomputed tables; default: "
-                  "the Earth defaults)", kind="atmosphere", cli=False),
+                  high=1e8, why="a quarter of the way to the Moon; the tables resolve nothing finer there"),
+        *(atmosphere_option(p.name) for p in ATMOSPHERE_OPTIONS),
+        Parameter("tables", "", None, "which tables to build: spectral (default: 16 wavelengths, 400-700 nm, right "
+                  "colour) or rgb (3: quicker to build, wrong colour at low sun)", kind="choice",
+                  choices=("spectral", "rgb")),
+        Parameter("atmosphere", "", None, "the atmosphere (AtmosphereParameters; default: the Earth defaults)",
+                  kind="atmosphere", cli=False),
+        Parameter("precomputed", "", None, "precomputed tables (PrecomputedAtmosphere) instead of the atmosphere",
+                  kind="atmosphere", cli=False),
     ),
+    renamed={"albedo": "ground_albedo", "wavelengths": "tables"},
     sun_below_horizon=True,
     spectral=True,
     cost="tables",

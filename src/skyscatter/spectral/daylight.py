@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import InvalidParameterError
 from .grid import as_wavelengths
 
 __all__ = ["daylight_basis", "daylight_chromaticity", "daylight_coefficients", "daylight_spectrum"]
@@ -29,8 +30,6 @@ def daylight_chromaticity(cct: ArrayLike) -> tuple[NDArray[np.float64], NDArray[
     4000 <= T <= 7000 K, ``x_D = -2.0064e9/T^3 + 1.9018e6/T^2 + 0.24748e3/T + 0.237040`` above; Eq. 3.4:
     ``y_D = -3.000 x_D^2 + 2.870 x_D - 0.275``.
     """
-    from ..errors import InvalidParameterError
-
     t = np.asarray(cct, dtype=float)
     if not np.all(np.isfinite(t) & (t >= 4000.0) & (t <= 25000.0)):
         raise InvalidParameterError(f"daylight CCT must be within 4000-25000 K (CIE 015:2004); got {cct!r}")
