@@ -9,6 +9,7 @@ import time
 
 from ..errors import InvalidParameterError
 from ..fileio import check_output_path
+from .atmosphere_options import NAMES as ATMOSPHERE_NAMES
 from .atmosphere_options import add_atmosphere_options, add_deprecated_option, atmosphere_from_args
 from .common import HELP_FORMATTER, float_in, float_list, one_line_warnings, output_path, positive_int
 
@@ -41,12 +42,12 @@ def _wavelengths(text: str) -> list[float] | str:
     return values
 
 
-def add_table_options(p: argparse.ArgumentParser) -> None:
-    """Options describing the atmosphere (generated from the one list) and the tables (shared with
-    ``export-luts``)."""
+def add_table_options(p: argparse.ArgumentParser, exclude: tuple[str, ...] = ()) -> None:
+    """Options describing the atmosphere (generated from the one list, less ``exclude``) and the tables (shared
+    with ``export-luts`` and ``view``)."""
     g = p.add_argument_group("atmosphere", "The Earth defaults of Bruneton & Neyret 2008 (as in Bruneton's 2017 "
                              "implementation) unless changed.")
-    add_atmosphere_options(g)
+    add_atmosphere_options(g, [n for n in ATMOSPHERE_NAMES if n not in exclude])
     add_deprecated_option(g, "--albedo", "--ground-albedo", "ground_albedo", type=float_in(0.0, 1.0), metavar="A")
     t = p.add_argument_group("tables")
     t.add_argument("--max-sun-zenith", type=float_in(102.0, 180.0), default=102.0, metavar="DEG",

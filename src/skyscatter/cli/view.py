@@ -44,7 +44,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--check", action="store_true",
                    help="serve, fetch the page, its script, the shaders, the manifest and every texture over HTTP "
                         "from 127.0.0.1, report what was served and exit (no browser)")
-    add_table_options(p)
+    # an OPAC type's Mie phase is tabulated per wavelength: the colour-folded textures cannot carry it
+    add_table_options(p, exclude=("aerosol_type",))
     p.set_defaults(func=run)
 
 

@@ -220,7 +220,7 @@ def fold_matrix(atm: PrecomputedAtmosphere) -> NDArray[np.float64]:
     in skyscatter's HDR scale (Y = luminance / 683): the CIE 1931 integral of the tables' colour rule
     (:func:`skyscatter.precomputed.conversion.xyz_matrix`; for tables of fewer than 15 wavelengths its quadratic or
     piecewise-linear rule without the negative-lobe guard, which is not linear) then XYZ to linear sRGB."""
-    return xyz_to_linear_srgb(atm.xyz_matrix.T).T * HDR_SCALE
+    return np.asarray(xyz_to_linear_srgb(atm.xyz_matrix.T).T * HDR_SCALE, dtype=np.float64)
 
 
 def _analytic_phase(atm: PrecomputedAtmosphere):
@@ -347,7 +347,7 @@ def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
 def _write_raw(path: Path, array: NDArray, dtype: str) -> int:
     data = np.ascontiguousarray(array, dtype=dtype)
     with open(path, "wb") as fh:
-        fh.write(memoryview(data).cast("B"))
+        fh.write(data.tobytes())  # little-endian by dtype; at most a few hundred MB per texture
     return int(data.nbytes)
 
 
