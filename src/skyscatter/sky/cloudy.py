@@ -63,6 +63,10 @@ PHASE_MOMENTS = 256
 #: Sun elevation [rad] below which the direct beam is not traced (twilight: the tables' clear sky lights the
 #: cloud top).
 MIN_BEAM_ELEVATION = math.radians(0.5)
+#: Sizes of the clear-sky tables that light the cloud top (:mod:`skyscatter.precomputed`): only the sun's
+#: transmittance and the sky's irradiance at one altitude are read, so the 4D tables are coarser than the
+#: defaults (1/8 of their texels; the irradiance at the cloud top within 0.3 % of the default tables, docs).
+COUPLING_TABLE_SIZES = {"scattering_r": 16, "scattering_mu": 64, "scattering_nu": 4}
 #: Highest observer altitude accepted [m] (as the precomputed sky).
 MAX_ALTITUDE = 1.0e8
 
@@ -194,7 +198,8 @@ class CloudySky(SunSkyMixin, SkyModel):
     def __init__(self, sun_zenith: float, sun_azimuth: float = 0.0, *, cloud_optical_depth: float = 15.0,
                  cloud_base: float = 1000.0, cloud_top: float = 1500.0, cloud_effective_radius: float = 10e-6,
                  albedo: float | None = None, altitude: float = 0.0,
-                 atmosphere: AtmosphereParameters | None = None, streams: int = 16) -> None:
+                 atmosphere: AtmosphereParameters | None = None, streams: int = 16,
+                 illumination: str = "tables") -> None:
         zen, azi = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=True)
         from ..atmosphere.clouds import CloudLayer
 
@@ -209,6 +214,9 @@ class CloudySky(SunSkyMixin, SkyModel):
         if isinstance(streams, bool) or not isinstance(streams, (int, np.integer)) or streams % 2 \
                 or not 4 <= streams <= 64:
             raise InvalidParameterError(f"streams must be an even whole number, 4 to 64; got {streams!r}")
+        if illumination not in ("column", "tables"):
+            raise InvalidParameterError(f"illumination must be 'column' or 'tables'; got {illumination!r}")
+        self.illumination = illumination
         air = AtmosphereParameters() if atmosphere is None else atmosphere
         if not isinstance(air, AtmosphereParameters):
             raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(air).__name__}")
@@ -228,7 +236,8 @@ class CloudySky(SunSkyMixin, SkyModel):
         self.streams = int(streams)
         self.sun_angular_radius = self.atmosphere.sun_angular_radius
         self._remember(cloud_optical_depth=tau, cloud_base=base, cloud_top=top, cloud_effective_radius=radius,
-                       albedo=albedo, altitude=alt, atmosphere=atmosphere, streams=self.streams)
+                       albedo=albedo, altitude=alt, atmosphere=atmosphere, streams=self.streams,
+                       illumination=illumination)
 
     def __repr__(self) -> str:
         tau = 0.0 if self.cloud_layer is None else self.cloud_layer.optical_depth_550
@@ -249,11 +258,14 @@ class CloudySky(SunSkyMixin, SkyModel):
         top = atm.thickness
         obs = min(self.altitude, top)
         edges, tau, ssa, moments = cloud_column(atm, wl, obs)
+        full_edges, full_tau = edges, tau  # the whole column, for the sun's direct transmittance
         mu0 = math.cos(self.sun_zenith)
         beam = mu0 > math.sin(MIN_BEAM_ELEVATION)
         ref = max((c.top for c in atm.particles if hasattr(c, "top")), default=0.0)
-        if not beam:
-            # twilight: the column starts at the highest cloud top, lit there by the clear sky of the tables
+        # the coupling with the tables needs a cloud and an observer at or below its top (twilight: always)
+        fed = ref > 0 and (not beam or (self.illumination == "tables" and obs <= ref))
+        if fed:
+            # the column starts at the highest cloud top, lit there by the clear sky of the tables (twilight)
             keep = int(np.argmin(np.abs(edges - ref)))
             if keep >= edges.size - 1:
                 keep = 0
@@ -265,7 +277,7 @@ class CloudySky(SunSkyMixin, SkyModel):
         mu_user = -np.cos(theta)  # DISORT: mu < 0 travels down (seen looking up)
         order = np.argsort(mu_user, kind="stable")
         phi = np.arange(0.0, 180.0 + 1e-9, AZIMUTH_STEP_DEG)
-        if beam:
+        if beam and not fed:
             # the spherical beam: DISORT's beam takes the cosine mu_eff whose plane-parallel attenuation down to
             # the highest cloud top equals the chord through the spherical shells, and the flux that keeps
             # the irradiance there right (mu0 F0 T_sph)
@@ -278,7 +290,14 @@ class CloudySky(SunSkyMixin, SkyModel):
         rad = np.zeros((theta.size, phi.size, wl.size))
         down = np.zeros(wl.size)
         up = np.zeros(wl.size)
-        iso_top = self._twilight_top_intensity(wl) if not beam else np.zeros(wl.size)
+        if fed:
+            sun_top, iso_top = self._table_illumination(wl, ref)
+            beam_flux = sun_top if beam else np.zeros(wl.size)
+            mu_eff = np.full(wl.size, max(mu0, 1e-3))
+            iso_top = iso_top + self._interreflection(wl, ref, edges, tau, ssa, moments, beam_flux, mu_eff, iso_top)
+        else:
+            iso_top = np.zeros(wl.size)
+            beam_flux = mu0 / mu_eff if beam else np.zeros(wl.size)
         for k in range(wl.size):
             cfg = disortpp.DisortConfig(int(tau.shape[0]), self.streams, PHASE_MOMENTS)
             cfg.flags.use_user_mu = True
@@ -295,7 +314,7 @@ class CloudySky(SunSkyMixin, SkyModel):
             cfg.tau_user = [float(cum[level, k])]
             cfg.mu_user = [float(m) for m in mu_user[order]]
             cfg.phi_user = [float(p) for p in phi]
-            cfg.bc.direct_beam_flux = float(mu0 / mu_eff[k]) if beam else 0.0
+            cfg.bc.direct_beam_flux = float(beam_flux[k])
             cfg.bc.direct_beam_mu = float(mu_eff[k])
             cfg.bc.direct_beam_phi = 0.0
             cfg.bc.isotropic_flux_top = float(iso_top[k])
@@ -305,30 +324,103 @@ class CloudySky(SunSkyMixin, SkyModel):
             rad[order, :, k] = vals
             down[k] = res.flux_down[0]
             up[k] = res.flux_up[0]
+        if fed:
+            # the clear sky seen through the cloud without being scattered: the tables' radiance at the cloud top
+            # in place of the isotropic radiance that lit the column (thin clouds show the sky's gradients)
+            up_rows = np.nonzero(theta < 0.5 * math.pi)[0]
+            sky_top = self._table_sky(wl, ref, theta[up_rows], np.radians(phi))  # (n_up, n_phi, n_wl)
+            depth = cum[level]  # optical depth from the observer up to the column's top (n_wl,)
+            t_unscattered = np.exp(-depth[None, :] / np.cos(theta[up_rows])[:, None])  # (n_up, n_wl)
+            # the air's backscatter of the cloud's light (the interreflection) takes the clear sky's angular shape
+            gain = np.divide(iso_top, self._table_iso, out=np.ones(wl.size), where=self._table_iso > 0)
+            rad[up_rows] += (sky_top * gain - iso_top) * t_unscattered[:, None, :]
         rad = np.maximum(rad, 0.0)
-        if beam and self.altitude <= top:
-            direct = np.exp(-slant_optical_depth(edges, tau, atm.bottom_radius, obs, mu0))
-        elif beam:
-            direct = np.exp(-slant_optical_depth(edges, tau, atm.bottom_radius, top, mu0))
+        if beam:
+            direct = np.exp(-slant_optical_depth(full_edges, full_tau, atm.bottom_radius, min(self.altitude, top),
+                                                 mu0))
         else:
             direct = np.zeros(wl.size)
         return {"radiance": rad, "theta": theta, "phi": np.radians(phi), "direct": direct, "diffuse_down": down,
                 "diffuse_up": up}
 
-    def _twilight_top_intensity(self, wl: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Sun below the horizon: the clear sky's downward irradiance at the highest cloud top from the
-        precomputed tables ([Bruneton2008] Eq. 15) as an isotropic radiance [sr^-1 per unit solar irradiance]
-        (its irradiance / pi) lighting the column from there down (the tables' own air above, no cloud)."""
+    def _interreflection(self, wl, ref, edges, tau, ssa, moments, beam_flux, mu_eff, iso_top):
+        """The light the cloud reflects that the air above sends back down, as extra isotropic radiance at the
+        cloud top [sr^-1 per unit solar irradiance]: by the adding method ([Liou2002] Sec. 6.2), the downward
+        flux ``F`` at the top becomes ``F (1 - a s) / (1 - r s)`` with ``r`` the column's reflectance under that
+        light (a flux-only DISORT solve), ``s`` the spherical albedo of the clear air above (a DISORT solve with
+        isotropic light from above on a black floor: by reciprocity the same from below for an air that scatters
+        without absorbing; ozone's absorption, a few per cent, is the error) and
+        ``a`` the ground albedo the tables' sky already reflects."""
+        import disortpp
+
+        atm = self.atmosphere
+        full, t_all, w_all, m_all = cloud_column(atm.replace(particles=()), wl, 0.0)
+        air = full > ref - 1e-6
+        n_air = int(np.count_nonzero(air)) - 1
+        albedo = atm.ground_albedo_at(wl)
+        extra = np.zeros(wl.size)
+        for k in range(wl.size):
+            fluxes = []
+            for lay_tau, lay_ssa, lay_mom, floor, beam, iso in (
+                    (tau[:, k], ssa[:, k], moments[:, k], albedo[k], beam_flux[k], iso_top[k]),
+                    (t_all[:n_air, k], w_all[:n_air, k], m_all[:n_air, k], 0.0, 0.0, 1.0 / math.pi)):
+                cfg = disortpp.DisortConfig(int(lay_tau.size), self.streams, self.streams)
+                cfg.flags.comp_only_fluxes = True
+                cfg.flags.use_user_tau = True
+                cfg.flags.use_lambertian_surface = True
+                cfg.num_user_tau = 2
+                cfg.allocate()
+                cfg.delta_tau = [float(t) for t in lay_tau]
+                cfg.single_scat_albedo = [float(w) for w in lay_ssa]
+                cfg.phase_function_moments = lay_mom[:, : self.streams + 1].tolist()
+                cfg.tau_user = [0.0, float(lay_tau.sum())]
+                cfg.bc.direct_beam_flux = float(beam)
+                cfg.bc.direct_beam_mu = float(mu_eff[k])
+                cfg.bc.isotropic_flux_top = float(iso)
+                cfg.bc.surface_albedo = float(floor)
+                res = disortpp.DisortSolver().solve(cfg)
+                fluxes.append((res.flux_up[0], res.flux_down[0] + res.flux_direct_beam[0], res.flux_down[1]))
+            up, down, _ = fluxes[0]
+            s = fluxes[1][0]  # reflected fraction of isotropic light of flux 1 (ozone's absorption is not reflected)
+            r = up / down if down > 0 else 0.0
+            a = float(albedo[k])
+            total = down * (1.0 - a * s) / max(1.0 - r * s, 1e-6)
+            extra[k] = max(total - down, 0.0) / math.pi
+        return extra
+
+    def _table_illumination(self, wl: NDArray[np.float64], height: float
+                            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The clear sky's light at ``height`` [m] (the highest cloud top) from the precomputed tables
+        ([Bruneton2008]): the sun's transmittance (spherical, the disc's visible fraction) and the sky's
+        downward irradiance (Eq. 15) as an isotropic radiance (irradiance / pi), both per unit solar irradiance."""
         from ..precomputed.cache import cached_atmosphere
 
         clear = self.atmosphere.replace(particles=())
-        tables = cached_atmosphere(clear, progress=False)
-        top = max((c.top for c in self.atmosphere.particles if hasattr(c, "top")), default=0.0)
-        r = clear.bottom_radius + top
+        tables = cached_atmosphere(clear, sizes=COUPLING_TABLE_SIZES, progress=False)
+        pos = [[0.0, 0.0, clear.bottom_radius + height]]
+        sun = [[math.sin(self.sun_zenith), 0.0, math.cos(self.sun_zenith)]]
+        t_sun = tables.sun_transmittance(pos, sun)
+        _, e_sky = tables.ground_irradiance(pos, [[0.0, 0.0, 1.0]], sun)
+        t_sun = np.interp(wl, tables.wavelengths, t_sun[0])
+        e_sky = tables.resample(e_sky, wl)[0]
+        self._table_iso = np.maximum(e_sky, 0.0) / (math.pi * clear.solar_irradiance_at(wl))
+        return np.maximum(t_sun, 0.0), self._table_iso
+
+    def _table_sky(self, wl: NDArray[np.float64], height: float, theta: NDArray[np.float64],
+                   phi: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The clear sky's radiance at ``height`` [m] from the tables ([Bruneton2008] Eq. 16) towards view zenith
+        angles ``theta`` (n,) and azimuths from the sun ``phi`` (m,) [rad], per unit solar irradiance (n, m, n_wl)."""
+        from ..precomputed.cache import cached_atmosphere
+
+        clear = self.atmosphere.replace(particles=())
+        tables = cached_atmosphere(clear, sizes=COUPLING_TABLE_SIZES, progress=False)
+        t, p = np.meshgrid(theta, phi, indexing="ij")
+        # the sun in the x-z plane (azimuth pi/2 in ENU terms: x east); directions at azimuth phi from it
+        d = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
         sun = np.array([math.sin(self.sun_zenith), 0.0, math.cos(self.sun_zenith)])
-        _, e_sky = tables.ground_irradiance([[0.0, 0.0, r]], [[0.0, 0.0, 1.0]], sun)
-        e_sky = tables.resample(e_sky, wl)[0] if hasattr(tables, "resample") else e_sky[0]
-        return np.maximum(e_sky, 0.0) / (math.pi * clear.solar_irradiance_at(wl))
+        pos = np.array([0.0, 0.0, clear.bottom_radius + height])
+        rad = tables.sky_radiance(np.broadcast_to(pos, d.shape), d, sun)
+        return np.maximum(tables.resample(rad, wl), 0.0) / clear.solar_irradiance_at(wl)
 
     @cached_property
     def _xyz_grid(self) -> NDArray[np.float64]:

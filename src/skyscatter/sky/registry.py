@@ -554,6 +554,9 @@ register(ModelSpec(
         Parameter("altitude", "m", 0.0, "observer altitude above the ground: below, in or above the clouds",
                   low=0.0, high=1e8),
         Parameter("streams", "1", 16, "DISORT streams (even)", kind="int", low=4, high=64, cli=False),
+        Parameter("illumination", "", "tables", "light on the cloud top: tables (the precomputed clear sky, "
+                  "spherical) or column (the whole air in DISORT)", kind="choice", choices=("tables", "column"),
+                  cli=False),
         Parameter("atmosphere", "", None, "the air (AtmosphereParameters; default: the Earth defaults)",
                   kind="atmosphere", cli=False),
     ),
