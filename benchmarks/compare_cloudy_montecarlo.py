@@ -62,7 +62,8 @@ def main() -> None:
     data = json.loads(Path(a.data).read_text())
     wl = data["wavelengths_nm"]
     fine = np.arange(380.0, 781.0, 5.0)
-    print("| tau | sun | diffuse E vs MC (450 / 550 / 650 nm) | MC stderr | MC method | radiance >= 10 deg: median, max "
+    print("| tau | sun | diffuse E vs MC (450 / 550 / 650 nm) | MC stderr | MC method | radiance >= 10 deg: median, "
+          "max "
           "abs (MC median stderr) | CCT model / MC estimate | solve s |")
     print("|---|---|---|---|---|---|---|---|")
     for case in sorted(data["cases"], key=lambda c: (-c["sun_elevation_deg"], c["tau"])):

@@ -163,3 +163,12 @@ def test_xyz_agrees_with_the_spectrum_and_dict_round_trip():
 def test_bad_options_give_one_clear_error(kw, words):
     with pytest.raises(InvalidParameterError, match=words):
         CloudySky(0.5, 0.0, **kw)
+
+
+def test_twilight_is_lit_by_the_tables_and_darker_than_sunset():
+    up = _dirs([(90.0, 0.0), (20.0, 0.0), (20.0, 180.0), (-30.0, 0.0)])
+    dusk = _sky(15.0, -3.0).luminance(up)
+    sunset = _sky(15.0, 2.0).luminance(up)
+    assert np.all(np.isfinite(dusk)) and np.all(dusk > 0)
+    assert np.all(dusk < sunset)
+    assert _sky(15.0, -3.0).sun.illuminance_normal() == 0.0

@@ -442,13 +442,18 @@ class CloudySky(SunSkyMixin, SkyModel):
         """Bilinear interpolation of ``grid`` (n_theta, n_phi, c) at ``directions`` (..., 3): (..., c)."""
         from .cloudy_kernels import grid_lookup
 
-        d = np.ascontiguousarray(as_directions(directions), dtype=np.float64)
+        d = np.asarray(directions) if isinstance(directions, np.ndarray) else None
+        if d is None or d.dtype.kind != "f" or d.ndim == 0 or d.shape[-1] != 3:
+            d = as_directions(directions)  # the shape and type checks (and their errors)
         shape = d.shape[:-1]
-        d = d.reshape(-1, 3)
-        out = np.empty((d.shape[0], grid.shape[-1]))
+        flat = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
+        out = np.empty((flat.shape[0], grid.shape[-1]))
         f = self._field
-        grid_lookup(d, float(self.sun_azimuth), f["theta"], float(f["phi"][1] - f["phi"][0]),
+        # the kernel normalises and flags bad vectors (NaN): validating 2 M directions in numpy took 1.4 s
+        grid_lookup(flat, float(self.sun_azimuth), f["theta"], float(f["phi"][1] - f["phi"][0]),
                     np.ascontiguousarray(grid), out)
+        if out.size and not np.isfinite(out[:, 0]).all():
+            as_directions(d)  # raises the specific InvalidDirectionError
         return out.reshape(*shape, grid.shape[-1])
 
     # ------------------------------------------------------------------ the protocol

@@ -14,7 +14,8 @@ __all__ = ["grid_lookup"]
 
 @parallel_kernel
 def grid_lookup(dirs, sun_azimuth, theta_nodes, phi_step, grid, out):
-    """``out[i]`` = ``grid`` (n_theta, n_phi, c) interpolated bilinearly at direction ``dirs[i]`` (unit, ENU):
+    """``out[i]`` = ``grid`` (n_theta, n_phi, c) interpolated bilinearly at direction ``dirs[i]`` (any length, ENU;
+    NaN where the vector has a NaN, an infinity or zero length):
     its zenith angle among ``theta_nodes`` [rad] (ascending) and its azimuth from ``sun_azimuth`` [rad] folded
     into [0, pi] (the field is symmetric about the sun's vertical plane) on nodes every ``phi_step`` [rad]."""
     n = dirs.shape[0]
@@ -22,7 +23,12 @@ def grid_lookup(dirs, sun_azimuth, theta_nodes, phi_step, grid, out):
     npf = grid.shape[1]
     nc = grid.shape[2]
     for i in prange(n):
-        z = min(1.0, max(-1.0, dirs[i, 2]))
+        norm = math.sqrt(dirs[i, 0] * dirs[i, 0] + dirs[i, 1] * dirs[i, 1] + dirs[i, 2] * dirs[i, 2])
+        if not (norm > 0.0 and norm < math.inf):  # NaN, infinite or zero: flagged for the caller to refuse
+            for c in range(nc):
+                out[i, c] = math.nan
+            continue
+        z = min(1.0, max(-1.0, dirs[i, 2] / norm))
         theta = math.acos(z)
         it = np.searchsorted(theta_nodes, theta) - 1
         it = min(max(it, 0), nt - 2)
