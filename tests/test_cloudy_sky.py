@@ -87,8 +87,11 @@ def test_clear_sky_radiance_against_the_monte_carlo():
     assert np.all(np.abs(model - mc) <= allowed * mc + 3.0 * err), (model / mc - 1, err / mc)
 
 
-def test_hemisphere_integral_is_the_diffuse_flux():
-    sky = _sky(15.0, 40.0)
+@pytest.mark.parametrize("tau", [1.0, 15.0])
+def test_hemisphere_integral_is_the_diffuse_flux(tau):
+    """The grid as the lookup reads it integrates to DISORT's diffuse flux (the forward peak's light restored
+    about the sun: without it 75 % under optical depth 1), on a quadrature other than the restoration's."""
+    sky = _sky(tau, 40.0)
     n_t, n_p = 90, 180
     theta = (np.arange(n_t) + 0.5) * (math.pi / 2) / n_t
     phi = (np.arange(n_p) + 0.5) * 2 * math.pi / n_p
@@ -172,3 +175,25 @@ def test_twilight_is_lit_by_the_tables_and_darker_than_sunset():
     assert np.all(np.isfinite(dusk)) and np.all(dusk > 0)
     assert np.all(dusk < sunset)
     assert _sky(15.0, -3.0).sun.illuminance_normal() == 0.0
+
+
+def test_photometry_under_the_layer():
+    """Horizontal illuminance of the sky (photometry's quadrature of the luminance) against DISORT's diffuse flux
+    weighted by the CIE y-bar (683 lm/W); Tregenza patches cover the same light; the sun's illuminance behind
+    the cloud is its disc radiance's, attenuated by exp(-tau / mu)."""
+    from skyscatter import photometry
+    from skyscatter.patches import patch_luminance, patch_scheme
+    from skyscatter.spectral import REFERENCE_WAVELENGTHS, spectrum_to_xyz
+
+    sky = _sky(5.0, 35.0)
+    e_v = photometry.horizontal_illuminance(sky)
+    flux = sky.diffuse_fluxes(REFERENCE_WAVELENGTHS)[0]
+    assert e_v == pytest.approx(float(spectrum_to_xyz(flux, REFERENCE_WAVELENGTHS)[1]), rel=0.01)
+    scheme = patch_scheme("tregenza")
+    lum = patch_luminance(sky, scheme)
+    assert lum.shape == (145,) and np.all(lum > 0)
+    # the patches' light on a horizontal plane (centre cosines: a coarse quadrature, 3 %)
+    assert float(np.sum(lum * scheme.solid_angles * scheme.centre_directions[:, 2])) == pytest.approx(e_v, rel=0.03)
+    assert photometry.vertical_illuminance(sky, math.pi) > 0
+    clear_sun = _sky(0.0, 35.0).sun.illuminance_normal()
+    assert sky.sun.illuminance_normal() < clear_sun * math.exp(-4.0 / math.sin(math.radians(35.0)))

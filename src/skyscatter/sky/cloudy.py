@@ -58,6 +58,8 @@ MAX_CLOUD_OPTICAL_DEPTH = 60.0
 ZENITH_STEP_DEG = 2.0
 #: Spacing of the azimuths (relative to the sun) of the radiance grid [deg].
 AZIMUTH_STEP_DEG = 5.0
+#: Angles [deg] from the sun at which the radiance grid has extra nodes (the aureole).
+AUREOLE_OFFSETS_DEG = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0)
 #: Legendre moments of the phase functions given to DISORT (the Nakajima-Tanaka correction uses them all).
 PHASE_MOMENTS = 256
 #: Sun elevation [rad] below which the direct beam is not traced (twilight: the tables' clear sky lights the
@@ -80,11 +82,35 @@ def _profile_integral(profile: Any, lo: NDArray[np.float64], hi: NDArray[np.floa
     return (profile(z) * w[None, :]).sum(axis=1) * 0.5 * (hi - lo)
 
 
-def _zenith_nodes() -> NDArray[np.float64]:
-    """View zenith angles [rad] of the radiance grid: 0 to 88 deg, 89.5, 90.5, 92 to 180 deg."""
+def _grid_nodes(sun_zenith: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """View zenith angles [rad] and azimuths from the sun [deg] of the radiance grid: every
+    :data:`ZENITH_STEP_DEG` from 0 to 88 deg, 89.5 and 90.5 deg, every step from 92 to 180 deg; azimuths every
+    :data:`AZIMUTH_STEP_DEG` from 0 to 180 deg; and, for a sun above the horizon, nodes at
+    :data:`AUREOLE_OFFSETS_DEG` from it in both (the droplets' diffraction peak, about a degree wide, carries up
+    to a quarter of the diffuse light under a thin cloud: without these nodes the grid lost 25 % of the
+    diffuse irradiance at optical depth 1)."""
     up = np.arange(0.0, 89.0, ZENITH_STEP_DEG)
     deg = np.concatenate([up, [89.5, 90.5], 180.0 - up[::-1]])
-    return np.radians(deg)
+    phi = np.arange(0.0, 180.0 + 1e-9, AZIMUTH_STEP_DEG)
+    sz = math.degrees(sun_zenith)
+    if sz < 89.0:
+        off = np.asarray(AUREOLE_OFFSETS_DEG)
+        near = np.concatenate([[sz], sz - off, sz + off])
+        deg = _distinct(np.concatenate([deg, near[(near > 0.0) & (near < 89.0)]]))
+        stretch = max(math.sin(sun_zenith), 0.2)  # an angle from the sun across azimuths is dphi sin(theta)
+        phi = _distinct(np.concatenate([phi, np.minimum(off / stretch, 180.0)]))
+    return np.radians(deg), phi
+
+
+def _distinct(values: NDArray[np.float64], gap: float = 0.05) -> NDArray[np.float64]:
+    """Sorted values [deg] without those within ``gap`` of the previous one kept (DISORT wants increasing
+    cosines)."""
+    v = np.sort(values)
+    keep = [v[0]]
+    for x in v[1:]:
+        if x - keep[-1] > gap:
+            keep.append(x)
+    return np.array(keep)
 
 
 def cloud_column(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, observer_altitude: float = 0.0,
@@ -160,6 +186,41 @@ def slant_optical_depth(edges: NDArray[np.float64], tau: NDArray[np.float64], bo
     chord = np.maximum(dist(hi) - dist(lo), 0.0)
     k = tau / np.maximum(hi - lo, 1e-9)[:, None]
     return (k * chord[:, None]).sum(axis=0)
+
+
+def _restore_forward_peak(rad: NDArray[np.float64], theta: NDArray[np.float64], phi: NDArray[np.float64],
+                          sun_zenith: float, down: NDArray[np.float64], width: float = math.radians(1.5)
+                          ) -> NDArray[np.float64]:
+    """The grid's radiance with the light of the droplets' forward peak put back around the sun.
+
+    Delta-M ([Wiscombe1977]) moves the phase function's forward peak into the direct beam; the Nakajima-Tanaka
+    correction restores its single scattering at the grid's directions, but the multiply scattered light in the
+    peak is in DISORT's diffuse flux and in none of its intensities (measured: the intensities integrated to
+    75 % of the flux under optical depth 1, 99 % under 5, 99.99 % under 15). That light reaches the observer
+    within the peak's width of the sun, so the difference between DISORT's downward diffuse flux ``down`` (n_wl,)
+    and the grid's integral is added as a lobe ``exp(-(gamma / width)^2)`` about the sun, scaled so that the
+    grid (as the lookup interpolates it) integrates to the flux. ``rad`` (n_theta, n_phi, n_wl) per unit solar
+    irradiance; ``theta`` [rad], ``phi`` [rad] its nodes."""
+    from .cloudy_kernels import grid_lookup
+
+    n_t, n_p = 180, 360  # midpoint quadrature of the upper hemisphere (0.5 deg x 0.5 deg)
+    t = (np.arange(n_t) + 0.5) * (0.5 * math.pi / n_t)
+    p = (np.arange(n_p) + 0.5) * (2.0 * math.pi / n_p)
+    tt, pp = np.meshgrid(t, p, indexing="ij")
+    dirs = np.stack([np.sin(tt) * np.sin(pp), np.sin(tt) * np.cos(pp), np.cos(tt)], axis=-1).reshape(-1, 3)
+    weight = (np.cos(tt) * np.sin(tt)).reshape(-1) * (0.5 * math.pi / n_t) * (2.0 * math.pi / n_p)
+    gt, gp = np.meshgrid(theta, phi, indexing="ij")
+    cos_gamma = np.cos(gt) * math.cos(sun_zenith) + np.sin(gt) * math.sin(sun_zenith) * np.cos(gp)
+    lobe = np.exp(-(np.arccos(np.clip(cos_gamma, -1.0, 1.0)) / width) ** 2)
+    lobe[theta >= 0.5 * math.pi] = 0.0
+    both = np.concatenate([rad, lobe[:, :, None]], axis=2)
+    out = np.empty((dirs.shape[0], both.shape[2]))
+    grid_lookup(dirs, 0.0, theta, phi, np.ascontiguousarray(both), out)
+    integral = weight @ out  # (n_wl + 1,)
+    missing = np.maximum(down - integral[:-1], 0.0)
+    if integral[-1] <= 0:
+        return rad
+    return rad + lobe[:, :, None] * (missing / integral[-1])[None, None, :]
 
 
 class CloudySky(SunSkyMixin, SkyModel):
@@ -273,10 +334,9 @@ class CloudySky(SunSkyMixin, SkyModel):
             obs = min(obs, float(edges[0]))
         cum = np.concatenate([np.zeros((1, wl.size)), np.cumsum(tau, axis=0)])
         level = int(np.argmin(np.abs(edges - obs)))
-        theta = _zenith_nodes()
+        theta, phi = _grid_nodes(self.sun_zenith)
         mu_user = -np.cos(theta)  # DISORT: mu < 0 travels down (seen looking up)
         order = np.argsort(mu_user, kind="stable")
-        phi = np.arange(0.0, 180.0 + 1e-9, AZIMUTH_STEP_DEG)
         if beam and not fed:
             # the spherical beam: DISORT's beam takes the cosine mu_eff whose plane-parallel attenuation down to
             # the highest cloud top equals the chord through the spherical shells, and the flux that keeps
@@ -335,6 +395,8 @@ class CloudySky(SunSkyMixin, SkyModel):
             gain = np.divide(iso_top, self._table_iso, out=np.ones(wl.size), where=self._table_iso > 0)
             rad[up_rows] += (sky_top * gain - iso_top) * t_unscattered[:, None, :]
         rad = np.maximum(rad, 0.0)
+        if beam:
+            rad = _restore_forward_peak(rad, theta, np.radians(phi), self.sun_zenith, down)
         if beam:
             direct = np.exp(-slant_optical_depth(full_edges, full_tau, atm.bottom_radius, min(self.altitude, top),
                                                  mu0))
@@ -450,7 +512,7 @@ class CloudySky(SunSkyMixin, SkyModel):
         out = np.empty((flat.shape[0], grid.shape[-1]))
         f = self._field
         # the kernel normalises and flags bad vectors (NaN): validating 2 M directions in numpy took 1.4 s
-        grid_lookup(flat, float(self.sun_azimuth), f["theta"], float(f["phi"][1] - f["phi"][0]),
+        grid_lookup(flat, float(self.sun_azimuth), f["theta"], f["phi"],
                     np.ascontiguousarray(grid), out)
         if out.size and not np.isfinite(out[:, 0]).all():
             as_directions(d)  # raises the specific InvalidDirectionError

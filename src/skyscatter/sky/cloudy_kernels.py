@@ -13,11 +13,12 @@ __all__ = ["grid_lookup"]
 
 
 @parallel_kernel
-def grid_lookup(dirs, sun_azimuth, theta_nodes, phi_step, grid, out):
+def grid_lookup(dirs, sun_azimuth, theta_nodes, phi_nodes, grid, out):
     """``out[i]`` = ``grid`` (n_theta, n_phi, c) interpolated bilinearly at direction ``dirs[i]`` (any length, ENU;
     NaN where the vector has a NaN, an infinity or zero length):
     its zenith angle among ``theta_nodes`` [rad] (ascending) and its azimuth from ``sun_azimuth`` [rad] folded
-    into [0, pi] (the field is symmetric about the sun's vertical plane) on nodes every ``phi_step`` [rad]."""
+    into [0, pi] (the field is symmetric about the sun's vertical plane) among ``phi_nodes`` [rad] (ascending,
+    0 to pi)."""
     n = dirs.shape[0]
     nt = theta_nodes.shape[0]
     npf = grid.shape[1]
@@ -36,9 +37,9 @@ def grid_lookup(dirs, sun_azimuth, theta_nodes, phi_step, grid, out):
         u = min(1.0, max(0.0, u))
         rel = math.atan2(dirs[i, 0], dirs[i, 1]) - sun_azimuth
         rel = abs((rel + math.pi) % (2.0 * math.pi) - math.pi)
-        x = rel / phi_step
-        ip = min(max(int(x), 0), npf - 2)
-        v = min(1.0, max(0.0, x - ip))
+        ip = np.searchsorted(phi_nodes, rel) - 1
+        ip = min(max(ip, 0), npf - 2)
+        v = min(1.0, max(0.0, (rel - phi_nodes[ip]) / (phi_nodes[ip + 1] - phi_nodes[ip])))
         for c in range(nc):
             out[i, c] = ((1.0 - u) * ((1.0 - v) * grid[it, ip, c] + v * grid[it, ip + 1, c])
                          + u * ((1.0 - v) * grid[it + 1, ip, c] + v * grid[it + 1, ip + 1, c]))
