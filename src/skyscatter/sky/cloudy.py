@@ -2,35 +2,37 @@
 
 The atmosphere of :class:`~skyscatter.atmosphere.AtmosphereParameters` (Rayleigh, aerosol, ozone, Lambertian
 ground) with one or more water cloud layers (:class:`~skyscatter.atmosphere.clouds.CloudLayer`: Mie droplets,
-tabulated phase function with its diffraction peak) is cut into homogeneous plane-parallel layers (the cloud's
-base and top, the observer's altitude and the air's scale heights as boundaries; each layer's Rayleigh, aerosol,
-ozone and cloud optical depths are the exact integrals of the medium's density profiles over it) and solved
-once per sun position and wavelength by the discrete-ordinate method, DISORT ([Stamnes1988]; the ``disortpp``
-binding): all orders of scattering (the cloud's reflection and transmission, cloud-ground and cloud-air
-interreflection), delta-M scaling of the phase function's forward peak ([Wiscombe1977]) with the
-Nakajima-Tanaka intensity correction ([NakajimaTanaka1988]: single and secondary scattering of the full
-tabulated phase function), and the pseudo-spherical direct beam (the sun's attenuation along its slant path
-through spherical shells, [Dahlback1991]), so that a sun 2 deg above the horizon is handled.
+tabulated phase function with its diffraction peak) is cut into homogeneous plane-parallel layers (the clouds'
+bases and tops and the observer's altitude among the boundaries; each layer's Rayleigh, aerosol, ozone and
+cloud optical depths the exact integrals of the medium's density profiles over it) and solved per sun position
+and wavelength by the discrete-ordinate method, DISORT ([Stamnes1988]; the ``disortpp`` binding): all orders of
+scattering, exactly in optical depth (an optical depth of 60 costs what 1 costs), delta-M scaling of the
+droplets' forward peak ([Wiscombe1977]) with the Nakajima-Tanaka intensity correction ([NakajimaTanaka1988]).
 
-The solution is the radiance at the observer's altitude on a grid of view zenith angles (every
-:data:`ZENITH_STEP_DEG` from the zenith to the nadir, with nodes 0.5 deg either side of the horizon) and of
-azimuths relative to the sun (every :data:`AZIMUTH_STEP_DEG`; the field is symmetric about the sun's vertical
-plane), at the wavelengths :data:`GRID_WAVELENGTHS`; a direction's radiance is the bilinear interpolation on
-that grid, a wavelength's the linear interpolation of the radiance per unit solar irradiance times the solar
-spectrum there (clamped outside the grid: the clouds are grey). XYZ is computed per grid node from the same
-spectra, so ``xyz`` and the spectrum agree exactly.
+Light on the cloud top (``illumination="tables"``, the default, for observers at or below the highest cloud
+top; always in twilight): the column is solved from the cloud top down, lit there by the clear sky of the
+precomputed tables of the same air ([Bruneton2008]; small tables, cached): the sun's transmittance through the
+spherical atmosphere (a sun 2 deg high) and the sky's irradiance as an isotropic radiance, plus the cloud's
+light the air above sends back (adding method, [Liou2002]); the clear sky seen through a thin cloud without
+being scattered is the tables' radiance. ``illumination="column"`` (and observers above the clouds) solve the
+whole air in DISORT with the sun's beam attenuated along its chord through spherical shells (the
+pseudo-spherical beam of [Dahlback1991], reached through an effective cosine: disortpp's own spherical beam
+gave negative intensities).
 
-Why this design (docs/clouds.md, "Fast cloud layers"): the precomputed tables of [Bruneton2008] hold the clear
-sky well, but a cloud layer inside them (it fits their spherical symmetry) is resolved by one or two of their
-32 altitude samples and by ray integrals of 50 steps over 100 km, and a layer of optical depth 60 needs
-hundreds of orders, where the tables' geometric tail assumes the shape of the orders has settled after six:
-measured against the Monte Carlo, the cloud as the tables' aerosol was off by tens of per cent (docs). DISORT
-solves the layer exactly in a plane-parallel medium in about 0.05 s per wavelength with 16 streams.
+The solution is the radiance at the observer's altitude on a grid of view zenith angles and azimuths from the
+sun (:func:`_grid_nodes`: 2 x 5 deg, finer about the sun; the field is symmetric about the sun's vertical
+plane) at :data:`GRID_WAVELENGTHS`, with the forward peak's light restored about the sun
+(:func:`_restore_forward_peak`); a direction's radiance is the bilinear interpolation on that grid, a
+wavelength's the linear interpolation of the radiance per unit solar irradiance times the solar spectrum there
+(clamped outside the grid: the clouds are grey). XYZ is computed per grid node from the same spectra, so
+``xyz`` and the spectrum agree exactly.
 
-What it does not do: the planet's curvature for the diffuse light (plane-parallel below and above the cloud:
-views within a few degrees of the horizon from high altitudes and the limb from orbit are not right); the
-aureole within a few degrees of the sun is smoothed by the grid (thin clouds); twilight (sun below the horizon)
-is lit by the clear sky of the precomputed tables at the cloud top (:meth:`CloudySky.__init__`, ``twilight``).
+Why this design, its accuracy against the Monte Carlo and its limits (the curvature of the plane-parallel air
+above the clouds: no limb from orbit; the red at a sun 2 deg high; radiance under clouds not verified by the
+Monte Carlo): docs/clouds.md, "Fast cloud layers". In short, the cloud inside the precomputed tables (it fits
+their spherical symmetry) was off by +135 to +330 % in the diffuse irradiance under optical depth 15: a 500 m
+layer falls between their altitude samples and ray steps, and a thick cloud's orders do not settle into the
+tables' geometric tail after six.
 """
 
 from __future__ import annotations
@@ -44,7 +46,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..atmosphere import AtmosphereParameters
 from ..conventions import as_directions
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, MissingDependencyError
 from ..spectral import DEFAULT_WAVELENGTHS, REFERENCE_WAVELENGTHS, as_wavelengths, spectrum_to_xyz
 from .base import SkyModel, SunSkyMixin, check_sun_angles
 
@@ -263,6 +265,12 @@ class CloudySky(SunSkyMixin, SkyModel):
                  illumination: str = "tables") -> None:
         zen, azi = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=True)
         from ..atmosphere.clouds import CloudLayer
+
+        try:
+            import disortpp  # noqa: F401
+        except ImportError:
+            raise MissingDependencyError("the cloudy sky needs the package 'disortpp' (pip install "
+                                         "'skyscatter[clouds]')") from None
 
         tau = _number("cloud_optical_depth", cloud_optical_depth, 0.0, MAX_CLOUD_OPTICAL_DEPTH, "")
         base = _number("cloud_base", cloud_base, 0.0, 20000.0, "m")
