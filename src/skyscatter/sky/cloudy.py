@@ -327,7 +327,6 @@ class CloudySky(SunSkyMixin, SkyModel):
         top = atm.thickness
         obs = min(self.altitude, top)
         edges, tau, ssa, moments = cloud_column(atm, wl, obs)
-        full_edges, full_tau = edges, tau  # the whole column, for the sun's direct transmittance
         mu0 = math.cos(self.sun_zenith)
         beam = mu0 > math.sin(MIN_BEAM_ELEVATION)
         ref = max((c.top for c in atm.particles if hasattr(c, "top")), default=0.0)
@@ -405,13 +404,20 @@ class CloudySky(SunSkyMixin, SkyModel):
         rad = np.maximum(rad, 0.0)
         if beam:
             rad = _restore_forward_peak(rad, theta, np.radians(phi), self.sun_zenith, down)
-        if beam:
-            direct = np.exp(-slant_optical_depth(full_edges, full_tau, atm.bottom_radius, min(self.altitude, top),
-                                                 mu0))
-        else:
-            direct = np.zeros(wl.size)
-        return {"radiance": rad, "theta": theta, "phi": np.radians(phi), "direct": direct, "diffuse_down": down,
+        return {"radiance": rad, "theta": theta, "phi": np.radians(phi), "diffuse_down": down,
                 "diffuse_up": up}
+
+    @cached_property
+    def _direct(self) -> NDArray[np.float64]:
+        """The sun's direct transmittance to the observer at :data:`GRID_WAVELENGTHS` (n_wl,): ``exp(-tau)``
+        along its chord through the column's spherical shells (no DISORT solve: the sun alone is cheap)."""
+        atm = self.atmosphere
+        mu0 = math.cos(self.sun_zenith)
+        if mu0 <= math.sin(MIN_BEAM_ELEVATION):
+            return np.zeros(GRID_WAVELENGTHS.size)
+        obs = min(self.altitude, atm.thickness)
+        edges, tau, _, _ = cloud_column(atm, GRID_WAVELENGTHS, obs)
+        return np.exp(-slant_optical_depth(edges, tau, atm.bottom_radius, obs, mu0))
 
     def _interreflection(self, wl, ref, edges, tau, ssa, moments, beam_flux, mu_eff, iso_top):
         """The light the cloud reflects that the air above sends back down, as extra isotropic radiance at the
@@ -544,7 +550,7 @@ class CloudySky(SunSkyMixin, SkyModel):
         from ..sun.disc import solar_disc_solid_angle
 
         wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
-        t = self._spectra(self._field["direct"], wl)
+        t = self._spectra(self._direct, wl)
         return t / solar_disc_solid_angle(self.sun_angular_radius)
 
     def diffuse_fluxes(self, wavelengths: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
