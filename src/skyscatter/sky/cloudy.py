@@ -7,7 +7,9 @@ bases and tops and the observer's altitude among the boundaries; each layer's Ra
 cloud optical depths the exact integrals of the medium's density profiles over it) and solved per sun position
 and wavelength by the discrete-ordinate method, DISORT ([Stamnes1988]; the ``disortpp`` binding): all orders of
 scattering, exactly in optical depth (an optical depth of 60 costs what 1 costs), delta-M scaling of the
-droplets' forward peak ([Wiscombe1977]) with the Nakajima-Tanaka intensity correction ([NakajimaTanaka1988]).
+droplets' forward peak ([Wiscombe1977]); the Nakajima-Tanaka intensity correction ([NakajimaTanaka1988]) is
+requested, but disortpp 1.2.1's flag changes no intensity (docs/clouds.md), so the forward peak's light is
+restored about the sun instead (:func:`_restore_forward_peak`).
 
 Light on the cloud top (``illumination="tables"``, the default, for observers at or below the highest cloud
 top; always in twilight): the column is solved from the cloud top down, lit there by the clear sky of the
@@ -62,7 +64,7 @@ ZENITH_STEP_DEG = 2.0
 AZIMUTH_STEP_DEG = 5.0
 #: Angles [deg] from the sun at which the radiance grid has extra nodes (the aureole).
 AUREOLE_OFFSETS_DEG = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0)
-#: Legendre moments of the phase functions given to DISORT (the Nakajima-Tanaka correction uses them all).
+#: Legendre moments of the phase functions given to DISORT (delta-M keeps the first 2 x streams).
 PHASE_MOMENTS = 256
 #: Sun elevation [rad] below which the direct beam is not traced (twilight: the tables' clear sky lights the
 #: cloud top).
@@ -195,9 +197,9 @@ def _restore_forward_peak(rad: NDArray[np.float64], theta: NDArray[np.float64], 
                           ) -> NDArray[np.float64]:
     """The grid's radiance with the light of the droplets' forward peak put back around the sun.
 
-    Delta-M ([Wiscombe1977]) moves the phase function's forward peak into the direct beam; the Nakajima-Tanaka
-    correction restores its single scattering at the grid's directions, but the multiply scattered light in the
-    peak is in DISORT's diffuse flux and in none of its intensities (measured: the intensities integrated to
+    Delta-M ([Wiscombe1977]) moves the phase function's forward peak into the direct beam; its light is in
+    DISORT's diffuse flux and in none of the intensities disortpp 1.2.1 returns (its Nakajima-Tanaka flag
+    changes nothing) (measured: the intensities integrated to
     75 % of the flux under optical depth 1, 99 % under 5, 99.99 % under 15). That light reaches the observer
     within the peak's width of the sun, so the difference between DISORT's downward diffuse flux ``down`` (n_wl,)
     and the grid's integral is added as a lobe ``exp(-(gamma / width)^2)`` about the sun, scaled so that the
