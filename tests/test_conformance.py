@@ -35,9 +35,10 @@ REFERENCE_TESTS = {
     "bruneton": "test_precomputed_sky.py",
     "montecarlo": "test_montecarlo_physics.py",
     "hosek-wilkie": "test_hosek_wilkie.py",
+    "cloudy": "test_cloudy_sky.py",
 }
 #: Parameters that keep costly models quick in this suite (the statistics are tested in the model's own tests).
-QUICK = {"montecarlo": {"samples": 4}}
+QUICK = {"montecarlo": {"samples": 4}, "cloudy": {"streams": 8}}
 # Sun position used where one is needed: 40 deg elevation, south-east.
 SUN = (math.radians(50.0), math.radians(135.0))
 
@@ -71,6 +72,9 @@ def _random_parameters(spec, rng) -> dict:
     if spec.name in ("bruneton", "montecarlo"):
         # the medium options would build a new atmosphere's tables per sample (a minute each): altitude only
         out = {"altitude": float(rng.uniform(0.0, 1.0e5))}  # ground to well above the atmosphere's top
+    if spec.name == "cloudy":
+        # the cloud's amount and the observer's place (base < top is a pair, tested in test_cloudy_sky.py)
+        out = {"altitude": float(rng.uniform(0.0, 1.0e5)), "cloud_optical_depth": float(rng.uniform(0.0, 60.0))}
     out.update(QUICK.get(spec.name, {}))
     return out
 

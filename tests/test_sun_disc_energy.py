@@ -27,7 +27,7 @@ WIDTHS = (256, 512, 1024, 2048, 4096, 8192)
 VIEWS = (("equirect", "skyscatter"), ("equirect", "blender"), ("equirect", "mitsuba"), ("fisheye", "skyscatter"))
 #: Models whose disc carries nothing by default get a sun (the CIE skies' direct normal illuminance [lx]).
 SUN_PARAMETERS = {"cie": {"sun_illuminance_normal": 80_000.0}, "cie-clear": {"sun_illuminance_normal": 80_000.0},
-                  "montecarlo": {"samples": 4}}
+                  "montecarlo": {"samples": 4}, "cloudy": {"cloud_optical_depth": 1.0}}
 SUN_MODELS = [s.name for s in registry.models() if s.uses_sun]
 
 

@@ -421,6 +421,37 @@ register(ModelSpec(
     cost="expensive",
 ))
 
+register(ModelSpec(
+    name="cloudy",
+    factory="skyscatter.sky.cloudy:CloudySky",
+    summary="overcast and layered clouds: a uniform water cloud layer in the air, solved by DISORT (fast)",
+    citation=cite("Stamnes1988", "NakajimaTanaka1988",
+                  note="The medium's layers (air, Mie cloud droplets) solved by the discrete-ordinate method of the "
+                       "first with the intensity correction of the second:"),
+    parameters=(
+        Parameter("cloud_optical_depth", "1", 15.0, "optical depth at 550 nm of a uniform water cloud layer "
+                  "(0: none; 15 a stratus)", low=0.0, high=60.0, why="the range measured against the Monte Carlo"),
+        Parameter("cloud_base", "m", 1000.0, "altitude of the cloud layer's base", low=0.0, high=20000.0),
+        Parameter("cloud_top", "m", 1500.0, "altitude of the cloud layer's top (above its base)", low=0.0,
+                  high=20000.0),
+        Parameter("cloud_effective_radius", "m", 10e-6, "effective radius of the cloud droplets (Mie optics)",
+                  low=1e-6, high=50e-6, why="the range of the droplet optics"),
+        Parameter("ground_albedo", "1", None, "ground albedo, the same at every wavelength (default 0.1)", low=0.0,
+                  high=1.0),
+        Parameter("altitude", "m", 0.0, "observer altitude above the ground: below, in or above the clouds",
+                  low=0.0, high=1e8),
+        Parameter("streams", "1", 16, "DISORT streams (even)", kind="int", low=4, high=64, cli=False),
+        Parameter("illumination", "", "tables", "light on the cloud top: tables (the precomputed clear sky, "
+                  "spherical) or column (the whole air in DISORT)", kind="choice", choices=("tables", "column"),
+                  cli=False),
+        Parameter("atmosphere", "", None, "the air (AtmosphereParameters; default: the Earth defaults)",
+                  kind="atmosphere", cli=False),
+    ),
+    sun_below_horizon=True,
+    spectral=True,
+    cost="tables",
+))
+
 
 class _Summaries(Mapping):
     """``SKY_MODELS``: read-only name -> one-line summary view of the registry (kept for older callers)."""

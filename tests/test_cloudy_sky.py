@@ -1,0 +1,199 @@
+"""The cloudy sky (skyscatter.sky.cloudy.CloudySky) against the Monte Carlo reference and against itself.
+
+* Diffuse irradiance on the ground under water cloud layers of optical depth 1 to 60 (Mie droplets 10 um, 1000-1500
+  m, Earth air, ground albedo 0.2, 450 / 550 / 650 nm) against the Monte Carlo's forward photons stored in
+  tests/data/cloudy_montecarlo.json (written by benchmarks/cloudy_montecarlo_reference.py, which records the seed
+  and the photon counts): within 3 % (the target of docs/clouds.md) plus 3 Monte Carlo standard errors.
+* The machinery without a cloud (directions, azimuths from the sun, wavelength interpolation, the layers of the
+  air) against the Monte Carlo's clear-sky radiances in the same file (spherical atmosphere): within 3 % plus 3
+  standard errors 30 deg or more above the horizon, 5 % at 10 deg (the plane-parallel column's curvature error).
+* Self-consistency: the radiance integrated over the upper hemisphere is DISORT's diffuse flux (within 1 %: the
+  grid's bilinear interpolation); symmetry about the sun's vertical plane; the solar disc attenuated by
+  ``exp(-tau_slant)``; xyz equal to the integrated spectrum; one clear error per bad option.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skyscatter.errors import InvalidParameterError
+from skyscatter.sky import registry
+from skyscatter.sky.cloudy import CloudySky
+
+pytest.importorskip("disortpp")
+
+DATA = json.loads((Path(__file__).parent / "data" / "cloudy_montecarlo.json").read_text())
+WL = DATA["wavelengths_nm"]
+
+
+def _case(tau: float, sun: float) -> dict:
+    for c in DATA["cases"]:
+        if c["tau"] == tau and c["sun_elevation_deg"] == sun:
+            return c
+    raise KeyError((tau, sun))
+
+
+def _sky(tau: float, sun: float, **kw) -> CloudySky:
+    return CloudySky(math.radians(90.0 - sun), 0.0, cloud_optical_depth=tau, cloud_base=DATA["cloud_base_m"],
+                     cloud_top=DATA["cloud_top_m"], ground_albedo=DATA["ground_albedo"], **kw)
+
+
+def _dirs(views):
+    return np.array([[math.cos(math.radians(h)) * math.sin(math.radians(a)),
+                      math.cos(math.radians(h)) * math.cos(math.radians(a)), math.sin(math.radians(h))]
+                     for h, a in views])
+
+
+@pytest.mark.parametrize("tau, sun", [(1.0, 60.0), (15.0, 60.0), (60.0, 60.0), (5.0, 30.0)])
+def test_diffuse_irradiance_against_the_monte_carlo(tau, sun):
+    """High suns, forward photons: within 3 % plus 3 standard errors. (The forward photons miss part of the air's
+    own light, 3-6 % of the clear sky's diffuse irradiance at sun 30 deg, which is why the sun-30 cases sit
+    2-7 % above them: docs/clouds.md.)"""
+    case = _case(tau, sun)
+    model = _sky(tau, sun).diffuse_fluxes(WL)[0]
+    mc = np.array(case["diffuse_irradiance"])
+    err = np.array(case["diffuse_irradiance_stderr"])
+    assert np.all(np.abs(model - mc) <= 0.03 * mc + 3.0 * err), (model / mc - 1, err / mc)
+
+
+def test_diffuse_irradiance_at_sunset_against_the_monte_carlo():
+    """Sun 2 deg high, backward paths (unbiased; 2-4 % standard error): the coupling with the spherical tables
+    is within 5 % + 3 sigma at 450 nm, and the model is too bright in the red by up to 28 %
+    (docs/clouds.md: the measured limit; the plane-parallel column alone was 31-35 % too dark at 450-550 nm)."""
+    case = _case(15.0, 2.0)
+    model = _sky(15.0, 2.0).diffuse_fluxes(WL)[0]
+    mc = np.array(case["diffuse_irradiance_backward"])
+    err = np.array(case["diffuse_irradiance_backward_stderr"])
+    assert abs(model[0] - mc[0]) <= 0.05 * mc[0] + 3.0 * err[0]
+    assert np.all(model / mc - 1 < 0.30) and np.all(model / mc - 1 > -0.05)
+    column = _sky(15.0, 2.0, illumination="column").diffuse_fluxes(WL)[0]
+    assert np.all(np.abs(model / mc - 1)[:2] < np.abs(column / mc - 1)[:2])
+
+
+def test_clear_sky_radiance_against_the_monte_carlo():
+    case = _case(0.0, 30.0)
+    sky = _sky(0.0, 30.0)
+    model = sky.spectral_radiance(_dirs(case["views_deg"]), WL)
+    mc = np.array(case["radiance"])
+    err = np.array(case["radiance_stderr"])
+    # 5 % (the target of docs/clouds.md) 10 deg above the horizon, where the plane-parallel column's
+    # missing curvature is 2-4 % (measured: +3.8 % at 650 nm); 3 % higher up
+    allowed = np.array([0.05 if h < 30.0 else 0.03 for h, _ in case["views_deg"]])[:, None]
+    assert np.all(np.abs(model - mc) <= allowed * mc + 3.0 * err), (model / mc - 1, err / mc)
+
+
+@pytest.mark.parametrize("tau", [1.0, 15.0])
+def test_hemisphere_integral_is_the_diffuse_flux(tau):
+    """The grid as the lookup reads it integrates to DISORT's diffuse flux (the forward peak's light restored
+    about the sun: without it 75 % under optical depth 1), on a quadrature other than the restoration's."""
+    sky = _sky(tau, 40.0)
+    n_t, n_p = 90, 180
+    theta = (np.arange(n_t) + 0.5) * (math.pi / 2) / n_t
+    phi = (np.arange(n_p) + 0.5) * 2 * math.pi / n_p
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    d = np.stack([np.sin(t) * np.sin(p), np.sin(t) * np.cos(p), np.cos(t)], axis=-1)
+    L = sky.spectral_radiance(d, [550.0])[..., 0]
+    e = float(np.sum(L * np.cos(t) * np.sin(t)) * (math.pi / 2 / n_t) * (2 * math.pi / n_p))
+    down = float(sky.diffuse_fluxes([550.0])[0][0])
+    assert abs(e / down - 1) < 0.01
+
+
+def test_symmetric_about_the_sun_and_brighter_towards_it():
+    sky = CloudySky(math.radians(60.0), math.radians(135.0), cloud_optical_depth=2.0)
+    a = math.radians(135.0)
+    left = _dirs([(20.0, 135.0 - 70.0)])
+    right = _dirs([(20.0, 135.0 + 70.0)])
+    np.testing.assert_allclose(sky.luminance(left), sky.luminance(right), rtol=1e-12)
+    towards = np.array([[math.cos(0.6) * math.sin(a), math.cos(0.6) * math.cos(a), math.sin(0.6)]])
+    away = np.array([[-math.cos(0.6) * math.sin(a), -math.cos(0.6) * math.cos(a), math.sin(0.6)]])
+    assert sky.luminance(towards)[0] > 1.5 * sky.luminance(away)[0]
+
+
+def test_solar_disc_is_attenuated_by_the_cloud():
+    clear = _sky(0.0, 60.0)
+    cloudy = _sky(2.0, 60.0)
+    wl = [555.0]  # a wavelength of the grid: no interpolation
+    ratio = cloudy.sun_spectral_radiance(wl)[0] / clear.sun_spectral_radiance(wl)[0]
+    # the cloud's optical depth along a slant path of 1 / cos(30 deg) (the shell's curvature: < 1e-4 here)
+    tau = float(cloudy.cloud_layer.optical_depth(wl, DATA["cloud_top_m"])[0])
+    assert ratio == pytest.approx(math.exp(-tau / math.cos(math.radians(30.0))), rel=1e-4)
+    assert _sky(60.0, 30.0).sun_spectral_radiance(wl)[0] < 1e-40
+
+
+def test_views_from_inside_and_above_the_layer():
+    below = _sky(15.0, 40.0)
+    above = _sky(15.0, 40.0, altitude=3000.0)
+    up, down = np.array([[0.0, 0.0, 1.0]]), np.array([[0.0, 0.0, -1.0]])
+    # above the cloud the sky overhead is clear (dim) and the cloud below bright; below, the reverse
+    assert above.luminance(down)[0] > 3 * above.luminance(up)[0]
+    assert below.luminance(up)[0] > 3 * below.luminance(down)[0]
+    # just below and just above the cloud top (the column lit by the tables, then the whole column in DISORT):
+    # the same cloud within 3 % looking down; looking up, the clear sky of the spherical tables (over the ground's
+    # albedo, with the cloud's light sent back by the air given the sky's angular shape) against the
+    # plane-parallel air over the cloud: measured -6 % at 45 deg and +15 % at 80 deg elevation (docs/clouds.md)
+    d = _dirs([(-45.0, 30.0), (-80.0, 150.0), (45.0, 100.0), (80.0, 10.0)])
+    inside = _sky(15.0, 40.0, altitude=1499.0).luminance(d)
+    outside = _sky(15.0, 40.0, altitude=1501.0).luminance(d)
+    np.testing.assert_allclose(inside[:2], outside[:2], rtol=0.03)
+    np.testing.assert_allclose(inside[2:], outside[2:], rtol=0.2)
+
+
+def test_xyz_agrees_with_the_spectrum_and_dict_round_trip():
+    from skyscatter.spectral import REFERENCE_WAVELENGTHS, spectrum_to_xyz
+
+    sky = _sky(5.0, 25.0)
+    d = _dirs([(10.0, 0.0), (45.0, 100.0), (-20.0, 30.0)])
+    np.testing.assert_allclose(sky.xyz(d), spectrum_to_xyz(sky.spectral_radiance(d, REFERENCE_WAVELENGTHS),
+                                                           REFERENCE_WAVELENGTHS), rtol=1e-10)
+    again = registry.from_dict(json.loads(json.dumps(sky.to_dict())))
+    np.testing.assert_array_equal(again.xyz(d), sky.xyz(d))
+
+
+@pytest.mark.parametrize("kw, words", [
+    ({"cloud_optical_depth": 61.0}, "cloud_optical_depth"),
+    ({"cloud_optical_depth": -1.0}, "cloud_optical_depth"),
+    ({"cloud_base": 2000.0, "cloud_top": 1000.0}, "above the cloud base"),
+    ({"cloud_effective_radius": 0.5e-6}, "cloud_effective_radius"),
+    ({"cloud_top": 25000.0}, "cloud_top"),
+    ({"streams": 5}, "streams"),
+    ({"altitude": float("nan")}, "altitude"),
+])
+def test_bad_options_give_one_clear_error(kw, words):
+    with pytest.raises(InvalidParameterError, match=words):
+        CloudySky(0.5, 0.0, **kw)
+
+
+def test_twilight_is_lit_by_the_tables_and_darker_than_sunset():
+    up = _dirs([(90.0, 0.0), (20.0, 0.0), (20.0, 180.0), (-30.0, 0.0)])
+    dusk = _sky(15.0, -3.0).luminance(up)
+    sunset = _sky(15.0, 2.0).luminance(up)
+    assert np.all(np.isfinite(dusk)) and np.all(dusk > 0)
+    assert np.all(dusk < sunset)
+    assert _sky(15.0, -3.0).sun.illuminance_normal() == 0.0
+
+
+def test_photometry_under_the_layer():
+    """Horizontal illuminance of the sky (photometry's quadrature of the luminance) against DISORT's diffuse flux
+    weighted by the CIE y-bar (683 lm/W); Tregenza patches cover the same light; the sun's illuminance behind
+    the cloud is its disc radiance's, attenuated by exp(-tau / mu)."""
+    from skyscatter import photometry
+    from skyscatter.patches import patch_luminance, patch_scheme
+    from skyscatter.spectral import REFERENCE_WAVELENGTHS, spectrum_to_xyz
+
+    sky = _sky(5.0, 35.0)
+    e_v = photometry.horizontal_illuminance(sky)
+    flux = sky.diffuse_fluxes(REFERENCE_WAVELENGTHS)[0]
+    assert e_v == pytest.approx(float(spectrum_to_xyz(flux, REFERENCE_WAVELENGTHS)[1]), rel=0.01)
+    scheme = patch_scheme("tregenza")
+    lum = patch_luminance(sky, scheme)
+    assert lum.shape == (145,) and np.all(lum > 0)
+    # the patches' light on a horizontal plane (centre cosines: a coarse quadrature, 3 %)
+    assert float(np.sum(lum * scheme.solid_angles * scheme.centre_directions[:, 2])) == pytest.approx(e_v, rel=0.03)
+    assert photometry.vertical_illuminance(sky, math.pi) > 0
+    clear_sun = _sky(0.0, 35.0).sun.illuminance_normal()
+    assert sky.sun.illuminance_normal() < clear_sun * math.exp(-4.0 / math.sin(math.radians(35.0)))
