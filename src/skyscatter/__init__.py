@@ -32,8 +32,8 @@ if TYPE_CHECKING:  # the names below, as type checkers see them (imported on fir
     from . import patches as patches
     from . import photometry as photometry
     from . import precomputed as precomputed
-    from . import render as render
     from . import realtime as realtime
+    from . import render as render
     from . import sky as sky
     from . import spectral as spectral
     from . import sun as sun
