@@ -14,6 +14,7 @@ Reference: [Bruneton2008].
 from __future__ import annotations
 
 from types import ModuleType
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -63,6 +64,8 @@ class TableLookups:
     parameters: AtmosphereParameters
     wavelengths: NDArray[np.float64]
     tables: dict[str, NDArray[np.float32]]
+    #: the tables as stored (:class:`.storage.HalfTable` for the 4D ones); indexing one decodes only that part
+    stored: dict[str, Any]
     #: solar irradiance [W m^-2 nm^-1] and ground albedo at the table wavelengths
     _solar: NDArray[np.float64]
     _albedo: NDArray[np.float64]
@@ -265,14 +268,16 @@ class TableLookups:
         s = sun / np.linalg.norm(sun)
         mu_s = float(np.clip(pos @ s / r, -1.0, 1.0))
         projection = np.ascontiguousarray(projection, dtype=np.float64)
-        slices = lookup.observer_slices(self.tables["single_rayleigh"], self.tables["single_mie"],
-                                        self.tables["multiple"], min(max(r, bottom), top), mu_s, bottom, top,
-                                        mu_s_min, projection)
+        # the slices at the observer's radius and sun, decoded from the stored tables (a memory-mapped file is
+        # read there only: the first sky from a cached file does not wait for all of it)
+        stored = self.stored
+        slices = lookup.observer_slices(stored["single_rayleigh"], stored["single_mie"], stored["multiple"],
+                                        min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, projection)
         out = np.empty((dirs.shape[0], projection.shape[0]))
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
-        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, self.tables["transmittance"],
-                     self.tables["irradiance"], self._albedo, self._solar, projection,
+        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, stored["transmittance"],
+                     stored["irradiance"], self._albedo, self._solar, projection,
                      bottom, top, self._mie_g, self._mie_kind, self.parameters.sun_angular_radius,
                      bool(include_ground), dirs, out, bad, grain=2048)
         if bad.any():
@@ -360,7 +365,7 @@ class TableLookups:
         self._check_above_ground(pos)
         bottom, top, _ = self._geometry()
         t = np.ones((pos.shape[0], self.wavelengths.size))
-        parallel_for(lookup.sun_kernel, pos.shape[0], pos, sun, self.tables["transmittance"], bottom, top,
+        parallel_for(lookup.sun_kernel, pos.shape[0], pos, sun, self.stored["transmittance"], bottom, top,
                      self.parameters.sun_angular_radius, t, grain=4096)
         return t.reshape(*shape, -1)
 
@@ -383,7 +388,7 @@ class TableLookups:
         bottom, top, _ = self._geometry()
         e_sun = np.zeros((pts.shape[0], self.wavelengths.size))
         e_sky = np.zeros((pts.shape[0], self.wavelengths.size))
-        parallel_for(lookup.irradiance_kernel, pts.shape[0], pts, nrm, sun, self.tables["transmittance"],
-                     self.tables["irradiance"], self._solar, bottom, top, self.parameters.sun_angular_radius, e_sun,
+        parallel_for(lookup.irradiance_kernel, pts.shape[0], pts, nrm, sun, self.stored["transmittance"],
+                     self.stored["irradiance"], self._solar, bottom, top, self.parameters.sun_angular_radius, e_sun,
                      e_sky, grain=4096)
         return e_sun.reshape(*shape, -1), e_sky.reshape(*shape, -1)
