@@ -386,3 +386,37 @@ def test_cli_sky_and_illuminance(tmp_path, capsys):
     assert main(["illuminance", "--model", "hosek-wilkie", "--turbidity", "0.5"]) == 2
     err = capsys.readouterr().err
     assert "turbidity 0.5 is outside 1 to 10" in err and len(err.strip().splitlines()) == 1
+
+
+def test_compiled_kernel_equals_the_numpy_form():
+    """The compiled kernel (large inputs, or numba already loaded) and the numpy form built from
+    perez_family.gradation and indicatrix give the same bands, colours and luminance to rounding, over the whole
+    sphere (zero below the horizon), and the kernel flags bad directions with the error of as_directions."""
+    import numba  # noqa: F401  (loaded: _evaluate takes the kernel for any size)
+
+    from skyscatter.errors import InvalidDirectionError
+
+    rng = np.random.default_rng(7)
+    d = rng.normal(size=(5000, 3)) * rng.uniform(0.5, 3.0, (5000, 1))  # not unit: normalised by both
+    sky = HosekWilkieSky(np.radians(35.0), np.radians(200.0), turbidity=4.5, albedo=0.3)
+    bands = sky.band_radiance(d)
+    np.testing.assert_allclose(bands, sky._evaluate_numpy(d, sky._params, sky._radiance, clip=True),
+                               rtol=1e-13, atol=1e-300)
+    assert np.all(bands[d[:, 2] < 0] == 0.0) and np.all(bands[d[:, 2] > 0.05] > 0.0)
+    params, scale = sky._xyz_config
+    xyz = 683.0 * sky._evaluate_numpy(d, params, scale, clip=True)
+    np.testing.assert_allclose(sky.xyz(d), xyz, rtol=1e-13, atol=1e-300)
+    np.testing.assert_allclose(sky.luminance(d), xyz[:, 1], rtol=1e-13, atol=1e-300)
+    wl = np.arange(300.0, 761.0, 10.0)
+    from skyscatter.sky.hosek_wilkie import _band_interpolation
+
+    spec = np.maximum(sky._evaluate_numpy(d, sky._params, sky._radiance, clip=False)
+                      @ _band_interpolation(wl, BANDS).T, 0.0)
+    np.testing.assert_allclose(sky.spectral_radiance(d, wl), spec, rtol=1e-13, atol=1e-300)
+    bad = d.copy()
+    bad[17] = [0.0, 0.0, 0.0]
+    with pytest.raises(InvalidDirectionError, match="zero-length"):
+        sky.luminance(bad)
+    bad[17] = [np.nan, 0.0, 1.0]
+    with pytest.raises(InvalidDirectionError, match="NaN"):
+        sky.spectral_radiance(bad)
