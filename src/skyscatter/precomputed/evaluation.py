@@ -238,6 +238,30 @@ class TableLookups:
                 return fast[..., 0]
         return self.sky_xyz(positions, directions, sun_direction, include_ground=include_ground)[..., 1]
 
+    def sky_spectrum(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike,
+                     wavelengths: ArrayLike, *, include_ground: bool = True) -> NDArray[np.float64]:
+        """:meth:`sky_radiance` (no light shafts) at other ``wavelengths`` [nm]: ``resample(sky_radiance(...))``,
+        shape broadcast + (n_wavelengths,).
+
+        Where the resampling is a matrix (not the guarded few-wavelength rule of :mod:`.conversion`) and the
+        observer's fast path applies (:meth:`sky_xyz`), the tables' slices are projected to the wavelengths
+        first: the same values to rounding, without the radiance at the table wavelengths in between.
+        """
+        wl = np.atleast_1d(np.asarray(wavelengths, dtype=float))
+        if not self.colour.guarded:
+            from .conversion import reconstruction_matrix
+
+            key = wl.tobytes()
+            cached = getattr(self, "_spectrum_projection", None)
+            if cached is None or cached[0] != key:
+                cached = (key, reconstruction_matrix(self.wavelengths, wl, self.parameters))
+                self._spectrum_projection = cached
+            fast = self._observer(positions, directions, sun_direction, include_ground, cached[1])
+            if fast is not None:
+                return np.maximum(fast, 0.0, out=fast)
+        return self.resample(self.sky_radiance(positions, directions, sun_direction, include_ground=include_ground),
+                             wl)
+
     def _observer(self, positions, directions, sun_direction, include_ground, projection):
         """The observer fast path of :meth:`sky_xyz`, :meth:`sky_luminance` and :meth:`sky_radiance` (radiance
         projected with ``projection`` (C, n_wavelengths)), or None where it does not apply."""
