@@ -3,11 +3,11 @@
 Run: python benchmarks/bench_hosek_wilkie.py   (prints the figures; target: faster per direction than Mitsuba's
 scalar variant); ``python benchmarks/bench_hosek_wilkie.py --rounds=N``: ``luminance`` (10^6 directions) and
 ``spectral_radiance`` at 41 wavelengths in N rounds alternating with Mitsuba's LLVM RGB sunsky, per-round ratios
-(needs ``DRJIT_LIBLLVM_PATH``, below). Mitsuba's scalar variants are called once per direction from Python (the only way to use them
-from Python; the binding overhead is part of what a Python caller pays); its LLVM variants take all directions
-in one call (timed after a warm-up call that JIT-compiles the kernel). The spectral figures are for the 11 bands
-320-720 nm: three calls of Mitsuba's 4-wavelength spectrum per direction, one call of ours. Mitsuba evaluates the
-sky only (``sun_scale`` 0), like skyscatter's ``spectral_radiance``.
+(needs ``DRJIT_LIBLLVM_PATH``, below). Mitsuba's scalar variants are called once per direction from Python (the
+only way to use them from Python; the binding overhead is part of what a Python caller pays); its LLVM variants take
+all directions in one call (timed after a warm-up call that JIT-compiles the kernel). The spectral figures are for
+the 11 bands 320-720 nm: three calls of Mitsuba's 4-wavelength spectrum per direction, one call of ours. Mitsuba
+evaluates the sky only (``sun_scale`` 0), like skyscatter's ``spectral_radiance``.
 
 The LLVM variants run in a child process: with the system's LLVM 15 Dr.Jit 1.5's LLVM backend aborts the whole
 process ("LLVM ERROR: Cannot select ... fminimum": LLVM 15 cannot lower the ``llvm.minimum`` intrinsic on x86).

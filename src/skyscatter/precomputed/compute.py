@@ -14,8 +14,8 @@
 What the tables hold (single scattering apart, without its phase functions) is described in :mod:`.tables`.
 Wavelengths are computed in chunks (:func:`compute_tables`, ``chunk_size``): most of the work is geometry shared
 by the wavelengths of a chunk, and memory grows with it (three 4D float32 tables per wavelength of a chunk, the
-finished scattering tables written to disk in half precision, :class:`SpillTables`). Timings and the progress bar are kept by :class:`Bookkeeping`, apart from the
-steps.
+finished scattering tables written to disk in half precision, :class:`SpillTables`). Timings and the progress
+bar are kept by :class:`Bookkeeping`, apart from the steps.
 
 Orders. Each order of the radiance field is, after a few orders, close to the previous one times a constant
 ``lambda < 1`` (the dominant eigenvalue of the scattering operator with the ground's reflection: successive

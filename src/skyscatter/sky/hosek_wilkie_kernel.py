@@ -26,6 +26,7 @@ import numpy as np
 from ..jit import CONTRACT_ARCP, kernel
 from .perez_family import HOSEK_WILKIE_OFFSET as OFFSET
 
+
 @kernel(fastmath=CONTRACT_ARCP)
 def radiance_kernel(dirs, sun, params, scale, band_index, band_weight, clip_bands, clip_out, out, bad, start,
                     stop):
