@@ -105,6 +105,13 @@ class HalfTable:
         self._moved = np.moveaxis(values, 0, -1)  # a view: wavelength last
         self._scale_b = np.broadcast_to(np.moveaxis(self.scale, 0, -1)[:, None, :, None, :], self.shape)
 
+    def __getstate__(self) -> dict[str, Any]:
+        # pickled (e.g. sent to another process) as plain arrays: a mapped file or spill file does not travel
+        return {"values": np.array(self.values), "scale": self.scale}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__init__(state["values"], state["scale"])  # type: ignore[misc]
+
     @classmethod
     def encode(cls, table: NDArray[np.floating]) -> HalfTable:
         """Round a float32 table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths), all values >= 0, to half precision."""
@@ -282,6 +289,8 @@ def _member_arrays(p: Path) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
         names = {info.filename[:-4]: info for info in zf.infolist() if info.filename.endswith(".npy")}
         with zf.open(names["metadata"]) as f:
             meta = json.loads(str(np.lib.format.read_array(f, allow_pickle=False)[()]))
+        if not isinstance(meta, dict) or meta.get("format_version") != FORMAT_VERSION:
+            return meta, arrays  # read_tables says what the file is
         for name in STORED_NAMES:
             info = names[name]
             fh.seek(info.header_offset)
