@@ -536,7 +536,8 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         if self.dataset is not None:
             return super().luminance(directions)
         params, scale = self._xyz_config
-        return 683.0 * self._evaluate(directions, params[1:2], scale[1:2])[..., 0]
+        # 683 folded into the scale: no pass over the result (the same value to one rounding)
+        return self._evaluate(directions, params[1:2], 683.0 * scale[1:2])[..., 0]
 
     def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
         """CIE 1931 XYZ [cd m^-2] from the authors' XYZ dataset (683 times its X, Y, Z), shape (..., 3)."""
