@@ -68,6 +68,8 @@ STORED_NAMES = ("transmittance", "irradiance", *(f"{n}{s}" for n in HALF_TABLES 
 #: Largest value of a slice after scaling: 2^13 (module docstring), so that rounding to float16 never moves it
 #: past a power of two and encoding decoded values again gives the same scales and values.
 _SCALED_MAX_EXPONENT = 13
+#: Radius layers a :class:`HalfTable` keeps decoded (:meth:`HalfTable.radius_layer`).
+_LAYERS_KEPT = 4
 #: Bytes per block when streaming stored arrays (writing, checksums).
 _BLOCK = 1 << 23
 #: Alignment [bytes] of every array's data in a table file.
@@ -119,7 +121,26 @@ class HalfTable:
         return cls(values, scale)
 
     def __getitem__(self, key: Any) -> NDArray[np.float32]:
+        if isinstance(key, tuple) and key and isinstance(key[0], (int, np.integer)):
+            # one radius (the observer's slices): from that radius's decoded layer, kept for the next calls
+            return self.radius_layer(int(key[0]))[key[1:]]
         return np.multiply(self._moved[key], self._scale_b[key], dtype=np.float32)
+
+    def radius_layer(self, i_r: int) -> NDArray[np.float32]:
+        """The table at radius index ``i_r``, decoded: (n_mu, n_mu_s, n_nu, n_wavelengths) float32. The last
+        :data:`_LAYERS_KEPT` layers asked for are kept (2 MB each with the default sizes): the values of one radius
+        lie in one block per wavelength of the wavelength-first layout, while a slice at one sun zenith is spread
+        over the whole table (decoding the observer's slices directly took 5-30 ms per sky, a layer 1-2 ms once)."""
+        i_r = range(self.shape[0])[i_r]  # negative indices, and IndexError outside
+        layers = self.__dict__.setdefault("_layers", {})
+        layer = layers.get(i_r)
+        if layer is None:
+            layer = np.multiply(np.moveaxis(self.values[:, i_r], 0, -1),
+                                np.moveaxis(self.scale[:, i_r], 0, -1)[None, :, None, :], dtype=np.float32)
+            while len(layers) >= _LAYERS_KEPT:
+                layers.pop(next(iter(layers)))
+            layers[i_r] = layer
+        return layer
 
     def __array__(self, dtype: Any = None, copy: Any = None) -> NDArray[Any]:
         out = self.decode()
