@@ -1,11 +1,13 @@
 """Benchmark the Hosek-Wilkie sky (issue 10) side by side with Mitsuba 3's ``sunsky`` on the same directions.
 
 Run: python benchmarks/bench_hosek_wilkie.py   (prints the figures; target: faster per direction than Mitsuba's
-scalar variant). Mitsuba's scalar variants are called once per direction from Python (the only way to use them
-from Python; the binding overhead is part of what a Python caller pays); its LLVM variants take all directions
-in one call (timed after a warm-up call that JIT-compiles the kernel). The spectral figures are for the 11 bands
-320-720 nm: three calls of Mitsuba's 4-wavelength spectrum per direction, one call of ours. Mitsuba evaluates the
-sky only (``sun_scale`` 0), like skyscatter's ``spectral_radiance``.
+scalar variant); ``python benchmarks/bench_hosek_wilkie.py --rounds=N``: ``luminance`` (10^6 directions) and
+``spectral_radiance`` at 41 wavelengths in N rounds alternating with Mitsuba's LLVM RGB sunsky, per-round ratios
+(needs ``DRJIT_LIBLLVM_PATH``, below). Mitsuba's scalar variants are called once per direction from Python (the
+only way to use them from Python; the binding overhead is part of what a Python caller pays); its LLVM variants take
+all directions in one call (timed after a warm-up call that JIT-compiles the kernel). The spectral figures are for
+the 11 bands 320-720 nm: three calls of Mitsuba's 4-wavelength spectrum per direction, one call of ours. Mitsuba
+evaluates the sky only (``sun_scale`` 0), like skyscatter's ``spectral_radiance``.
 
 The LLVM variants run in a child process: with the system's LLVM 15 Dr.Jit 1.5's LLVM backend aborts the whole
 process ("LLVM ERROR: Cannot select ... fminimum": LLVM 15 cannot lower the ``llvm.minimum`` intrinsic on x86).
@@ -150,8 +152,47 @@ def llvm(variant: str, n: int) -> None:
         report(f"mitsuba {variant} sunsky, numpy in -> numpy out ({name})", n, *best_of(numpy_to_numpy, 3))
 
 
+def side_by_side(rounds: int, n: int, repeat: int = 5) -> None:
+    """``HosekWilkieSky.luminance`` and ``spectral_radiance`` (41 wavelengths) in rounds alternating with
+    Mitsuba's ``llvm_ad_rgb`` sunsky (child process, numpy in -> numpy out and on device), so that both see the
+    same load; per-round ratios, best and median over the rounds, and the load average."""
+    d = directions(n)
+    sky = HosekWilkieSky(ZEN, AZI, turbidity=T, albedo=A)
+    sky.luminance(d[:10])
+    sky.spectral_radiance(d[:10])
+    ours, spec, theirs_np, theirs_dev, loads = [], [], [], [], []
+    for k in range(rounds):
+        loads.append(os.getloadavg()[0])
+        t = best_of(lambda: sky.luminance(d), repeat)[0]
+        ts = best_of(lambda: sky.spectral_radiance(d[: n // 4]), max(1, repeat // 2))[0]
+        run = subprocess.run([sys.executable, __file__, "llvm_ad_rgb", str(n)], capture_output=True, text=True)
+        lines = [ln for ln in run.stdout.splitlines() if ln.startswith("mitsuba")]
+        if run.returncode != 0 or not lines:
+            print(f"mitsuba llvm_ad_rgb: not measured (exit {run.returncode}; set DRJIT_LIBLLVM_PATH)")
+            return
+        ns = {("device" if "eval" in ln else "numpy"): float(ln.rsplit("(", 1)[1].split("ns/dir")[0])
+              for ln in lines}
+        ours.append(t / n * 1e9)
+        spec.append(n / 4 / ts / 1e6)
+        theirs_np.append(ns["numpy"])
+        theirs_dev.append(ns["device"])
+        print(f"round {k + 1} (load {loads[-1]:.1f}): HosekWilkieSky.luminance {ours[-1]:6.1f} ns/dir; Mitsuba "
+              f"llvm_ad_rgb numpy in -> out {ns['numpy']:6.1f}, on device {ns['device']:6.1f} ns/dir; "
+              f"spectral_radiance 41 wl {spec[-1]:5.2f} M dir/s")
+    r_np = np.array(theirs_np) / np.array(ours)
+    r_dev = np.array(theirs_dev) / np.array(ours)
+    print(f"luminance, {n} dirs, {rounds} rounds, load {min(loads):.1f}-{max(loads):.1f}: ours best "
+          f"{min(ours):.1f} / median {np.median(ours):.1f} ns/dir; Mitsuba numpy best {min(theirs_np):.1f} / median "
+          f"{np.median(theirs_np):.1f}, device best {min(theirs_dev):.1f} / median {np.median(theirs_dev):.1f} ns/dir; "
+          f"speed ratio ours/Mitsuba per round: numpy {r_np.min():.2f}-{r_np.max():.2f} (median "
+          f"{np.median(r_np):.2f}), device {r_dev.min():.2f}-{r_dev.max():.2f} (median {np.median(r_dev):.2f})")
+    print(f"spectral_radiance 41 wl, {n // 4} dirs: best {max(spec):.2f} / median {np.median(spec):.2f} M dir/s")
+
+
 if __name__ == "__main__":
     if len(sys.argv) == 3:
         llvm(sys.argv[1], int(sys.argv[2]))
+    elif len(sys.argv) == 2 and sys.argv[1].startswith("--rounds="):
+        side_by_side(int(sys.argv[1].split("=", 1)[1]), 1_000_000)
     else:
         main()

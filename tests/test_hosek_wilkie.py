@@ -386,3 +386,67 @@ def test_cli_sky_and_illuminance(tmp_path, capsys):
     assert main(["illuminance", "--model", "hosek-wilkie", "--turbidity", "0.5"]) == 2
     err = capsys.readouterr().err
     assert "turbidity 0.5 is outside 1 to 10" in err and len(err.strip().splitlines()) == 1
+
+
+def test_compiled_kernel_equals_the_numpy_form():
+    """The compiled kernel (large inputs, or numba already loaded) and the numpy form built from
+    perez_family.gradation and indicatrix give the same bands, colours and luminance to rounding, over the whole
+    sphere (zero below the horizon), and the kernel flags bad directions with the error of as_directions."""
+    import numba  # noqa: F401  (loaded: _evaluate takes the kernel for any size)
+
+    from skyscatter.errors import InvalidDirectionError
+
+    rng = np.random.default_rng(7)
+    d = rng.normal(size=(5000, 3)) * rng.uniform(0.5, 3.0, (5000, 1))  # not unit: normalised by both
+    sky = HosekWilkieSky(np.radians(35.0), np.radians(200.0), turbidity=4.5, albedo=0.3)
+    bands = sky.band_radiance(d)
+    np.testing.assert_allclose(bands, sky._evaluate_numpy(d, sky._params, sky._radiance, clip=True),
+                               rtol=1e-13, atol=1e-300)
+    assert np.all(bands[d[:, 2] < 0] == 0.0) and np.all(bands[d[:, 2] > 0.05] > 0.0)
+    params, scale = sky._xyz_config
+    xyz = 683.0 * sky._evaluate_numpy(d, params, scale, clip=True)
+    np.testing.assert_allclose(sky.xyz(d), xyz, rtol=1e-13, atol=1e-300)
+    np.testing.assert_allclose(sky.luminance(d), xyz[:, 1], rtol=1e-13, atol=1e-300)
+    wl = np.arange(300.0, 761.0, 10.0)
+    from skyscatter.sky.hosek_wilkie import _band_interpolation
+
+    spec = np.maximum(sky._evaluate_numpy(d, sky._params, sky._radiance, clip=False)
+                      @ _band_interpolation(wl, BANDS).T, 0.0)
+    np.testing.assert_allclose(sky.spectral_radiance(d, wl), spec, rtol=1e-13, atol=1e-300)
+    bad = d.copy()
+    bad[17] = [0.0, 0.0, 0.0]
+    with pytest.raises(InvalidDirectionError, match="zero-length"):
+        sky.luminance(bad)
+    bad[17] = [np.nan, 0.0, 1.0]
+    with pytest.raises(InvalidDirectionError, match="NaN"):
+        sky.spectral_radiance(bad)
+
+
+def test_branch_free_atan2_and_exp_match_libm():
+    """The kernel's atan2 and exp (Cephes algorithms, written without calls so that its loops vectorise) are
+    within 1 and 2 units in the last place of libm's (math.atan2, math.exp) over the arguments the form meets:
+    angles 0..pi, exponents -700..700 (and exactly 1 at 0)."""
+    import math
+
+    import numba
+
+    from skyscatter.sky.hosek_wilkie_kernel import atan2_nonnegative, exp_parts
+
+    @numba.njit
+    def both(c, d, x, out_a, out_m, out_bits):
+        for k in range(c.size):
+            out_a[k] = atan2_nonnegative(c[k], d[k])
+            out_m[k], out_bits[k] = exp_parts(x[k])
+
+    rng = np.random.default_rng(5)
+    theta = np.concatenate([[0.0, np.pi, np.pi / 2, 1e-12, np.pi - 1e-9], rng.uniform(0.0, np.pi, 200_000)])
+    c, d = np.sin(theta), np.cos(theta)
+    x = np.concatenate([[0.0, -1e-300, 1e-12], rng.uniform(-700.0, 700.0, theta.size - 3)])
+    a, m, bits = np.empty(theta.size), np.empty(theta.size), np.empty(theta.size, dtype=np.int64)
+    both(c, d, x, a, m, bits)
+    e = m * bits.view(np.float64)
+    ref_a = np.array([math.atan2(ci, di) for ci, di in zip(c, d, strict=True)])
+    ref_e = np.array([math.exp(xi) for xi in x])
+    assert np.max(np.abs(a - ref_a) / np.spacing(np.maximum(ref_a, 1e-300))) <= 1.0
+    assert np.max(np.abs(e - ref_e) / np.spacing(ref_e)) <= 2.0
+    assert e[0] == 1.0 and a[0] == 0.0 and a[1] == np.pi

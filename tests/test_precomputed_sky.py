@@ -364,6 +364,10 @@ def test_observer_slices_equal_the_4d_lookup(atm, altitude, sun_elevation):
     # luminance alone (one projected channel) is the Y of the three
     np.testing.assert_allclose(spectral.sky_luminance(pos, d, sun), spectral.sky_xyz(pos, d, sun)[:, 1],
                                rtol=1e-12, atol=1e-15)
+    # spectra at other wavelengths: the slices projected to them equal the resampled general lookup
+    wl = np.arange(380.0, 781.0, 10.0)
+    np.testing.assert_allclose(spectral.sky_spectrum(pos, d, sun, wl),
+                               spectral.resample(spectral.sky_radiance(many, d, sun), wl), rtol=1e-6, atol=1e-12)
     # unnormalised directions are normalised; invalid ones are refused with the library's error
     np.testing.assert_allclose(spectral.sky_xyz(pos, 3.0 * d[:5], sun), spectral.sky_xyz(pos, d[:5], sun), rtol=1e-12)
     from skyscatter.errors import InvalidDirectionError

@@ -305,6 +305,65 @@ def test_save_load_round_trip_and_corruption(tmp_path):
         PrecomputedAtmosphere.load(tmp_path / "junk.npz")
 
 
+def test_half_precision_storage_within_its_rounding_bound_and_idempotent():
+    """The 4D tables are stored as float16 times a power of two per (wavelength, r, mu_s) (storage module): a value
+    at least 2^-26 of its slice's largest keeps float16's relative rounding bound 2^-11 (IEEE 754 binary16, 11
+    significant bits), whatever the slice's magnitude; zeros stay zero; encoding the decoded table gives the same
+    bits (so computed, saved and loaded tables agree exactly); indexing decodes the same values as the whole."""
+    from skyscatter.precomputed.storage import HalfTable
+
+    rng = np.random.default_rng(3)
+    shape = (4, 6, 5, 3, 2)  # (n_r, n_mu, n_mu_s, n_nu, n_wavelengths)
+    table = 10.0 ** rng.uniform(-9, 0, shape) * 10.0 ** rng.uniform(-25, 8, (4, 1, 5, 1, 2))
+    table[0, 0, 0, 0, 0] = 0.0
+    table = table.astype(np.float32)
+    half = HalfTable.encode(table)
+    assert half.values.dtype == np.float16 and half.values.shape == (2, 4, 6, 5, 3)
+    back = half.decode()
+    peak = table.max(axis=(1, 3), keepdims=True)
+    kept = table >= peak * 2.0**-26
+    rel = np.abs(back.astype(np.float64) - table) / np.where(table > 0, table, 1.0)
+    assert kept.mean() > 0.9 and rel[kept].max() <= 2.0**-11
+    assert back[0, 0, 0, 0, 0] == 0.0
+    again = HalfTable.encode(back)
+    np.testing.assert_array_equal(again.values, half.values)
+    np.testing.assert_array_equal(again.scale, half.scale)
+    np.testing.assert_array_equal(half[2, :, 1], back[2, :, 1])
+    np.testing.assert_array_equal(half[1:3, 2:4, :, 1], back[1:3, 2:4, :, 1])
+    with pytest.raises(InvalidParameterError, match="finite and >= 0"):
+        HalfTable.encode(-table)
+
+
+def test_loaded_tables_are_mapped_verified_and_read_in_slices(tmp_path):
+    """A table file is an .npz numpy reads; loading maps the half-precision tables, a sky seen by one observer
+    decodes only slices of them, a damaged byte in any stored array is caught by its checksum, and tables mapped
+    from a file keep their values when the file is replaced (as the cache replaces files: by renaming)."""
+    from skyscatter.precomputed.storage import HALF_TABLES, STORED_NAMES
+
+    atm = PrecomputedAtmosphere.compute(EARTH, orders=2, sizes=TINY, progress=False)
+    path = atm.save(tmp_path / "t.npz")
+    with np.load(path) as raw:
+        assert set(STORED_NAMES) <= set(raw.files)
+        np.testing.assert_array_equal(raw["multiple"], atm.stored["multiple"].values)
+    back = PrecomputedAtmosphere.load(path)
+    assert isinstance(back.stored["multiple"].values, np.memmap)
+    d = np.array([[0.0, 0.6, 0.8], [0.3, -0.9, 0.1], [0.0, 0.5, -0.5]])
+    y = back.sky_luminance([0.0, 0.0, R + 10.0], d, _sun(20.0))
+    assert back._decoded is None  # the observer's slices only
+    np.testing.assert_allclose(y, atm.sky_luminance([0.0, 0.0, R + 10.0], d, _sun(20.0)), rtol=1e-12)
+    for name in HALF_TABLES:
+        arr = back.stored[name].values
+        data = bytearray(path.read_bytes())
+        data[arr.offset + arr.nbytes // 2] ^= 0x10
+        (tmp_path / "bad.npz").write_bytes(bytes(data))
+        with pytest.raises(FileFormatError, match=f"checksum mismatch in table '{name}'"):
+            PrecomputedAtmosphere.load(tmp_path / "bad.npz")
+    other = PrecomputedAtmosphere.compute(EARTH.replace(ground_albedo=0.6), orders=2, sizes=TINY, progress=False)
+    other.save(path)
+    for name, table in atm.tables.items():
+        np.testing.assert_array_equal(back.tables[name], table)
+
+
 def test_export_layout(tmp_path):
     atm = PrecomputedAtmosphere.compute(EARTH, orders=2, sizes=TINY, progress=False, tables="rgb")
     desc = json.loads(atm.export(tmp_path / "luts").read_text())

@@ -578,6 +578,13 @@ class CloudLayer(ParticleComponent):
 
     kind = "cloud_layer"
     __slots__ = ("base", "top", "optical_depth_550", "effective_radius", "effective_variance", "name")
+    # the slots' types, for type checkers (set once in __init__ through object.__setattr__: the layer is frozen)
+    base: float
+    top: float
+    optical_depth_550: float
+    effective_radius: float
+    effective_variance: float
+    name: str
 
     def __init__(self, base: float, top: float, optical_depth: float | None = None, *,
                  liquid_water_path: float | None = None, effective_radius: float = 10e-6,
@@ -668,8 +675,9 @@ class CloudLayer(ParticleComponent):
         return table if angles is None else table.on_angles(angles)
 
     def replace(self, **changes: Any) -> CloudLayer:
-        kw = dict(base=self.base, top=self.top, optical_depth=self.optical_depth_550,
-                  effective_radius=self.effective_radius, effective_variance=self.effective_variance, name=self.name)
+        kw: dict[str, Any] = dict(base=self.base, top=self.top, optical_depth=self.optical_depth_550,
+                                  effective_radius=self.effective_radius,
+                                  effective_variance=self.effective_variance, name=self.name)
         if "liquid_water_path" in changes:
             kw.pop("optical_depth")
         kw.update(changes)

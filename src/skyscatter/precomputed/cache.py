@@ -5,7 +5,8 @@ configuration named after the first 24 hex digits of :func:`.storage.cache_key` 
 parameters, orders, wavelengths, table sizes, library version and table format). Files are written atomically
 and verified when read (format, per-table SHA-256 checksums, stored key): a corrupt, truncated or mismatched
 file triggers a :class:`CacheRebuildWarning` and is recomputed, never trusted. Tables loaded once are also
-kept in memory for the life of the process.
+kept in memory for the life of the process; their scattering tables stay memory maps of the file
+(:mod:`.storage`), which another process may replace (by renaming) without changing what this one reads.
 """
 
 from __future__ import annotations
@@ -115,7 +116,7 @@ def load_or_compute(atmosphere: AtmosphereParameters | None = None, *, orders: i
     if computed:
         if progress is None:  # a library call that did not choose: say once why it takes a while
             warnings.warn(f"building the precomputed tables for this atmosphere once ({wl.size} wavelengths, "
-                          f"{orders} orders; typically 10-30 s on 2 cores, and about 20 s more the first time, "
+                          f"{orders} orders; typically 30-60 s on 2 cores, and about 20 s more the first time, "
                           f"to compile the kernels); they are then cached in {path.parent}",
                           TableBuildWarning, stacklevel=3)
         atm = PrecomputedAtmosphere.compute(params, orders=orders, wavelengths=wl, sizes=sz, progress=progress)

@@ -13,8 +13,9 @@
 
 What the tables hold (single scattering apart, without its phase functions) is described in :mod:`.tables`.
 Wavelengths are computed in chunks (:func:`compute_tables`, ``chunk_size``): most of the work is geometry shared
-by the wavelengths of a chunk. Timings and the progress bar are kept by :class:`Bookkeeping`, apart from the
-steps.
+by the wavelengths of a chunk, and memory grows with it (three 4D float32 tables per wavelength of a chunk, the
+finished scattering tables written to disk in half precision, :class:`SpillTables`). Timings and the progress
+bar are kept by :class:`Bookkeeping`, apart from the steps.
 
 Orders. Each order of the radiance field is, after a few orders, close to the previous one times a constant
 ``lambda < 1`` (the dominant eigenvalue of the scattering operator with the ground's reflection: successive
@@ -33,9 +34,10 @@ Reference: [Bruneton2008].
 from __future__ import annotations
 
 import math
+import os
 import sys
 import time
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
@@ -52,6 +54,7 @@ from .parallel import parallel_for
 from .parameters import SOLAR_BAND_WIDTH, AtmosphereParameters
 from .sampling import TABLE_PHASE
 from .sizes import DEFAULT_ORDERS, TableSizes, table_wavelengths
+from .storage import HALF_TABLES, HalfTable, encode_half
 
 __all__ = ["MAX_ORDER_RATIO", "Bookkeeping", "Medium", "Order", "add_geometric_tail", "compute_tables",
            "density_profiles", "direct_irradiance", "indirect_irradiance", "multiple_scattering",
@@ -59,8 +62,14 @@ __all__ = ["MAX_ORDER_RATIO", "Bookkeeping", "Medium", "Order", "add_geometric_t
 
 #: Largest ratio of successive orders used for the tail (a bound against a noisy estimate: 1 would be infinite).
 MAX_ORDER_RATIO = 0.95
-#: Working memory [bytes] of the 4D tables of one wavelength chunk that sets the default chunk size.
-CHUNK_MEMORY = 512e6
+#: Working memory [bytes] of the 4D tables of one wavelength chunk that sets the default chunk size: all 16
+#: default wavelengths in one chunk (:data:`WORKING_TABLES` float32 tables of 32 x 128 x 32 x 8 texels each: 201 MB),
+#: because the kernels use a chunk's wavelengths as SIMD lanes and a chunk costs about the same for 5 or 16
+#: wavelengths (docs/bruneton.md, measured CPU: one chunk of 16 19.5-19.9 s, peak 410 MiB; 8 + 8 35.9 s, 321 MiB;
+#: 6/5/5 48.0 s, 280 MiB). Speed is kept over the last 110 MiB; ``chunk_size`` chooses the other trade.
+CHUNK_MEMORY = 210e6
+#: 4D float32 tables of a chunk alive at once (:func:`_orders`).
+WORKING_TABLES = 3
 
 F32 = NDArray[np.float32]
 F64 = NDArray[np.float64]
@@ -270,44 +279,102 @@ def add_geometric_tail(table: F32, last: F32, last_sum: F64, before_sum: F64) ->
     table += last * (ratio / (1.0 - ratio)).astype(np.float32)
 
 
-def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int,
-            book: Bookkeeping) -> tuple[F32, F32, F32, F32]:
-    """Steps 2-4 for one chunk of wavelengths: (single_rayleigh, single_mie, multiple, irradiance)."""
+def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int, book: Bookkeeping,
+            keep: Callable[[str, F32], None]) -> None:
+    """Steps 2-4 for one chunk of wavelengths. Each table is handed to ``keep(name, table)`` (names of
+    :data:`.storage.TABLE_NAMES`) as soon as it is final and dropped here: at most three 4D tables of the chunk
+    are alive at once (single Rayleigh and Mie and the first density; later the sum of the orders, the previous
+    order and the density, then the sum, the density and the new order)."""
     with book.order(1, "single scattering"):
         e_direct = direct_irradiance(medium, sizes, transmittance)
         single_r, single_m = single_scattering(medium, sizes, transmittance)
-    multiple = np.zeros_like(single_r)
     irradiance = np.zeros_like(e_direct)
-    previous = Order(single_r, single_m, True, e_direct)
+    multiple: F32 | None = None
+    previous: Order | None = Order(single_r, single_m, True, e_direct)
     sums: list[tuple[F64, F64]] = []  # per order: sums of its scattering and irradiance tables per wavelength
     for k in range(2, orders + 1):
+        assert previous is not None
         with book.order(k):
             with book.timed(f"order {k} density"):
                 density = scattering_density(medium, sizes, transmittance, previous)
             with book.timed(f"order {k} irradiance"):
                 d_irradiance = indirect_irradiance(medium, sizes, previous)
                 irradiance += d_irradiance
+            if k == 2:  # single scattering is final: out of memory before the next 4D table
+                keep("single_rayleigh", single_r)
+                keep("single_mie", single_m)
+                del single_r, single_m
+            previous = None
             with book.timed(f"order {k} multiple"):
                 d_scattering = multiple_scattering(medium, sizes, transmittance, density)
                 del density  # before the next order's: one 4D density table in memory at a time
-                multiple += d_scattering
+                if multiple is None:
+                    multiple = d_scattering.copy()
+                else:
+                    multiple += d_scattering
                 sums.append((d_scattering.sum(axis=(0, 1, 2, 3), dtype=np.float64),
                              d_irradiance.sum(axis=(0, 1), dtype=np.float64)))
         previous = Order(d_scattering, d_scattering, False, d_irradiance)
+        del d_scattering
+    if orders == 1:
+        keep("single_rayleigh", single_r)
+        keep("single_mie", single_m)
+        del single_r, single_m
+        multiple = np.zeros((*sizes.scattering_shape, transmittance.shape[-1]), dtype=np.float32)
+    assert multiple is not None and previous is not None
     if orders >= 3:
         add_geometric_tail(multiple, previous.rayleigh, sums[-1][0], sums[-2][0])
         add_geometric_tail(irradiance, previous.irradiance, sums[-1][1], sums[-2][1])
-    return single_r, single_m, multiple, irradiance
+    previous = None
+    keep("multiple", multiple)
+    keep("irradiance", irradiance)
+
+
+class SpillTables:
+    """The half-precision scattering tables of a computation (:class:`.storage.HalfTable`), written chunk by chunk
+    of wavelengths to unnamed temporary files instead of being kept in memory: a wavelength chunk is one
+    contiguous block of the wavelength-first layout. The tables are memory maps of those files (mapped pages are
+    read only when a lookup needs them; :func:`.storage.write_tables` streams the files without mapping them)."""
+
+    def __init__(self, sizes: TableSizes, n_wavelengths: int) -> None:
+        import tempfile
+
+        n_r, n_mu, n_s, n_nu = sizes.scattering_shape
+        self._shape = (n_wavelengths, n_r, n_mu, n_s, n_nu)
+        self._per_wavelength = n_r * n_mu * n_s * n_nu * 2
+        self._files = {name: tempfile.TemporaryFile(prefix="skyscatter-tables-") for name in HALF_TABLES}
+        for fh in self._files.values():
+            fh.truncate(self._per_wavelength * n_wavelengths)
+        self._scales = {name: np.ones((n_wavelengths, n_r, n_s), dtype=np.float32) for name in HALF_TABLES}
+
+    def put(self, name: str, first: int, table: F32) -> None:
+        """Store ``table`` (n_r, n_mu, n_mu_s, n_nu, chunk) of the wavelengths ``first..first + chunk - 1``."""
+        fd = self._files[name].fileno()
+        for k in range(table.shape[-1]):  # one wavelength at a time: a float16 copy of one wavelength in memory
+            values, scale = encode_half(table[..., k: k + 1])
+            data = memoryview(values).cast("B")  # type: ignore[arg-type]  # numpy arrays export the buffer protocol
+            offset = (first + k) * self._per_wavelength
+            while data.nbytes:
+                written = os.pwrite(fd, data, offset)
+                data, offset = data[written:], offset + written
+            self._scales[name][first + k] = scale[0]
+
+    def tables(self) -> dict[str, HalfTable]:
+        """The finished tables."""
+        return {name: HalfTable(np.memmap(fh, dtype=np.float16, mode="r", shape=self._shape), self._scales[name],
+                                source=(fh, 0))
+                for name, fh in self._files.items()}
 
 
 def compute_tables(atmosphere: AtmosphereParameters, *, orders: int = DEFAULT_ORDERS,
                    wavelengths: ArrayLike | str | None = None, sizes: TableSizes | Mapping[str, int] | None = None,
                    progress: bool | None = None, preset: str | None = None,
-                   chunk_size: int | None = None) -> tuple[F64, TableSizes, dict[str, F32], dict[str, float]]:
+                   chunk_size: int | None = None) -> tuple[F64, TableSizes, dict[str, Any], dict[str, float]]:
     """Algorithm 4.1: ``(wavelengths, sizes, tables, timings)`` after validating the arguments (those of
     :meth:`.PrecomputedAtmosphere.compute`, whose ``tables`` preset is ``preset`` here); ``tables`` maps the names
-    of :data:`.storage.TABLE_NAMES` to float32
-    arrays with a trailing wavelength axis, ``timings`` each step's seconds (summed over wavelength chunks)."""
+    of :data:`.storage.TABLE_NAMES` to float32 arrays with a trailing wavelength axis (transmittance, irradiance)
+    and :class:`.storage.HalfTable` objects (the 4D tables, :class:`SpillTables`), ``timings`` each step's seconds
+    (summed over wavelength chunks)."""
     if not isinstance(atmosphere, AtmosphereParameters):
         raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(atmosphere).__name__}")
     whole_number("orders", orders, 1, 50)
@@ -320,21 +387,26 @@ def compute_tables(atmosphere: AtmosphereParameters, *, orders: int = DEFAULT_OR
     check_colour_range(atmosphere, wl)
     sz = TableSizes.coerce(sizes)
     if chunk_size is None:
-        chunk_size = max(1, int(CHUNK_MEMORY // (24 * math.prod(sz.scattering_shape))))
+        chunk_size = max(1, int(CHUNK_MEMORY // (WORKING_TABLES * 4 * math.prod(sz.scattering_shape))))
     whole_number("chunk_size", chunk_size, 1)
     medium = Medium.of(atmosphere, wl, sz)
-    chunks = [np.arange(i, min(i + chunk_size, wl.size)) for i in range(0, wl.size, chunk_size)]
+    # as many chunks as needed, of nearly equal sizes (16 wavelengths by 8: two chunks of 8, not 8, 8 and 0)
+    chunks = np.array_split(np.arange(wl.size), -(-wl.size // int(chunk_size)))
+    spill = SpillTables(sz, wl.size)
     with Bookkeeping(orders * len(chunks), progress) as book:
         with book.timed("transmittance"):
             transmittance = transmittance_table(medium, sz)
-        tables = {"transmittance": transmittance}
-        for name, shape in (("irradiance", sz.irradiance_shape), ("single_rayleigh", sz.scattering_shape),
-                            ("single_mie", sz.scattering_shape), ("multiple", sz.scattering_shape)):
-            tables[name] = np.zeros((*shape, wl.size), dtype=np.float32)
+        irradiance = np.zeros((*sz.irradiance_shape, wl.size), dtype=np.float32)
         for ch in chunks:
-            chunk = _orders(medium.channels(ch), sz, np.ascontiguousarray(transmittance[..., ch]), int(orders), book)
-            for name, table in zip(("single_rayleigh", "single_mie", "multiple", "irradiance"), chunk, strict=True):
-                tables[name][..., ch] = table
+            def keep(name: str, table: F32, ch: NDArray[np.intp] = ch) -> None:
+                if name == "irradiance":
+                    irradiance[..., ch] = table
+                else:
+                    spill.put(name, int(ch[0]), table)
+
+            _orders(medium.channels(ch), sz, np.ascontiguousarray(transmittance[..., ch]), int(orders), book, keep)
+    tables: dict[str, F32 | HalfTable] = {"transmittance": transmittance, "irradiance": irradiance,
+                                          **spill.tables()}
     return wl, sz, tables, book.timings
 
 

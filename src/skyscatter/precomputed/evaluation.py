@@ -14,6 +14,7 @@ Reference: [Bruneton2008].
 from __future__ import annotations
 
 from types import ModuleType
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -62,7 +63,11 @@ class TableLookups:
 
     parameters: AtmosphereParameters
     wavelengths: NDArray[np.float64]
-    tables: dict[str, NDArray[np.float32]]
+    @property
+    def tables(self) -> dict[str, NDArray[np.float32]]:
+        raise NotImplementedError  # the float32 tables: provided by the subclass that holds them
+    #: the tables as stored (:class:`.storage.HalfTable` for the 4D ones); indexing one decodes only that part
+    stored: dict[str, Any]
     #: solar irradiance [W m^-2 nm^-1] and ground albedo at the table wavelengths
     _solar: NDArray[np.float64]
     _albedo: NDArray[np.float64]
@@ -235,6 +240,30 @@ class TableLookups:
                 return fast[..., 0]
         return self.sky_xyz(positions, directions, sun_direction, include_ground=include_ground)[..., 1]
 
+    def sky_spectrum(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike,
+                     wavelengths: ArrayLike, *, include_ground: bool = True) -> NDArray[np.float64]:
+        """:meth:`sky_radiance` (no light shafts) at other ``wavelengths`` [nm]: ``resample(sky_radiance(...))``,
+        shape broadcast + (n_wavelengths,).
+
+        Where the resampling is a matrix (not the guarded few-wavelength rule of :mod:`.conversion`) and the
+        observer's fast path applies (:meth:`sky_xyz`), the tables' slices are projected to the wavelengths
+        first: the same values to rounding, without the radiance at the table wavelengths in between.
+        """
+        wl = np.atleast_1d(np.asarray(wavelengths, dtype=float))
+        if not self.colour.guarded:
+            from .conversion import reconstruction_matrix
+
+            key = wl.tobytes()
+            cached = getattr(self, "_spectrum_projection", None)
+            if cached is None or cached[0] != key:
+                cached = (key, reconstruction_matrix(self.wavelengths, wl, self.parameters))
+                self._spectrum_projection = cached
+            fast = self._observer(positions, directions, sun_direction, include_ground, cached[1])
+            if fast is not None:
+                return np.maximum(fast, 0.0, out=fast)
+        return self.resample(self.sky_radiance(positions, directions, sun_direction, include_ground=include_ground),
+                             wl)
+
     def _observer(self, positions, directions, sun_direction, include_ground, projection):
         """The observer fast path of :meth:`sky_xyz`, :meth:`sky_luminance` and :meth:`sky_radiance` (radiance
         projected with ``projection`` (C, n_wavelengths)), or None where it does not apply."""
@@ -265,14 +294,16 @@ class TableLookups:
         s = sun / np.linalg.norm(sun)
         mu_s = float(np.clip(pos @ s / r, -1.0, 1.0))
         projection = np.ascontiguousarray(projection, dtype=np.float64)
-        slices = lookup.observer_slices(self.tables["single_rayleigh"], self.tables["single_mie"],
-                                        self.tables["multiple"], min(max(r, bottom), top), mu_s, bottom, top,
-                                        mu_s_min, projection)
+        # the slices at the observer's radius and sun, decoded from the stored tables (a memory-mapped file is
+        # read there only: the first sky from a cached file does not wait for all of it)
+        stored = self.stored
+        slices = lookup.observer_slices(stored["single_rayleigh"], stored["single_mie"], stored["multiple"],
+                                        min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, projection)
         out = np.empty((dirs.shape[0], projection.shape[0]))
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
-        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, self.tables["transmittance"],
-                     self.tables["irradiance"], self._albedo, self._solar, projection,
+        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, stored["transmittance"],
+                     stored["irradiance"], self._albedo, self._solar, projection,
                      bottom, top, self._mie_g, self._mie_kind, self.parameters.sun_angular_radius,
                      bool(include_ground), dirs, out, bad, grain=2048)
         if bad.any():
@@ -360,7 +391,7 @@ class TableLookups:
         self._check_above_ground(pos)
         bottom, top, _ = self._geometry()
         t = np.ones((pos.shape[0], self.wavelengths.size))
-        parallel_for(lookup.sun_kernel, pos.shape[0], pos, sun, self.tables["transmittance"], bottom, top,
+        parallel_for(lookup.sun_kernel, pos.shape[0], pos, sun, self.stored["transmittance"], bottom, top,
                      self.parameters.sun_angular_radius, t, grain=4096)
         return t.reshape(*shape, -1)
 
@@ -383,7 +414,7 @@ class TableLookups:
         bottom, top, _ = self._geometry()
         e_sun = np.zeros((pts.shape[0], self.wavelengths.size))
         e_sky = np.zeros((pts.shape[0], self.wavelengths.size))
-        parallel_for(lookup.irradiance_kernel, pts.shape[0], pts, nrm, sun, self.tables["transmittance"],
-                     self.tables["irradiance"], self._solar, bottom, top, self.parameters.sun_angular_radius, e_sun,
+        parallel_for(lookup.irradiance_kernel, pts.shape[0], pts, nrm, sun, self.stored["transmittance"],
+                     self.stored["irradiance"], self._solar, bottom, top, self.parameters.sun_angular_radius, e_sun,
                      e_sky, grain=4096)
         return e_sun.reshape(*shape, -1), e_sky.reshape(*shape, -1)

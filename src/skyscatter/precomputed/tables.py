@@ -20,7 +20,10 @@ the range its ``mu`` and ``mu_s`` allow (views or sun near the zenith) that divi
 by ``P_R`` of the looked-up ``nu`` do not cancel, which skews multiple scattering towards the sun by up to 40 %
 (measured against DISORT, ``docs/bruneton.md``). The packed ``C*`` is still produced by :meth:`export`.
 Tables are float32 with a trailing wavelength axis: transmittance (n_r, n_mu), irradiance (n_r, n_mu_s),
-scattering (n_r, n_mu, n_mu_s, n_nu); ``irradiance`` is the sky's (orders 1 and up), not the sun's.
+scattering (n_r, n_mu, n_mu_s, n_nu); ``irradiance`` is the sky's (orders 1 and up), not the sun's. The three
+scattering tables are kept and stored in half precision with a power-of-two scale per wavelength, radius and sun
+zenith (:class:`.storage.HalfTable`, at most 0.049 % rounding), in the computation's results as in the files,
+so computed and loaded tables give the same values.
 
 Reference: [Bruneton2008].
 """
@@ -45,7 +48,7 @@ from .sizes import (
     RGB_TABLE_WAVELENGTHS,
     TableSizes,
 )
-from .storage import FORMAT_VERSION, TABLE_NAMES, cache_key, read_tables, write_tables
+from .storage import FORMAT_VERSION, HALF_TABLES, TABLE_NAMES, HalfTable, cache_key, read_tables, write_tables
 
 # The constants, TableSizes and cache_key are defined in .sizes and .storage; they stay importable from here.
 __all__ = ["DEFAULT_ORDERS", "DEFAULT_TABLE_WAVELENGTHS", "FORMAT_VERSION", "NAMED_WAVELENGTHS",
@@ -68,7 +71,18 @@ class PrecomputedAtmosphere(TableLookups):
         self.wavelengths = np.asarray(wavelengths, dtype=float)
         self.sizes = sizes
         self.orders = int(orders)
-        self.tables = {name: np.ascontiguousarray(tables[name], dtype=np.float32) for name in TABLE_NAMES}
+        stored: dict[str, NDArray[np.float32] | HalfTable] = {}
+        for name in TABLE_NAMES:
+            table = tables[name]
+            if name in HALF_TABLES:
+                stored[name] = table if isinstance(table, HalfTable) else HalfTable.encode(table)
+            else:
+                # a copy (small): a read-only memory map would make numba compile its kernels again for it
+                stored[name] = np.array(table, dtype=np.float32, order="C")
+        #: The tables as stored (:mod:`.storage`): float32 arrays and :class:`.storage.HalfTable` objects (possibly
+        #: memory maps of a table file); :attr:`tables` decodes them.
+        self.stored = stored
+        self._decoded: dict[str, NDArray[np.float32]] | None = None
         self.timings = dict(timings or {})
         nl = self.wavelengths.size
         expected = {
@@ -79,12 +93,21 @@ class PrecomputedAtmosphere(TableLookups):
             "multiple": (*sizes.scattering_shape, nl),
         }
         for name, shape in expected.items():
-            if self.tables[name].shape != shape:
-                raise FileFormatError(f"table {name} has shape {self.tables[name].shape}, expected {shape}")
+            if tuple(self.stored[name].shape) != shape:
+                raise FileFormatError(f"table {name} has shape {self.stored[name].shape}, expected {shape}")
         self._solar = atmosphere.solar_irradiance_at(self.wavelengths)
         self._albedo = atmosphere.ground_albedo_at(self.wavelengths)
         self._xyz_matrix: NDArray[np.float64] | None = None
         self._colour = None  # the ColourConversion, built on first use
+
+    @property
+    def tables(self) -> dict[str, NDArray[np.float32]]:
+        """The tables as float32 arrays, wavelength last (module docstring): the half-precision scattering tables
+        are decoded on first use (a sky seen by one observer reads only slices of :attr:`stored` and never needs
+        this)."""
+        if self._decoded is None:
+            self._decoded = {name: t.decode() if isinstance(t, HalfTable) else t for name, t in self.stored.items()}
+        return self._decoded
 
     # ------------------------------------------------------------------ computation
 
@@ -118,8 +141,9 @@ class PrecomputedAtmosphere(TableLookups):
             tqdm progress bar per scattering order (default: when stderr is a terminal).
         chunk_size : int, optional
             Wavelengths computed together. Most of the work is geometry shared by all wavelengths of a chunk,
-            so larger chunks are faster; memory grows with them (about 6 x 4 bytes per texel of the 4D tables
-            and wavelength). Default: as many as fit in 512 MB of working tables (20 with the default sizes).
+            so larger chunks are faster; memory grows with them (3 x 4 bytes per texel of the 4D tables and
+            wavelength). Default: as many as fit in 210 MB of working tables (all 16 with the default sizes:
+            peak 410 MiB; ``chunk_size=6`` keeps it under 300 MiB at 2.4x the CPU time).
         """
         from .compute import compute_tables  # numba and the kernels load when tables are first computed
 

@@ -174,7 +174,7 @@ class BrunetonSky(SunSkyMixin, SkyModel):
         table range are zero (see the class notes).
         """
         wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
-        return self.precomputed.resample(self.table_radiance(directions), wl)
+        return self.precomputed.sky_spectrum(self.position, directions, self.sun_direction, wl)
 
     def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
         """CIE 1931 XYZ [cd m^-2] of sky and ground in ``directions`` (..., 3)."""

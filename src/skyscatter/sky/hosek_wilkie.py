@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -456,17 +457,64 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         return flat, self._gamma(flat), shape
 
     def _evaluate(self, directions: ArrayLike, params: NDArray[np.float64], scale: NDArray[np.float64], *,
-                  clip: bool = True) -> NDArray[np.float64]:
+                  clip: bool = True, weights: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
         """``F(theta, gamma; params[b]) * scale[b]`` for every direction and band b, zero below the horizon.
 
-        With ``clip`` negative values are set to 0 (see the class notes).
+        With ``clip`` negative values are set to 0 (see the class notes). With ``weights`` (n_out, n_bands), at
+        most two non-zero per row, the result is instead ``weights @ bands`` per direction, negative sums set to
+        0 (the band values themselves unclipped). One compiled pass over the directions
+        (:mod:`.hosek_wilkie_kernel`, on all cores); fewer than :data:`_KERNEL_MIN_DIRECTIONS` directions in a
+        process that has not imported numba go through numpy (:meth:`_evaluate_numpy`), the same values to
+        rounding (``tests/test_hosek_wilkie.py``).
         """
+        try:
+            d = np.asarray(directions)
+        except (ValueError, TypeError):
+            d = None
+        if d is None or d.dtype.kind not in "fiu" or d.ndim == 0 or d.shape[-1] != 3:
+            as_directions(directions)  # raises the error that says what is wrong
+        assert d is not None  # as_directions raised otherwise
+        shape = d.shape[:-1]
+        p = np.ascontiguousarray(params, dtype=np.float64).reshape(-1, 9)
+        sc = np.ascontiguousarray(scale, dtype=np.float64).ravel()
+        if d.size < 3 * _KERNEL_MIN_DIRECTIONS and "numba" not in sys.modules:
+            # a few directions in a process without numba (a small image from the command line): numpy, without
+            # numba's import and first-use cost (about 0.5 s, more than numpy takes for these directions)
+            bands = self._evaluate_numpy(d, p, sc, clip=clip and weights is None)
+            if weights is None:
+                return bands
+            return np.maximum(bands @ weights.T, 0.0)
+        from ..precomputed.parallel import parallel_for
+        from . import hosek_wilkie_kernel
+
+        flat = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
+        if weights is None:
+            index = np.repeat(np.arange(sc.size, dtype=np.int64)[:, None], 2, axis=1)
+            weight = np.zeros((sc.size, 2))
+            weight[:, 0] = 1.0
+            clip_bands = clip_out = clip
+        else:
+            index, weight = _two_band_weights(weights)
+            clip_bands, clip_out = False, True
+        out = np.empty((flat.shape[0], index.shape[0]))
+        bad = np.zeros(flat.shape[0], dtype=np.bool_)
+        parallel_for(hosek_wilkie_kernel.radiance_kernel, flat.shape[0], flat,
+                     np.ascontiguousarray(self.sun_direction, dtype=np.float64), p, sc, index, weight,
+                     bool(clip_bands), bool(clip_out), out, bad, grain=4096)
+        if bad.any():
+            as_directions(d)  # raises: zero, NaN or infinite directions
+        return out.reshape(*shape, index.shape[0])
+
+    def _evaluate_numpy(self, directions: NDArray[np.float64], params: NDArray[np.float64],
+                        scale: NDArray[np.float64], *, clip: bool) -> NDArray[np.float64]:
+        """:meth:`_evaluate` without weights, with numpy (the same operations as the kernel, on blocks of
+        directions): :func:`.perez_family.gradation` and :func:`.perez_family.indicatrix`."""
         d = as_directions(directions)
         shape = d.shape[:-1]
         flat = np.asarray(d.reshape(-1, 3), dtype=np.float64)
         out = np.empty((flat.shape[0], scale.size))
         # Parameters in the stored order A..G, I, H (HOSEK_WILKIE_PARAMETER_ORDER), one row per band.
-        a, b, c, dd, e, f, g, i, h = (np.asarray(params, dtype=np.float64)[None, :, k] for k in range(9))
+        a, b, c, dd, e, f, g, i, h = (params[None, :, k] for k in range(9))
         step = max(1, _CHUNK // max(scale.size, 1))
         for start in range(0, flat.shape[0], step):
             sl = slice(start, start + step)
@@ -497,13 +545,15 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         if used.size == 0:
             d = as_directions(directions)
             return np.zeros((*d.shape[:-1], wl.size))
-        bands = self._evaluate(directions, self._params[used], self._radiance[used], clip=False)
-        w = weights[:, used]
-        out = np.zeros((*bands.shape[:-1], wl.size))
-        for j in range(wl.size):  # at most two bands per wavelength
-            for k in np.nonzero(w[j])[0]:
-                out[..., j] += w[j, k] * bands[..., k]
-        return np.maximum(out, 0.0, out=out)
+        return self._evaluate(directions, self._params[used], self._radiance[used], weights=weights[:, used])
+
+    def luminance(self, directions: ArrayLike) -> NDArray[np.float64]:
+        """Luminance [cd m^-2]: 683 times the Y of the authors' XYZ dataset (the Y channel alone), shape (...)."""
+        if self.dataset is not None:
+            return super().luminance(directions)
+        params, scale = self._xyz_config
+        # 683 folded into the scale: no pass over the result (the same value to one rounding)
+        return self._evaluate(directions, params[1:2], 683.0 * scale[1:2])[..., 0]
 
     def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
         """CIE 1931 XYZ [cd m^-2] from the authors' XYZ dataset (683 times its X, Y, Z), shape (..., 3)."""
@@ -624,8 +674,25 @@ class HosekWilkieSky(SunSkyMixin, SkyModel):
         return super().sun_xyz()
 
 
-#: Direction x band values per vectorised step of ``HosekWilkieSky._evaluate`` (temporaries stay in cache).
+#: Direction x band values per vectorised step of ``HosekWilkieSky._evaluate_numpy`` (temporaries stay in cache).
 _CHUNK = 65536
+#: Fewest directions evaluated by the compiled kernel in a process that has not imported numba yet (below, numpy).
+_KERNEL_MIN_DIRECTIONS = 32768
+
+
+def _two_band_weights(weights: NDArray[np.float64]) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """The interpolation matrix (n_out, n_bands) of :func:`_band_interpolation` (at most two non-zero weights per
+    row) as ``(index, weight)`` arrays (n_out, 2) for :func:`.hosek_wilkie_kernel.radiance_kernel`."""
+    n_out = weights.shape[0]
+    index = np.zeros((n_out, 2), dtype=np.int64)
+    weight = np.zeros((n_out, 2))
+    for j in range(n_out):  # a few dozen wavelengths
+        nz = np.nonzero(weights[j])[0]
+        if nz.size > 2:
+            raise InvalidParameterError("band interpolation weights must have at most two bands per wavelength")
+        index[j, : nz.size] = nz
+        weight[j, : nz.size] = weights[j, nz]
+    return index, weight
 
 
 @lru_cache(maxsize=1)

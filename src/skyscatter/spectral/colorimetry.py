@@ -210,22 +210,25 @@ def gamut_map_rgb(rgb: ArrayLike, luminance_weights: ArrayLike) -> NDArray[np.fl
     luminance."""
     c = np.asarray(rgb)
     dtype = c.dtype if c.dtype == np.float32 else np.float64
-    c = c.astype(np.float64, copy=False)
+    if c.dtype not in (np.float32, np.float64):
+        c = c.astype(np.float64)
     if c.shape[-1:] != (3,):
         raise InvalidParameterError(f"linear RGB colours need a last axis of 3; got shape {c.shape}")
     weights = np.asarray(luminance_weights, dtype=float)
-    low = c.min(axis=-1)
-    if not np.any(low < 0):
-        return c.astype(dtype, copy=False)
-    y = c @ weights
-    out = c.copy()
+    # the test and the mapping on the out-of-gamut colours only, in float64 (a whole image is not converted)
+    low = np.minimum(np.minimum(c[..., 0], c[..., 1]), c[..., 2])
     bad = low < 0
+    if not np.any(bad):
+        return c.astype(dtype, copy=False)
+    cb = c[bad].astype(np.float64)
+    y = cb @ weights
+    out = c.astype(dtype, copy=True)
     # the grey (g, g, g) of the same luminance; the white (1, 1, 1) has Y = sum of the weights
-    g, lb = y[bad] / weights.sum(), low[bad]
+    g, lb = y / weights.sum(), low[bad].astype(np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(g > 0, g / (g - lb), 0.0)  # the lowest component g + t (low - g) becomes 0
     t = np.clip(t, 0.0, 1.0)
-    mapped = np.maximum(g[:, None] + t[:, None] * (c[bad] - g[:, None]), 0.0)
+    mapped = np.maximum(g[:, None] + t[:, None] * (cb - g[:, None]), 0.0)
     mapped[g <= 0] = 0.0
     out[bad] = mapped
-    return out.astype(dtype, copy=False)
+    return out
