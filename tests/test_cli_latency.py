@@ -13,7 +13,7 @@ import sys
 import pytest
 
 import skyscatter.cli as cli
-from test_epw_skymatrix import HEADER, day_records
+from epw_records import HEADER, day_records
 
 HEAVY = ("numba", "scipy", "pandas", "pvlib", "colour", "matplotlib", "dask", "tqdm")
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import skyscatter.cli as cli
-from test_epw_skymatrix import HEADER, day_records
+from epw_records import HEADER, day_records
 
 
 @pytest.fixture(autouse=True)

@@ -19,11 +19,11 @@ import numpy as np
 import pytest
 
 import skyscatter
+from epw_records import HEADER, day_records, record
 from skyscatter.cli import main
 from skyscatter.conventions import MAX_EXTRATERRESTRIAL_IRRADIANCE
 from skyscatter.epw import MAX_FILE_BYTES, EPWWarning, read_epw
 from skyscatter.errors import FileFormatError
-from test_epw_skymatrix import HEADER, day_records, record
 
 
 def _write(path, header, rows):
