@@ -37,3 +37,11 @@ def day_records():
             dhi = round(30 + 120 * solar) if solar > 0 else 0
             rows.append(record(6, day, hour, dni, dhi, dew=8.0 + hour / 4))
     return rows
+
+
+def write_epw(path, header=None, rows=None):
+    """Write an EPW file (default: HEADER and the two days of day_records) and return its path."""
+    header = HEADER if header is None else header
+    rows = day_records() if rows is None else rows
+    path.write_text("\n".join(header + rows) + "\n", encoding="utf-8")
+    return path

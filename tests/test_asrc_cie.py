@@ -10,7 +10,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import skyscatter
-from epw_records import HEADER, day_records
 from skyscatter.cli import main
 from skyscatter.conventions import direction_from_angles
 from skyscatter.errors import InvalidParameterError, SunBelowHorizonError
@@ -273,13 +272,6 @@ def test_below_horizon_is_zero():
 
 
 # -- the sky matrix ----------------------------------------------------------------------------------------------
-
-
-@pytest.fixture
-def epw_file(tmp_path):
-    path = tmp_path / "test.epw"
-    path.write_text("\n".join(HEADER + day_records()) + "\n", encoding="utf-8")
-    return path
 
 
 def test_skymatrix_rows_match_the_sky_class(epw_file):

@@ -13,13 +13,6 @@ from skyscatter.patches import patch_luminance, patch_scheme
 from skyscatter.sky.perez import PerezSky
 
 
-@pytest.fixture
-def epw_file(tmp_path):
-    path = tmp_path / "test.epw"
-    path.write_text("\n".join(HEADER + day_records()) + "\n", encoding="utf-8")
-    return path
-
-
 def test_read_good_file(epw_file):
     epw = read_epw(epw_file)
     loc = epw.location

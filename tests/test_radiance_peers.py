@@ -108,10 +108,9 @@ def test_gendaymtx_on_the_same_epw(tmp_path):
     centre values) and its 3-hour mean dew point; the benchmark reports them for a full year.
     """
     import skyscatter
-    from epw_records import HEADER, day_records  # the two-day EPW of the EPW tests
+    from epw_records import write_epw  # the two-day EPW of the EPW tests
 
-    epw = tmp_path / "t.epw"
-    epw.write_text("\n".join(HEADER + day_records()) + "\n", encoding="utf-8")
+    epw = write_epw(tmp_path / "t.epw")
     ours = skyscatter.skymatrix(epw, scheme="reinhart2", samples=1)
     raw = run("gendaymtx", "-m", 2, "-s", "-O0", "-of", epw)
     head = raw.index(b"\n\n") + 2
@@ -138,10 +137,9 @@ def test_gendaymtx_sun_patches_on_the_same_epw(tmp_path):
     at near ties and the weights by a little; the sun's illuminance differs by the efficacy details.
     """
     import skyscatter
-    from epw_records import HEADER, day_records
+    from epw_records import write_epw  # the two-day EPW of the EPW tests
 
-    epw = tmp_path / "t.epw"
-    epw.write_text("\n".join(HEADER + day_records()) + "\n", encoding="utf-8")
+    epw = write_epw(tmp_path / "t.epw")
     sky_only = skyscatter.skymatrix(epw, scheme="reinhart2", samples=1)
     with_sun = skyscatter.skymatrix(epw, scheme="reinhart2", samples=1, include_sun=True)
     ours = with_sun.luminance - sky_only.luminance

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from epw_records import HEADER, day_records
+from epw_records import write_epw
 from skyscatter.cli import main
 from skyscatter.errors import (
     FileFormatError,
@@ -53,9 +53,7 @@ def small_sky():
 
 
 def _epw(tmp_path: Path) -> Path:
-    path = tmp_path / "w.epw"
-    path.write_text("\n".join(HEADER + day_records()) + "\n", encoding="utf-8")
-    return path
+    return write_epw(tmp_path / "w.epw")
 
 
 # ---- item 2: half a pair -------------------------------------------------------------------------------------
