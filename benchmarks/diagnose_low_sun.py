@@ -3,7 +3,7 @@
 Splits the table radiance into single scattering (Rayleigh + Mie, phase applied at lookup) and multiple
 scattering, and compares:
 
-* the tables' single scattering with an independent Gauss-Legendre integral (``tests/test_precomputed_reference``,
+* the tables' single scattering with an independent Gauss-Legendre integral (``tests/precomputed_reference``,
   plain numpy, point sun);
 * the tables' multiple scattering with the Monte Carlo total minus that integral;
 
@@ -16,9 +16,10 @@ zenith shows apart from the errors of the precomputation itself.
 from __future__ import annotations
 
 import argparse
-import importlib.util
+import importlib
 import math
 import pathlib
+import sys
 import time
 
 import numpy as np
@@ -27,14 +28,16 @@ from skyscatter.montecarlo import sky_radiance
 from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere, cached_atmosphere
 from skyscatter.precomputed.kernels import mu_s_texels
 
-_REF = pathlib.Path(__file__).resolve().parents[1] / "tests" / "test_precomputed_reference.py"
+_TESTS = pathlib.Path(__file__).resolve().parents[1] / "tests"
 
 
 def reference_module():
-    spec = importlib.util.spec_from_file_location("precomputed_reference", _REF)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    """tests/precomputed_reference.py (it imports its sibling tests/quadrature.py, so tests/ goes on the path)."""
+    sys.path.insert(0, str(_TESTS))
+    try:
+        return importlib.import_module("precomputed_reference")
+    finally:
+        sys.path.remove(str(_TESTS))
 
 
 def atmospheres() -> dict[str, AtmosphereParameters]:

@@ -11,3 +11,11 @@ def rng():
 def _isolated_cache(tmp_path_factory, monkeypatch):
     """Keep generated lookup tables out of the user's cache folder."""
     monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+@pytest.fixture
+def epw_file(tmp_path):
+    """The made two-day EPW file of tests/epw_records.py, written to a fresh temporary folder."""
+    from epw_records import write_epw
+
+    return write_epw(tmp_path / "test.epw")

@@ -12,19 +12,33 @@ the forward peak accurate.
 
 This is independent of the code under test: only the atmosphere's parameters (coefficients, scale heights,
 albedo, g) are shared.
+
+The DISORT problem itself (beam from the top onto a Lambertian ground, radiance looking up at the ground or the
+upward flux at the top) is set up once, in :func:`solve_ground_radiance` and :func:`solve_upward_flux`, for
+every DISORT comparison of the tests (the tables, the Monte Carlo reference). Also the table sizes of the
+tables-vs-DISORT tests (:data:`TABLE_SIZES`).
 """
 
 from __future__ import annotations
 
 import math
+from functools import cache
 
 import numpy as np
 
+from quadrature import gauss_legendre
 
+#: Table sizes of the tables-vs-DISORT tests: the default angular resolution (mu 128, mu_s 32, nu 8) on half the
+#: radii and smaller 2D tables.
+TABLE_SIZES = dict(transmittance_mu=128, transmittance_r=32, irradiance_mu_s=32, irradiance_r=8, scattering_r=16,
+                   scattering_mu=128, scattering_mu_s=32, scattering_nu=8)
+
+
+@cache
 def cornette_shanks_moments(g: float, n_moments: int, n_nodes: int = 4000) -> np.ndarray:
     """Legendre moments chi_l = 2 pi integral p(mu) P_l(mu) dmu, l = 0..n_moments, of the Cornette-Shanks phase
-    normalised to chi_0 = 1 on the same quadrature."""
-    x, w = np.polynomial.legendre.leggauss(n_nodes)
+    normalised to chi_0 = 1 on the same quadrature (computed once per (g, n_moments, n_nodes); read-only)."""
+    x, w = gauss_legendre(n_nodes)
     k = 3.0 / (8.0 * math.pi) * (1.0 - g * g) / (2.0 + g * g)
     p = k * (1.0 + x * x) / (1.0 + g * g - 2.0 * g * x) ** 1.5
     # Legendre polynomials by the three-term recurrence.
@@ -37,12 +51,14 @@ def cornette_shanks_moments(g: float, n_moments: int, n_nodes: int = 4000) -> np
         p_next = ((2 * ell + 1) * x * p_cur - ell * p_prev) / (ell + 1)
         p_prev, p_cur = p_cur, p_next
         chi[ell + 1] = np.sum(w * p * p_cur)
-    return chi / chi[0]
+    chi /= chi[0]
+    chi.setflags(write=False)
+    return chi
 
 
 def _layer_integral(profile, z_lo: np.ndarray, z_hi: np.ndarray, n_sub: int = 64) -> np.ndarray:
     """Integral of a DensityProfile's relative density over [z_lo, z_hi] [m] (Gauss-Legendre per layer)."""
-    x, w = np.polynomial.legendre.leggauss(n_sub)
+    x, w = gauss_legendre(n_sub)
     arr = profile.as_array()
     mid = 0.5 * (z_lo + z_hi)[:, None]
     half = 0.5 * (z_hi - z_lo)[:, None]
@@ -79,8 +95,6 @@ def disort_radiance(params, wavelength: float, sun_zenith: float, view_zenith, v
     -------
     ndarray, shape (len(view_zenith), len(view_azimuth))
     """
-    import disortpp
-
     wl = [float(wavelength)]
     beta_r = float(params.rayleigh_scattering_at(wl)[0])
     beta_me = float(params.mie_extinction_at(wl)[0])
@@ -103,30 +117,70 @@ def disort_radiance(params, wavelength: float, sun_zenith: float, view_zenith, v
     chi_r[0], chi_r[2] = 1.0, 0.1
     f_r = tau_r / (tau_r + tau_ms)
     moments = f_r[:, None] * chi_r[None, :] + (1.0 - f_r)[:, None] * chi_m[None, :]
+    albedo = float(np.mean(params.ground_albedo_at(wl)))
+    return solve_ground_radiance(tau, ssa, moments, sun_zenith=sun_zenith, view_zenith=view_zenith,
+                                 relative_azimuth=view_azimuth, ground_albedo=albedo, n_streams=n_streams)
 
-    vz = np.atleast_1d(np.asarray(view_zenith, dtype=float))
-    va = np.atleast_1d(np.asarray(view_azimuth, dtype=float))
-    mu = -np.cos(vz)
-    order = np.argsort(mu)
-    cfg = disortpp.DisortConfig(n_layers, n_streams, n_moments)
-    cfg.flags.use_user_mu = True
-    cfg.flags.use_user_tau = True
+
+def _config(delta_tau, single_scattering_albedo, phase_moments, *, sun_zenith: float, ground_albedo: float,
+            n_streams: int, n_moments: int | None, nakajima: bool):
+    """The DISORT problem of every comparison: plane-parallel layers listed from the top down, a unit beam flux
+    from the top at ``sun_zenith`` [rad] (azimuth 0), a Lambertian ground of albedo ``ground_albedo``.
+    ``phase_moments`` is (n_layers, n_moments + 1) Legendre moments per layer, or "rayleigh" (DISORT's own
+    Rayleigh moments, then ``n_moments`` is required)."""
+    import disortpp
+
+    dtau = np.asarray(delta_tau, dtype=float)
+    rayleigh = isinstance(phase_moments, str)
+    if rayleigh:
+        assert phase_moments == "rayleigh" and n_moments is not None
+    else:
+        phase_moments = np.asarray(phase_moments, dtype=float)
+        n_moments = phase_moments.shape[1] - 1
+    cfg = disortpp.DisortConfig(dtau.size, n_streams, n_moments)
     cfg.flags.use_lambertian_surface = True
-    cfg.flags.intensity_corr_nakajima = True
+    cfg.flags.use_user_tau = True
+    if nakajima:
+        cfg.flags.intensity_corr_nakajima = True
+    return disortpp, cfg, dtau, rayleigh, phase_moments
+
+
+def _fill(cfg, dtau, single_scattering_albedo, phase_moments, rayleigh, sun_zenith, ground_albedo):
+    cfg.delta_tau = [float(t) for t in dtau]
+    cfg.single_scat_albedo = [float(s) for s in np.asarray(single_scattering_albedo, dtype=float)]
+    if rayleigh:
+        cfg.set_rayleigh()
+    else:
+        cfg.phase_function_moments = [[float(c) for c in row] for row in phase_moments]
+    cfg.bc.direct_beam_flux = 1.0
+    cfg.bc.direct_beam_mu = math.cos(sun_zenith)
+    cfg.bc.direct_beam_phi = 0.0
+    cfg.bc.surface_albedo = float(ground_albedo)
+
+
+def solve_ground_radiance(delta_tau, single_scattering_albedo, phase_moments, *, sun_zenith: float, view_zenith,
+                          relative_azimuth, ground_albedo: float, n_streams: int = 32, n_moments: int | None = None,
+                          nakajima: bool = True) -> np.ndarray:
+    """Downwelling radiance at the ground per unit beam flux [sr^-1] looking up at ``view_zenith`` [rad]
+    (< pi/2) and ``relative_azimuth`` [rad] from the sun's azimuth, shape (n_view, n_azimuth). Layers, phase
+    moments and the boundary as in :func:`_config`; ``nakajima``: DISORT's Nakajima-Tanaka intensity correction.
+    """
+    disortpp, cfg, dtau, rayleigh, moments = _config(delta_tau, single_scattering_albedo, phase_moments,
+                                                     sun_zenith=sun_zenith, ground_albedo=ground_albedo,
+                                                     n_streams=n_streams, n_moments=n_moments, nakajima=nakajima)
+    vz = np.atleast_1d(np.asarray(view_zenith, dtype=float))
+    va = np.atleast_1d(np.asarray(relative_azimuth, dtype=float))
+    mu = -np.cos(vz)  # downwelling: DISORT's negative cosines
+    order = np.argsort(mu)
+    cfg.flags.use_user_mu = True
     cfg.num_user_tau = 1
     cfg.num_user_mu = vz.size
     cfg.num_phi = va.size
     cfg.allocate()
-    cfg.delta_tau = [float(t) for t in tau]
-    cfg.single_scat_albedo = [float(s) for s in ssa]
-    cfg.phase_function_moments = [[float(c) for c in row] for row in moments]
-    cfg.tau_user = [float(tau.sum())]
+    _fill(cfg, dtau, single_scattering_albedo, moments, rayleigh, sun_zenith, ground_albedo)
+    cfg.tau_user = [float(dtau.sum())]  # at the ground
     cfg.mu_user = [float(m) for m in mu[order]]
     cfg.phi_user = [float(math.degrees(a)) for a in va]
-    cfg.bc.direct_beam_flux = 1.0
-    cfg.bc.direct_beam_mu = math.cos(sun_zenith)
-    cfg.bc.direct_beam_phi = 0.0
-    cfg.bc.surface_albedo = float(np.mean(params.ground_albedo_at(wl)))
     res = disortpp.DisortSolver().solve(cfg)
     out = np.empty((vz.size, va.size))
     for k, idx in enumerate(order):
@@ -192,3 +246,18 @@ def disort_cloud(atm, layer, wl, sun_zen, view_zen, view_azi, albedo, n_layers=1
         for j in range(len(view_azi)):
             rad[idx, j] = res.intensities(k, 0, j)
     return rad, res.flux_down[0] / math.cos(sun_zen)
+
+
+def solve_upward_flux(delta_tau, single_scattering_albedo, phase_moments, *, sun_zenith: float,
+                      ground_albedo: float, n_streams: int = 32, n_moments: int | None = None) -> float:
+    """Upward flux at the top of the layers per unit beam flux (fluxes only; layers, moments, boundary as in
+    :func:`_config`)."""
+    disortpp, cfg, dtau, rayleigh, moments = _config(delta_tau, single_scattering_albedo, phase_moments,
+                                                     sun_zenith=sun_zenith, ground_albedo=ground_albedo,
+                                                     n_streams=n_streams, n_moments=n_moments, nakajima=False)
+    cfg.flags.comp_only_fluxes = True
+    cfg.num_user_tau = 1
+    cfg.allocate()
+    _fill(cfg, dtau, single_scattering_albedo, moments, rayleigh, sun_zenith, ground_albedo)
+    cfg.tau_user = [0.0]  # at the top
+    return float(disortpp.DisortSolver().solve(cfg).flux_up[0])

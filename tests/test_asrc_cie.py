@@ -31,7 +31,6 @@ from skyscatter.sky.cie import (
     overcast_relative_luminance,
 )
 from skyscatter.sky.perez import PerezSky
-from test_epw_skymatrix import HEADER, day_records
 
 
 def energyplus_weights(eps: float, delta: float) -> dict:
@@ -173,7 +172,7 @@ def _gensky_relative(option, alt, az, d, tmp_path):
     skybright.cal returns ``(a sky + b ground) / (a + b)``, a = (Dz + 1.01)^10, b = (Dz + 1.01)^-10, with the
     ground brightness A3 printed in the scene; inverting that exactly lets the comparison go down to 10 deg
     altitude (where b / a is 3 %)."""
-    from test_radiance_peers import rad_azimuth, run, trace
+    from radiance_tools import rad_azimuth, run, trace
 
     text = run("gensky", "-ang", alt, rad_azimuth(math.radians(az)), option)
     lines = text.decode().splitlines()
@@ -273,13 +272,6 @@ def test_below_horizon_is_zero():
 
 
 # -- the sky matrix ----------------------------------------------------------------------------------------------
-
-
-@pytest.fixture
-def epw_file(tmp_path):
-    path = tmp_path / "test.epw"
-    path.write_text("\n".join(HEADER + day_records()) + "\n", encoding="utf-8")
-    return path
 
 
 def test_skymatrix_rows_match_the_sky_class(epw_file):

@@ -13,7 +13,7 @@ import sys
 import pytest
 
 import skyscatter.cli as cli
-from test_epw_skymatrix import HEADER, day_records
+from epw_records import write_epw
 
 HEAVY = ("numba", "scipy", "pandas", "pvlib", "colour", "matplotlib", "dask", "tqdm")
 
@@ -44,8 +44,7 @@ def _imported_by(args: list[str]) -> list[str]:
 def test_skymatrix_command_imports_no_heavy_package(tmp_path):
     """Own SPA and Spencer series, numpy Perez kernel and time stamps: no pvlib (about 0.7 s to import), pandas
     (0.25 s), numba (0.25 s, plus 0.35 s at first use) or scipy."""
-    epw = tmp_path / "w.epw"
-    epw.write_text("\n".join(HEADER + day_records()) + "\n", encoding="utf-8")
+    epw = write_epw(tmp_path / "w.epw")
     args = ["skymatrix", str(epw), "--samples", "1", "--out", str(tmp_path / "m.npz"), "--csv",
             str(tmp_path / "m.csv"), "--no-progress"]
     assert _imported_by(args) == "0 []"

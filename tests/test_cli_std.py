@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import skyscatter.cli as cli
-from test_epw_skymatrix import HEADER, day_records
+from epw_records import write_epw
 
 
 @pytest.fixture(autouse=True)
@@ -24,9 +24,7 @@ def run(capsys, *args):
 
 @pytest.fixture
 def epw(tmp_path):
-    path = tmp_path / "w.epw"
-    path.write_text("\n".join(HEADER + day_records()) + "\n", encoding="utf-8")
-    return path
+    return write_epw(tmp_path / "w.epw")
 
 
 def test_illuminance_default_overcast(capsys):

@@ -19,6 +19,7 @@ import math
 import numpy as np
 import pytest
 
+from disort_reference import cornette_shanks_moments, solve_ground_radiance, solve_upward_flux
 from skyscatter.atmosphere import AtmosphereParameters, DensityProfile
 from skyscatter.montecarlo import kernels, sky_radiance, solar_disc_radiance
 from skyscatter.montecarlo.driver import prepare_medium
@@ -131,19 +132,12 @@ def _flat(**changes) -> AtmosphereParameters:
     return AtmosphereParameters(**base)
 
 
-def _cornette_shanks_moments(g: float, nmom: int) -> np.ndarray:
-    """Legendre moments chi_l = 1/2 int P_l(mu) 4 pi p_CS(mu) dmu of the Cornette-Shanks phase function (1992, Eq. 8,
-    written out here) by 400-point Gauss-Legendre quadrature (numpy)."""
-    mu, w = np.polynomial.legendre.leggauss(400)
-    p = 3 * (1 - g * g) * (1 + mu * mu) / (2 * (2 + g * g) * (1 + g * g - 2 * g * mu) ** 1.5)  # 4 pi p_CS
-    return np.array([0.5 * np.sum(w * p * np.polynomial.legendre.Legendre.basis(k)(mu)) for k in range(nmom + 1)])
-
-
 def _disort_principal_plane(p: AtmosphereParameters, wl: float, sun_zen_deg: float, albedo: float,
                             view_zen_deg: np.ndarray) -> np.ndarray:
     """DISORT downwelling radiance at the ground for unit beam flux, (n_view, 2): towards the sun, away; the
-    aerosol phase moments are those of ``p.mie_phase_function``."""
-    disort = pytest.importorskip("disortpp")
+    aerosol phase moments are those of ``p.mie_phase_function`` (Henyey-Greenstein: g^l; Cornette-Shanks: by
+    400-point Gauss-Legendre quadrature)."""
+    pytest.importorskip("disortpp")
     edges = np.concatenate([np.linspace(0.0, 6000.0, 31), np.linspace(7000.0, 60000.0, 54)])[::-1]
     n = edges.size - 1
     br = float(p.rayleigh_scattering_at([wl])[0])
@@ -159,41 +153,17 @@ def _disort_principal_plane(p: AtmosphereParameters, wl: float, sun_zen_deg: flo
     tau_r = np.array([br * col(p.rayleigh_density, edges[i + 1], edges[i]) for i in range(n)])
     tau_me = np.array([be * col(p.mie_density, edges[i + 1], edges[i]) for i in range(n)])
     tau_ms = tau_me * p.mie_single_scattering_albedo if be > 0 else tau_me
-    cfg = disort.DisortConfig(n, streams, nmom)
-    cfg.flags.use_user_mu = True
-    cfg.flags.use_user_tau = True
-    cfg.flags.use_lambertian_surface = True
-    cfg.flags.intensity_corr_nakajima = True
-    cfg.num_user_tau = 1
-    cfg.num_user_mu = view_zen_deg.size
-    cfg.num_phi = 2
-    cfg.allocate()
     dtau = tau_r + tau_me
-    cfg.delta_tau = list(dtau)
-    cfg.single_scat_albedo = list((tau_r + tau_ms) / dtau)
     ray = np.zeros(nmom + 1)
     ray[0], ray[2] = 1.0, 0.1
     if p.mie_phase_function == "henyey-greenstein":
         hg = g ** np.arange(nmom + 1)
     else:
-        hg = _cornette_shanks_moments(g, nmom)
-    mom = [list((tau_r[i] * ray + tau_ms[i] * hg) / (tau_r[i] + tau_ms[i])) for i in range(n)]
-    cfg.phase_function_moments = mom
-    cfg.tau_user = [float(dtau.sum())]
-    cfg.mu_user = list(np.sort(-np.cos(np.radians(view_zen_deg))))
-    cfg.phi_user = [0.0, 180.0]
-    cfg.bc.direct_beam_flux = 1.0
-    cfg.bc.direct_beam_mu = math.cos(math.radians(sun_zen_deg))
-    cfg.bc.direct_beam_phi = 0.0
-    cfg.bc.surface_albedo = albedo
-    res = disort.DisortSolver().solve(cfg)
-    out = np.empty((view_zen_deg.size, 2))
-    for k, u in enumerate(res.mu_angles):
-        zen = math.degrees(math.acos(-u))
-        i = int(np.argmin(np.abs(view_zen_deg - zen)))
-        for j in range(2):
-            out[i, j] = res.intensities(k, 0, j)
-    return out
+        hg = cornette_shanks_moments(g, nmom, n_nodes=400)
+    mom = [(tau_r[i] * ray + tau_ms[i] * hg) / (tau_r[i] + tau_ms[i]) for i in range(n)]
+    return solve_ground_radiance(dtau, (tau_r + tau_ms) / dtau, mom, sun_zenith=math.radians(sun_zen_deg),
+                                 view_zenith=np.radians(view_zen_deg), relative_azimuth=[0.0, math.pi],
+                                 ground_albedo=albedo, n_streams=streams)
 
 
 #: Sphericity allowance of the plane-parallel comparison (relative). With a planet 1000 x the Earth's radius the
@@ -283,7 +253,7 @@ def test_energy_budget_closes_with_absorption():
     """With absorbing aerosol (single-scattering albedo 0.8, tau 0.2) over a black ground the atmosphere reflects
     less than it receives; the reflected flux equals DISORT's upward flux at the top (so absorbed + transmitted
     close the budget as in DISORT) within 3 standard errors + 0.5 % (angular quadrature)."""
-    disort = pytest.importorskip("disortpp")
+    pytest.importorskip("disortpp")
     p = _flat(ground_albedo=0.0, mie_angstrom_beta=0.2, mie_single_scattering_albedo=0.8)
     sun_zen = math.radians(30.0)
     ratio, err = _upward_flux_at_top(p.replace(mie_phase_function="henyey-greenstein"), sun_zen, samples=512)
@@ -295,24 +265,12 @@ def test_energy_budget_closes_with_absorption():
     tr = br * 8000.0 * (np.exp(-edges[1:] / 8000.0) - np.exp(-edges[:-1] / 8000.0))
     tm = be * 1200.0 * (np.exp(-edges[1:] / 1200.0) - np.exp(-edges[:-1] / 1200.0))
     tms = tm * 0.8
-    cfg = disort.DisortConfig(n, 32, 32)
-    cfg.flags.use_lambertian_surface = True
-    cfg.flags.comp_only_fluxes = True
-    cfg.flags.use_user_tau = True
-    cfg.num_user_tau = 1
-    cfg.allocate()
-    cfg.delta_tau = list(tr + tm)
-    cfg.single_scat_albedo = list((tr + tms) / (tr + tm))
     ray = np.zeros(33)
     ray[0], ray[2] = 1.0, 0.1
     hg = p.mie_phase_g ** np.arange(33)
-    cfg.phase_function_moments = [list((tr[i] * ray + tms[i] * hg) / (tr[i] + tms[i])) for i in range(n)]
-    cfg.tau_user = [0.0]
-    cfg.bc.direct_beam_flux = 1.0
-    cfg.bc.direct_beam_mu = math.cos(sun_zen)
-    cfg.bc.surface_albedo = 0.0
-    res = disort.DisortSolver().solve(cfg)
-    up = res.flux_up[0] / math.cos(sun_zen)
+    mom = [(tr[i] * ray + tms[i] * hg) / (tr[i] + tms[i]) for i in range(n)]
+    up = solve_upward_flux(tr + tm, (tr + tms) / (tr + tm), mom, sun_zenith=sun_zen, ground_albedo=0.0,
+                           n_streams=32) / math.cos(sun_zen)
     assert abs(ratio - up) < 3 * err + 5e-3 * up, (ratio, up, err)
 
 

@@ -29,14 +29,12 @@ import math
 import numpy as np
 import pytest
 
+from disort_reference import TABLE_SIZES as SIZES
 from disort_reference import disort_radiance
 from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
 
 disortpp = pytest.importorskip("disortpp")
 
-#: Table sizes: the default angular resolution (mu 128, mu_s 32, nu 8) on half the radii and smaller 2D tables.
-SIZES = dict(transmittance_mu=128, transmittance_r=32, irradiance_mu_s=32, irradiance_r=8, scattering_r=16,
-             scattering_mu=128, scattering_mu_s=32, scattering_nu=8)
 VIEW_ZENITH = np.radians(np.arange(0.0, 71.0, 10.0))
 SIDES = np.radians([0.0, 180.0])  # towards the sun's azimuth, away from it
 

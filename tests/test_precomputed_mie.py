@@ -1,6 +1,6 @@
 """The precomputed tables with a tabulated (Mie) aerosol phase (issue 20).
 
-* Single scattering against the independent integral of tests/test_precomputed_reference.py, which evaluates
+* Single scattering against the independent integral of tests/precomputed_reference.py, which evaluates
   the aerosol's phase table with numpy (no table, no kernel): within 0.8 % for a Mie aerosol (OPAC
   continental-average, optical depth 0.2; measured 0.61 % worst) at the small test sizes, the same as the default
   Cornette-Shanks aerosol there (0.80 % at 550 nm: the interpolation between the 16 radii, not the phase);
@@ -24,9 +24,9 @@ import math
 import numpy as np
 import pytest
 
+from precomputed_reference import SMALL_SIZES, optical_depth, single_scattering
 from skyscatter.atmosphere import AtmosphereParameters
 from skyscatter.precomputed import PrecomputedAtmosphere
-from test_precomputed_reference import SMALL_SIZES, optical_depth, single_scattering
 
 
 @pytest.fixture(scope="module")
@@ -75,7 +75,7 @@ def test_aerial_perspective_reads_the_phase_table(mie_params):
 
 @pytest.fixture(scope="module")
 def mie_tables(mie_params):
-    from test_precomputed_disort import SIZES
+    from disort_reference import TABLE_SIZES as SIZES
 
     return PrecomputedAtmosphere.compute(mie_params, orders=6, wavelengths=[550.0], sizes=SIZES, progress=False)
 

@@ -7,12 +7,12 @@ import math
 import numpy as np
 import pytest
 
+from precomputed_reference import small_earth
 from skyscatter.errors import InvalidParameterError, SunBelowHorizonError
 from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
 from skyscatter.render.bruneton import camera_view, fisheye_view, preview_png
 from skyscatter.sky.base import SkyModel
 from skyscatter.sky.bruneton import BrunetonSky
-from test_precomputed_reference import small_earth
 
 R = AtmosphereParameters().bottom_radius
 

@@ -7,39 +7,17 @@ Radiance azimuths for -ang are degrees west of south: ours (from north towards e
 """
 
 import math
-import os
-import subprocess
 
 import numpy as np
 import pytest
 
 pyradiance = pytest.importorskip("pyradiance")
 
+from radiance_tools import rad_azimuth, run, trace  # noqa: E402
 from skyscatter.conventions import direction_from_angles  # noqa: E402
 from skyscatter.patches import patch_scheme  # noqa: E402
 from skyscatter.sky.cie import CIEOvercastSky, CIEStandardSky  # noqa: E402
 from skyscatter.sky.perez import PerezSky, luminous_efficacy, sky_brightness, sky_clearness  # noqa: E402
-
-BIN = os.path.join(pyradiance.BINPATH)
-ENV = dict(os.environ, RAYPATH=os.path.join(os.path.dirname(pyradiance.__file__), "lib"))
-GLOW = "\nskyfunc glow skyglow\n0\n0\n4 1 1 1 0\n\nskyglow source sky\n0\n0\n4 0 0 1 180\n"
-
-
-def run(*args, stdin=None):
-    res = subprocess.run([os.path.join(BIN, args[0]), *map(str, args[1:])], input=stdin, capture_output=True,
-                         env=ENV, check=True)
-    return res.stdout
-
-
-def trace(sky_text: bytes, dirs: np.ndarray, tmp_path) -> np.ndarray:
-    """Radiance's sky radiance (grey: one channel) along directions (N, 3), via oconv + rtrace -ab 0."""
-    scene = tmp_path / "sky.rad"
-    scene.write_bytes(sky_text + GLOW.encode())
-    octree = tmp_path / "sky.oct"
-    octree.write_bytes(run("oconv", scene))
-    rays = "".join(f"0 0 0 {x:.9f} {y:.9f} {z:.9f}\n" for x, y, z in dirs).encode()
-    out = run("rtrace", "-h", "-ab", "0", "-ov", octree, stdin=rays)
-    return np.array(out.split(), dtype=float).reshape(-1, 3)[:, 1]
 
 
 def sky_points(sun_zenith, sun_azimuth, rng, n=60):
@@ -50,10 +28,6 @@ def sky_points(sun_zenith, sun_azimuth, rng, n=60):
     sun = direction_from_angles(sun_zenith, sun_azimuth)
     d = d[d @ sun < math.cos(math.radians(8))][:n]
     return np.vstack([[0.0, 0.0, 1.0], d])
-
-
-def rad_azimuth(azimuth):
-    return (math.degrees(azimuth) - 180.0) % 360.0
 
 
 @pytest.mark.parametrize("alt,az", [(20, 120), (45, 200), (70, 290)])
@@ -134,10 +108,9 @@ def test_gendaymtx_on_the_same_epw(tmp_path):
     centre values) and its 3-hour mean dew point; the benchmark reports them for a full year.
     """
     import skyscatter
-    from test_epw_skymatrix import HEADER, day_records  # the two-day EPW of the EPW tests
+    from epw_records import write_epw  # the two-day EPW of the EPW tests
 
-    epw = tmp_path / "t.epw"
-    epw.write_text("\n".join(HEADER + day_records()) + "\n", encoding="utf-8")
+    epw = write_epw(tmp_path / "t.epw")
     ours = skyscatter.skymatrix(epw, scheme="reinhart2", samples=1)
     raw = run("gendaymtx", "-m", 2, "-s", "-O0", "-of", epw)
     head = raw.index(b"\n\n") + 2
@@ -164,10 +137,9 @@ def test_gendaymtx_sun_patches_on_the_same_epw(tmp_path):
     at near ties and the weights by a little; the sun's illuminance differs by the efficacy details.
     """
     import skyscatter
-    from test_epw_skymatrix import HEADER, day_records
+    from epw_records import write_epw  # the two-day EPW of the EPW tests
 
-    epw = tmp_path / "t.epw"
-    epw.write_text("\n".join(HEADER + day_records()) + "\n", encoding="utf-8")
+    epw = write_epw(tmp_path / "t.epw")
     sky_only = skyscatter.skymatrix(epw, scheme="reinhart2", samples=1)
     with_sun = skyscatter.skymatrix(epw, scheme="reinhart2", samples=1, include_sun=True)
     ours = with_sun.luminance - sky_only.luminance

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gl_sampling import sample_texture as _sample
 from skyscatter.conventions import direction_from_angles, equirect_directions
 from skyscatter.precomputed import PrecomputedAtmosphere
 from skyscatter.realtime import MANIFEST_NAME, export_realtime
@@ -322,7 +323,6 @@ def test_library_aerial_perspective_matches_the_python_lookup(viewer, atm, luts)
 
 def _emulate_aerial(ns, tex, cam, point, sun):
     """GetSkyRadianceToPoint of the GLSL library, from the manifest's Python code and the float32 textures."""
-    from test_realtime_export import _sample
 
     bottom = ns["BOTTOM_RADIUS"]
 

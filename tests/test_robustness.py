@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from epw_records import write_epw
 from skyscatter.cli import main
 from skyscatter.errors import (
     FileFormatError,
@@ -31,7 +32,6 @@ from skyscatter.render import read_exr, sky_image, write_exr, write_exr_and_png,
 from skyscatter.sky.preetham import PreethamSky
 
 SRC = Path(__file__).resolve().parents[1] / "src"
-EPW_TESTS = Path(__file__).resolve().parent / "test_epw_skymatrix.py"
 
 
 def run(capsys, *args):
@@ -53,14 +53,7 @@ def small_sky():
 
 
 def _epw(tmp_path: Path) -> Path:
-    sys.path.insert(0, str(EPW_TESTS.parent))
-    try:
-        import test_epw_skymatrix as t
-    finally:
-        sys.path.pop(0)
-    path = tmp_path / "w.epw"
-    path.write_text("\n".join(t.HEADER + t.day_records()) + "\n", encoding="utf-8")
-    return path
+    return write_epw(tmp_path / "w.epw")
 
 
 # ---- item 2: half a pair -------------------------------------------------------------------------------------

@@ -19,16 +19,11 @@ import numpy as np
 import pytest
 
 import skyscatter
+from epw_records import HEADER, day_records, record, write_epw
 from skyscatter.cli import main
 from skyscatter.conventions import MAX_EXTRATERRESTRIAL_IRRADIANCE
 from skyscatter.epw import MAX_FILE_BYTES, EPWWarning, read_epw
 from skyscatter.errors import FileFormatError
-from test_epw_skymatrix import HEADER, day_records, record
-
-
-def _write(path, header, rows):
-    path.write_text("\n".join(header + rows) + "\n", encoding="utf-8")
-    return path
 
 
 def _cli(capsys, *args):
@@ -38,7 +33,7 @@ def _cli(capsys, *args):
 
 
 def test_good_file_passes_without_a_word(tmp_path):
-    path = _write(tmp_path / "ok.epw", HEADER, day_records())
+    path = write_epw(tmp_path / "ok.epw", HEADER, day_records())
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         skyscatter.skymatrix(path, scheme="tregenza", samples=1)
@@ -53,7 +48,7 @@ def test_impossible_irradiance_is_refused_with_the_line(tmp_path, capsys, dni, d
     fields = rows[11].split(",")  # 2023-06-20 hour 12
     fields[13], fields[14], fields[15] = str(ghi), str(dni), str(dhi)
     rows[11] = ",".join(fields)
-    path = _write(tmp_path / "bad.epw", HEADER, rows)
+    path = write_epw(tmp_path / "bad.epw", HEADER, rows)
     with pytest.raises(FileFormatError, match=re.escape(f"line 20: {message}")):
         read_epw(path)
     code, out, err = _cli(capsys, "skymatrix", path, "--out", tmp_path / "m.npz")
@@ -72,13 +67,13 @@ def test_rounding_of_diffuse_over_global_is_tolerated(tmp_path):
     fields = rows[11].split(",")
     fields[13], fields[15] = "100", "103"  # 3 W m^-2 over: integer rounding, instruments
     rows[11] = ",".join(fields)
-    read_epw(_write(tmp_path / "ok.epw", HEADER, rows))
+    read_epw(write_epw(tmp_path / "ok.epw", HEADER, rows))
 
 
 def test_time_zone_far_from_the_longitude_is_warned(tmp_path, capsys):
     """The issue's case: UTC-8 at 2.35 E (Paris), every sun 9 h off."""
     header = ["LOCATION,Paris,-,FRA,skyscatter test,071560,48.85,2.35,-8.0,35.0", *HEADER[1:]]
-    path = _write(tmp_path / "tz.epw", header, day_records())
+    path = write_epw(tmp_path / "tz.epw", header, day_records())
     with pytest.warns(EPWWarning, match=r"time zone UTC-8 h is 8\.2 h from the longitude's"):
         read_epw(path)
     code, out, err = _cli(capsys, "skymatrix", path, "--out", tmp_path / "m.npz")
@@ -88,7 +83,7 @@ def test_time_zone_far_from_the_longitude_is_warned(tmp_path, capsys):
     header = ["LOCATION,Kashgar,-,CHN,skyscatter test,517090,39.47,75.98,8.0,1289.0", *HEADER[1:]]
     with warnings.catch_warnings():
         warnings.simplefilter("error", EPWWarning)
-        read_epw(_write(tmp_path / "kashgar.epw", header, day_records()))
+        read_epw(write_epw(tmp_path / "kashgar.epw", header, day_records()))
 
 
 def _polar_night(tmp_path):
@@ -101,7 +96,7 @@ def _polar_night(tmp_path):
         for hour in range(1, 25):
             lit = 10 <= hour <= 14
             rows.append(record(12, day, hour, 300 if lit else 0, 80 if lit else 0, dew=-10.0))
-    return _write(tmp_path / "polar.epw", header, rows)
+    return write_epw(tmp_path / "polar.epw", header, rows)
 
 
 def test_light_during_the_polar_night_is_left_dark_or_refused(tmp_path, capsys):
@@ -128,7 +123,7 @@ def test_twilight_and_sunrise_hours_are_not_flagged(tmp_path):
     rows[4] = ",".join(fields)
     with warnings.catch_warnings():
         warnings.simplefilter("error", EPWWarning)
-        m = skyscatter.skymatrix(_write(tmp_path / "dawn.epw", HEADER, rows), scheme="tregenza", samples=1)
+        m = skyscatter.skymatrix(write_epw(tmp_path / "dawn.epw", HEADER, rows), scheme="tregenza", samples=1)
     assert m.diffuse_illuminance[4] > 0
 
 
