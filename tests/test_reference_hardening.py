@@ -209,3 +209,41 @@ def test_ctrl_c_interrupts_a_huge_run_at_once(tmp_path, capsys):
     assert time.monotonic() - t0 < 2.0  # 1 s until the signal, then at most one task's remainder
     assert capsys.readouterr().err.strip().splitlines()[-1] == "skyscatter reference: interrupted"
     assert _entries(tmp_path) in ([], ["big.zarr"])  # no lock, no temporary store left
+
+
+_CONTENDER = """
+import sys, time
+from pathlib import Path
+from skyscatter.errors import OutputError
+from skyscatter.montecarlo import dataset
+store = Path(sys.argv[1])
+while time.time() < float(sys.argv[2]):  # start together
+    pass
+try:
+    dataset._acquire(store)
+except OutputError:
+    print("refused")
+    sys.exit(0)
+t0 = time.time()
+time.sleep(0.3)
+t1 = time.time()
+dataset._release(store)
+print(f"held {t0!r} {t1!r}")
+"""
+
+
+def test_store_lock_is_held_by_one_process_at_a_time(tmp_path):
+    """Six processes take the store's lock at the same instant: the intervals during which each believed it held
+    the lock never overlap (the lock used to exist empty for a moment after its exclusive creation, and a second
+    process read that as a stale lock and took it over: two writers, seen in CI), and no private lock file is
+    left."""
+    store = tmp_path / "s.zarr"
+    start = time.time() + 1.5
+    procs = [subprocess.Popen([sys.executable, "-c", _CONTENDER, str(store), repr(start)], stdout=subprocess.PIPE,
+                              text=True) for _ in range(6)]
+    outs = [p.communicate(timeout=60)[0].split() for p in procs]
+    held = sorted((float(o[1]), float(o[2])) for o in outs if o and o[0] == "held")
+    assert held, outs
+    for (_, end), (begin, _) in zip(held[:-1], held[1:], strict=False):
+        assert begin >= end, held
+    assert sorted(p.name for p in tmp_path.iterdir()) == [], list(tmp_path.iterdir())

@@ -231,31 +231,40 @@ def _lock_holder(store: Path) -> int | None:
 
 
 def _acquire(store: Path) -> None:
-    """Take the store's lock (:func:`lock_path`, created exclusively, holding our pid); a lock left by a process
-    that no longer runs is taken over. Another live writer: OutputError."""
+    """Take the store's lock (:func:`lock_path`, holding our pid); a lock left by a process that no longer runs is
+    taken over. Another live writer: OutputError.
+
+    The lock appears with its pid already in it: the pid is written to a private file that is then hard-linked to
+    the lock's name (``link`` fails if the name exists, like an exclusive create). An exclusive create followed by
+    a write left a moment when the lock existed empty, and a second process starting at the same time read that as
+    a stale lock, took it over and raced the first to create the store (seen in CI)."""
     lock = lock_path(store)
-    for _ in range(3):
-        try:
-            fd = os.open(lock, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
-        except FileExistsError:
-            holder = _lock_holder(store)
-            if holder is not None:
-                raise OutputError(f"{store} is being written by another skyscatter process (pid {holder}); wait "
-                                  "for it to finish (re-running then resumes) or choose another path") from None
-            with contextlib.suppress(OSError):
-                lock.unlink()  # stale: its process is gone
-            continue
-        except OSError as exc:
-            raise OutputError(f"cannot write {store}: {exc.strerror or exc}") from None
-        try:
-            with os.fdopen(fd, "w", encoding="ascii") as fh:
-                fh.write(f"{os.getpid()}\n")
-        except OSError as exc:  # a full disk: no lock is left behind
-            with contextlib.suppress(OSError):
-                lock.unlink()
-            raise OutputError(f"cannot write {store}: {exc.strerror or exc}") from None
-        return
-    raise OutputError(f"{store}: could not take its lock {lock}")  # pragma: no cover - a live race on the lock
+    mine = lock.with_name(f"{lock.name}.{os.getpid()}.{os.urandom(6).hex()}")
+    try:
+        mine.write_text(f"{os.getpid()}\n", encoding="ascii")
+    except OSError as exc:  # a full disk or a read-only folder: nothing is left behind
+        with contextlib.suppress(OSError):
+            mine.unlink()
+        raise OutputError(f"cannot write {store}: {exc.strerror or exc}") from None
+    try:
+        for _ in range(3):
+            try:
+                os.link(mine, lock)
+            except FileExistsError:
+                holder = _lock_holder(store)
+                if holder is not None:
+                    raise OutputError(f"{store} is being written by another skyscatter process (pid {holder}); wait "
+                                      "for it to finish (re-running then resumes) or choose another path") from None
+                with contextlib.suppress(OSError):
+                    lock.unlink()  # stale: its process is gone
+                continue
+            except OSError as exc:
+                raise OutputError(f"cannot write {store}: {exc.strerror or exc}") from None
+            return
+        raise OutputError(f"{store}: could not take its lock {lock}")  # pragma: no cover - a live race on the lock
+    finally:
+        with contextlib.suppress(OSError):
+            mine.unlink()
 
 
 def _release(store: Path) -> None:
@@ -268,13 +277,19 @@ _TEMP_STORE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.[0-9a-f]{12}\.tmp$")
 
 
 def _remove_stale_temporary_stores(store: Path) -> None:
-    """Remove temporary stores (``.NAME.PID.TOKEN.tmp``) beside ``store`` left by processes that no longer run."""
+    """Remove temporary stores (``.NAME.PID.TOKEN.tmp``) and private lock files (``.NAME<lock suffix>.PID.TOKEN``)
+    beside ``store`` left by processes that no longer run."""
     folder = store.parent
+    private_lock = re.compile(rf"^\.{re.escape(store.name)}{re.escape(LOCK_SUFFIX)}\.(?P<pid>\d+)\.[0-9a-f]{{12}}$")
     with contextlib.suppress(OSError):
         for entry in os.scandir(folder):
             m = _TEMP_STORE.match(entry.name)
             if m and m["name"] == store.name and not _pid_alive(int(m["pid"])) and entry.is_dir(follow_symlinks=False):
                 shutil.rmtree(entry.path, ignore_errors=True)
+            m = private_lock.match(entry.name)
+            if m and not _pid_alive(int(m["pid"])):
+                with contextlib.suppress(OSError):
+                    os.unlink(entry.path)
 
 
 def check_store_path(store: str | os.PathLike[str]) -> Path:
