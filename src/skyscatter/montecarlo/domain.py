@@ -344,7 +344,7 @@ def domain_quantities(atmosphere: AtmosphereParameters, clouds: Any, wavelengths
     direct = np.empty((nlev, nx, ny, wl.size))
     for j, radius in enumerate(radii):
         pts = _on_sphere((cx[:, None] + ox[None, :]).ravel(), (cy[:, None] + oy[None, :]).ravel(), radius)
-        d = direct_transmittance(medium, pts, sun, 1, 1).reshape(ncol, ox.size, wl.size).mean(axis=1)
+        d = direct_transmittance(medium, pts, sun, point=True).reshape(ncol, ox.size, wl.size).mean(axis=1)
         direct[j] = d.reshape(nx, ny, wl.size)
     nu = ups.shape[0]
     top, base = nlev - 1, 0
