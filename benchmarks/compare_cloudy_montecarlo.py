@@ -71,7 +71,7 @@ def main() -> None:
         tau, sun = case["tau"], case["sun_elevation_deg"]
         t0 = time.perf_counter()
         sky = CloudySky(math.radians(90.0 - sun), 0.0, cloud_optical_depth=tau, cloud_base=data["cloud_base_m"],
-                        cloud_top=data["cloud_top_m"], albedo=data["ground_albedo"], streams=a.streams,
+                        cloud_top=data["cloud_top_m"], ground_albedo=data["ground_albedo"], streams=a.streams,
                         illumination=a.illumination)
         diffuse = sky.diffuse_fluxes(wl)[0]
         dt = time.perf_counter() - t0
