@@ -17,8 +17,8 @@ The fluxes come from forward photons (:func:`skyscatter.montecarlo.kernels.flux_
 travel on the sun rays through the field's base, uniformly over the periodic domain there, entering the top of
 the atmosphere where those rays do (in a sphere, rays entering the top above the domain would reach the base
 where the sun stands lower), and are tracked with the same free paths, lobes and hero-wavelength weights as
-the backward paths; every upward crossing of the top, downward crossing of the base and absorbing collision adds the photon's weight to the pixel under it (standard errors from the
-spread between batches of photons). With a phase function as forward-peaked as a cloud's, this estimates
+the backward paths; every upward crossing of the top, downward crossing of the base and absorbing collision adds
+the photon's weight to the pixel under it (standard errors from the spread between batches of photons). With a phase function as forward-peaked as a cloud's, this estimates
 fluxes with far less variance than backward paths with cosine-distributed directions, whose next-event
 estimates hinge on rare scattering angles near the forward peak. The radiances are backward paths from a point
 drawn uniformly over the pixel (at the top or the base) along one direction, with next-event estimation. The
