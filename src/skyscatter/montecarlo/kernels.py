@@ -919,8 +919,8 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
     crossings of the level spheres, and the absorption in the column between the lowest and the highest level
     (:mod:`.domain`).
 
-    Photons travel along ``-sun`` on the sun rays that cross the lowest level sphere (``levels[0]``, the field's
-    base) uniformly over the domain's cell ``dom`` (x0, y0, dx, dy, nx, ny: pixel corner [m], pixel size [m],
+    Photons travel along ``-sun`` on the sun rays that cross the lowest level sphere (``levels[0]``: the field's
+    base, or a lower level asked for) uniformly over the domain's cell ``dom`` (x0, y0, dx, dy, nx, ny: pixel corner [m], pixel size [m],
     pixel counts), entering at the top of the atmosphere where those rays do. Why: a sun ray entering the top
     above the domain reaches the base far down-sun (Earth defaults, sun 10 deg high: 418 km), where the sun
     stands lower by that distance over the radius (there 6.2 deg) behind a longer slant path: the base would see
