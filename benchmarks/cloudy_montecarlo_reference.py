@@ -9,9 +9,10 @@ Stored: the diffuse irradiance on the ground by forward photons
 radiance seen from the ground (:func:`skyscatter.montecarlo.sky_radiance`) towards a few directions at least
 20 deg from the sun, each with its standard error, the seed and the path counts.
 
-The forward photons miss part of the air's diffuse light (measured without a cloud: 3-6 % low at sun 30 deg
-against the backward estimate and the precomputed tables, and far more at 10 deg), so ``--backward N`` adds
-the diffuse irradiance by backward cosine-distributed paths (:func:`skyscatter.montecarlo.domain.ground_irradiance`,
+The forward photons' periodic domain is off in a sphere at a low sun (without a cloud, against the backward
+estimate: +0.1..+0.9 % at sun 30 deg, -2.4..-3.2 % at 10 deg; under the layers -7..-34 % at 2 deg;
+docs/clouds.md), so ``--backward N`` adds the diffuse irradiance by backward cosine-distributed paths
+(:func:`skyscatter.montecarlo.domain.ground_irradiance`,
 N paths; unbiased, but heavy-tailed under a cloud with the sun high: use it for low suns) as
 ``diffuse_irradiance_backward``.
 

@@ -51,9 +51,7 @@ def _dirs(views):
 
 @pytest.mark.parametrize("tau, sun", [(1.0, 60.0), (15.0, 60.0), (60.0, 60.0), (5.0, 30.0)])
 def test_diffuse_irradiance_against_the_monte_carlo(tau, sun):
-    """High suns, forward photons: within 3 % plus 3 standard errors. (The forward photons miss part of the air's
-    own light, 3-6 % of the clear sky's diffuse irradiance at sun 30 deg, which is why the sun-30 cases sit
-    2-7 % above them: docs/clouds.md.)"""
+    """High suns, forward photons: within 3 % plus 3 standard errors (docs/clouds.md)."""
     case = _case(tau, sun)
     model = _sky(tau, sun).diffuse_fluxes(WL)[0]
     mc = np.array(case["diffuse_irradiance"])

@@ -684,14 +684,18 @@ def reduce_batches(sums: NDArray[np.float64], sumsq: NDArray[np.float64], n: int
 
 
 def direct_transmittance(medium: Medium, origins: NDArray[np.float64], sun: NDArray[np.float64],
-                         n_radial: int = 8, n_angular: int = 16) -> NDArray[np.float64]:
+                         n_radial: int = 8, n_angular: int = 16, *, point: bool = False) -> NDArray[np.float64]:
     """Mean transmittance over the solar disc from each origin (N, 3) [planet frame, m], (N, n_wl); exact through
-    a cloud field (deterministic)."""
+    a cloud field (deterministic). ``point``: along the disc's centre ``sun`` alone (the beam of the forward
+    photons; one ring and sector of the disc would sit off the centre, by 0.19 deg for the Sun)."""
     m = medium
     f = m.field_exact
     out = np.zeros((origins.shape[0], m.coef.shape[0]))
+    radius = 0.0 if point else m.sun_angular_radius
+    if point:
+        n_radial = n_angular = 1
     for k in range(origins.shape[0]):
-        kernels.disc_transmittance(np.ascontiguousarray(origins[k]), sun, m.sun_angular_radius, m.bottom_radius,
+        kernels.disc_transmittance(np.ascontiguousarray(origins[k]), sun, radius, m.bottom_radius,
                                    m.top_radius, m.edges, m.layers, m.nlay, m.coef, f.vf, f.vi, f.rho, f.bmax,
                                    f.bmin, f.xe, f.ye, f.re, m.fs, int(n_radial), int(n_angular), out[k])
     return out

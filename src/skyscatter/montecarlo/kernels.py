@@ -919,14 +919,20 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
     crossings of the level spheres, and the absorption in the column between the lowest and the highest level
     (:mod:`.domain`).
 
-    Photons enter at the top of the atmosphere, uniformly over the domain's cell ``dom`` (x0, y0, dx, dy, nx, ny:
-    pixel corner [m], pixel size [m], pixel counts), travelling along ``-sun``; the same free paths, collision
-    densities, lobes and hero-wavelength weights as :func:`trace_block` (without next-event estimation). A free
-    path stops at each level sphere (``levels`` (L,) radii [m], ascending), where the crossing adds the photon's
-    weight to ``up`` or ``down`` at that level and the pixel under the crossing, and starts afresh (free paths
-    are memoryless); each collision adds ``f sigma_a`` to ``absorbed`` at the pixel under it. Outputs ``up``,
-    ``down`` (L, n_pixels, n_wl, 2) and ``absorbed`` (n_pixels, n_wl, 2): per batch the tallies are summed, then
-    their sum and sum of squares over batches are added to ``[..., 0]`` and ``[..., 1]``. ``vertices_out`` (1,)
+    Photons travel along ``-sun`` on the sun rays that cross the lowest level sphere (``levels[0]``: the field's
+    base, or a lower level asked for) uniformly over the domain's cell ``dom`` (x0, y0, dx, dy, nx, ny: pixel corner
+    [m], pixel size [m], pixel counts), entering at the top of the atmosphere where those rays do. Why: a sun ray
+    entering the top above the domain reaches the base far down-sun (Earth defaults, sun 10 deg high: 418 km), where
+    the sun stands lower by that distance over the radius (there 6.2 deg) behind a longer slant path: the base would
+    see another sun. Aimed at the base, the beam there has the domain's geometry exactly; a level at height ``h``
+    above the base is crossed about ``h / tan(elevation)`` towards the sun, where the sun stands higher by that
+    distance over the radius. In the plane-parallel limit both launches are the same uniform beam. The same free
+    paths, collision densities, lobes and hero-wavelength weights as :func:`trace_block` (without next-event
+    estimation). A free path stops at each level sphere (``levels`` (L,) radii [m], ascending), where the crossing
+    adds the photon's weight to ``up`` or ``down`` at that level and the pixel under the crossing, and starts afresh
+    (free paths are memoryless); each collision adds ``f sigma_a`` to ``absorbed`` at the pixel under it. Outputs
+    ``up``, ``down`` (L, n_pixels, n_wl, 2) and ``absorbed`` (n_pixels, n_wl, 2): per batch the tallies are summed,
+    then their sum and sum of squares over batches are added to ``[..., 0]`` and ``[..., 1]``. ``vertices_out`` (1,)
     counts the vertices.
     """
     n = coef.shape[0]
@@ -990,9 +996,16 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
             hero = min(int(next_uniform(st) * n), n - 1)
             for q in range(nc):
                 kh[q] = coef[hero, q]
+            # aimed at the domain: a point uniform over the cell on the lowest level sphere, and the sun ray through
+            # it from the top of the atmosphere (docstring: in a sphere a ray entering the top above the domain
+            # would reach the base where the sun is lower)
             x = dom[0] + next_uniform(st) * lx
             y = dom[1] + next_uniform(st) * ly
-            px, py, pz = x, y, math.sqrt(rt * rt - x * x - y * y)
+            bz = math.sqrt(r_base * r_base - x * x - y * y)
+            t_up, _ = _exit_distance(x, y, bz, sun[0], sun[1], sun[2], rb, rt)
+            px, py, pz = x + t_up * sun[0], y + t_up * sun[1], bz + t_up * sun[2]
+            rr = rt / math.sqrt(px * px + py * py + pz * pz)  # exactly on the top sphere (rounding)
+            px, py, pz = px * rr, py * rr, pz * rr
             dx, dy, dz = -sun[0], -sun[1], -sun[2]
             vertices = 0
             while True:
