@@ -194,8 +194,11 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
     sky = np.zeros((n, n_p, n_b), dtype=np.float32)
     sun = np.zeros((n, n_b))
     dhi_matrix = np.full(n, np.nan)
-    rows = np.flatnonzero(h.has_sky)
-    not_sky = ~h.has_sky & (h.status != 0)
+    # the tables hold clear skies only: retrieved cloudy hours keep their cloud optical depth in the Dataset and
+    # a NaN sky (their patches from the cloudy sky are not computed here yet)
+    clear_sky = np.isin(h.status, (CLEAR, CLEAR_OPEN))
+    rows = np.flatnonzero(clear_sky)
+    not_sky = ~clear_sky & (h.status != 0)
     sky[not_sky] = np.nan
     sun[not_sky] = np.nan
     if rows.size:
