@@ -49,16 +49,17 @@ def _retrieve(model, z, ghi, dhi, opaque=None):
 
 
 def test_optical_depth_recovered(setup):
-    """Noise-free hours made with CloudySky off the nodes: the optical depth within 2 % for tau >= 2 and 8 % for
-    tau 0.8 (there GHI changes by 3 % per node interval under a high sun: the interpolation's error is
-    amplified), the retrieved sky's DHI within 1 % of the exact one (it is not fitted), GHI within 0.2 %."""
+    """Noise-free hours made with CloudySky off the nodes: the optical depth within 2 % for tau >= 5 and 4 % below
+    (there GHI changes by only 1-5 % per node interval: the table's interpolation error in zenith, a few tenths of
+    a per cent in the diffuse, is amplified; measured at AOD 0.1: <= 1.1 % and <= 2.7 %), the retrieved sky's DHI
+    within 1 % of the exact one (it is not fitted; measured <= 0.4 %), GHI within 0.2 % (the 400-point grid)."""
     model, z, tau, ghi, dhi = setup
     r = _retrieve(model, z, ghi, dhi)
     assert np.all(r.retrieved) and np.all(r.overcast) and all(x == "" for x in r.reason)
     rel = r.optical_depth / tau - 1.0
-    thick = tau >= 2.0
+    thick = tau >= 5.0
     assert np.max(np.abs(rel[thick])) < 0.02, rel
-    assert np.max(np.abs(rel[~thick])) < 0.08, rel
+    assert np.max(np.abs(rel[~thick])) < 0.04, rel
     np.testing.assert_allclose(r.dhi_model, dhi, rtol=0.01)
     np.testing.assert_allclose(r.ghi_model, ghi, rtol=2e-3)
 
@@ -89,7 +90,7 @@ def test_out_of_range_and_broken(setup):
     assert "below the sky under the thickest cloud" in r.reason[1]
     assert "outside the cloud table" in r.reason[2]
     assert not r.overcast[3] and "approximate" in r.reason[3] and r.cover[3] == 0.5
-    assert r.optical_depth[3] == pytest.approx(tau[i[2]], rel=0.08)
+    assert r.optical_depth[3] == pytest.approx(tau[i[2]], rel=0.04)
     assert np.all(np.isnan(r.optical_depth[:3]))
 
 

@@ -424,9 +424,10 @@ class CloudTable:
     (:meth:`~skyscatter.sky.cloudy.CloudySky.diffuse_fluxes`), and per zenith node the cloud's slant optical depth
     per unit optical depth at 550 nm, ``-ln(S_cloud / S_clear)`` from the sun's spectral radiance with a layer of
     optical depth 1 and without (:meth:`~skyscatter.sky.cloudy.CloudySky.sun_spectral_radiance`: the chord through
-    the spherical shells), times cos z. Between zenith nodes both are interpolated linearly in cos z after
-    dividing by cos z (the diffuse irradiance is nearly proportional to cos z under a cloud); hours beyond the
-    last node are not evaluated.
+    the spherical shells), times cos z. Between zenith nodes both are interpolated in cos z after dividing by
+    cos z (the diffuse irradiance is nearly proportional to cos z under a cloud): the diffuse by a cubic spline
+    (linearly it was 0.7-1.6 % off under thin clouds, 3-8 % in the retrieved optical depth), the slant linearly;
+    hours beyond the last node are not evaluated.
 
     Parameters
     ----------
@@ -481,11 +482,14 @@ class CloudTable:
 
     def diffuse_spectral(self, zenith: ArrayLike) -> NDArray[np.float64]:
         """Diffuse downward spectral irradiance [W m^-2 nm^-1] (n, n_tau, n_wl) at sun zenith angles [rad]."""
+        from scipy.interpolate import CubicSpline
+
         z = np.atleast_1d(np.asarray(zenith, dtype=float))
-        j, w = self._zenith_weights(z)
-        per_mu = self.diffuse / np.cos(self.zeniths)[None, :, None]
-        a, b = per_mu[:, j, :], per_mu[:, j - 1, :]  # (n_tau, n, n_wl): node j has the smaller mu
-        return np.moveaxis(a * (1 - w)[None, :, None] + b * w[None, :, None], 0, 1) * np.cos(z)[:, None, None]
+        mu_nodes = np.cos(self.zeniths)[::-1]
+        mu = np.clip(np.cos(z), mu_nodes[0], mu_nodes[-1])
+        per_mu = (self.diffuse / np.cos(self.zeniths)[None, :, None])[:, ::-1, :]
+        out = CubicSpline(mu_nodes, per_mu, axis=1)(mu)  # (n_tau, n, n_wl)
+        return np.moveaxis(out, 0, 1) * np.cos(z)[:, None, None]
 
     def slant_optical_depth(self, zenith: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64]:
         """The cloud's slant optical depth per unit optical depth at 550 nm [-] (n, n_wl) along the sun's path
