@@ -24,8 +24,9 @@ Radiances are scaled by the day's Sun-Earth distance (Spencer 1971).
 (:meth:`~skyscatter.patches.PatchScheme.sample_directions`); the observer sits on the tables' ground.
 
 **Hours.** Every record of the file is a time step (``time`` the middle of the hour, UTC). Night hours are 0;
-hours whose sky is not retrieved (``status`` other than clear, clear-not-closed or cloudy-retrieved, see
-:data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN, so that nothing downstream mistakes them for a sky; the
+hours without a clear sky (``status`` other than clear or clear-not-closed, see
+:data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN (retrieved cloudy hours too: their ``cloud_optical_depth``
+is in the Dataset, their patches from the cloudy sky are not computed yet), so that nothing downstream mistakes them for a sky; the
 ``status`` and ``reason`` variables say why. ``dhi_matrix`` is the broadband diffuse horizontal irradiance of the
 matrix itself (patch radiances at the table wavelengths integrated over the patches' solid angles and carried
 to broadband as in the retrieval): ``dhi_matrix / dhi - 1`` is the closure of the matrix.

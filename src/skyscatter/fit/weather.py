@@ -42,15 +42,19 @@ sun: the circumsolar light they add to DNI is not modelled (it lowers the retrie
    of that day wins), else the file's optical depth where present (converted from TMY's broadband value at
    700 nm, Molineaux et al. 1998, with the Angstrom exponent), else the 6 nearest clear hours within 3 days,
    else ``default_aerosol_optical_depth``.
-   The cloud optical depth and cover come from :func:`retrieve_clouds`, the one function the fast cloudy sky
-   (the cloudy-skies work) plugs into; until it exists such hours are *cloudy, not retrieved* and their sky is NaN.
+   The cloud optical depth at 550 nm comes from GHI by :func:`retrieve_clouds`, inverting the fast cloudy sky
+   (:class:`~skyscatter.sky.cloudy.CloudySky`, an overcast water layer, through a :class:`CloudTable` of its
+   solutions for one representative aerosol); the file's sky cover is a recorded prior that flags broken hours
+   as approximate. Retrieved hours are *cloudy*, the others *cloudy, not retrieved* with the reason (GHI beyond
+   the table's thinnest or thickest cloud, a sun below 3 deg). The spectral matrix (:mod:`.spectral_matrix`)
+   does not compute cloudy skies yet: their patches stay NaN, their optical depth is in the Dataset.
 
 Precipitable water: the file's field, else Gueymard (1994) from temperature and relative humidity, else
 ``default_precipitable_water``. Ozone: a CSV's ``ozone`` column, else ``default_ozone`` (EPW and TMY3 files do
 not carry it). The ground albedo of the tables is the base atmosphere's (the file's albedo is reported, not
 used: it would be one more grid axis).
 
-References: [BirdRiordan1986], [Gueymard1994], [Molineaux1998], [Spencer1971], [Bruneton2008].
+References: [BirdRiordan1986], [Gueymard1994], [Molineaux1998], [Spencer1971], [Bruneton2008], [Stamnes1988].
 """
 
 from __future__ import annotations
@@ -588,8 +592,10 @@ def retrieve_clouds(ghi: NDArray[np.float64], dhi: NDArray[np.float64], zenith: 
     """Cloud optical depth at 550 nm of cloudy hours from their GHI [W m^-2], by inverting the fast cloudy sky's
     broadband global horizontal irradiance (:class:`CloudTable`, :func:`cloud_irradiance`); DHI is the check.
 
-    GHI(tau) = DHI(tau) + DNI(tau) cos z decreases with the cloud optical depth (checked per hour on the table;
-    DHI alone does not: it rises under thin clouds). Per hour it is computed at the table's optical depth
+    GHI(tau) = DHI(tau) + DNI(tau) cos z decreases with the cloud optical depth, except under thin clouds with a
+    high sun, where it first rises by up to 0.2 % (forward scattering): the inversion uses the branch beyond the
+    maximum, and a GHI between the thinnest node's and the maximum (two solutions) is not retrieved. DHI alone
+    rises under thin clouds and cannot be inverted. Per hour it is computed at the table's optical depth
     nodes, interpolated on 400 points in ln tau (the diffuse by a monotone cubic, PCHIP, in (ln tau, ln DHI), the
     direct by one in (tau, ln DNI)) and inverted there linearly. Hours whose GHI lies above the sky under the thinnest node or below the thickest, or whose sun is
     lower than the last zenith node, are not retrieved (``reason``). The table is built for one aerosol: the
@@ -653,11 +659,17 @@ def retrieve_clouds(ghi: NDArray[np.float64], dhi: NDArray[np.float64], zenith: 
     ld = PchipInterpolator(lt, np.log(np.maximum(d_nodes, 1e-300)).T, axis=0)(fine)  # (400, n)
     ln_ = PchipInterpolator(table.optical_depths, np.log(np.maximum(n_nodes, 1e-300)).T, axis=0)(np.exp(fine))
     lg = np.log(np.maximum(np.exp(ld) + np.exp(ln_) * np.cos(z)[None, :], 1e-300))
-    monotone = np.all(np.diff(lg, axis=0) < 0, axis=0)
+    # under thin clouds and a high sun GHI first rises a little (forward scattering: +0.2 % from 0.5 to 0.8): the
+    # inversion uses the decreasing branch beyond the maximum; a GHI between the thinnest node's and the maximum
+    # has two solutions and is not retrieved
+    peak = np.argmax(lg, axis=0)
+    lg_max = lg[peak, np.arange(n)]
+    lg = np.where(np.arange(fine.size)[:, None] < peak[None, :], lg_max[None, :], lg)
     target = np.log(np.maximum(ghi, 1e-300))
-    above = target > lg[0]
+    above = target > lg_max
+    ambiguous = (target > lg[0]) & ~above
     below = target < lg[-1]
-    ok = in_range & monotone & ~above & ~below & (ghi > 0)
+    ok = in_range & ~above & ~ambiguous & ~below & (ghi > 0)
     idx = np.clip(np.sum(lg > target[None, :], axis=0), 1, fine.size - 1)  # first fine point at or below target
     cols = np.arange(n)
     g_hi, g_lo = lg[idx - 1, cols], lg[idx, cols]
@@ -678,7 +690,8 @@ def retrieve_clouds(ghi: NDArray[np.float64], dhi: NDArray[np.float64], zenith: 
                             "cloud enhancement, cloud optical depth not retrieved")
     reason[rest & below] = (f"GHI below the sky under the thickest cloud (optical depth {t1:g}): cloud optical "
                             "depth not retrieved")
-    reason[rest & ~above & ~below & ~monotone] = "GHI not monotonic in the cloud optical depth at this sun: not retrieved"
+    reason[rest & ambiguous] = (f"GHI between the sky under the thinnest cloud (optical depth {t0:g}) and the slightly "
+                                "brighter one under a somewhat thicker cloud: two solutions, not retrieved")
     reason[rest & (ghi <= 0) & (reason == "")] = "no global irradiance: cloud optical depth not retrieved"
     broken = ok & ~overcast
     reason[broken] = [f"broken sky (cover {c:g} tenths) fitted with an overcast layer: approximate"
