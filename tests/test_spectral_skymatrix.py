@@ -153,7 +153,8 @@ def test_clear_sky_model_against_spectrl2():
 def test_retrieval_recovers_spectrl2_aerosol(hourly):
     """Clear hours of the SPECTRL2 day: AOD within 0.03 of the truth (the two models' Rayleigh, gas and aerosol
     descriptions differ; measured 0.131-0.135 for 0.15), DNI closure exact (Newton), DHI closed by an aerosol
-    albedo of 0.92-0.97 (SPECTRL2's aerosol: 0.945 at 400 nm); the DNI retrieval wins over the file's field. Cloudy days: cloud optical depth from GHI (retrieve_clouds)."""
+    albedo of 0.92-0.97 (SPECTRL2's aerosol: 0.945 at 400 nm); the DNI retrieval wins over the file's field.
+    Cloudy days: the cloud optical depth from GHI (retrieve_clouds)."""
     from skyscatter.fit.weather import CLEAR, CLOUDY, CLOUDY_OPEN, NIGHT
 
     st = hourly.status

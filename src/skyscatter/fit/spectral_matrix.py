@@ -26,7 +26,8 @@ Radiances are scaled by the day's Sun-Earth distance (Spencer 1971).
 **Hours.** Every record of the file is a time step (``time`` the middle of the hour, UTC). Night hours are 0;
 hours without a clear sky (``status`` other than clear or clear-not-closed, see
 :data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN (retrieved cloudy hours too: their ``cloud_optical_depth``
-is in the Dataset, their patches from the cloudy sky are not computed yet), so that nothing downstream mistakes them for a sky; the
+is in the Dataset, their patches from the cloudy sky are not computed yet), so that nothing downstream
+mistakes them for a sky; the
 ``status`` and ``reason`` variables say why. ``dhi_matrix`` is the broadband diffuse horizontal irradiance of the
 matrix itself (patch radiances at the table wavelengths integrated over the patches' solid angles and carried
 to broadband as in the retrieval): ``dhi_matrix / dhi - 1`` is the closure of the matrix.

@@ -439,20 +439,20 @@ class CloudTable:
         The air without clouds (its aerosol included).
     optical_depth_nodes : sequence of float
         Cloud optical depths at 550 nm [-], increasing, in (0, 60].
-    zenith_nodes : sequence of float
-        Sun zenith angles [rad], increasing, in [0, 88 deg].
+    zenith_nodes : sequence of float, optional
+        Sun zenith angles [rad], increasing, in [0, 88 deg] (default :data:`CLOUD_ZENITH_NODES_DEG`).
     streams : int
         DISORT streams (default 16, the cloudy sky's).
     """
 
     def __init__(self, atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike = CLOUD_OPTICAL_DEPTH_NODES,
-                 zenith_nodes: ArrayLike = np.radians(CLOUD_ZENITH_NODES_DEG), *, streams: int = 16) -> None:
+                 zenith_nodes: ArrayLike | None = None, *, streams: int = 16) -> None:
         import time
 
         from ..sky.cloudy import GRID_WAVELENGTHS, MAX_CLOUD_OPTICAL_DEPTH, CloudySky
 
         tau = np.asarray(optical_depth_nodes, dtype=float)
-        zen = np.asarray(zenith_nodes, dtype=float)
+        zen = np.radians(CLOUD_ZENITH_NODES_DEG) if zenith_nodes is None else np.asarray(zenith_nodes, dtype=float)
         for name, v, lo, hi in (("optical_depth_nodes", tau, 1e-6, MAX_CLOUD_OPTICAL_DEPTH),
                                 ("zenith_nodes", zen, 0.0, math.radians(88.0))):
             if v.ndim != 1 or v.size < 2 or not np.all(np.isfinite(v)) or np.any(np.diff(v) <= 0) \
@@ -514,8 +514,10 @@ def _interp_rows(x: NDArray[np.float64], xp: NDArray[np.float64], fp: NDArray[np
 
 
 def cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike = CLOUD_OPTICAL_DEPTH_NODES,
-                zenith_nodes: ArrayLike = np.radians(CLOUD_ZENITH_NODES_DEG)) -> CloudTable:
+                zenith_nodes: ArrayLike | None = None) -> CloudTable:
     """A :class:`CloudTable`, kept in memory for the process (key: the air and the nodes)."""
+    if zenith_nodes is None:
+        zenith_nodes = np.radians(CLOUD_ZENITH_NODES_DEG)
     key = (repr(atmosphere), tuple(np.asarray(optical_depth_nodes, dtype=float)),
            tuple(np.asarray(zenith_nodes, dtype=float)))
     if key not in _CLOUD_TABLES:
@@ -597,7 +599,8 @@ def retrieve_clouds(ghi: NDArray[np.float64], dhi: NDArray[np.float64], zenith: 
     maximum, and a GHI between the thinnest node's and the maximum (two solutions) is not retrieved. DHI alone
     rises under thin clouds and cannot be inverted. Per hour it is computed at the table's optical depth
     nodes, interpolated on 400 points in ln tau (the diffuse by a monotone cubic, PCHIP, in (ln tau, ln DHI), the
-    direct by one in (tau, ln DNI)) and inverted there linearly. Hours whose GHI lies above the sky under the thinnest node or below the thickest, or whose sun is
+    direct by one in (tau, ln DNI)) and inverted there linearly. Hours whose GHI lies above the sky under the
+    thinnest node or below the thickest, or whose sun is
     lower than the last zenith node, are not retrieved (``reason``). The table is built for one aerosol: the
     node of ``aerosol_nodes`` nearest the median of the hours' aerosol optical depths (the clouds dominate GHI;
     the table's air is built once per node and cached); the direct beam uses each hour's own aerosol.
@@ -664,10 +667,11 @@ def retrieve_clouds(ghi: NDArray[np.float64], dhi: NDArray[np.float64], zenith: 
     # has two solutions and is not retrieved
     peak = np.argmax(lg, axis=0)
     lg_max = lg[peak, np.arange(n)]
+    lg_thin = lg[0].copy()
     lg = np.where(np.arange(fine.size)[:, None] < peak[None, :], lg_max[None, :], lg)
     target = np.log(np.maximum(ghi, 1e-300))
     above = target > lg_max
-    ambiguous = (target > lg[0]) & ~above
+    ambiguous = (target > lg_thin) & ~above
     below = target < lg[-1]
     ok = in_range & ~above & ~ambiguous & ~below & (ghi > 0)
     idx = np.clip(np.sum(lg > target[None, :], axis=0), 1, fine.size - 1)  # first fine point at or below target
@@ -1071,12 +1075,12 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
                                  precipitable_water=pw[cl], pressure=pressure[cl], ozone=ozone[cl],
                                  eccentricity=ecc[cl], model=model, aerosol_nodes=aod_axis.values)
         status[cl] = np.where(clouds.retrieved, CLOUDY, CLOUDY_OPEN)
-        reason[cl] = [("; ".join(x for x in (r, c) if x)) for r, c in zip(reason[cl], clouds.reason)]
+        reason[cl] = [("; ".join(x for x in (r, c) if x)) for r, c in zip(reason[cl], clouds.reason, strict=True)]
         dhi_model[cl], dni_model[cl] = clouds.dhi_model, clouds.dni_model
         if clouds.table is not None:
             notes.append(f"cloudy hours: {int(clouds.retrieved.sum())} of {cl.size} retrieved, with the cloud table "
-                         f"of aerosol optical depth {clouds.aerosol_optical_depth:g} ({clouds.table.optical_depths.size}"
-                         f" x {clouds.table.zeniths.size} DISORT solves)")
+                         f"of aerosol optical depth {clouds.aerosol_optical_depth:g} "
+                         f"({clouds.table.optical_depths.size} x {clouds.table.zeniths.size} DISORT solves)")
         cod = np.full(n, np.nan)
         ccv = np.full(n, np.nan)
         cod[cl], ccv[cl] = clouds.optical_depth, clouds.cover
