@@ -153,8 +153,9 @@ def test_clear_sky_model_against_spectrl2():
 def test_retrieval_recovers_spectrl2_aerosol(hourly):
     """Clear hours of the SPECTRL2 day: AOD within 0.03 of the truth (the two models' Rayleigh, gas and aerosol
     descriptions differ; measured 0.131-0.135 for 0.15), DNI closure exact (Newton), DHI closed by an aerosol
-    albedo of 0.92-0.97 (SPECTRL2's aerosol: 0.945 at 400 nm); the DNI retrieval wins over the file's field."""
-    from skyscatter.fit.weather import CLEAR, CLOUDY_OPEN, NIGHT
+    albedo of 0.92-0.97 (SPECTRL2's aerosol: 0.945 at 400 nm); the DNI retrieval wins over the file's field.
+    Cloudy days: the cloud optical depth from GHI (retrieve_clouds)."""
+    from skyscatter.fit.weather import CLEAR, CLOUDY, CLOUDY_OPEN, NIGHT
 
     st = hourly.status
     clear = np.flatnonzero(st == CLEAR)
@@ -165,11 +166,30 @@ def test_retrieval_recovers_spectrl2_aerosol(hourly):
     assert np.all((hourly.single_scattering_albedo[clear] > 0.85) & (hourly.single_scattering_albedo[clear] < 1.0))
     assert np.all(hourly.aerosol_source[clear] == "dni")
     assert np.all(np.isfinite(hourly.aerosol_optical_depth_file[clear]))
-    # broken and overcast days: cloudy, not retrieved, with the file's AOD (no clear hour that day) and a reason
-    cloudy = np.flatnonzero((st == CLOUDY_OPEN) & (np.arange(st.size) >= 24))
+    # broken and overcast days: cloudy, with the file's AOD (no clear hour that day); the cloud optical depth
+    # retrieved from GHI where the sun is high enough, else a reason
+    later = np.arange(st.size) >= 24
+    cloudy = np.flatnonzero(np.isin(st, (CLOUDY, CLOUDY_OPEN)) & later)
     assert cloudy.size >= 28
     np.testing.assert_allclose(hourly.aerosol_optical_depth[cloudy], FILE_AOD_BROADBAND * (700 / 550) ** 1.3)
-    assert all("cloud optical depth not retrieved" in str(r) for r in hourly.reason[cloudy])
+    done = np.flatnonzero((st == CLOUDY) & later)
+    open_ = np.flatnonzero((st == CLOUDY_OPEN) & later)
+    assert done.size >= 20
+    assert np.all((hourly.cloud_optical_depth[done] >= 0.5) & (hourly.cloud_optical_depth[done] <= 60))
+    assert np.all(np.isnan(hourly.cloud_optical_depth[open_]))
+    assert all("not retrieved" in str(r) for r in hourly.reason[open_])
+    # the fit is to GHI: the retrieved sky's GHI (DHI + DNI cos z) reproduces it to the inversion's 400-point grid
+    g_model = hourly.dhi_model[done] + hourly.dni_model[done] * np.cos(hourly.sun_zenith[done])
+    np.testing.assert_allclose(g_model, hourly.ghi[done], rtol=2e-3)
+    # broken day (cover 5 tenths): fitted with an overcast layer and flagged; overcast day: no flag, and (no beam
+    # in the record) the layer is thick enough that DHI closes with GHI
+    broken = done[(done >= 24) & (done < 48)]
+    overcast = done[done >= 48]
+    assert broken.size and all("approximate" in str(r) for r in hourly.reason[broken])
+    assert np.all(hourly.cloud_cover[broken] == 0.5) and np.all(hourly.cloud_cover[overcast] == 1.0)
+    assert overcast.size >= 8 and all(str(r) == "" for r in hourly.reason[overcast])
+    assert np.all(hourly.cloud_optical_depth[overcast] > 5)
+    np.testing.assert_allclose(hourly.dhi_model[overcast], hourly.dhi[overcast], rtol=0.01)
     assert np.all(st[(hourly.ghi == 0) & (hourly.dhi == 0)] == NIGHT)
 
 

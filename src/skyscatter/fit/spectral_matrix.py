@@ -24,8 +24,10 @@ Radiances are scaled by the day's Sun-Earth distance (Spencer 1971).
 (:meth:`~skyscatter.patches.PatchScheme.sample_directions`); the observer sits on the tables' ground.
 
 **Hours.** Every record of the file is a time step (``time`` the middle of the hour, UTC). Night hours are 0;
-hours whose sky is not retrieved (``status`` other than clear, clear-not-closed or cloudy-retrieved, see
-:data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN, so that nothing downstream mistakes them for a sky; the
+hours without a clear sky (``status`` other than clear or clear-not-closed, see
+:data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN (retrieved cloudy hours too: their ``cloud_optical_depth``
+is in the Dataset, their patches from the cloudy sky are not computed yet), so that nothing downstream
+mistakes them for a sky; the
 ``status`` and ``reason`` variables say why. ``dhi_matrix`` is the broadband diffuse horizontal irradiance of the
 matrix itself (patch radiances at the table wavelengths integrated over the patches' solid angles and carried
 to broadband as in the retrieval): ``dhi_matrix / dhi - 1`` is the closure of the matrix.
@@ -194,8 +196,11 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
     sky = np.zeros((n, n_p, n_b), dtype=np.float32)
     sun = np.zeros((n, n_b))
     dhi_matrix = np.full(n, np.nan)
-    rows = np.flatnonzero(h.has_sky)
-    not_sky = ~h.has_sky & (h.status != 0)
+    # the tables hold clear skies only: retrieved cloudy hours keep their cloud optical depth in the Dataset and
+    # a NaN sky (their patches from the cloudy sky are not computed here yet)
+    clear_sky = np.isin(h.status, (CLEAR, CLEAR_OPEN))
+    rows = np.flatnonzero(clear_sky)
+    not_sky = ~clear_sky & (h.status != 0)
     sky[not_sky] = np.nan
     sun[not_sky] = np.nan
     if rows.size:
