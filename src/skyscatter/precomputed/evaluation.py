@@ -14,7 +14,7 @@ Reference: [Bruneton2008].
 from __future__ import annotations
 
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -63,9 +63,9 @@ class TableLookups:
 
     parameters: AtmosphereParameters
     wavelengths: NDArray[np.float64]
-    @property
-    def tables(self) -> dict[str, NDArray[np.float32]]:
-        raise NotImplementedError  # the float32 tables: provided by the subclass that holds them
+    if TYPE_CHECKING:  # the float32 tables: a property of the subclass that holds them (PrecomputedAtmosphere)
+        @property
+        def tables(self) -> dict[str, NDArray[np.float32]]: ...
     #: the tables as stored (:class:`.storage.HalfTable` for the 4D ones); indexing one decodes only that part
     stored: dict[str, Any]
     #: solar irradiance [W m^-2 nm^-1] and ground albedo at the table wavelengths

@@ -32,6 +32,7 @@ radiance times its solid angle.
 
 from __future__ import annotations
 
+import abc
 import math
 from dataclasses import dataclass
 
@@ -60,7 +61,7 @@ def _unit(zenith: NDArray[np.float64], azimuth: NDArray[np.float64]) -> NDArray[
     return np.stack([st * np.sin(azimuth), st * np.cos(azimuth), np.cos(zenith)], axis=-1)
 
 
-class _Projection:
+class _Projection(abc.ABC):
     """A continuous map between image coordinates (x right, y down, in pixels; pixel (i, j) spans
     [j, j + 1) x [i, i + 1)) and unit ENU directions."""
 
@@ -68,17 +69,17 @@ class _Projection:
     height: int
     wraps = False  # columns wrap around (the full-sphere equirectangular map)
 
+    @abc.abstractmethod
     def to_pixel(self, d: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray]:
         """(x, y, valid) of directions (..., 3)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def from_pixel(self, x: NDArray, y: NDArray) -> NDArray[np.float64]:
         """Unit directions (..., 3) at image coordinates (x, y)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def solid_angle_density(self, x: NDArray, y: NDArray, d: NDArray[np.float64]) -> NDArray[np.float64]:
         """Solid angle per unit image area [sr px^-2] at (x, y) (direction ``d`` there)."""
-        raise NotImplementedError
 
     def in_view(self, d: NDArray[np.float64], x: NDArray, y: NDArray) -> NDArray[np.bool_]:
         """Whether the sub-sample at (x, y), direction ``d``, lies in the image's field of view."""
