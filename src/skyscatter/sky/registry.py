@@ -393,6 +393,20 @@ register(ModelSpec(
     spectral=True,
     cost="tables",
 ))
+def cloud_layer_parameters(optical_depth: Parameter, highest: float) -> tuple[Parameter, ...]:
+    """The parameters of one uniform water cloud layer (:class:`skyscatter.atmosphere.clouds.CloudLayer`), shared
+    by the models that take one: its optical depth (``optical_depth``: each model its default and range), base and
+    top altitudes [m] up to ``highest``, and the droplets' effective radius (the range of the droplet optics)."""
+    return (
+        optical_depth,
+        Parameter("cloud_base", "m", 1000.0, "altitude of the cloud layer's base", low=0.0, high=highest),
+        Parameter("cloud_top", "m", 1500.0, "altitude of the cloud layer's top (above its base)", low=0.0,
+                  high=highest),
+        Parameter("cloud_effective_radius", "m", 10e-6, "effective radius of the cloud droplets (Mie optics)",
+                  low=1e-6, high=50e-6, why="the range of the droplet optics"),
+    )
+
+
 register(ModelSpec(
     name="montecarlo",
     factory="skyscatter.sky.montecarlo:MonteCarloSky",
@@ -407,12 +421,8 @@ register(ModelSpec(
         Parameter("seed", "1", 0, "seed of the counter-based random streams", kind="int", low=0, high=2**63 - 1),
         Parameter("atmosphere", "", None, "the medium (AtmosphereParameters; default: the Earth defaults)",
                   kind="atmosphere", cli=False),
-        Parameter("cloud_optical_depth", "1", 0.0, "optical depth at 550 nm of a uniform water cloud layer (0: none)",
-                  low=0.0, high=1000.0),
-        Parameter("cloud_base", "m", 1000.0, "altitude of the cloud layer's base", low=0.0, high=1e5),
-        Parameter("cloud_top", "m", 1500.0, "altitude of the cloud layer's top (above its base)", low=0.0, high=1e5),
-        Parameter("cloud_effective_radius", "m", 10e-6, "effective radius of the cloud droplets (Mie optics)",
-                  low=1e-6, high=50e-6),
+        *cloud_layer_parameters(Parameter("cloud_optical_depth", "1", 0.0, "optical depth at 550 nm of a uniform "
+                                          "water cloud layer (0: none)", low=0.0, high=1000.0), highest=1e5),
         Parameter("clouds", "", None, "a 3D cloud field (skyscatter.atmosphere.clouds.CloudField)", kind="object",
                   cli=False),
     ),
@@ -429,13 +439,9 @@ register(ModelSpec(
                   note="The medium's layers (air, Mie cloud droplets) solved by the discrete-ordinate method of the "
                        "first with the intensity correction of the second:"),
     parameters=(
-        Parameter("cloud_optical_depth", "1", 15.0, "optical depth at 550 nm of a uniform water cloud layer "
-                  "(0: none; 15 a stratus)", low=0.0, high=60.0, why="the range measured against the Monte Carlo"),
-        Parameter("cloud_base", "m", 1000.0, "altitude of the cloud layer's base", low=0.0, high=20000.0),
-        Parameter("cloud_top", "m", 1500.0, "altitude of the cloud layer's top (above its base)", low=0.0,
-                  high=20000.0),
-        Parameter("cloud_effective_radius", "m", 10e-6, "effective radius of the cloud droplets (Mie optics)",
-                  low=1e-6, high=50e-6, why="the range of the droplet optics"),
+        *cloud_layer_parameters(Parameter("cloud_optical_depth", "1", 15.0, "optical depth at 550 nm of a uniform "
+                                          "water cloud layer (0: none; 15 a stratus)", low=0.0, high=60.0,
+                                          why="the range measured against the Monte Carlo"), highest=20000.0),
         Parameter("ground_albedo", "1", None, "ground albedo, the same at every wavelength (default 0.1)", low=0.0,
                   high=1.0),
         Parameter("altitude", "m", 0.0, "observer altitude above the ground: below, in or above the clouds",
