@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from skyscatter.atmosphere import AtmosphereParameters
 from skyscatter.errors import InvalidParameterError
 from skyscatter.sky import registry
 from skyscatter.sky.cloudy import CloudySky
@@ -60,17 +61,67 @@ def test_diffuse_irradiance_against_the_monte_carlo(tau, sun):
 
 
 def test_diffuse_irradiance_at_sunset_against_the_monte_carlo():
-    """Sun 2 deg high, backward paths (unbiased; 2-4 % standard error): the coupling with the spherical tables
-    is within 5 % + 3 sigma at 450 nm, and the model is too bright in the red by up to 28 %
-    (docs/clouds.md: the measured limit; the plane-parallel column alone was 31-35 % too dark at 450-550 nm)."""
+    """Sun 2 deg high, Earth radius, against the stored backward paths (20000): the coupling with the spherical
+    tables is within 5 % + 3 sigma at 450 nm, where the sky's light on the cloud top dominates; at 650 nm the
+    backward estimate is too low (its heavy tail, below), so only the sign and the plane-parallel column's
+    failure are checked there (the column alone is 31-35 % too dark at 450-550 nm)."""
     case = _case(15.0, 2.0)
     model = _sky(15.0, 2.0).diffuse_fluxes(WL)[0]
     mc = np.array(case["diffuse_irradiance_backward"])
     err = np.array(case["diffuse_irradiance_backward_stderr"])
     assert abs(model[0] - mc[0]) <= 0.05 * mc[0] + 3.0 * err[0]
-    assert np.all(model / mc - 1 < 0.30) and np.all(model / mc - 1 > -0.05)
+    assert np.all(model / mc - 1 > -0.05)
     column = _sky(15.0, 2.0, illumination="column").diffuse_fluxes(WL)[0]
     assert np.all(np.abs(model / mc - 1)[:2] < np.abs(column / mc - 1)[:2])
+
+
+LOW_SUN = json.loads((Path(__file__).parent / "data" / "cloudy_low_sun.json").read_text())
+
+
+def _forward_mean(case: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Mean of a case's independent forward-photon runs and its standard error."""
+    vals = np.array([r["diffuse_irradiance"] for r in case["forward"]])
+    errs = np.array([r["diffuse_irradiance_stderr"] for r in case["forward"]])
+    return vals.mean(axis=0), np.sqrt((errs ** 2).sum(axis=0)) / len(vals)
+
+
+def _low_sun_case(tau: float, sun: float, scale: float) -> dict:
+    return next(c for c in LOW_SUN["cases"] if (c["air"], c["tau"], c["sun_elevation_deg"], c["radius_scale"])
+                == ("earth", tau, sun, scale))
+
+
+def _scaled_air(scale: float) -> AtmosphereParameters:
+    rb = AtmosphereParameters().bottom_radius * scale
+    return AtmosphereParameters(bottom_radius=rb, top_radius=rb + AtmosphereParameters().thickness,
+                                ground_albedo=LOW_SUN["ground_albedo"])
+
+
+@pytest.mark.parametrize("tau, sun", [(1.0, 2.0), (15.0, 2.0), (1.0, 10.0), (15.0, 10.0)])
+def test_grazing_sun_on_the_cloud_in_the_plane_parallel_limit(tau, sun):
+    """DISORT's cloud lit by a grazing sun is right: on a planet of 1000 Earth radii (the same air; the
+    plane-parallel limit, where the forward photons' periodic domain is exact and the column's DISORT is the
+    whole physics) the column (``illumination="column"``) is within 3 % + 3 sigma of forward photons
+    (tests/data/cloudy_low_sun.json: two seeds of 65536 photons, benchmarks/cloudy_low_sun_reference.py;
+    measured -2.9 to +1.8 %). The backward paths that gave the old 2-deg table its +20-50 % red excess are
+    heavy-tailed there (docs/clouds.md): the reference, not the cloud, was wrong."""
+    mc, err = _forward_mean(_low_sun_case(tau, sun, 1000.0))
+    sky = CloudySky(math.radians(90.0 - sun), 0.0, cloud_optical_depth=tau, cloud_base=LOW_SUN["cloud_base_m"],
+                    cloud_top=LOW_SUN["cloud_top_m"], ground_albedo=LOW_SUN["ground_albedo"],
+                    atmosphere=_scaled_air(1000.0), illumination="column")
+    model = sky.diffuse_fluxes(LOW_SUN["wavelengths_nm"])[0]
+    assert np.all(np.abs(model - mc) <= 0.03 * mc + 3.0 * err), (model / mc - 1, err / mc)
+
+
+@pytest.mark.parametrize("tau", [1.0, 15.0])
+def test_sun_10_deg_against_forward_photons(tau):
+    """Sun 10 deg, Earth radius, the default coupling with the tables against forward photons (two seeds of
+    65536; under these layers the periodic domain's term is at most 1.6 %: the same photons on planets of 1, 4
+    and 1000 Earth radii): 3 % + 3 sigma. The clear sky lit the cloud top as an isotropic radiance until
+    2026-12-02; its light comes from low elevations, which the cloud passes less: optical depth 15 was then
+    +7.1 / +4.1 / +4.6 % (fails), now +0.7 / -1.0 / +1.1 %."""
+    mc, err = _forward_mean(_low_sun_case(tau, 10.0, 1.0))
+    model = _sky(tau, 10.0).diffuse_fluxes(LOW_SUN["wavelengths_nm"])[0]
+    assert np.all(np.abs(model - mc) <= 0.03 * mc + 3.0 * err), (model / mc - 1, err / mc)
 
 
 def test_clear_sky_radiance_against_the_monte_carlo():
