@@ -2,10 +2,10 @@
 correlated colour temperature of the spectral sky picture it writes, beside the fast cloudy sky (docs/clouds.md).
 
 Runs pyradiance's ``genssky 6 21 12 -y 2024 -a 45 -o 0 -m 0 -c 1.0`` in a temporary folder (its own tables are
-precomputed there: about 2 min), reads the 20-band sky picture (``rmtxop -fa``: 32 rows of zenith angle, 64
-columns of azimuth, 380-780 nm), and prints L(h) / L(zenith row) averaged over azimuth with the CIE overcast
-``(1 + 2 sin h) / 3`` and its CCT (Hernandez 1999 through colour-science) per elevation; then the cloudy sky's
-gradation at h = 10, 30, 60 deg under optical depths 15-60.
+precomputed there: about 2 min), reads the 20-band sky picture (``genssky_montecarlo.read_hsr``: 32 rows of
+altitude 90 to -90 deg, 64 columns of azimuth, 380-780 nm in the header's order), and prints L(h) / L(zenith row)
+averaged over azimuth with the CIE overcast ``(1 + 2 sin h) / 3`` and its CCT (Hernandez 1999 through
+colour-science) per elevation; then the cloudy sky's gradation at h = 10, 30, 60 deg under optical depths 15-60.
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ def main() -> None:
     import colour
     import pyradiance
 
+    from genssky_montecarlo import read_hsr
     from skyscatter.sky.cloudy import CloudySky
     from skyscatter.spectral import spectrum_to_xyz, xyz_to_chromaticity
 
@@ -33,17 +34,17 @@ def main() -> None:
                "1.0", "-n", "1", "-f", "oc"]
         out = subprocess.run(cmd, cwd=tmp, env=env, capture_output=True, text=True, check=True).stdout
         print(out.strip().splitlines()[0:4])
-        txt = subprocess.run([str(root / "bin" / "rmtxop"), "-fa", str(Path(tmp) / "oc_sky.hsr")],
-                             capture_output=True, text=True, check=True).stdout
-    a = np.array([float(x) for x in txt.split("\n\n", 1)[1].split()]).reshape(32, 64, 20)
-    bands = np.linspace(390.0, 770.0, 20)
+        # the picture read with its header's sample order (Radiance stores spectral samples from the long
+        # wavelengths to the short: WAVELENGTH_SPLITS= 780 588 480 380); read in the other order its spectrum
+        # gave 4330-4350 K instead of D6415's 6430 K
+        alt, bands, rad = read_hsr(Path(tmp) / "oc_sky.hsr")
     fine = np.arange(380.0, 781.0, 5.0)
-    h = 90.0 - np.degrees((np.arange(32) + 0.5) / 32 * math.pi)
-    rows = np.nonzero(h > 0)[0]
-    spec = np.array([np.interp(fine, bands, m) for m in a[rows].mean(axis=1)])
+    rows = np.nonzero(alt > 0)[0]
+    spec = np.array([np.interp(fine, bands, m) for m in rad[rows].mean(axis=1)])
     xyz = spectrum_to_xyz(spec, fine)
     cct = [float(np.squeeze(colour.temperature.xy_to_CCT(np.asarray(xyz_to_chromaticity(x))[:2],
                                                           method="Hernandez 1999"))) for x in xyz]
+    h = alt
     cie = (1 + 2 * np.sin(np.radians(h[rows]))) / (1 + 2 * np.sin(np.radians(h[rows][0])))
     for k in range(rows.size):
         print(f"genssky h {h[rows][k]:5.1f} deg: L / L_top {xyz[k, 1] / xyz[0, 1]:.3f} (CIE {cie[k]:.3f}), "
@@ -53,7 +54,7 @@ def main() -> None:
     print(f"CIE overcast at h = 10, 30, 60 deg: {np.round((1 + 2 * np.sin(hs)) / 3, 3)}")
     for sun in (60.0, 30.0, 10.0):
         for tau in (15.0, 30.0, 60.0):
-            sky = CloudySky(math.radians(90.0 - sun), 0.0, cloud_optical_depth=tau, albedo=0.2)
+            sky = CloudySky(math.radians(90.0 - sun), 0.0, cloud_optical_depth=tau, ground_albedo=0.2)
             z = sky.luminance([[0.0, 0.0, 1.0]])[0]
             g = [np.mean(sky.luminance(np.stack([np.cos(x) * np.sin(az), np.cos(x) * np.cos(az),
                                                  np.full(az.size, np.sin(x))], -1))) / z for x in hs]
