@@ -17,9 +17,10 @@ precomputed tables of the same air ([Bruneton2008]; small tables, cached): the s
 spherical atmosphere (a sun 2 deg high) and the sky's irradiance as an isotropic radiance, the fluxes then
 corrected to the sky's angular distribution (:meth:`CloudySky._sky_anisotropy`: the tables' radiance averaged
 over azimuth as parallel beams), plus the cloud's light the air above sends back (adding method, [Liou2002]);
-the clear sky seen through a thin cloud without being scattered is the tables' radiance. ``illumination="column"`` (and observers above the clouds) solve the
-whole air in DISORT with the sun's beam attenuated along its chord through spherical shells (the
-pseudo-spherical beam of [Dahlback1991], reached through an effective cosine: disortpp's own spherical beam
+the clear sky seen through a thin cloud without being scattered is the tables' radiance.
+``illumination="column"`` (and observers above the clouds) solve the whole air in DISORT with the sun's beam
+attenuated along its chord through spherical shells (the pseudo-spherical beam of [Dahlback1991], reached
+through an effective cosine: disortpp's own spherical beam
 gave negative intensities).
 
 The solution is the radiance at the observer's altitude on a grid of view zenith angles and azimuths from the
