@@ -369,7 +369,8 @@ class CloudySky(SunSkyMixin, SkyModel):
             mu_eff = np.full(wl.size, max(mu0, 1e-3))
             # the tables' sky is not isotropic: the change of the diffuse flux at the observer it makes
             sky_shift = self._sky_anisotropy(wl, ref, tau, ssa, moments, cum[level], iso_top)
-            iso_top = iso_top + self._interreflection(wl, ref, edges, tau, ssa, moments, beam_flux, mu_eff, iso_top)
+            iso_top = iso_top + self._interreflection(wl, ref, edges, tau, ssa, moments, beam_flux, mu_eff, iso_top,
+                                                      sky_shift[3])
         else:
             iso_top = np.zeros(wl.size)
             beam_flux = mu0 / mu_eff if beam else np.zeros(wl.size)
@@ -449,7 +450,8 @@ class CloudySky(SunSkyMixin, SkyModel):
         below the column's top when the clear sky's light on the cloud top at ``ref`` [m] has the tables'
         angular distribution instead of being isotropic with the same irradiance (``iso_top`` x pi): row 0 all
         of the sky's light there (scattered or not), row 1 its scattered part only; row 2 the change of the
-        upward flux there.
+        upward flux there, row 3 that of the upward flux at the column's top (the cloud reflects light from low
+        elevations more: :meth:`_interreflection` uses it).
 
         The flux depends only on the azimuthal mean of the incident radiance (DISORT's m = 0 term,
         [Stamnes1988]), so the sky is the tables' radiance ([Bruneton2008] Eq. 16) averaged over azimuth, on
@@ -471,51 +473,56 @@ class CloudySky(SunSkyMixin, SkyModel):
         from scipy.special import expn
 
         albedo = self.atmosphere.ground_albedo_at(wl)
-        shift = np.zeros((3, wl.size))
+        shift = np.zeros((4, wl.size))
 
-        def down_at(k: int, beam: float, beam_mu: float, iso: float) -> tuple[float, float, float]:
+        def down_at(k: int, beam: float, beam_mu: float, iso: float) -> tuple[float, float, float, float]:
             cfg = disortpp.DisortConfig(int(tau.shape[0]), self.streams, self.streams)
             cfg.flags.comp_only_fluxes = True
             cfg.flags.use_user_tau = True
             cfg.flags.use_lambertian_surface = True
-            cfg.num_user_tau = 1
+            cfg.num_user_tau = 2
             cfg.allocate()
             cfg.delta_tau = [float(t) for t in tau[:, k]]
             cfg.single_scat_albedo = [float(s) for s in ssa[:, k]]
             cfg.phase_function_moments = moments[:, k, : self.streams + 1].tolist()
-            cfg.tau_user = [float(depth[k])]
+            cfg.tau_user = [0.0, max(float(depth[k]), 1e-9)]
             cfg.bc.direct_beam_flux = float(beam)
             cfg.bc.direct_beam_mu = float(beam_mu)
             cfg.bc.isotropic_flux_top = float(iso)
             cfg.bc.surface_albedo = float(albedo[k])
             res = disortpp.DisortSolver().solve(cfg)
-            return float(res.flux_down[0]), float(res.flux_direct_beam[0]), float(res.flux_up[0])
+            return (float(res.flux_down[1]), float(res.flux_direct_beam[1]), float(res.flux_up[1]),
+                    float(res.flux_up[0]))
 
         for k in range(wl.size):
             if iso_top[k] <= 0 or total[k] <= 0:
                 continue
             flux = math.pi * iso_top[k]  # the sky's irradiance on the cloud top
-            total_k = diffuse_k = up_k = 0.0
+            total_k = diffuse_k = up_k = top_k = 0.0
             for i in range(mu.size):
-                dif, direct, up = down_at(k, flux * share[i, k] / mu[i], mu[i], 0.0)
+                dif, direct, up, top_up = down_at(k, flux * share[i, k] / mu[i], mu[i], 0.0)
                 total_k += dif + direct
                 diffuse_k += dif
                 up_k += up
-            iso_all, _, iso_up = down_at(k, 0.0, 0.5, iso_top[k])
+                top_k += top_up
+            iso_all, _, iso_up, iso_top_up = down_at(k, 0.0, 0.5, iso_top[k])
             iso_unscattered = 2.0 * flux * expn(3, float(depth[k]))
             shift[0, k] = total_k - iso_all
             shift[1, k] = diffuse_k - (iso_all - iso_unscattered)
             shift[2, k] = up_k - iso_up
+            shift[3, k] = top_k - iso_top_up
         return shift
 
-    def _interreflection(self, wl, ref, edges, tau, ssa, moments, beam_flux, mu_eff, iso_top):
+    def _interreflection(self, wl, ref, edges, tau, ssa, moments, beam_flux, mu_eff, iso_top, up_shift=None):
         """The light the cloud reflects that the air above sends back down, as extra isotropic radiance at the
         cloud top [sr^-1 per unit solar irradiance]: by the adding method ([Liou2002] Sec. 6.2), the downward
         flux ``F`` at the top becomes ``F (1 - a s) / (1 - r s)`` with ``r`` the column's reflectance under that
         light (a flux-only DISORT solve), ``s`` the spherical albedo of the clear air above (a DISORT solve with
         isotropic light from above on a black floor: by reciprocity the same from below for an air that scatters
         without absorbing; ozone's absorption, a few per cent, is the error) and
-        ``a`` the ground albedo the tables' sky already reflects."""
+        ``a`` the ground albedo the tables' sky already reflects. ``up_shift`` (n_wl,): the change of the
+        column's upward flux at its top when the sky's light has its angular distribution
+        (:meth:`_sky_anisotropy`)."""
         import disortpp
 
         atm = self.atmosphere
@@ -546,6 +553,8 @@ class CloudySky(SunSkyMixin, SkyModel):
                 res = disortpp.DisortSolver().solve(cfg)
                 fluxes.append((res.flux_up[0], res.flux_down[0] + res.flux_direct_beam[0], res.flux_down[1]))
             up, down, _ = fluxes[0]
+            if up_shift is not None:
+                up = max(up + float(up_shift[k]), 0.0)
             s = fluxes[1][0]  # reflected fraction of isotropic light of flux 1 (ozone's absorption is not reflected)
             r = up / down if down > 0 else 0.0
             a = float(albedo[k])
