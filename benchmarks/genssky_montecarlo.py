@@ -110,20 +110,11 @@ def picture_quantities(path: Path, wl_out, view_elevations):
     return e_out, l_out, irr, wl, mean[0]
 
 
-def cct(spectrum, wl):
-    import colour
-
-    from skyscatter.spectral import spectrum_to_xyz, xyz_to_chromaticity
-
-    xy = np.asarray(xyz_to_chromaticity(spectrum_to_xyz(spectrum, wl)))[:2]
-    return float(np.squeeze(colour.temperature.xy_to_CCT(xy, method="Hernandez 1999")))
-
-
 def main() -> None:
     import sys
 
     sys.path.insert(0, str(HERE / "benchmarks"))
-    from compare_cloudy_montecarlo import directions, reference_diffuse
+    from compare_cloudy_montecarlo import cct, reference_diffuse
     from skyscatter.sky.cloudy import CloudySky
     from skyscatter.spectral import spectrum_to_xyz
 
@@ -172,7 +163,6 @@ def main() -> None:
             d_l = l_l / mc_l - 1.0
             rad_text = (f"median {np.median(d_l) * 100:+.0f} %, range {d_l.min() * 100:+.0f}..{d_l.max() * 100:+.0f} % "
                         f"({np.median(mc_le / mc_l) * 100:.0f} %)")
-            _ = directions(views)  # the same directions the model is compared at (azimuth-free here)
         gs_fine = np.interp(fine, gwl, irr_l)
         fmt = lambda d: " / ".join(f"{100 * v:+.0f}" for v in d)  # noqa: E731
         print(f"| {tau:g} | {sun:g} ({kind}) | {fmt(e_alone / mc_e - 1)} % | {fmt(e_l / mc_e - 1)} % "
