@@ -26,6 +26,8 @@ from skyscatter.atmosphere import AtmosphereParameters
 from skyscatter.fileio import atomic_path
 from skyscatter.montecarlo import sky_radiance
 
+DESCRIPTION = ("Monte Carlo sky radiance at low sun seen from the ground (skyscatter.montecarlo.sky_radiance), the "
+               "stored values the precomputed tables are held against (tests/test_precomputed_low_sun.py)")
 WAVELENGTHS = [float(w) for w in range(400, 701, 20)]
 SUNS = [10.0, 3.0, 0.0, -3.0, -6.0]
 ELEVATIONS = [2.0, 5.0, 15.0]
@@ -75,13 +77,13 @@ def run_case(name: str, sun_elev: float, paths: int, seed: int) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("tests/data/low_sun_montecarlo.json"))
-    ap.add_argument("--paths", type=int, default=8192, help="paths per direction with the sun up (default 8192)")
+    ap.add_argument("--paths", type=int, default=32768, help="paths per direction with the sun up (default 32768)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--atmospheres", default=",".join(ATMOSPHERES))
     ap.add_argument("--suns", default=",".join(f"{s:g}" for s in SUNS), help="sun elevations [deg]")
     args = ap.parse_args()
     doc = json.loads(args.out.read_text()) if args.out.exists() else {
-        "description": __doc__.splitlines()[0],
+        "description": DESCRIPTION,
         "generator": "benchmarks/low_sun_montecarlo_reference.py",
         "wavelengths_nm": WAVELENGTHS, "views_deg": views(), "sun_azimuth_deg": 0.0, "observer_altitude_m": 0.0,
         "atmospheres": {k: v[0] for k, v in ATMOSPHERES.items()}, "cases": []}
