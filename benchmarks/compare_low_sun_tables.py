@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -21,21 +22,18 @@ import numpy as np
 
 from skyscatter.precomputed import cached_atmosphere
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from low_sun_montecarlo_reference import ATMOSPHERES, directions  # noqa: E402  (the sibling script)
+
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data" / "low_sun_montecarlo.json"
-sys_path_benchmarks = Path(__file__).resolve().parent
 
 
 def reference() -> dict:
     return json.loads(DATA.read_text())
 
 
-def case_errors(atm, case: dict, doc: dict, columns: list[int]) -> tuple[np.ndarray, np.ndarray]:
+def case_errors(atm, case: dict, columns: list[int]) -> tuple[np.ndarray, np.ndarray]:
     """(relative difference, relative MC standard error), (n_views, n_columns), for one stored case."""
-    import sys
-
-    sys.path.insert(0, str(sys_path_benchmarks))
-    from low_sun_montecarlo_reference import directions
-
     s = np.radians(case["sun_elevation_deg"])
     sun = np.array([0.0, np.cos(s), np.sin(s)])
     pos = np.array([0.0, 0.0, atm.parameters.bottom_radius])
@@ -46,11 +44,6 @@ def case_errors(atm, case: dict, doc: dict, columns: list[int]) -> tuple[np.ndar
 
 
 def main() -> None:
-    import sys
-
-    sys.path.insert(0, str(sys_path_benchmarks))
-    from low_sun_montecarlo_reference import ATMOSPHERES
-
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--wavelengths", default="400,560,700", help="compared wavelengths [nm] or 'all'")
     ap.add_argument("--sizes", default="", help="table size overrides, e.g. scattering_mu_s=64")
@@ -73,7 +66,7 @@ def main() -> None:
         for case in doc["cases"]:
             if case["atmosphere"] != name:
                 continue
-            rel, rse = case_errors(atm, case, doc, columns)
+            rel, rse = case_errors(atm, case, columns)
             worst = np.argmax(np.abs(rel), axis=1)
             r = rel[np.arange(len(views)), worst]
             e = rse[np.arange(len(views)), worst]
