@@ -256,13 +256,17 @@ def test_fig7_parameters_against_cie_clear_sky():
     """Bruneton & Neyret Fig. 7: with albedo 0.1, beta_M = 2.2e-5 m^-1, beta_s / beta_e = 0.9, g = 0.73,
     H_M = 1.2 km the relative luminance along the solar meridian follows the CIE clear sky (type 12). Measured
     (docs/bruneton.md): within +-25 % (RMS) for view zenith angles up to 60 deg and sun zeniths 10-70 deg; the
-    paper notes an over-estimation towards the horizon, which we reproduce (> +40 % at 85 deg)."""
+    paper notes an over-estimation towards the horizon, which we reproduce (> +40 % at 85 deg). The largest
+    difference, 60 deg from the zenith away from a sun at 30 deg, was +0.698 with the midpoint density grid and is
+    +0.707 with the double-Gauss one of table format 7: the density grid that brings the tables closer to the Monte
+    Carlo reference (Earth's daytime median 1.1-1.6 % -> 0.3-1.1 %, docs/accuracy.md) moves them 0.5 % further
+    from this empirical formula there, so the bound on that difference went from 0.7 to 0.72."""
     atm = PrecomputedAtmosphere.compute(FIG7, sizes=SMALL, progress=False)
     view = np.arange(-60.0, 61.0, 10.0)
     for sz in (10.0, 30.0, 50.0, 70.0):
         err = fig7_errors(atm, sz, view)
         assert np.sqrt(np.mean(err**2)) < 0.35, (sz, err)
-        assert np.max(np.abs(err)) < 0.7, (sz, err)
+        assert np.max(np.abs(err)) < 0.72, (sz, err)
     horizon = fig7_errors(atm, 30.0, np.array([-85.0, 85.0]))
     assert np.all(horizon > 0.4)
 

@@ -264,27 +264,69 @@ def _quadratic_form(m, vx, vy, vz):
             + 2.0 * (m[0, 1] * vx * vy + m[0, 2] * vx * vz + m[1, 2] * vy * vz))
 
 
+@helper
+def gauss_legendre_unit(n, x, w):
+    """Gauss-Legendre nodes ``x`` and weights ``w`` (n each, ascending) on [0, 1] ([Abramowitz1964] 25.4.29,
+    nodes the zeros of the Legendre polynomial ``P_n``, weights ``2 / ((1 - z^2) P_n'(z)^2)`` on [-1, 1]), by
+    Newton's iteration: here, not numpy's ``leggauss``, because the kernels build their grids inside numba."""
+    for i in range(n):
+        z = math.cos(PI * (i + 0.75) / (n + 0.5))
+        dp = 1.0
+        for _ in range(100):
+            p0 = 1.0
+            p1 = z
+            for k in range(2, n + 1):
+                p0, p1 = p1, ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k
+            dp = n * (z * p1 - p0) / (z * z - 1.0)
+            dz = p1 / dp
+            z -= dz
+            if abs(dz) < 1e-15:
+                break
+        x[n - 1 - i] = 0.5 * (z + 1.0)
+        w[n - 1 - i] = 1.0 / ((1.0 - z * z) * dp * dp)
+
+
 @kernel
 def sphere_quadrature(n_theta, hemisphere):
-    """Midpoint-rule directions and solid angles [sr] on the sphere (or upper hemisphere), in a frame whose
-    x axis points to the sun's azimuth: (n_theta * 2 n_theta, 3) directions and their weights."""
+    """Directions and solid angles [sr] on the sphere (or upper hemisphere), in a frame whose x axis points to
+    the sun's azimuth: (n_theta * 2 n_theta, 3) directions and their weights.
+
+    Zenith: double Gauss, Gauss-Legendre in ``cos theta`` on each hemisphere separately (``n_theta / 2`` nodes
+    each on the sphere, the upper one more if ``n_theta`` is odd; ``n_theta`` on the upper hemisphere), the rule
+    of discrete-ordinate solvers because the radiance is discontinuous at the horizon ([Stamnes1988]): nodes
+    crowd towards the horizon, where the radiance of a low sun in haze peaks, and towards the zenith. With 16
+    zenith steps the nodes nearest the horizon are at +-1.1 deg instead of the midpoint rule's +-5.6 deg; the
+    hazy low-sun sky 2 deg above the horizon towards the sun came out 21 -> 9 % above the Monte Carlo (sun
+    +0.8 deg; docs/accuracy.md, "Low sun"), and 32 steps of either rule change it by less than 1.5 %.
+    Azimuth: the midpoint rule."""
     n_phi = 2 * n_theta
-    span = 0.5 * PI if hemisphere else PI
-    d_theta = span / n_theta
     d_phi = 2.0 * PI / n_phi
+    n_up = n_theta if hemisphere else n_theta - n_theta // 2
+    n_lo = n_theta - n_up
+    ux = np.empty(n_up)
+    uw = np.empty(n_up)
+    lx = np.empty(n_lo)
+    lw = np.empty(n_lo)
+    gauss_legendre_unit(n_up, ux, uw)
+    gauss_legendre_unit(n_lo, lx, lw)
     om = np.empty((n_theta * n_phi, 3))
     dom = np.empty(n_theta * n_phi)
     for i in range(n_theta):
-        theta = (i + 0.5) * d_theta
-        st = math.sin(theta)
-        ct = math.cos(theta)
+        # the upper hemisphere from the zenith down, then the lower one from the horizon down
+        if i < n_up:
+            ct = ux[n_up - 1 - i]
+            wt = uw[n_up - 1 - i]
+        else:
+            ct = -lx[i - n_up]
+            wt = lw[i - n_up]
+        st = math.sqrt(max(1.0 - ct * ct, 0.0))
         for j in range(n_phi):
             phi = (j + 0.5) * d_phi
             w = i * n_phi + j
             om[w, 0] = st * math.cos(phi)
             om[w, 1] = st * math.sin(phi)
             om[w, 2] = ct
-            dom[w] = st * d_theta * d_phi
+            dom[w] = wt * d_phi
     return om, dom
 
 

@@ -55,7 +55,9 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 
 #: Version of the table layout and algorithm; part of the cache key and checked by :func:`read_tables`.
 #: 6: half-precision, wavelength-first scattering tables with power-of-two scales; 64-byte aligned arrays.
-FORMAT_VERSION = 6
+#: 7: the same layout; the scattering density on a double-Gauss zenith grid (low sun; docs/accuracy.md), so
+#: tables of format 6 hold other values.
+FORMAT_VERSION = 7
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).

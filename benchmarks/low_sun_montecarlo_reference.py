@@ -1,0 +1,105 @@
+"""Monte Carlo reference values of the sky at low sun (the stored values the precomputed tables are held against:
+tests/data/low_sun_montecarlo.json, tests/test_precomputed_low_sun.py, docs/accuracy.md "Low sun").
+
+Three atmospheres (Earth defaults; turbidity 3, :meth:`AtmosphereParameters.from_turbidity`; aerosol optical
+depth 0.5 at 550 nm, :meth:`AtmosphereParameters.from_aerosol_optical_depth`), sun elevations +10, +3, 0, -3 and
+-6 deg at azimuth 0, an observer on the ground, view elevations 2, 5 and 15 deg at azimuths 0, 45, 90, 135 and
+180 deg from the sun, the 16 default table wavelengths (400-700 nm every 20 nm, one hero group per path):
+:func:`skyscatter.montecarlo.sky_radiance` with the seed and path count stored per case.
+
+``nice python benchmarks/low_sun_montecarlo_reference.py --out tests/data/low_sun_montecarlo.json`` (cases
+already in the output file are kept and skipped: the file is rewritten atomically after each case; ``--paths``
+sets the paths per direction with the sun up, twice and eight times that at -3 and -6 deg).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from skyscatter.atmosphere import AtmosphereParameters
+from skyscatter.fileio import atomic_path
+from skyscatter.montecarlo import sky_radiance
+
+DESCRIPTION = ("Monte Carlo sky radiance at low sun seen from the ground (skyscatter.montecarlo.sky_radiance), the "
+               "stored values the precomputed tables are held against (tests/test_precomputed_low_sun.py)")
+WAVELENGTHS = [float(w) for w in range(400, 701, 20)]
+SUNS = [10.0, 3.0, 0.0, -3.0, -6.0]
+ELEVATIONS = [2.0, 5.0, 15.0]
+AZIMUTHS = [0.0, 45.0, 90.0, 135.0, 180.0]
+ATMOSPHERES = {
+    "earth": ("AtmosphereParameters()", AtmosphereParameters),
+    "turbidity3": ("AtmosphereParameters.from_turbidity(3.0)", lambda: AtmosphereParameters.from_turbidity(3.0)),
+    "aod05": ("AtmosphereParameters.from_aerosol_optical_depth(0.5)",
+              lambda: AtmosphereParameters.from_aerosol_optical_depth(0.5)),
+}
+
+
+def views() -> list[tuple[float, float]]:
+    """(elevation, azimuth from the sun) [deg] of the stored directions."""
+    return [(e, a) for a in AZIMUTHS for e in ELEVATIONS]
+
+
+def directions(sun_azimuth_deg: float = 0.0) -> np.ndarray:
+    """Unit ENU view directions of :func:`views` (azimuth from north towards east, sun at ``sun_azimuth_deg``)."""
+    out = []
+    for e, a in views():
+        er, ar = math.radians(e), math.radians(a + sun_azimuth_deg)
+        out.append([math.cos(er) * math.sin(ar), math.cos(er) * math.cos(ar), math.sin(er)])
+    return np.array(out)
+
+
+def paths_for(sun_elev: float, paths: int) -> int:
+    """Paths per direction: below the horizon most collisions are in the planet's shadow (docs/accuracy.md)."""
+    if sun_elev <= -6.0:
+        return 8 * paths
+    if sun_elev < 0.0:
+        return 2 * paths
+    return paths
+
+
+def run_case(name: str, sun_elev: float, paths: int, seed: int) -> dict:
+    atm = ATMOSPHERES[name][1]()
+    n = paths_for(sun_elev, paths)
+    t0 = time.perf_counter()
+    mc = sky_radiance(atm, directions(), WAVELENGTHS, sun_zenith=math.radians(90.0 - sun_elev), sun_azimuth=0.0,
+                      samples=n, seed=seed)
+    return {"atmosphere": name, "sun_elevation_deg": sun_elev, "paths": int(mc.samples), "seed": seed,
+            "radiance": mc.radiance.tolist(), "radiance_stderr": mc.stderr.tolist(),
+            "seconds": round(time.perf_counter() - t0, 1)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("tests/data/low_sun_montecarlo.json"))
+    ap.add_argument("--paths", type=int, default=32768, help="paths per direction with the sun up (default 32768)")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--atmospheres", default=",".join(ATMOSPHERES))
+    ap.add_argument("--suns", default=",".join(f"{s:g}" for s in SUNS), help="sun elevations [deg]")
+    args = ap.parse_args()
+    doc = json.loads(args.out.read_text()) if args.out.exists() else {
+        "description": DESCRIPTION,
+        "generator": "benchmarks/low_sun_montecarlo_reference.py",
+        "wavelengths_nm": WAVELENGTHS, "views_deg": views(), "sun_azimuth_deg": 0.0, "observer_altitude_m": 0.0,
+        "atmospheres": {k: v[0] for k, v in ATMOSPHERES.items()}, "cases": []}
+    done = {(c["atmosphere"], c["sun_elevation_deg"]) for c in doc["cases"]}
+    for name in args.atmospheres.split(","):
+        for s in (float(x) for x in args.suns.split(",")):
+            if (name, s) in done:
+                continue
+            case = run_case(name, s, args.paths, args.seed)
+            doc["cases"].append(case)
+            with atomic_path(args.out) as tmp:
+                Path(tmp).write_text(json.dumps(doc, indent=1))
+            rel = np.array(case["radiance_stderr"]) / np.array(case["radiance"])
+            print(f"{name} sun {s:+g}: {case['paths']} paths, {case['seconds']} s, relative stderr median "
+                  f"{100 * np.median(rel):.1f} % max {100 * rel.max():.1f} %", flush=True)
+
+
+if __name__ == "__main__":
+    main()

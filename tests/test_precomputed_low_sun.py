@@ -1,0 +1,121 @@
+"""The precomputed tables at low sun against stored Monte Carlo values (docs/accuracy.md, "Low sun").
+
+Reference: tests/data/low_sun_montecarlo.json, made by ``benchmarks/low_sun_montecarlo_reference.py`` (the seed
+and path count of each case are stored in it; rerun the script to regenerate them): the spectral Monte Carlo
+(:mod:`skyscatter.montecarlo`, validated against DISORT, QUADPACK and energy conservation, docs/montecarlo.md) for
+Earth defaults, turbidity 3 and aerosol optical depth 0.5, the sun at +10, +3, 0, -3 and -6 deg, an observer on
+the ground, view elevations 2, 5 and 15 deg at azimuths 0-180 deg from the sun, 16 wavelengths.
+
+The tables here are the default sizes and orders computed at three of the stored wavelengths (400, 560 and
+700 nm: radiance at a table wavelength does not depend on the others). Target (the issue's): within 5 % or 2
+Monte Carlo standard errors, whichever is larger.
+"""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
+
+DATA = Path(__file__).parent / "data" / "low_sun_montecarlo.json"
+WAVELENGTHS = [400.0, 560.0, 700.0]
+ATMOSPHERES = {
+    "earth": AtmosphereParameters,
+    "turbidity3": lambda: AtmosphereParameters.from_turbidity(3.0),
+    "aod05": lambda: AtmosphereParameters.from_aerosol_optical_depth(0.5),
+}
+
+
+@pytest.fixture(scope="module")
+def reference():
+    return json.loads(DATA.read_text())
+
+
+@pytest.fixture(scope="module")
+def tables():
+    """Default-size tables at the three compared wavelengths, per atmosphere, computed once per module."""
+    return {name: PrecomputedAtmosphere.compute(make(), wavelengths=WAVELENGTHS, progress=False)
+            for name, make in ATMOSPHERES.items()}
+
+
+def _directions(views):
+    out = []
+    for e, a in views:
+        er, ar = math.radians(e), math.radians(a)
+        out.append([math.cos(er) * math.sin(ar), math.cos(er) * math.cos(ar), math.sin(er)])
+    return np.array(out)
+
+
+def _errors(reference, tables, name, sun_elev):
+    """(tables / MC - 1, MC relative standard error), (n_views, 3), for one stored case."""
+    case = next(c for c in reference["cases"] if c["atmosphere"] == name and c["sun_elevation_deg"] == sun_elev)
+    cols = [reference["wavelengths_nm"].index(w) for w in WAVELENGTHS]
+    atm = tables[name]
+    s = math.radians(sun_elev)
+    tab = atm.sky_radiance(np.array([0.0, 0.0, atm.parameters.bottom_radius]), _directions(reference["views_deg"]),
+                           np.array([0.0, math.cos(s), math.sin(s)]))
+    mc = np.array(case["radiance"])[:, cols]
+    se = np.array(case["radiance_stderr"])[:, cols]
+    return tab / mc - 1.0, se / mc
+
+
+def test_reference_records_how_it_was_made(reference):
+    """Every case names its seed and path count, and the generator script exists (so the values can be remade)."""
+    assert (Path(__file__).parents[1] / reference["generator"]).is_file()
+    assert len(reference["cases"]) == 15
+    for c in reference["cases"]:
+        assert c["seed"] == 1 and c["paths"] >= 32768
+        assert np.all(np.array(c["radiance"]) > 0.0) and np.all(np.array(c["radiance_stderr"]) > 0.0)
+
+
+#: Cases (atmosphere, sun elevation [deg]) with directions outside the target after the double-Gauss density grid
+#: (docs/accuracy.md, "Low sun"): the worst difference at 400/560/700 nm, as measured against the stored values.
+#: Held as strict expected failures, so that a fix shows (and must then move the case out of this table).
+OUTSIDE = {
+    ("earth", 0.0): "2 of 15 directions outside; worst 2/180 deg: +10.4±0.7 %",
+    ("earth", -3.0): "8 of 15 directions outside; worst 2/135 deg: +23.9±3.1 %",
+    ("earth", -6.0): "15 of 15 directions outside; worst 5/180 deg: +66.2±15.1 %",
+    ("turbidity3", 10.0): "3 of 15 directions outside; worst 2/45 deg: +13.8±1.2 %",
+    ("turbidity3", 3.0): "4 of 15 directions outside; worst 2/45 deg: +14.7±2.0 %",
+    ("turbidity3", 0.0): "8 of 15 directions outside; worst 2/0 deg: +24.7±3.0 %",
+    ("turbidity3", -3.0): "10 of 15 directions outside; worst 2/180 deg: +14.1±3.7 %",
+    ("turbidity3", -6.0): "13 of 15 directions outside; worst 5/180 deg: +78.7±24.3 %",
+    ("aod05", 10.0): "9 of 15 directions outside; worst 5/45 deg: +19.6±1.7 %",
+    ("aod05", 3.0): "8 of 15 directions outside; worst 5/45 deg: +22.8±2.5 %",
+    ("aod05", 0.0): "7 of 15 directions outside; worst 2/45 deg: +17.7±3.7 %",
+    ("aod05", -3.0): "10 of 15 directions outside; worst 5/90 deg: +23.4±6.4 %",
+    ("aod05", -6.0): "11 of 15 directions outside; worst 5/180 deg: +78.7±19.9 %",
+}
+
+CASES = [(a, s) for a in ATMOSPHERES for s in (10.0, 3.0, 0.0, -3.0, -6.0)]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("name", "sun_elev"), [
+    pytest.param(a, s, marks=pytest.mark.xfail(strict=True, reason=OUTSIDE[a, s])) if (a, s) in OUTSIDE
+    else (a, s) for a, s in CASES])
+def test_low_sun_against_stored_monte_carlo(reference, tables, name, sun_elev):
+    """Every direction of the case within 5 % or 2 Monte Carlo standard errors, whichever is larger, at each of
+    the three wavelengths."""
+    rel, rse = _errors(reference, tables, name, sun_elev)
+    bad = np.abs(rel) > np.maximum(0.05, 2.0 * rse)
+    assert not bad.any(), (np.round(100 * rel, 1), np.round(100 * rse, 1))
+
+
+def test_sphere_quadrature_is_double_gauss():
+    """The density grid's zenith nodes are Gauss-Legendre in cos(theta) on each hemisphere (numpy's leggauss as
+    the reference); the solid angles sum to 4 pi (2 pi on the hemisphere) and integrate mu^2 exactly."""
+    from skyscatter.precomputed.kernels import sphere_quadrature
+
+    for n, hemisphere in ((16, False), (7, False), (32, True)):
+        om, dom = sphere_quadrature(n, hemisphere)
+        n_up = n if hemisphere else n - n // 2
+        x, _ = np.polynomial.legendre.leggauss(n_up)
+        up = np.unique(om[:, 2][om[:, 2] > 0])
+        np.testing.assert_allclose(up, np.sort(0.5 * (x + 1.0)), rtol=0, atol=1e-13)
+        np.testing.assert_allclose(dom.sum(), (2.0 if hemisphere else 4.0) * np.pi, rtol=1e-13)
+        np.testing.assert_allclose(np.sum(om[:, 2] ** 2 * dom), (2.0 if hemisphere else 4.0) * np.pi / 3, rtol=1e-13)
+        np.testing.assert_allclose(np.linalg.norm(om, axis=1), 1.0, rtol=1e-14)
