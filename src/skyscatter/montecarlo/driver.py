@@ -373,8 +373,8 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
     kernels.trace_block(origins, jitter, dirs, mode, dir_index, sun, math.cos(m.sun_angular_radius),
                         m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.scat, m.lobe, m.lobe_g,
                         m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe,
-                        f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa, seed, group, batch0, n_batches, batch_size, sums,
-                        sumsq, verts)
+                        f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa, seed, group,
+                        batch0, n_batches, batch_size, sums, sumsq, verts)
     return sums, sumsq, verts
 
 

@@ -40,6 +40,26 @@ Estimator (backward paths from the observer; [Veach1997] Ch. 8-9):
   (angular radius from the parameters), the transmittance to the top of the atmosphere (zero when the planet
   blocks it; through the field by ratio tracking), phase function or ``albedo / pi * cos``. The sun is reached
   only by NEE, so the sky radiance never contains the directly transmitted sun (reported separately);
+* forward peak (cloudy media; the driver's ``peak_lobe``, ``PEAK_ANGLE``): the cloud's tabulated phase function
+  ``P = P_rest + P_peak`` is split at a node 10 deg from the forward direction (``P_peak = P - c`` above it, ``c``
+  just below the table's smallest value there; 0 below; the driver's ``forward_peak``), which is exact for the
+  interpolant. A light path from the observer ``x_1 ... x_n`` to the sun is counted once, at its last vertex
+  ``x_j`` that is not a peak scattering (the first vertex and ground vertices always count as such): (a) ``j = n``:
+  the next-event estimate at ``x_j`` with ``P_rest`` in place of ``P`` (``P`` itself at the first vertex); (b) ``j <
+  n``: the chain ``x_{j+1} ... x_n`` of ``L = n - j`` peak scatterings, estimated at ``x_j`` by a *peak probe*
+  (``_peak_probe``): ``L`` drawn from ``(1 - c) c^(L-1)``, a point ``w`` on the solar disc, the directions drawn
+  backwards from the sun (``omega_L`` about ``w``, ``omega_{L-1}`` about ``omega_L``, ... from the hero's normalised
+  peak, so every link's peak value over its density is the constant ``a_i P_peak,i / P_peak,hero`` with ``a`` the
+  peak's fraction), the positions forwards (free paths from ``x_j`` along ``omega_1``, ...; each collision weighted
+  by the cloud's scattering coefficient over the hero's collision density; an escaping free path ends the probe
+  with 0), and the transmittance from ``x_L`` to the sun; ``x_j``'s own phase value (``P_rest`` or the ground's
+  ``albedo cos / pi``) is taken at ``omega_1``. Every factor is bounded (``P_rest <= c``, about 0.6 sr^-1 for 10 um
+  droplets), where plain NEE multiplies by the diffraction peak (some 10^3 sr^-1) whenever a path heads within a
+  degree of the sun: the paths and their distribution are unchanged, only what is added at each vertex
+  ([Veach1997] Ch. 8: a partition of path space; the problem is [BurasMayer2011]'s). Unbiased (tested against the
+  analytic lobe without the split, and against DISORT); a probe costs a few rays, so where the vertex's own NEE
+  found the sun hidden it is made with probability ``max(0.1, min(1, 100 T))`` and divided by it (roulette). The
+  per-path relative standard deviation of the radiance under water clouds fell from 13-14 to about 2;
 * absorption (particle albedos, ozone) enters as a weight, never as termination;
 * directional importance sampling towards the sun (the "DDIS" of [BurasMayer2011] Sec. 3.3, here for backward
   paths), optional: with probability ``ddis`` the new direction is drawn from the cloud's own phase function (the
