@@ -88,6 +88,8 @@ class Medium:
     atmosphere (cloud layers, more aerosols); ``lobe``, ``lobe_g``, ``lobe_tab`` have one more entry, the cloud
     field's. ``field`` is the field for tracking (majorant blocks), ``field_exact`` the same field with every
     voxel its own block (exact transmittance of the direct sun); both :func:`.tracking.empty_field` without one.
+    ``peak_lobe``, ``pval``, ``pcdf``, ``pa``: the lobe whose forward peak is split off the next-event estimates
+    (-1: none) and the peak as :func:`forward_peak` returns it.
     """
 
     bottom_radius: float
@@ -204,7 +206,9 @@ def forward_peak(tmu: NDArray[np.float64], tval: NDArray[np.float64], angle: flo
     table's interpolant exactly, both are >= 0, and every wavelength's peak is > 0 on the same interval
     ``(tmu[j - 1], 1]`` (so the hero's peak can be sampled for every wavelength's). Returns ``(values, cdf,
     fraction)``: the peak normalised to 1 over the sphere (n_wl, m) [sr^-1], its CDF on ``tmu`` (n_wl, m) and its
-    fraction of the phase function (n_wl,); None when the split node would be the last or the first.
+    fraction of the phase function (n_wl,); None when the split node would be the last or the first, or when the
+    peak holds less than 5 % of the scattering at every wavelength (a smooth phase function: nothing to gain, and
+    the probes cost rays).
     """
     m = tmu.size
     j = int(np.searchsorted(tmu, math.cos(angle)))
@@ -216,6 +220,8 @@ def forward_peak(tmu: NDArray[np.float64], tval: NDArray[np.float64], angle: flo
                           np.cumsum(0.5 * (val[:, 1:] + val[:, :-1]) * np.diff(tmu)[None, :], axis=1)], axis=1)
     cdf *= 2.0 * math.pi
     frac = cdf[:, -1].copy()
+    if not np.max(frac) >= 0.05:
+        return None
     return (np.ascontiguousarray(val / frac[:, None]), np.ascontiguousarray(cdf / frac[:, None]),
             np.ascontiguousarray(frac))
 
