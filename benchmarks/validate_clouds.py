@@ -12,6 +12,9 @@ Sections (``python benchmarks/validate_clouds.py SECTION [--scale S]``; ``all`` 
   DISORT (disortpp, 64 streams, the Legendre moments of the same phase table, delta-M and the Nakajima-Tanaka
   intensity correction, 100 layers): diffuse ground irradiance and radiance 10 deg or more above the horizon.
 * ``waterclouds-irradiance`` - the ground diffuse irradiance of ``waterclouds`` alone, 12 of its cases (minutes).
+* ``waterclouds-radiance`` - the radiance of ``waterclouds`` alone, the same 12 cases, 6 views each (zenith 0, 60,
+  80 deg; azimuth 90 and 180 deg from the sun; those 25 deg or more from the sun compared): per view the relative
+  difference and z-score, per case the largest, and the mean relative difference over all views.
 * ``overcast`` - the luminance gradation under a thick stratus (optical depth 30, base 500 m, top 1000 m,
   Earth air, ground albedo 0.2) against the CIE overcast sky (1 + 2 sin h) / 3, and the correlated colour
   temperature of the diffuse light at sun elevations 60, 30, 10 deg.
@@ -238,6 +241,40 @@ def waterclouds_irradiance(scale):
           f"{np.max(np.abs(rel)):.2%}")
 
 
+def waterclouds_radiance(scale):
+    """The radiance of ``waterclouds`` for the cases of IRRADIANCE_CASES (16384 x scale paths per view)."""
+    wl = 550.0
+    n = int(16384 * scale)
+    vz = np.radians([0.0, 60.0, 80.0])
+    va = np.radians([90.0, 180.0])
+    dirs = np.array([[math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z)] for z in vz for a in va])
+    rels, zs, bad = [], [], 0
+    for tau, air, albedo, sun in IRRADIANCE_CASES:
+        layer = CloudLayer(1000.0, 1500.0, float(tau), effective_radius=10e-6, effective_variance=0.1)
+        kw = dict(rayleigh_scattering=0.0) if air == "alone" else {}
+        atm = AtmosphereParameters(bottom_radius=RB, top_radius=RB + 60000.0, mie_angstrom_beta=0.0,
+                                   ozone_column=0.0, ground_albedo=albedo, particles=(layer,), **kw)
+        sz = math.radians(sun)
+        t0 = time.perf_counter()
+        mc = sky_radiance(atm, dirs, [wl], sun_zenith=sz, samples=n, seed=61)
+        rad_ref, _ = _disort_cloud(atm, layer, wl, sz, vz, va, albedo)
+        e0 = float(atm.solar_irradiance_at([wl])[0])
+        rad, err, ref = mc.radiance[:, 0] / e0, mc.stderr[:, 0] / e0, rad_ref.ravel()
+        keep = dirs @ np.array([0.0, math.sin(sz), math.cos(sz)]) < math.cos(math.radians(25.0))
+        rel = rad[keep] / ref[keep] - 1
+        z = (rad[keep] - ref[keep]) / err[keep]
+        rels.extend(rel)
+        zs.extend(z)
+        bad += int(np.sum(np.abs(rad[keep] - ref[keep]) > 0.02 * ref[keep] + 3 * err[keep]))
+        print(f"tau {tau:4.1f} {air:8s} A {albedo:.1f} sun {sun:4.1f}: rel {', '.join(f'{v:+.2%}' for v in rel)}; "
+              f"z {', '.join(f'{v:+.1f}' for v in z)}; median rel stderr {np.median(err[keep] / rad[keep]):.2%}; "
+              f"{mc.mean_vertices:.1f} events per path ({time.perf_counter() - t0:.0f} s)", flush=True)
+    rels, zs = np.array(rels), np.array(zs)
+    print(f"waterclouds-radiance: {rels.size} views in {len(IRRADIANCE_CASES)} cases, {n} paths each; mean rel "
+          f"{rels.mean():+.2%} +- {rels.std(ddof=1) / math.sqrt(rels.size):.2%}, max |rel| {np.max(np.abs(rels)):.2%}, "
+          f"max |z| {np.max(np.abs(zs)):.1f}; views off by more than 2 % + 3 standard errors: {bad}")
+
+
 def overcast(scale):
     from skyscatter.sky.montecarlo import MonteCarloSky
 
@@ -303,8 +340,8 @@ def overcast_cct(scale):
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("section", choices=["i3rc", "disort5", "waterclouds", "waterclouds-irradiance", "overcast",
-                                               "overcast-cct", "all"])
+    ap.add_argument("section", choices=["i3rc", "disort5", "waterclouds", "waterclouds-irradiance",
+                                        "waterclouds-radiance", "overcast", "overcast-cct", "all"])
     ap.add_argument("--scale", type=float, default=1.0)
     args = ap.parse_args()
     print(f"machine: {len(os.sched_getaffinity(0))} cores, load average {os.getloadavg()[0]:.1f} at start")

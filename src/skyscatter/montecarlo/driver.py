@@ -40,6 +40,10 @@ MAX_BATCH_SIZE = 512
 #: Probability of drawing a scattering direction about the sun from the cloud's phase function in a cloudy medium
 #: (directional importance sampling, ``kernels`` module docstring); cloudless media do not use it.
 DDIS_PROBABILITY = 0.0
+#: Half-angle [rad] of the forward peak split off the cloud's tabulated phase function (``kernels`` module
+#: docstring, "forward peak"): next-event estimates use the phase function without it, chains of peak scatterings
+#: sampled about the sun carry it. 10 deg: the efficiency measured in docs/clouds.md (2 deg: 3x lower).
+PEAK_ANGLE = math.radians(10.0)
 
 
 @dataclass(frozen=True)
@@ -84,6 +88,8 @@ class Medium:
     atmosphere (cloud layers, more aerosols); ``lobe``, ``lobe_g``, ``lobe_tab`` have one more entry, the cloud
     field's. ``field`` is the field for tracking (majorant blocks), ``field_exact`` the same field with every
     voxel its own block (exact transmittance of the direct sun); both :func:`.tracking.empty_field` without one.
+    ``peak_lobe``, ``pval``, ``pcdf``, ``pa``: the lobe whose forward peak is split off the next-event estimates
+    (-1: none) and the peak as :func:`forward_peak` returns it.
     """
 
     bottom_radius: float
@@ -108,6 +114,10 @@ class Medium:
     fss: NDArray[np.float64]
     ddis: float = 0.0
     ddis_lobe: int = 0
+    peak_lobe: int = -1
+    pval: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros((1, 2)))
+    pcdf: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros((1, 2)))
+    pa: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(1))
 
     def subset(self, index: NDArray[np.int64]) -> Medium:
         """The same medium at a subset of its wavelengths."""
@@ -117,7 +127,8 @@ class Medium:
         return dataclasses.replace(self, coef=c(self.coef[index]), scat=c(self.scat[index]),
                                    tval=c(self.tval[:, index]), tcdf=c(self.tcdf[:, index]),
                                    albedo=c(self.albedo[index]), esun=c(self.esun[index]), fs=c(self.fs[index]),
-                                   fss=c(self.fss[index]))
+                                   fss=c(self.fss[index]), pval=c(self.pval[index]), pcdf=c(self.pcdf[index]),
+                                   pa=c(self.pa[index]))
 
     @property
     def has_field(self) -> bool:
@@ -185,6 +196,36 @@ def _stack_tables(tables: list, n_wl: int) -> tuple[NDArray[np.float64], NDArray
             np.ascontiguousarray(np.stack([a.cdf for a in arrs])))
 
 
+def forward_peak(tmu: NDArray[np.float64], tval: NDArray[np.float64], angle: float = PEAK_ANGLE
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]] | None:
+    """The forward peak of a phase table (``tval`` (n_wl, m) [sr^-1] on ascending ``tmu``) split off at a node.
+
+    With ``j`` the first node at or above ``cos(angle)`` ([rad], ``angle`` > 0) and ``c_i`` just below (a factor
+    1 - 1e-6) the smallest value of wavelength ``i`` at the nodes ``j .. m - 1``, the peak is ``P_i - c_i`` at those
+    nodes and 0 at the nodes below, linear in ``mu`` between the same nodes as the table: peak + rest reproduce the
+    table's interpolant exactly, both are >= 0, and every wavelength's peak is > 0 on the same interval
+    ``(tmu[j - 1], 1]`` (so the hero's peak can be sampled for every wavelength's). Returns ``(values, cdf,
+    fraction)``: the peak normalised to 1 over the sphere (n_wl, m) [sr^-1], its CDF on ``tmu`` (n_wl, m) and its
+    fraction of the phase function (n_wl,); None when the split node would be the last or the first, or when the
+    peak holds less than 5 % of the scattering at every wavelength (a smooth phase function: nothing to gain, and
+    the probes cost rays).
+    """
+    m = tmu.size
+    j = int(np.searchsorted(tmu, math.cos(angle)))
+    if j >= m - 1 or j < 1:
+        return None
+    floor = (1.0 - 1e-6) * tval[:, j:].min(axis=1, keepdims=True)
+    val = np.where(np.arange(m)[None, :] >= j, tval - floor, 0.0)
+    cdf = np.concatenate([np.zeros((val.shape[0], 1)),
+                          np.cumsum(0.5 * (val[:, 1:] + val[:, :-1]) * np.diff(tmu)[None, :], axis=1)], axis=1)
+    cdf *= 2.0 * math.pi
+    frac = cdf[:, -1].copy()
+    if not np.max(frac) >= 0.05:
+        return None
+    return (np.ascontiguousarray(val / frac[:, None]), np.ascontiguousarray(cdf / frac[:, None]),
+            np.ascontiguousarray(frac))
+
+
 def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.float64], clouds: Any = None,
                    block: Any = None) -> Medium:
     """Pack ``atmosphere`` (and a :class:`~skyscatter.atmosphere.clouds.CloudField` ``clouds``) for the kernels at
@@ -240,6 +281,14 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
     cloudy = clouds is not None or len(comps) > 1
     # the cloud's lobe for directional sampling: the field's, else the last further particle component's
     ddis_lobe = len(lobes) - 1 if clouds is not None else (len(lobes) - 2 if len(comps) > 1 else 0)
+    peak_lobe = -1
+    pval = pcdf = np.zeros((wl.size, 2))
+    pa = np.zeros(wl.size)
+    if cloudy and lobes[ddis_lobe][0] == kernels.LOBE_TABLE:
+        split = forward_peak(tmu, tval[lobes[ddis_lobe][2]], PEAK_ANGLE)
+        if split is not None:
+            peak_lobe = ddis_lobe
+            pval, pcdf, pa = split
     return Medium(
         rb, atmosphere.top_radius, quadrature_edges(atmosphere), layers,
         np.array([a.shape[0] for a in arrs], dtype=np.int64),
@@ -250,7 +299,8 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
         np.ascontiguousarray(atmosphere.ground_albedo_at(wl), dtype=float),
         np.ascontiguousarray(atmosphere.solar_irradiance_at(wl), dtype=float),
         atmosphere.sun_angular_radius, field, field_exact, np.ascontiguousarray(fs, dtype=float),
-        np.ascontiguousarray(fss, dtype=float), DDIS_PROBABILITY if cloudy else 0.0, ddis_lobe,
+        np.ascontiguousarray(fss, dtype=float), DDIS_PROBABILITY if cloudy else 0.0, ddis_lobe, peak_lobe, pval,
+        pcdf, pa,
     )
 
 
@@ -329,8 +379,8 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
     kernels.trace_block(origins, jitter, dirs, mode, dir_index, sun, math.cos(m.sun_angular_radius),
                         m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.scat, m.lobe, m.lobe_g,
                         m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe,
-                        f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, seed, group, batch0, n_batches, batch_size, sums,
-                        sumsq, verts)
+                        f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa, seed, group,
+                        batch0, n_batches, batch_size, sums, sumsq, verts)
     return sums, sumsq, verts
 
 

@@ -40,6 +40,26 @@ Estimator (backward paths from the observer; [Veach1997] Ch. 8-9):
   (angular radius from the parameters), the transmittance to the top of the atmosphere (zero when the planet
   blocks it; through the field by ratio tracking), phase function or ``albedo / pi * cos``. The sun is reached
   only by NEE, so the sky radiance never contains the directly transmitted sun (reported separately);
+* forward peak (cloudy media; the driver's ``peak_lobe``, ``PEAK_ANGLE``): the cloud's tabulated phase function
+  ``P = P_rest + P_peak`` is split at a node 10 deg from the forward direction (``P_peak = P - c`` above it, ``c``
+  just below the table's smallest value there; 0 below; the driver's ``forward_peak``), which is exact for the
+  interpolant. A light path from the observer ``x_1 ... x_n`` to the sun is counted once, at its last vertex
+  ``x_j`` that is not a peak scattering (the first vertex and ground vertices always count as such): (a) ``j = n``:
+  the next-event estimate at ``x_j`` with ``P_rest`` in place of ``P`` (``P`` itself at the first vertex); (b) ``j <
+  n``: the chain ``x_{j+1} ... x_n`` of ``L = n - j`` peak scatterings, estimated at ``x_j`` by a *peak probe*
+  (``_peak_probe``): ``L`` drawn from ``(1 - c) c^(L-1)``, a point ``w`` on the solar disc, the directions drawn
+  backwards from the sun (``omega_L`` about ``w``, ``omega_{L-1}`` about ``omega_L``, ... from the hero's normalised
+  peak, so every link's peak value over its density is the constant ``a_i P_peak,i / P_peak,hero`` with ``a`` the
+  peak's fraction), the positions forwards (free paths from ``x_j`` along ``omega_1``, ...; each collision weighted
+  by the cloud's scattering coefficient over the hero's collision density; an escaping free path ends the probe
+  with 0), and the transmittance from ``x_L`` to the sun; ``x_j``'s own phase value (``P_rest`` or the ground's
+  ``albedo cos / pi``) is taken at ``omega_1``. Every factor is bounded (``P_rest <= c``, about 0.6 sr^-1 for 10 um
+  droplets), where plain NEE multiplies by the diffraction peak (some 10^3 sr^-1) whenever a path heads within a
+  degree of the sun: the paths and their distribution are unchanged, only what is added at each vertex
+  ([Veach1997] Ch. 8: a partition of path space; the problem is [BurasMayer2011]'s). Unbiased (tested against the
+  analytic lobe without the split, and against DISORT); a probe costs a few rays, so where the vertex's own NEE
+  found the sun hidden it is made with probability ``max(0.1, min(1, 100 T))`` and divided by it (roulette). The
+  per-path relative standard deviation of the radiance under water clouds fell from 13-14 to about 2;
 * absorption (particle albedos, ozone) enters as a weight, never as termination;
 * directional importance sampling towards the sun (the "DDIS" of [BurasMayer2011] Sec. 3.3, here for backward
   paths), optional: with probability ``ddis`` the new direction is drawn from the cloud's own phase function (the
@@ -505,11 +525,121 @@ def _lobe_sum(active, sc, ph, out):
         for i in range(n):
             out[i] += sc[c, i] * ph[c, i]
 
+#: Continuation probability of the forward-peak chains of :func:`_peak_probe` (chain length L >= 1 drawn with
+#: P(L = k) = (1 - c) c^(k - 1)), and their longest length (the tail mass c^(K - 1) goes to L = K: chains of more
+#: than K = 64 consecutive peak scatterings are dropped, probability below 1e-25 per vertex for c = 0.4).
+_PEAK_CONTINUE = 0.4
+_PEAK_MAX_ORDER = 64
+#: The chains are probed at a medium vertex with probability ``min(1, max(_PEAK_PROBE_MIN, _PEAK_PROBE_GAIN T))``
+#: (``T`` the hero's transmittance to the sun found by the vertex's next-event estimate) and their estimate divided
+#: by it (Russian roulette, unbiased): deep in a thick cloud, where the sun is not seen, most probes would find
+#: nothing, and they cost several rays each.
+_PEAK_PROBE_MIN = 0.1
+_PEAK_PROBE_GAIN = 100.0
+
+
+@helper
+def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nlay, coef_t, scat_t, kh, kmin,
+                peak_lobe, tmu, pval, pcdf, pa, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax,
+                fsmin, st, fstate, cols, tot, tmp, rec, dens, sc, stt, sst, tau, trf, pk, fp, pp, chain, g):
+    """The sunlight reaching ``p`` [m] after a chain of L >= 1 forward-peak scatterings (module docstring, "forward
+    peak"): draws L, a direction ``w`` uniform over the solar disc, directions ``omega_L`` about ``w``, ...,
+    ``omega_1`` about ``omega_2`` from the hero's normalised peak ``pval`` (so each link's peak value over its
+    density is ``pa_i pval_i / pval_hero``), then the positions: ``x_1`` the free path from ``p`` along ``omega_1``,
+    ..., ``x_L`` along ``omega_L``, each collision weighted by the peak lobe's scattering coefficient over the hero's
+    collision density, and the transmittance from ``x_L`` to the sun along ``w`` times the solar irradiance.
+    Returns ``(alive, omega_1)`` and ``g`` (n,): per wavelength the estimate of ``int int P_peak ... T E`` over
+    everything but the first vertex's phase value at ``omega_1``, divided by ``P(L)``. ``alive`` False: zero
+    (a free path escaped, the planet or an opaque column blocks the sun)."""
+    n = g.shape[0]
+    nl = 1
+    while nl < _PEAK_MAX_ORDER and next_uniform(st) < _PEAK_CONTINUE:
+        nl += 1
+    prob = _PEAK_CONTINUE ** (nl - 1)
+    if nl < _PEAK_MAX_ORDER:
+        prob *= 1.0 - _PEAK_CONTINUE
+    for i in range(n):
+        g[i] = 1.0 / prob
+    wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
+    ax, ay, az = wx, wy, wz
+    for k in range(nl - 1, -1, -1):
+        mu = phase_table_inverse_cdf(tmu, pval, pcdf, hero, next_uniform(st))
+        ax, ay, az = direction_about_axis(ax, ay, az, mu, 2.0 * math.pi * next_uniform(st))
+        chain[k, 0] = ax
+        chain[k, 1] = ay
+        chain[k, 2] = az
+        phase_table_values(tmu, pval, mu, pk)
+        if pk[hero] <= 0.0:
+            return False, 0.0, 0.0, 0.0
+        for i in range(n):
+            g[i] *= pa[i] * pk[i] / pk[hero]
+    field = fvf[8] != 0.0
+    qx, qy, qz = px, py, pz
+    for k in range(nl):
+        dx, dy, dz = chain[k, 0], chain[k, 1], chain[k, 2]
+        t_end, _ = _exit_distance(qx, qy, qz, dx, dy, dz, rb, rt)
+        t, reached, npc = _march(qx, qy, qz, dx, dy, dz, t_end, -math.log1p(-next_uniform(st)), kh, rb, edges,
+                                 layers, nlay, cols, tmp, rec)
+        if not reached:
+            t = t_end
+        rho_f = 0.0
+        for i in range(n):
+            fp[i] = 1.0
+            pp[i] = 1.0
+        if field:
+            tv, hit, rv = field_free_path(qx, qy, qz, dx, dy, dz, t, hero, fs, fsmax, fvf, fvi, frho, fbmax, fbmin,
+                                          fxe, fye, fre, fp, pp, st, fstate)
+            if hit:
+                _columns_at(qx, qy, qz, dx, dy, dz, tv, rb, layers, nlay, rec, npc, cols, tmp)
+                t = tv
+                reached = True
+                rho_f = rv
+        if not reached:
+            return False, 0.0, 0.0, 0.0
+        qx += t * dx
+        qy += t * dy
+        qz += t * dz
+        if field and rho_f == 0.0:
+            rho_f = field_density_at(qx, qy, qz, fvf, fvi, frho)
+        _medium_at(qx, qy, qz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt, sst)
+        _optical_depths(coef_t, cols, tau)
+        den = stt[hero] * math.exp(-tau[hero]) * pp[hero]
+        if not den > 0.0 or sc[peak_lobe, hero] <= 0.0:
+            return False, 0.0, 0.0, 0.0
+        for i in range(n):
+            g[i] *= fp[i] * math.exp(-tau[i]) * sc[peak_lobe, i] / den
+    te, blocked = _exit_distance(qx, qy, qz, wx, wy, wz, rb, rt)
+    if blocked:
+        return False, 0.0, 0.0, 0.0
+    if field:
+        field_transmittance(qx, qy, qz, wx, wy, wz, te, fs, fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre,
+                            trf, st, fstate)
+    _, opaque, _ = _march(qx, qy, qz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, tot, tmp, rec)
+    if opaque:
+        return False, 0.0, 0.0, 0.0
+    _optical_depths(coef_t, tot, tau)
+    for i in range(n):
+        tr = math.exp(-tau[i])
+        if field:
+            tr *= trf[i]
+        g[i] *= esun[i] * tr
+    return True, chain[0, 0], chain[0, 1], chain[0, 2]
+
+
+@helper
+def _without_peak(mu, peak_lobe, tmu, pval, pa, pk, ph):
+    """Subtract the forward peak ``pa_i pval_i(mu)`` from the peak lobe's phase values ``ph[peak_lobe]``."""
+    phase_table_values(tmu, pval, mu, pk)
+    for i in range(pk.shape[0]):
+        v = ph[peak_lobe, i] - pa[i] * pk[i]
+        ph[peak_lobe, i] = v if v > 0.0 else 0.0
+
 
 @kernel
 def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, scat,
                 lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
-                fre, fs, fss, ddis, ddis_lobe, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
+                fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, seed, group, batch0, n_batches, batch_size,
+                sums, sumsq, vertices_out):
     """Trace ``n_batches`` batches of ``batch_size`` paths for each entry of a block; one wavelength group.
 
     Parameters (all SI; arrays float64 unless stated)
@@ -529,6 +659,9 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     fs, fss : (n_wl,) its extinction and scattering per unit density [-].
     ddis, ddis_lobe : probability of drawing a scattering direction about the sun instead (0: never), from the
     phase function of lobe ``ddis_lobe`` (the cloud's) centred on the sun; see the module docstring.
+    peak_lobe : the lobe whose forward peak is split off (-1: none; module docstring, "forward peak"); pval, pcdf
+    (n_wl, m): its peak, normalised, as a table on ``tmu`` (0 below the split cosine); pa (n_wl,): the peak's
+    fraction of the lobe's scattering.
     seed, group, batch0 : RNG counters (batch numbers batch0 .. batch0 + n_batches - 1).
     sums, sumsq : (n, n_wl, n_batches) outputs: per batch, sum and sum of squares of the per-path estimate.
     vertices_out : (n, n_batches) output: per batch, the number of scattering and ground vertices of its paths.
@@ -568,6 +701,15 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     for i in range(n):
         fsmax = max(fsmax, fs[i])
         fsmin = min(fsmin, fs[i])
+    peak = peak_lobe >= 0
+    pk = np.empty(n)
+    gch = np.empty(n)
+    fp = np.empty(n)
+    pp = np.empty(n)
+    sc3 = np.empty((nc + 1, n))
+    stt3 = np.empty(n)
+    sst3 = np.empty(n)
+    chain = np.empty((_PEAK_MAX_ORDER, 3))
     kmin = np.empty(nc)
     for q in range(nc):
         kmin[q] = coef[0, q]
@@ -683,6 +825,7 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                         # next-event estimation to the sun
                         wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
                         te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
+                        tsun = 0.0
                         if not blocked:
                             live = True
                             if field:
@@ -698,8 +841,10 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                                                       nlay, tot, tmp, rec)
                                 live = not opaque
                             if live:
-                                _lobe_values(wx * dx + wy * dy + wz * dz, active, lobe, lobe_g, lobe_tab, tmu, tval, ph,
-                                             qs)
+                                mw = wx * dx + wy * dy + wz * dz
+                                _lobe_values(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, ph, qs)
+                                if peak and not first:
+                                    _without_peak(mw, peak_lobe, tmu, pval, pa, pk, ph)
                                 _lobe_sum(active, sc, ph, val)
                                 _optical_depths(coef_t, tot, tau)
                                 for i in range(n):
@@ -707,6 +852,26 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                                     if field:
                                         tr *= trf[i]
                                     contrib[i] += f[i] * val[i] * esun[i] * tr
+                                tsun = math.exp(-tau[hero]) * (trf[hero] if field else 1.0)
+                        # the sun through a chain of forward-peak scatterings (module docstring), probed with
+                        # probability 1 where the sun is seen, _PEAK_PROBE_MIN where it is not
+                        qprobe = 1.0
+                        if peak:
+                            qprobe = min(1.0, max(_PEAK_PROBE_MIN, _PEAK_PROBE_GAIN * tsun))
+                        if peak and (qprobe >= 1.0 or next_uniform(st) < qprobe):
+                            alive, wx, wy, wz = _peak_probe(
+                                px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nlay, coef_t, scat_t, kh,
+                                kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
+                                fre, fs, fss, fsmax, fsmin, st, fstate, cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau,
+                                trf, pk, fp, pp, chain, gch)
+                            if alive:
+                                mw = wx * dx + wy * dy + wz * dz
+                                _lobe_values(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, ph, qs)
+                                if not first:
+                                    _without_peak(mw, peak_lobe, tmu, pval, pa, pk, ph)
+                                _lobe_sum(active, sc, ph, val)
+                                for i in range(n):
+                                    contrib[i] += f[i] * val[i] * gch[i] / qprobe
                         # scattering direction: lobe chosen by the hero's scattering coefficients, or (with
                         # probability ddis) about the sun
                         if ddis > 0.0 and next_uniform(st) < ddis:
@@ -783,6 +948,16 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                                     if field:
                                         tr *= trf[i]
                                     contrib[i] += f[i] * albedo[i] / math.pi * cs * esun[i] * tr
+                        if peak:
+                            alive, wx, wy, wz = _peak_probe(
+                                px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nlay, coef_t, scat_t, kh,
+                                kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
+                                fre, fs, fss, fsmax, fsmin, st, fstate, cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau,
+                                trf, pk, fp, pp, chain, gch)
+                            cs = wx * nx + wy * ny + wz * nz
+                            if alive and cs > 0.0:
+                                for i in range(n):
+                                    contrib[i] += f[i] * albedo[i] / math.pi * cs * gch[i]
                         # cosine-weighted hemisphere: weight albedo
                         u1 = next_uniform(st)
                         mu = math.sqrt(u1)
