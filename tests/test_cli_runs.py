@@ -167,6 +167,21 @@ def _dataset(name, n_wl):
     return check
 
 
+def _mixture_json(name):
+    """fit-atmosphere --mixture wrote the members' optical depths, their fractions (summing to 1) and the mixture."""
+    def check(folder: Path, out: str) -> None:
+        data = json.loads((folder / name).read_text())
+        fit = data["fit"]
+        assert fit["mixture"] == ["waso", "sscm"] and fit["free"] == ["optical_depth:waso", "optical_depth:sscm"]
+        fractions = [fit["derived"][f"fraction:{m}"][0] for m in ("waso", "sscm")]
+        assert abs(sum(fractions) - 1) < 1e-9 and all(0 <= f <= 1 for f in fractions)
+        # the optical depths 0.25, 0.15, 0.11 at 440, 675, 870 nm: about 0.19 at 550 nm
+        assert 0.15 < fit["derived"]["aerosol_optical_depth"][0] < 0.21
+        air = data["atmosphere"]["aerosol"]
+        assert air["kind"] == "opac" and air["name"] == "waso+sscm"
+    return check
+
+
 def _all(*checks):
     def check(folder: Path, out: str) -> None:
         for c in checks:
@@ -198,6 +213,10 @@ RUNS = {
                        _all(_files("air.json"), _exr("sky.exr"), _stdout("lx"), _exr("landscape.exr"))),
     "fit-atmosphere-opac": (["fit-atmosphere", "aod.csv", "--aerosol", "continental-average", "--free",
                              "aerosol_optical_depth"], _files("air.json")),
+    # a fine + coarse mixture from the optical depths (no table build), its air in the sky
+    "fit-atmosphere-mixture": (["fit-atmosphere", "aod.csv", "--mixture", "waso,sscm", "--out", "mix.json", "&&",
+                                "sky", "--width", "16", "--model", "bruneton", "--atmosphere", "mix.json", "--tables",
+                                "rgb"], _all(_mixture_json("mix.json"), _stdout("fraction:waso"), _exr("sky.exr"))),
     "sky-bruneton-opac": (["sky", "--width", "16", "--model", "bruneton", "--aerosol", "urban", "--aod", "0.2",
                            "--tables", "rgb"], _exr("sky.exr")),
     # sky: every model, projection, layout and format
