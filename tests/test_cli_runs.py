@@ -167,6 +167,42 @@ def _dataset(name, n_wl):
     return check
 
 
+def _mixture_json(name):
+    """fit-atmosphere --mixture wrote the members' optical depths, their fractions (summing to 1) and the mixture."""
+    def check(folder: Path, out: str) -> None:
+        data = json.loads((folder / name).read_text())
+        fit = data["fit"]
+        assert fit["mixture"] == ["waso", "sscm"] and fit["free"] == ["optical_depth:waso", "optical_depth:sscm"]
+        fractions = [fit["derived"][f"fraction:{m}"][0] for m in ("waso", "sscm")]
+        assert abs(sum(fractions) - 1) < 1e-9 and all(0 <= f <= 1 for f in fractions)
+        # the optical depths 0.25, 0.15, 0.11 at 440, 675, 870 nm: about 0.19 at 550 nm
+        assert 0.15 < fit["derived"]["aerosol_optical_depth"][0] < 0.21
+        air = data["atmosphere"]["aerosol"]
+        assert air["kind"] == "opac" and air["name"] == "waso+sscm"
+    return check
+
+
+def _spectral_air(report, dataset):
+    """skymatrix --spectral --aerosol urban --aod 0.3 --ozone 320 --ground-albedo 0.3: the hours without a retrieval
+    have optical depth 0.3, every hour ozone 320 DU, the daylit hours urban's Mie albedo at 550 nm (0.754 at 50 %
+    RH: OPAC's urban is strongly absorbing), the tables the ground albedo 0.3."""
+    def check(folder: Path, out: str) -> None:
+        import csv
+
+        import xarray as xr
+
+        from skyscatter.atmosphere.aerosol_types import OpacAerosol
+
+        rows = list(csv.DictReader((folder / report).read_text().splitlines()))
+        assert rows and all(float(r["ozone"]) == 320.0 for r in rows)
+        lit = [r for r in rows if r["status"] != "0"]
+        assert lit and all(r["aerosol_source"] != "default" or float(r["aerosol_optical_depth"]) == 0.3 for r in lit)
+        ssa = float(OpacAerosol.preset("urban", 0.3).single_scattering_albedo_at([550.0])[0])
+        assert 0.7 < ssa < 0.8 and all(abs(float(r["single_scattering_albedo"]) - ssa) < 1e-5 for r in lit)
+        assert float(xr.open_dataset(folder / dataset, engine="h5netcdf").attrs["ground_albedo"]) == 0.3
+    return check
+
+
 def _all(*checks):
     def check(folder: Path, out: str) -> None:
         for c in checks:
@@ -198,6 +234,10 @@ RUNS = {
                        _all(_files("air.json"), _exr("sky.exr"), _stdout("lx"), _exr("landscape.exr"))),
     "fit-atmosphere-opac": (["fit-atmosphere", "aod.csv", "--aerosol", "continental-average", "--free",
                              "aerosol_optical_depth"], _files("air.json")),
+    # a fine + coarse mixture from the optical depths (no table build), its air in the sky
+    "fit-atmosphere-mixture": (["fit-atmosphere", "aod.csv", "--mixture", "waso,sscm", "--out", "mix.json", "&&",
+                                "sky", "--width", "16", "--model", "bruneton", "--atmosphere", "mix.json", "--tables",
+                                "rgb"], _all(_mixture_json("mix.json"), _stdout("fraction:waso"), _exr("sky.exr"))),
     "sky-bruneton-opac": (["sky", "--width", "16", "--model", "bruneton", "--aerosol", "urban", "--aod", "0.2",
                            "--tables", "rgb"], _exr("sky.exr")),
     # sky: every model, projection, layout and format
@@ -275,12 +315,14 @@ RUNS = {
     "skymatrix-reinhart": (["skymatrix", EPW, "--patches", "reinhart4", "--samples", "1", "--timestep", "records",
                             "--night-irradiance", "dark", "--format", "npz"], _npz("skymatrix.npz", 2305)),
     # spectral (issue 24): the test EPW's sky cover is 5 tenths in every hour, so no hour is clear and no table is
-    # built; tests/test_spectral_skymatrix.py runs the same options on a file with clear hours
+    # built; tests/test_spectral_skymatrix.py runs the same options on a file with clear hours. The air's options
+    # of every command (an OPAC type, its optical depth for hours without a retrieval, ozone, ground albedo)
     "skymatrix-spectral-cloudy": (["skymatrix", "--spectral", EPW, "--tables", "coarse", "--aod-nodes", "0,0.5",
                                    "--bands", "41", "--patches", "tregenza", "--samples", "1", "--radiance", "s.mtx",
                                    "--radiance-rgb", "r.mtx", "--report", "h.csv", "--bad-hours", "flag",
+                                   "--aerosol", "urban", "--aod", "0.3", "--ozone", "320", "--ground-albedo", "0.3",
                                    "--out", "s.nc"],
-                                  _files("s.nc", "s.mtx", "r.mtx", "h.csv")),
+                                  _all(_files("s.nc", "s.mtx", "r.mtx", "h.csv"), _spectral_air("h.csv", "s.nc"))),
     "skymatrix-spectral-sites": (["skymatrix", "--spectral", EPW, EPW, "--tables", "default", "--bad-hours", "error",
                                   "--scheduler", "threads", "--workers", "1", "--out", "sites.zarr"],
                                  _stdout("2 of 2 sites")),

@@ -176,3 +176,25 @@ def test_bad_particle_inputs_are_refused():
         mie_optics(LogNormalMode(1e-7, 2.0), water_refractive_index(), [1500.0])
     with pytest.raises(InvalidParameterError):
         sphere_efficiencies(1.5, 0.0)
+
+
+def test_mixture_of_members_adds_their_optical_depths():
+    """OpacAerosol.mixture: one type alone is that type's preset (optical depth, albedo at 3 wavelengths); two
+    members' optical depths add at every wavelength (external mixture, Hess et al. 1998 Eq. 1) and each keeps
+    its own spectral shape; the 550 nm optical depths are the ones asked for."""
+    wl = [440.0, 550.0, 870.0]
+    one = OpacAerosol.mixture([("continental-average", 0.2)])
+    ref = OpacAerosol.preset("continental-average", 0.2)
+    np.testing.assert_allclose(one.optical_depth(wl, 60e3), ref.optical_depth(wl, 60e3), rtol=1e-12)
+    np.testing.assert_allclose(one.single_scattering_albedo_at(wl), ref.single_scattering_albedo_at(wl), rtol=1e-12)
+    fine = OpacAerosol.mixture([("waso", 0.15)], density=one.density)
+    coarse = OpacAerosol.mixture([("sscm", 0.1)], density=one.density)
+    both = OpacAerosol.mixture([("waso", 0.15), ("sscm", 0.1)], density=one.density)
+    np.testing.assert_allclose(both.optical_depth(wl, 60e3), fine.optical_depth(wl, 60e3) +
+                               coarse.optical_depth(wl, 60e3), rtol=1e-12)
+    np.testing.assert_allclose(both.optical_depth([550.0], 60e3), [0.25], rtol=1e-12)
+    assert both.name == "waso+sscm" and dict(both.components).keys() == {"waso", "sscm"}
+    with pytest.raises(InvalidParameterError, match="unknown mixture member"):
+        OpacAerosol.mixture([("waso", 0.1), ("dust", 0.1)])
+    with pytest.raises(InvalidParameterError, match="optical depth of waso"):
+        OpacAerosol.mixture([("waso", -0.1)])

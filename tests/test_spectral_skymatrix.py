@@ -477,3 +477,66 @@ def test_ground_only_family_equals_full_tables(options):
         np.testing.assert_allclose(small.sky_radiance(pos, d, s), full.sky_radiance(pos, d, s), rtol=1e-6, atol=1e-12)
         np.testing.assert_allclose(small.ground_irradiance(pos, [0, 0, 1.0], s)[1],
                                    full.ground_irradiance(pos, [0, 0, 1.0], s)[1], rtol=1e-12)
+
+
+@pytest.mark.slow
+def test_cli_spectral_takes_the_air_options(tmp_path):
+    """`skymatrix --spectral --aerosol maritime-clean` on the clear day: the optical depth is still retrieved from DNI
+    (closure kept), but through the type's own spectral shape, and the sky it gives is less blue.
+
+    Expected from physics, not from the code: a broadband DNI weighs the aerosol's optical depth at roughly 600-900 nm,
+    so the two aerosols must agree there: maritime-clean (nearly flat, Angstrom exponent 0.13) retrieves a 550 nm
+    optical depth between the default's (Angstrom 1.3) times ``(900/550)^-1.3 / s(900)`` and times
+    ``(600/550)^-1.3 / s(600)`` (``s`` its optical depth relative to 550 nm); its albedo is its Mie albedo (0.996 at
+    550 nm, no albedo axis). Colour: with the sun high the aerosol's own scattered light decides, and the flatter
+    aerosol adds relatively more red: the sky's 390/670 nm radiance ratio falls (docs/aerosols.md: zenith 450/550
+    1.63 against 1.88 at optical depth 0.2); with the sun low the beam's path decides, and the default aerosol,
+    whose optical depth at 390 nm is about twice maritime's here (steep spectrum), reddens the sunlight more: the
+    ratio rises. Measured: 390/670 maritime / default 0.89-0.97 for sun elevations 29-65 deg, 1.17 and 1.31 at 15
+    and 10 deg; optical depth ratio 0.68-0.80. The DHI closure is no longer fitted (no albedo axis): -7 to +16 %
+    against this SPECTRL2 file, whose aerosol is the Angstrom one."""
+    import xarray as xr
+
+    from skyscatter.atmosphere import AtmosphereParameters
+    from skyscatter.cli import main
+    from skyscatter.fit.weather import particle_aerosol_shape
+
+    epw = write_epw(tmp_path / "clear.epw", days=((6, 20, "clear"),))
+    common = ["--tables", "coarse", "--aod-nodes", ",".join(map(str, AOD_NODES)), "--patches", "tregenza",
+              "--samples", "1", "--no-progress"]
+    assert main(["skymatrix", "--spectral", str(epw), "--out", str(tmp_path / "d.nc"), *common]) == 0
+    assert main(["skymatrix", "--spectral", str(epw), "--out", str(tmp_path / "m.nc"), "--aerosol", "maritime-clean",
+                 "--ground-albedo", "0.2", *common]) == 0
+    d = xr.open_dataset(tmp_path / "d.nc", engine="h5netcdf")
+    m = xr.open_dataset(tmp_path / "m.nc", engine="h5netcdf")
+    clear = (d["status"].values == 1) & (m["status"].values == 1)
+    assert clear.sum() >= 8
+    assert np.all(np.abs(m["dni_closure"].values[clear]) < 1e-3)
+    air = AtmosphereParameters.with_aerosol_type("maritime-clean", 0.1)
+    s600, s900 = particle_aerosol_shape(air.aerosol, [600.0, 900.0])
+    ratio = m["aerosol_optical_depth"].values[clear] / d["aerosol_optical_depth"].values[clear]
+    assert np.all(ratio > (900 / 550) ** -1.3 / s900) and np.all(ratio < (600 / 550) ** -1.3 / s600), ratio
+    ssa = float(air.aerosol.single_scattering_albedo_at([550.0])[0])
+    np.testing.assert_allclose(m["single_scattering_albedo"].values[clear], ssa, rtol=1e-12)
+    wl = d["wavelength"].values
+    blue, red = int(np.argmin(np.abs(wl - 390))), int(np.argmin(np.abs(wl - 670)))
+
+    def colour(ds):
+        rad = ds["sky_radiance"].values[clear]  # (hours, patches, bands)
+        return rad[..., blue].mean(axis=1) / rad[..., red].mean(axis=1)
+
+    elevation = 90.0 - np.degrees(d["sun_zenith"].values[clear])
+    ratio = colour(m) / colour(d)
+    assert np.all(ratio[elevation >= 29.0] < 1.0) and np.all(ratio[elevation <= 16.0] > 1.0), (elevation, ratio)
+    assert (elevation >= 29.0).sum() >= 6 and (elevation <= 16.0).sum() >= 1
+
+
+def test_air_options_go_with_spectral(epw, tmp_path, capsys):
+    """The atmosphere options belong to the physical sky (--spectral): with the Perez luminance matrix they are
+    refused in one line, nothing written."""
+    from skyscatter.cli import main
+
+    out = tmp_path / "x.npz"
+    assert main(["skymatrix", str(epw), "--aerosol", "urban", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "go with --spectral" in err and "Traceback" not in err and not out.exists()

@@ -278,6 +278,51 @@ class OpacAerosol(ParticleComponent):
         t = _aerosol_type(name)
         return cls(t.name, t.components, t.profile(), relative_humidity, optical_depth_550, column_height)
 
+    @classmethod
+    def mixture(cls, members: Any, relative_humidity: float = 50.0, density: DensityProfile | None = None,
+                column_height: float = 60_000.0) -> OpacAerosol:
+        """An external mixture of OPAC components and types, each with its own vertical optical depth at 550 nm.
+
+        Parameters
+        ----------
+        members : sequence of (str, float)
+            An OPAC component code (:data:`OPAC_COMPONENTS`, e.g. ``"waso"`` fine, ``"sscm"`` coarse) or an
+            aerosol type's name (:data:`AEROSOL_TYPES`, its components in their Table 4 ratios) and the optical
+            depth [-] >= 0 at 550 nm it contributes; at least one > 0. The mixture's optical depth is their sum
+            (extinction adds over an external mixture, Hess et al. 1998, Eq. 1).
+        relative_humidity : float
+            [%] in [0, 99].
+        density : DensityProfile, optional
+            The mixture's profile (default: that of the first member that is a type, else that of
+            continental-average).
+        column_height : float
+            Height [m] to which the optical depths are counted (default 60 km).
+        """
+        try:
+            items = [(str(m), float(t)) for m, t in members]
+        except (TypeError, ValueError):
+            raise InvalidParameterError("mixture members must be (component or type, optical depth) pairs") from None
+        if not items or len({m for m, _ in items}) != len(items):
+            raise InvalidParameterError("a mixture needs one or more distinct members")
+        for m, tau in items:
+            if m not in OPAC_COMPONENTS and m not in AEROSOL_TYPES:
+                raise InvalidParameterError(f"unknown mixture member {m!r}; OPAC components: "
+                                            f"{', '.join(OPAC_COMPONENTS)}; types: {', '.join(AEROSOL_TYPES)}")
+            if not (math.isfinite(tau) and 0.0 <= tau <= 10.0):
+                raise InvalidParameterError(f"optical depth of {m} must be in [0, 10]; got {tau!r}")
+        if density is None:
+            types = [AEROSOL_TYPES[m] for m, _ in items if m in AEROSOL_TYPES]
+            density = (types[0] if types else AEROSOL_TYPES["continental-average"]).profile()
+        column = density.column(float(column_height))
+        rh = _humidity(relative_humidity)
+        numbers: dict[str, float] = {}
+        for m, tau in items:
+            comps = AEROSOL_TYPES[m].components if m in AEROSOL_TYPES else ((m, 1.0),)
+            unit = column * sum(n * 1e6 * _extinction_550(code, rh, 24.0) for code, n in comps)
+            for code, n in comps:
+                numbers[code] = numbers.get(code, 0.0) + n * tau / unit
+        return cls("+".join(m for m, _ in items), tuple(numbers.items()), density, rh, None, column_height)
+
     # ------------------------------------------------------------------ optics
 
     def component_optics(self, wavelengths: ArrayLike):
@@ -311,8 +356,13 @@ class OpacAerosol(ParticleComponent):
 
     def phase_table(self, wavelengths: ArrayLike, angles: ArrayLike | None = None) -> PhaseTable:
         from ..spectral import as_wavelengths
+        from .mie_optics import mie_optics
 
-        optics = [(n, o) for _, n, o in self.component_optics(as_wavelengths(wavelengths)) if n > 0]
+        # the components' own number densities: the phase does not depend on the optical-depth scaling, which
+        # may be 0 (an aerosol-free node of a table family)
+        wl = as_wavelengths(wavelengths)
+        optics = [(n, mie_optics(*opac_component(code, self.relative_humidity), wl, nodes_per_e=self.nodes_per_e))
+                  for code, n in self.components if n > 0]
         table = PhaseTable.mixture([o.phase for _, o in optics],
                                    np.stack([n * o.scattering_cross_section for n, o in optics]))
         return table if angles is None else table.on_angles(angles)
@@ -333,13 +383,16 @@ class OpacAerosol(ParticleComponent):
                    float(data.get("nodes_per_e", 24.0)))
 
 
-def _optical_depth_scale(aerosol: OpacAerosol) -> float:
+def _extinction_550(code: str, relative_humidity: float, nodes_per_e: float) -> float:
+    """Extinction cross-section [m^2] of one particle of an OPAC component at 550 nm."""
     from .mie_optics import mie_optics
 
-    ext = 0.0
-    for code, number in aerosol.components:
-        mode, index = opac_component(code, aerosol.relative_humidity)
-        ext += number * 1e6 * float(mie_optics(mode, index, [550.0], nodes_per_e=aerosol.nodes_per_e)
-                                    .extinction_cross_section[0])
+    mode, index = opac_component(code, relative_humidity)
+    return float(mie_optics(mode, index, [550.0], nodes_per_e=nodes_per_e).extinction_cross_section[0])
+
+
+def _optical_depth_scale(aerosol: OpacAerosol) -> float:
+    ext = sum(number * 1e6 * _extinction_550(code, aerosol.relative_humidity, aerosol.nodes_per_e)
+              for code, number in aerosol.components)
     tau = ext * aerosol.density.column(aerosol.column_height)
     return float(aerosol.optical_depth_550) / tau

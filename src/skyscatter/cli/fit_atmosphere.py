@@ -52,11 +52,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--lon", type=float_in(-180.0, 180.0), default=None, metavar="DEG", help="site longitude [deg]")
     p.add_argument("--free", default="aerosol_optical_depth,mie_phase_g,ground_albedo", metavar="LIST",
                    help="parameters to fit, comma-separated: aerosol_optical_depth, angstrom_alpha, mie_phase_g, "
-                        "mie_single_scattering_albedo, ground_albedo; with --aerosol: aerosol_optical_depth, "
-                        "relative_humidity, ground_albedo (default aerosol_optical_depth,mie_phase_g,ground_albedo)")
+                        "mie_single_scattering_albedo, ground_albedo; with --aerosol or --mixture: "
+                        "aerosol_optical_depth, relative_humidity, ground_albedo (default "
+                        "aerosol_optical_depth,mie_phase_g,ground_albedo; with --aerosol or --mixture "
+                        "aerosol_optical_depth,ground_albedo)")
     p.add_argument("--aerosol", default=None, metavar="TYPE",
                    help="fit an OPAC aerosol type (continental-average, maritime-clean, urban, desert, ...) instead "
                         "of the analytic aerosol")
+    p.add_argument("--mixture", default=None, metavar="LIST",
+                   help="fit an external mixture of OPAC components or types, comma-separated (e.g. waso,sscm: a "
+                        "fine and a coarse mode; components inso, waso, soot, ssam, sscm, minm, miam, micm, mitr, "
+                        "suso, or type names): aerosol_optical_depth in --free then stands for each member's "
+                        "optical depth at 550 nm; prints the total and each member's fraction with uncertainties")
     p.add_argument("--noise", type=float_in(1e-4, 1.0), default=0.03, metavar="REL",
                    help="relative noise of radiance, luminance and irradiance (default 0.03)")
     p.set_defaults(func=run)
@@ -201,17 +208,30 @@ def run(args: argparse.Namespace) -> int:
         if args.aerosol not in AEROSOL_TYPES:
             raise InvalidParameterError(f"--aerosol must be one of {', '.join(AEROSOL_TYPES)}; got {args.aerosol!r}")
     free = tuple(s.strip() for s in args.free.split(",") if s.strip())
-    if args.aerosol is not None and args.free == "aerosol_optical_depth,mie_phase_g,ground_albedo":
+    mixture = None
+    if args.mixture is not None:
+        mixture = tuple(s.strip() for s in args.mixture.split(",") if s.strip())
+        if args.aerosol is not None:
+            raise InvalidParameterError("give --aerosol or --mixture, not both")
+    if (args.aerosol is not None or mixture is not None) and \
+            args.free == "aerosol_optical_depth,mie_phase_g,ground_albedo":
         free = ("aerosol_optical_depth", "ground_albedo")
+        default_free = True
+    else:
+        default_free = False
     scan, irradiance, aod = read_measurements(args.measurements, args.lat, args.lon)
     if scan is not None:
         scan = dataclasses.replace(scan, relative_noise=args.noise)
     if irradiance is not None:
         irradiance = dataclasses.replace(irradiance, relative_noise=args.noise)
-    fit = fit_atmosphere(scan, irradiance, aod, free=free, aerosol_type=args.aerosol)
+    if default_free and scan is None and irradiance is None:
+        free = ("aerosol_optical_depth",)  # optical depths alone do not see the ground
+    fit = fit_atmosphere(scan, irradiance, aod, free=free, aerosol_type=args.aerosol, mixture=mixture)
     print(f"fitted air ({fit.builds} table builds, {fit.seconds:.1f} s, reduced chi^2 {fit.chi2_reduced:.3g}):")
     for name in fit.free:
         print(f"  {name:30s} {fit.values[name]:.4g} +- {fit.uncertainties[name]:.2g}")
+    for name, (value, sd) in fit.derived.items():
+        print(f"  {name:30s} {value:.4g} +- {sd:.2g}")
     for region, value in fit.residuals.items():
         unit = "" if region == "aod" else " %"
         print(f"  residual RMS {region:18s} {value:.3g}{unit}")

@@ -9,7 +9,13 @@ from pathlib import Path
 
 from ..errors import InvalidParameterError
 from ..fileio import atomic_path, check_output_path
+from .atmosphere_options import NAMES as ATMOSPHERE_NAMES
+from .atmosphere_options import add_atmosphere_options, atmosphere_values
 from .common import HELP_FORMATTER, float_in, output_path, positive_int
+
+#: The atmosphere options of --spectral: every command's (atmosphere_options), --ground-albedo being the
+#: command's own option (the Radiance ground patch's reflectance; with --spectral the tables' ground albedo).
+SPECTRAL_AIR = tuple(n for n in ATMOSPHERE_NAMES if n != "ground_albedo")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -55,7 +61,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="output file (default: skymatrix.npz, or skymatrix.mtx with --format radiance)")
     p.add_argument("--ground-albedo", type=float_in(0.0, 1.0), default=None, metavar="RHO",
                    help="--format radiance: reflectance of the ground patch, whose radiance is RHO x the global "
-                   "horizontal illuminance / pi, 0 to 1 (gendaymtx's -g; default 0.2)")
+                   "horizontal illuminance / pi, 0 to 1 (gendaymtx's -g; default 0.2); with --spectral the "
+                   "ground albedo of the tables (default 0.2)")
     p.add_argument("--night-irradiance", choices=["dark", "error"], default="dark",
                    help="records with light while the sun stays below the horizon for their whole interval (more "
                    "than 1 deg for direct, 6 deg for diffuse light; a time shift or the wrong place): dark = left "
@@ -102,6 +109,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     g.add_argument("--aod-nodes", type=str, default=None, metavar="LIST",
                    help="aerosol optical depth grid at 550 nm, comma-separated (default "
                    "0,0.05,0.1,0.2,0.3,0.45,0.65,1,1.5)")
+    a = p.add_argument_group(
+        "the air of --spectral",
+        "the medium the hourly retrieval starts from (the same options as every command that builds an "
+        "atmosphere): --aerosol TYPE an OPAC type whose optical depth is retrieved per hour from DNI (its albedo "
+        "and spectral shape are its Mie optics'; no albedo axis), --atmosphere FILE a fitted air, --mie-g, "
+        "--ozone (hours without an ozone value), --angstrom-alpha (the analytic aerosol's spectral shape); "
+        "--aod / --turbidity give the optical depth of hours with nothing to retrieve it from (cloudy hours "
+        "without a clear hour or a file value)")
+    add_atmosphere_options(a, SPECTRAL_AIR)
     g.add_argument("--scheduler", default="threads", metavar="NAME",
                    help="several sites: threads (Dask's threaded scheduler), local (a distributed LocalCluster) or "
                    "a scheduler address tcp://host:port")
@@ -124,6 +140,9 @@ def run(args: argparse.Namespace) -> int:
     for name in ("radiance", "radiance_rgb", "report"):
         if getattr(args, name) is not None:
             raise InvalidParameterError(f"--{name.replace('_', '-')} goes with --spectral")
+    if atmosphere_values(args, SPECTRAL_AIR):
+        raise InvalidParameterError("the atmosphere options (--aerosol, --aod, --atmosphere, ...) go with --spectral; "
+                                    f"the luminance matrix is the {args.model} sky of the file's DNI and DHI")
     args.epw = args.epw[0]
     args.samples = 3 if args.samples is None else args.samples
     if args.out is None:
@@ -185,6 +204,33 @@ def _csv_report(ds, path: Path) -> None:
             fh.write(t + "," + ",".join(cells) + "\n")
 
 
+def spectral_retrieval_options(values: dict, **settings):
+    """The :class:`~skyscatter.fit.weather.RetrievalOptions` of ``skymatrix --spectral`` from the atmosphere
+    options ``values`` (keyword names of :data:`~skyscatter.atmosphere.options.ATMOSPHERE_OPTIONS`) and the
+    retrieval's other ``settings``: the options change the retrieval's default base medium (or replace it:
+    ``atmosphere_file``) through :meth:`AtmosphereParameters.from_options`; ``angstrom_alpha`` alone sets the
+    analytic aerosol's spectral shape; an optical depth (``aerosol_optical_depth``, ``turbidity``) becomes the
+    optical depth of hours with nothing to retrieve it from, ``ozone_column`` that of hours without ozone data."""
+    from ..atmosphere import AtmosphereParameters
+    from ..fit.weather import RetrievalOptions
+
+    alpha = float(values.get("angstrom_alpha", RetrievalOptions.angstrom_alpha))
+    if not values or set(values) == {"angstrom_alpha"}:
+        return RetrievalOptions(angstrom_alpha=alpha, **settings)
+    air = {k: v for k, v in values.items() if k != "angstrom_alpha" or "aerosol_optical_depth" in values}
+    start = None if "atmosphere_file" in air else RetrievalOptions(angstrom_alpha=alpha).base_atmosphere()
+    base = AtmosphereParameters.from_options(start, **air)
+    extra: dict = {}
+    if base.aerosol is None:
+        alpha = base.mie_angstrom_alpha
+    if {"aerosol_optical_depth", "turbidity", "atmosphere_file"} & set(values):
+        extra["default_aerosol_optical_depth"] = float(base.aerosol_component.optical_depth([550.0],
+                                                                                           base.thickness)[0])
+    if {"ozone_column", "atmosphere_file"} & set(values):
+        extra["default_ozone"] = base.ozone_column
+    return RetrievalOptions(angstrom_alpha=alpha, base=base, **extra, **settings)
+
+
 def run_spectral(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -194,7 +240,7 @@ def run_spectral(args: argparse.Namespace) -> int:
         spectral_sky_matrix_sites,
         write_radiance_matrix,
     )
-    from ..fit.weather import DEFAULT_AOD_NODES, HOUR_STATUS, RetrievalOptions
+    from ..fit.weather import DEFAULT_AOD_NODES, HOUR_STATUS
 
     if args.model != "perez" or args.include_sun or args.csv is not None or args.timestep != "records":
         raise InvalidParameterError("--model, --include-sun, --csv and --timestep go with the luminance matrix, "
@@ -209,11 +255,14 @@ def run_spectral(args: argparse.Namespace) -> int:
         except ValueError:
             raise InvalidParameterError(
                 f"--aod-nodes must be comma-separated numbers; got {args.aod_nodes!r}") from None
-    options = RetrievalOptions(aerosol_optical_depth_nodes=nodes, bad_hours=args.bad_hours, tables=args.tables)
-    if args.format != "npz" or args.ground_albedo is not None or args.night_irradiance != "dark":
-        raise InvalidParameterError("--format, --ground-albedo and --night-irradiance go with the luminance matrix; "
-                                    "with --spectral use --radiance / --radiance-rgb (the ground albedo is the "
-                                    "tables' 0.2) and --bad-hours")
+    if args.format != "npz" or args.night_irradiance != "dark":
+        raise InvalidParameterError("--format and --night-irradiance go with the luminance matrix; with --spectral "
+                                    "use --radiance / --radiance-rgb and --bad-hours")
+    values = atmosphere_values(args, SPECTRAL_AIR)
+    if args.ground_albedo is not None:
+        values["ground_albedo"] = args.ground_albedo
+    options = spectral_retrieval_options(values, aerosol_optical_depth_nodes=nodes, bad_hours=args.bad_hours,
+                                         tables=args.tables)
     out = args.out
     if out is None:
         out = Path("skymatrix.nc") if len(args.epw) == 1 else Path("sites.zarr")

@@ -18,17 +18,28 @@ from the sky part of :meth:`~.PrecomputedAtmosphere.ground_irradiance`. The aero
 The free parameters are chosen from :data:`FREE_PARAMETERS`: with the default analytic aerosol (Angstrom's law,
 Cornette-Shanks phase) its optical depth at 550 nm, Angstrom exponent, asymmetry g and single-scattering albedo;
 with an OPAC aerosol type (``aerosol_type``, :mod:`skyscatter.atmosphere.aerosol_types`) its optical depth and
-relative humidity; and the ground albedo. Residuals are relative: ``ln(model / measured) / sigma`` for radiance,
-luminance and irradiance (``sigma`` the stated relative noise) and ``(model - measured) / sigma`` for optical
-depths. :func:`scipy.optimize.least_squares` (trust-region reflective, within the parameters' bounds) with a
-forward-difference Jacobian (relative step 1e-2: the tables are float32) costs ``1 + n_free`` table builds per
-iteration; :attr:`AtmosphereFit.builds` reports the total.
+relative humidity; with a mixture of OPAC components or types (``mixture``, e.g. a fine and a coarse mode:
+:meth:`~skyscatter.atmosphere.aerosol_types.OpacAerosol.mixture`, the external mixture of [Hess1998] Eqs. 1-2)
+each member's optical depth at 550 nm and the relative humidity, and from them the total optical depth and each
+member's fraction with uncertainties propagated from the covariance; and the ground albedo.
+
+Residuals are relative: ``ln(model / measured) / sigma`` for radiance, luminance and irradiance (``sigma`` the
+stated relative noise) and ``(model - measured) / sigma`` for optical depths. :func:`scipy.optimize.least_squares`
+(trust-region reflective, within the parameters' bounds) with a forward-difference Jacobian (relative step 1e-2: the
+tables are float32) costs ``1 + n_free`` table builds per iteration; :attr:`AtmosphereFit.builds` reports the total.
 
 Uncertainties are the square roots of the diagonal of the covariance ``s^2 (J^T J)^-1`` at the solution, with
 ``J`` the Jacobian of the weighted residuals and ``s^2 = max(1, chi^2 / (m - n))``: the stated noise, inflated by
 the misfit when the model cannot reach the measurements ([Press2007] Sec.
 15.4-15.5). The residual of the sky scan is reported by region: within 20 deg of the sun, below 15 deg elevation
 (the horizon) and the rest (relative RMS, %).
+
+With a sky scan the covariance also carries the tables' systematic error in sky radiance against the Monte Carlo
+reference (:data:`SCAN_MODEL_ERROR`: 4.5 % below 15 deg elevation, 2 % at 15-30 deg, 1.5 % above, each common to
+its band's directions and wavelengths) propagated through the solution (``model_error=True``, the default): without
+it the ground albedo from a Monte Carlo scan came back 11 % high at 5 stated standard deviations, the horizon
+band's -4.3 % taken up by the parameter the scan is least sensitive to. ``AtmosphereFit.extra`` keeps the
+statistical part alone (``statistical_uncertainties``).
 """
 
 from __future__ import annotations
@@ -45,7 +56,7 @@ from ..atmosphere import AtmosphereParameters
 from ..conventions import direction_from_angles
 from ..errors import InvalidParameterError
 
-__all__ = ["FIT_SIZES", "FREE_PARAMETERS", "AerosolOpticalDepth", "AtmosphereFit", "Irradiance", "SkyScan",
+__all__ = ["FIT_SIZES", "FREE_PARAMETERS", "MEMBER", "AerosolOpticalDepth", "AtmosphereFit", "Irradiance", "SkyScan",
            "fit_atmosphere"]
 
 #: Table sizes of the fits: a third of the default 4D table's radii, mu and mu_s (build about 1 s).
@@ -58,10 +69,18 @@ FREE_PARAMETERS = {
     "angstrom_alpha": (-0.5, 3.0, "Angstrom exponent (analytic aerosol)"),
     "mie_phase_g": (0.0, 0.95, "asymmetry parameter of the Cornette-Shanks phase (analytic aerosol)"),
     "mie_single_scattering_albedo": (0.5, 1.0, "aerosol single-scattering albedo (analytic aerosol)"),
-    "relative_humidity": (0.0, 99.0, "relative humidity [%] (OPAC aerosol type)"),
+    "relative_humidity": (0.0, 99.0, "relative humidity [%] (OPAC aerosol type or mixture)"),
     "ground_albedo": (0.0, 1.0, "Lambertian ground albedo, the same at every wavelength"),
 }
 _ANALYTIC_ONLY = ("angstrom_alpha", "mie_phase_g", "mie_single_scattering_albedo")
+#: Prefix of a mixture member's free optical depth at 550 nm: ``"optical_depth:waso"``.
+MEMBER = "optical_depth:"
+#: Systematic error of the fit's tables (:data:`FIT_SIZES`, 4 orders) in sky radiance against the Monte Carlo
+#: reference, by view elevation band: (lowest [deg], highest [deg], relative error). Measured (docs/aerosols.md:
+#: air optical depth 0.25, g 0.7, albedo 0.2, sun 40 deg, 440 and 670 nm, ring means of an 81-direction scan):
+#: -4.3 / -4.4 % at 10 deg elevation (-4.6 / -4.2 % with 6 orders and 16 x 64 radii x mu: not the table size),
+#: -1.7 / -2.0 % at 19 deg, within 1.6 % above 28 deg.
+SCAN_MODEL_ERROR = ((0.0, 15.0, 0.045), (15.0, 30.0, 0.02), (30.0, 90.0, 0.015))
 NEAR_SUN = math.radians(20.0)
 HORIZON = math.radians(15.0)
 
@@ -189,7 +208,9 @@ class AtmosphereFit:
     """The result of :func:`fit_atmosphere`.
 
     ``parameters`` the fitted air; ``values``, ``uncertainties`` (one standard deviation) by free parameter;
-    ``covariance`` (n_free, n_free) in the order of ``free``; ``residuals`` relative RMS [%] by group and
+    ``covariance`` (n_free, n_free) in the order of ``free``; ``derived`` (value, standard deviation) of a
+    mixture's total optical depth at 550 nm (``"aerosol_optical_depth"``) and its members' fractions
+    (``"fraction:<member>"``), first-order propagation of ``covariance``; ``residuals`` relative RMS [%] by group and
     region (``"sky: near sun"``, ``"sky: horizon"``, ``"sky: rest"``, ``"direct"``, ``"diffuse"``) and the optical
     depth's absolute RMS (``"aod"``); ``chi2_reduced``; ``builds`` table builds and ``seconds`` wall time.
     """
@@ -205,19 +226,28 @@ class AtmosphereFit:
     seconds: float
     aerosol_type: str | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+    mixture: tuple[str, ...] | None = None
+    derived: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     def report(self) -> dict[str, Any]:
         """JSON-compatible summary (what ``skyscatter fit-atmosphere`` stores beside the air)."""
         return {"free": list(self.free), "values": self.values, "uncertainties": self.uncertainties,
                 "covariance": self.covariance.tolist(), "residual_rms": self.residuals,
                 "chi2_reduced": self.chi2_reduced, "builds": self.builds, "seconds": self.seconds,
-                "aerosol_type": self.aerosol_type}
+                "aerosol_type": self.aerosol_type, "mixture": None if self.mixture is None else list(self.mixture),
+                "derived": {k: list(v) for k, v in self.derived.items()}, **self.extra}
 
 
 def _air(base: AtmosphereParameters, names: tuple[str, ...], x: NDArray[np.float64],
-         aerosol_type: str | None, start: dict[str, float]) -> AtmosphereParameters:
+         aerosol_type: str | None, start: dict[str, float],
+         mixture: tuple[str, ...] | None = None) -> AtmosphereParameters:
     v = dict(start)
     v.update(zip(names, (float(t) for t in x), strict=True))
+    if mixture is not None:
+        from ..atmosphere.aerosol_types import OpacAerosol
+
+        return base.replace(ground_albedo=v["ground_albedo"], aerosol=OpacAerosol.mixture(
+            [(m, v[MEMBER + m]) for m in mixture], v["relative_humidity"], column_height=base.thickness))
     if aerosol_type is not None:  # the relative humidity is the fit's own (not a user option of the air)
         from ..atmosphere.aerosol_types import OpacAerosol
 
@@ -229,25 +259,49 @@ def _air(base: AtmosphereParameters, names: tuple[str, ...], x: NDArray[np.float
     return air.replace(mie_single_scattering_albedo=v["mie_single_scattering_albedo"])
 
 
-def _start_values(base: AtmosphereParameters, aerosol_type: str | None,
-                  relative_humidity: float) -> dict[str, float]:
+def _start_values(base: AtmosphereParameters, aerosol_type: str | None, relative_humidity: float,
+                  mixture: tuple[str, ...] | None = None) -> dict[str, float]:
     from ..atmosphere.turbidity import angstrom_beta_from_optical_depth
 
     tau = float(base.aerosol_component.optical_depth([550.0], base.thickness)[0])
     if base.aerosol is None:
         tau = base.mie_angstrom_beta / angstrom_beta_from_optical_depth(1.0, base.mie_angstrom_alpha)
-    return {"aerosol_optical_depth": max(tau, 0.02), "angstrom_alpha": base.mie_angstrom_alpha,
-            "mie_phase_g": base.mie_phase_g, "mie_single_scattering_albedo": base.mie_single_scattering_albedo,
-            "relative_humidity": relative_humidity,
-            "ground_albedo": float(np.mean(base.ground_albedo_at([550.0])))}
+    out = {"aerosol_optical_depth": max(tau, 0.02), "angstrom_alpha": base.mie_angstrom_alpha,
+           "mie_phase_g": base.mie_phase_g, "mie_single_scattering_albedo": base.mie_single_scattering_albedo,
+           "relative_humidity": relative_humidity,
+           "ground_albedo": float(np.mean(base.ground_albedo_at([550.0])))}
+    for m in mixture or ():  # equal shares of the base's optical depth
+        out[MEMBER + m] = out["aerosol_optical_depth"] / len(mixture)
+    return out
+
+
+def _mixture_derived(mixture: tuple[str, ...], free: tuple[str, ...], x: NDArray[np.float64],
+                     cov: NDArray[np.float64], start: dict[str, float]) -> dict[str, tuple[float, float]]:
+    """The mixture's total optical depth at 550 nm and each member's fraction of it, with standard deviations
+    propagated from the covariance to first order (``g^T C g``, ``g`` the gradient of each quantity)."""
+    names = [MEMBER + m for m in mixture]
+    tau = np.array([float(x[free.index(n)]) if n in free else start[n] for n in names])
+    grad_rows = np.zeros((len(mixture), len(free)))
+    for i, n in enumerate(names):
+        if n in free:
+            grad_rows[i, free.index(n)] = 1.0
+    total = float(tau.sum())
+    g_total = grad_rows.sum(axis=0)
+    out = {"aerosol_optical_depth": (total, float(np.sqrt(max(g_total @ cov @ g_total, 0.0))))}
+    if total > 0:
+        for i, m in enumerate(mixture):
+            g = (grad_rows[i] * total - tau[i] * g_total) / total**2
+            out["fraction:" + m] = (float(tau[i] / total), float(np.sqrt(max(g @ cov @ g, 0.0))))
+    return out
 
 
 def fit_atmosphere(scan: SkyScan | None = None, irradiance: Irradiance | None = None,
                    aod: AerosolOpticalDepth | None = None, *,
                    free: tuple[str, ...] = ("aerosol_optical_depth", "mie_phase_g", "ground_albedo"),
                    base: AtmosphereParameters | None = None, aerosol_type: str | None = None,
+                   mixture: tuple[str, ...] | None = None,
                    relative_humidity: float = 50.0, orders: int = 4, sizes: dict[str, int] | None = None,
-                   max_builds: int = 60) -> AtmosphereFit:
+                   max_builds: int = 60, model_error: bool = True) -> AtmosphereFit:
     """Fit the air to the measurements (module docstring).
 
     Parameters
@@ -261,11 +315,21 @@ def fit_atmosphere(scan: SkyScan | None = None, irradiance: Irradiance | None = 
         Angstrom exponent 1.3).
     aerosol_type : str, optional
         Fit an OPAC aerosol type (its optical depth and humidity) instead of the analytic aerosol.
+    mixture : tuple of str, optional
+        Fit an external mixture of two or more OPAC components or types
+        (:meth:`~skyscatter.atmosphere.aerosol_types.OpacAerosol.mixture`, e.g. ``("waso", "sscm")``: a fine
+        and a coarse mode): ``"aerosol_optical_depth"`` in ``free`` stands for the optical depth at 550 nm of
+        every member (free parameters ``"optical_depth:<member>"``, each >= 0; start: equal shares of the
+        base's). :attr:`AtmosphereFit.derived` gives the total optical depth and each member's fraction of it
+        with their propagated uncertainties.
     relative_humidity : float
-        [%], start (or fixed) humidity of an aerosol type.
+        [%], start (or fixed) humidity of an aerosol type or mixture.
     orders, sizes : the table builds' scattering orders and sizes (default 4 and :data:`FIT_SIZES`).
     max_builds : int
         Limit of table builds (function evaluations).
+    model_error : bool
+        Add the tables' systematic error in sky radiance (:data:`SCAN_MODEL_ERROR`) to the covariance (default
+        True; module docstring). Without a scan nothing is added.
     """
     from scipy.optimize import least_squares
 
@@ -274,22 +338,38 @@ def fit_atmosphere(scan: SkyScan | None = None, irradiance: Irradiance | None = 
     if scan is None and irradiance is None and aod is None:
         raise InvalidParameterError("give at least one measurement: a sky scan, irradiance or optical depths")
     free = tuple(free)
+    if mixture is not None:
+        mixture = tuple(str(m) for m in mixture)
+        if aerosol_type is not None:
+            raise InvalidParameterError("give an aerosol type or a mixture, not both")
+        if len(mixture) < 2 or len(set(mixture)) != len(mixture):
+            raise InvalidParameterError("a mixture needs two or more distinct members")
+        from ..atmosphere.aerosol_types import AEROSOL_TYPES, OPAC_COMPONENTS
+
+        for m in mixture:
+            if m not in OPAC_COMPONENTS and m not in AEROSOL_TYPES:
+                raise InvalidParameterError(f"unknown mixture member {m!r}; OPAC components: "
+                                            f"{', '.join(OPAC_COMPONENTS)}; types: {', '.join(AEROSOL_TYPES)}")
     for name in free:
         if name not in FREE_PARAMETERS:
             raise InvalidParameterError(f"unknown free parameter {name!r}; known: {', '.join(FREE_PARAMETERS)}")
-        if aerosol_type is not None and name in _ANALYTIC_ONLY:
-            raise InvalidParameterError(f"{name} belongs to the analytic aerosol; an aerosol type fits "
+        if (aerosol_type is not None or mixture is not None) and name in _ANALYTIC_ONLY:
+            raise InvalidParameterError(f"{name} belongs to the analytic aerosol; an aerosol type or mixture fits "
                                         "aerosol_optical_depth and relative_humidity")
-        if aerosol_type is None and name == "relative_humidity":
-            raise InvalidParameterError("relative_humidity is fitted with an aerosol type (aerosol_type=...)")
+        if aerosol_type is None and mixture is None and name == "relative_humidity":
+            raise InvalidParameterError("relative_humidity is fitted with an aerosol type or mixture")
     if len(set(free)) != len(free) or not free:
         raise InvalidParameterError("free parameters must be distinct, at least one")
     if scan is None and irradiance is None and set(free) - {"aerosol_optical_depth", "angstrom_alpha"}:
         raise InvalidParameterError("optical depths alone determine only aerosol_optical_depth and angstrom_alpha")
     base = AtmosphereParameters.from_aerosol_optical_depth(0.1, 1.3) if base is None else base
-    start = _start_values(base, aerosol_type, relative_humidity)
-    lo = np.array([FREE_PARAMETERS[n][0] for n in free])
-    hi = np.array([FREE_PARAMETERS[n][1] for n in free])
+    start = _start_values(base, aerosol_type, relative_humidity, mixture)
+    if mixture is not None and "aerosol_optical_depth" in free:
+        i = free.index("aerosol_optical_depth")
+        free = free[:i] + tuple(MEMBER + m for m in mixture) + free[i + 1:]
+    bounds = {**FREE_PARAMETERS, **{MEMBER + m: (0.0, 3.0, "") for m in mixture or ()}}
+    lo = np.array([bounds[n][0] for n in free])
+    hi = np.array([bounds[n][1] for n in free])
     x0 = np.clip(np.array([start[n] for n in free]), lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo))
     sz = FIT_SIZES if sizes is None else sizes
     wl_set: set[float] = set()
@@ -303,7 +383,7 @@ def fit_atmosphere(scan: SkyScan | None = None, irradiance: Irradiance | None = 
 
     def model(x: NDArray[np.float64]):
         nonlocal builds
-        air = _air(base, free, x, aerosol_type, start)
+        air = _air(base, free, x, aerosol_type, start, mixture)
         out: dict[str, NDArray[np.float64]] = {}
         if table_wl is not None:
             atm = PrecomputedAtmosphere.compute(air, orders=orders, wavelengths=table_wl, sizes=sz, progress=False)
@@ -351,7 +431,10 @@ def fit_atmosphere(scan: SkyScan | None = None, irradiance: Irradiance | None = 
         cov = np.linalg.pinv(jac.T @ jac) * max(1.0, chi2)
     except np.linalg.LinAlgError:  # pragma: no cover
         cov = np.full((n, n), np.nan)
-    fitted = _air(base, free, res.x, aerosol_type, start)
+    statistical = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    if scan is not None and model_error:
+        cov = cov + _model_error_covariance(jac, scan)
+    fitted = _air(base, free, res.x, aerosol_type, start, mixture)
     final = model(res.x)
     rms: dict[str, float] = {}
     if scan is not None:
@@ -371,6 +454,32 @@ def fit_atmosphere(scan: SkyScan | None = None, irradiance: Irradiance | None = 
     if aod is not None:
         rms["aod"] = float(np.sqrt(np.mean((final["aod"] - aod.values) ** 2)))
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    derived = {} if mixture is None else _mixture_derived(mixture, free, res.x, cov, start)
+    extra = {"statistical_uncertainties": {k: float(v) for k, v in zip(free, statistical, strict=True)}}
+    if scan is not None and model_error:
+        extra["scan_model_error"] = [list(b) for b in SCAN_MODEL_ERROR]
     return AtmosphereFit(fitted, free, {k: float(v) for k, v in zip(free, res.x, strict=True)},
                          {k: float(v) for k, v in zip(free, sd, strict=True)}, cov, rms, chi2, builds,
-                         time.perf_counter() - t0, aerosol_type)
+                         time.perf_counter() - t0, aerosol_type, extra=extra, mixture=mixture, derived=derived)
+
+
+def _model_error_covariance(jac: NDArray[np.float64], scan: SkyScan) -> NDArray[np.float64]:
+    """Covariance of the fitted parameters from the tables' systematic sky-radiance error: an error ``delta_b``
+    (:data:`SCAN_MODEL_ERROR`) common to every direction of elevation band ``b`` and every wavelength, independent
+    between bands, carried by the least-squares solution's linear map ``G = (J^T J)^+ J^T`` (``J`` the Jacobian
+    of the weighted residuals, the scan's first in their order): ``sum_b (G u_b)(G u_b)^T``, ``u_b`` the band's
+    residual pattern ``delta_b / sigma`` (linear propagation through the least-squares solution, [Press2007]
+    Sec. 15.4)."""
+    n_wl = 1 if scan.values.ndim == 1 else scan.values.shape[1]
+    elevation = np.degrees(math.pi / 2 - scan.zenith)
+    gmap = np.linalg.pinv(jac.T @ jac) @ jac.T
+    out = np.zeros((jac.shape[1], jac.shape[1]))
+    for lo, hi, delta in SCAN_MODEL_ERROR:
+        sel = (elevation >= lo) & ((elevation < hi) | (hi >= 90.0))
+        if not sel.any():
+            continue
+        u = np.zeros(jac.shape[0])
+        u[:scan.zenith.size * n_wl] = np.repeat(sel, n_wl) * (delta / scan.relative_noise)
+        d = gmap @ u
+        out += np.outer(d, d)
+    return out

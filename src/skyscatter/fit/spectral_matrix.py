@@ -547,7 +547,8 @@ def _job_description(paths: Sequence[Path], scheme: str, bands, samples: int, op
     return {"sites": [str(p) for p in paths], "sha256": [digest(p) for p in paths], "scheme": scheme,
             "bands": band_edges(bands)[0].tolist(), "samples": int(samples),
             "options": {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(options).items()
-                        if k not in ("base", "sizes")}, "sizes": repr(options.sizes)}
+                        if k not in ("base", "sizes")}, "sizes": repr(options.sizes),
+            "base": None if options.base is None else options.base.to_dict()}
 
 
 def _site_arrays(ds) -> dict[str, NDArray]:

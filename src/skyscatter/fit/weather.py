@@ -274,6 +274,26 @@ def _read_csv(p: Path) -> EPWData:
 # --------------------------------------------------------------------------------------------- broadband model
 
 
+def particle_aerosol_shape(aerosol: Any, wavelengths: ArrayLike) -> NDArray[np.float64]:
+    """Optical depth of a particle aerosol at ``wavelengths`` [nm] relative to 550 nm [-]: its extinction at
+    300, 400, ..., 1200 nm and 550 nm (the range of OPAC's refractive indices), linear in log-log between them and
+    the power law of the two end nodes beyond (Angstrom's law locally, [Angstrom1929])."""
+    import dataclasses
+
+    if getattr(aerosol, "optical_depth_550", None) == 0.0:  # the shape of an aerosol-free node: its own numbers
+        aerosol = dataclasses.replace(aerosol, optical_depth_550=None)
+    nodes = np.array([300.0, 400.0, 500.0, 550.0, 600.0, 700.0, 800.0, 900.0, 1000.0, 1100.0, 1200.0])
+    ext = np.asarray(aerosol.extinction_at(nodes), dtype=float)
+    if not np.all(ext > 0):
+        raise InvalidParameterError("the aerosol's extinction must be > 0 at 300-1200 nm for its spectral shape")
+    x, y = np.log(nodes), np.log(ext / ext[3])
+    lw = np.log(np.asarray(wavelengths, dtype=float))
+    out = np.interp(lw, x, y)
+    out = np.where(lw < x[0], y[0] + (lw - x[0]) * (y[1] - y[0]) / (x[1] - x[0]), out)
+    out = np.where(lw > x[-1], y[-1] + (lw - x[-1]) * (y[-1] - y[-2]) / (x[-1] - x[-2]), out)
+    return np.exp(out)
+
+
 class BroadbandClearSky:
     """Broadband direct and diffuse irradiance of the medium (module docstring, "Broadband model").
 
@@ -282,7 +302,9 @@ class BroadbandClearSky:
     base : AtmosphereParameters
         The medium (its Rayleigh, ozone profile and cross-sections, aerosol profile and spectral shape).
     angstrom_alpha : float
-        Angstrom exponent of the aerosol optical depth's spectral shape.
+        Angstrom exponent of the aerosol optical depth's spectral shape (the analytic aerosol); a particle aerosol
+        (``base.aerosol``, e.g. an OPAC type) has its own: its Mie extinction relative to 550 nm at 300-1200 nm
+        (100 nm steps), interpolated linearly in log-log and extended beyond by the power law of the two end nodes.
     """
 
     def __init__(self, base: AtmosphereParameters, angstrom_alpha: float) -> None:
@@ -303,7 +325,8 @@ class BroadbandClearSky:
         ozone[inside] = per_du.ozone_absorption_at(wl[inside]) * base.ozone_density.column(thick)
         self.tau_ozone_per_du = ozone  # [DU^-1] inside the medium's data; Bird & Riordan's form outside
         self.ozone_inside = inside
-        self.aerosol_shape = (wl / 550.0) ** -self.alpha
+        self.aerosol_shape = (wl / 550.0) ** -self.alpha if base.aerosol is None else \
+            particle_aerosol_shape(base.aerosol, wl)
 
     def gas_transmittance(self, zenith: ArrayLike, precipitable_water: ArrayLike,
                           pressure: ArrayLike) -> NDArray[np.float64]:
@@ -803,16 +826,19 @@ TABLE_PRESETS = {
 
 
 def default_family(options: RetrievalOptions | None = None) -> TableFamily:
-    """The table family of a retrieval: aerosol optical depth x single-scattering albedo over the base medium,
+    """The table family of a retrieval: aerosol optical depth x single-scattering albedo over the base medium
+    (the optical depth alone for a particle aerosol such as an OPAC type, whose albedo is its Mie optics'),
     with the options' table preset, for ground observers (every node kept in memory: 4.5 MB each by default)."""
     o = RetrievalOptions() if options is None else options
     preset = TABLE_PRESETS[o.tables]
-    return TableFamily([GridAxis("aerosol_optical_depth", tuple(o.aerosol_optical_depth_nodes)),
-                        GridAxis("aerosol_single_scattering_albedo", tuple(o.single_scattering_albedo_nodes))],
-                       base=o.base_atmosphere(), wavelengths=preset["wavelengths"],
+    base = o.base_atmosphere()
+    axes = [GridAxis("aerosol_optical_depth", tuple(o.aerosol_optical_depth_nodes))]
+    if base.aerosol is None:  # a particle aerosol (an OPAC type) has the albedo of its Mie optics: no such axis
+        axes.append(GridAxis("aerosol_single_scattering_albedo", tuple(o.single_scattering_albedo_nodes)))
+    return TableFamily(axes, base=base, wavelengths=preset["wavelengths"],
                        sizes=o.sizes if o.sizes is not None else preset["sizes"],
                        orders=o.orders if o.orders is not None else preset["orders"], ground_only=True,
-                       max_in_memory=len(o.aerosol_optical_depth_nodes) * len(o.single_scattering_albedo_nodes))
+                       max_in_memory=int(np.prod([len(a.values) for a in axes])))
 
 
 @dataclass(eq=False)
@@ -1013,6 +1039,9 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
 
     # ---- clear hours: AOD from DNI, albedo from DHI
     model = BroadbandClearSky(fam.base, o.angstrom_alpha)
+    # the aerosol albedo where no axis retrieves it: the base's (a particle aerosol's from its Mie optics, 550 nm)
+    base_ssa = (fam.base.mie_single_scattering_albedo if fam.base.aerosol is None else
+                float(fam.base.aerosol_component.single_scattering_albedo_at([550.0])[0]))
     aod_axis = next(a for a in fam.axes if a.name == "aerosol_optical_depth")
     ssa_axis = next((a for a in fam.axes if a.name == "aerosol_single_scattering_albedo"), None)
     cover = rec.total_sky_cover if rec.total_sky_cover is not None else np.full(n, np.nan)
@@ -1057,7 +1086,7 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
                 dhi_model[good] = lo + frac * (hi - lo)
                 slope[good] = (hi - lo) / (s_nodes[-1] - s_nodes[0])
             else:
-                ssa[good] = fam.base.mie_single_scattering_albedo if ssa_axis is None else ssa_axis.values[0]
+                ssa[good] = base_ssa if ssa_axis is None else ssa_axis.values[0]
                 status[good] = CLEAR
                 dhi_model[good] = d_nodes[:, 0]
             dni_model[good] = model.direct_normal(zen[good], aod[good], pw[good], pressure[good], ozone[good],
@@ -1069,7 +1098,7 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
     if cl.size:
         _cloudy_aerosol(rec, cl, status, aod, aod_src, aod_file, float(o.default_aerosol_optical_depth), unix)
         aod[cl] = np.minimum(aod[cl], tau_max)
-        ssa[cl] = fam.base.mie_single_scattering_albedo if fam.base.aerosol is None else np.nan
+        ssa[cl] = base_ssa
         opaque = rec.opaque_sky_cover if rec.opaque_sky_cover is not None else np.full(n, np.nan)
         clouds = retrieve_clouds(ghi[cl], dhi[cl], zen[cl], aod[cl], cover[cl], opaque[cl],
                                  precipitable_water=pw[cl], pressure=pressure[cl], ozone=ozone[cl],

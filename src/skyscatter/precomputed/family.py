@@ -13,7 +13,8 @@ family's base atmosphere by the axis's *setter*, one function registered by name
 
 =================================  =====================================================================
 ``aerosol_optical_depth``           vertical aerosol optical depth at 550 nm [-] of the base's aerosol
-                                    (Angstrom aerosol: ``beta = tau 0.55^alpha`` with the base's alpha)
+                                    (Angstrom aerosol: ``beta = tau 0.55^alpha`` with the base's alpha; an
+                                    OPAC type or mixture: its number densities scaled to it)
 ``aerosol_single_scattering_albedo``  the Angstrom aerosol's single-scattering albedo [-]
 =================================  =====================================================================
 
@@ -63,11 +64,15 @@ FAMILY_WAVELENGTHS = (360.0, *(float(w) for w in range(390, 771, 20)), 800.0, 83
 
 
 def _aerosol_optical_depth(atmosphere: AtmosphereParameters, value: float) -> AtmosphereParameters:
-    if atmosphere.aerosol is not None:
-        raise InvalidParameterError("the aerosol_optical_depth axis scales the Angstrom aerosol (mie_* fields); "
-                                    "this base atmosphere has a particle-component aerosol")
+    from ..atmosphere.aerosol_types import OpacAerosol
+
+    if atmosphere.aerosol is not None and not isinstance(atmosphere.aerosol, OpacAerosol):
+        raise InvalidParameterError("the aerosol_optical_depth axis scales the Angstrom aerosol (mie_* fields) or an "
+                                    "OPAC aerosol; this base atmosphere has another particle-component aerosol")
     if not 0.0 <= value <= 10.0:
         raise InvalidParameterError(f"aerosol optical depth nodes must be in [0, 10]; got {value:g}")
+    if atmosphere.aerosol is not None:  # an OPAC type or mixture: its number densities scaled, ratios kept
+        return atmosphere.replace(aerosol=dataclasses.replace(atmosphere.aerosol, optical_depth_550=float(value)))
     alpha = atmosphere.mie_angstrom_alpha
     return atmosphere.replace(mie_angstrom_beta=float(value) * 0.55**alpha)
 

@@ -385,7 +385,9 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     phase_m = np.empty((n_om, n_v))
     # tabulated phase: per wavelength (empty otherwise)
     n_lt = n_l if table else 0
-    phase_t = np.empty((n_lt, n_om, n_v))
+    # one wavelength's truncated phase at a time (n_om, n_v), filled just before its product: a table of all
+    # wavelengths was n_l times larger (67 MB at 16 wavelengths and default sizes) and written then read back
+    phase_t = np.empty((n_om if table else 0, n_v))
     norm_t = np.empty((n_lt, n_v))
     mie_t = np.empty((n_lt, n_s, n_v))
     own = np.empty((n_lt, n_s, n_v))  # L(v) at each texel (the delta part)
@@ -444,18 +446,6 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                         nm += pm * dom[w]
                     norm_m[v] = nm
                 norm_r[v] = w0 + _quadratic_form(w2, vx, vy, mu)
-        if table:
-            for k in range(n_l):
-                for v in range(n_v):
-                    norm_t[k, v] = 0.0
-                for w in range(n_om):
-                    dw = dom[w]
-                    for v in range(n_v):
-                        i = idx_t[w, v]
-                        f = wt_t[w, v]
-                        p = (1.0 - f) * phase_trunc[k, i] + f * phase_trunc[k, i + 1]
-                        phase_t[k, w, v] = p
-                        norm_t[k, v] += p * dw
         m0[:] = 0.0
         m2[:] = 0.0
         for i_s in range(n_s):
@@ -499,10 +489,20 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                             m2[i_s, k, a, b] += om[w, a] * om[w, b] * lw
         if table:
             for k in range(n_l):
+                for v in range(n_v):
+                    norm_t[k, v] = 0.0
+                for w in range(n_om):
+                    dw = dom[w]
+                    for v in range(n_v):
+                        i = idx_t[w, v]
+                        f = wt_t[w, v]
+                        p = (1.0 - f) * phase_trunc[k, i] + f * phase_trunc[k, i + 1]
+                        phase_t[w, v] = p
+                        norm_t[k, v] += p * dw
                 for i_s in range(n_s):
                     for w in range(n_om):
                         rad_k[i_s, w] = radiance[i_s * n_l + k, w]
-                mie_t[k] = np.dot(rad_k, phase_t[k])  # (n_s, n_v): sum over quadrature directions of L dw p*
+                mie_t[k] = np.dot(rad_k, phase_t)  # (n_s, n_v): sum over quadrature directions of L dw p*
             _own_radiance(s_a, s_b, first, ground_irradiance, transmittance, albedo, phase_mu, phase_full, i_r,
                           view, mu_s_tab, bottom, top, n_n, own, buf, e_buf, t_buf, tmp, pv)
             mie = phase_m[:0]
