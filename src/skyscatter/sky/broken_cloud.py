@@ -29,8 +29,8 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   ``J_amb = omega (E_down exp(-d tau_above k) + rho_g E_ground exp(-d tau_below k)) / (2 pi)`` with the
   vertical optical depths to the field's top and base and the ground's upward light (the clear-sky global
   irradiance with the sun's part times the field's mean shadow); ``d`` is fitted with ``a, b, c``.
-* **Along the view ray**: midpoint steps of ``min(dx, dy, dz) / 2`` (growing as 0.002 x the distance, about a
-  pixel of a 2048-wide panorama), empty blocks of 4^3 voxels crossed in one step, the march stopping once
+* **Along the view ray**: midpoint steps of half a voxel along the axis the ray crosses fastest (growing as
+  0.002 x the distance, about a pixel of a 2048-wide panorama), empty blocks of 4^3 voxels crossed in one step, the march stopping once
   every wavelength's transmittance is below 1e-3. Each step adds ``T (1 - exp(-sigma_e dt)) J``.
 * **The clear air in front of and behind the cloud** ([Bruneton2008] Eq. 16): with ``p`` the cloud's mean
   depth along the ray (weights ``T (1 - exp(-sigma dt))``), ``L = L_sky(eye) - T_air(eye, p) (1 - T_cloud)
@@ -69,13 +69,17 @@ OCTAVES = 8
 #: ``(a, b, c, d)``: the octaves' extinction, scattering and eccentricity factors and the ambient light's
 #: extinction factor, fitted by least squares to Monte Carlo radiances (``benchmarks/fit_broken_cloud.py`` on
 #: tests/data/broken_cloud_montecarlo.npz: cover 0.6, seed and path counts stored there; docs/clouds.md).
-FITTED_OCTAVES = (0.3735, 0.7082, 0.6513, 0.0)
+FITTED_OCTAVES = (0.4129, 0.7262, 0.6665, 0.0)
 #: Procedural fields: horizontal size [m], voxels (x, y, z) and noise feature size [m].
 PROCEDURAL_SIZE = 16_000.0
 PROCEDURAL_RESOLUTION = (128, 128, 32)
 PROCEDURAL_FEATURE = 4_000.0
 #: Sun cosines of the air's transmittance and irradiance tables read by the march.
 _MU_NODES = np.linspace(-0.3, 1.0, 131)
+#: Rays per chunk of the march and its lookups (bounds the working arrays to about 100 MB).
+CHUNK = 1 << 17
+#: The march's step as a fraction of a voxel along the axis the ray crosses fastest.
+STEP_FRACTION = 0.5
 #: Block edge [voxels] of the empty-space skipping.
 _BLOCK = 4
 
@@ -260,7 +264,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         tau_ground = self.optical_depth_to_sun(np.stack([gx, gy, gz], axis=-1))
         return {"gf": gf, "tau_sun": tau_sun, "above": np.ascontiguousarray(above),
                 "below": np.ascontiguousarray(below), "occupied": occupied, "tau_ground": tau_ground,
-                "step": 0.5 * min(dx, dy, dz)}
+                "step": STEP_FRACTION}
 
     @cached_property
     def _light(self) -> dict[str, Any]:
@@ -358,7 +362,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         if np.any(gsel):
             gpts = eye + t_ground[idx][gsel, None] * dd[gsel]
             gpts *= (bottom / np.linalg.norm(gpts, axis=-1))[:, None]
-            tau = self.optical_depth_to_sun(gpts)
+            tau = self._ground_optical_depth(gpts)
             lit = 1.0 - np.exp(-np.multiply.outer(tau, self._light["k"]))
             shadowed = tau > 0.0
             if np.any(shadowed):
@@ -371,19 +375,52 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         out[idx] = np.maximum(value, 0.0)
         return out, changed
 
+    def _ground_optical_depth(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The field's optical depth to the sun from ground ``points`` (n, 3): bilinear in the map of the voxel
+        columns' centres (periodic fields; exact per point for open ones, whose shadows reach outside the box)."""
+        f = self.field
+        if not f.periodic:
+            return self.optical_depth_to_sun(points)
+        tau = self._volumes["tau_ground"]
+        nx, ny = tau.shape
+        dx, dy, _ = f.voxel_size
+        u = (points[:, 0] - f.origin[0]) / dx - 0.5
+        v = (points[:, 1] - f.origin[1]) / dy - 0.5
+        i0 = np.floor(u).astype(np.int64)
+        j0 = np.floor(v).astype(np.int64)
+        fu = u - i0
+        fv = v - j0
+        i0 %= nx
+        j0 %= ny
+        i1 = (i0 + 1) % nx
+        j1 = (j0 + 1) % ny
+        return ((tau[i0, j0] * (1 - fu) + tau[i1, j0] * fu) * (1 - fv)
+                + (tau[i0, j1] * (1 - fu) + tau[i1, j1] * fu) * fv)
+
     def _directions(self, directions: ArrayLike) -> tuple[NDArray[np.float64], tuple[int, ...]]:
         d = as_directions(directions)
         shape = d.shape[:-1]
         flat = np.ascontiguousarray(d.reshape(-1, 3), dtype=float)
         return flat / np.linalg.norm(flat, axis=-1, keepdims=True), shape
 
+    def _chunks(self, d: NDArray[np.float64], channels: int, clear, convert) -> NDArray[np.float64]:
+        """``(n, channels)`` values of the rays ``d`` in chunks of :data:`CHUNK` (bounded memory): the clear sky's
+        ``clear(d)`` where nothing changed, ``convert(table radiance)`` elsewhere."""
+        out = np.zeros((d.shape[0], channels))
+        for start in range(0, d.shape[0], CHUNK):
+            part = d[start:start + CHUNK]
+            view = out[start:start + CHUNK]
+            tab_rad, changed = self._composite(part)
+            if np.any(changed):
+                view[changed] = convert(tab_rad[changed])
+            if np.any(~changed):
+                view[~changed] = clear(part[~changed])
+        return out
+
     def table_radiance(self, directions: ArrayLike) -> NDArray[np.float64]:
         """Spectral radiance [W m^-2 sr^-1 nm^-1] at the table wavelengths, (..., n_table_wavelengths)."""
         d, shape = self._directions(directions)
-        out, changed = self._composite(d)
-        rest = ~changed
-        if np.any(rest):
-            out[rest] = self.clear.table_radiance(d[rest])
+        out = self._chunks(d, self._tables.wavelengths.size, self.clear.table_radiance, lambda v: v)
         return out.reshape(*shape, -1)
 
     # ------------------------------------------------------------------ the protocol
@@ -393,24 +430,14 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         that meet no cloud (nor its shadow) are the clear sky's :meth:`BrunetonSky.spectral_radiance`."""
         wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
         d, shape = self._directions(directions)
-        out = np.zeros((d.shape[0], wl.size))
-        tab_rad, changed = self._composite(d)
-        if np.any(changed):
-            out[changed] = self._tables.resample(tab_rad[changed], wl)
-        if np.any(~changed):
-            out[~changed] = self.clear.spectral_radiance(d[~changed], wl)
+        out = self._chunks(d, wl.size, lambda v: self.clear.spectral_radiance(v, wl),
+                           lambda v: self._tables.resample(v, wl))
         return out.reshape(*shape, wl.size)
 
     def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
         """CIE 1931 XYZ [cd m^-2] (..., 3); rays that meet no cloud are the clear sky's :meth:`BrunetonSky.xyz`."""
         d, shape = self._directions(directions)
-        out = np.zeros((d.shape[0], 3))
-        tab_rad, changed = self._composite(d)
-        if np.any(changed):
-            out[changed] = self._tables.to_xyz(tab_rad[changed])
-        if np.any(~changed):
-            out[~changed] = self.clear.xyz(d[~changed])
-        return out.reshape(*shape, 3)
+        return self._chunks(d, 3, self.clear.xyz, self._tables.to_xyz).reshape(*shape, 3)
 
     def luminance(self, directions: ArrayLike) -> NDArray[np.float64]:
         """Luminance [cd m^-2] (...)."""

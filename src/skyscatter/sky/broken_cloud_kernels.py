@@ -189,8 +189,8 @@ def march_rays(origin, dirs, sun, gf, rho, occupied, bsize, tau_sun, tau_above, 
     ``solar`` the extraterrestrial irradiance [W m^-2 nm^-1]; ``t_atm`` (nz, n_mu, n_wl) the clear air's
     transmittance to the sun and ``e_down`` (nz, n_mu, n_wl) its diffuse irradiance on a horizontal plane [W m^-2
     nm^-1] at each voxel layer, for the sun cosines ``mu0 + i dmu``; ``e_up`` (n_wl,) the ground's
-    upward irradiance [W m^-2 nm^-1]. ``mp``: a, b, c, d (octaves and ambient extinction), the step [m], the
-    level-of-detail factor (step >= lod * distance) and the ray start distance. ``linear``: the densities and
+    upward irradiance [W m^-2 nm^-1]. ``mp``: a, b, c, d (octaves and ambient extinction), the step as a fraction
+    of the voxel along the axis the ray crosses fastest [-], the level-of-detail factor (step >= lod * distance) and the ray start distance. ``linear``: the densities and
     optical depths interpolated trilinearly between voxel centres (smooth cloud edges; ``occupied`` must then
     count a voxel's neighbours); else constant per voxel (the field's definition, the Monte Carlo's).
     """
@@ -203,20 +203,34 @@ def march_rays(origin, dirs, sun, gf, rho, occupied, bsize, tau_sun, tau_above, 
     b = mp[M_B]
     c = mp[M_C]
     dd = mp[M_D]
-    step0 = mp[M_STEP]
+    step_fraction = mp[M_STEP]
     lod = mp[M_LOD]
     ox = origin[0]
     oy = origin[1]
     oz = origin[2]
     four_pi = 4.0 * math.pi
+    inv_two_pi = 0.5 / math.pi
+    kbar = 0.0
+    for wl in range(nwl):
+        kbar += k[wl] / nwl
+    dk = np.empty(nwl)
+    dkmax = 0.0
+    for wl in range(nwl):
+        dk[wl] = k[wl] - kbar
+        dkmax = max(dkmax, abs(dk[wl]))
     periodic = gf[G_PERIODIC] != 0.0
     for ray in prange(n):
         dx = dirs[ray, 0]
         dy = dirs[ray, 1]
         dz = dirs[ray, 2]
+        # the step: ``step_fraction`` of the voxel along the axis the ray crosses fastest (the altitude's rate taken
+        # at the eye: further out the planet's curvature steepens it by at most t / R)
+        rate = max(abs(dx) / gf[G_DX], abs(dy) / gf[G_DY], abs(dz) / gf[G_DZ])
+        step0 = step_fraction / rate
         tr = np.ones(nwl)
         acc = np.zeros(nwl)
         w = np.empty((n_octaves, nwl))
+        direct = np.empty(nwl)
         # phase of each octave towards the eye (a function of the ray only: the sun's rays are parallel)
         # cosine of the scattering angle: the sunlight's direction of travel (-s) . the light's towards the eye (-d)
         mu = dx * sun[0] + dy * sun[1] + dz * sun[2]
@@ -329,21 +343,42 @@ def march_rays(origin, dirs, sun, gf, rho, occupied, bsize, tau_sun, tau_above, 
                 fm = min(max(fm, 0.0), nmu - 1.0)
                 j = min(int(fm), nmu - 2)
                 fm -= j
+                # the sun's octaves: exp(-a^i tau k_l) = exp(-x kbar) exp(-x dk_l), x = a^i tau; the second factor by
+                # its Taylor polynomial where x max|dk| < 0.02 (error below 1.4e-6), else exactly
+                for wl in range(nwl):
+                    direct[wl] = 0.0
+                att = 1.0
+                for o in range(n_octaves):
+                    x = att * ts
+                    att *= a
+                    if x * kbar > 40.0:
+                        continue
+                    base = math.exp(-x * kbar)
+                    if x * dkmax < 0.02:
+                        for wl in range(nwl):
+                            y = x * dk[wl]
+                            direct[wl] += w[o, wl] * base * (1.0 - y + 0.5 * y * y)
+                    else:
+                        for wl in range(nwl):
+                            direct[wl] += w[o, wl] * math.exp(-x * k[wl])
+                x = r * h
+                base = math.exp(-x * kbar)
+                poly = x * dkmax < 0.02
                 wmax = 0.0
                 for wl in range(nwl):
                     kk = k[wl]
-                    sig = r * kk
-                    ts_l = ts * kk
-                    direct = 0.0
-                    att = 1.0
-                    for o in range(n_octaves):
-                        direct += w[o, wl] * math.exp(-att * ts_l)
-                        att *= a
                     tatm = t_atm[iz, j, wl] * (1.0 - fm) + t_atm[iz, j + 1, wl] * fm
                     edn = e_down[iz, j, wl] * (1.0 - fm) + e_down[iz, j + 1, wl] * fm
-                    amb = (edn * math.exp(-dd * tup * kk) + e_up[wl] * math.exp(-dd * tdn * kk)) / (2.0 * math.pi)
-                    src = albedo[wl] * (direct * tatm + amb)
-                    step_t = math.exp(-sig * h)
+                    if dd != 0.0:
+                        amb = (edn * math.exp(-dd * tup * kk) + e_up[wl] * math.exp(-dd * tdn * kk)) * inv_two_pi
+                    else:
+                        amb = (edn + e_up[wl]) * inv_two_pi
+                    src = albedo[wl] * (direct[wl] * tatm + amb)
+                    if poly:
+                        y = x * dk[wl]
+                        step_t = base * (1.0 - y + 0.5 * y * y)
+                    else:
+                        step_t = math.exp(-x * kk)
                     acc[wl] += tr[wl] * (1.0 - step_t) * src
                     if wl == 0:
                         wgt = tr[0] * (1.0 - step_t)
