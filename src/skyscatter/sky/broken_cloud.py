@@ -69,7 +69,9 @@ OCTAVES = 8
 #: ``(a, b, c, d)``: the octaves' extinction, scattering and eccentricity factors and the ambient light's
 #: extinction factor, fitted by least squares to Monte Carlo radiances (``benchmarks/fit_broken_cloud.py`` on
 #: tests/data/broken_cloud_montecarlo.npz: cover 0.6, seed and path counts stored there; docs/clouds.md).
-FITTED_OCTAVES = (0.4129, 0.7262, 0.6665, 0.0)
+FITTED_OCTAVES = (0.4128, 0.7268, 0.6671, 0.0)
+#: Octave i weighted by (1 - exp(-tau_column))^i (module docstring).
+THIN_AWARE = True
 #: Procedural fields: horizontal size [m], voxels (x, y, z) and noise feature size [m].
 PROCEDURAL_SIZE = 16_000.0
 PROCEDURAL_RESOLUTION = (128, 128, 32)
@@ -328,7 +330,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         march_rays(origin, d, self._sun_planet, v["gf"], self._exact.rho, v["occupied"], _BLOCK, v["tau_sun"],
                    v["above"], v["below"], li["k"], li["albedo"], li["ph_mu"], li["ph_val"], li["g"], li["solar"],
                    float(mu[0]), float(mu[1] - mu[0]), li["t_atm"], li["e_down"], li["e_up"], mp, OCTAVES,
-                   (interpolation or self.interpolation) == "linear", rad, tr, depth, hit)
+                   (interpolation or self.interpolation) == "linear", THIN_AWARE, rad, tr, depth, hit)
         return rad, tr, depth, hit
 
     def _composite(self, d: NDArray[np.float64], hit_only: bool = False):
@@ -397,15 +399,18 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         return ((tau[i0, j0] * (1 - fu) + tau[i1, j0] * fu) * (1 - fv)
                 + (tau[i0, j1] * (1 - fu) + tau[i1, j1] * fu) * fv)
 
-    def _directions(self, directions: ArrayLike) -> tuple[NDArray[np.float64], tuple[int, ...]]:
+    def _directions(self, directions: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[int, ...]]:
+        """Unit directions (n, 3) for the march, the caller's directions (n, 3) for the clear sky (so that rays
+        without cloud get the clear sky's own bits), and the shape."""
         d = as_directions(directions)
         shape = d.shape[:-1]
-        flat = np.ascontiguousarray(d.reshape(-1, 3), dtype=float)
-        return flat / np.linalg.norm(flat, axis=-1, keepdims=True), shape
+        raw = np.asarray(directions, dtype=float).reshape(-1, 3)
+        return np.ascontiguousarray(d.reshape(-1, 3), dtype=float), raw, shape
 
-    def _chunks(self, d: NDArray[np.float64], channels: int, clear, convert) -> NDArray[np.float64]:
+    def _chunks(self, d: NDArray[np.float64], raw: NDArray[np.float64], channels: int, clear,
+                convert) -> NDArray[np.float64]:
         """``(n, channels)`` values of the rays ``d`` in chunks of :data:`CHUNK` (bounded memory): the clear sky's
-        ``clear(d)`` where nothing changed, ``convert(table radiance)`` elsewhere."""
+        ``clear(raw)`` where nothing changed, ``convert(table radiance)`` elsewhere."""
         out = np.zeros((d.shape[0], channels))
         for start in range(0, d.shape[0], CHUNK):
             part = d[start:start + CHUNK]
@@ -414,13 +419,13 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
             if np.any(changed):
                 view[changed] = convert(tab_rad[changed])
             if np.any(~changed):
-                view[~changed] = clear(part[~changed])
+                view[~changed] = clear(raw[start:start + CHUNK][~changed])
         return out
 
     def table_radiance(self, directions: ArrayLike) -> NDArray[np.float64]:
         """Spectral radiance [W m^-2 sr^-1 nm^-1] at the table wavelengths, (..., n_table_wavelengths)."""
-        d, shape = self._directions(directions)
-        out = self._chunks(d, self._tables.wavelengths.size, self.clear.table_radiance, lambda v: v)
+        d, raw, shape = self._directions(directions)
+        out = self._chunks(d, raw, self._tables.wavelengths.size, self.clear.table_radiance, lambda v: v)
         return out.reshape(*shape, -1)
 
     # ------------------------------------------------------------------ the protocol
@@ -429,15 +434,15 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         """Spectral radiance [W m^-2 sr^-1 nm^-1] of sky, clouds and ground (no solar disc), (..., n_wl); rays
         that meet no cloud (nor its shadow) are the clear sky's :meth:`BrunetonSky.spectral_radiance`."""
         wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
-        d, shape = self._directions(directions)
-        out = self._chunks(d, wl.size, lambda v: self.clear.spectral_radiance(v, wl),
+        d, raw, shape = self._directions(directions)
+        out = self._chunks(d, raw, wl.size, lambda v: self.clear.spectral_radiance(v, wl),
                            lambda v: self._tables.resample(v, wl))
         return out.reshape(*shape, wl.size)
 
     def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
         """CIE 1931 XYZ [cd m^-2] (..., 3); rays that meet no cloud are the clear sky's :meth:`BrunetonSky.xyz`."""
-        d, shape = self._directions(directions)
-        return self._chunks(d, 3, self.clear.xyz, self._tables.to_xyz).reshape(*shape, 3)
+        d, raw, shape = self._directions(directions)
+        return self._chunks(d, raw, 3, self.clear.xyz, self._tables.to_xyz).reshape(*shape, 3)
 
     def luminance(self, directions: ArrayLike) -> NDArray[np.float64]:
         """Luminance [cd m^-2] (...)."""

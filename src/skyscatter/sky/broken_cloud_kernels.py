@@ -175,7 +175,7 @@ def _block_exit(px, py, pz, dx, dy, dz, ix, iy, iz, gf, bsize, nx, ny, nz):
 
 @parallel_kernel
 def march_rays(origin, dirs, sun, gf, rho, occupied, bsize, tau_sun, tau_above, tau_below, k, albedo, ph_mu, ph_val,
-               g, solar, mu0, dmu, t_atm, e_down, e_up, mp, n_octaves, linear, radiance, transmittance, depth, hit):
+               g, solar, mu0, dmu, t_atm, e_down, e_up, mp, n_octaves, linear, thin_aware, radiance, transmittance, depth, hit):
     """March view rays ``dirs`` (n, 3) from ``origin`` (3,) through the field (module docstring of
     :mod:`.broken_cloud`): the cloud's radiance reaching the eye through the cloud ``radiance`` (n, n_wl) [W m^-2
     sr^-1 nm^-1], the cloud's transmittance along the ray ``transmittance`` (n, n_wl), the mean depth of the
@@ -348,19 +348,25 @@ def march_rays(origin, dirs, sun, gf, rho, occupied, bsize, tau_sun, tau_above, 
                 for wl in range(nwl):
                     direct[wl] = 0.0
                 att = 1.0
+                # octave i scatters i more times: in a column of vertical optical depth tau_c the chance of each
+                # further scattering is taken as 1 - exp(-tau_c) (thin wisps do not multiply-scatter)
+                pc = -math.expm1(-(tup + tdn)) if thin_aware else 1.0
+                pw = 1.0
                 for o in range(n_octaves):
                     x = att * ts
                     att *= a
+                    po = pw
+                    pw *= pc
                     if x * kbar > 40.0:
                         continue
-                    base = math.exp(-x * kbar)
+                    base = po * math.exp(-x * kbar)
                     if x * dkmax < 0.02:
                         for wl in range(nwl):
                             y = x * dk[wl]
                             direct[wl] += w[o, wl] * base * (1.0 - y + 0.5 * y * y)
                     else:
                         for wl in range(nwl):
-                            direct[wl] += w[o, wl] * math.exp(-x * k[wl])
+                            direct[wl] += po * w[o, wl] * math.exp(-x * k[wl])
                 x = r * h
                 base = math.exp(-x * kbar)
                 poly = x * dkmax < 0.02
