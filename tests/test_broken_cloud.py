@@ -274,3 +274,46 @@ def test_cli_refuses_bad_clouds_in_one_line_and_writes_nothing(argv, match, tmp_
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and match in err[0] and "Traceback" not in err[0], err
     assert not list(tmp_path.glob("sky.*"))
+
+
+def test_sun_shadow_on_terrain_points_is_the_slant_chord():
+    """Points of a flat scene under a uniform layer: the field's transmittance to the sun along the spherical chord
+    from each point's altitude, over the eye's (the disc of ``sky.sun`` is already dimmed by it)."""
+    tau = 2.0
+    sky = BrokenCloudSky(SUN_Z, SUN_A, clouds=_layer(tau))
+    wl = np.array([450.0, 650.0])
+    k = DROPS.extinction_at(wl) / DROPS.extinction_at([550.0])[0]
+    bottom = sky.clear.position[2]
+    pts = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 1250.0], [0.0, 0.0, 3000.0]])
+
+    def depth(z):
+        r = bottom + z
+        lo = max(r, bottom + 1000.0)
+        return 0.0 if lo >= bottom + 1500.0 else tau / 500.0 * _chord(r, math.cos(SUN_Z), lo, bottom + 1500.0)
+
+    expected = np.exp(-np.outer([depth(z) - depth(0.0) for z in pts[:, 2]], k))
+    np.testing.assert_allclose(sky.sun_shadow(pts, wl), expected, rtol=1e-9)
+
+
+def test_landscape_terrain_lies_in_the_clouds_shadow():
+    """A flat terrain seen from above by the landscape renderer (the eye 3 km up, above a layer of optical depth
+    1, slant transmittance 0.2): against the same scene with ``sun_shadow`` switched off, every pixel is darker
+    by more than 10 % (the sunlight is most of the ground's light)."""
+    from skyscatter.render import PinholeCamera, Scene, Terrain
+    from skyscatter.spectral import REFERENCE_WAVELENGTHS
+
+    sky = BrokenCloudSky(SUN_Z, SUN_A, clouds=_layer(1.0), altitude=3000.0)
+    terrain = Terrain(np.zeros((11, 11)), 100.0)
+    camera = PinholeCamera.from_degrees((500.0, 500.0, 3000.0), 0.0, -80.0, 10.0)
+    shaded = Scene(sky, terrain=terrain, camera=camera, aerial=None, sun_disc=False,
+                   wavelengths=REFERENCE_WAVELENGTHS).render(4, 3)
+
+    class Unshadowed(BrokenCloudSky):
+        def sun_shadow(self, points, wavelengths):
+            return None
+
+    open_sky = Unshadowed(SUN_Z, SUN_A, clouds=_layer(1.0), altitude=3000.0)
+    unshaded = Scene(open_sky, terrain=terrain, camera=camera, aerial=None, sun_disc=False,
+                     wavelengths=REFERENCE_WAVELENGTHS).render(4, 3)
+    # the eye is above the layer (its disc undimmed), the ground below it in the layer's shadow
+    assert np.all(shaded.rgb < 0.9 * unshaded.rgb)

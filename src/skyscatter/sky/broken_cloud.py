@@ -41,7 +41,8 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   times ``1 - exp(-tau k)``, ``tau`` the field's optical depth from the ground point to the sun, is taken away.
 * **The solar disc**: the clear sky's disc times the field's transmittance from the eye to the sun.
 
-Not modelled: the clouds' shadows on the air (light shafts) and the clouds' light scattered by the air (both
+Renderers of terrain take the field's shadows from :meth:`BrokenCloudSky.sun_shadow` (the landscape's
+:class:`~skyscatter.render.scene.Scene`). Not modelled: the clouds' shadows on the air (light shafts) and the clouds' light scattered by the air (both
 in the Monte Carlo), the sun's cosine varying across the field with the planet's curvature (taken at each
 point for the air's transmittance, but the field's shadow volume is for the observer's sun direction).
 """
@@ -447,6 +448,19 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
     def luminance(self, directions: ArrayLike) -> NDArray[np.float64]:
         """Luminance [cd m^-2] (...)."""
         return self.xyz(directions)[..., 1]
+
+    def sun_shadow(self, points: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        """The field's transmittance to the sun from ``points`` (n, 3) [m] of a flat scene (x east, y north, z above
+        the ground at the observer's foot: a point's altitude is its z and its tangent-plane position its x, y) over
+        the transmittance from the eye (which dims :attr:`sun`), at ``wavelengths`` [nm], (n, n_wl): exact through
+        the voxels (cloud shadows on terrain; both optical depths are capped at 50, so the ratio stays finite)."""
+        pts = np.asarray(points, dtype=float).reshape(-1, 3)
+        wl = as_wavelengths(wavelengths)
+        bottom = self._tables.parameters.bottom_radius
+        z = np.sqrt(np.maximum((bottom + pts[:, 2]) ** 2 - pts[:, 0] ** 2 - pts[:, 1] ** 2, 0.0))
+        tau = self.optical_depth_to_sun(np.stack([pts[:, 0], pts[:, 1], z], axis=-1))
+        tau_eye = float(self.optical_depth_to_sun(self.clear.position[None, :])[0])
+        return np.exp(-np.multiply.outer(tau - tau_eye, self._relative_extinction(wl)))
 
     def sun_transmittance(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
         """The field's transmittance from the eye to the sun's centre at ``wavelengths`` [nm] (n,)."""
