@@ -21,7 +21,6 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from broken_cloud_montecarlo import OUT as DATA  # noqa: E402
 from broken_cloud_montecarlo import field_for  # noqa: E402
-
 from skyscatter.atmosphere import AtmosphereParameters  # noqa: E402
 from skyscatter.render import sky_image, write_png  # noqa: E402
 from skyscatter.sky.broken_cloud import BrokenCloudSky  # noqa: E402

@@ -2,7 +2,8 @@
 
 Reads tests/data/broken_cloud_montecarlo.npz (``benchmarks/broken_cloud_montecarlo.py``: the scene, the Monte
 Carlo seeds and path counts are stored in it), evaluates :class:`skyscatter.sky.broken_cloud.BrokenCloudSky` on
-the same field (``interpolation="voxel"``: the field as the Monte Carlo traces it), sun and fisheye pixels at 450 / 550 / 650 nm, and minimises by least squares (scipy's
+the same field (``interpolation="voxel"``: the field as the Monte Carlo traces it), sun and fisheye pixels at
+450 / 550 / 650 nm, and minimises by least squares (scipy's
 ``least_squares``, trust-region reflective, bounds a in [0.01, 1], b in [0, 0.99], c in [0, 1], d in [0, 2])
 
     sum over pixels and wavelengths of ((model - MC) / (stderr_MC + 0.05 MC))^2
@@ -37,7 +38,6 @@ from scipy.optimize import least_squares
 sys.path.insert(0, str(Path(__file__).parent))
 from broken_cloud_montecarlo import OUT as DATA  # noqa: E402
 from broken_cloud_montecarlo import field_for  # noqa: E402
-
 from skyscatter.atmosphere import AtmosphereParameters  # noqa: E402
 from skyscatter.sky.broken_cloud import FITTED_OCTAVES, BrokenCloudSky  # noqa: E402
 

@@ -36,6 +36,7 @@ REFERENCE_TESTS = {
     "montecarlo": "test_montecarlo_physics.py",
     "hosek-wilkie": "test_hosek_wilkie.py",
     "cloudy": "test_cloudy_sky.py",
+    "broken-cloud": "test_broken_cloud.py",
 }
 #: Parameters that keep costly models quick in this suite (the statistics are tested in the model's own tests).
 QUICK = {"montecarlo": {"samples": 4}, "cloudy": {"streams": 8}}

@@ -16,8 +16,10 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   ``N`` = 8. Octave 0 is single scattering exactly: the droplets' tabulated Mie phase function
   (:func:`skyscatter.atmosphere.mie_optics.water_droplets`, diffraction peak kept) and ``tau_sun`` the field's
   optical depth from the point to the sun; octaves ``i >= 1`` (multiple scattering) scatter ``b^i`` as much,
-  see an extinction ``a^i`` as large and a Henyey-Greenstein phase of asymmetry ``c^i g``. ``a, b, c`` are
-  **fitted to the Monte Carlo** (:data:`FITTED_OCTAVES`; docs/clouds.md).
+  see an extinction ``a^i`` as large and a Henyey-Greenstein phase of asymmetry ``c^i g``, and are weighted by
+  ``(1 - exp(-tau_c))^i`` with ``tau_c`` the vertical optical depth of the point's column (thin wisps do not
+  multiply-scatter: without it a layer of optical depth 1 came out 2-3x the DISORT layer's radiance).
+  ``a, b, c`` are **fitted to the Monte Carlo** (:data:`FITTED_OCTAVES`; docs/clouds.md).
 * **The sun's path through the field: a precomputed shadow volume.** ``tau_sun`` of every voxel centre is
   integrated once per sky along the sun's ray exactly (regular tracking through the voxel-constant grid, the
   Monte Carlo's :func:`~skyscatter.montecarlo.tracking.field_transmittance`); the march reads it at the voxel
@@ -30,7 +32,8 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   vertical optical depths to the field's top and base and the ground's upward light (the clear-sky global
   irradiance with the sun's part times the field's mean shadow); ``d`` is fitted with ``a, b, c``.
 * **Along the view ray**: midpoint steps of half a voxel along the axis the ray crosses fastest (growing as
-  0.002 x the distance, about a pixel of a 2048-wide panorama), empty blocks of 4^3 voxels crossed in one step, the march stopping once
+  0.002 x the distance, about a pixel of a 2048-wide panorama), empty blocks of 4^3 voxels crossed in one
+  step, the march stopping once
   every wavelength's transmittance is below 1e-3. Each step adds ``T (1 - exp(-sigma_e dt)) J``.
 * **The clear air in front of and behind the cloud** ([Bruneton2008] Eq. 16): with ``p`` the cloud's mean
   depth along the ray (weights ``T (1 - exp(-sigma dt))``), ``L = L_sky(eye) - T_air(eye, p) (1 - T_cloud)
@@ -42,7 +45,8 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
 * **The solar disc**: the clear sky's disc times the field's transmittance from the eye to the sun.
 
 Renderers of terrain take the field's shadows from :meth:`BrokenCloudSky.sun_shadow` (the landscape's
-:class:`~skyscatter.render.scene.Scene`). Not modelled: the clouds' shadows on the air (light shafts) and the clouds' light scattered by the air (both
+:class:`~skyscatter.render.scene.Scene`). Not modelled: the clouds' shadows on the air (light shafts) and
+the clouds' light scattered by the air (both
 in the Monte Carlo), the sun's cosine varying across the field with the planet's curvature (taken at each
 point for the air's transmittance, but the field's shadow volume is for the observer's sun direction).
 """

@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
 from numba import prange
 
 from ..jit import helper, kernel, parallel_kernel
@@ -105,7 +104,8 @@ def _trilinear(vol, fx, fy, fz, periodic):
 @kernel
 def shadow_volume(gf, vf, vi, rho, bmax, bmin, xe, ye, re, sun, out, start, stop):
     """Optical depth at the reference wavelength from each voxel centre to the sun through the field, for voxels
-    ``start..stop`` of the flattened grid (called through :func:`skyscatter.precomputed.parallel.parallel_for`) into ``out`` (nx, ny, nz): the exact integral of the voxel-constant
+    ``start..stop`` of the flattened grid (called through :func:`skyscatter.precomputed.parallel.parallel_for`)
+    into ``out`` (nx, ny, nz): the exact integral of the voxel-constant
     field along the sun ray (:func:`skyscatter.montecarlo.tracking.field_transmittance` on a grid packed
     ``exact=True``: regular tracking, no random events), capped at 50 (``T < 2e-22``)."""
     nx, ny, nz = rho.shape
@@ -175,24 +175,25 @@ def _block_exit(px, py, pz, dx, dy, dz, ix, iy, iz, gf, bsize, nx, ny, nz):
 
 @parallel_kernel
 def march_rays(origin, dirs, sun, gf, rho, occupied, bsize, tau_sun, tau_above, tau_below, k, albedo, ph_mu, ph_val,
-               g, solar, mu0, dmu, t_atm, e_down, e_up, mp, n_octaves, linear, thin_aware, radiance, transmittance, depth, hit):
+               g, solar, mu0, dmu, t_atm, e_down, e_up, mp, n_octaves, linear, thin_aware, radiance, transmittance,
+               depth, hit):
     """March view rays ``dirs`` (n, 3) from ``origin`` (3,) through the field (module docstring of
     :mod:`.broken_cloud`): the cloud's radiance reaching the eye through the cloud ``radiance`` (n, n_wl) [W m^-2
-    sr^-1 nm^-1], the cloud's transmittance along the ray ``transmittance`` (n, n_wl), the mean depth of the
-    light's last scattering ``depth`` (n,) [m] (weights ``T (1 - exp(-sigma dt))`` at the first wavelength) and
-    ``hit`` (n,) (the ray met cloud).
-
-    ``occupied`` (nbx, nby, nbz): 1 where a block of ``bsize`` voxels holds cloud (empty blocks are crossed in
-    one step). ``tau_sun``, ``tau_above``, ``tau_below``: optical depths at the reference wavelength from each
-    voxel centre to the sun, to the field's top and to its base (vertically). ``k`` (n_wl,) extinction relative to the reference wavelength, ``albedo`` single-
-    scattering albedo; ``ph_mu`` (m,), ``ph_val`` (n_wl, m) the droplets' phase table; ``g`` its asymmetry;
-    ``solar`` the extraterrestrial irradiance [W m^-2 nm^-1]; ``t_atm`` (nz, n_mu, n_wl) the clear air's
-    transmittance to the sun and ``e_down`` (nz, n_mu, n_wl) its diffuse irradiance on a horizontal plane [W m^-2
-    nm^-1] at each voxel layer, for the sun cosines ``mu0 + i dmu``; ``e_up`` (n_wl,) the ground's
-    upward irradiance [W m^-2 nm^-1]. ``mp``: a, b, c, d (octaves and ambient extinction), the step as a fraction
-    of the voxel along the axis the ray crosses fastest [-], the level-of-detail factor (step >= lod * distance) and the ray start distance. ``linear``: the densities and
-    optical depths interpolated trilinearly between voxel centres (smooth cloud edges; ``occupied`` must then
-    count a voxel's neighbours); else constant per voxel (the field's definition, the Monte Carlo's).
+    sr^-1 nm^-1], the cloud's transmittance along the ray ``transmittance`` (n, n_wl), the mean depth of the light's
+    last scattering ``depth`` (n,) [m] (weights ``T (1 - exp(-sigma dt))`` at the first wavelength) and ``hit`` (n,)
+    (the ray met cloud). ``occupied`` (nbx, nby, nbz): 1 where a block of ``bsize`` voxels holds cloud (empty
+    blocks are crossed in one step). ``tau_sun``, ``tau_above``, ``tau_below``: optical depths at the reference
+    wavelength from each voxel centre to the sun, to the field's top and to its base (vertically). ``k`` (n_wl,)
+    extinction relative to the reference wavelength, ``albedo`` single-scattering albedo; ``ph_mu`` (m,),
+    ``ph_val`` (n_wl, m) the droplets' phase table; ``g`` its asymmetry; ``solar`` the extraterrestrial irradiance
+    [W m^-2 nm^-1]; ``t_atm`` (nz, n_mu, n_wl) the clear air's transmittance to the sun and ``e_down`` (nz, n_mu,
+    n_wl) its diffuse irradiance on a horizontal plane [W m^-2 nm^-1] at each voxel layer, for the sun cosines ``mu0
+    + i dmu``; ``e_up`` (n_wl,) the ground's upward irradiance [W m^-2 nm^-1]. ``mp``: a, b, c, d (octaves and
+    ambient extinction), the step as a fraction of the voxel along the axis the ray crosses fastest [-], the
+    level-of-detail factor (step >= lod * distance) and the ray start distance. ``linear``: the densities and
+    optical depths interpolated trilinearly between voxel centres (smooth cloud edges; ``occupied`` must then count
+    a voxel's neighbours); else constant per voxel (the field's definition, the Monte Carlo's). ``thin_aware``:
+    octave ``i`` weighted by ``(1 - exp(-tau_column))^i`` (:mod:`.broken_cloud`).
     """
     n = dirs.shape[0]
     nwl = k.shape[0]
