@@ -281,6 +281,12 @@ RUNS = {
                     "--cloud-top", "1400", "--cloud-effective-radius", "12e-6", "--ground-albedo", "0.3",
                     "--altitude", "100",
                     "--projection", "fisheye", "--sun-elevation", "25"], _exr("sky.exr", (16, 16, 3))),
+    "sky-broken-cloud": (["sky", "--width", "16", "--model", "broken-cloud", "--cloud-cover", "0.4", "--cloud-seed",
+                          "3", "--cloud-optical-depth", "8", "--cloud-base", "900", "--cloud-top", "2200",
+                          "--cloud-effective-radius", "12e-6", "--ground-albedo", "0.2", "--altitude", "50",
+                          "--projection", "fisheye"], _exr("sky.exr", (16, 16, 3))),
+    "sky-broken-cloud-file": (["sky", "--width", "16", "--model", "broken-cloud", "--cloud-field", "field.nc",
+                               "--projection", "pinhole", "--pitch", "30"], _exr("sky.exr", (12, 16, 3))),
     # illuminance
     "illuminance-planes": (["illuminance", "--model", "perez", "--dni", "700", "--dhi", "120", "--vertical", "180",
                             "90", "--tilted", "30", "180", "--include-sun"], _stdout("lx")),
@@ -294,6 +300,10 @@ RUNS = {
     "illuminance-cloudy": (["illuminance", "--model", "cloudy", "--cloud-optical-depth", "8", "--cloud-base", "600",
                             "--cloud-top", "1200", "--cloud-effective-radius", "8e-6", "--vertical", "180", "--json"],
                            _json_keys("planes", "model")),
+    "illuminance-broken-cloud": (["illuminance", "--model", "broken-cloud", "--cloud-cover", "0.5", "--cloud-seed",
+                                  "1", "--vertical", "180"], _stdout("lx")),
+    "illuminance-broken-cloud-file": (["illuminance", "--model", "broken-cloud", "--cloud-field", "field.nc",
+                                       "--json"], _json_keys("planes", "model")),
     "illuminance-preetham": (["illuminance", "--model", "preetham", "--turbidity", "3", "--include-sun"],
                              _stdout("lx")),
     "illuminance-preetham-overcast": (["illuminance", "--model", "preetham-overcast", "--turbidity", "7"],
@@ -361,6 +371,10 @@ RUNS = {
     "demo-cloudy": (["demo", "--width", "6", "--height", "4", "--no-glare", "--model", "cloudy",
                      "--cloud-optical-depth", "30", "--cloud-base", "500", "--cloud-top", "1000"],
                     _exr("landscape.exr")),
+    "demo-broken-cloud": (["demo", "--width", "6", "--height", "4", "--no-glare", "--model", "broken-cloud",
+                           "--cloud-cover", "0.5", "--cloud-seed", "2", "&&", "demo", "--width", "6", "--height", "4",
+                           "--no-glare", "--model", "broken-cloud", "--cloud-field", "field.nc"],
+                          _exr("landscape.exr")),
     "demo-bruneton-rgb": (["demo", "--figure", "custom", "--model", "bruneton", "--tables", "rgb", *D,
                            "--sun-elevation", "6", "--sun-azimuth", "270"], _exr("landscape.exr")),
     "demo-bruneton-aod": (["demo", "--model", "bruneton", "--aod", "0.1", "--angstrom-alpha", "1.3", "--ozone", "300",
@@ -436,6 +450,11 @@ def test_command_runs_and_writes_its_output(name, tmp_path, monkeypatch, capsys)
     from weather_synth import write_epw
 
     write_epw(tmp_path / "synth.epw")
+    if any("--cloud-field" in a for a in args):
+        from skyscatter.atmosphere.clouds import CloudField, CloudLayer
+
+        CloudField.procedural(cover=0.5, base=800.0, top=1600.0, particles=CloudLayer(0.0, 1.0, 1.0), size=4000.0,
+                              resolution=(16, 16, 8), feature_size=2000.0, seed=2).save(tmp_path / "field.nc")
     (tmp_path / "aod.csv").write_text("kind,time,azimuth_deg,elevation_deg,wavelength_nm,value\n"
                                       "aod,,,,440,0.25\naod,,,,675,0.15\naod,,,,870,0.11\n")
     out_parts = []

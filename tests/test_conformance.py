@@ -36,6 +36,7 @@ REFERENCE_TESTS = {
     "montecarlo": "test_montecarlo_physics.py",
     "hosek-wilkie": "test_hosek_wilkie.py",
     "cloudy": "test_cloudy_sky.py",
+    "broken-cloud": "test_broken_cloud.py",
 }
 #: Parameters that keep costly models quick in this suite (the statistics are tested in the model's own tests).
 QUICK = {"montecarlo": {"samples": 4}, "cloudy": {"streams": 8}}
@@ -75,6 +76,12 @@ def _random_parameters(spec, rng) -> dict:
     if spec.name == "cloudy":
         # the cloud's amount and the observer's place (base < top is a pair, tested in test_cloudy_sky.py)
         out = {"altitude": float(rng.uniform(0.0, 1.0e5)), "cloud_optical_depth": float(rng.uniform(0.0, 60.0))}
+    if spec.name == "broken-cloud":
+        # the air's options would build new tables per sample; base < top is a pair (tested in test_broken_cloud.py)
+        base = float(rng.uniform(0.0, 15000.0))
+        out = {"cloud_cover": float(rng.uniform(0.0, 1.0)), "cloud_seed": int(rng.integers(0, 1000)),
+               "cloud_optical_depth": float(rng.uniform(0.1, 100.0)), "cloud_base": base,
+               "cloud_top": base + float(rng.uniform(50.0, 5000.0)), "altitude": float(rng.uniform(0.0, 1.0e5))}
     out.update(QUICK.get(spec.name, {}))
     return out
 
@@ -188,10 +195,12 @@ def test_xyz_luminance_and_spectrum_agree(spec):
     from_spectrum = spectrum_to_luminance(sky.spectral_radiance(d, REFERENCE_WAVELENGTHS), REFERENCE_WAVELENGTHS)
     # Luminance-only skies scale one spectrum of luminance 1 (exact to rounding); spectral models integrate their
     # own spectra: Preetham's Y comes from its Perez fit, not from the reconstructed spectrum (within 0.5 %,
-    # README); the precomputed tables' XYZ matrix against their reconstructed spectra (within 1 %); Hosek-Wilkie's
+    # README); the precomputed tables' XYZ matrix against their reconstructed spectra (within 1 %; broken-cloud
+    # is those tables' sky and clouds at the same wavelengths); Hosek-Wilkie's
     # luminance comes from the authors' separately fitted CIE XYZ dataset, and their spectral model stops at
     # 720 nm (within 6 %, docs/hosek_wilkie.md and tests/test_hosek_wilkie.py).
-    tolerance = {"preetham": 5e-3, "preetham-overcast": 5e-3, "bruneton": 1e-2, "hosek-wilkie": 6e-2}.get(
+    tolerance = {"preetham": 5e-3, "preetham-overcast": 5e-3, "bruneton": 1e-2, "broken-cloud": 1e-2,
+                 "hosek-wilkie": 6e-2}.get(
         spec.name, 1e-9)
     np.testing.assert_allclose(from_spectrum, y, rtol=tolerance, atol=1e-9 * float(np.max(y)))
 

@@ -7,7 +7,8 @@ radiance is
     L_0 = rho / pi * (E_sun max(0, n . omega_sun) V + E_sky(n) + rho E_h (1 - n_z) / 2)
 
 (Lambertian albedo rho; direct sunlight ``E_sun = L_sun Omega_sun`` [W m^-2 nm^-1] with the terrain shadow
-V from a shadow ray towards the sun's centre; sky irradiance on the tilted surface ``E_sky(n)``; light
+V from a shadow ray towards the sun's centre and the sky's cloud shadows (``sky.sun_shadow``, a 3D cloud
+field); sky irradiance on the tilted surface ``E_sky(n)``; light
 reflected by the surrounding ground, taken as a horizontal plane of the same albedo lit by the global
 horizontal irradiance E_h, seen over the view factor ``(1 - n_z) / 2``), and the camera sees
 ``L = L_0 tau + L_in`` from the aerial-perspective model. Rays that miss see the sky model, plus the solar
@@ -283,7 +284,13 @@ class Scene:
             timings["intersection"] += t1 - t0
             spec = np.empty((d.shape[0], wl.size))
             l0 = _irradiance_lookup(e_sky, normals) + (e_h * rho) * (0.5 * (1.0 - normals[:, 2]))[:, None]
-            l0 += lit[:, None] * e_sun
+            sunlit = lit[:, None] * e_sun
+            if np.any(lit > 0):
+                # the sky's own clouds (a 3D field) shadow the sunlight (None: the sky has none)
+                cloud = self.sky.sun_shadow(pos[lit > 0], wl)
+                if cloud is not None:
+                    sunlit[lit > 0] *= cloud
+            l0 += sunlit
             l0 *= rho / np.pi
             t2 = time.perf_counter()
             timings["shading"] += t2 - t1

@@ -185,6 +185,14 @@ class SkyModel(abc.ABC):
         """Unit ENU vector towards the sun centre, or None for models without a sun."""
         return None
 
+    def sun_shadow(self, points: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64] | None:
+        """The factor by which the sunlight reaching ``points`` (n, 3) [m] (x east, y north, z above the ground at
+        the observer's foot) differs from the solar disc :attr:`sun` seen by the observer, at ``wavelengths`` [nm],
+        (n, n_wl): for a sky with a 3D cloud field, the field's transmittance to the sun from each point over that
+        from the eye. None for skies whose sunlight does not vary between points (every sky without a 3D field).
+        Renderers multiply the sunlight on their surfaces by it (cloud shadows on terrain)."""
+        return None
+
     # -- registry and serialisation ------------------------------------------------------------------------
     def model_parameters(self) -> dict[str, Any]:
         """The keyword arguments that rebuild this sky with the registry (sun angles excluded)."""

@@ -458,6 +458,44 @@ register(ModelSpec(
     cost="tables",
 ))
 
+register(ModelSpec(
+    name="broken-cloud",
+    factory="skyscatter.sky.broken_cloud:BrokenCloudSky",
+    summary="broken 3D cloud fields (procedural by cover, or a NetCDF/Zarr field) ray-marched in the precomputed "
+            "clear sky",
+    citation=cite("Wrenninge2013", "Bruneton2008",
+                  note="Ray marching with the multiple-scattering octaves of the first (fitted to the Monte Carlo) "
+                       "in the clear sky of the second:"),
+    parameters=(
+        Parameter("cloud_cover", "1", 0.5, "procedural field: fraction of the columns that hold cloud", low=0.0,
+                  high=1.0, why="a fraction"),
+        Parameter("cloud_seed", "1", 0, "procedural field: seed of its noise", kind="int", low=0, high=2**32 - 1),
+        Parameter("cloud_optical_depth", "1", 10.0, "procedural field: mean optical depth at 550 nm of its cloudy "
+                  "columns", low=0.0, high=100.0, low_open=True),
+        Parameter("cloud_base", "m", 1000.0, "procedural field: altitude of the cloud base", low=0.0, high=20000.0),
+        Parameter("cloud_top", "m", 2500.0, "procedural field: altitude of the highest cloud tops (above the base)",
+                  low=0.0, high=20000.0),
+        Parameter("cloud_effective_radius", "m", 10e-6, "effective radius of the cloud droplets (Mie optics)",
+                  low=1e-6, high=50e-6, why="the range of the droplet optics"),
+        Parameter("cloud_field", "", None, "a cloud field file (NetCDF .nc or Zarr .zarr: variable extinction "
+                  "[m^-1 at 550 nm] on (x, y, z), attributes base and top [m]) instead of the procedural field",
+                  kind="path"),
+        Parameter("clouds", "", None, "a 3D cloud field (skyscatter.atmosphere.clouds.CloudField)", kind="object",
+                  cli=False),
+        Parameter("altitude", "m", 0.0, "observer altitude above the ground: below, in or above the clouds",
+                  low=0.0, high=1e8),
+        Parameter("ground_albedo", "1", None, "ground albedo, the same at every wavelength (default 0.1)", low=0.0,
+                  high=1.0),
+        Parameter("atmosphere", "", None, "the air (AtmosphereParameters; default: the Earth defaults)",
+                  kind="atmosphere", cli=False),
+        Parameter("interpolation", "", "linear", "densities between voxel centres: linear (smooth edges) or voxel "
+                  "(constant per voxel, as the Monte Carlo)", kind="choice", choices=("linear", "voxel"), cli=False),
+    ),
+    spectral=True,
+    cost="tables",
+))
+
+
 
 class _Summaries(Mapping):
     """``SKY_MODELS``: read-only name -> one-line summary view of the registry (kept for older callers)."""

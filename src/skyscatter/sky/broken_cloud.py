@@ -1,0 +1,495 @@
+"""Broken 3D cloud fields in the clear sky of the precomputed tables: the ``broken-cloud`` sky model.
+
+A :class:`~skyscatter.atmosphere.clouds.CloudField` (procedural Perlin-Worley clouds by cover fraction, or a
+field from a NetCDF/Zarr file) seen from one observer (on the ground, inside or above the field) by ray marching
+each view ray through the voxels, spectrally at the precomputed tables' wavelengths ([Bruneton2008]; 16 from 400
+to 700 nm by default), then to XYZ like every spectral sky. It is a sky model, not a renderer function, because
+the ray march is a radiance per direction from one eye: the registry, the CLI's options (``skyscatter sky
+--model broken-cloud --cloud-cover 0.4``), ``sky_image`` (equirect, fisheye, pinhole, the solar disc),
+illuminance and ``to_dict`` then serve it unchanged.
+
+Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the voxel's extinction at 550 nm and
+``k`` the droplets' extinction relative to 550 nm, albedo ``omega``; :func:`.broken_cloud_kernels.march_rays`):
+
+* **The sun, single and multiple scattering by octaves** ([Wrenninge2013] Sec. "multiple scattering
+  approximation"): ``J_sun = omega E_0 T_air(h, mu_s) sum_{i=0}^{N-1} b^i p_i(theta) exp(-a^i tau_sun k)``,
+  ``N`` = 8. Octave 0 is single scattering exactly: the droplets' tabulated Mie phase function
+  (:func:`skyscatter.atmosphere.mie_optics.water_droplets`, diffraction peak kept) and ``tau_sun`` the field's
+  optical depth from the point to the sun; octaves ``i >= 1`` (multiple scattering) scatter ``b^i`` as much,
+  see an extinction ``a^i`` as large and a Henyey-Greenstein phase of asymmetry ``c^i g``, and are weighted by
+  ``(1 - exp(-tau_c))^i`` with ``tau_c`` the vertical optical depth of the point's column (thin wisps do not
+  multiply-scatter: without it a layer of optical depth 1 came out 2-3x the DISORT layer's radiance).
+  ``a, b, c`` are **fitted to the Monte Carlo** (:data:`FITTED_OCTAVES`; docs/clouds.md).
+* **The sun's path through the field: a precomputed shadow volume.** ``tau_sun`` of every voxel centre is
+  integrated once per sky along the sun's ray exactly (regular tracking through the voxel-constant grid, the
+  Monte Carlo's :func:`~skyscatter.montecarlo.tracking.field_transmittance`); the march reads it at the voxel
+  it is in. A light march per sample would cost (march samples) x (light steps) per ray; the volume costs
+  (voxels) x (crossings) once, a few tenths of a second, because the sun's rays are parallel.
+* **The sun above the field and the sky's light: the clear-sky tables.** ``T_air(h, mu_s)`` is the tables'
+  transmittance from the point's altitude to the sun and the ambient light the tables' sky irradiance there
+  (:meth:`~skyscatter.precomputed.evaluation.TableLookups.ground_irradiance`), isotropic:
+  ``J_amb = omega (E_down exp(-d tau_above k) + rho_g E_ground exp(-d tau_below k)) / (2 pi)`` with the
+  vertical optical depths to the field's top and base and the ground's upward light (the clear-sky global
+  irradiance with the sun's part times the field's mean shadow); ``d`` is fitted with ``a, b, c``.
+* **Along the view ray**: midpoint steps of half a voxel along the axis the ray crosses fastest (growing as
+  0.002 x the distance, about a pixel of a 2048-wide panorama), empty blocks of 4^3 voxels crossed in one
+  step, the march stopping once
+  every wavelength's transmittance is below 1e-3. Each step adds ``T (1 - exp(-sigma_e dt)) J``.
+* **The clear air in front of and behind the cloud** ([Bruneton2008] Eq. 16): with ``p`` the cloud's mean
+  depth along the ray (weights ``T (1 - exp(-sigma dt))``), ``L = L_sky(eye) - T_air(eye, p) (1 - T_cloud)
+  L_sky(p) + T_air(eye, p) L_cloud``: the clear sky seen from the eye, less what the cloud hides of the sky
+  behind it, plus the cloud's light dimmed by the air between. Rays that meet no cloud are the clear sky of
+  the same tables (:class:`~skyscatter.sky.bruneton.BrunetonSky`), bit for bit.
+* **Shadows on the ground** (views that meet the ground): the ground's sunlit part ``albedo / pi E_sun``
+  times ``1 - exp(-tau k)``, ``tau`` the field's optical depth from the ground point to the sun, is taken away.
+* **The solar disc**: the clear sky's disc times the field's transmittance from the eye to the sun.
+
+Renderers of terrain take the field's shadows from :meth:`BrokenCloudSky.sun_shadow` (the landscape's
+:class:`~skyscatter.render.scene.Scene`). Not modelled: the clouds' shadows on the air (light shafts) and
+the clouds' light scattered by the air (both
+in the Monte Carlo), the sun's cosine varying across the field with the planet's curvature (taken at each
+point for the air's transmittance, but the field's shadow volume is for the observer's sun direction).
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..atmosphere import AtmosphereParameters
+from ..conventions import as_directions
+from ..errors import InvalidParameterError
+from ..spectral import DEFAULT_WAVELENGTHS, as_wavelengths
+from . import registry
+from .base import SkyModel, SunSkyMixin, check_sun_angles
+
+__all__ = ["BrokenCloudSky", "FITTED_OCTAVES", "OCTAVES"]
+
+#: Octaves of the multiple-scattering approximation ([Wrenninge2013]).
+OCTAVES = 8
+#: ``(a, b, c, d)``: the octaves' extinction, scattering and eccentricity factors and the ambient light's
+#: extinction factor, fitted by least squares to Monte Carlo radiances (``benchmarks/fit_broken_cloud.py`` on
+#: tests/data/broken_cloud_montecarlo.npz: cover 0.6, seed and path counts stored there; docs/clouds.md).
+FITTED_OCTAVES = (0.4128, 0.7268, 0.6671, 0.0)
+#: Octave i weighted by (1 - exp(-tau_column))^i (module docstring).
+THIN_AWARE = True
+#: Procedural fields: horizontal size [m], voxels (x, y, z) and noise feature size [m].
+PROCEDURAL_SIZE = 16_000.0
+PROCEDURAL_RESOLUTION = (128, 128, 32)
+PROCEDURAL_FEATURE = 4_000.0
+#: Sun cosines of the air's transmittance and irradiance tables read by the march.
+_MU_NODES = np.linspace(-0.3, 1.0, 131)
+#: Rays per chunk of the march and its lookups (bounds the working arrays to about 100 MB).
+CHUNK = 1 << 17
+#: The march's step as a fraction of a voxel along the axis the ray crosses fastest.
+STEP_FRACTION = 0.5
+#: Block edge [voxels] of the empty-space skipping.
+_BLOCK = 4
+
+
+class BrokenCloudSky(SunSkyMixin, SkyModel):
+    """The clear sky of the precomputed tables with a 3D cloud field in it (module docstring: the ray march).
+
+    Parameters
+    ----------
+    sun_zenith, sun_azimuth : float
+        Sun position at the observer [rad]; zenith in [0, pi/2] (the clouds are lit by the sun).
+    cloud_cover : float
+        Procedural field: fraction of the columns that hold cloud, in [0, 1] (default 0.5).
+    cloud_seed : int
+        Procedural field: seed of its noise (default 0).
+    cloud_optical_depth : float
+        Procedural field: mean vertical optical depth at 550 nm of its cloudy columns, in (0, 100] (default 10).
+    cloud_base, cloud_top : float
+        Procedural field: cloud base and highest tops [m], ``0 <= base < top <= 20 km`` (default 1000, 2500 m).
+    cloud_effective_radius : float
+        The droplets' effective radius [m] (Mie optics, effective variance 0.1), 1 to 50 um (default 10 um).
+    cloud_field : str, optional
+        A field file (NetCDF ``.nc`` or Zarr ``.zarr``, :meth:`~skyscatter.atmosphere.clouds.CloudField.load`)
+        instead of the procedural one; its own droplet optics if it has them, else those of
+        ``cloud_effective_radius``.
+    clouds : CloudField, optional
+        A field object instead (Python only).
+    altitude : float
+        Observer altitude above the ground [m], 0 to 1e8 (below, inside or above the field).
+    ground_albedo : float, optional
+        Ground albedo [-] (default: the atmosphere's).
+    atmosphere : AtmosphereParameters, optional
+        The clear air (default: the Earth defaults); its tables come from the cache.
+    interpolation : {"linear", "voxel"}
+        The march reads the field's densities (and its shadow volume) trilinearly between voxel centres (default:
+        smooth cloud edges) or constant per voxel (the field's definition, as the Monte Carlo traces it).
+    """
+
+    model_name = "broken-cloud"
+    renders_ground = True
+
+    def __init__(self, sun_zenith: float, sun_azimuth: float = 0.0, *, cloud_cover: float = 0.5,
+                 cloud_seed: int = 0, cloud_optical_depth: float = 10.0, cloud_base: float = 1000.0,
+                 cloud_top: float = 2500.0, cloud_effective_radius: float = 10e-6, cloud_field: str | None = None,
+                 clouds: Any = None, altitude: float = 0.0, ground_albedo: float | None = None,
+                 atmosphere: AtmosphereParameters | None = None, interpolation: str = "linear") -> None:
+        from ..atmosphere.clouds import CloudField, CloudLayer
+
+        zen, azi = check_sun_angles(sun_zenith, sun_azimuth, allow_below_horizon=False)
+        spec = registry.get(self.model_name)
+        cover = spec.parameter("cloud_cover").check(cloud_cover)
+        seed = spec.parameter("cloud_seed").check(cloud_seed)
+        tau = spec.parameter("cloud_optical_depth").check(cloud_optical_depth)
+        base = spec.parameter("cloud_base").check(cloud_base)
+        top = spec.parameter("cloud_top").check(cloud_top)
+        radius = spec.parameter("cloud_effective_radius").check(cloud_effective_radius)
+        alt = spec.parameter("altitude").check(altitude)
+        if ground_albedo is not None:
+            ground_albedo = spec.parameter("ground_albedo").check(ground_albedo)
+        if not top > base:
+            raise InvalidParameterError(f"cloud_top ({top:g} m) must be above cloud_base ({base:g} m)")
+        if clouds is not None and cloud_field is not None:
+            raise InvalidParameterError("give the cloud field as clouds= or cloud_field= (a file), not both")
+        drops = CloudLayer(0.0, 1.0, 1.0, effective_radius=radius)  # the droplets' optics only
+        if clouds is not None:
+            if not isinstance(clouds, CloudField):
+                raise InvalidParameterError(f"clouds must be a CloudField; got {type(clouds).__name__}")
+            field = clouds
+        elif cloud_field is not None:
+            field = _load_field(cloud_field, drops)
+        else:
+            field = CloudField.procedural(cover=cover, base=base, top=top, particles=drops, optical_depth=tau,
+                                          size=PROCEDURAL_SIZE, resolution=PROCEDURAL_RESOLUTION,
+                                          feature_size=PROCEDURAL_FEATURE, seed=seed)
+        air = AtmosphereParameters() if atmosphere is None else atmosphere
+        if not isinstance(air, AtmosphereParameters):
+            raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(air).__name__}")
+        if ground_albedo is not None:
+            air = air.replace(ground_albedo=ground_albedo)
+        if field.top >= air.thickness:
+            raise InvalidParameterError(f"the cloud field's top ({field.top:g} m) must be below the atmosphere's top "
+                                        f"({air.thickness:g} m)")
+        from .bruneton import BrunetonSky
+
+        #: The clear sky of the same air (its tables light the clouds and lie behind them).
+        self.clear = BrunetonSky(zen, azi, altitude=alt, atmosphere=air)
+        self.field = field
+        self.sun_zenith = zen
+        self.sun_azimuth = azi
+        self.altitude = alt
+        self.sun_angular_radius = self.clear.sun_angular_radius
+        #: ``(a, b, c, d)`` of the multiple scattering (:data:`FITTED_OCTAVES`; replaceable for fits).
+        self.octaves = FITTED_OCTAVES
+        if interpolation not in ("linear", "voxel"):
+            raise InvalidParameterError(f"interpolation must be 'linear' or 'voxel'; got {interpolation!r}")
+        #: "linear": densities interpolated between voxel centres (smooth edges, the default); "voxel": constant
+        #: per voxel (the field's definition and the Monte Carlo's).
+        self.interpolation = interpolation
+        self._remember(cloud_cover=cover, cloud_seed=seed, cloud_optical_depth=tau, cloud_base=base, cloud_top=top,
+                       cloud_effective_radius=radius, cloud_field=cloud_field, clouds=clouds, altitude=alt,
+                       ground_albedo=ground_albedo, atmosphere=atmosphere, interpolation=interpolation)
+
+    def __repr__(self) -> str:
+        return (f"BrokenCloudSky(sun_zenith={self.sun_zenith:.6g}, sun_azimuth={self.sun_azimuth:.6g}, "
+                f"field={self.field!r}, altitude={self.altitude:g})")
+
+    # ------------------------------------------------------------------ what is computed once per sky
+
+    @property
+    def _tables(self):
+        return self.clear.precomputed
+
+    @cached_property
+    def _sun_planet(self) -> NDArray[np.float64]:
+        return np.ascontiguousarray(self.sun_direction, dtype=float)
+
+    @cached_property
+    def _exact(self):
+        """The field packed for exact (regular) tracking (every voxel its own block)."""
+        from ..montecarlo.tracking import pack_grid
+
+        f = self.field
+        return pack_grid(f.extinction, f.size, f.origin, f.base, f.top, f.periodic,
+                         self._tables.parameters.bottom_radius, exact=True)
+
+    def _relative_extinction(self, wavelengths: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The droplets' extinction at ``wavelengths`` relative to 550 nm."""
+        from ..atmosphere.clouds import REFERENCE_WAVELENGTH
+
+        p = self.field.particles
+        return np.asarray(p.extinction_at(wavelengths), dtype=float) / float(p.extinction_at([REFERENCE_WAVELENGTH])[0])
+
+    def optical_depth_to_sun(self, points: ArrayLike) -> NDArray[np.float64]:
+        """The field's optical depth at 550 nm from ``points`` (..., 3) [m, planet-centred frame: the observer at
+        ``(0, 0, bottom_radius + altitude)``] to the sun (exact through the voxels; 50 where it is larger)."""
+        from ..precomputed.parallel import parallel_for
+        from .broken_cloud_kernels import ground_shadow
+
+        pts = np.asarray(points, dtype=float)
+        shape = pts.shape[:-1]
+        flat = np.ascontiguousarray(pts.reshape(-1, 3))
+        out = np.zeros(flat.shape[0])
+        e = self._exact
+        parallel_for(ground_shadow, flat.shape[0], flat, e.vf, e.vi, e.rho, e.bmax, e.bmin, e.xe, e.ye, e.re,
+                     self._sun_planet, out, grain=256)
+        return out.reshape(shape)
+
+    @cached_property
+    def _volumes(self) -> dict[str, Any]:
+        """The shadow volume, the vertical optical depths, the occupancy blocks and the geometry (module
+        docstring)."""
+        from ..precomputed.parallel import parallel_for
+        from .broken_cloud_kernels import shadow_volume
+
+        f = self.field
+        e = self._exact
+        rho = e.rho
+        nx, ny, nz = rho.shape
+        dx, dy, dz = f.voxel_size
+        bottom = self._tables.parameters.bottom_radius
+        gf = np.array([f.origin[0], f.origin[1], dx, dy, dz, f.size[0], f.size[1], bottom + f.base, bottom + f.top,
+                       bottom, 1.0 if f.periodic else 0.0])
+        tau_sun = np.zeros((nx, ny, nz))
+        parallel_for(shadow_volume, rho.size, gf, e.vf, e.vi, rho, e.bmax, e.bmin, e.xe, e.ye, e.re,
+                     self._sun_planet, tau_sun, grain=1024)
+        layer = rho * dz
+        above = np.cumsum(layer[:, :, ::-1], axis=2)[:, :, ::-1] - 0.5 * layer
+        below = np.cumsum(layer, axis=2) - 0.5 * layer
+        b = _BLOCK
+        nbx, nby, nbz = -(-nx // b), -(-ny // b), -(-nz // b)
+        pad = np.zeros((nbx * b, nby * b, nbz * b))
+        # a voxel is occupied when it or a neighbour holds cloud (the trilinear density reaches half a voxel out)
+        from scipy.ndimage import maximum_filter
+
+        grown = maximum_filter(rho, size=3, mode="wrap" if f.periodic else "nearest")
+        pad[:nx, :ny, :nz] = grown
+        occupied = (pad.reshape(nbx, b, nby, b, nbz, b).max(axis=(1, 3, 5)) > 0).astype(np.uint8)
+        # the ground's mean shadow (the sun's share of the light the ground sends up to the cloud bases)
+        xs, ys, _ = f.coordinates()
+        gx, gy = np.meshgrid(xs, ys, indexing="ij")
+        gz = np.sqrt(np.maximum(bottom**2 - gx**2 - gy**2, 0.0))
+        tau_ground = self.optical_depth_to_sun(np.stack([gx, gy, gz], axis=-1))
+        return {"gf": gf, "tau_sun": tau_sun, "above": np.ascontiguousarray(above),
+                "below": np.ascontiguousarray(below), "occupied": occupied, "tau_ground": tau_ground,
+                "step": STEP_FRACTION}
+
+    @cached_property
+    def _light(self) -> dict[str, Any]:
+        """The droplets' optics and the clear air's light at the table wavelengths (module docstring)."""
+        tab = self._tables
+        wl = np.asarray(tab.wavelengths, dtype=float)
+        f = self.field
+        p = f.particles
+        k = self._relative_extinction(wl)
+        albedo = np.asarray(p.single_scattering_albedo_at(wl), dtype=float)
+        table = p.phase_table(wl)
+        arr = table.numba_arrays()
+        g = np.asarray(table.asymmetry, dtype=float)
+        bottom = tab.parameters.bottom_radius
+        _, _, zc = f.coordinates()
+        r = bottom + zc
+        mu = _MU_NODES
+        t_atm = np.asarray(tab.transmittance(r[:, None], mu[None, :]), dtype=float)
+        # rays towards a sun below the point's horizon meet the ground: no sunlight
+        horizon = -np.sqrt(np.maximum(1.0 - (bottom / r) ** 2, 0.0))
+        t_atm[mu[None, :] < horizon[:, None]] = 0.0
+        suns = np.stack([np.sqrt(1.0 - mu**2), np.zeros_like(mu), mu], axis=-1)
+        pos = np.zeros((r.size, 1, 3))
+        pos[:, 0, 2] = r
+        _, e_down = tab.ground_irradiance(pos, np.array([0.0, 0.0, 1.0]), suns[None, :, :])
+        ground = np.array([0.0, 0.0, bottom])
+        e_sun_g, e_sky_g = tab.ground_irradiance(ground, np.array([0.0, 0.0, 1.0]), self._sun_planet)
+        shadow = np.exp(-np.multiply.outer(self._volumes["tau_ground"].ravel(), k)).mean(axis=0)
+        albedo_g = np.asarray(tab.parameters.ground_albedo_at(wl), dtype=float)
+        e_up = albedo_g * (e_sun_g * shadow + e_sky_g)
+        return {"wl": wl, "k": k, "albedo": albedo, "ph_mu": np.ascontiguousarray(arr.mu),
+                "ph_val": np.ascontiguousarray(arr.values), "g": g,
+                "solar": np.asarray(tab.parameters.solar_irradiance_at(wl), dtype=float),
+                "t_atm": np.ascontiguousarray(t_atm), "e_down": np.ascontiguousarray(e_down),
+                "e_up": np.ascontiguousarray(np.asarray(e_up, dtype=float).reshape(-1)), "ground_albedo": albedo_g}
+
+    # ------------------------------------------------------------------ the march
+
+    def march(self, directions: ArrayLike, octaves: tuple[float, float, float, float] | None = None,
+              lod: float = 0.002, interpolation: str | None = None):
+        """The ray march alone for unit ``directions`` (n, 3): the cloud's radiance at the eye through the cloud
+        (n, n_table_wavelengths) [W m^-2 sr^-1 nm^-1], the cloud's transmittance (n, n_wl), the mean depth of the
+        cloud's light (n,) [m] and whether each ray met cloud (n,). ``octaves``: ``(a, b, c, d)`` instead of
+        :attr:`octaves`; ``lod``: the step's growth with distance [-]; ``interpolation``: "linear" or "voxel"
+        instead of :attr:`interpolation`."""
+        from .broken_cloud_kernels import march_rays
+
+        d = np.ascontiguousarray(np.asarray(directions, dtype=float).reshape(-1, 3))
+        v = self._volumes
+        li = self._light
+        a, b, c, dd = self.octaves if octaves is None else octaves
+        n = d.shape[0]
+        nwl = li["k"].size
+        rad = np.zeros((n, nwl))
+        tr = np.ones((n, nwl))
+        depth = np.zeros(n)
+        hit = np.zeros(n, dtype=np.bool_)
+        mp = np.array([a, b, c, dd, v["step"], lod, 0.0])
+        origin = np.ascontiguousarray(self.clear.position, dtype=float)
+        mu = _MU_NODES
+        march_rays(origin, d, self._sun_planet, v["gf"], self._exact.rho, v["occupied"], _BLOCK, v["tau_sun"],
+                   v["above"], v["below"], li["k"], li["albedo"], li["ph_mu"], li["ph_val"], li["g"], li["solar"],
+                   float(mu[0]), float(mu[1] - mu[0]), li["t_atm"], li["e_down"], li["e_up"], mp, OCTAVES,
+                   (interpolation or self.interpolation) == "linear", THIN_AWARE, rad, tr, depth, hit)
+        return rad, tr, depth, hit
+
+    def _composite(self, d: NDArray[np.float64], hit_only: bool = False):
+        """Table-wavelength radiance of the rays ``d`` (n, 3) that meet cloud or ground shadow, and the mask of
+        the rays that differ from the clear sky."""
+        tab = self._tables
+        rad, tr, depth, hit = self.march(d)
+        eye = self.clear.position
+        sun = self._sun_planet
+        # views that meet the ground (before leaving the atmosphere): the clouds' shadows there
+        bottom = tab.parameters.bottom_radius
+        b = d @ eye
+        disc = b * b - (eye @ eye - bottom * bottom)
+        t_ground = np.where(disc >= 0.0, -b - np.sqrt(np.maximum(disc, 0.0)), -1.0)
+        ground = t_ground > 0.0
+        changed = hit.copy()
+        out = np.zeros((d.shape[0], tab.wavelengths.size))
+        idx = np.flatnonzero(hit | ground)
+        if idx.size == 0:
+            return out, changed
+        dd = d[idx]
+        clear = tab.sky_radiance(eye, dd, sun)
+        value = clear.copy()
+        h = hit[idx]
+        if np.any(h):
+            pts = eye + depth[idx][h, None] * dd[h]
+            t_air, _ = tab.aerial_perspective(eye, pts, sun)
+            behind = tab.sky_radiance(pts, dd[h], sun)
+            value[h] += t_air * (rad[idx][h] - (1.0 - tr[idx][h]) * behind)
+        gsel = ground[idx]
+        if np.any(gsel):
+            gpts = eye + t_ground[idx][gsel, None] * dd[gsel]
+            gpts *= (bottom / np.linalg.norm(gpts, axis=-1))[:, None]
+            tau = self._ground_optical_depth(gpts)
+            lit = 1.0 - np.exp(-np.multiply.outer(tau, self._light["k"]))
+            shadowed = tau > 0.0
+            if np.any(shadowed):
+                e_sun, _ = tab.ground_irradiance(gpts[shadowed], gpts[shadowed] / bottom, sun)
+                t_air, _ = tab.aerial_perspective(eye, gpts[shadowed], sun)
+                rows = np.flatnonzero(gsel)[shadowed]
+                value[rows] -= (t_air * tr[idx][rows] * self._light["ground_albedo"] / math.pi * e_sun
+                                * lit[shadowed])
+                changed[idx[rows]] = True
+        out[idx] = np.maximum(value, 0.0)
+        return out, changed
+
+    def _ground_optical_depth(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The field's optical depth to the sun from ground ``points`` (n, 3): bilinear in the map of the voxel
+        columns' centres (periodic fields; exact per point for open ones, whose shadows reach outside the box)."""
+        f = self.field
+        if not f.periodic:
+            return self.optical_depth_to_sun(points)
+        tau = self._volumes["tau_ground"]
+        nx, ny = tau.shape
+        dx, dy, _ = f.voxel_size
+        u = (points[:, 0] - f.origin[0]) / dx - 0.5
+        v = (points[:, 1] - f.origin[1]) / dy - 0.5
+        i0 = np.floor(u).astype(np.int64)
+        j0 = np.floor(v).astype(np.int64)
+        fu = u - i0
+        fv = v - j0
+        i0 %= nx
+        j0 %= ny
+        i1 = (i0 + 1) % nx
+        j1 = (j0 + 1) % ny
+        return ((tau[i0, j0] * (1 - fu) + tau[i1, j0] * fu) * (1 - fv)
+                + (tau[i0, j1] * (1 - fu) + tau[i1, j1] * fu) * fv)
+
+    def _directions(self, directions: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[int, ...]]:
+        """Unit directions (n, 3) for the march, the caller's directions (n, 3) for the clear sky (so that rays
+        without cloud get the clear sky's own bits), and the shape."""
+        d = as_directions(directions)
+        shape = d.shape[:-1]
+        raw = np.asarray(directions, dtype=float).reshape(-1, 3)
+        return np.ascontiguousarray(d.reshape(-1, 3), dtype=float), raw, shape
+
+    def _chunks(self, d: NDArray[np.float64], raw: NDArray[np.float64], channels: int, clear,
+                convert) -> NDArray[np.float64]:
+        """``(n, channels)`` values of the rays ``d`` in chunks of :data:`CHUNK` (bounded memory): the clear sky's
+        ``clear(raw)`` where nothing changed, ``convert(table radiance)`` elsewhere."""
+        out = np.zeros((d.shape[0], channels))
+        for start in range(0, d.shape[0], CHUNK):
+            part = d[start:start + CHUNK]
+            view = out[start:start + CHUNK]
+            tab_rad, changed = self._composite(part)
+            if np.any(changed):
+                view[changed] = convert(tab_rad[changed])
+            if np.any(~changed):
+                view[~changed] = clear(raw[start:start + CHUNK][~changed])
+        return out
+
+    def table_radiance(self, directions: ArrayLike) -> NDArray[np.float64]:
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] at the table wavelengths, (..., n_table_wavelengths)."""
+        d, raw, shape = self._directions(directions)
+        out = self._chunks(d, raw, self._tables.wavelengths.size, self.clear.table_radiance, lambda v: v)
+        return out.reshape(*shape, -1)
+
+    # ------------------------------------------------------------------ the protocol
+
+    def spectral_radiance(self, directions: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] of sky, clouds and ground (no solar disc), (..., n_wl); rays
+        that meet no cloud (nor its shadow) are the clear sky's :meth:`BrunetonSky.spectral_radiance`."""
+        wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
+        d, raw, shape = self._directions(directions)
+        out = self._chunks(d, raw, wl.size, lambda v: self.clear.spectral_radiance(v, wl),
+                           lambda v: self._tables.resample(v, wl))
+        return out.reshape(*shape, wl.size)
+
+    def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
+        """CIE 1931 XYZ [cd m^-2] (..., 3); rays that meet no cloud are the clear sky's :meth:`BrunetonSky.xyz`."""
+        d, raw, shape = self._directions(directions)
+        return self._chunks(d, raw, 3, self.clear.xyz, self._tables.to_xyz).reshape(*shape, 3)
+
+    def luminance(self, directions: ArrayLike) -> NDArray[np.float64]:
+        """Luminance [cd m^-2] (...)."""
+        return self.xyz(directions)[..., 1]
+
+    def sun_shadow(self, points: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        """The field's transmittance to the sun from ``points`` (n, 3) [m] of a flat scene (x east, y north, z above
+        the ground at the observer's foot: a point's altitude is its z and its tangent-plane position its x, y) over
+        the transmittance from the eye (which dims :attr:`sun`), at ``wavelengths`` [nm], (n, n_wl): exact through
+        the voxels (cloud shadows on terrain; both optical depths are capped at 50, so the ratio stays finite)."""
+        pts = np.asarray(points, dtype=float).reshape(-1, 3)
+        wl = as_wavelengths(wavelengths)
+        bottom = self._tables.parameters.bottom_radius
+        z = np.sqrt(np.maximum((bottom + pts[:, 2]) ** 2 - pts[:, 0] ** 2 - pts[:, 1] ** 2, 0.0))
+        tau = self.optical_depth_to_sun(np.stack([pts[:, 0], pts[:, 1], z], axis=-1))
+        tau_eye = float(self.optical_depth_to_sun(self.clear.position[None, :])[0])
+        return np.exp(-np.multiply.outer(tau - tau_eye, self._relative_extinction(wl)))
+
+    def sun_transmittance(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        """The field's transmittance from the eye to the sun's centre at ``wavelengths`` [nm] (n,)."""
+        wl = as_wavelengths(wavelengths)
+        tau = float(self.optical_depth_to_sun(self.clear.position[None, :])[0])
+        return np.exp(-tau * self._relative_extinction(wl))
+
+    def sun_spectral_radiance(self, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Mean spectral radiance of the solar disc [W m^-2 sr^-1 nm^-1]: the clear sky's, times the field's
+        transmittance towards the sun's centre."""
+        wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
+        return self.clear.sun_spectral_radiance(wl) * self.sun_transmittance(wl)
+
+
+def _load_field(path: Any, particles: Any):
+    """A field file, with ``particles`` when it holds no optics (one-line errors: FileFormatError,
+    InvalidParameterError)."""
+    from ..atmosphere.clouds import CloudField
+    from ..errors import FileFormatError
+
+    if not isinstance(path, (str, bytes)) and not hasattr(path, "__fspath__"):
+        raise InvalidParameterError(f"cloud_field must be a file name; got {path!r}")
+    try:
+        return CloudField.load(path)
+    except FileFormatError as exc:
+        if "particles" in str(exc) or "optics" in str(exc):
+            return CloudField.load(path, particles=particles)
+        raise
