@@ -656,16 +656,19 @@ class CloudySky(SunSkyMixin, SkyModel):
         if self._spherical:
             d = self._unit(directions)
             hit, limb, vals = self._spherical_view(d)
-            rows = np.empty((vals.shape[0], 3))
-            for a in range(0, vals.shape[0], 32768):  # bounded memory: 32768 x 95 wavelengths at a time
-                rows[a:a + 32768] = spectrum_to_xyz(self._spectra(vals[a:a + 32768], REFERENCE_WAVELENGTHS),
-                                                    REFERENCE_WAVELENGTHS)
-            out[hit] = rows
+            out[hit] = vals @ self._grid_to_xyz
             if limb.any():
                 out[limb] = self._limb_sky.xyz(d[limb])
         return out
 
     # ------------------------------------------------------------------ the spherical view from above the cloud
+
+    @cached_property
+    def _grid_to_xyz(self) -> NDArray[np.float64]:
+        """The linear map (n_grid_wl, 3) from values per unit solar irradiance at :data:`GRID_WAVELENGTHS` to XYZ
+        [cd m^-2]: each grid wavelength's spectrum (:meth:`_spectra`) integrated (the same as ``_xyz_grid``)."""
+        eye = np.eye(GRID_WAVELENGTHS.size)
+        return spectrum_to_xyz(self._spectra(eye, REFERENCE_WAVELENGTHS), REFERENCE_WAVELENGTHS)
 
     @cached_property
     def _cloud_top(self) -> float:
