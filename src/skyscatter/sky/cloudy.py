@@ -37,9 +37,9 @@ hit point's local angles and sun zenith through the air's chord.
 
 Why this design, its accuracy against the Monte Carlo and its limits (the air's in-scatter above the clouds
 plane-parallel at an equivalent angle; radiance under clouds not verified by the Monte Carlo): docs/clouds.md,
-"Fast cloud layers". In short, the cloud inside the precomputed tables (it fits their spherical symmetry) was off by +135 to +330 % in the diffuse irradiance under optical depth 15: a 500 m
-layer falls between their altitude samples and ray steps, and a thick cloud's orders do not settle into the
-tables' geometric tail after six.
+"Fast cloud layers". In short, the cloud inside the precomputed tables (it fits their spherical symmetry) was off
+by +135 to +330 % in the diffuse irradiance under optical depth 15: a 500 m layer falls between their altitude
+samples and ray steps, and a thick cloud's orders do not settle into the tables' geometric tail after six.
 """
 
 from __future__ import annotations
@@ -744,17 +744,17 @@ class CloudySky(SunSkyMixin, SkyModel):
 
         A ray of nadir angle ``eta`` from radius ``r0`` meets the cloud top at the local zenith angle
         ``asin(r0 sin(eta) / R_c)`` (the line-sphere intersection). The layer is horizontally uniform, so the
-        cloud's radiance there is the column's upwelling radiance ``L_top`` at the local view zenith angle and
-        the local azimuth from the sun and the local sun zenith (:meth:`_top_field`, solved every
+        cloud's radiance there is the column's upwelling radiance ``L_top`` at the local view zenith angle, the
+        local azimuth from the sun and the local sun zenith (:meth:`_top_field`, solved every
         :attr:`LOCAL_SUN_STEP_DEG` from the observer's sun zenith and interpolated linearly), attenuated by the
-        air's optical depth along the chord (``T_s``). The air's in-scatter is the plane-parallel one, ``L_obs - T_pp L_top`` (the
-        observer's and the cloud top's fields of the same solve, [Stamnes1988]), taken at the angle
-        ``theta_e`` whose plane-parallel optical depth equals the chord's (at 555 nm):
+        air's optical depth along the chord (``T_s``). The air's in-scatter is the plane-parallel one,
+        ``L_obs - T_pp L_top`` (the observer's and the cloud top's fields of the same solve, [Stamnes1988]),
+        taken at the angle ``theta_e`` whose plane-parallel optical depth equals the chord's (at 555 nm):
         ``L = L_obs(theta_e) + T_s L_top(theta) - T_pp(theta_e) L_top(theta_e)``, which at the nadir is the
         plane-parallel field exactly. Approximations (docs/clouds.md): the air's in-scatter keeps the
-        plane-parallel geometry at ``theta_e`` and the observer's sun zenith; the limb's air is lit by the tables'
-        ground (albedo), not by the cloud; where the local sun is lower than :data:`MIN_BEAM_ELEVATION` the
-        cloud is dark (its twilight is not modelled in this view)."""
+        plane-parallel geometry at ``theta_e`` and the observer's sun zenith; the limb's air is lit by the
+        tables' ground (albedo), not by the cloud; where the local sun is lower than :data:`MIN_BEAM_ELEVATION`
+        the cloud is dark (its twilight is not modelled in this view)."""
         from .cloudy_kernels import grid_lookup
 
         atm = self.atmosphere
