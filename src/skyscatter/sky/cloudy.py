@@ -31,12 +31,15 @@ wavelength's the linear interpolation of the radiance per unit solar irradiance 
 (clamped outside the grid: the clouds are grey). XYZ is computed per grid node from the same spectra, so
 ``xyz`` and the spectrum agree exactly.
 
-Why this design, its accuracy against the Monte Carlo and its limits (the curvature of the plane-parallel air
-above the clouds: no limb from orbit; radiance under clouds not verified by the
-Monte Carlo): docs/clouds.md, "Fast cloud layers". In short, the cloud inside the precomputed tables (it fits
-their spherical symmetry) was off by +135 to +330 % in the diffuse irradiance under optical depth 15: a 500 m
-layer falls between their altitude samples and ray steps, and a thick cloud's orders do not settle into the
-tables' geometric tail after six.
+Observers above the highest cloud top see it over a sphere (:meth:`CloudySky._spherical_view`): rays that miss
+the cloud shell show the tables' clear air (the limb from orbit), rays that hit it the column's radiance at the
+hit point's local angles and sun zenith through the air's chord.
+
+Why this design, its accuracy against the Monte Carlo and its limits (the air's in-scatter above the clouds
+plane-parallel at an equivalent angle; radiance under clouds not verified by the Monte Carlo): docs/clouds.md,
+"Fast cloud layers". In short, the cloud inside the precomputed tables (it fits their spherical symmetry) was off
+by +135 to +330 % in the diffuse irradiance under optical depth 15: a 500 m layer falls between their altitude
+samples and ray steps, and a thick cloud's orders do not settle into the tables' geometric tail after six.
 """
 
 from __future__ import annotations
@@ -633,14 +636,196 @@ class CloudySky(SunSkyMixin, SkyModel):
     # ------------------------------------------------------------------ the protocol
 
     def spectral_radiance(self, directions: ArrayLike, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
-        """Spectral radiance [W m^-2 sr^-1 nm^-1] of sky, clouds and ground (no solar disc), (..., n_wl)."""
+        """Spectral radiance [W m^-2 sr^-1 nm^-1] of sky, clouds and ground (no solar disc), (..., n_wl).
+        Observers above the cloud top see it over a sphere (:meth:`_spherical_view`)."""
         wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
         normalised = self._interpolate(self._field["radiance"], directions)
-        return self._spectra(normalised, wl)
+        out = self._spectra(normalised, wl)
+        if self._spherical:
+            d = self._unit(directions)
+            hit, limb, vals = self._spherical_view(d)
+            out[hit] = self._spectra(vals, wl)
+            if limb.any():
+                out[limb] = self._limb_sky.spectral_radiance(d[limb], wl)
+        return out
 
     def xyz(self, directions: ArrayLike) -> NDArray[np.float64]:
-        """CIE XYZ [cd m^-2] (..., 3): the grid's XYZ interpolated (equal to integrating ``spectral_radiance``)."""
-        return self._interpolate(self._xyz_grid, directions)
+        """CIE XYZ [cd m^-2] (..., 3): the grid's XYZ interpolated (equal to integrating ``spectral_radiance``);
+        above the cloud top the spherical view's spectra integrated (:meth:`_spherical_view`)."""
+        out = self._interpolate(self._xyz_grid, directions)
+        if self._spherical:
+            d = self._unit(directions)
+            hit, limb, vals = self._spherical_view(d)
+            out[hit] = vals @ self._grid_to_xyz
+            if limb.any():
+                out[limb] = self._limb_sky.xyz(d[limb])
+        return out
+
+    # ------------------------------------------------------------------ the spherical view from above the cloud
+
+    @cached_property
+    def _grid_to_xyz(self) -> NDArray[np.float64]:
+        """The linear map (n_grid_wl, 3) from values per unit solar irradiance at :data:`GRID_WAVELENGTHS` to XYZ
+        [cd m^-2]: each grid wavelength's spectrum (:meth:`_spectra`) integrated (the same as ``_xyz_grid``)."""
+        eye = np.eye(GRID_WAVELENGTHS.size)
+        return spectrum_to_xyz(self._spectra(eye, REFERENCE_WAVELENGTHS), REFERENCE_WAVELENGTHS)
+
+    @cached_property
+    def _cloud_top(self) -> float:
+        """Altitude [m] of the highest cloud top (0 without clouds)."""
+        return max((c.top for c in self.atmosphere.particles if hasattr(c, "top")), default=0.0)
+
+    @property
+    def _spherical(self) -> bool:
+        """Whether the view is spherical: an observer above the highest cloud top with the sun's beam traced
+        (in twilight the column is solved from the cloud top down and the observer put there: not done)."""
+        return (self._cloud_top > 0.0 and self.altitude > self._cloud_top + 1.0
+                and math.cos(self.sun_zenith) > math.sin(MIN_BEAM_ELEVATION))
+
+    @staticmethod
+    def _unit(directions: ArrayLike) -> NDArray[np.float64]:
+        """Unit vectors (..., 3) of directions already checked by :meth:`_interpolate`."""
+        d = np.asarray(directions, dtype=np.float64)
+        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+    @cached_property
+    def _limb_sky(self) -> Any:
+        """The clear air's sky from the precomputed tables ([Bruneton2008]) at the observer: what rays that miss
+        the cloud shell see (the limb)."""
+        from .bruneton import BrunetonSky
+
+        return BrunetonSky(self.sun_zenith, self.sun_azimuth, altitude=self.altitude,
+                           atmosphere=self.atmosphere.replace(particles=()))
+
+    #: Spacing [deg] of the sun zenith angles at which the cloud top's field is solved for the spherical view.
+    LOCAL_SUN_STEP_DEG = 5.0
+
+    def _top_field(self, sun_zenith: float) -> dict[str, NDArray[np.float64]]:
+        """The column's solution at the highest cloud top for the sun at ``sun_zenith`` [rad] there (the same
+        DISORT solve as the observer's, the whole air above with the spherical beam; cached per sun zenith):
+        the cloud's upwelling radiance."""
+        cache = self.__dict__.setdefault("_top_fields", {})
+        key = round(float(sun_zenith), 12)
+        if key not in cache:
+            other = object.__new__(type(self))
+            other.__dict__.update({k: v for k, v in self.__dict__.items()
+                                   if k not in ("_field", "_xyz_grid", "_direct", "_top_fields", "_air_chords",
+                                                "_limb_sky")})
+            other.altitude = self._cloud_top
+            other.illumination = "column"
+            other.sun_zenith = float(sun_zenith)
+            cache[key] = other._field
+        return cache[key]
+
+    @cached_property
+    def _air_chords(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """The air between the cloud top and the observer: its vertical optical depth (n_wl,) and, on nodes of
+        the cosine ``mu`` (n_mu,) of a ray's angle with the local zenith at the cloud top, the optical depth
+        along its chord through the spherical shells up to the observer (n_mu, n_wl) (:func:`slant_optical_depth`
+        per node: a table, not a loop over directions)."""
+        atm = self.atmosphere
+        obs = min(self.altitude, atm.thickness)
+        edges, tau, _, _ = cloud_column(atm, GRID_WAVELENGTHS, obs)
+        keep = (edges[1:] >= self._cloud_top - 1e-6) & (edges[:-1] <= obs + 1e-6)
+        e = np.concatenate([edges[:-1][keep], [edges[1:][keep][-1]]])
+        t = tau[keep]
+        mu = np.linspace(0.0, 1.0, 513) ** 2
+        chord = np.array([slant_optical_depth(e, t, atm.bottom_radius, self._cloud_top, float(m)) for m in mu])
+        return t.sum(axis=0), mu, chord
+
+    def _spherical_view(self, d: NDArray[np.float64]
+                        ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.float64]]:
+        """The view over a sphere from above the highest cloud top, for unit directions ``d`` (..., 3) (ENU at the
+        observer): ``(hit, limb, values)``, ``hit`` the rays that meet the sphere of the cloud top (radius
+        ``R + z_top``), ``values`` (n_hit, n_grid_wl) their radiance per unit solar irradiance, and ``limb`` the
+        rays that miss it below the observer's horizontal (and, from above the atmosphere, every ray that
+        misses it): they see the clear air of the tables (:attr:`_limb_sky`). Upward rays from inside the
+        atmosphere keep the plane-parallel field.
+
+        A ray of nadir angle ``eta`` from radius ``r0`` meets the cloud top at the local zenith angle
+        ``asin(r0 sin(eta) / R_c)`` (the line-sphere intersection). The layer is horizontally uniform, so the
+        cloud's radiance there is the column's upwelling radiance ``L_top`` at the local view zenith angle, the
+        local azimuth from the sun and the local sun zenith (:meth:`_top_field`, solved every
+        :attr:`LOCAL_SUN_STEP_DEG` from the observer's sun zenith and interpolated linearly), attenuated by the
+        air's optical depth along the chord (``T_s``). The air's in-scatter is the plane-parallel one,
+        ``L_obs - T_pp L_top`` (the observer's and the cloud top's fields of the same solve, [Stamnes1988]),
+        taken at the angle ``theta_e`` whose plane-parallel optical depth equals the chord's (at 555 nm):
+        ``L = L_obs(theta_e) + T_s L_top(theta) - T_pp(theta_e) L_top(theta_e)``, which at the nadir is the
+        plane-parallel field exactly. Approximations (docs/clouds.md): the air's in-scatter keeps the
+        plane-parallel geometry at ``theta_e`` and the observer's sun zenith; the limb's air is lit by the
+        tables' ground (albedo), not by the cloud; where the local sun is lower than :data:`MIN_BEAM_ELEVATION`
+        the cloud is dark (its twilight is not modelled in this view)."""
+        from .cloudy_kernels import grid_lookup
+
+        atm = self.atmosphere
+        flat = d.reshape(-1, 3)
+        r0 = atm.bottom_radius + self.altitude
+        rc = atm.bottom_radius + self._cloud_top
+        b = r0 * flat[:, 2]
+        disc = b * b - (r0 * r0 - rc * rc)
+        hit = (disc >= 0.0) & (b < 0.0)
+        limb = ~hit & ((flat[:, 2] < 0.0) | (self.altitude >= atm.thickness))
+        v = flat[hit]
+        dist = -b[hit] - np.sqrt(disc[hit])
+        p = v * dist[:, None]
+        p[:, 2] += r0
+        n = p / rc  # the local zenith at the hit point
+        cos_loc = np.einsum("ij,ij->i", v, n)  # < 0: the ray goes down
+        zs, azs = self.sun_zenith, self.sun_azimuth
+        sun = np.array([math.sin(zs) * math.sin(azs), math.sin(zs) * math.cos(azs), math.cos(zs)])
+        v_t = v - cos_loc[:, None] * n
+        s_t = sun[None, :] - (n @ sun)[:, None] * n
+        phi = np.arctan2(np.linalg.norm(np.cross(v_t, s_t), axis=1), np.einsum("ij,ij->i", v_t, s_t))
+        mu_loc = np.clip(-cos_loc, 0.0, 1.0)
+        vert, mu_nodes, chord = self._air_chords
+        nwl = GRID_WAVELENGTHS.size
+        t_sph = np.empty((mu_loc.size, nwl))
+        for k in range(nwl):  # a loop over 17 wavelengths
+            t_sph[:, k] = np.exp(-np.interp(mu_loc, mu_nodes, chord[:, k]))
+        k5 = int(np.argmin(np.abs(GRID_WAVELENGTHS - 555.0)))
+        slant = np.interp(mu_loc, mu_nodes, chord[:, k5])
+        mu_e = np.clip(np.divide(vert[k5], slant, out=np.ones_like(slant), where=slant > 0), 1e-3, 1.0)
+        t_pp = np.exp(-vert[None, :] / mu_e[:, None])
+
+        def look_rows(field: dict[str, NDArray[np.float64]], cos_t: NDArray[np.float64], rows: Any = slice(None)
+                      ) -> NDArray[np.float64]:
+            c = cos_t[rows]
+            f = phi[rows]
+            sin_t = np.sqrt(np.maximum(1.0 - c * c, 0.0))
+            dirs = np.ascontiguousarray(np.stack([sin_t * np.sin(f), sin_t * np.cos(f), c], axis=-1))
+            out = np.empty((dirs.shape[0], nwl))
+            grid_lookup(dirs, 0.0, field["theta"], field["phi"], np.ascontiguousarray(field["radiance"]), out)
+            return out
+
+        def look(field: dict[str, NDArray[np.float64]], cos_t: NDArray[np.float64]) -> NDArray[np.float64]:
+            return look_rows(field, cos_t)
+
+        top = self._top_field(zs)
+        vals = look(self._field, -mu_e) - t_pp * look(top, -mu_e)
+        # the cloud's light at the hit point's own sun zenith: linear between fields solved every
+        # LOCAL_SUN_STEP_DEG from the observer's (so that the nadir is the observer's field); dark where the
+        # sun is below the lowest traced beam there (the night side: its twilight is not modelled in this view)
+        step = math.radians(self.LOCAL_SUN_STEP_DEG)
+        last = 0.5 * math.pi - MIN_BEAM_ELEVATION - 1e-6
+        local = np.arccos(np.clip(n @ sun, -1.0, 1.0))
+        lit = local <= last
+        pos = (local - zs) / step
+        lo = np.floor(pos)
+        cloud = np.zeros_like(vals)
+        for j in np.unique(lo[lit]):
+            rows = lit & (lo == j)
+            a = zs + j * step
+            b = min(a + step, last)
+            za, zb = max(a, 0.0), b  # the nodes, clipped to the sky's range
+            if zb <= za or abs(local[rows] - za).max() < 1e-12:
+                cloud[rows] = look_rows(self._top_field(za), cos_loc, rows)
+                continue
+            w = np.clip((local[rows] - za) / (zb - za), 0.0, 1.0)[:, None]
+            cloud[rows] = ((1.0 - w) * look_rows(self._top_field(za), cos_loc, rows)
+                           + w * look_rows(self._top_field(zb), cos_loc, rows))
+        vals += t_sph * cloud
+        shape = d.shape[:-1]
+        return hit.reshape(shape), limb.reshape(shape), np.maximum(vals, 0.0)
 
     def sun_spectral_radiance(self, wavelengths: ArrayLike | None = None) -> NDArray[np.float64]:
         """Mean radiance of the solar disc [W m^-2 sr^-1 nm^-1]: the sun's spectrum times the direct
