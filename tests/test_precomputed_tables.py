@@ -136,7 +136,7 @@ def _density_of(field, params, sizes, first=False, n_theta=16):
                  params.rayleigh_scattering_at(wl), params.mie_scattering_at(wl), params.mie_phase_g,
                  aerosol_phase_kind(params.mie_phase_function), np.array([-1.0, 1.0]), np.zeros((1, 2)),
                  np.zeros((1, 2)), np.zeros(1), prof, counts, params.bottom_radius,
-                 params.top_radius, params.mu_s_min, n_theta, out)
+                 params.top_radius, params.mu_s_min, n_theta, out, 0)
     return out
 
 
