@@ -12,9 +12,11 @@
 4. :func:`add_geometric_tail` - the orders beyond the last (below, "Orders").
 
 What the tables hold (single scattering apart, without its phase functions) is described in :mod:`.tables`.
-Wavelengths are computed in chunks (:func:`compute_tables`, ``chunk_size``): most of the work is geometry shared
-by the wavelengths of a chunk, and memory grows with it (three 4D float32 tables per wavelength of a chunk, the
-finished scattering tables written to disk in half precision, :class:`SpillTables`). Timings and the progress
+Wavelengths are computed in chunks (:func:`compute_tables`, ``chunk_size``; all 16 default wavelengths are one):
+most of the work is geometry shared by the wavelengths of a chunk, so each step runs over all of a chunk's
+wavelengths at once. Memory is bounded by streaming (:func:`_orders`): one whole 4D float32 table of the chunk is
+in memory at a time, the working tables go to scratch files by blocks of radii (:class:`ScratchTable`) and the
+finished scattering tables to disk in half precision (:class:`SpillTables`). Timings and the progress
 bar are kept by :class:`Bookkeeping`, apart from the steps.
 
 Orders. Each order of the radiance field is, after a few orders, close to the previous one times a constant
