@@ -8,9 +8,14 @@
 4. Radiance's genssky (shipped in pyradiance's ``bin/``), which also precomputes multiple-scattering tables
    (Bruneton's 2017 scheme, 20 wavelengths), timed from an empty data folder in the same run; the ratio of
    the two precompute times is reported.
+5. Whole processes, alternated (``--rounds N``): ``PrecomputedAtmosphere.compute()`` (default), the same with
+   ``tables="rgb"`` (3 wavelengths), each in a new Python process (imports, loading the compiled kernels from a warm
+   numba cache, computing), and genssky, round after round; CPU time (user + system) and peak resident memory of
+   each process from ``getrusage``, best and median, and the CPU ratio to genssky's in the same rounds. The load
+   average is printed: on a shared machine compare the ratios, not the seconds.
 
-Usage: ``python benchmarks/bench_precompute.py [--repeat N] [--spectral N] [--no-genssky]``. Run on an otherwise idle
-machine: other processes on the two cores inflate every figure.
+Usage: ``python benchmarks/bench_precompute.py [--repeat N] [--spectral N] [--no-genssky] [--rounds N]
+[--rounds-only]``. Run on an otherwise idle machine: other processes on the two cores inflate every figure.
 """
 
 from __future__ import annotations
@@ -58,13 +63,103 @@ def bench_genssky(threads: int) -> float | None:
     return dt
 
 
+_CHILD = """
+import resource, sys
+from skyscatter.precomputed import PrecomputedAtmosphere
+PrecomputedAtmosphere.compute(progress=False, tables=sys.argv[1] if len(sys.argv) > 1 else None)
+"""
+
+
+def _process(cmd: list[str], **kw) -> tuple[float, float, float]:
+    """Run ``cmd``; its wall time [s], CPU time [s] (user + system of the child) and peak RSS [MiB]."""
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    subprocess.run(cmd, check=True, capture_output=True, **kw)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu, after.ru_maxrss / 1024  # ru_maxrss of children: the largest so far [KiB]
+
+
+def bench_processes(rounds: int, threads: int) -> None:
+    """Section 5 of the module docstring."""
+    import statistics
+
+    try:
+        import pyradiance
+
+        root = Path(pyradiance.__file__).parent
+        exe = root / "bin" / "genssky"
+        gen = exe.exists()
+    except ImportError:
+        gen = False
+    cases = {"default (16 wavelengths)": [sys.executable, "-c", _CHILD],
+             "rgb (3 wavelengths)": [sys.executable, "-c", _CHILD, "rgb"]}
+    got: dict[str, list[tuple[float, float]]] = {name: [] for name in [*cases, "genssky"]}
+    # peak RSS per process needs a fresh child-rusage high-water mark: measure it once per case, first, in a
+    # process of its own
+    rss: dict[str, float] = {}
+    for name, cmd in cases.items():
+        rss[name] = _peak_rss(cmd)
+    print(f"load average before the rounds: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    for _ in range(rounds):
+        for name, cmd in cases.items():
+            wall, cpu, _ = _process(cmd)
+            got[name].append((wall, cpu))
+        if gen:
+            with tempfile.TemporaryDirectory() as tmp:
+                env = dict(os.environ, RAYPATH=f".{os.pathsep}{root / 'lib'}")
+                cmd = [str(exe), "6", "21", "12", "-a", "45", "-o", "0", "-m", "0", "-y", "2024", "-n",
+                       str(threads), "-f", "bench"]
+                wall, cpu, _ = _process(cmd, cwd=tmp, env=env)
+                got["genssky"].append((wall, cpu))
+    print(f"load average after the rounds: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    if gen:
+        with tempfile.TemporaryDirectory() as tmp:
+            rss["genssky"] = _peak_rss(cmd, cwd=tmp, env=env)
+    for name, runs in got.items():
+        if not runs:
+            continue
+        walls = [w for w, _ in runs]
+        cpus = [c for _, c in runs]
+        line = (f"{name:<26s} CPU best {min(cpus):5.1f} s, median {statistics.median(cpus):5.1f} s; wall best "
+                f"{min(walls):5.1f} s, median {statistics.median(walls):5.1f} s")
+        if name in rss:
+            line += f"; peak RSS {rss[name]:.0f} MiB"
+        print(line)
+    if gen and got["genssky"]:
+        for name in cases:
+            ratios = [c / g for (_, c), (_, g) in zip(got[name], got["genssky"], strict=True)]
+            print(f"CPU ratio {name} / genssky, per round: best {min(ratios):.3f}, median "
+                  f"{statistics.median(ratios):.3f}")
+
+
+def _peak_rss(cmd: list[str], **kw) -> float:
+    """Peak resident memory [MiB] of ``cmd`` run in a process of its own (a child's ``ru_maxrss`` high-water mark
+    is shared by all children of a process)."""
+    code = ("import resource, subprocess, sys; subprocess.run(sys.argv[1:], check=True, capture_output=True); "
+            "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)")
+    out = subprocess.run([sys.executable, "-c", code, *cmd], check=True, capture_output=True, text=True, **kw)
+    return int(out.stdout.split()[-1]) / 1024
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=2, help="precompute runs (best is reported)")
     ap.add_argument("--no-genssky", action="store_true", help="skip Radiance's genssky")
     ap.add_argument("--spectral", type=int, default=0, metavar="N",
                     help="also time the spectral mode with N wavelengths evenly spread over 380-760 nm")
+    ap.add_argument("--rounds", type=int, default=3,
+                    help="alternated whole-process rounds of section 5 (0: skip)")
+    ap.add_argument("--rounds-only", action="store_true", help="only section 5")
     args = ap.parse_args()
+    if args.rounds_only:
+        from skyscatter.precomputed.parallel import n_threads
+
+        bench_processes(max(1, args.rounds), n_threads())
+        return 0
 
     numba_cache = tempfile.mkdtemp(prefix="skyscatter-numba-")
     os.environ["NUMBA_CACHE_DIR"] = numba_cache  # before numba is imported: cold JIT cache
@@ -117,6 +212,9 @@ def main() -> int:
         if g:
             print(f"ratio skyscatter / genssky precompute time: {wall / g:.2f}")
     shutil.rmtree(numba_cache, ignore_errors=True)
+    del os.environ["NUMBA_CACHE_DIR"]  # the whole processes below load the compiled kernels from the usual cache
+    if args.rounds:
+        bench_processes(args.rounds, threads)
     return 0
 
 

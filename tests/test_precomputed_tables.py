@@ -136,7 +136,7 @@ def _density_of(field, params, sizes, first=False, n_theta=16):
                  params.rayleigh_scattering_at(wl), params.mie_scattering_at(wl), params.mie_phase_g,
                  aerosol_phase_kind(params.mie_phase_function), np.array([-1.0, 1.0]), np.zeros((1, 2)),
                  np.zeros((1, 2)), np.zeros(1), prof, counts, params.bottom_radius,
-                 params.top_radius, params.mu_s_min, n_theta, out)
+                 params.top_radius, params.mu_s_min, n_theta, out, 0)
     return out
 
 
@@ -448,3 +448,34 @@ def test_geometric_tail_of_the_orders():
            .sky_radiance([0.0, 0.0, p.bottom_radius], d, sun)[:, 0] for o in (2, 6, 12)}
     assert np.max(np.abs(rad[6] / rad[12] - 1)) < 3e-3
     assert np.max(np.abs(rad[2] / rad[12] - 1)) > 0.3
+
+
+def test_streaming_and_chunks_do_not_change_the_tables(monkeypatch):
+    """The tables do not depend on how the computation is cut (bit for bit): wavelength chunks of 1, 2 or all,
+    blocks of 1, 3 or 4 radii streamed to the scratch files (6 radii: a partial last block), the first order's
+    density in one or two wavelength halves, for 1, 2 and 5 orders (no tail, no tail, tail). Every kernel sums
+    each texel's terms in the same order whatever the cut, so any difference is a streaming or indexing error."""
+    from skyscatter.precomputed import compute
+
+    sizes = dict(transmittance_mu=16, transmittance_r=4, irradiance_mu_s=4, irradiance_r=4, scattering_r=6,
+                 scattering_mu=8, scattering_mu_s=4, scattering_nu=2)
+    wl = np.array([420.0, 480.0, 550.0, 610.0, 680.0])
+
+    def tables(orders, **kw):
+        t = PrecomputedAtmosphere.compute(orders=orders, sizes=sizes, wavelengths=wl, progress=False, **kw).tables
+        return {k: (np.asarray(v.values), np.asarray(v.scale)) if hasattr(v, "scale") else (np.asarray(v),)
+                for k, v in t.items()}
+
+    assert (compute.ROW_BLOCK, compute.FIRST_ORDER_SPLIT) == (4, 2)  # the defaults, for the reference
+    for orders in (1, 2, 5):
+        ref = tables(orders)
+        for chunk, block, split in ((1, 4, 2), (2, 4, 2), (None, 1, 1), (None, 3, 2), (None, 4, 1)):
+            monkeypatch.setattr(compute, "ROW_BLOCK", block)
+            monkeypatch.setattr(compute, "FIRST_ORDER_SPLIT", split)
+            got = tables(orders, chunk_size=chunk)
+            for name, arrays in ref.items():
+                for a, b in zip(arrays, got[name], strict=True):
+                    assert np.array_equal(a, b), (orders, chunk, block, split, name)
+        monkeypatch.setattr(compute, "ROW_BLOCK", 4)
+        monkeypatch.setattr(compute, "FIRST_ORDER_SPLIT", 2)
+        assert ref["multiple"][0].any() == (orders > 1)

@@ -12,9 +12,11 @@
 4. :func:`add_geometric_tail` - the orders beyond the last (below, "Orders").
 
 What the tables hold (single scattering apart, without its phase functions) is described in :mod:`.tables`.
-Wavelengths are computed in chunks (:func:`compute_tables`, ``chunk_size``): most of the work is geometry shared
-by the wavelengths of a chunk, and memory grows with it (three 4D float32 tables per wavelength of a chunk, the
-finished scattering tables written to disk in half precision, :class:`SpillTables`). Timings and the progress
+Wavelengths are computed in chunks (:func:`compute_tables`, ``chunk_size``; all 16 default wavelengths are one):
+most of the work is geometry shared by the wavelengths of a chunk, so each step runs over all of a chunk's
+wavelengths at once. Memory is bounded by streaming (:func:`_orders`): one whole 4D float32 table of the chunk is
+in memory at a time, the working tables go to scratch files by blocks of radii (:class:`ScratchTable`) and the
+finished scattering tables to disk in half precision (:class:`SpillTables`). Timings and the progress
 bar are kept by :class:`Bookkeeping`, apart from the steps.
 
 Orders. Each order of the radiance field is, after a few orders, close to the previous one times a constant
@@ -37,7 +39,7 @@ import math
 import os
 import sys
 import time
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
@@ -62,14 +64,17 @@ __all__ = ["MAX_ORDER_RATIO", "Bookkeeping", "Medium", "Order", "add_geometric_t
 
 #: Largest ratio of successive orders used for the tail (a bound against a noisy estimate: 1 would be infinite).
 MAX_ORDER_RATIO = 0.95
-#: Working memory [bytes] of the 4D tables of one wavelength chunk that sets the default chunk size: all 16
-#: default wavelengths in one chunk (:data:`WORKING_TABLES` float32 tables of 32 x 128 x 32 x 8 texels each: 201 MB),
-#: because the kernels use a chunk's wavelengths as SIMD lanes and a chunk costs about the same for 5 or 16
-#: wavelengths (docs/bruneton.md, measured CPU: one chunk of 16 19.5-19.9 s, peak 410 MiB; 8 + 8 35.9 s, 321 MiB;
-#: 6/5/5 48.0 s, 280 MiB). Speed is kept over the last 110 MiB; ``chunk_size`` chooses the other trade.
-CHUNK_MEMORY = 210e6
-#: 4D float32 tables of a chunk alive at once (:func:`_orders`).
-WORKING_TABLES = 3
+#: Memory [bytes] of the one whole 4D float32 table of a wavelength chunk that :func:`_orders` holds at a time;
+#: it sets the default chunk size: all 16 default wavelengths in one chunk (32 x 128 x 32 x 8 texels: 67 MB).
+#: A chunk costs about the same CPU time for 5 or 16 wavelengths (most of each kernel's work is per texel, ray
+#: sample and sun, shared by the chunk's wavelengths), so chunks are as large as this allows.
+CHUNK_MEMORY = 70e6
+#: Radii per block of the 4D tables streamed to and from scratch files (:class:`ScratchTable`): 8 MiB per block
+#: of 4 of the default 32 radii at 16 wavelengths.
+ROW_BLOCK = 4
+#: Sub-chunks of the wavelengths for the first order's scattering density, which reads two whole tables (single
+#: Rayleigh and Mie): in halves they take the memory of one.
+FIRST_ORDER_SPLIT = 2
 
 F32 = NDArray[np.float32]
 F64 = NDArray[np.float64]
@@ -212,40 +217,45 @@ def direct_irradiance(medium: Medium, sizes: TableSizes, transmittance: F32) -> 
     return out
 
 
-def single_scattering(medium: Medium, sizes: TableSizes, transmittance: F32) -> tuple[F32, F32]:
+def single_scattering(medium: Medium, sizes: TableSizes, transmittance: F32,
+                      rows: range | None = None) -> tuple[F32, F32]:
     """Step 2: ``DS = S[L0]`` (Eq. 11 with the sun's light), Rayleigh and Mie apart and without their phase
-    functions (Sec. 4, "Angular precision"): two (n_r, n_mu, n_mu_s, n_nu, n_wavelengths) float32 tables."""
+    functions (Sec. 4, "Angular precision"): two (n_rows, n_mu, n_mu_s, n_nu, n_wavelengths) float32 tables of
+    the radius indices ``rows`` (default all)."""
     n_r, n_mu = sizes.scattering_r, sizes.scattering_mu
-    rayleigh = np.zeros((*sizes.scattering_shape, transmittance.shape[-1]), dtype=np.float32)
+    rows = range(n_r) if rows is None else rows
+    rayleigh = np.zeros((len(rows), *sizes.scattering_shape[1:], transmittance.shape[-1]), dtype=np.float32)
     mie = np.zeros_like(rayleigh)
-    parallel_for(kernels.single_scattering_kernel, n_r * n_mu, transmittance, medium.bottom, medium.top,
+    parallel_for(kernels.single_scattering_kernel, rows.stop * n_mu, transmittance, medium.bottom, medium.top,
                  medium.mu_s_min, medium.sun_angular_radius, medium.profiles, medium.counts, sizes.ray_samples,
-                 rayleigh, mie)
+                 n_r, rayleigh, mie, rows.start, begin=rows.start * n_mu)
     rayleigh *= (medium.solar_irradiance * medium.rayleigh_scattering).astype(np.float32)
     mie *= (medium.solar_irradiance * medium.mie_scattering).astype(np.float32)
     return rayleigh, mie
 
 
-def scattering_density(medium: Medium, sizes: TableSizes, transmittance: F32, previous: Order) -> F32:
+def scattering_density(medium: Medium, sizes: TableSizes, transmittance: F32, previous: Order,
+                       rows: range | None = None) -> F32:
     """Step 3: ``DJ = J[(a / pi) T DE + DS]`` (Eqs. 6, 7) from the previous order's light, per unit scattering
-    coefficient (:func:`.kernels.scattering_density_kernel`), (n_r, n_mu, n_mu_s, n_nu, n_wavelengths) float32."""
-    out = np.zeros((*sizes.scattering_shape, transmittance.shape[-1]), dtype=np.float32)
-    args = (kernels.scattering_density_kernel, sizes.scattering_r, transmittance, previous.rayleigh,
+    coefficient (:func:`.kernels.scattering_density_kernel`), (n_rows, n_mu, n_mu_s, n_nu, n_wavelengths) float32
+    at the radius indices ``rows`` (default all)."""
+    rows = range(sizes.scattering_r) if rows is None else rows
+    out = np.zeros((len(rows), *sizes.scattering_shape[1:], transmittance.shape[-1]), dtype=np.float32)
+    args = (kernels.scattering_density_kernel, rows.stop, transmittance, previous.rayleigh,
             previous.mie, previous.single, previous.irradiance, medium.ground_albedo,
             medium.rayleigh_scattering, medium.mie_scattering, medium.mie_phase_g, medium.mie_kind,
             medium.phase_mu, medium.phase_full, medium.phase_trunc, medium.forward,
             medium.profiles, medium.counts, medium.bottom, medium.top, medium.mu_s_min,
-            sizes.density_sphere_samples, out)
-    if medium.mie_kind == TABLE_PHASE:
-        # one matrix product per wavelength from each of the pool's threads: with OpenBLAS's own threads on top
-        # the density step of a tabulated phase took 32.8 s instead of 7.3 s (default sizes, 16 wavelengths,
-        # busy 2-core machine); the analytic path (one large product per radius) keeps the default pool
-        from threadpoolctl import threadpool_limits
+            sizes.density_sphere_samples, out, rows.start)
+    # The kernel runs on all cores (parallel_for); OpenBLAS's own threads on top of it only spin: one BLAS thread
+    # per pool thread. Measured: a tabulated phase's density step took 32.8 s instead of 7.3 s with them (default
+    # sizes, 16 wavelengths, busy 2-core machine); the default precomputation (analytic phase, one product per
+    # radius) 22.0 s of CPU instead of 17.9 s, whole process, load 10. The products are the same (OpenBLAS splits
+    # the output among its threads, not the sums).
+    from threadpoolctl import threadpool_limits
 
-        with threadpool_limits(1, user_api="blas"):
-            parallel_for(*args)
-    else:
-        parallel_for(*args)
+    with threadpool_limits(1, user_api="blas"):
+        parallel_for(*args, begin=rows.start)
     return out
 
 
@@ -260,13 +270,16 @@ def indirect_irradiance(medium: Medium, sizes: TableSizes, previous: Order) -> F
     return out
 
 
-def multiple_scattering(medium: Medium, sizes: TableSizes, transmittance: F32, density: F32) -> F32:
-    """Step 3: ``DS = integral T DJ`` (Eq. 11) along each texel's view ray, (n_r, n_mu, n_mu_s, n_nu,
-    n_wavelengths) float32."""
-    out = np.zeros_like(density)
-    parallel_for(kernels.multiple_scattering_kernel, sizes.scattering_r * sizes.scattering_mu, transmittance,
+def multiple_scattering(medium: Medium, sizes: TableSizes, transmittance: F32, density: F32,
+                        rows: range | None = None) -> F32:
+    """Step 3: ``DS = integral T DJ`` (Eq. 11) along each texel's view ray, (n_rows, n_mu, n_mu_s, n_nu,
+    n_wavelengths) float32 at the radius indices ``rows`` (default all)."""
+    rows = range(sizes.scattering_r) if rows is None else rows
+    out = np.zeros((len(rows), *density.shape[1:]), dtype=np.float32)
+    parallel_for(kernels.multiple_scattering_kernel, rows.stop * sizes.scattering_mu, transmittance,
                  density, medium.rayleigh_scattering, medium.mie_scattering, medium.profiles, medium.counts,
-                 medium.bottom, medium.top, medium.mu_s_min, sizes.ray_samples, out)
+                 medium.bottom, medium.top, medium.mu_s_min, sizes.ray_samples, out, rows.start,
+                 begin=rows.start * sizes.scattering_mu)
     return out
 
 
@@ -280,54 +293,140 @@ def add_geometric_tail(table: F32, last: F32, last_sum: F64, before_sum: F64) ->
 
 
 def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int, book: Bookkeeping,
-            keep: Callable[[str, F32], None]) -> None:
-    """Steps 2-4 for one chunk of wavelengths. Each table is handed to ``keep(name, table)`` (names of
-    :data:`.storage.TABLE_NAMES`) as soon as it is final and dropped here: at most three 4D tables of the chunk
-    are alive at once (single Rayleigh and Mie and the first density; later the sum of the orders, the previous
-    order and the density, then the sum, the density and the new order)."""
-    with book.order(1, "single scattering"):
-        e_direct = direct_irradiance(medium, sizes, transmittance)
-        single_r, single_m = single_scattering(medium, sizes, transmittance)
-    irradiance = np.zeros_like(e_direct)
-    multiple: F32 | None = None
-    previous: Order | None = Order(single_r, single_m, True, e_direct)
-    sums: list[tuple[F64, F64]] = []  # per order: sums of its scattering and irradiance tables per wavelength
-    for k in range(2, orders + 1):
-        assert previous is not None
-        with book.order(k):
-            with book.timed(f"order {k} density"):
-                density = scattering_density(medium, sizes, transmittance, previous)
-            with book.timed(f"order {k} irradiance"):
-                d_irradiance = indirect_irradiance(medium, sizes, previous)
-                irradiance += d_irradiance
-            if k == 2:  # single scattering is final: out of memory before the next 4D table
-                keep("single_rayleigh", single_r)
-                keep("single_mie", single_m)
-                del single_r, single_m
-            previous = None
-            with book.timed(f"order {k} multiple"):
-                d_scattering = multiple_scattering(medium, sizes, transmittance, density)
-                del density  # before the next order's: one 4D density table in memory at a time
-                if multiple is None:
-                    multiple = d_scattering.copy()
-                else:
-                    multiple += d_scattering
-                sums.append((d_scattering.sum(axis=(0, 1, 2, 3), dtype=np.float64),
-                             d_irradiance.sum(axis=(0, 1), dtype=np.float64)))
-        previous = Order(d_scattering, d_scattering, False, d_irradiance)
-        del d_scattering
-    if orders == 1:
-        keep("single_rayleigh", single_r)
-        keep("single_mie", single_m)
-        del single_r, single_m
-        multiple = np.zeros((*sizes.scattering_shape, transmittance.shape[-1]), dtype=np.float32)
-    assert multiple is not None and previous is not None
+            spill: SpillTables, first_channel: int, split: int) -> F32:
+    """Steps 2-4 for one group of wavelengths (all of them by default): the finished 4D tables go to ``spill``
+    (its wavelengths from ``first_channel`` on) and the irradiance table is returned.
+
+    Every step runs over all the group's wavelengths at once, because most of each kernel's work is per texel,
+    ray sample and sun (cells, weights, positions) and shared by the wavelengths; only the tables it reads must be
+    whole. The tables it writes are streamed by blocks of :data:`ROW_BLOCK` radii to float32 scratch files
+    (:class:`ScratchTable`) and read back when the next step needs them, so one whole 4D table is in memory at
+    a time: the previous order while its scattering density is computed, then that density while the next order
+    is integrated. The first order's density reads two tables (single Rayleigh and Mie); it runs on ``split``
+    sub-chunks of the wavelengths so that its inputs are no larger than one table.
+    """
+    n_l = transmittance.shape[-1]
+    shape = (*sizes.scattering_shape, n_l)
+    blocks = [range(a, min(a + ROW_BLOCK, sizes.scattering_r)) for a in range(0, sizes.scattering_r, ROW_BLOCK)]
+    with ScratchTable(shape) as s_r, ScratchTable(shape) as s_m, ScratchTable(shape) as density, \
+            ScratchTable(shape) as previous, ScratchTable(shape) as total:
+        with book.order(1, "single scattering"):
+            e_direct = direct_irradiance(medium, sizes, transmittance)
+            for rows in blocks:
+                ray, mie = single_scattering(medium, sizes, transmittance, rows)
+                s_r.write(rows, ray)
+                s_m.write(rows, mie)
+                spill.put("single_rayleigh", first_channel, rows, ray)
+                spill.put("single_mie", first_channel, rows, mie)
+                del ray, mie
+        irradiance = np.zeros_like(e_direct)
+        last_irradiance = e_direct
+        sums: list[tuple[F64, F64]] = []  # per order: sums of its scattering and irradiance tables per wavelength
+        for k in range(2, orders + 1):
+            with book.order(k):
+                d_irradiance = np.empty_like(e_direct)
+                with book.timed(f"order {k} density"):
+                    if k == 2:
+                        for ch in np.array_split(np.arange(n_l), min(split, n_l)):
+                            med = medium.channels(ch)
+                            t_ch = np.ascontiguousarray(transmittance[..., ch])
+                            light = Order(s_r.load(ch), s_m.load(ch), True, np.ascontiguousarray(e_direct[..., ch]))
+                            for rows in blocks:
+                                density.write(rows, scattering_density(med, sizes, t_ch, light, rows), ch)
+                            d_irradiance[..., ch] = indirect_irradiance(med, sizes, light)
+                            del light
+                    else:
+                        table = previous.load()
+                        light = Order(table, table, False, last_irradiance)
+                        for rows in blocks:
+                            density.write(rows, scattering_density(medium, sizes, transmittance, light, rows))
+                        d_irradiance = indirect_irradiance(medium, sizes, light)
+                        del light, table
+                    irradiance += d_irradiance
+                with book.timed(f"order {k} multiple"):
+                    dens = density.load()
+                    order_sum = np.zeros(n_l)
+                    for rows in blocks:
+                        d_scattering = multiple_scattering(medium, sizes, transmittance, dens, rows)
+                        order_sum += d_scattering.sum(axis=(0, 1, 2, 3), dtype=np.float64)
+                        previous.write(rows, d_scattering)
+                        if k > 2:
+                            d_scattering += total.read(rows)  # the sum of the orders
+                        total.write(rows, d_scattering)
+                    del dens, d_scattering
+                    sums.append((order_sum, d_irradiance.sum(axis=(0, 1), dtype=np.float64)))
+                last_irradiance = d_irradiance
+        for rows in blocks:
+            multiple = total.read(rows)  # zeros for one order
+            if orders >= 3:
+                add_geometric_tail(multiple, previous.read(rows), sums[-1][0], sums[-2][0])
+            spill.put("multiple", first_channel, rows, multiple)
     if orders >= 3:
-        add_geometric_tail(multiple, previous.rayleigh, sums[-1][0], sums[-2][0])
-        add_geometric_tail(irradiance, previous.irradiance, sums[-1][1], sums[-2][1])
-    previous = None
-    keep("multiple", multiple)
-    keep("irradiance", irradiance)
+        add_geometric_tail(irradiance, last_irradiance, sums[-1][1], sums[-2][1])
+    return irradiance
+
+
+class ScratchTable:
+    """A float32 4D table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths) in an unnamed temporary file, written and read
+    by blocks of radii (each a contiguous run of the file): a working table of :func:`_orders` that is not needed
+    whole in memory. The pages live in the operating system's file cache, not in the process."""
+
+    def __init__(self, shape: tuple[int, ...]) -> None:
+        import tempfile
+
+        self.shape = shape
+        self._row = math.prod(shape[1:]) * 4
+        self._fh = tempfile.TemporaryFile(prefix="skyscatter-work-")
+        self._fh.truncate(self._row * shape[0])
+
+    def __enter__(self) -> ScratchTable:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._fh.close()
+
+    def write(self, rows: range, block: F32, channels: NDArray[np.intp] | None = None) -> None:
+        """Store ``block`` (len(rows), n_mu, n_mu_s, n_nu, n) as the radii ``rows``: all wavelengths, or the
+        wavelengths of indices ``channels`` (n of them; the others are kept)."""
+        if channels is not None:
+            full = self.read(rows)
+            full[..., channels] = block
+            block = full
+        _pwrite_all(self._fh.fileno(), np.ascontiguousarray(block, dtype=np.float32), rows.start * self._row)
+
+    def read(self, rows: range) -> F32:
+        """The radii ``rows``, all wavelengths."""
+        out = np.empty((len(rows), *self.shape[1:]), dtype=np.float32)
+        _pread_all(self._fh.fileno(), out, rows.start * self._row)
+        return out
+
+    def load(self, channels: NDArray[np.intp] | None = None) -> F32:
+        """The whole table, at all wavelengths or at those of indices ``channels`` (read by blocks of radii)."""
+        if channels is None:
+            return self.read(range(self.shape[0]))
+        out = np.empty((*self.shape[:-1], len(channels)), dtype=np.float32)
+        for a in range(0, self.shape[0], ROW_BLOCK):
+            rows = range(a, min(a + ROW_BLOCK, self.shape[0]))
+            out[a: rows.stop] = self.read(rows)[..., channels]
+        return out
+
+
+def _pwrite_all(fd: int, arr: NDArray[Any], offset: int) -> None:
+    """Write the bytes of the C-contiguous ``arr`` at ``offset`` of file descriptor ``fd``."""
+    data = memoryview(arr).cast("B")  # type: ignore[arg-type]  # numpy arrays export the buffer protocol
+    while data.nbytes:
+        written = os.pwrite(fd, data, offset)
+        data, offset = data[written:], offset + written
+
+
+def _pread_all(fd: int, arr: NDArray[Any], offset: int) -> None:
+    """Fill the C-contiguous ``arr`` with the bytes at ``offset`` of file descriptor ``fd``."""
+    data = memoryview(arr).cast("B")  # type: ignore[arg-type]
+    while data.nbytes:
+        got = os.preadv(fd, [data], offset)
+        if got <= 0:
+            raise OSError(f"short read of a scratch table at byte {offset}")
+        data, offset = data[got:], offset + got
 
 
 class SpillTables:
@@ -347,17 +446,15 @@ class SpillTables:
             fh.truncate(self._per_wavelength * n_wavelengths)
         self._scales = {name: np.ones((n_wavelengths, n_r, n_s), dtype=np.float32) for name in HALF_TABLES}
 
-    def put(self, name: str, first: int, table: F32) -> None:
-        """Store ``table`` (n_r, n_mu, n_mu_s, n_nu, chunk) of the wavelengths ``first..first + chunk - 1``."""
+    def put(self, name: str, first: int, rows: range, table: F32) -> None:
+        """Store ``table`` (len(rows), n_mu, n_mu_s, n_nu, chunk), the radii ``rows`` of the wavelengths
+        ``first..first + chunk - 1`` (the half-precision scales are per radius: a block of whole radii is final)."""
         fd = self._files[name].fileno()
+        row_bytes = self._per_wavelength // self._shape[1]
         for k in range(table.shape[-1]):  # one wavelength at a time: a float16 copy of one wavelength in memory
             values, scale = encode_half(table[..., k: k + 1])
-            data = memoryview(values).cast("B")  # type: ignore[arg-type]  # numpy arrays export the buffer protocol
-            offset = (first + k) * self._per_wavelength
-            while data.nbytes:
-                written = os.pwrite(fd, data, offset)
-                data, offset = data[written:], offset + written
-            self._scales[name][first + k] = scale[0]
+            _pwrite_all(fd, values, (first + k) * self._per_wavelength + rows.start * row_bytes)
+            self._scales[name][first + k, rows.start: rows.stop] = scale[0]
 
     def tables(self) -> dict[str, HalfTable]:
         """The finished tables."""
@@ -387,7 +484,7 @@ def compute_tables(atmosphere: AtmosphereParameters, *, orders: int = DEFAULT_OR
     check_colour_range(atmosphere, wl)
     sz = TableSizes.coerce(sizes)
     if chunk_size is None:
-        chunk_size = max(1, int(CHUNK_MEMORY // (WORKING_TABLES * 4 * math.prod(sz.scattering_shape))))
+        chunk_size = max(1, int(CHUNK_MEMORY // (4 * math.prod(sz.scattering_shape))))
     whole_number("chunk_size", chunk_size, 1)
     medium = Medium.of(atmosphere, wl, sz)
     # as many chunks as needed, of nearly equal sizes (16 wavelengths by 8: two chunks of 8, not 8, 8 and 0)
@@ -398,13 +495,8 @@ def compute_tables(atmosphere: AtmosphereParameters, *, orders: int = DEFAULT_OR
             transmittance = transmittance_table(medium, sz)
         irradiance = np.zeros((*sz.irradiance_shape, wl.size), dtype=np.float32)
         for ch in chunks:
-            def keep(name: str, table: F32, ch: NDArray[np.intp] = ch) -> None:
-                if name == "irradiance":
-                    irradiance[..., ch] = table
-                else:
-                    spill.put(name, int(ch[0]), table)
-
-            _orders(medium.channels(ch), sz, np.ascontiguousarray(transmittance[..., ch]), int(orders), book, keep)
+            irradiance[..., ch] = _orders(medium.channels(ch), sz, np.ascontiguousarray(transmittance[..., ch]),
+                                          int(orders), book, spill, int(ch[0]), FIRST_ORDER_SPLIT)
     tables: dict[str, F32 | HalfTable] = {"transmittance": transmittance, "irradiance": irradiance,
                                           **spill.tables()}
     return wl, sz, tables, book.timings

@@ -164,16 +164,17 @@ def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, 
 
 
 @kernel
-def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profiles, counts, n_samples, ray, mie,
-                             start, stop):
+def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profiles, counts, n_samples, n_r, ray,
+                             mie, first_r, start, stop):
     """Single scattering integrals per unit solar irradiance and unit scattering coefficient.
 
-    Fills ``ray`` and ``mie`` (n_r, n_mu, n_mu_s, n_nu, n_wavelengths) float32 for flat (r, mu) indices
-    ``start..stop`` with
+    Fills ``ray`` and ``mie`` (n_rows, n_mu, n_mu_s, n_nu, n_wavelengths) float32, radius indices ``first_r`` to
+    ``first_r + n_rows - 1`` of a table of ``n_r`` radii (a block of rows: the driver streams them), for flat
+    (r, mu) indices ``start..stop`` of the whole table with
     ``integral rho_i(y) T(x, y) T_sun(y) dy`` from the texel's point to the ground or the top
     (Bruneton & Neyret 2008, Eqs. 9 and 11; the phase functions and coefficients are applied later).
     """
-    n_r, n_mu, n_mu_s, n_nu, n_l = ray.shape
+    _, n_mu, n_mu_s, n_nu, n_l = ray.shape
     n_pts = n_samples + 1
     dist = np.empty(n_pts)
     rad = np.empty(n_pts)
@@ -253,8 +254,8 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
             for i_n in range(n_nu):
                 u = i_s * n_nu + i_n
                 for k in range(n_l):
-                    ray[i_r, i_mu, i_s, i_n, k] = acc_r[u, k]
-                    mie[i_r, i_mu, i_s, i_n, k] = acc_m[u, k]
+                    ray[i_r - first_r, i_mu, i_s, i_n, k] = acc_r[u, k]
+                    mie[i_r - first_r, i_mu, i_s, i_n, k] = acc_m[u, k]
 
 
 @helper
@@ -333,11 +334,12 @@ def sphere_quadrature(n_theta, hemisphere):
 @kernel(fastmath=CONTRACT_REASSOC)
 def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance, albedo, beta_r, beta_m, g, mie_kind,
                               phase_mu, phase_full, phase_trunc, forward, profiles, counts, bottom, top, mu_s_min,
-                              n_theta, out, start, stop):
+                              n_theta, out, first_r, start, stop):
     """Scattering density J (Eq. 7) of one order per unit total scattering coefficient, ``J / (beta_R rho_R(r) +
-    beta_M rho_M(r))`` at each texel's radius, into ``out`` (n_r, n_mu, n_mu_s, n_nu, n_wl) float32, for radius
-    indices ``start..stop``: the incident radiance weighted by the Rayleigh and the aerosol phase functions in the
-    proportions of the two scattering coefficients there.
+    beta_M rho_M(r))`` at each texel's radius, into ``out`` (n_rows, n_mu, n_mu_s, n_nu, n_wl) float32 (radius
+    indices ``first_r`` to ``first_r + n_rows - 1``: a block of rows), for radius indices ``start..stop``: the
+    incident radiance weighted by the Rayleigh and the aerosol phase functions in the proportions of the two
+    scattering coefficients there.
 
     Stored per unit scattering coefficient because the densities fall exponentially with altitude (the aerosols'
     scale height is 1.2 km) while this weighted radiance varies slowly: :func:`multiple_scattering_kernel`
@@ -526,7 +528,7 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                                      + forward[k] * own[k, i_s, v])
                         else:
                             acc_m = mie[i_s * n_l + k, v] / norm_m[v]
-                        out[i_r, i_mu, i_s, i_n, k] = f_r[k] * acc_r / norm_r[v] + f_m[k] * acc_m
+                        out[i_r - first_r, i_mu, i_s, i_n, k] = f_r[k] * acc_r / norm_r[v] + f_m[k] * acc_m
 
 
 @helper
@@ -635,9 +637,10 @@ def _sun_cells(r, d, r_i, mu_i, mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a
 
 @kernel
 def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles, counts, bottom, top,
-                               mu_s_min, n_samples, out, start, stop):
+                               mu_s_min, n_samples, out, first_r, start, stop):
     """Radiance of one order scattered towards each texel's point (Eq. 11 with the order's J) into ``out``
-    (float32, like the densities), for flat (r, mu) indices ``start..stop``.
+    (float32, like the densities; radius indices ``first_r`` to ``first_r + n_rows - 1``, a block of rows), for
+    flat (r, mu) indices ``start..stop`` of the whole table.
 
     ``integral T(x, y) J(y, v, s) dy`` from the point to the ground or the top, by product integration
     with the total scattering coefficient ``beta_r rho_r + beta_m rho_m`` as the exponential factor; at each
@@ -731,4 +734,4 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
         for i_s in range(n_s):
             for i_n in range(n_n):
                 for k in range(n_l):
-                    out[i_r, i_mu, i_s, i_n, k] = acc[i_s, i_n, k]
+                    out[i_r - first_r, i_mu, i_s, i_n, k] = acc[i_s, i_n, k]

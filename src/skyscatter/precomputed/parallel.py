@@ -57,20 +57,20 @@ if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_forget_pool_after_fork)
 
 
-def parallel_for(kernel: Callable[..., Any], n: int, *args: Any, grain: int = 1) -> None:
-    """Call ``kernel(*args, start, stop)`` on chunks covering ``range(n)``, in parallel.
+def parallel_for(kernel: Callable[..., Any], n: int, *args: Any, grain: int = 1, begin: int = 0) -> None:
+    """Call ``kernel(*args, start, stop)`` on chunks covering ``range(begin, n)``, in parallel.
 
     ``grain`` is the smallest chunk worth a thread (in items). Called from one of the pool's own threads it runs
     inline (a worker waiting for its own pool could wait for ever).
     """
     threads = n_threads()
-    if n <= 0:
+    if n <= begin:
         return
-    n_chunks = min(max(n // max(grain, 1), 1), threads * 8)
+    n_chunks = min(max((n - begin) // max(grain, 1), 1), threads * 8)
     if threads == 1 or n_chunks == 1 or threading.current_thread().name.startswith(_THREAD_PREFIX):
-        kernel(*args, 0, n)
+        kernel(*args, begin, n)
         return
-    edges = np.linspace(0, n, n_chunks + 1).astype(np.int64)
+    edges = np.linspace(begin, n, n_chunks + 1).astype(np.int64)
     pool = _executor(threads)
     futures = [pool.submit(kernel, *args, int(a), int(b)) for a, b in zip(edges[:-1], edges[1:], strict=True)
                if b > a]

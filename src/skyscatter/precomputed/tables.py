@@ -141,9 +141,9 @@ class PrecomputedAtmosphere(TableLookups):
             tqdm progress bar per scattering order (default: when stderr is a terminal).
         chunk_size : int, optional
             Wavelengths computed together. Most of the work is geometry shared by all wavelengths of a chunk,
-            so larger chunks are faster; memory grows with them (3 x 4 bytes per texel of the 4D tables and
-            wavelength). Default: as many as fit in 210 MB of working tables (all 16 with the default sizes:
-            peak 410 MiB; ``chunk_size=6`` keeps it under 300 MiB at 2.4x the CPU time).
+            so larger chunks are faster; memory grows with them (one whole 4D float32 table of the chunk is in
+            memory at a time, 4 bytes per texel and wavelength; the others are streamed to scratch files).
+            Default: as many as fit in 70 MB (all 16 with the default sizes: peak 280 MiB).
         """
         from .compute import compute_tables  # numba and the kernels load when tables are first computed
 
