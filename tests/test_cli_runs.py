@@ -60,6 +60,17 @@ def _exr(name, shape=None, positive=True, png=None):
     return check
 
 
+def _broken_and_overcast_skies(folder: Path, out: str) -> None:
+    """--figure clouds: the cumulus panel's sky is patchy (clouds and gaps), the overcast one's smooth."""
+    from skyscatter.render import read_exr
+
+    def spread(name: str) -> float:
+        sky = read_exr(folder / name)[:4].sum(axis=-1)  # the top rows: sky above the mountains
+        return float(sky.std() / sky.mean())
+
+    assert spread("clouds_a_broken_cumulus.exr") > 2.0 * spread("clouds_b_overcast_evening.exr")
+
+
 def _files(*names):
     def check(folder: Path, out: str) -> None:
         for n in names:
@@ -333,13 +344,17 @@ RUNS = {
                                    "--aerosol", "urban", "--aod", "0.3", "--ozone", "320", "--ground-albedo", "0.3",
                                    "--out", "s.nc"],
                                   _all(_files("s.nc", "s.mtx", "r.mtx", "h.csv"), _spectral_air("h.csv", "s.nc"))),
-    "skymatrix-spectral-sites": (["skymatrix", "--spectral", EPW, EPW, "--tables", "default", "--bad-hours", "error",
-                                  "--scheduler", "threads", "--workers", "1", "--out", "sites.zarr"],
+    "skymatrix-spectral-sites": (["fit-atmosphere", "aod.csv", "--free", "aerosol_optical_depth,angstrom_alpha",
+                                  "--out", "air.json", "&&",
+                                  "skymatrix", "--spectral", EPW, EPW, "--tables", "default", "--bad-hours", "error",
+                                  "--scheduler", "threads", "--workers", "1", "--atmosphere", "air.json", "--out",
+                                  "sites.zarr"],
                                  _stdout("2 of 2 sites")),
     "skymatrix-radiance": (["skymatrix", EPW, "--patches", "reinhart2", "--format", "radiance", "--ground-albedo",
                             "0.3", "--include-sun"], _radiance_matrix("skymatrix.mtx", 578)),
     "skymatrix-spectral": (["skymatrix", "--spectral", "synth.epw", "--out", "s.nc", "--tables", "coarse",
                             "--aod-nodes", "0,0.2,0.5", "--patches", "tregenza", "--samples", "1", "--bands", "41",
+                            "--turbidity", "3", "--angstrom-alpha", "1.1", "--mie-g", "0.75",
                             "--radiance-rgb", "s3.mtx", "--bad-hours", "flag", "--scheduler", "threads",
                             "--no-progress"], _all(_files("s.nc"), _radiance_spectral("s3.mtx"))),
     # demo
@@ -368,6 +383,10 @@ RUNS = {
     "demo-montecarlo-cloud": (["demo", "--width", "6", "--height", "4", "--no-glare", "--model", "montecarlo",
                                "--samples", "1", "--cloud-optical-depth", "5", "--cloud-base", "900", "--cloud-top",
                                "1100", "--cloud-effective-radius", "12e-6"], _exr("landscape.exr")),
+    "demo-figure-clouds": (["demo", "--figure", "clouds", "--width", "32", "--height", "18", "--no-glare"],
+                           _all(_exr("clouds_a_broken_cumulus.exr", (18, 32, 3)),
+                                _exr("clouds_b_overcast_evening.exr", (18, 32, 3)), _files("clouds.png"),
+                                _broken_and_overcast_skies)),
     "demo-cloudy": (["demo", "--width", "6", "--height", "4", "--no-glare", "--model", "cloudy",
                      "--cloud-optical-depth", "30", "--cloud-base", "500", "--cloud-top", "1000"],
                     _exr("landscape.exr")),

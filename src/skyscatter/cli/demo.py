@@ -5,6 +5,10 @@ and one tone-mapped PNG per panel, plus a PNG of each figure with its panels sta
 
 * Figure 7, looking west: (a) morning, T = 2; (b) evening, T = 2; (c) evening, T = 6; (d) overcast, T = 10
   (CIE overcast sky, achromatic; aerial perspective with T = 10 lit by that sky only).
+* ``--figure clouds`` (not part of ``all``: it needs the precomputed tables and a DISORT solve), looking west:
+  (a) broken cumulus with the sun 30 deg high (the ``broken-cloud`` model: a procedural field of cover 0.4 and
+  its shadows on the terrain); (b) an overcast evening (the ``cloudy`` model: a stratus of optical depth 20 with
+  the sun 4 deg high behind it).
 * Figure 8, looking east half an hour before sunset, T = 6: (a) the CIE clear sky with one colour
   everywhere (the spectrum of the Preetham zenith) and Ward-Larson's direction-independent aerial
   perspective; (b) the Preetham sky and aerial perspective.
@@ -34,6 +38,9 @@ if TYPE_CHECKING:
 #: (elevation, azimuth) [deg] of the sun in the figure panels.
 MORNING_SUN = (25.0, 120.0)
 EVENING_SUN = (4.0, 290.0)
+#: The sun of the broken-cumulus panel of ``--figure clouds`` (elevation, azimuth) [deg]: 30 deg high, behind the
+#: camera's left so that the clouds' shadows fall on the terrain in view.
+CUMULUS_SUN = (30.0, 200.0)
 #: Camera headings [deg]: Figure 7 looks west, Figure 8 east.
 WEST, EAST = 270.0, 90.0
 #: Camera (x, y) [m] on the built-in landscape: Figure 7 (and custom panels) and Figure 8, chosen for ranges of
@@ -80,13 +87,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "morning T=2, evening T=2, evening T=6, overcast T=10) and Figure 8 (looking east before sunset, T=6: "
         "CIE clear sky of one colour with Ward-Larson's ambient aerial perspective, then the Preetham model), "
         "one EXR (linear sRGB, Y = luminance/683) and one PNG per panel plus fig7.png and fig8.png, in the "
-        "current folder. Giving --model, --turbidity, a sun option or --aerial renders one custom panel "
+        "current folder. --figure clouds renders broken cumulus (sun 30 deg) and an overcast evening under "
+        "physical cloud models (clouds.png). Giving --model, --turbidity, a sun option or --aerial renders one "
+        "custom panel "
         "(landscape.exr/.png) instead. Nothing is written unless every image renders and every file can be "
         "written.",
         formatter_class=HELP_FORMATTER,
     )
-    p.add_argument("--figure", choices=["all", "7", "8", "custom"], default=None,
-                   help="which figure to render (default: all, or custom when a scene option is given)")
+    p.add_argument("--figure", choices=["all", "7", "8", "clouds", "custom"], default=None,
+                   help="which figure to render (default: all = 7 and 8, or custom when a scene option is given); "
+                   "clouds: broken cumulus at a 30 deg sun and an overcast evening (the broken-cloud and cloudy "
+                   "models, with the precomputed tables: the first run computes and caches them, about 20 s)")
     p.add_argument("--out-dir", type=Path, default=Path("."), metavar="DIR",
                    help="folder for the output files (created if missing)")
     g = p.add_argument_group("image")
@@ -240,6 +251,18 @@ def _panels(args: argparse.Namespace, figure: str) -> list[_Panel]:
                              cie, _aerial("ward-larson", cie, 6.0), EAST, FIG8_CAMERA_XY))
         panels.append(_Panel("fig8b_preetham", "Figure 8b: Preetham sky + aerial perspective", preetham,
                              _aerial("analytic", preetham, 6.0), EAST, FIG8_CAMERA_XY))
+    if figure == "clouds":
+        from ..sky.broken_cloud import BrokenCloudSky
+        from ..sky.cloudy import CloudySky
+
+        cumulus = BrokenCloudSky(math.radians(90.0 - CUMULUS_SUN[0]), math.radians(CUMULUS_SUN[1]), cloud_cover=0.4,
+                                 cloud_seed=1)
+        panels.append(_Panel("clouds_a_broken_cumulus", "Clouds a: broken cumulus (cover 0.4), sun 30 deg",
+                             cumulus, _aerial("analytic", cumulus, DEFAULT_HAZE_TURBIDITY), WEST))
+        overcast = CloudySky(math.radians(90.0 - EVENING_SUN[0]), math.radians(EVENING_SUN[1]),
+                             cloud_optical_depth=20.0)
+        panels.append(_Panel("clouds_b_overcast_evening", "Clouds b: overcast evening (stratus, optical depth 20)",
+                             overcast, _aerial("analytic", overcast, DEFAULT_HAZE_TURBIDITY), WEST))
     if figure == "custom":
         zenith, azimuth = sun_angles_from_args(args)
         elevation, az = 90.0 - math.degrees(zenith), math.degrees(azimuth)
@@ -297,6 +320,10 @@ def _old_sky_option(args: argparse.Namespace) -> None:
     args.model = old
 
 
+#: Prefixes of the panels stacked into one figure PNG (``fig7.png``, ``fig8.png``, ``clouds.png``).
+_FIGURES = ("fig7", "fig8", "clouds")
+
+
 def _check_out_dir(out_dir: Path) -> None:
     """Create the output folder if missing (as ``export-luts`` does); refuse a file or a read-only folder."""
     ensure_output_folder(out_dir, what="--out-dir")
@@ -306,7 +333,7 @@ def _targets(out_dir: Path, panels: list[_Panel], figure: str) -> list[Path]:
     """Every file the run will write, in writing order: EXR and PNG per panel, then the figure montages."""
     targets = [out_dir / f"{panel.name}{suffix}" for panel in panels for suffix in (".exr", ".png")]
     if figure != "custom":
-        targets += [out_dir / f"{fig}.png" for fig in ("fig7", "fig8") if any(p.name.startswith(fig) for p in panels)]
+        targets += [out_dir / f"{fig}.png" for fig in _FIGURES if any(p.name.startswith(fig) for p in panels)]
     return targets
 
 
@@ -403,7 +430,7 @@ def run(args: argparse.Namespace) -> int:
         jobs.append((args.out_dir / f"{panel.name}.png",
                      lambda path, d=displays[panel.name]: write_png(path, d, tonemapped=True)))
     if figure != "custom":
-        for fig in ("fig7", "fig8"):
+        for fig in _FIGURES:
             stack_panels = [displays[p.name] for p in panels if p.name.startswith(fig)]
             if stack_panels:
                 gap = np.ones((max(2, args.height // 60), args.width, 3))
