@@ -379,8 +379,15 @@ class BroadbandClearSky:
         ``x`` at the table wavelengths, inside their range (linear interpolation of ``x / E0``); and the
         extrapolation is done by :meth:`broadband_diffuse`."""
         z = np.asarray(zenith, dtype=float)
-        _, tg = self._gas(z, precipitable_water, pressure, ozone)
+        m, tg = self._gas(z, precipitable_water, pressure, ozone)
         wlt = np.asarray(table_wavelengths, dtype=float)
+        # The tables (and the cloud table's DISORT column) already absorb by the medium's own ozone column inside
+        # their wavelength range: there only the hour's departure from that column is applied (along the sun's
+        # ozone path, Bird & Riordan's assumption for the diffuse light); outside it, where the reduced diffuse is
+        # extended by power laws, the full column (Hartley-Huggins bands below 360 nm).
+        in_table = (self.wavelengths >= wlt[0]) & (self.wavelengths <= wlt[-1])
+        tg = tg * np.where(in_table, np.exp((self.base.ozone_column * m.ozone)[:, None] * self.tau_ozone_per_du),
+                           1.0)
         e0t = self.base.solar_irradiance_at(wlt)
         return (np.asarray(eccentricity, dtype=float)[:, None] * self.weights * self.e0 * tg), e0t
 
@@ -555,9 +562,9 @@ def cloud_irradiance(table: CloudTable, model: BroadbandClearSky, zenith: ArrayL
     With ``optical_depth`` None: at every node of the table, each (n, n_tau); else the direct normal at each
     hour's cloud optical depth (n,) and the diffuse NaN (interpolate the nodes' yourself). Broadband as the clear hours
     (:class:`BroadbandClearSky`, ASTM G173 280-4000 nm): the diffuse by :meth:`BroadbandClearSky.broadband_diffuse`
-    from the table's 380-780 nm spectrum, with water vapour and mixed gases but ozone 0 (DISORT's column already
-    absorbs by ozone; outside 380-780 nm the reduced spectrum is extended by power laws, so Hartley-Huggins
-    absorption below 340 nm is not applied: at most about 1 % of the diffuse); the direct normal is
+    from the table's 380-780 nm spectrum, with water vapour and mixed gases, and ozone only where DISORT's column
+    does not already absorb (the hour's departure from the medium's column inside 380-780 nm, the whole column
+    where the reduced spectrum is extended by power laws: the Hartley-Huggins bands); the direct normal is
     :meth:`BroadbandClearSky.direct_normal_spectral` (air, aerosol, ozone, gases) times the cloud's
     ``exp(-tau s(lambda, z))`` (:meth:`CloudTable.slant_optical_depth`)."""
     z = np.atleast_1d(np.asarray(zenith, dtype=float))
@@ -571,8 +578,7 @@ def cloud_irradiance(table: CloudTable, model: BroadbandClearSky, zenith: ArrayL
         sl = slice(s, min(s + chunk, n))
         aod, pw, p, o3, ecc = (a[sl] for a in args)
         if optical_depth is None:
-            # ozone 0: DISORT's column already absorbs by ozone (docstring)
-            dhi[sl] = model.broadband_diffuse(table.diffuse_spectral(z[sl]), z[sl], pw, p, np.zeros(pw.size), ecc,
+            dhi[sl] = model.broadband_diffuse(table.diffuse_spectral(z[sl]), z[sl], pw, p, o3, ecc,
                                               table.wavelengths)
         direct = model.direct_normal_spectral(z[sl], aod, pw, p, o3, ecc)  # (m, n_fine), sums to the clear DNI
         k = table.slant_optical_depth(z[sl], model.wavelengths)  # (m, n_fine)
