@@ -204,7 +204,8 @@ def _restore_forward_peak(rad: NDArray[np.float64], theta: NDArray[np.float64], 
     within the peak's width of the sun, so the difference between DISORT's downward diffuse flux ``down`` (n_wl,)
     and the grid's integral is added as a lobe ``exp(-(gamma / width)^2)`` about the sun, scaled so that the
     grid (as the lookup interpolates it) integrates to the flux. ``rad`` (n_theta, n_phi, n_wl) per unit solar
-    irradiance; ``theta`` [rad], ``phi`` [rad] its nodes."""
+    irradiance; ``theta`` [rad], ``phi`` [rad] its nodes. Returns the restored grid and the lobe's flux (n_wl,)
+    (the same units as ``down``)."""
     from .cloudy_kernels import grid_lookup
 
     n_t, n_p = 180, 360  # midpoint quadrature of the upper hemisphere (0.5 deg x 0.5 deg)
@@ -223,8 +224,8 @@ def _restore_forward_peak(rad: NDArray[np.float64], theta: NDArray[np.float64], 
     integral = weight @ out  # (n_wl + 1,)
     missing = np.maximum(down - integral[:-1], 0.0)
     if integral[-1] <= 0:
-        return rad
-    return rad + lobe[:, :, None] * (missing / integral[-1])[None, None, :]
+        return rad, np.zeros_like(missing)
+    return rad + lobe[:, :, None] * (missing / integral[-1])[None, None, :], missing
 
 
 class CloudySky(SunSkyMixin, SkyModel):
@@ -404,10 +405,12 @@ class CloudySky(SunSkyMixin, SkyModel):
             gain = np.divide(iso_top, self._table_iso, out=np.ones(wl.size), where=self._table_iso > 0)
             rad[up_rows] += (sky_top * gain - iso_top) * t_unscattered[:, None, :]
         rad = np.maximum(rad, 0.0)
+        smooth = rad  # without the forward peak's lobe (a table on a coarser grid puts that light back itself)
+        peak = np.zeros(wl.size)
         if beam:
-            rad = _restore_forward_peak(rad, theta, np.radians(phi), self.sun_zenith, down)
-        return {"radiance": rad, "theta": theta, "phi": np.radians(phi), "diffuse_down": down,
-                "diffuse_up": up}
+            rad, peak = _restore_forward_peak(rad, theta, np.radians(phi), self.sun_zenith, down)
+        return {"radiance": rad, "radiance_smooth": smooth, "forward_peak": peak, "theta": theta,
+                "phi": np.radians(phi), "diffuse_down": down, "diffuse_up": up}
 
     @cached_property
     def _direct(self) -> NDArray[np.float64]:
