@@ -257,6 +257,12 @@ def run_spectral(args: argparse.Namespace) -> int:
     if closure.size:
         print(f"clear hours: DNI closure within {np.nanmax(np.abs(dni_c)) * 100:.2g} %, DHI closure of the matrix "
               f"within {np.nanmax(np.abs(closure)) * 100:.2g} %")
+    for code, what in ((4, "cloudy"), (6, "broken")):
+        c = ds["dhi_closure"].values[st == code]
+        c = c[np.isfinite(c)]
+        if c.size:
+            print(f"{what} hours: DHI closure of the matrix within {np.max(np.abs(c)) * 100:.2g} %, median "
+                  f"{np.median(np.abs(c)) * 100:.2g} %")
     if ds.attrs.get("notes"):
         print("notes: " + ds.attrs["notes"])
     print(f"{ds.sizes['patch']} patches ({ds.attrs['scheme']}), {ds.sizes['wavelength']} bands; computed in "

@@ -24,10 +24,12 @@ Radiances are scaled by the day's Sun-Earth distance (Spencer 1971).
 (:meth:`~skyscatter.patches.PatchScheme.sample_directions`); the observer sits on the tables' ground.
 
 **Hours.** Every record of the file is a time step (``time`` the middle of the hour, UTC). Night hours are 0;
-hours without a clear sky (``status`` other than clear or clear-not-closed, see
-:data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN (retrieved cloudy hours too: their ``cloud_optical_depth``
-is in the Dataset, their patches from the cloudy sky are not computed yet), so that nothing downstream
-mistakes them for a sky; the
+clear hours come from the family's tables; cloudy (overcast) hours from the cloud table of the retrieval
+(:class:`~skyscatter.fit.weather.CloudTable`: the radiance of the fast cloudy sky at the hour's cloud optical
+depth and sun, :func:`_cloud_patches`); broken hours are the blend ``(1 - f) clear + f overcast`` of
+:func:`~skyscatter.fit.weather.fit_broken_sky` (an approximation); low-sun hours the stated fallback of the
+retrieval. Hours without a retrieved sky (cloudy not retrieved, invalid records; ``status``, see
+:data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN, so that nothing downstream mistakes them for a sky; the
 ``status`` and ``reason`` variables say why. ``dhi_matrix`` is the broadband diffuse horizontal irradiance of the
 matrix itself (patch radiances at the table wavelengths integrated over the patches' solid angles and carried
 to broadband as in the retrieval): ``dhi_matrix / dhi - 1`` is the closure of the matrix.

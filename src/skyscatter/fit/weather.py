@@ -46,8 +46,12 @@ sun: the circumsolar light they add to DNI is not modelled (it lowers the retrie
    (:class:`~skyscatter.sky.cloudy.CloudySky`, an overcast water layer, through a :class:`CloudTable` of its
    solutions for one representative aerosol); the file's sky cover is a recorded prior that flags broken hours
    as approximate. Retrieved hours are *cloudy*, the others *cloudy, not retrieved* with the reason (GHI beyond
-   the table's thinnest or thickest cloud, a sun below 3 deg). The spectral matrix (:mod:`.spectral_matrix`)
-   does not compute cloudy skies yet: their patches stay NaN, their optical depth is in the Dataset.
+   the table's thinnest or thickest cloud).
+5. *broken*: cloudy hours with sky cover below :data:`OVERCAST_COVER` tenths, a beam and diffuse light: a clear /
+   overcast blend fitted to GHI and DNI (:func:`fit_broken_sky`; an independent-pixel approximation, stated).
+6. *low sun, fallback*: cloudy hours with the sun below the cloud table's last zenith (3 deg up): the table's
+   overcast sky at its lowest sun (optical depth :data:`LOW_SUN_OPTICAL_DEPTH`) scaled to the record's DHI, the
+   sun the record's DNI (stated in ``reason``).
 
 Precipitable water: the file's field, else Gueymard (1994) from temperature and relative humidity, else
 ``default_precipitable_water``. Ozone: a CSV's ``ozone`` column, else ``default_ozone`` (EPW and TMY3 files do
