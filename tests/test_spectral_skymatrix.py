@@ -421,6 +421,19 @@ def test_broken_sky_blend_recovers_its_parts(hourly):
     assert not bad.retrieved[0] and "no cloud in the beam" in bad.reason[0]
 
 
+def test_cloud_table_disk_cache(hourly, monkeypatch):
+    """The cloud table is stored beside the precomputed tables: a process without it in memory (Dask's workers)
+    loads the same arrays instead of redoing its DISORT solves."""
+    import skyscatter.fit.weather as weather
+
+    t = hourly.cloud_table
+    monkeypatch.setattr(weather, "_CLOUD_TABLES", {})
+    again = weather.cloud_table(t.atmosphere, t.optical_depths, t.zeniths)
+    assert again is not t and again.build_seconds == 0.0
+    for name in ("diffuse", "slant", "field", "peak", "optical_depths", "zeniths", "wavelengths"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(t, name))
+
+
 def test_outputs_roundtrip_and_radiance(matrix, tmp_path):
     """NetCDF and Zarr round trips; Radiance's rmtxop reads our matrix back to the same numbers, and dctimestep
     with a horizontal-irradiance coefficient row gives our horizontal diffuse + ground-free sky irradiance."""
