@@ -427,6 +427,8 @@ def test_cloud_table_disk_cache(hourly, monkeypatch):
     import skyscatter.fit.weather as weather
 
     t = hourly.cloud_table
+    # the module's fixtures run before the per-test cache folder is set: store the table in this test's folder
+    weather._save_cloud_table(t)
     monkeypatch.setattr(weather, "_CLOUD_TABLES", {})
     again = weather.cloud_table(t.atmosphere, t.optical_depths, t.zeniths)
     assert again is not t and again.build_seconds == 0.0

@@ -627,22 +627,39 @@ _CLOUD_TABLE_ARRAYS = ("optical_depths", "zeniths", "wavelengths", "diffuse", "s
                        "field", "peak")
 
 
-def _cached_cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike,
-                        zenith_nodes: ArrayLike) -> CloudTable:
-    """A :class:`CloudTable` from the disk cache of the precomputed tables (``cloudtable-<key>.npz``: its 108
-    DISORT solves cost about a minute, and Dask's worker processes would each redo them), else built and stored
-    (atomically; an unwritable cache only costs the rebuild)."""
+def _cloud_table_key(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike,
+                     zenith_nodes: ArrayLike) -> tuple[str, Path]:
+    """The disk cache key text of a cloud table and its file (``cloudtable-<sha256>.npz`` in the cache folder)."""
     import hashlib
 
     from .. import __version__
-    from ..fileio import atomic_path
     from ..precomputed.cache import cache_dir
 
     tau = np.asarray(optical_depth_nodes, dtype=float)
     zen = np.asarray(zenith_nodes, dtype=float)
     text = "|".join([atmosphere.canonical_json(), repr(tau.tolist()), repr(zen.tolist()), str(_CLOUD_TABLE_VERSION),
                      __version__])
-    path = cache_dir() / f"cloudtable-{hashlib.sha256(text.encode()).hexdigest()[:24]}.npz"
+    return text, cache_dir() / f"cloudtable-{hashlib.sha256(text.encode()).hexdigest()[:24]}.npz"
+
+
+def _save_cloud_table(table: CloudTable) -> None:
+    """Store ``table`` in the disk cache (atomically; an unwritable cache only costs a rebuild elsewhere)."""
+    from ..fileio import atomic_path
+
+    text, path = _cloud_table_key(table.atmosphere, table.optical_depths, table.zeniths)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, key=np.array(text), **{name: getattr(table, name) for name in _CLOUD_TABLE_ARRAYS})
+    except Exception as exc:  # noqa: BLE001 - the cache is an optimisation: any failure to store it is a warning
+        _warn(f"the cloud table could not be cached in {path.parent} ({exc}); it is rebuilt in every process")
+
+
+def _cached_cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike,
+                        zenith_nodes: ArrayLike) -> CloudTable:
+    """A :class:`CloudTable` from the disk cache of the precomputed tables (its 108 DISORT solves cost about a
+    minute, and Dask's worker processes would each redo them), else built and stored."""
+    text, path = _cloud_table_key(atmosphere, optical_depth_nodes, zenith_nodes)
     if path.exists():
         try:
             with np.load(path) as z:
@@ -655,13 +672,8 @@ def _cached_cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: A
                     return table
         except (OSError, KeyError, ValueError):
             pass  # a damaged file: rebuilt below
-    table = CloudTable(atmosphere, tau, zen)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-            np.savez(fh, key=np.array(text), **{name: getattr(table, name) for name in _CLOUD_TABLE_ARRAYS})
-    except Exception as exc:  # noqa: BLE001 - the cache is an optimisation: any failure to store it is a warning
-        _warn(f"the cloud table could not be cached in {path.parent} ({exc}); it is rebuilt in every process")
+    table = CloudTable(atmosphere, optical_depth_nodes, zenith_nodes)
+    _save_cloud_table(table)
     return table
 
 
