@@ -184,7 +184,8 @@ def _csv_report(ds, path: Path) -> None:
 
     cols = ["status", "reason", "ghi", "dni", "dhi", "aerosol_optical_depth", "aerosol_source",
             "aerosol_optical_depth_file", "single_scattering_albedo", "precipitable_water", "precipitable_water_source",
-            "ozone", "pressure", "dni_model", "dhi_matrix", "dni_closure", "dhi_closure"]
+            "ozone", "pressure", "cloud_optical_depth", "cloud_cover", "cloud_fraction", "dni_model", "dhi_matrix",
+            "dni_closure", "dhi_closure"]
     times = [str(t)[:19] + "Z" for t in ds["time"].values]
     with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="\n") as fh:
         fh.write("time," + ",".join(cols) + "\n")
@@ -306,6 +307,12 @@ def run_spectral(args: argparse.Namespace) -> int:
     if closure.size:
         print(f"clear hours: DNI closure within {np.nanmax(np.abs(dni_c)) * 100:.2g} %, DHI closure of the matrix "
               f"within {np.nanmax(np.abs(closure)) * 100:.2g} %")
+    for code, what in ((4, "cloudy"), (6, "broken")):
+        c = ds["dhi_closure"].values[st == code]
+        c = c[np.isfinite(c)]
+        if c.size:
+            print(f"{what} hours: DHI closure of the matrix within {np.max(np.abs(c)) * 100:.2g} %, median "
+                  f"{np.median(np.abs(c)) * 100:.2g} %")
     if ds.attrs.get("notes"):
         print("notes: " + ds.attrs["notes"])
     print(f"{ds.sizes['patch']} patches ({ds.attrs['scheme']}), {ds.sizes['wavelength']} bands; computed in "

@@ -24,10 +24,12 @@ Radiances are scaled by the day's Sun-Earth distance (Spencer 1971).
 (:meth:`~skyscatter.patches.PatchScheme.sample_directions`); the observer sits on the tables' ground.
 
 **Hours.** Every record of the file is a time step (``time`` the middle of the hour, UTC). Night hours are 0;
-hours without a clear sky (``status`` other than clear or clear-not-closed, see
-:data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN (retrieved cloudy hours too: their ``cloud_optical_depth``
-is in the Dataset, their patches from the cloudy sky are not computed yet), so that nothing downstream
-mistakes them for a sky; the
+clear hours come from the family's tables; cloudy (overcast) hours from the cloud table of the retrieval
+(:class:`~skyscatter.fit.weather.CloudTable`: the radiance of the fast cloudy sky at the hour's cloud optical
+depth and sun, :func:`_cloud_patches`); broken hours are the blend ``(1 - f) clear + f overcast`` of
+:func:`~skyscatter.fit.weather.fit_broken_sky` (an approximation); low-sun hours the stated fallback of the
+retrieval. Hours without a retrieved sky (cloudy not retrieved, invalid records; ``status``, see
+:data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN, so that nothing downstream mistakes them for a sky; the
 ``status`` and ``reason`` variables say why. ``dhi_matrix`` is the broadband diffuse horizontal irradiance of the
 matrix itself (patch radiances at the table wavelengths integrated over the patches' solid angles and carried
 to broadband as in the retrieval): ``dhi_matrix / dhi - 1`` is the closure of the matrix.
@@ -54,9 +56,12 @@ from ..patches import PatchScheme, patch_scheme
 from ..radiance import write_radiance_matrix as _write_matrix
 from ..validation import whole_number
 from .weather import (
+    BROKEN,
     CLEAR,
     CLEAR_OPEN,
+    CLOUDY,
     HOUR_STATUS,
+    LOW_SUN,
     BroadbandClearSky,
     HourlyAtmosphere,
     RetrievalOptions,
@@ -196,13 +201,17 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
     sky = np.zeros((n, n_p, n_b), dtype=np.float32)
     sun = np.zeros((n, n_b))
     dhi_matrix = np.full(n, np.nan)
-    # the tables hold clear skies only: retrieved cloudy hours keep their cloud optical depth in the Dataset and
-    # a NaN sky (their patches from the cloudy sky are not computed here yet)
-    clear_sky = np.isin(h.status, (CLEAR, CLEAR_OPEN))
+    peak_fraction, quad, dhi_scale = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+    # clear skies from the family's tables (broken hours: their clear part), overcast skies from the cloud table
+    # (broken hours: their cloudy part); hours without a retrieved sky are NaN
+    clear_sky = np.isin(h.status, (CLEAR, CLEAR_OPEN, BROKEN))
+    cloud_sky = np.isin(h.status, (CLOUDY, BROKEN, LOW_SUN)) & (h.cloud_table is not None)
     rows = np.flatnonzero(clear_sky)
-    not_sky = ~clear_sky & (h.status != 0)
+    not_sky = ~clear_sky & ~cloud_sky & (h.status != 0)
     sky[not_sky] = np.nan
     sun[not_sky] = np.nan
+    broken = h.status == BROKEN
+    f_cloud = np.where(broken, h.cloud_fraction, 0.0)
     if rows.size:
         dirs = geom.sample_directions(int(samples))  # (n_p, s^2, 3)
         flat = np.ascontiguousarray(dirs.reshape(-1, 3))
@@ -262,9 +271,11 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
                 d_lo = matrix_dhi(res[:, n_p * n_b:].astype(float))
                 d_hi = matrix_dhi(res_hi[:, n_p * n_b:].astype(float))
                 w = (values[:, k_ssa] - lo_v) / (hi_v - lo_v)
-                clear = h.status[rows] == CLEAR
+                clear = np.isin(h.status[rows], (CLEAR, BROKEN))
+                # the record's DHI; broken hours: their clear part's (the retrieval's blend)
+                target = np.where(broken[rows], h.clear_dhi[rows], h.dhi[rows])
                 with np.errstate(divide="ignore", invalid="ignore"):
-                    w_close = (h.dhi[rows] - d_lo) / (d_hi - d_lo)
+                    w_close = (target - d_lo) / (d_hi - d_lo)
                 ok = clear & np.isfinite(w_close) & (d_hi > d_lo)
                 inside = ok & (w_close >= 0) & (w_close <= 1)
                 # at the grid's first or last cell an albedo beyond the cell is beyond the grid
@@ -273,6 +284,10 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
                 w = np.where(out_of_grid, np.clip(w_close, 0, 1), w)
                 for j in np.flatnonzero(out_of_grid):
                     i = rows[j]
+                    if h.status[i] == BROKEN:
+                        h.reason[i] = (f"{h.reason[i]}; the clear part's DHI needs an aerosol albedo outside the grid "
+                                       "cell: clamped, not closed")
+                        continue
                     h.status[i] = CLEAR_OPEN
                     h.reason[i] = "the matrix's DHI needs an aerosol albedo outside the grid cell: clamped, not closed"
                 h.single_scattering_albedo[rows] = lo_v + w * (hi_v - lo_v)
@@ -288,15 +303,27 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
         if gases:
             tg = model.gas_transmittance(h.sun_zenith[rows], h.precipitable_water[rows], h.pressure[rows])
             gas_b = _band_means(tg, model.e0 * model.weights, masks)
-        bandsky *= (ecc[rows, None] * gas_b).astype(np.float32)[:, None, :]
+        keep = (1.0 - f_cloud[rows])  # the clear part of broken hours
+        bandsky *= (ecc[rows, None] * gas_b * keep[:, None]).astype(np.float32)[:, None, :]
         sky[rows] = bandsky
+        dhi_matrix[rows] *= keep
         direct = model.direct_normal_spectral(h.sun_zenith[rows], h.aerosol_optical_depth[rows],
                                               h.precipitable_water[rows], h.pressure[rows], h.ozone[rows],
                                               ecc[rows], weighted=False)
         if not gases:
             direct = direct / model.gas_transmittance(h.sun_zenith[rows], h.precipitable_water[rows],
                                                       h.pressure[rows])
-        sun[rows] = _band_means(direct, model.weights, masks)  # band mean over wavelength
+        sun[rows] = _band_means(direct, model.weights, masks) * keep[:, None]  # band mean over wavelength
+    crow = np.flatnonzero(cloud_sky)
+    if crow.size:
+        c_sky, c_sun, c_dhi, c_peak, c_quad, c_scale = _cloud_patches(h, model, geom, int(samples), crow, edges,
+                                                                      masks, gases)
+        quad[crow], dhi_scale[crow] = c_quad, c_scale
+        f = np.where(broken[crow], f_cloud[crow], 1.0)
+        sky[crow] = np.where(broken[crow, None, None], sky[crow], 0.0) + (c_sky * f[:, None, None]).astype(np.float32)
+        sun[crow] = np.where(broken[crow, None], sun[crow], 0.0) + c_sun * f[:, None]
+        dhi_matrix[crow] = np.where(broken[crow], dhi_matrix[crow], 0.0) + c_dhi * f
+        peak_fraction[crow] = c_peak
     times = (np.round(h.unix_time).astype(np.int64)).astype("datetime64[s]").astype("datetime64[ns]")
     loc = h.record.location
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -335,6 +362,16 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
         "dhi_matrix": ("time", dhi_matrix, {"units": flux, "long_name": "broadband DHI of the matrix's patches"}),
         "dni_closure": ("time", h.dni_closure, {"units": "1", "long_name": "dni_model / dni - 1"}),
         "dhi_closure": ("time", dhi_closure, {"units": "1", "long_name": "dhi_matrix / dhi - 1"}),
+        "cloud_fraction": ("time", h.cloud_fraction, {"units": "1", "long_name": "weight of the overcast sky in "
+                           "the hour's sky (1 overcast, the fitted blend weight of broken hours)"}),
+        "forward_peak_fraction": ("time", peak_fraction, {"units": "1", "long_name": "fraction of the overcast "
+                                  "sky's 550 nm diffuse irradiance put in the sun's patch (the droplets' forward "
+                                  "peak, not on the cloud table's radiance grid)"}),
+        "cloud_quadrature": ("time", quad, {"units": "1", "long_name": "the overcast sky's patches (interpolated "
+                             "radiance grid) over DISORT's diffuse without the forward peak, 550 nm, - 1, before "
+                             "scaling"}),
+        "cloud_dhi_scale": ("time", dhi_scale, {"units": "1", "long_name": "factor that takes the overcast sky's "
+                            "DHI to the retrieval's (interpolation in optical depth; low sun: the record's)"}),
     }
     coords = {
         "time": ("time", times, {"long_name": "middle of the hour", "timezone": "UTC"}),
@@ -363,6 +400,85 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
         "references": _references(),
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _cloud_patches(h: HourlyAtmosphere, model: BroadbandClearSky, geom: PatchScheme, samples: int,
+                   rows: NDArray[np.int64], edges: NDArray[np.float64], masks, gases: bool, chunk: int = 256):
+    """The overcast sky of hours ``rows`` from the cloud table: ``(band radiance (n, n_p, n_b) [W m^-2 sr^-1
+    nm^-1], sun (n, n_b) [W m^-2 nm^-1], broadband DHI (n,) [W m^-2], forward-peak fraction at 550 nm (n,), ...)``.
+
+    Per hour the table's radiance field at the hour's cloud optical depth and sun (:meth:`~.weather.CloudTable.
+    patch_radiance`: linear in ln tau and cos z between the nodes) is averaged over each patch's cells. The field
+    holds no forward peak of the droplets (a lobe about 1.5 deg wide, up to a quarter of the diffuse light under
+    an optical depth of 1): its flux (:meth:`~.weather.CloudTable.peak_fraction` of DISORT's diffuse irradiance
+    at the same optical depth and sun, :meth:`~.weather.CloudTable.diffuse_at`) is put in the patch that holds
+    the sun, and the field is scaled per wavelength so that the patches' horizontal irradiance is the rest (the
+    patch quadrature of the interpolated grid: ``quadrature`` returned, the relative difference at 550 nm before
+    that scaling). The sky is then scaled by one number per hour (``dhi_scale``) so that its broadband DHI is the
+    retrieval's ``cloud_dhi`` (the retrieval interpolates the broadband DHI in ln tau by a monotone cubic, this
+    one linearly: they differ by a few tenths of a per cent; the low-sun fallback: the record's DHI). The sun:
+    the clear direct beam times the cloud's ``exp(-tau s)``; low-sun fallback hours: the clear beam's spectrum
+    scaled to the record's DNI.
+
+    Returns ``(sky, sun, dhi, peak, quadrature, dhi_scale)``."""
+    table = h.cloud_table
+    assert table is not None
+    gwl = table.wavelengths
+    e0g = table.atmosphere.solar_irradiance_at(gwl)
+    # the field is per unit E0 (r = L / E0), grey outside its 380-780 nm: padded with its end values
+    lo_wl, hi_wl = min(edges[0], gwl[0]) - 1.0, max(edges[-1], gwl[-1]) + 1.0
+    wl_ext = np.concatenate([[lo_wl], gwl, [hi_wl]])
+    bmat, _, _ = _band_matrix(edges, wl_ext, np.ones(wl_ext.size), model)
+    cells = geom.sample_directions(samples)
+    g = geom.solid_angles * np.maximum(cells[..., 2], 0.0).mean(axis=1)  # omega x mean cos per patch
+    k550 = int(np.argmin(np.abs(gwl - 550.0)))
+    n = rows.size
+    n_b = edges.size - 1
+    out_sky = np.empty((n, geom.n_patches, n_b), dtype=np.float32)
+    out_sun = np.empty((n, n_b))
+    out_dhi = np.empty(n)
+    out_peak = np.empty(n)
+    out_quad = np.empty(n)
+    out_dhi_scale = np.empty(n)
+    for s0 in range(0, n, chunk):
+        sl = slice(s0, min(s0 + chunk, n))
+        r_ = rows[sl]
+        m = r_.size
+        z, az = h.sun_zenith[r_], h.sun_azimuth[r_]
+        low = h.status[r_] == LOW_SUN
+        tau = np.where(np.isfinite(h.cloud_optical_depth[r_]), h.cloud_optical_depth[r_], 1.0)
+        r = table.patch_radiance(z, az, tau, cells)  # (m, n_p, n_wl) [sr^-1]
+        e_p = np.einsum("hpw,p->hw", r, g) * e0g  # horizontal irradiance of the patches [W m^-2 nm^-1]
+        d = table.diffuse_at(z, tau)
+        lobe = table.peak_fraction(z, tau) * d
+        # the field's quadrature on the patches: scaled per wavelength to DISORT's diffuse without the peak
+        r *= ((d - lobe) / np.where(e_p > 0, e_p, 1.0))[:, None, :]
+        p_sun = geom.patch_index(direction_from_angles(np.minimum(z, np.pi / 2 - 1e-6), az))
+        r[np.arange(m), p_sun] += lobe / (g[p_sun][:, None] * e0g)
+        out_peak[sl] = lobe[:, k550] / d[:, k550]
+        out_quad[sl] = e_p[:, k550] / (d - lobe)[:, k550] - 1.0
+        dhi_m = model.broadband_diffuse(d, z, h.precipitable_water[r_], h.pressure[r_], h.ozone[r_],
+                                        h.eccentricity[r_], gwl)
+        scale = h.cloud_dhi[r_] / dhi_m
+        out_dhi_scale[sl] = scale
+        r *= scale[:, None, None]
+        out_dhi[sl] = dhi_m * scale
+        r_ext = np.concatenate([r[..., :1], r, r[..., -1:]], axis=2)
+        band = r_ext @ bmat.T  # (m, n_p, n_b)
+        gas_b = np.ones((m, n_b))
+        tg = model.gas_transmittance(z, h.precipitable_water[r_], h.pressure[r_])
+        if gases:
+            gas_b = _band_means(tg, model.e0 * model.weights, masks)
+        out_sky[sl] = band * (h.eccentricity[r_, None] * gas_b)[:, None, :]
+        direct = model.direct_normal_spectral(z, h.aerosol_optical_depth[r_], h.precipitable_water[r_],
+                                              h.pressure[r_], h.ozone[r_], h.eccentricity[r_], weighted=False)
+        clear_dni = (direct * model.weights).sum(axis=1)
+        direct = np.where(low[:, None], direct * (h.dni[r_] / np.where(clear_dni > 0, clear_dni, 1.0))[:, None],
+                          direct * np.exp(-tau[:, None] * table.slant_optical_depth(z, model.wavelengths)))
+        if not gases:
+            direct = direct / tg
+        out_sun[sl] = _band_means(direct, model.weights, masks)
+    return out_sky, out_sun, out_dhi, out_peak, out_quad, out_dhi_scale
 
 
 def _axis_values(fam, name: str, h: HourlyAtmosphere) -> NDArray[np.float64]:

@@ -46,8 +46,12 @@ sun: the circumsolar light they add to DNI is not modelled (it lowers the retrie
    (:class:`~skyscatter.sky.cloudy.CloudySky`, an overcast water layer, through a :class:`CloudTable` of its
    solutions for one representative aerosol); the file's sky cover is a recorded prior that flags broken hours
    as approximate. Retrieved hours are *cloudy*, the others *cloudy, not retrieved* with the reason (GHI beyond
-   the table's thinnest or thickest cloud, a sun below 3 deg). The spectral matrix (:mod:`.spectral_matrix`)
-   does not compute cloudy skies yet: their patches stay NaN, their optical depth is in the Dataset.
+   the table's thinnest or thickest cloud).
+5. *broken*: cloudy hours with sky cover below :data:`OVERCAST_COVER` tenths, a beam and diffuse light: a clear /
+   overcast blend fitted to GHI and DNI (:func:`fit_broken_sky`; an independent-pixel approximation, stated).
+6. *low sun, fallback*: cloudy hours with the sun below the cloud table's last zenith (3 deg up): the table's
+   overcast sky at its lowest sun (optical depth :data:`LOW_SUN_OPTICAL_DEPTH`) scaled to the record's DHI, the
+   sun the record's DNI (stated in ``reason``).
 
 Precipitable water: the file's field, else Gueymard (1994) from temperature and relative humidity, else
 ``default_precipitable_water``. Ozone: a CSV's ``ozone`` column, else ``default_ozone`` (EPW and TMY3 files do
@@ -87,9 +91,11 @@ __all__ = [
     "DEFAULT_AOD_NODES",
     "DEFAULT_ALBEDO_NODES",
     "HOUR_STATUS",
+    "LOW_SUN_OPTICAL_DEPTH",
     "BroadbandClearSky",
     "CLOUD_OPTICAL_DEPTH_NODES",
     "CLOUD_ZENITH_NODES_DEG",
+    "BrokenSkyFit",
     "CloudRetrieval",
     "CloudTable",
     "OVERCAST_COVER",
@@ -101,6 +107,7 @@ __all__ = [
     "default_family",
     "precipitable_water_gueymard1994",
     "read_weather",
+    "fit_broken_sky",
     "retrieve_clouds",
     "retrieve_hourly_atmosphere",
 ]
@@ -119,8 +126,8 @@ RAYLEIGH_SCALE_HEIGHT = 8434.0
 DEFAULT_GROUND_ALBEDO = 0.2
 #: Status codes of :attr:`HourlyAtmosphere.status`.
 HOUR_STATUS = {0: "night", 1: "clear", 2: "clear, DHI not closed", 3: "cloudy, not retrieved",
-               4: "cloudy", 5: "invalid record"}
-NIGHT, CLEAR, CLEAR_OPEN, CLOUDY_OPEN, CLOUDY, INVALID = range(6)
+               4: "cloudy", 5: "invalid record", 6: "broken", 7: "low sun, fallback"}
+NIGHT, CLEAR, CLEAR_OPEN, CLOUDY_OPEN, CLOUDY, INVALID, BROKEN, LOW_SUN = range(8)
 #: Wavelength [nm] of TMY's broadband aerosol optical depth (Molineaux et al. 1998's key wavelength).
 BROADBAND_AOD_WAVELENGTH = 700.0
 _MIN_CLEAR_ELEVATION = math.radians(5.0)
@@ -402,8 +409,15 @@ class BroadbandClearSky:
         ``x`` at the table wavelengths, inside their range (linear interpolation of ``x / E0``); and the
         extrapolation is done by :meth:`broadband_diffuse`."""
         z = np.asarray(zenith, dtype=float)
-        _, tg = self._gas(z, precipitable_water, pressure, ozone)
+        m, tg = self._gas(z, precipitable_water, pressure, ozone)
         wlt = np.asarray(table_wavelengths, dtype=float)
+        # The tables (and the cloud table's DISORT column) already absorb by the medium's own ozone column inside
+        # their wavelength range: there only the hour's departure from that column is applied (along the sun's
+        # ozone path, Bird & Riordan's assumption for the diffuse light); outside it, where the reduced diffuse is
+        # extended by power laws, the full column (Hartley-Huggins bands below 360 nm).
+        in_table = (self.wavelengths >= wlt[0]) & (self.wavelengths <= wlt[-1])
+        tg = tg * np.where(in_table, np.exp((self.base.ozone_column * m.ozone)[:, None] * self.tau_ozone_per_du),
+                           1.0)
         e0t = self.base.solar_irradiance_at(wlt)
         return (np.asarray(eccentricity, dtype=float)[:, None] * self.weights * self.e0 * tg), e0t
 
@@ -436,6 +450,10 @@ class BroadbandClearSky:
 CLOUD_OPTICAL_DEPTH_NODES = tuple(float(x) for x in np.round(np.geomspace(0.5, 60.0, 12), 4))
 #: Sun zenith nodes [deg] of :class:`CloudTable` (about even in cos z; the last is 3 deg above the horizon).
 CLOUD_ZENITH_NODES_DEG = (0.0, 25.0, 40.0, 52.0, 62.0, 70.0, 77.0, 83.0, 87.0)
+#: View zenith angles [deg] of the radiance grid a :class:`CloudTable` keeps per node (0-90 deg every 2 deg).
+CLOUD_FIELD_THETA_DEG = tuple(float(x) for x in np.arange(0.0, 90.1, 2.0))
+#: Azimuths from the sun [deg] of that grid (0-180 deg every 5 deg; the field is symmetric about the sun).
+CLOUD_FIELD_PHI_DEG = tuple(float(x) for x in np.arange(0.0, 180.1, 5.0))
 #: Opaque sky cover [tenths] from which a cloudy hour is treated as overcast (below: broken, approximate).
 OVERCAST_COVER = 8.0
 _CLOUD_TABLES: dict[Any, CloudTable] = {}
@@ -473,6 +491,7 @@ class CloudTable:
         import time
 
         from ..sky.cloudy import GRID_WAVELENGTHS, MAX_CLOUD_OPTICAL_DEPTH, CloudySky
+        from ..sky.cloudy_kernels import grid_lookup
 
         tau = np.asarray(optical_depth_nodes, dtype=float)
         zen = np.radians(CLOUD_ZENITH_NODES_DEG) if zenith_nodes is None else np.asarray(zenith_nodes, dtype=float)
@@ -489,6 +508,19 @@ class CloudTable:
         self.wavelengths = wl
         self.diffuse = np.zeros((tau.size, zen.size, wl.size))
         self.slant = np.zeros((zen.size, wl.size))
+        self.field_theta = np.radians(CLOUD_FIELD_THETA_DEG)
+        self.field_phi = np.radians(CLOUD_FIELD_PHI_DEG)
+        #: Sky radiance per unit solar irradiance [sr^-1] on (view zenith, azimuth from the sun) per node, divided by
+        #: the node's cos z, without the droplets' forward peak (its light is the difference between ``diffuse``
+        #: and the field's integral; :meth:`patch_radiance` callers put it back about the sun), float32.
+        self.field = np.zeros((tau.size, zen.size, self.field_theta.size, self.field_phi.size, wl.size),
+                              dtype=np.float32)
+        #: The fraction of the diffuse irradiance ``diffuse`` in the droplets' forward peak (n_tau, n_zen, n_wl) [-]:
+        #: the light within about 1.5 deg of the sun that :attr:`field` does not hold.
+        self.peak = np.zeros((tau.size, zen.size, wl.size))
+        tt, pp = np.meshgrid(self.field_theta, self.field_phi, indexing="ij")
+        grid_dirs = np.ascontiguousarray(direction_from_angles(tt, pp).reshape(-1, 3))
+        resampled = np.empty((grid_dirs.shape[0], wl.size))
         for j, z in enumerate(zen):
             clear = CloudySky(float(z), cloud_optical_depth=0.0, atmosphere=atmosphere, streams=streams)
             unit = CloudySky(float(z), cloud_optical_depth=1.0, atmosphere=atmosphere, streams=streams)
@@ -497,6 +529,12 @@ class CloudTable:
             for k, t in enumerate(tau):
                 sky = CloudySky(float(z), cloud_optical_depth=float(t), atmosphere=atmosphere, streams=streams)
                 self.diffuse[k, j] = sky.diffuse_fluxes(wl)[0]
+                f = sky._field
+                grid_lookup(grid_dirs, 0.0, f["theta"], f["phi"], np.ascontiguousarray(f["radiance_smooth"]),
+                            resampled)
+                self.field[k, j] = (resampled / math.cos(z)).reshape(tt.shape + (wl.size,))
+                down = f["diffuse_down"]
+                self.peak[k, j] = np.divide(f["forward_peak"], down, out=np.zeros(wl.size), where=down > 0)
         #: Wall time [s] of the solves (the clear-sky coupling tables of a new air included).
         self.build_seconds = time.perf_counter() - t0
 
@@ -518,6 +556,63 @@ class CloudTable:
         out = CubicSpline(mu_nodes, per_mu, axis=1)(mu)  # (n_tau, n, n_wl)
         return np.moveaxis(out, 0, 1) * np.cos(z)[:, None, None]
 
+    def _node_weights(self, zenith: NDArray[np.float64], optical_depth: NDArray[np.float64]):
+        """Lower optical depth node and the weight of the next (linear in ln tau), lower zenith node (in the
+        table's order) and the weight of the next (linear in cos z); both clamped to the table."""
+        lt = np.log(self.optical_depths)
+        x = np.clip(np.log(np.maximum(optical_depth, 1e-12)), lt[0], lt[-1])
+        k = np.clip(np.searchsorted(lt, x, side="right") - 1, 0, lt.size - 2)
+        a = (x - lt[k]) / (lt[k + 1] - lt[k])
+        j_hi_mu, w_mu = self._zenith_weights(zenith)  # node with the lower mu (higher zenith), weight of higher mu
+        return k, a, j_hi_mu - 1, 1.0 - w_mu
+
+    def diffuse_at(self, zenith: ArrayLike, optical_depth: ArrayLike) -> NDArray[np.float64]:
+        """Diffuse downward spectral irradiance [W m^-2 nm^-1] (n, n_wl) at each hour's sun zenith [rad] (the cubic
+        spline of :meth:`diffuse_spectral`) and cloud optical depth [-] (linear in ln tau between the nodes,
+        clamped to them)."""
+        z = np.atleast_1d(np.asarray(zenith, dtype=float))
+        t = np.broadcast_to(np.asarray(optical_depth, dtype=float), z.shape)
+        k, a, _, _ = self._node_weights(z, t)
+        d = self.diffuse_spectral(z)  # (n, n_tau, n_wl)
+        rows = np.arange(z.size)
+        return d[rows, k] * (1 - a)[:, None] + d[rows, k + 1] * a[:, None]
+
+    def peak_fraction(self, zenith: ArrayLike, optical_depth: ArrayLike) -> NDArray[np.float64]:
+        """:attr:`peak` (n, n_wl) [-] interpolated linearly in ln tau and cos z (clamped to the nodes)."""
+        z = np.atleast_1d(np.asarray(zenith, dtype=float))
+        t = np.broadcast_to(np.asarray(optical_depth, dtype=float), z.shape)
+        k, a, j, b = self._node_weights(z, t)
+        p = self.peak
+        return ((1 - a) * (1 - b))[:, None] * p[k, j] + ((1 - a) * b)[:, None] * p[k, j + 1] \
+            + (a * (1 - b))[:, None] * p[k + 1, j] + (a * b)[:, None] * p[k + 1, j + 1]
+
+    def patch_radiance(self, zenith: ArrayLike, azimuth: ArrayLike, optical_depth: ArrayLike,
+                       cells: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Mean sky radiance per unit solar irradiance [sr^-1] (n, n_patches, n_wl) over each patch's cells
+        ``cells`` (n_patches, n_cells, 3; ENU unit vectors) for hours of sun zenith and azimuth [rad] and cloud
+        optical depth [-]: :attr:`field` interpolated linearly in ln tau and in cos z between the nodes (times
+        cos z) and bilinearly in (view zenith, azimuth from the sun); without the forward peak (see
+        :attr:`field`). Cells below the horizon take the horizon's value."""
+        from ..sky.cloudy_kernels import patch_field_lookup
+
+        z = np.atleast_1d(np.asarray(zenith, dtype=float))
+        az = np.broadcast_to(np.asarray(azimuth, dtype=float), z.shape)
+        t = np.broadcast_to(np.asarray(optical_depth, dtype=float), z.shape)
+        k, a, j, b = self._node_weights(z, t)
+        n_p, n_c = cells.shape[:2]
+        flat = cells.reshape(-1, 3)
+        theta = np.arccos(np.clip(flat[:, 2], -1.0, 1.0))
+        th = self.field_theta
+        it = np.clip(np.searchsorted(th, theta, side="right") - 1, 0, th.size - 2)
+        u = np.clip((theta - th[it]) / (th[it + 1] - th[it]), 0.0, 1.0)
+        cell_az = np.arctan2(flat[:, 0], flat[:, 1])
+        patch = np.repeat(np.arange(n_p), n_c)
+        out = np.zeros((z.size, n_p, self.wavelengths.size))
+        patch_field_lookup(self.field, k.astype(np.int64), a, j.astype(np.int64), b, np.ascontiguousarray(az),
+                           it.astype(np.int64), u, cell_az, patch, np.full(flat.shape[0], 1.0 / n_c), self.field_phi,
+                           out)
+        return out * np.cos(z)[:, None, None]
+
     def slant_optical_depth(self, zenith: ArrayLike, wavelengths: ArrayLike) -> NDArray[np.float64]:
         """The cloud's slant optical depth per unit optical depth at 550 nm [-] (n, n_wl) along the sun's path
         (sun zenith [rad]) at ``wavelengths`` [nm] (clamped to the grid's 380-780 nm: the droplets are grey)."""
@@ -538,14 +633,71 @@ def _interp_rows(x: NDArray[np.float64], xp: NDArray[np.float64], fp: NDArray[np
 
 def cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike = CLOUD_OPTICAL_DEPTH_NODES,
                 zenith_nodes: ArrayLike | None = None) -> CloudTable:
-    """A :class:`CloudTable`, kept in memory for the process (key: the air and the nodes)."""
+    """A :class:`CloudTable`, kept in memory for the process (key: the air and the nodes) and on disk beside the
+    precomputed tables (:func:`~skyscatter.precomputed.cache.cache_dir`)."""
     if zenith_nodes is None:
         zenith_nodes = np.radians(CLOUD_ZENITH_NODES_DEG)
     key = (repr(atmosphere), tuple(np.asarray(optical_depth_nodes, dtype=float)),
            tuple(np.asarray(zenith_nodes, dtype=float)))
     if key not in _CLOUD_TABLES:
-        _CLOUD_TABLES[key] = CloudTable(atmosphere, optical_depth_nodes, zenith_nodes)
+        _CLOUD_TABLES[key] = _cached_cloud_table(atmosphere, optical_depth_nodes, zenith_nodes)
     return _CLOUD_TABLES[key]
+
+
+#: Version of the cloud table's stored layout and contents (part of its disk cache key).
+_CLOUD_TABLE_VERSION = 2
+_CLOUD_TABLE_ARRAYS = ("optical_depths", "zeniths", "wavelengths", "diffuse", "slant", "field_theta", "field_phi",
+                       "field", "peak")
+
+
+def _cloud_table_key(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike,
+                     zenith_nodes: ArrayLike) -> tuple[str, Path]:
+    """The disk cache key text of a cloud table and its file (``cloudtable-<sha256>.npz`` in the cache folder)."""
+    import hashlib
+
+    from .. import __version__
+    from ..precomputed.cache import cache_dir
+
+    tau = np.asarray(optical_depth_nodes, dtype=float)
+    zen = np.asarray(zenith_nodes, dtype=float)
+    text = "|".join([atmosphere.canonical_json(), repr(tau.tolist()), repr(zen.tolist()), str(_CLOUD_TABLE_VERSION),
+                     __version__])
+    return text, cache_dir() / f"cloudtable-{hashlib.sha256(text.encode()).hexdigest()[:24]}.npz"
+
+
+def _save_cloud_table(table: CloudTable) -> None:
+    """Store ``table`` in the disk cache (atomically; an unwritable cache only costs a rebuild elsewhere)."""
+    from ..fileio import atomic_path
+
+    text, path = _cloud_table_key(table.atmosphere, table.optical_depths, table.zeniths)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, key=np.array(text), **{name: getattr(table, name) for name in _CLOUD_TABLE_ARRAYS})
+    except Exception as exc:  # noqa: BLE001 - the cache is an optimisation: any failure to store it is a warning
+        _warn(f"the cloud table could not be cached in {path.parent} ({exc}); it is rebuilt in every process")
+
+
+def _cached_cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike,
+                        zenith_nodes: ArrayLike) -> CloudTable:
+    """A :class:`CloudTable` from the disk cache of the precomputed tables (its 108 DISORT solves cost about a
+    minute, and Dask's worker processes would each redo them), else built and stored."""
+    text, path = _cloud_table_key(atmosphere, optical_depth_nodes, zenith_nodes)
+    if path.exists():
+        try:
+            with np.load(path) as z:
+                if str(z["key"]) == text:
+                    table = CloudTable.__new__(CloudTable)
+                    table.atmosphere = atmosphere
+                    for name in _CLOUD_TABLE_ARRAYS:
+                        setattr(table, name, np.array(z[name]))
+                    table.build_seconds = 0.0
+                    return table
+        except (OSError, KeyError, ValueError):
+            pass  # a damaged file: rebuilt below
+    table = CloudTable(atmosphere, optical_depth_nodes, zenith_nodes)
+    _save_cloud_table(table)
+    return table
 
 
 @dataclass(frozen=True)
@@ -578,9 +730,9 @@ def cloud_irradiance(table: CloudTable, model: BroadbandClearSky, zenith: ArrayL
     With ``optical_depth`` None: at every node of the table, each (n, n_tau); else the direct normal at each
     hour's cloud optical depth (n,) and the diffuse NaN (interpolate the nodes' yourself). Broadband as the clear hours
     (:class:`BroadbandClearSky`, ASTM G173 280-4000 nm): the diffuse by :meth:`BroadbandClearSky.broadband_diffuse`
-    from the table's 380-780 nm spectrum, with water vapour and mixed gases but ozone 0 (DISORT's column already
-    absorbs by ozone; outside 380-780 nm the reduced spectrum is extended by power laws, so Hartley-Huggins
-    absorption below 340 nm is not applied: at most about 1 % of the diffuse); the direct normal is
+    from the table's 380-780 nm spectrum, with water vapour and mixed gases, and ozone only where DISORT's column
+    does not already absorb (the hour's departure from the medium's column inside 380-780 nm, the whole column
+    where the reduced spectrum is extended by power laws: the Hartley-Huggins bands); the direct normal is
     :meth:`BroadbandClearSky.direct_normal_spectral` (air, aerosol, ozone, gases) times the cloud's
     ``exp(-tau s(lambda, z))`` (:meth:`CloudTable.slant_optical_depth`)."""
     z = np.atleast_1d(np.asarray(zenith, dtype=float))
@@ -594,8 +746,7 @@ def cloud_irradiance(table: CloudTable, model: BroadbandClearSky, zenith: ArrayL
         sl = slice(s, min(s + chunk, n))
         aod, pw, p, o3, ecc = (a[sl] for a in args)
         if optical_depth is None:
-            # ozone 0: DISORT's column already absorbs by ozone (docstring)
-            dhi[sl] = model.broadband_diffuse(table.diffuse_spectral(z[sl]), z[sl], pw, p, np.zeros(pw.size), ecc,
+            dhi[sl] = model.broadband_diffuse(table.diffuse_spectral(z[sl]), z[sl], pw, p, o3, ecc,
                                               table.wavelengths)
         direct = model.direct_normal_spectral(z[sl], aod, pw, p, o3, ecc)  # (m, n_fine), sums to the clear DNI
         k = table.slant_optical_depth(z[sl], model.wavelengths)  # (m, n_fine)
@@ -727,6 +878,99 @@ def retrieve_clouds(ghi: NDArray[np.float64], dhi: NDArray[np.float64], zenith: 
                           dni_model, reason, rep_aod, table)
 
 
+#: Cloud optical depth [-] whose sky shape the low-sun fallback takes (a typical stratus; stated, not retrieved).
+LOW_SUN_OPTICAL_DEPTH = 10.0
+
+
+@dataclass(frozen=True)
+class BrokenSkyFit:
+    """What :func:`fit_broken_sky` found (arrays of shape (n,)): the overcast part's optical depth at 550 nm [-]
+    and the cloud fraction [-] (the blend weight of the overcast sky), the blend's ``dhi_model`` and ``dni_model``
+    and the overcast component's ``cloud_dhi`` [W m^-2], ``retrieved`` flags and a ``reason`` where not."""
+
+    optical_depth: NDArray[np.float64]
+    cloud_fraction: NDArray[np.float64]
+    dhi_model: NDArray[np.float64]
+    dni_model: NDArray[np.float64]
+    cloud_dhi: NDArray[np.float64]
+    retrieved: NDArray[np.bool_]
+    reason: NDArray[np.object_]
+
+
+def fit_broken_sky(ghi: ArrayLike, dni: ArrayLike, zenith: ArrayLike, aerosol_optical_depth: ArrayLike,
+                   clear_dhi: ArrayLike, *, table: CloudTable, model: BroadbandClearSky,
+                   precipitable_water: ArrayLike = 1.4, pressure: ArrayLike = 101325.0, ozone: ArrayLike = 300.0,
+                   eccentricity: ArrayLike = 1.0, iterations: int = 8) -> BrokenSkyFit:
+    """A broken sky as a blend ``(1 - f) clear + f overcast`` fitted to the record's GHI and DNI [W m^-2].
+
+    An approximation, stated: the sky of a partly cloudy hour is taken as the clear sky (the hour's aerosol, its
+    diffuse ``clear_dhi`` [W m^-2]) over a fraction ``1 - f`` of the hour and the overcast layer of
+    :func:`retrieve_clouds` over ``f``, both horizontally uniform (no cloud sides, no light scattered between
+    the clear and the cloudy parts: the independent pixel approximation of the hour, in the spirit of the
+    cover-weighted clear / overcast mixing of gensdaymtx's sky, but with the weight fitted to the beam). The
+    cloud fraction comes from DNI, ``f = (DNI_clear - DNI) / (DNI_clear - DNI_cloud)``, and the overcast optical
+    depth from the global irradiance left for the cloudy part, ``GHI_cloud = (GHI - (1 - f) GHI_clear) / f``
+    (inverted as in :func:`retrieve_clouds`); DNI_cloud depends on that optical depth, so the two are iterated
+    (``iterations`` times; DNI_cloud is small, the fixed point is reached in two or three). GHI and DNI are then
+    reproduced, hence DHI. Not fitted (``reason``): DNI at or above the clear sky's (no cloud in the beam: a
+    clear hour with more diffuse light, or cloud enhancement), or a GHI left for the cloudy part outside the
+    table's range.
+
+    Parameters
+    ----------
+    ghi, dni : array (n,)
+        The record [W m^-2].
+    zenith : array (n,)
+        Sun zenith [rad] (within the table's zeniths).
+    aerosol_optical_depth : array (n,)
+        [-] at 550 nm.
+    clear_dhi : array (n,)
+        DHI [W m^-2] of the clear component (the tables' sky at the hour's aerosol).
+    table, model
+        The cloud table and broadband model of :func:`retrieve_clouds`.
+    precipitable_water, pressure, ozone, eccentricity
+        [cm], [Pa], [DU], [-].
+    """
+    ghi = np.atleast_1d(np.asarray(ghi, dtype=float))
+    n = ghi.size
+    dni = np.broadcast_to(np.asarray(dni, dtype=float), (n,))
+    z = np.broadcast_to(np.asarray(zenith, dtype=float), (n,))
+    aod = np.broadcast_to(np.asarray(aerosol_optical_depth, dtype=float), (n,))
+    d_clear = np.broadcast_to(np.asarray(clear_dhi, dtype=float), (n,))
+    pw, p, o3, ecc = (np.broadcast_to(np.asarray(v, dtype=float), (n,)) for v in
+                      (precipitable_water, pressure, ozone, eccentricity))
+    cosz = np.cos(z)
+    n_clear = model.direct_normal(z, aod, pw, p, o3, ecc)
+    g_clear = d_clear + n_clear * cosz
+    beam_ok = dni < n_clear
+    n_cloud = np.zeros(n)
+    overcast = np.full(n, 10.0)
+    r = None
+    f = np.ones(n)
+    for _ in range(int(iterations)):
+        f = np.clip((n_clear - dni) / np.maximum(n_clear - n_cloud, 1e-9), 1e-3, 1.0)
+        target = (ghi - (1.0 - f) * g_clear) / f
+        r = retrieve_clouds(np.maximum(target, 0.0), np.full(n, np.nan), z, aod, overcast, overcast,
+                            precipitable_water=pw, pressure=p, ozone=o3, eccentricity=ecc, model=model, table=table)
+        new = np.where(r.retrieved, r.dni_model, 0.0)
+        if np.all(np.abs(new - n_cloud) <= 1e-9 * np.maximum(n_clear, 1.0)):
+            n_cloud = new
+            break
+        n_cloud = new
+    assert r is not None
+    ok = beam_ok & r.retrieved
+    reason = np.full(n, "", dtype=object)
+    reason[~beam_ok] = "DNI at or above the clear sky's: no cloud in the beam"
+    rest = beam_ok & ~r.retrieved
+    reason[rest] = [f"the GHI left for the cloudy part: {x}" for x in r.reason[rest]]
+    nan = np.full(n, np.nan)
+    d_cloud = np.where(ok, r.dhi_model, np.nan)
+    return BrokenSkyFit(optical_depth=np.where(ok, r.optical_depth, nan), cloud_fraction=np.where(ok, f, nan),
+                        dhi_model=np.where(ok, (1 - f) * d_clear + f * d_cloud, nan),
+                        dni_model=np.where(ok, (1 - f) * n_clear + f * n_cloud, nan), cloud_dhi=d_cloud,
+                        retrieved=ok, reason=reason)
+
+
 # --------------------------------------------------------------------------------------------- retrieval
 
 
@@ -850,7 +1094,11 @@ class HourlyAtmosphere:
     vertical) and ``single_scattering_albedo``; ``cloud_optical_depth`` and ``cloud_cover`` (NaN until
     retrieved); the model's ``dni_model``/``dhi_model`` [W m^-2] and the relative closure
     ``model / record - 1`` (NaN where not computed); ``dhi_albedo_slope`` d DHI / d albedo [W m^-2] of the clear
-    hours (for a closure step on another discretisation of the same sky, :mod:`.spectral_matrix`).
+    hours (for a closure step on another discretisation of the same sky, :mod:`.spectral_matrix`);
+    ``cloud_fraction`` [-] the weight of the overcast sky in the hour's sky (1 for overcast and low-sun hours, the
+    fitted blend weight of *broken* hours, NaN elsewhere), ``clear_dhi`` and ``cloud_dhi`` [W m^-2] the diffuse
+    horizontal irradiance of the blend's clear and overcast (full-cover) components, so that ``dhi_model =
+    (1 - cloud_fraction) clear_dhi + cloud_fraction cloud_dhi`` in those hours.
     """
 
     record: EPWData
@@ -877,9 +1125,14 @@ class HourlyAtmosphere:
     dni_model: NDArray[np.float64]
     dhi_model: NDArray[np.float64]
     dhi_albedo_slope: NDArray[np.float64]
+    cloud_fraction: NDArray[np.float64]
+    clear_dhi: NDArray[np.float64]
+    cloud_dhi: NDArray[np.float64]
     options: RetrievalOptions
     family: TableFamily
     notes: list[str] = field(default_factory=list)
+    #: The cloud table of the cloudy hours (None without retrieved cloudy hours).
+    cloud_table: CloudTable | None = None
 
     @property
     def dni_closure(self) -> NDArray[np.float64]:
@@ -896,7 +1149,7 @@ class HourlyAtmosphere:
     @property
     def has_sky(self) -> NDArray[np.bool_]:
         """Hours whose sky can be computed (clear, clear-not-closed, cloudy retrieved)."""
-        return np.isin(self.status, (CLEAR, CLEAR_OPEN, CLOUDY))
+        return np.isin(self.status, (CLEAR, CLEAR_OPEN, CLOUDY, BROKEN, LOW_SUN))
 
     def summary(self) -> dict[str, Any]:
         """Counts per status and closure statistics: the largest |closure| of the clear hours, the median of the
@@ -908,6 +1161,8 @@ class HourlyAtmosphere:
             # cloudy hours are fitted to GHI: their DHI and DNI closures are checks, not fits
             sel = np.isfinite(c) & (self.status == CLOUDY)
             out[f"cloudy_{name}_closure_median_abs"] = float(np.median(np.abs(c[sel]))) if np.any(sel) else None
+            sel = np.isfinite(c) & (self.status == BROKEN)
+            out[f"broken_{name}_closure_max_abs"] = float(np.max(np.abs(c[sel]))) if np.any(sel) else None
         return out
 
 
@@ -1093,6 +1348,9 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
                                                   ecc[good])
 
     # ---- cloudy hours
+    table = None
+    cod, ccv, frac = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+    clear_dhi, cloud_dhi = np.full(n, np.nan), np.full(n, np.nan)
     cloudy = lit & ~np.isin(status, (CLEAR, CLEAR_OPEN))
     cl = np.flatnonzero(cloudy)
     if cl.size:
@@ -1106,24 +1364,60 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
         status[cl] = np.where(clouds.retrieved, CLOUDY, CLOUDY_OPEN)
         reason[cl] = [("; ".join(x for x in (r, c) if x)) for r, c in zip(reason[cl], clouds.reason, strict=True)]
         dhi_model[cl], dni_model[cl] = clouds.dhi_model, clouds.dni_model
-        if clouds.table is not None:
+        cod[cl], ccv[cl] = clouds.optical_depth, clouds.cover
+        frac[cl[clouds.retrieved]] = 1.0
+        cloud_dhi[cl] = clouds.dhi_model
+        table = clouds.table
+        if table is not None:
             notes.append(f"cloudy hours: {int(clouds.retrieved.sum())} of {cl.size} retrieved, with the cloud table "
                          f"of aerosol optical depth {clouds.aerosol_optical_depth:g} "
                          f"({clouds.table.optical_depths.size} x {clouds.table.zeniths.size} DISORT solves)")
-        cod = np.full(n, np.nan)
-        ccv = np.full(n, np.nan)
-        cod[cl], ccv[cl] = clouds.optical_depth, clouds.cover
-    else:
-        cod = np.full(n, np.nan)
-        ccv = np.full(n, np.nan)
+            # broken skies: a clear / overcast blend fitted to GHI and DNI (fit_broken_sky)
+            s_b = float(np.clip(fam.base.mie_single_scattering_albedo, *(
+                (ssa_axis.values[0], ssa_axis.values[-1]) if ssa_axis is not None else (0.0, 1.0))))
+            br = cl[~clouds.overcast & (dni[cl] > 0) & (dhi[cl] > 0) & (zen[cl] <= table.zeniths[-1] + 1e-9)]
+            if br.size:
+                d_nodes = _diffuse_at_albedo_nodes(fam, model, br, aod, zen, azi, pw, pressure, ozone, ecc)
+                if ssa_axis is not None and len(ssa_axis.values) > 1:
+                    s_nodes = np.asarray(ssa_axis.values)
+                    d_clear = np.array([np.interp(s_b, s_nodes, row) for row in d_nodes])
+                else:
+                    d_clear = d_nodes[:, 0]
+                fit = fit_broken_sky(ghi[br], dni[br], zen[br], aod[br], d_clear, table=table, model=model,
+                                     precipitable_water=pw[br], pressure=pressure[br], ozone=ozone[br],
+                                     eccentricity=ecc[br])
+                ok = fit.retrieved
+                b_ok = br[ok]
+                status[b_ok] = BROKEN
+                ssa[b_ok] = s_b
+                cod[b_ok], frac[b_ok] = fit.optical_depth[ok], fit.cloud_fraction[ok]
+                clear_dhi[b_ok], cloud_dhi[b_ok] = d_clear[ok], fit.cloud_dhi[ok]
+                dhi_model[b_ok], dni_model[b_ok] = fit.dhi_model[ok], fit.dni_model[ok]
+                reason[b_ok] = [f"broken sky (cover {10 * c:g} tenths): clear / overcast blend, cloud fraction "
+                                f"{f:.2f}" for c, f in zip(ccv[b_ok], fit.cloud_fraction[ok], strict=True)]
+                for i, why in zip(br[~ok], fit.reason[~ok], strict=True):
+                    reason[i] = f"{reason[i]}; blend not fitted ({why})" if reason[i] else f"blend not fitted ({why})"
+                notes.append(f"broken hours: {int(ok.sum())} of {br.size} fitted with a clear / overcast blend")
+            # suns below the table's lowest (3 deg): the fallback of low_sun_fallback
+            low = cl[(zen[cl] > table.zeniths[-1] + 1e-9) & (dhi[cl] > 0)]
+            if low.size:
+                status[low] = LOW_SUN
+                cod[low] = LOW_SUN_OPTICAL_DEPTH
+                frac[low] = 1.0
+                dhi_model[low], cloud_dhi[low] = dhi[low], dhi[low]
+                dni_model[low] = dni[low]
+                reason[low] = (f"sun below {90 - math.degrees(table.zeniths[-1]):g} deg (outside the cloud table): "
+                               f"fallback, the shape of the overcast sky (optical depth {LOW_SUN_OPTICAL_DEPTH:g}) of "
+                               "the table's lowest sun scaled to the record's DHI, the sun the record's DNI; "
+                               "closure by construction")
     return HourlyAtmosphere(
         record=rec, unix_time=unix, sun_zenith=zen, sun_azimuth=azi, ghi=ghi, dni=dni, dhi=dhi, eccentricity=ecc,
         precipitable_water=pw, precipitable_water_source=pw_src, pressure=pressure, ozone=ozone,
         ozone_source=o3_src, aerosol_optical_depth=aod, aerosol_source=aod_src,
         aerosol_optical_depth_file=aod_file, single_scattering_albedo=ssa, cloud_optical_depth=cod,
         cloud_cover=ccv, status=status, reason=reason, dni_model=dni_model, dhi_model=dhi_model,
-        dhi_albedo_slope=slope, options=o,
-        family=fam, notes=notes)
+        dhi_albedo_slope=slope, cloud_fraction=frac, clear_dhi=clear_dhi, cloud_dhi=cloud_dhi, options=o,
+        family=fam, notes=notes, cloud_table=table)
 
 
 def _diffuse_at_albedo_nodes(fam: TableFamily, model: BroadbandClearSky, rows, aod, zen, azi, pw, pressure, ozone,

@@ -218,7 +218,7 @@ def _restore_forward_peak(rad: NDArray[np.float64], theta: NDArray[np.float64], 
     omega f) tau`` (the delta-M scaling of [Wiscombe1977]). Beyond it the difference between the flux and the grid's
     integral is the quadrature's error, not peak light: under a thick cloud and a low sun (optical depth 20, sun 4
     deg) that error, some 1e-4 of the flux, made a spot three times the overcast's radiance about a sun the cloud
-    hides entirely."""
+    hides entirely. Returns the restored grid and the lobe's flux (n_wl,) (the same units as ``down``)."""
     from .cloudy_kernels import grid_lookup
 
     n_t, n_p = 180, 360  # midpoint quadrature of the upper hemisphere (0.5 deg x 0.5 deg)
@@ -237,8 +237,8 @@ def _restore_forward_peak(rad: NDArray[np.float64], theta: NDArray[np.float64], 
     integral = weight @ out  # (n_wl + 1,)
     missing = np.minimum(np.maximum(down - integral[:-1], 0.0), np.maximum(peak_limit, 0.0))
     if integral[-1] <= 0:
-        return rad
-    return rad + lobe[:, :, None] * (missing / integral[-1])[None, None, :]
+        return rad, np.zeros_like(missing)
+    return rad + lobe[:, :, None] * (missing / integral[-1])[None, None, :], missing
 
 
 class CloudySky(SunSkyMixin, SkyModel):
@@ -438,14 +438,16 @@ class CloudySky(SunSkyMixin, SkyModel):
             gain = np.divide(iso_top, self._table_iso, out=np.ones(wl.size), where=self._table_iso > 0)
             rad[up_rows] += sky_top * gain * t_unscattered[:, None, :]
         rad = np.maximum(rad, 0.0)
+        smooth = rad  # without the forward peak's lobe (a table on a coarser grid puts that light back itself)
+        peak = np.zeros(wl.size)
         if beam:
             # delta-M's truncated fraction per layer is the moment of order `streams` (DISORT's f = PMOM(NSTR))
             f = moments[:, :, self.streams]
             scaled = np.concatenate([np.zeros((1, wl.size)), np.cumsum((1.0 - ssa * f) * tau, axis=0)])[level]
             peak_limit = mu_eff * beam_flux * (np.exp(-scaled / mu_eff) - np.exp(-cum[level] / mu_eff))
-            rad = _restore_forward_peak(rad, theta, np.radians(phi), self.sun_zenith, down, peak_limit)
-        return {"radiance": rad, "theta": theta, "phi": np.radians(phi), "diffuse_down": down,
-                "diffuse_up": up}
+            rad, peak = _restore_forward_peak(rad, theta, np.radians(phi), self.sun_zenith, down, peak_limit)
+        return {"radiance": rad, "radiance_smooth": smooth, "forward_peak": peak, "theta": theta,
+                "phi": np.radians(phi), "diffuse_down": down, "diffuse_up": up}
 
     @cached_property
     def _direct(self) -> NDArray[np.float64]:
