@@ -339,6 +339,29 @@ def test_half_precision_storage_within_its_rounding_bound_and_idempotent():
         HalfTable.encode(-table)
 
 
+def test_half_precision_storage_of_a_vanishing_slice_decodes_finite():
+    """A slice whose largest value is below 2^-113 (measured: texels in the planet's shadow under aerosol optical
+    depth 1.5) got a float32 scale of 0 and decoded as inf * 0 = NaN; the scale now stays a normal float32 and such
+    values decode finite, within float16's subnormal step of that scale, and encoding stays idempotent."""
+    import warnings
+
+    from skyscatter.precomputed.storage import HalfTable
+
+    table = np.zeros((2, 3, 2, 2, 1), dtype=np.float32)
+    table[0, :, 0] = np.float32(3e-38)  # normal float32, peak below 2^-113
+    table[1, :, 1] = np.float32(1e-44)  # subnormal float32
+    table[1, :, 0] = 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no division by zero on the way
+        half = HalfTable.encode(table)
+    back = half.decode()
+    assert np.all(np.isfinite(back)) and np.all(half.scale > 0)
+    assert np.all(np.abs(back - table) <= 2.0**-24 * 2.0**-126 + 2.0**-11 * table)
+    np.testing.assert_array_equal(back[1, :, 0], 1.0)
+    again = HalfTable.encode(back)
+    np.testing.assert_array_equal(again.values, half.values)
+
+
 def test_loaded_tables_are_mapped_verified_and_read_in_slices(tmp_path):
     """A table file is an .npz numpy reads; loading maps the half-precision tables, a sky seen by one observer
     decodes only slices of them, a damaged byte in any stored array is caught by its checksum, and tables mapped

@@ -70,6 +70,8 @@ STORED_NAMES = ("transmittance", "irradiance", *(f"{n}{s}" for n in HALF_TABLES 
 #: Largest value of a slice after scaling: 2^13 (module docstring), so that rounding to float16 never moves it
 #: past a power of two and encoding decoded values again gives the same scales and values.
 _SCALED_MAX_EXPONENT = 13
+#: Smallest exponent of a slice's scale: float32's smallest normal number, 2^-126.
+_MIN_SCALE_EXPONENT = -126
 #: Radius layers a :class:`HalfTable` keeps decoded (:meth:`HalfTable.radius_layer`).
 _LAYERS_KEPT = 4
 #: Bytes per block when streaming stored arrays (writing, checksums).
@@ -187,7 +189,11 @@ def encode_half(table: NDArray[np.floating]) -> tuple[NDArray[np.float16], NDArr
         raise InvalidParameterError("scattering tables must be finite and >= 0 to be stored in half precision")
     mantissa, exponent = np.frexp(peak)  # peak = m 2^e, m in [0.5, 1)
     ceil_log2 = np.where(mantissa > 0.5, exponent, exponent - 1)  # peak in (2^(k-1), 2^k]
-    scale = np.where(peak > 0, np.ldexp(np.float32(1.0), ceil_log2 - _SCALED_MAX_EXPONENT), 1.0).astype(np.float32)
+    # the scale stays a normal float32 (>= 2^-126): a slice whose peak is below 2^-113 (a texel deep in the planet's
+    # shadow under a thick haze) would otherwise get a scale of 0 and decode as inf * 0 = NaN; its values then keep
+    # fewer bits, which at that level is nothing
+    exponent = np.maximum(ceil_log2 - _SCALED_MAX_EXPONENT, _MIN_SCALE_EXPONENT)
+    scale = np.where(peak > 0, np.ldexp(np.float32(1.0), exponent), 1.0).astype(np.float32)
     values = np.empty(t.shape, dtype=np.float16)
     for w in range(t.shape[0]):  # one wavelength at a time: no float32 copy of the whole table
         np.divide(t[w], scale[w][:, None, :, None], out=values[w], casting="unsafe")
