@@ -427,7 +427,7 @@ def test_cloud_table_disk_cache(hourly, monkeypatch):
     import skyscatter.fit.weather as weather
 
     t = hourly.cloud_table
-    # the module's fixtures run before the per-test cache folder is set: store the table in this test's folder
+    # stored again (the session's cache folder) so that the test does not rely on how the fixture was built
     weather._save_cloud_table(t)
     monkeypatch.setattr(weather, "_CLOUD_TABLES", {})
     again = weather.cloud_table(t.atmosphere, t.optical_depths, t.zeniths)
