@@ -361,8 +361,9 @@ class OpacAerosol(ParticleComponent):
         # the components' own number densities: the phase does not depend on the optical-depth scaling, which
         # may be 0 (an aerosol-free node of a table family)
         wl = as_wavelengths(wavelengths)
-        optics = [(n, mie_optics(*opac_component(code, self.relative_humidity), wl, nodes_per_e=self.nodes_per_e))
-                  for code, n in self.components if n > 0]
+        optics = [(n, mie_optics(mode, index, wl, nodes_per_e=self.nodes_per_e))
+                  for code, n in self.components if n > 0
+                  for mode, index in [opac_component(code, self.relative_humidity)]]
         table = PhaseTable.mixture([o.phase for _, o in optics],
                                    np.stack([n * o.scattering_cross_section for n, o in optics]))
         return table if angles is None else table.on_angles(angles)

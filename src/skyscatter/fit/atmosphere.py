@@ -270,8 +270,9 @@ def _start_values(base: AtmosphereParameters, aerosol_type: str | None, relative
            "mie_phase_g": base.mie_phase_g, "mie_single_scattering_albedo": base.mie_single_scattering_albedo,
            "relative_humidity": relative_humidity,
            "ground_albedo": float(np.mean(base.ground_albedo_at([550.0])))}
-    for m in mixture or ():  # equal shares of the base's optical depth
-        out[MEMBER + m] = out["aerosol_optical_depth"] / len(mixture)
+    members = tuple(mixture or ())
+    for m in members:  # equal shares of the base's optical depth
+        out[MEMBER + m] = out["aerosol_optical_depth"] / len(members)
     return out
 
 
@@ -455,7 +456,8 @@ def fit_atmosphere(scan: SkyScan | None = None, irradiance: Irradiance | None = 
         rms["aod"] = float(np.sqrt(np.mean((final["aod"] - aod.values) ** 2)))
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     derived = {} if mixture is None else _mixture_derived(mixture, free, res.x, cov, start)
-    extra = {"statistical_uncertainties": {k: float(v) for k, v in zip(free, statistical, strict=True)}}
+    extra: dict[str, Any] = {"statistical_uncertainties": {k: float(v)
+                                                           for k, v in zip(free, statistical, strict=True)}}
     if scan is not None and model_error:
         extra["scan_model_error"] = [list(b) for b in SCAN_MODEL_ERROR]
     return AtmosphereFit(fitted, free, {k: float(v) for k, v in zip(free, res.x, strict=True)},

@@ -1371,7 +1371,7 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
         if table is not None:
             notes.append(f"cloudy hours: {int(clouds.retrieved.sum())} of {cl.size} retrieved, with the cloud table "
                          f"of aerosol optical depth {clouds.aerosol_optical_depth:g} "
-                         f"({clouds.table.optical_depths.size} x {clouds.table.zeniths.size} DISORT solves)")
+                         f"({table.optical_depths.size} x {table.zeniths.size} DISORT solves)")
             # broken skies: a clear / overcast blend fitted to GHI and DNI (fit_broken_sky)
             s_b = float(np.clip(fam.base.mie_single_scattering_albedo, *(
                 (ssa_axis.values[0], ssa_axis.values[-1]) if ssa_axis is not None else (0.0, 1.0))))

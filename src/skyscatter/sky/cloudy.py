@@ -201,7 +201,7 @@ def slant_optical_depth(edges: NDArray[np.float64], tau: NDArray[np.float64], bo
 
 def _restore_forward_peak(rad: NDArray[np.float64], theta: NDArray[np.float64], phi: NDArray[np.float64],
                           sun_zenith: float, down: NDArray[np.float64], peak_limit: NDArray[np.float64],
-                          width: float = math.radians(1.5)) -> NDArray[np.float64]:
+                          width: float = math.radians(1.5)) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The grid's radiance with the light of the droplets' forward peak put back around the sun.
 
     Delta-M ([Wiscombe1977]) moves the phase function's forward peak into the direct beam; its light is in
@@ -827,9 +827,8 @@ class CloudySky(SunSkyMixin, SkyModel):
         cloud = np.zeros_like(vals)
         for j in np.unique(lo[lit]):
             rows = lit & (lo == j)
-            a = zs + j * step
-            b = min(a + step, last)
-            za, zb = max(a, 0.0), b  # the nodes, clipped to the sky's range
+            node_lo = float(zs + j * step)
+            za, zb = max(node_lo, 0.0), min(node_lo + step, last)  # the nodes, clipped to the sky's range
             if zb <= za or abs(local[rows] - za).max() < 1e-12:
                 cloud[rows] = look_rows(self._top_field(za), cos_loc, rows)
                 continue
