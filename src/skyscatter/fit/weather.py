@@ -1373,7 +1373,9 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
                          f"of aerosol optical depth {clouds.aerosol_optical_depth:g} "
                          f"({table.optical_depths.size} x {table.zeniths.size} DISORT solves)")
             # broken skies: a clear / overcast blend fitted to GHI and DNI (fit_broken_sky)
-            s_b = float(np.clip(fam.base.mie_single_scattering_albedo, *(
+            # the blend's clear part has the aerosol albedo of hours without an albedo retrieval (a particle
+            # aerosol's Mie albedo: the analytic one would misreport an OPAC type's broken hours)
+            s_b = float(np.clip(base_ssa, *(
                 (ssa_axis.values[0], ssa_axis.values[-1]) if ssa_axis is not None else (0.0, 1.0))))
             br = cl[~clouds.overcast & (dni[cl] > 0) & (dhi[cl] > 0) & (zen[cl] <= table.zeniths[-1] + 1e-9)]
             if br.size:
