@@ -13,13 +13,22 @@ means of model and Monte Carlo, ``stderr`` the region mean's): the Monte Carlo's
 heavy-tailed (median relative standard error 9-15 % per pixel, most pixels below their expectation and a few far
 above: next-event estimates through the droplets' diffraction peak), so that per-pixel (or 4 x 4 block) weights
 favour the pixels that came out low and pull the fit below the expectation (measured: 4 x 4 blocks gave region
-means 30-36 % below the Monte Carlo's). Fitted on the cover ``--fit-cover`` (default 0.6); the other
-covers are held out and only compared. Prints and writes
-benchmarks/fit_broken_cloud.json: the fitted numbers, the residuals per cover (RMS and 95th percentile of the
-relative difference per pixel, mean ratio per wavelength) before and after the fit. The numbers are then copied
-by hand into ``skyscatter.sky.broken_cloud.FITTED_OCTAVES``.
+means 30-36 % below the Monte Carlo's). Fitted on the covers ``--fit-cover`` (default 0.6); the other
+covers are held out and only compared. ``--irradiance`` adds the domain-mean diffuse ground irradiance of the
+six cases of tests/data/broken_cloud_domain_montecarlo.json (covers 0.3 / 0.6 / 0.9, sun 30 and 60 deg high;
+``benchmarks/broken_cloud_domain_montecarlo.py``) as residuals ``(model - MC) / (0.02 MC)`` per wavelength
+(:meth:`~skyscatter.sky.broken_cloud.BrokenCloudSky.domain_ground_irradiance` on 4 x 4 ground points x 16 x 32
+directions: the fit's quadrature; the comparison, ``benchmarks/broken_cloud_accuracy.py``, uses 8 x 8 x 32 x 64);
+``--above`` adds the 6 region means (3 bands of nadir angle x towards / away from the sun) of the nadir fisheye
+from 10 km (tests/data/broken_cloud_above_montecarlo.npz) of each fitted cover, weighted like the fisheye's.
+Prints and writes ``--out`` (default benchmarks/fit_broken_cloud.json, the shipped fit): the fitted numbers, the
+residuals per cover (RMS and 95th percentile of the relative difference per pixel, mean ratio per wavelength)
+before and after the fit. The numbers are then copied by hand into
+``skyscatter.sky.broken_cloud.FITTED_OCTAVES``. The refits across covers, suns and views
+(benchmarks/fit_broken_cloud_irradiance.json: ``--fit-cover 0.3 0.6 0.9 --irradiance``;
+benchmarks/fit_broken_cloud_all.json: the same with ``--above``) were not adopted (docs/clouds.md).
 
-Usage: ``python benchmarks/fit_broken_cloud.py [--fit-cover 0.6]``.
+Usage: ``python benchmarks/fit_broken_cloud.py [--fit-cover 0.6 ...] [--irradiance] [--above] [--out FILE]``.
 """
 
 from __future__ import annotations
@@ -36,6 +45,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 sys.path.insert(0, str(Path(__file__).parent))
+from broken_cloud_domain_montecarlo import IRRADIANCE  # noqa: E402
 from broken_cloud_montecarlo import OUT as DATA  # noqa: E402
 from broken_cloud_montecarlo import field_for  # noqa: E402
 from skyscatter.atmosphere import AtmosphereParameters  # noqa: E402
@@ -57,7 +67,12 @@ def figures(model: np.ndarray, mc: np.ndarray, se: np.ndarray) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fit-cover", type=float, default=0.6)
+    ap.add_argument("--fit-cover", type=float, nargs="+", default=[0.6])
+    ap.add_argument("--irradiance", action="store_true", help="fit the domain-mean diffuse ground irradiance too")
+    ap.add_argument("--out", type=Path, default=RESULT, help="the JSON written (default: the shipped fit's)")
+    ap.add_argument("--above", action="store_true",
+                    help="fit the region means of the nadir fisheye from 10 km too (the --fit-cover covers)")
+    ap.add_argument("--x0", type=float, nargs=4, default=[0.3, 0.7, 0.7, 0.3], help="start (a, b, c, d)")
     args = ap.parse_args()
     data = np.load(DATA)
     meta = json.loads(str(data["meta"]))
@@ -69,10 +84,8 @@ def main() -> None:
                             clouds=field_for(c, meta), atmosphere=air, interpolation="voxel") for c in covers]
     print(f"load average {os.getloadavg()[0]:.1f}; Monte Carlo: {meta['samples']} paths per pixel, seeds "
           f"{meta['seeds']}, {dirs.shape[0]} pixels, covers {covers}")
-    fit_i = covers.index(args.fit_cover)
-    sky = skies[fit_i]
-    mc = data[f"radiance_{fit_i}"]
-    se = data[f"stderr_{fit_i}"]
+    fit_idx = [covers.index(c) for c in args.fit_cover]
+    sky = skies[fit_idx[0]]
 
     def evaluate(s: BrokenCloudSky, theta) -> np.ndarray:
         s.octaves = tuple(float(v) for v in theta)
@@ -88,27 +101,83 @@ def main() -> None:
     def block_mean(v: np.ndarray) -> np.ndarray:
         return np.stack([np.bincount(block, v[:, j], minlength=nb) for j in range(v.shape[1])], axis=1) / count
 
-    mc_b = block_mean(mc)
-    se_b = np.sqrt(block_mean(se**2) / count)
+    mc_b = {i: block_mean(data[f"radiance_{i}"]) for i in fit_idx}
+    se_b = {i: np.sqrt(block_mean(data[f"stderr_{i}"] ** 2) / count) for i in fit_idx}
+    irr_cases = []
+    if args.irradiance:
+        dom = json.loads(IRRADIANCE.read_text())
+        for case in dom["cases"].values():
+            zen = math.radians(90.0 - case["sun_elevation_deg"])
+            s_ = BrokenCloudSky(zen, math.radians(dom["scene"]["sun_azimuth_deg"]),
+                                clouds=field_for(case["cover"], dom["scene"]), atmosphere=air, interpolation="voxel")
+            norm = math.cos(zen) * np.asarray(air.solar_irradiance_at(wl), dtype=float)
+            irr_cases.append((s_, norm, np.asarray(case["diffuse"])))
+
+    def irr_residuals(theta) -> np.ndarray:
+        out = []
+        for s_, norm, mc_dif in irr_cases:
+            s_.octaves = tuple(float(v) for v in theta)
+            _, dif = s_.domain_ground_irradiance(wl, points_per_axis=4, direct_points=1, zeniths=16, azimuths=32)
+            out.append((dif / norm - mc_dif) / (0.02 * mc_dif))
+        return np.concatenate(out) if out else np.zeros(0)
+
+    above_cases = []
+    if args.above:
+        from broken_cloud_accuracy import regions
+        from broken_cloud_domain_montecarlo import ABOVE, ABOVE_ALTITUDE
+
+        up = np.load(ABOVE)
+        ameta = json.loads(str(up["meta"]))
+        adirs = up["directions"]
+        for i in fit_idx:
+            s_ = BrokenCloudSky(math.radians(ameta["sun_zenith_deg"]), math.radians(ameta["sun_azimuth_deg"]),
+                                clouds=field_for(covers[i], ameta), atmosphere=air, altitude=ABOVE_ALTITUDE,
+                                interpolation="voxel")
+            reg = regions(adirs, s_.sun_direction)
+            n_r = reg.max() + 1
+            cnt = np.bincount(reg, minlength=n_r)[:, None]
+
+            def rmean(v, reg=reg, n_r=n_r, cnt=cnt):
+                return np.stack([np.bincount(reg, v[:, j], minlength=n_r) for j in range(v.shape[1])], axis=1) / cnt
+
+            above_cases.append((s_, rmean, rmean(up[f"radiance_{i}"]),
+                                np.sqrt(rmean(up[f"stderr_{i}"] ** 2) / cnt)))
+
+    def above_residuals(theta) -> list[np.ndarray]:
+        out = []
+        for s_, rmean, mc_r, se_r in above_cases:
+            s_.octaves = tuple(float(v) for v in theta)
+            out.append(((rmean(s_.spectral_radiance(adirs, wl)) - mc_r) / (se_r + 0.03 * mc_r)).ravel())
+        return out
 
     def residuals(theta) -> np.ndarray:
-        return ((block_mean(evaluate(sky, theta)) - mc_b) / (se_b + 0.03 * mc_b)).ravel()
+        parts = [((block_mean(evaluate(skies[i], theta)) - mc_b[i]) / (se_b[i] + 0.03 * mc_b[i])).ravel()
+                 for i in fit_idx]
+        return np.concatenate(parts + above_residuals(theta) + [irr_residuals(theta)])
 
     before = {str(c): figures(evaluate(s, FITTED_OCTAVES), data[f"radiance_{i}"], data[f"stderr_{i}"])
               for i, (c, s) in enumerate(zip(covers, skies, strict=True))}
     t0 = time.perf_counter()
-    fit = least_squares(residuals, x0=np.array([0.3, 0.7, 0.7, 0.3]), bounds=([0.01, 0.0, 0.0, 0.0],
-                                                                           [1.0, 0.99, 1.0, 2.0]), x_scale=0.1)
+    fit = least_squares(residuals, x0=np.array(args.x0), bounds=([0.01, 0.0, 0.0, 0.0],
+                                                                           [1.0, 0.99, 1.0, 2.0]), x_scale=0.1,
+                        verbose=2)
     secs = time.perf_counter() - t0
     theta = tuple(round(float(v), 4) for v in fit.x)
     after = {str(c): figures(evaluate(s, theta), data[f"radiance_{i}"], data[f"stderr_{i}"])
              for i, (c, s) in enumerate(zip(covers, skies, strict=True))}
-    out = {"octaves_a_b_c_d": theta, "fit_cover": args.fit_cover, "cost": float(fit.cost), "nfev": int(fit.nfev),
+    irr = {}
+    if irr_cases:  # ratio model / MC of the domain-mean diffuse ground irradiance per case, at the fit's quadrature
+        keys = list(json.loads(IRRADIANCE.read_text())["cases"])
+        for name, theta_ in (("before", FITTED_OCTAVES), ("after", theta)):
+            z = irr_residuals(theta_).reshape(len(keys), -1)
+            irr[name] = {k: (1.0 + 0.02 * z[j]).round(4).tolist() for j, k in enumerate(keys)}
+    out = {"octaves_a_b_c_d": theta, "fit_cover": args.fit_cover, "irradiance": args.irradiance, "above": args.above,
+           "irradiance_diffuse_ratio": irr, "cost": float(fit.cost), "nfev": int(fit.nfev),
            "seconds": round(secs, 1), "monte_carlo": {k: meta[k] for k in meta},
            "wavelengths_nm": wl.tolist(), "before_fit_with": list(FITTED_OCTAVES), "before": before, "after": after}
-    RESULT.write_text(json.dumps(out, indent=1) + "\n")
+    args.out.write_text(json.dumps(out, indent=1) + "\n")
     print(json.dumps({"octaves": theta, "after": after, "before": before}, indent=1))
-    print(f"wrote {RESULT}")
+    print(f"wrote {args.out}")
 
 
 if __name__ == "__main__":

@@ -49,6 +49,10 @@ Renderers of terrain take the field's shadows from :meth:`BrokenCloudSky.sun_sha
 the clouds' light scattered by the air (both
 in the Monte Carlo), the sun's cosine varying across the field with the planet's curvature (taken at each
 point for the air's transmittance, but the field's shadow volume is for the observer's sun direction).
+
+The irradiance on the ground under the field, at points or averaged over the field's domain (direct through the
+field, diffuse from this sky): :meth:`BrokenCloudSky.ground_irradiance`,
+:meth:`BrokenCloudSky.domain_ground_irradiance`.
 """
 
 from __future__ import annotations
@@ -311,12 +315,12 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
     # ------------------------------------------------------------------ the march
 
     def march(self, directions: ArrayLike, octaves: tuple[float, float, float, float] | None = None,
-              lod: float = 0.002, interpolation: str | None = None):
+              lod: float = 0.002, interpolation: str | None = None, origin: ArrayLike | None = None):
         """The ray march alone for unit ``directions`` (n, 3): the cloud's radiance at the eye through the cloud
         (n, n_table_wavelengths) [W m^-2 sr^-1 nm^-1], the cloud's transmittance (n, n_wl), the mean depth of the
         cloud's light (n,) [m] and whether each ray met cloud (n,). ``octaves``: ``(a, b, c, d)`` instead of
         :attr:`octaves`; ``lod``: the step's growth with distance [-]; ``interpolation``: "linear" or "voxel"
-        instead of :attr:`interpolation`."""
+        instead of :attr:`interpolation`; ``origin``: the eye (3,) [m, planet-centred] instead of the observer's."""
         from .broken_cloud_kernels import march_rays
 
         d = np.ascontiguousarray(np.asarray(directions, dtype=float).reshape(-1, 3))
@@ -330,7 +334,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         depth = np.zeros(n)
         hit = np.zeros(n, dtype=np.bool_)
         mp = np.array([a, b, c, dd, v["step"], lod, 0.0])
-        origin = np.ascontiguousarray(self.clear.position, dtype=float)
+        origin = np.ascontiguousarray(self.clear.position if origin is None else origin, dtype=float)
         mu = _MU_NODES
         march_rays(origin, d, self._sun_planet, v["gf"], self._exact.rho, v["occupied"], _BLOCK, v["tau_sun"],
                    v["above"], v["below"], li["k"], li["albedo"], li["ph_mu"], li["ph_val"], li["g"], li["solar"],
@@ -338,12 +342,12 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
                    (interpolation or self.interpolation) == "linear", THIN_AWARE, rad, tr, depth, hit)
         return rad, tr, depth, hit
 
-    def _composite(self, d: NDArray[np.float64], hit_only: bool = False):
+    def _composite(self, d: NDArray[np.float64], hit_only: bool = False, eye: NDArray[np.float64] | None = None):
         """Table-wavelength radiance of the rays ``d`` (n, 3) that meet cloud or ground shadow, and the mask of
-        the rays that differ from the clear sky."""
+        the rays that differ from the clear sky; seen from ``eye`` (3,) [m] (default: the observer)."""
         tab = self._tables
-        rad, tr, depth, hit = self.march(d)
-        eye = self.clear.position
+        eye = self.clear.position if eye is None else eye
+        rad, tr, depth, hit = self.march(d, origin=eye)
         sun = self._sun_planet
         # views that meet the ground (before leaving the atmosphere): the clouds' shadows there
         bottom = tab.parameters.bottom_radius
@@ -477,6 +481,115 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         transmittance towards the sun's centre."""
         wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
         return self.clear.sun_spectral_radiance(wl) * self.sun_transmittance(wl)
+
+    # ------------------------------------------------------------------ irradiance on the ground
+
+    def ground_irradiance(self, points: ArrayLike | None = None, wavelengths: ArrayLike | None = None, *,
+                          zeniths: int = 16, azimuths: int = 32) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Direct and diffuse spectral irradiance [W m^-2 nm^-1] on the horizontal ground at ``points``.
+
+        Parameters
+        ----------
+        points : array_like, shape (n, 2), optional
+            East and north offsets [m] of ground points from the observer's foot point (the field's horizontal
+            coordinates); default one point at (0, 0).
+        wavelengths : array_like, optional
+            [nm] (default 380-780 nm every 10 nm), resampled from the table wavelengths like
+            :meth:`spectral_radiance` (``E / E_sun`` linear in wavelength; zero outside the tables).
+        zeniths, azimuths : int
+            The diffuse part's quadrature: midpoints in ``sin^2`` of the zenith angle (``zeniths`` of them, equal
+            projected solid angle) times ``azimuths`` midpoints in azimuth, about each point's own vertical.
+
+        Returns
+        -------
+        direct, diffuse : ndarray, shape (n, n_wl)
+            ``direct``: the tables' direct sun on the ground at the point ([Bruneton2008] Eq. 14's sun term) times
+            the field's exact transmittance ``exp(-tau k)`` to the sun's centre (:meth:`optical_depth_to_sun`;
+            ``k`` the droplets' extinction at ``wavelengths`` relative to 550 nm);
+            ``diffuse``: ``E = int L cos(theta) d omega`` of this model's sky radiance (clouds, the octaves'
+            multiple scattering, the clear sky and the air in front and behind) seen from the point, without the
+            solar disc: the tables' clear-sky irradiance ([Bruneton2008] Eq. 14's sky term) plus ``pi mean(L -
+            L_clear)`` over the quadrature (the clear sky's own peaks, the aureole and the horizon, need no
+            quadrature: with 16 x 32 nodes they alone were 0.3-2.3 % off at 440-640 nm, sun 30 deg high).
+        """
+        from ..validation import whole_number
+
+        nz = whole_number("zeniths", zeniths, 1)
+        na = whole_number("azimuths", azimuths, 1)
+        pts = np.zeros((1, 2)) if points is None else np.asarray(points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 2 or not np.all(np.isfinite(pts)) or np.any(np.abs(pts) > 1e6):
+            raise InvalidParameterError("points must be (n, 2) finite (east, north) offsets within 1000 km [m]")
+        wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
+        tab = self._tables
+        bottom = tab.parameters.bottom_radius
+        ground = np.stack([pts[:, 0], pts[:, 1], np.sqrt(bottom**2 - pts[:, 0] ** 2 - pts[:, 1] ** 2)], axis=-1)
+        up = ground / bottom
+        sun = self._sun_planet
+        _, e_sky = tab.ground_irradiance(ground, up, sun)
+        # equal projected solid angle: s = sin^2(theta) uniform, E = (1/2) int ds dphi L = pi mean(L)
+        s = (np.arange(nz) + 0.5) / nz
+        phi = (np.arange(na) + 0.5) / na * 2.0 * math.pi
+        st, ct = np.sqrt(s)[:, None], np.sqrt(1.0 - s)[:, None]
+        local = np.stack([np.broadcast_to(st * np.sin(phi), (nz, na)), np.broadcast_to(st * np.cos(phi), (nz, na)),
+                          np.broadcast_to(ct, (nz, na))], axis=-1).reshape(-1, 3)  # (east, north, up)
+        diffuse = np.empty((pts.shape[0], tab.wavelengths.size))
+        for i in range(pts.shape[0]):  # one eye per call (the march takes one origin); directions vectorised
+            d = np.ascontiguousarray(local @ _rotation_to(up[i]).T)
+            rad, changed = self._composite(d, eye=ground[i])
+            change = rad[changed] - tab.sky_radiance(ground[i], d[changed], sun)
+            diffuse[i] = e_sky[i] + math.pi * change.sum(axis=0) / d.shape[0]
+        return self._ground_direct(pts, wl), tab.resample(diffuse, wl)
+
+    def domain_ground_irradiance(self, wavelengths: ArrayLike | None = None, *, points_per_axis: int = 8,
+                                 direct_points: int = 4, zeniths: int = 32,
+                                 azimuths: int = 64) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Direct and diffuse spectral irradiance [W m^-2 nm^-1] on the ground averaged over the field's domain
+        (its horizontal box), each (n_wl,): the direct part over ``direct_points`` x ``direct_points`` cell
+        centres under every voxel column (a single point per column aliases with the voxel grid: for the sun
+        along the grid's diagonal, 30 deg high, the column centres' mean was 4.5 % above the 4 x 4 points' under
+        a cover of 0.9), the diffuse part over a grid of ``points_per_axis`` x ``points_per_axis`` cell centres of
+        the domain (:meth:`ground_irradiance`, whose ``zeniths`` and ``azimuths`` these are). The quantity the
+        Monte Carlo's forward photons give over a periodic domain
+        (:func:`skyscatter.montecarlo.domain.domain_quantities`, a flux level at the ground)."""
+        from ..validation import whole_number
+
+        m = whole_number("points_per_axis", points_per_axis, 1)
+        q = whole_number("direct_points", direct_points, 1)
+        f = self.field
+        nx, ny, _ = f.shape
+        dx, dy, _ = f.voxel_size
+        sub = (np.arange(q) + 0.5) / q
+        xs = f.origin[0] + (np.arange(nx)[:, None] + sub[None, :]).ravel() * dx
+        ys = f.origin[1] + (np.arange(ny)[:, None] + sub[None, :]).ravel() * dy
+        cols = np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1).reshape(-1, 2)
+        direct = sum(self._ground_direct(c, wavelengths).sum(axis=0)
+                     for c in np.array_split(cols, max(1, cols.shape[0] // CHUNK))) / cols.shape[0]
+        u = (np.arange(m) + 0.5) / m
+        grid = np.stack(np.meshgrid(f.origin[0] + u * f.size[0], f.origin[1] + u * f.size[1], indexing="ij"),
+                        axis=-1).reshape(-1, 2)
+        _, diffuse = self.ground_irradiance(grid, wavelengths, zeniths=zeniths, azimuths=azimuths)
+        return direct, diffuse.mean(axis=0)
+
+    def _ground_direct(self, points: NDArray[np.float64], wavelengths: ArrayLike | None) -> NDArray[np.float64]:
+        """The direct part of :meth:`ground_irradiance` alone (n, n_wl) [W m^-2 nm^-1]."""
+        wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
+        tab = self._tables
+        bottom = tab.parameters.bottom_radius
+        ground = np.stack([points[:, 0], points[:, 1],
+                           np.sqrt(bottom**2 - points[:, 0] ** 2 - points[:, 1] ** 2)], axis=-1)
+        e_sun, _ = tab.ground_irradiance(ground, ground / bottom, self._sun_planet)
+        tau = self.optical_depth_to_sun(ground)
+        # the field's transmittance at the wavelengths asked for, not resampled from the tables': behind optical
+        # depths of 10-50 the droplets' 1 % Mie ripple in extinction is a 5 % ripple in the transmittance
+        return tab.resample(e_sun, wl) * np.exp(-np.multiply.outer(tau, self._relative_extinction(wl)))
+
+
+def _rotation_to(up: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The rotation (3, 3) taking the observer's vertical (0, 0, 1) to the unit vector ``up`` by the shortest arc
+    (Rodrigues: ``I + [v]x + [v]x^2 / (1 + c)``, ``v = z x up``, ``c = z . up``; ``up`` in the upper half)."""
+    v = np.array([-up[1], up[0], 0.0])
+    vx = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    return np.eye(3) + vx + vx @ vx / (1.0 + up[2])
 
 
 def _load_field(path: Any, particles: Any):
