@@ -34,6 +34,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from broken_cloud_domain_montecarlo import ABOVE, ABOVE_ALTITUDE, IRRADIANCE  # noqa: E402
 from broken_cloud_montecarlo import field_for  # noqa: E402
+from fit_broken_cloud import figures  # noqa: E402
 from skyscatter.atmosphere import AtmosphereParameters  # noqa: E402
 from skyscatter.fileio import atomic_path  # noqa: E402
 from skyscatter.sky.broken_cloud import BrokenCloudSky  # noqa: E402
@@ -77,16 +78,6 @@ def irradiance(args, out: dict) -> None:
         res[key] = r
         print(f"{key}: global {r['ratio_global']} direct {r['ratio_direct']} diffuse {r['ratio_diffuse']} "
               f"(MC stderr {r['mc_relative_stderr']}; {r['seconds']} s, load {os.getloadavg()[0]:.1f})", flush=True)
-
-
-def figures(model: np.ndarray, mc: np.ndarray, se: np.ndarray) -> dict:
-    """Per-pixel relative differences model / MC - 1 at each wavelength and the ratio of the means."""
-    rel = model / mc - 1.0
-    return {"mc_median_relative_stderr": np.median(se / mc, axis=0).round(4).tolist(),
-            "rms": np.sqrt(np.mean(rel**2, axis=0)).round(4).tolist(),
-            "p95": np.percentile(np.abs(rel), 95, axis=0).round(4).tolist(),
-            "median": np.median(rel, axis=0).round(4).tolist(),
-            "mean_ratio": (model.mean(axis=0) / mc.mean(axis=0)).round(4).tolist()}
 
 
 def regions(dirs: np.ndarray, sun: np.ndarray) -> np.ndarray:
