@@ -48,7 +48,8 @@ def test_empty_field_ground_irradiance_is_the_tables():
     np.testing.assert_allclose(diffuse, tab.resample(e_sky, tab.wavelengths), rtol=1e-12)
 
 
-#: The march's step error in the diffuse part between points of a uniform 8 x 8 x 8-voxel layer (see below).
+#: The march's step error in the diffuse part between points of a uniform 8 x 8 x 8-voxel layer (see below;
+#: measured 0.36-0.43 % at 450-650 nm; the march is deterministic).
 RTOL_MARCH = 5e-3
 
 
