@@ -290,6 +290,19 @@ def test_s0_symmetric_about_the_sun_meridian_and_non_negative(evening_sky, rng):
         assert np.all(np.isfinite(x)) and np.all(x >= 0)
 
 
+def test_inscattered_is_the_lookup_times_the_integrals_bit_for_bit(evening_sky, rng):
+    """ScatteringTable.inscattered (one kernel) against lookup and numpy's S_1 I_1 + S_2 I_2, with and
+    without the sun's share."""
+    d = direction_from_angles(rng.uniform(0, np.pi, (7, 9)), rng.uniform(0, 2 * np.pi, (7, 9)))
+    i1 = rng.uniform(0.0, 5e3, (7, 9, WL.size))
+    i2 = rng.uniform(0.0, 5e3, (7, 9, WL.size))
+    for tab in (ScatteringTable(evening_sky, 3.0, WL), ScatteringTable(evening_sky, 3.0, WL, include_sun=False)):
+        s1, s2 = tab.lookup(d)
+        got = tab.inscattered(d, i1, i2)
+        assert got.shape == (7, 9, WL.size)
+        np.testing.assert_array_equal(got, s1 * i1 + s2 * i2)
+
+
 # -- the model classes -----------------------------------------------------------------------------------------
 def test_preetham_aerial_api_shapes_and_l0_mixing(evening_sky):
     ap = PreethamAerialPerspective(evening_sky)

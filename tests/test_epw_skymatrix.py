@@ -118,6 +118,34 @@ def test_skymatrix_rows_match_the_perez_sky_class(epw_file):
         np.testing.assert_allclose(m.luminance[h], patch_luminance(sky, "tregenza", samples=3), rtol=1e-3)
 
 
+def test_quadrature_by_moments_equals_the_per_node_sum(monkeypatch):
+    """The normalisation term by term (row moments for 1 and cos^2 gamma, exp(d gamma) per node) against the
+    per-node sum of max(0, I) (the path every sky took before), on 300 random Perez skies of the 1993 table's
+    range; and skies whose indicatrix can be negative take the per-node path (lower bound <= 0)."""
+    from skyscatter import sky_matrix as sm
+    from skyscatter.conventions import direction_from_angles
+
+    rng = np.random.default_rng(3)
+    n = 300
+    coeffs = np.column_stack([rng.uniform(-1.8, 1.0, n), rng.uniform(-1.1, -0.03, n), rng.uniform(0.03, 23.0, n),
+                              rng.uniform(-6.4, -0.07, n), rng.uniform(-0.14, 1.4, n)])
+    sun = direction_from_angles(rng.uniform(0.05, math.pi / 2, n), rng.uniform(0.0, 2 * math.pi, n))
+    scale = rng.uniform(1e3, 5e4, n)
+    scheme = patch_scheme("reinhart2")
+    assert sm._perez_positive(coeffs).all()
+    for samples in (1, 2):
+        fast = sm.perez_patch_luminance(coeffs, sun, scale, scheme, samples=samples)
+        with monkeypatch.context() as mp:
+            mp.setattr(sm, "_perez_positive", lambda c: np.zeros(c.shape[0], dtype=bool))
+            slow = sm.perez_patch_luminance(coeffs, sun, scale, scheme, samples=samples)
+        np.testing.assert_allclose(fast, slow, rtol=1e-13, atol=0.0)
+    # an indicatrix that dips below zero (e < -1 near gamma = 90 deg): not positive, so the per-node max(0, I)
+    neg = np.array([[-1.0, -0.3, 0.05, -3.0, -1.2]])
+    assert not sm._perez_positive(neg).any()
+    gamma = np.linspace(0.0, math.pi, 181)
+    assert np.min(1.0 + neg[0, 2] * np.exp(neg[0, 3] * gamma) + neg[0, 4] * np.cos(gamma) ** 2) < 0.0
+
+
 def test_skymatrix_sun_spread_over_the_four_nearest_patches(epw_file):
     """Issue 12: the sun is spread as gendaymtx's AddDirect does (4 nearest centres, w = 1 / (1.002 - cos))."""
     sky_only = skyscatter.skymatrix(epw_file, scheme="reinhart2", samples=1)

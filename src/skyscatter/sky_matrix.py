@@ -98,15 +98,55 @@ def _perez_chunk(coeffs, sun, scale, dirs_t, q_rows, rows, row_cos, qweights, n_
         f *= np.take(grad, rows, axis=1)
         np.maximum(f, 0.0, out=f)
         total = f[:, :n_q] @ qweights.reshape(-1)
+    _normalise(total, scale, f[:, n_q:].reshape(n_sky, -1, n_sub), out)
+
+
+def _normalise(total, scale, samples, out) -> None:
+    """``out`` = the patch means of ``samples`` (skies, patches, cells) scaled so each sky integrates to
+    ``scale`` (D_v) by its quadrature ``total``; a sky without positive luminance anywhere is uniform."""
     uniform = total <= 0.0  # no positive luminance anywhere: uniform sky (as PerezSky and gendaymtx)
     with np.errstate(divide="ignore", invalid="ignore"):
         norm = np.where(uniform, 0.0, scale / np.where(uniform, 1.0, total))
-    samples = f[:, n_q:].reshape(n_sky, -1, n_sub)
+    n_sub = samples.shape[-1]
     acc = samples[..., 0] if n_sub == 1 else samples.sum(axis=-1)
     np.multiply(norm[:, None], acc, out=out)
     if n_sub > 1:
         out /= n_sub
     out[uniform] = (scale[uniform] / np.pi)[:, None]
+
+
+def _perez_positive(coeffs) -> NDArray[np.bool_]:
+    """Skies whose indicatrix ``1 + c exp(d gamma) + e cos^2 gamma`` is positive for every gamma in [0, pi]
+    (a lower bound: ``1 + min(c, c exp(d pi)) + min(e, 0)``, with a margin far above rounding)."""
+    c, d, e = coeffs[:, 2], coeffs[:, 3], coeffs[:, 4]
+    return 1.0 + np.minimum(c, c * np.exp(d * np.pi)) + np.minimum(e, 0.0) > 1e-6
+
+
+def _perez_totals(coeffs, sun, g_q, nodes_t, qweights, moments, scratch) -> NDArray[np.float64]:
+    """The quadrature of skies whose indicatrix is positive everywhere (:func:`_perez_positive`) and whose
+    gradation is positive on every row of the horizontal rule (``g_q``, skies x rows): ``sum_r G_r (sum_j w_rj +
+    e s^T M_r s + c sum_j w_rj exp(d gamma_rj))``.
+
+    It is :func:`_perez_chunk`'s ``sum_r G_r sum_j w_rj max(0, I_rj)`` with the max dropped (I > 0) and the sum
+    taken term by term: with ``cos gamma = s . n`` (s the sun, n the node), ``sum_j w_rj cos^2 gamma_rj = s^T M_r
+    s``, ``M_r = sum_j w_rj n n^T`` (``moments``: the rows' weight sums and M_r), so only ``exp(d gamma)`` is
+    evaluated per node: equal to rounding (measured: patch luminance within 9e-16 relative over a year).
+    ``nodes_t`` (3, rows x nodes per row); ``scratch``: a flat float64 array of at least skies x nodes.
+    """
+    n_sky = coeffs.shape[0]
+    w_sum, w_nn = moments
+    cos_q = np.matmul(sun, nodes_t, out=scratch[: n_sky * nodes_t.shape[1]].reshape(n_sky, -1))
+    np.clip(cos_q, -1.0, 1.0, out=cos_q)
+    np.arccos(cos_q, out=cos_q)
+    cos_q *= coeffs[:, 3:4]
+    np.exp(cos_q, out=cos_q)
+    peak = np.einsum("hrj,rj->hr", cos_q.reshape(n_sky, *qweights.shape), qweights)
+    peak *= coeffs[:, 2:3]
+    quad = np.einsum("hi,rij,hj->hr", sun, w_nn, sun)
+    quad *= coeffs[:, 4:5]
+    quad += w_sum
+    quad += peak
+    return np.einsum("hr,hr->h", g_q, quad)
 
 
 def _hour_directions(scheme: PatchScheme, samples: int):
@@ -155,12 +195,47 @@ def perez_patch_luminance(
     nz, na = NORMALISATION_NODES
     if qw.size == nz * na and np.all(rows[: qw.size].reshape(nz, na) == rows[: qw.size : na, None]):
         q_rows, qw = rows[: qw.size : na], qw.reshape(nz, na)  # the horizontal rule: rows of equal zenith angle
+        nodes = dirs[: qw.size].reshape(nz, na, 3)
+        moments = (qw.sum(axis=1), np.einsum("rj,rji,rjk->rik", qw, nodes, nodes))
+    else:
+        moments = None
     out = np.zeros((coeffs.shape[0], scheme.n_patches))
     lit = np.flatnonzero(scale > 0.0)
     step = max(1, CHUNK_VALUES // dirs.shape[0])
     work = np.empty((step, dirs.shape[0]))
-    for start in range(0, lit.size, step):
-        sel = lit[start : start + step]
+    if moments is None:
+        slow = lit
+    else:
+        # skies with a positive gradation on every row and a positive indicatrix: the quadrature term by term
+        # (_perez_totals) in blocks of nodes, then the samples alone in blocks of samples
+        grad_q = gradation(row_cos[q_rows], coeffs[lit, 0:1], coeffs[lit, 1:2])
+        quick = np.all(grad_q > 0.0, axis=1) & _perez_positive(coeffs[lit])
+        slow = lit[~quick]
+        fast, grad_q = lit[quick], grad_q[quick]
+        n_q = qw.size
+        nodes_t, samples_t = np.ascontiguousarray(dirs_t[:, :n_q]), np.ascontiguousarray(dirs_t[:, n_q:])
+        total = np.empty(fast.size)
+        q_step = max(1, CHUNK_VALUES // n_q)
+        scratch = np.empty(q_step * n_q)
+        for start in range(0, fast.size, q_step):
+            sel = fast[start : start + q_step]
+            total[start : start + sel.size] = _perez_totals(coeffs[sel], sun[sel], grad_q[start : start + q_step],
+                                                            nodes_t, qw, moments, scratch)
+        s_step = max(1, CHUNK_VALUES // samples_t.shape[1])
+        s_rows = rows[n_q:]
+        for start in range(0, fast.size, s_step):
+            sel = fast[start : start + s_step]
+            k = coeffs[sel]
+            cos_g = sun[sel] @ samples_t
+            np.clip(cos_g, -1.0, 1.0, out=cos_g)
+            f = indicatrix(1.0, np.arccos(cos_g), cos_g, 1.0, k[:, 2:3], k[:, 3:4], k[:, 4:5])
+            f *= np.take(gradation(row_cos, k[:, 0:1], k[:, 1:2]), s_rows, axis=1)
+            np.maximum(f, 0.0, out=f)
+            block = np.empty((sel.size, scheme.n_patches))
+            _normalise(total[start : start + sel.size], scale[sel], f.reshape(sel.size, -1, n_sub), block)
+            out[sel] = block
+    for start in range(0, slow.size, step):
+        sel = slow[start : start + step]
         block = np.empty((sel.size, scheme.n_patches))
         _perez_chunk(coeffs[sel], sun[sel], scale[sel], dirs_t, q_rows, rows, row_cos, qw, n_sub, block, work)
         out[sel] = block

@@ -104,33 +104,40 @@ def _e(a):
     return -math.expm1(-a) / a
 
 
+#: Taylor coefficients ``1 / (k! (n + k + 1))`` of the moments ``m_n`` (n = 0..3, k = 0..7) of _hermite_integral.
+_MOMENT_TAYLOR = np.array([[1.0 / (math.factorial(k) * (n + k + 1)) for k in range(8)] for n in range(4)])
+
+
 @inline
-def _hermite_integral(z, p0, p1, d0, d1):
-    """int_0^1 e^{z w} p(w) dw for the cubic with p(0)=p0, p(1)=p1, p'(0)=d0, p'(1)=d1.
+def _hermite_integral(z, ez, ez1, p0, p1, d0, d1):
+    """int_0^1 e^{z w} p(w) dw for the cubic with p(0)=p0, p(1)=p1, p'(0)=d0, p'(1)=d1; ``ez1`` is ``expm1(z)``
+    and ``ez`` ``exp(z)`` (the caller has both: ``1 + expm1(z)``, the piece's transmittance of the species,
+    within an ulp of ``exp(z)``; one call instead of two).
 
     Uses the moments ``m_n = int_0^1 e^{z w} w^n dw``: the A.4 integration-by-parts recurrence
     ``m_n = (e^z - n m_{n-1}) / z`` for ``|z| >= 0.02`` (its relative error grows like ``6 eps / |z|^3``,
     below 1e-10 there) and the Taylor series ``m_n = sum_k z^k / (k! (n + k + 1))`` to k = 7 below
-    (truncation error < 1e-17).
+    (truncation error < 1e-17), in Horner form with the coefficients tabulated (``_MOMENT_TAYLOR``). Both
+    multiply by ``1 / z`` or by constants instead of dividing: a chain of dependent divisions was most of the
+    time of the whole kernel (the same values to a few ulp).
     """
     if abs(z) < 0.02:
-        m0 = 1.0
-        m1 = 0.5
-        m2 = 1.0 / 3.0
-        m3 = 0.25
-        term = 1.0
-        for k in range(1, 8):
-            term *= z / k
-            m0 += term / (k + 1)
-            m1 += term / (k + 2)
-            m2 += term / (k + 3)
-            m3 += term / (k + 4)
+        t = _MOMENT_TAYLOR
+        m0 = t[0, 7]
+        m1 = t[1, 7]
+        m2 = t[2, 7]
+        m3 = t[3, 7]
+        for k in range(6, -1, -1):
+            m0 = m0 * z + t[0, k]
+            m1 = m1 * z + t[1, k]
+            m2 = m2 * z + t[2, k]
+            m3 = m3 * z + t[3, k]
     else:
-        ez = math.exp(z)
-        m0 = math.expm1(z) / z
-        m1 = (ez - m0) / z
-        m2 = (ez - 2.0 * m1) / z
-        m3 = (ez - 3.0 * m2) / z
+        r = 1.0 / z
+        m0 = ez1 * r
+        m1 = (ez - m0) * r
+        m2 = (ez - 2.0 * m1) * r
+        m3 = (ez - 3.0 * m2) * r
     c2 = 3.0 * (p1 - p0) - 2.0 * d0 - d1
     c3 = 2.0 * (p0 - p1) + d0 + d1
     return p0 * m0 + d0 * m1 + c2 * m2 + c3 * m3
@@ -257,14 +264,19 @@ def _integrals_many(cos_t, h0, s, beta1, beta2, a1, a2, method, threshold, segme
                     j1 = e1 * dx * _e((a1 * c + kk) * dx)
                     j2 = e2 * dx * _e((a2 * c + kk) * dx)
                 else:
-                    t1 = math.exp(-b1 * l1)
-                    t2 = math.exp(-b2 * l2)
+                    # the pieces' transmittances t = exp(z) as 1 + expm1(z), which the moments need anyway
+                    z1 = -b1 * l1
+                    z2 = -b2 * l2
+                    em1 = math.expm1(z1)
+                    em2 = math.expm1(z2)
+                    t1 = 1.0 + em1
+                    t2 = 1.0 + em2
                     # I_1: exponential in the haze optical depth, cubic in w for the molecular transmittance
                     # f, with slopes df/dw = -beta_2 u_2 f L_1 / u_1 at both ends ...
-                    j1 = l1 * _hermite_integral(-b1 * l1, 1.0, t2, -b2 * l1 * r21_near, -b2 * l1 * t2 * r21_far)
+                    j1 = l1 * _hermite_integral(z1, t1, em1, 1.0, t2, -b2 * l1 * r21_near, -b2 * l1 * t2 * r21_far)
                     # ... and I_2 the same with the species swapped.
-                    j2 = l2 * _hermite_integral(-b2 * l2, 1.0, t1, -b1 * l2 / r21_near, -b1 * l2 * t1 / r21_far)
-                att = math.exp(-depth[j])
+                    j2 = l2 * _hermite_integral(z2, t2, em2, 1.0, t1, -b1 * l2 / r21_near, -b1 * l2 * t1 / r21_far)
+                att = math.exp(-depth[j]) if k > 0 else 1.0  # exp(-0) = 1 exactly: no call on the first piece
                 out1[i, j] += att * j1
                 out2[i, j] += att * j2
                 depth[j] += b1 * l1 + b2 * l2

@@ -149,8 +149,4 @@ class PreethamAerialPerspective(AerialPerspective):
         i1, i2, tau = in_scattering_integrals(d[..., 2], s, h, b1, b2, method=_METHODS[self.method],
                                               alpha_haze=self.alpha_haze, alpha_molecules=self.alpha_molecules,
                                               segments=self.segments, return_transmittance=True)
-        s1, s2 = self.table(wl).lookup(d)
-        s1 *= i1
-        s2 *= i2
-        s1 += s2
-        return tau, s1
+        return tau, self.table(wl).inscattered(d, i1, i2)

@@ -161,17 +161,41 @@ class ScatteringTable:
         nl = self.wavelengths.size
         out1 = np.empty((flat.shape[0], nl))
         out2 = np.empty((flat.shape[0], nl))
+        self._lookup(flat, None, None, out1, out2)
+        return out1.reshape(shape + (nl,)), out2.reshape(shape + (nl,))
+
+    def inscattered(self, directions: ArrayLike, i1: ArrayLike, i2: ArrayLike) -> NDArray[np.float64]:
+        """``L_in = S_1^0 I_1 + S_2^0 I_2`` [W m^-2 sr^-1 nm^-1] (Eq. 8) for view directions (..., 3) and the
+        paths' integrals ``I_1``, ``I_2`` [m] (..., n_wavelengths): :meth:`lookup` and the sum in one pass,
+        equal to it bit for bit."""
+        d = as_directions(directions)
+        shape = d.shape[:-1]
+        flat = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
+        nl = self.wavelengths.size
+        w1 = np.ascontiguousarray(np.broadcast_to(i1, shape + (nl,)), dtype=np.float64).reshape(-1, nl)
+        w2 = np.ascontiguousarray(np.broadcast_to(i2, shape + (nl,)), dtype=np.float64).reshape(-1, nl)
+        out = np.empty((flat.shape[0], nl))
+        self._lookup(flat, w1, w2, out, out)
+        return out.reshape(shape + (nl,))
+
+    def _lookup(self, flat, w1, w2, out1, out2) -> None:
+        nl = self.wavelengths.size
         has_sun = self._sun1 is not None
         sun = self.sun_direction if has_sun else np.zeros(3)
         sun1 = self._sun1 if has_sun else np.zeros((2, nl))
         sun2 = self._sun2 if has_sun else np.zeros((2, nl))
+        combine = w1 is not None
+        if not combine:
+            w1 = w2 = np.zeros((1, 1))
         _lookup_kernel(flat, self.sun_azimuth, self._theta[1], self._phi[1], self._sky1, self._sky2, has_sun, sun,
-                       sun1, sun2, _GAMMA_STEP, out1, out2)
-        return out1.reshape(shape + (nl,)), out2.reshape(shape + (nl,))
+                       sun1, sun2, _GAMMA_STEP, combine, w1, w2, out1, out2)
 
 
 @parallel_kernel
-def _lookup_kernel(d, sun_az, dtheta, dphi, sky1, sky2, has_sun, sun, sun1, sun2, dgamma, out1, out2):
+def _lookup_kernel(d, sun_az, dtheta, dphi, sky1, sky2, has_sun, sun, sun1, sun2, dgamma, combine, w1, w2, out1,
+                   out2):
+    """``(S_1^0, S_2^0)`` of each direction into ``out1``, ``out2``; with ``combine``, ``S_1^0 w1 + S_2^0 w2``
+    into ``out1`` (``out2`` unused)."""
     n = d.shape[0]
     nt, npf, nl = sky1.shape
     ng = sun1.shape[0]
@@ -189,16 +213,23 @@ def _lookup_kernel(d, sun_az, dtheta, dphi, sky1, sky2, has_sun, sun, sun1, sun2
         w01 = (1.0 - ft) * fp
         w10 = ft * (1.0 - fp)
         w11 = ft * fp
-        for k in range(nl):
-            out1[i, k] = (w00 * sky1[it, ip, k] + w01 * sky1[it, ip + 1, k] + w10 * sky1[it + 1, ip, k]
-                          + w11 * sky1[it + 1, ip + 1, k])
-            out2[i, k] = (w00 * sky2[it, ip, k] + w01 * sky2[it, ip + 1, k] + w10 * sky2[it + 1, ip, k]
-                          + w11 * sky2[it + 1, ip + 1, k])
+        j = 0
+        f = 0.0
         if has_sun:
             c = min(1.0, max(-1.0, d[i, 0] * sun[0] + d[i, 1] * sun[1] + d[i, 2] * sun[2]))
             g = math.acos(c) / dgamma
             j = min(max(int(g), 0), ng - 2)
             f = min(max(g - j, 0.0), 1.0)
-            for k in range(nl):
-                out1[i, k] += sun1[j, k] * (1.0 - f) + sun1[j + 1, k] * f
-                out2[i, k] += sun2[j, k] * (1.0 - f) + sun2[j + 1, k] * f
+        for k in range(nl):
+            a1 = (w00 * sky1[it, ip, k] + w01 * sky1[it, ip + 1, k] + w10 * sky1[it + 1, ip, k]
+                  + w11 * sky1[it + 1, ip + 1, k])
+            a2 = (w00 * sky2[it, ip, k] + w01 * sky2[it, ip + 1, k] + w10 * sky2[it + 1, ip, k]
+                  + w11 * sky2[it + 1, ip + 1, k])
+            if has_sun:
+                a1 += sun1[j, k] * (1.0 - f) + sun1[j + 1, k] * f
+                a2 += sun2[j, k] * (1.0 - f) + sun2[j + 1, k] * f
+            if combine:
+                out1[i, k] = a1 * w1[i, k] + a2 * w2[i, k]
+            else:
+                out1[i, k] = a1
+                out2[i, k] = a2

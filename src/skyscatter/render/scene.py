@@ -296,7 +296,8 @@ class Scene:
             timings["shading"] += t2 - t1
             if self.aerial is not None and pos.shape[0]:
                 tau, l_in = self.aerial.evaluate_rays(origin, d[hit], t[hit], wl)
-                l0 = l0 * tau + l_in
+                l0 *= tau  # in place: l0 is this band's own array
+                l0 += l_in
             spec[hit] = l0
             t3 = time.perf_counter()
             timings["aerial_perspective"] += t3 - t2
