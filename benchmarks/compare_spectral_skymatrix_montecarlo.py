@@ -54,7 +54,8 @@ KINDS = ("clear", "broken", "overcast")
 
 
 def gensdaymtx_matrix(epw: Path, cache: Path | None = None) -> np.ndarray:
-    """gensdaymtx -m 1 -fa: (hours, 145 patches, 20 bands, short to long); run in ``cache`` (its atmos_data)."""
+    """gensdaymtx -m 1 -s (the sky without the sun, which gensdaymtx otherwise puts into the patches around it):
+    (hours, 145 patches, 20 bands, short to long); run in ``cache`` (its atmos_data)."""
     import pyradiance
 
     root = Path(pyradiance.__file__).parent
@@ -62,7 +63,7 @@ def gensdaymtx_matrix(epw: Path, cache: Path | None = None) -> np.ndarray:
         cache = Path(os.environ.get("SKYSCATTER_CACHE_DIR", tempfile.gettempdir())) / "radiance"
     cache.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, RAYPATH=f".{os.pathsep}{root / 'lib'}")
-    out = subprocess.run([str(root / "bin" / "gensdaymtx"), "-m", "1", str(epw)], cwd=cache, env=env,
+    out = subprocess.run([str(root / "bin" / "gensdaymtx"), "-m", "1", "-s", str(epw)], cwd=cache, env=env,
                          capture_output=True, check=True).stdout
     head, body = out.split(b"\n\n", 1)
     text = head.decode()
@@ -191,16 +192,21 @@ def main() -> None:
     ap.add_argument("--radiance-dir", type=Path, default=None,
                     help="gensdaymtx's working folder (its atmos_data cache); default SKYSCATTER_CACHE_DIR/radiance")
     ap.add_argument("--until", default=None, help="UTC HH:MM: stop starting new Monte Carlo skies then")
+    ap.add_argument("--regens", type=Path, default=None,
+                    help="recompute gensdaymtx's columns of a results JSON (with its .jobs.pkl) and exit")
     ap.add_argument("--plot", type=Path, default=None, help="only redraw the figure and print the table of a JSON")
     ap.add_argument("--figure", type=Path, default=ROOT / "docs" / "images" / "spectral_skymatrix_montecarlo.png")
     args = ap.parse_args()
+    if args.regens is not None:
+        regens(args)
+        return
     if args.plot is not None:
         res = json.loads(args.plot.read_text())
         plot(res, args.figure)
         print("\n".join(summarise(res)))
         print(f"wrote {args.figure}")
         return
-    from skymatrix_mc import away_from_sun, mc_reduced, patch_subset, pool
+    from skymatrix_mc import away_from_sun, matrix_directions, mc_reduced, patch_subset, pool
     from skyscatter.conventions import direction_from_angles
 
     c_start = time.process_time()
@@ -212,24 +218,34 @@ def main() -> None:
         stop = time.time() + ((hh * 60 + mm) - (now.tm_hour * 60 + now.tm_min)) * 60.0 - now.tm_sec
     jobs_path = args.out.with_suffix(".jobs.pkl")
     if jobs_path.exists():
-        setup = pickle.loads(jobs_path.read_bytes())
+        from skyscatter.atmosphere.clouds import CloudLayer
+
+        # CloudLayer refuses attribute assignment, which pickle's default state restore uses: allow it while loading
+        guard = CloudLayer.__setattr__
+        CloudLayer.__setattr__ = object.__setattr__
+        try:
+            setup = pickle.loads(jobs_path.read_bytes())
+        finally:
+            CloudLayer.__setattr__ = guard
         print(f"setup read from {jobs_path}", flush=True)
     else:
         setup = prepare(args)
         jobs_path.write_bytes(pickle.dumps(setup))
     wl = np.array(WAVELENGTHS)
-    res = {k: v for k, v in setup.items() if k != "jobs"}
+    res = {k: v for k, v in setup.items() if k not in ("jobs", "dirs")}
+    res["directions"] = "the matrix's evaluation point of each patch (one equal-area cell: mid sin(altitude))"
     res.update({"description": __doc__.split("\n\n")[0], "seed": args.seed, "wavelengths": list(WAVELENGTHS),
                 "pilot": args.pilot, "target": args.target, "budget_cpu_min": args.budget, "until_utc": args.until,
                 "hours": [], "load_average_start": list(os.getloadavg())})
     n_skies = sum(len(j["parts"]) for j in setup["jobs"])
+    dirs_all = matrix_directions()
     mc_cpu = 0.0
     skies_done = 0
     for job in setup["jobs"]:
         i, kind, low = job["hour"], job["kind"], job["low_sun"]
         zen, azi = job["sun_zenith"], job["sun_azimuth"]
         sun = direction_from_angles(zen, azi)
-        dirs = setup["dirs"]
+        dirs = dirs_all
         patches = patch_subset(dirs, azi)
         pd = dirs[patches]
         r_mc = np.zeros((patches.size, wl.size))
@@ -263,7 +279,8 @@ def main() -> None:
             var_mc += (w * est[1]) ** 2
             away &= away_from_sun(pd, sun, what)
             info.append({"sky": what, "weight": w, "paths": int(est[2]), "cpu_s": c,
-                         "p90_rel_se": float(np.percentile(est[1] / est[0], 90))})
+                         "p90_rel_se": float(np.percentile(est[1] / est[0], 90)),
+                         "patches_all": patches.tolist(), "mc_rel": est[0].tolist(), "mc_rel_se": est[1].tolist()})
         if len(info) < len(job["parts"]):
             print(f"stopped at {args.until} UTC before hour {i} was finished", flush=True)
             break
@@ -298,6 +315,46 @@ def main() -> None:
         print("\n".join(summarise(res)))
         plot(res, args.figure)
     print(f"Monte Carlo CPU {mc_cpu:.0f} s; wrote {args.out}, {args.figure}; load average {os.getloadavg()}")
+
+
+def gens_reduced(epw: Path, hours: list[int], cache: Path | None) -> dict[int, np.ndarray]:
+    """gensdaymtx's patches of ``hours`` over its bands' E0 and the eccentricity (145, 4) [sr^-1]."""
+    from skymatrix_mc import band_e0
+    from skyscatter.fit.spectral_matrix import band_edges
+
+    c20, edges20 = band_edges(20)
+    b_wl = [int(np.argmin(np.abs(c20 - w))) for w in WAVELENGTHS]
+    e0 = band_e0(edges20, b_wl)
+    gens = gensdaymtx_matrix(epw, cache)
+    from skyscatter.fit.weather import read_weather
+    from skyscatter.sky.perez import SOLAR_CONSTANT, extraterrestrial_irradiance
+
+    ecc = np.asarray(extraterrestrial_irradiance(read_weather(epw).day_of_year), dtype=float) / SOLAR_CONSTANT
+    return {i: gens[i][:, b_wl] / (e0 * ecc[i]) for i in hours}
+
+
+def regens(args) -> None:
+    """Redo gensdaymtx's columns of a results JSON (the year file is made again: same seed, same bytes)."""
+    from weather_synth import write_year_epw
+
+    res = json.loads(args.regens.read_text())
+    cache = args.regens.with_suffix(".gens.npz")
+    if cache.exists():
+        with np.load(cache) as z:
+            g = {int(k): z[k] for k in z.files}
+    else:
+        epw = write_year_epw(Path(tempfile.mkdtemp(prefix="mc-spectral-")) / "year.epw")
+        t0 = time.perf_counter()
+        g = gens_reduced(epw, [int(p[0]) for p in res["picked"]], args.radiance_dir)
+        print(f"gensdaymtx -m 1 -s: {time.perf_counter() - t0:.0f} s")
+        np.savez(cache, **{str(k): v for k, v in g.items()})
+    for row in res["hours"]:
+        r_g = g[row["hour"]][row["patches"]]
+        ratio = r_g / np.asarray(row["mc_rel"])
+        scale = float(np.median(ratio))
+        row.update({"gens_value": r_g.tolist(), "gens_rel": (ratio - 1).tolist(), "gens_median_ratio": scale,
+                    "gens_shape_rel": (ratio / scale - 1).tolist(), "gens_options": "-m 1 -s"})
+    save(res, args.regens)
 
 
 def prepare(args) -> dict:
@@ -353,7 +410,7 @@ def prepare(args) -> dict:
                               "cloud_fraction": float(h.cloud_fraction[i]), "status": HOUR_STATUS[int(h.status[i])],
                               "dhi_closure": float(ds["dhi_closure"].values[i])}})
     return {"epw": "tests/weather_synth.py write_year_epw seed 24", "retrieval_counts": counts,
-            "picked": [list(p) for p in picks], "our_matrix_seconds": t_ours, "dirs": geom.centre_directions,
+            "picked": [list(p) for p in picks], "our_matrix_seconds": t_ours,
             "setup_wall_s": time.perf_counter() - w_start, "jobs": jobs}
 
 

@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from skymatrix_mc import away_from_sun, band_e0, mc_reduced, ours_reduced, parts_of, patch_subset  # noqa: E402
+from skymatrix_mc import away_from_sun, band_e0, matrix_directions, mc_reduced, ours_reduced, parts_of, patch_subset  # noqa: E402
 from weather_synth import write_epw  # noqa: E402
 
 pytest.importorskip("xarray")
@@ -66,11 +66,9 @@ def setup(tmp_path_factory):
 @pytest.mark.parametrize("kind", ["clear", "overcast"])
 def test_matrix_patches_against_montecarlo(setup, kind):
     from skyscatter.conventions import direction_from_angles
-    from skyscatter.patches import patch_scheme
-
     h, ds, hours, k_bands, e0 = setup
     i = hours[kind]
-    dirs = patch_scheme("tregenza").centre_directions
+    dirs = matrix_directions()
     zen, azi = float(h.sun_zenith[i]), float(h.sun_azimuth[i])
     patches = patch_subset(dirs, azi)[::3]
     sun = direction_from_angles(zen, azi)
