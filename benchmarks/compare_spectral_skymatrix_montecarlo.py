@@ -105,8 +105,8 @@ def summarise(res: dict) -> list[str]:
     rows = res["hours"]
     wl = res["wavelengths"]
     lines = ["| hours | n | wavelength [nm] | MC SE median | ours median | ours median abs | ours p95 abs | "
-             "gensdaymtx median | gensdaymtx median abs | gensdaymtx p95 abs | gensdaymtx shape p95 abs |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "gensdaymtx / MC (median) | gensdaymtx shape: median abs | p95 abs |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     groups = [("clear", lambda r: r["kind"] == "clear" and not r["low_sun"]),
               ("broken", lambda r: r["kind"] == "broken" and not r["low_sun"]),
               ("overcast", lambda r: r["kind"] == "overcast" and not r["low_sun"]),
@@ -125,9 +125,24 @@ def summarise(res: dict) -> list[str]:
             o, se, g, gs = col("ours_rel"), col("mc_rel_se"), col("gens_rel"), col("gens_shape_rel")
             f = lambda a, q: float(np.percentile(np.abs(a), q)) * 100 if a.size else float("nan")  # noqa: E731
             m = lambda a: float(np.median(a)) * 100 if a.size else float("nan")  # noqa: E731
+            ratio = float(np.median(g + 1.0)) if g.size else float("nan")
             lines.append(f"| {name} | {len(hs)} | {w if w == 'all' else int(w)} | {m(se):.1f} % | {m(o):+.1f} % | "
-                         f"{f(o, 50):.1f} % | {f(o, 95):.1f} % | {m(g):+.0f} % | {f(g, 50):.0f} % | "
-                         f"{f(g, 95):.0f} % | {f(gs, 95):.1f} % |")
+                         f"{f(o, 50):.1f} % | {f(o, 95):.1f} % | {ratio:.0f} | {f(gs, 50):.1f} % | "
+                         f"{f(gs, 95):.1f} % |")
+    cloudy = [r for r in rows if "cloudysky_vs_mc" in r]
+    if cloudy:
+        lines += ["", "| hours with an overcast part | n | CloudySky vs MC overcast: median | median abs | p95 abs | "
+                      "ours vs (1 - f) MC clear + f CloudySky: median | median abs | p95 abs |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for name, sel in groups[1:]:
+            hs = [r for r in cloudy if sel(r)]
+            if not hs:
+                continue
+            a = np.concatenate([np.asarray(r["cloudysky_vs_mc"]).ravel() for r in hs])
+            b = np.concatenate([np.asarray(r["ours_vs_cloudysky_blend"]).ravel() for r in hs])
+            lines.append(f"| {name} | {len(hs)} | {np.median(a) * 100:+.1f} % | {np.median(abs(a)) * 100:.1f} % | "
+                         f"{np.percentile(abs(a), 95) * 100:.1f} % | {np.median(b) * 100:+.1f} % | "
+                         f"{np.median(abs(b)) * 100:.1f} % | {np.percentile(abs(b), 95) * 100:.1f} % |")
     return lines
 
 
@@ -218,15 +233,7 @@ def main() -> None:
         stop = time.time() + ((hh * 60 + mm) - (now.tm_hour * 60 + now.tm_min)) * 60.0 - now.tm_sec
     jobs_path = args.out.with_suffix(".jobs.pkl")
     if jobs_path.exists():
-        from skyscatter.atmosphere.clouds import CloudLayer
-
-        # CloudLayer refuses attribute assignment, which pickle's default state restore uses: allow it while loading
-        guard = CloudLayer.__setattr__
-        CloudLayer.__setattr__ = object.__setattr__
-        try:
-            setup = pickle.loads(jobs_path.read_bytes())
-        finally:
-            CloudLayer.__setattr__ = guard
+        setup = load_setup(jobs_path)
         print(f"setup read from {jobs_path}", flush=True)
     else:
         setup = prepare(args)
@@ -354,7 +361,52 @@ def regens(args) -> None:
         scale = float(np.median(ratio))
         row.update({"gens_value": r_g.tolist(), "gens_rel": (ratio - 1).tolist(), "gens_median_ratio": scale,
                     "gens_shape_rel": (ratio / scale - 1).tolist(), "gens_options": "-m 1 -s"})
+    cloudysky_columns(res, load_setup(args.regens.with_suffix(".jobs.pkl")))
     save(res, args.regens)
+
+
+def load_setup(path: Path) -> dict:
+    from skyscatter.atmosphere.clouds import CloudLayer
+
+    # CloudLayer refuses attribute assignment, which pickle's default state restore uses: allow it while loading
+    guard = CloudLayer.__setattr__
+    CloudLayer.__setattr__ = object.__setattr__
+    try:
+        return pickle.loads(path.read_bytes())
+    finally:
+        CloudLayer.__setattr__ = guard
+
+
+def cloudysky_columns(res: dict, setup: dict) -> None:
+    """For hours with an overcast part: CloudySky (DISORT, the model the matrix's overcast patches follow) at the
+    hour's exact optical depth and sun against that part's Monte Carlo (``cloudysky_vs_mc``), and ours against
+    the blend with CloudySky in place of the overcast Monte Carlo (``ours_vs_cloudysky_blend``): which of the two
+    steps (matrix vs its model, model vs the reference) a difference comes from."""
+    from skymatrix_mc import matrix_directions
+    from skyscatter.sky.cloudy import CloudySky
+
+    wl = np.array(res["wavelengths"])
+    dirs = matrix_directions()
+    jobs = {j["hour"]: j for j in setup["jobs"]}
+    for row in res["hours"]:
+        parts = {s["sky"]: s for s in row["skies"]}
+        if "overcast" not in parts or "mc_rel" not in parts["overcast"]:
+            continue
+        job = jobs[row["hour"]]
+        air = [a for _, what, a in job["parts"] if what == "overcast"][0]
+        air = air.replace(particles=air.particles[:-1])
+        pa = np.asarray(parts["overcast"]["patches_all"])
+        keep = np.isin(pa, row["patches"])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            sky = CloudySky(job["sun_zenith"], job["sun_azimuth"], cloud_optical_depth=row["cloud_optical_depth"],
+                            atmosphere=air)
+            cs = sky.spectral_radiance(dirs[pa], wl) / air.solar_irradiance_at(wl)
+        mc_o = np.asarray(parts["overcast"]["mc_rel"])
+        f = parts["overcast"]["weight"]
+        blend = f * cs + ((1 - f) * np.asarray(parts["clear"]["mc_rel"]) if "clear" in parts else 0.0)
+        row["cloudysky_vs_mc"] = (cs / mc_o - 1)[keep].tolist()
+        row["ours_vs_cloudysky_blend"] = (job["ours"][pa] / blend - 1)[keep].tolist()
 
 
 def prepare(args) -> dict:
