@@ -1,28 +1,43 @@
 """Spectral sky matrix and gensdaymtx against the Monte Carlo reference, side by side (issue 24, item 3).
 
-A year of weather made by tests/weather_synth.py ``write_year_epw`` (SPECTRL2 clear days, broken and overcast
-days). Hours are drawn (seed 7, sun zenith below 80 deg) from those our retrieval calls clear, broken (the
-clear / overcast blend) and cloudy (overcast): ``--hours`` in all, split 40 / 30 / 30 %. The Monte Carlo
-(``skyscatter.montecarlo.sky_radiance``) runs through the same air and clouds as ours: clear hours the family's
-base medium with the hour's retrieved aerosol optical depth and albedo (not a node); overcast hours the cloud
-table's air (its aerosol node, the base albedo) with the retrieved water layer (1000-1500 m, 10 um droplets,
-``CloudLayer``); broken hours ``(1 - f) MC_clear + f MC_overcast`` with the retrieved cloud fraction f (our
-blend is an independent-pixel approximation of the hour: the Monte Carlo checks its two parts, it cannot check
-the approximation itself). At the Tregenza patch centres and 450, 550, 650 nm. Ours is the matrix itself
-(``spectral_sky_matrix``, Tregenza, one cell per patch, 5 nm bands at those wavelengths, no gases, divided by
-the day's eccentricity); gensdaymtx's the patch value of its ``-m 1`` matrix in the 20 nm bands holding those
-wavelengths. Each is compared as reduced radiance (radiance over its own extraterrestrial irradiance), per patch
-more than 5 deg from the sun (overcast: 10 deg, where our forward peak sits in the sun's patch). Prints per
-hour and per kind the median and 95th-percentile relative difference and the Monte Carlo's standard error, and
-writes docs/images/spectral_skymatrix_montecarlo.png.
+A year of weather made by tests/weather_synth.py ``write_year_epw`` (seed 24: SPECTRL2 clear days, broken and
+overcast days). **Hours**: ``--hours`` (20) drawn with ``--seed`` (7) among the daylit hours our retrieval
+calls clear, broken (the clear / overcast blend) and cloudy (overcast, sky cover >= 8 tenths): a quarter each
+of clear, broken and overcast hours with the sun at zenith < 70 deg, and a quarter "low sun" (zenith 70-86 deg,
+drawn evenly from the three kinds). The hours are run interleaved (clear, broken, overcast, low, clear, ...), so
+a partial run holds every kind.
 
-Usage: ``python benchmarks/compare_spectral_skymatrix_montecarlo.py [--samples 1000] [--hours 20]``.
+**Patches**: per hour the Tregenza patches nearest 19 directions in the sun's frame (altitudes 6-66 deg every
+12 deg at 0, 90 and 180 deg from the sun's azimuth, and the zenith; ``tests/skymatrix_mc.py``), minus those
+within 5 deg of the sun (10 deg for the overcast parts). **Wavelengths** 410, 490, 570, 650 nm (centres of
+gensdaymtx's 20 nm bands, nodes of our tables).
+
+**The Monte Carlo** runs through the same air and clouds as ours (``tests/skymatrix_mc.py`` says which; broken
+hours are ``(1 - f) MC_clear + f MC_overcast``, the matrix's own blend). Paths: a pilot of ``--pilot`` (512)
+paths per direction per sky, then more paths so that the 90th percentile over the hour's patches and
+wavelengths of the relative standard error reaches ``--target`` (2.5 %), within the time left (``--budget``
+minutes of CPU, shared evenly over the skies still to run); pilot and follow-up are pooled. Dask's synchronous
+scheduler: one core.
+
+**Ours** is the matrix itself (``spectral_sky_matrix``, Tregenza, one cell per patch, 5 nm bands centred at those
+wavelengths with their neighbours, no gases, over the band's E0 and the day's eccentricity); **gensdaymtx's** the
+patch value of its ``-m 1`` matrix in the 20 nm bands centred there, over the band's E0 and eccentricity. Its
+numbers are a few hundred times a spectral radiance in W m^-2 sr^-1 nm^-1 (unit or scale not established),
+so it is compared twice: as it is and divided by its per-hour median ratio (the shape of its sky).
+
+Results go to ``--out`` (JSON, rewritten atomically after every hour, so a stopped run keeps what finished);
+``--plot`` redraws the figure docs/images/spectral_skymatrix_montecarlo.png and prints the table from a JSON.
+
+Usage: ``python benchmarks/compare_spectral_skymatrix_montecarlo.py [--hours 20] [--budget 50] [--out X.json]``,
+``python benchmarks/compare_spectral_skymatrix_montecarlo.py --plot X.json``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import pickle
 import subprocess
 import sys
 import tempfile
@@ -34,17 +49,21 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+WAVELENGTHS = (410.0, 490.0, 570.0, 650.0)
+KINDS = ("clear", "broken", "overcast")
 
 
-def gensdaymtx_matrix(epw: Path) -> np.ndarray:
-    """gensdaymtx -m 1 -fa: (hours, 145 patches, 20 bands, short to long)."""
+def gensdaymtx_matrix(epw: Path, cache: Path | None = None) -> np.ndarray:
+    """gensdaymtx -m 1 -s (the sky without the sun, which gensdaymtx otherwise puts into the patches around it):
+    (hours, 145 patches, 20 bands, short to long); run in ``cache`` (its atmos_data)."""
     import pyradiance
 
     root = Path(pyradiance.__file__).parent
-    cache = Path(os.environ.get("SKYSCATTER_CACHE_DIR", tempfile.gettempdir())) / "radiance"
+    if cache is None:
+        cache = Path(os.environ.get("SKYSCATTER_CACHE_DIR", tempfile.gettempdir())) / "radiance"
     cache.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, RAYPATH=f".{os.pathsep}{root / 'lib'}")
-    out = subprocess.run([str(root / "bin" / "gensdaymtx"), "-m", "1", str(epw)], cwd=cache, env=env,
+    out = subprocess.run([str(root / "bin" / "gensdaymtx"), "-m", "1", "-s", str(epw)], cwd=cache, env=env,
                          capture_output=True, check=True).stdout
     head, body = out.split(b"\n\n", 1)
     text = head.decode()
@@ -55,148 +74,396 @@ def gensdaymtx_matrix(epw: Path) -> np.ndarray:
     return vals[1:, :, ::-1].transpose(1, 0, 2)  # drop the ground row; components short to long
 
 
+def pick_hours(h, n: int, seed: int) -> list[tuple[int, str]]:
+    """The hours (index, kind), interleaved by stratum (module docstring)."""
+    from skyscatter.fit.weather import BROKEN, CLEAR, CLOUDY
+
+    rng = np.random.default_rng(seed)
+    zen = np.degrees(h.sun_zenith)
+    code = {"clear": CLEAR, "broken": BROKEN, "overcast": CLOUDY}
+    ok = {k: (h.status == c) & ((c != CLOUDY) | ~(h.cloud_cover < 0.8)) for k, c in code.items()}
+    strata = []
+    per = [n // 4 + (1 if s < n % 4 else 0) for s in range(4)]
+    for s, kind in enumerate(KINDS):
+        pool = np.flatnonzero(ok[kind] & (zen < 70.0))
+        strata.append([(int(i), kind, False) for i in rng.choice(pool, size=min(per[s], pool.size), replace=False)])
+    low = []
+    for j in range(per[3]):
+        kind = KINDS[j % 3]
+        pool = np.setdiff1d(np.flatnonzero(ok[kind] & (zen >= 70.0) & (zen < 86.0)), [x[0] for x in low])
+        if pool.size:
+            low.append((int(rng.choice(pool)), kind, True))
+    strata.append(low)
+    out = []
+    for k in range(max(len(s) for s in strata)):
+        out += [s[k] for s in strata if k < len(s)]
+    return out
+
+
+def summarise(res: dict) -> list[str]:
+    """Table rows: per hour type and wavelength, median / p95 |error| of ours and gensdaymtx's vs the MC."""
+    rows = res["hours"]
+    wl = res["wavelengths"]
+    lines = ["| hours | n | wavelength [nm] | MC SE median | ours median | ours median abs | ours p95 abs | "
+             "gensdaymtx / MC (median) | gensdaymtx shape: median abs | p95 abs |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    groups = [("clear", lambda r: r["kind"] == "clear" and not r["low_sun"]),
+              ("broken", lambda r: r["kind"] == "broken" and not r["low_sun"]),
+              ("overcast", lambda r: r["kind"] == "overcast" and not r["low_sun"]),
+              ("low sun (70-86 deg)", lambda r: r["low_sun"]), ("all", lambda r: True)]
+    for name, sel in groups:
+        hs = [r for r in rows if sel(r)]
+        if not hs:
+            continue
+        for k, w in enumerate([*wl, "all"]):
+            def col(key, hs=hs, k=k, w=w):
+                a = [np.asarray(r[key], dtype=float) for r in hs if r.get(key) is not None]
+                if not a:
+                    return np.array([np.nan])
+                a = np.concatenate([x[:, k] if w != "all" else x.ravel() for x in a])
+                return a[np.isfinite(a)]
+            o, se, g, gs = col("ours_rel"), col("mc_rel_se"), col("gens_rel"), col("gens_shape_rel")
+            f = lambda a, q: float(np.percentile(np.abs(a), q)) * 100 if a.size else float("nan")  # noqa: E731
+            m = lambda a: float(np.median(a)) * 100 if a.size else float("nan")  # noqa: E731
+            ratio = float(np.median(g + 1.0)) if g.size else float("nan")
+            lines.append(f"| {name} | {len(hs)} | {w if w == 'all' else int(w)} | {m(se):.1f} % | {m(o):+.1f} % | "
+                         f"{f(o, 50):.1f} % | {f(o, 95):.1f} % | {ratio:.0f} | {f(gs, 50):.1f} % | "
+                         f"{f(gs, 95):.1f} % |")
+    cloudy = [r for r in rows if "cloudysky_vs_mc" in r]
+    if cloudy:
+        lines += ["", "| hours with an overcast part | n | CloudySky vs MC overcast: median | median abs | p95 abs | "
+                      "ours vs (1 - f) MC clear + f CloudySky: median | median abs | p95 abs |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for name, sel in groups[1:]:
+            hs = [r for r in cloudy if sel(r)]
+            if not hs:
+                continue
+            a = np.concatenate([np.asarray(r["cloudysky_vs_mc"]).ravel() for r in hs])
+            b = np.concatenate([np.asarray(r["ours_vs_cloudysky_blend"]).ravel() for r in hs])
+            lines.append(f"| {name} | {len(hs)} | {np.median(a) * 100:+.1f} % | {np.median(abs(a)) * 100:.1f} % | "
+                         f"{np.percentile(abs(a), 95) * 100:.1f} % | {np.median(b) * 100:+.1f} % | "
+                         f"{np.median(abs(b)) * 100:.1f} % | {np.percentile(abs(b), 95) * 100:.1f} % |")
+    return lines
+
+
+def plot(res: dict, out: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = res["hours"]
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.6), gridspec_kw={"width_ratios": [3, 1.2]})
+    ax = axes[0]
+    pos = np.arange(len(rows))
+    ours = [np.asarray(r["ours_rel"]).ravel() * 100 for r in rows]
+    shape = [np.asarray(r["gens_shape_rel"]).ravel() * 100 if r.get("gens_shape_rel") is not None else [np.nan]
+             for r in rows]
+    se = [2 * np.median(np.asarray(r["mc_rel_se"])) * 100 for r in rows]
+    ax.boxplot(ours, positions=pos - 0.18, widths=0.3, whis=(5, 95), showfliers=False, patch_artist=True,
+               boxprops={"facecolor": "tab:blue", "alpha": 0.6})
+    ax.boxplot(shape, positions=pos + 0.18, widths=0.3, whis=(5, 95), showfliers=False, patch_artist=True,
+               boxprops={"facecolor": "tab:orange", "alpha": 0.6})
+    ax.fill_between(pos, [-s for s in se], se, color="0.8", zorder=0, step="mid", label="MC 2 SE (median)")
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_xticks(pos, [f"{r['hour']} {r['kind'][0]}{'L' if r['low_sun'] else ''} {r['sun_zenith_deg']:.0f}"
+                        for r in rows], rotation=70, fontsize=7)
+    ax.set_ylim(-60, 60)
+    ax.set_xlabel("hour of year, kind (c/b/o, L low sun), sun zenith [deg]; whiskers 5-95 % of patches x 4 wavelengths")
+    ax.set_ylabel("relative to Monte Carlo [%]")
+    ax.set_title("skyscatter (blue) and gensdaymtx / its hourly median ratio (orange) vs Monte Carlo", fontsize=9)
+    ax.legend(loc="lower left", fontsize=7)
+    ax = axes[1]
+    for r in rows:
+        o = np.asarray(r["mc_rel"]).ravel()
+        ax.loglog(o, np.asarray(r["ours_rel_value"]).ravel(), ".", ms=3, color="tab:blue", alpha=0.6)
+        if r.get("gens_value") is not None:
+            ax.loglog(o, np.asarray(r["gens_value"]).ravel(), ".", ms=3, color="tab:orange", alpha=0.4)
+    lim = ax.get_xlim()
+    ax.plot(lim, lim, "k-", lw=0.7)
+    ax.set_xlabel("Monte Carlo reduced radiance [sr^-1]")
+    ax.set_ylabel("ours (blue), gensdaymtx as is (orange)")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+def save(res: dict, path: Path) -> None:
+    from skyscatter.fileio import atomic_path
+
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(res, indent=1))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--samples", type=int, default=1000)
     ap.add_argument("--hours", type=int, default=20)
     ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--pilot", type=int, default=512, help="pilot paths per direction and sky")
+    ap.add_argument("--target", type=float, default=0.025, help="p90 relative standard error per hour")
+    ap.add_argument("--max-samples", type=int, default=65536)
+    ap.add_argument("--budget", type=float, default=50.0, help="Monte Carlo CPU minutes in all")
+    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "spectral_skymatrix_montecarlo.json")
+    ap.add_argument("--radiance-dir", type=Path, default=None,
+                    help="gensdaymtx's working folder (its atmos_data cache); default SKYSCATTER_CACHE_DIR/radiance")
+    ap.add_argument("--until", default=None, help="UTC HH:MM: stop starting new Monte Carlo skies then")
+    ap.add_argument("--regens", type=Path, default=None,
+                    help="recompute gensdaymtx's columns of a results JSON (with its .jobs.pkl) and exit")
+    ap.add_argument("--plot", type=Path, default=None, help="only redraw the figure and print the table of a JSON")
+    ap.add_argument("--figure", type=Path, default=ROOT / "docs" / "images" / "spectral_skymatrix_montecarlo.png")
     args = ap.parse_args()
-    from skyscatter.atmosphere.clouds import CloudLayer
+    if args.regens is not None:
+        regens(args)
+        return
+    if args.plot is not None:
+        res = json.loads(args.plot.read_text())
+        plot(res, args.figure)
+        print("\n".join(summarise(res)))
+        print(f"wrote {args.figure}")
+        return
+    from skymatrix_mc import away_from_sun, matrix_directions, mc_reduced, patch_subset, pool
     from skyscatter.conventions import direction_from_angles
-    from skyscatter.fit.spectral_matrix import band_edges, spectral_sky_matrix
-    from skyscatter.fit.weather import BROKEN, CLEAR, CLOUDY, HOUR_STATUS, retrieve_hourly_atmosphere
-    from skyscatter.montecarlo import sky_radiance
-    from skyscatter.patches import patch_scheme
-    from skyscatter.precomputed.family import AXIS_SETTERS
+
+    c_start = time.process_time()
+    w_start = time.perf_counter()
+    stop = None
+    if args.until:
+        hh, mm = (int(x) for x in args.until.split(":"))
+        now = time.gmtime()
+        stop = time.time() + ((hh * 60 + mm) - (now.tm_hour * 60 + now.tm_min)) * 60.0 - now.tm_sec
+    jobs_path = args.out.with_suffix(".jobs.pkl")
+    if jobs_path.exists():
+        setup = load_setup(jobs_path)
+        print(f"setup read from {jobs_path}", flush=True)
+    else:
+        setup = prepare(args)
+        jobs_path.write_bytes(pickle.dumps(setup))
+    wl = np.array(WAVELENGTHS)
+    res = {k: v for k, v in setup.items() if k not in ("jobs", "dirs")}
+    res["directions"] = "the matrix's evaluation point of each patch (one equal-area cell: mid sin(altitude))"
+    res.update({"description": __doc__.split("\n\n")[0], "seed": args.seed, "wavelengths": list(WAVELENGTHS),
+                "pilot": args.pilot, "target": args.target, "budget_cpu_min": args.budget, "until_utc": args.until,
+                "hours": [], "load_average_start": list(os.getloadavg())})
+    n_skies = sum(len(j["parts"]) for j in setup["jobs"])
+    dirs_all = matrix_directions()
+    mc_cpu = 0.0
+    skies_done = 0
+    for job in setup["jobs"]:
+        i, kind, low = job["hour"], job["kind"], job["low_sun"]
+        zen, azi = job["sun_zenith"], job["sun_azimuth"]
+        sun = direction_from_angles(zen, azi)
+        dirs = dirs_all
+        patches = patch_subset(dirs, azi)
+        pd = dirs[patches]
+        r_mc = np.zeros((patches.size, wl.size))
+        var_mc = np.zeros_like(r_mc)
+        away = np.ones(patches.size, bool)
+        info = []
+        for part, (w, what, air) in enumerate(job["parts"]):
+            if stop is not None and time.time() > stop:
+                break
+            seed = 1000 * i + 10 * part
+            w0 = time.perf_counter()
+            m, s, n, c = mc_reduced(air, pd, wl, zen, azi, args.pilot, seed)
+            wall = time.perf_counter() - w0
+            mc_cpu += c
+            est = (m, s, n)
+            rel = np.percentile(s / m, 90)
+            left_skies = max(n_skies - skies_done, 1)
+            left = args.budget * 60.0 - mc_cpu
+            afford = int(n * max(left / left_skies, 0.0) / max(c, 1e-3))
+            if stop is not None:  # wall clock: the machine is shared, a CPU budget alone would overrun
+                afford = min(afford, int(n * max((stop - time.time()) / left_skies, 0.0) / max(wall, 1e-3)))
+            want = int(n * (rel / args.target) ** 2) - n
+            extra = int(min(want, afford, args.max_samples - n))
+            if extra >= 256:
+                m2, s2, n2, c2 = mc_reduced(air, pd, wl, zen, azi, extra, seed + 1)
+                mc_cpu += c2
+                c += c2
+                est = pool(est, (m2, s2, n2))
+            skies_done += 1
+            r_mc += w * est[0]
+            var_mc += (w * est[1]) ** 2
+            away &= away_from_sun(pd, sun, what)
+            info.append({"sky": what, "weight": w, "paths": int(est[2]), "cpu_s": c,
+                         "p90_rel_se": float(np.percentile(est[1] / est[0], 90)),
+                         "patches_all": patches.tolist(), "mc_rel": est[0].tolist(), "mc_rel_se": est[1].tolist()})
+        if len(info) < len(job["parts"]):
+            print(f"stopped at {args.until} UTC before hour {i} was finished", flush=True)
+            break
+        se_mc = np.sqrt(var_mc)
+        r_ours = job["ours"][patches]
+        row = {"hour": i, "kind": kind, "low_sun": low, "sun_zenith_deg": float(np.degrees(zen)),
+               "sun_azimuth_deg": float(np.degrees(azi)), **job["meta"],
+               "patches": patches[away].tolist(), "skies": info,
+               "mc_rel": r_mc[away].tolist(), "mc_rel_se": (se_mc / r_mc)[away].tolist(),
+               "ours_rel_value": r_ours[away].tolist(), "ours_rel": (r_ours / r_mc - 1)[away].tolist()}
+        if job["gens"] is not None:
+            r_g = job["gens"][patches]
+            ratio = (r_g / r_mc)[away]
+            scale = float(np.median(ratio))
+            row.update({"gens_value": r_g[away].tolist(), "gens_rel": (ratio - 1).tolist(),
+                        "gens_median_ratio": scale, "gens_shape_rel": (ratio / scale - 1).tolist()})
+        res["hours"].append(row)
+        res["mc_cpu_s"] = mc_cpu
+        res["cpu_s_total"] = time.process_time() - c_start
+        res["wall_s_total"] = time.perf_counter() - w_start
+        res["load_average_now"] = list(os.getloadavg())
+        save(res, args.out)
+        o = np.asarray(row["ours_rel"])
+        print(f"{kind:8s}{' low' if low else '    '} hour {i:5d} zenith {row['sun_zenith_deg']:5.1f}: "
+              + " + ".join(f"{x['sky']} {x['paths']} paths {x['cpu_s']:.0f} s" for x in info) + "; ours median "
+              f"{np.median(o) * 100:+.1f} %, p95 |.| {np.percentile(abs(o), 95) * 100:.1f} %, MC SE median "
+              f"{np.median(row['mc_rel_se']) * 100:.1f} %"
+              + (f"; gensdaymtx ratio {row['gens_median_ratio']:.3g}, shape p95 "
+                 f"{np.percentile(np.abs(row['gens_shape_rel']), 95) * 100:.1f} %" if job["gens"] is not None
+                 else ""), flush=True)
+    if res["hours"]:
+        print("\n".join(summarise(res)))
+        plot(res, args.figure)
+    print(f"Monte Carlo CPU {mc_cpu:.0f} s; wrote {args.out}, {args.figure}; load average {os.getloadavg()}")
+
+
+def gens_reduced(epw: Path, hours: list[int], cache: Path | None) -> dict[int, np.ndarray]:
+    """gensdaymtx's patches of ``hours`` over its bands' E0 and the eccentricity (145, 4) [sr^-1]."""
+    from skymatrix_mc import band_e0
+    from skyscatter.fit.spectral_matrix import band_edges
+
+    c20, edges20 = band_edges(20)
+    b_wl = [int(np.argmin(np.abs(c20 - w))) for w in WAVELENGTHS]
+    e0 = band_e0(edges20, b_wl)
+    gens = gensdaymtx_matrix(epw, cache)
+    from skyscatter.fit.weather import read_weather
+    from skyscatter.sky.perez import SOLAR_CONSTANT, extraterrestrial_irradiance
+
+    ecc = np.asarray(extraterrestrial_irradiance(read_weather(epw).day_of_year), dtype=float) / SOLAR_CONSTANT
+    return {i: gens[i][:, b_wl] / (e0 * ecc[i]) for i in hours}
+
+
+def regens(args) -> None:
+    """Redo gensdaymtx's columns of a results JSON (the year file is made again: same seed, same bytes)."""
     from weather_synth import write_year_epw
 
+    res = json.loads(args.regens.read_text())
+    cache = args.regens.with_suffix(".gens.npz")
+    if cache.exists():
+        with np.load(cache) as z:
+            g = {int(k): z[k] for k in z.files}
+    else:
+        epw = write_year_epw(Path(tempfile.mkdtemp(prefix="mc-spectral-")) / "year.epw")
+        t0 = time.perf_counter()
+        g = gens_reduced(epw, [int(p[0]) for p in res["picked"]], args.radiance_dir)
+        print(f"gensdaymtx -m 1 -s: {time.perf_counter() - t0:.0f} s")
+        np.savez(cache, **{str(k): v for k, v in g.items()})
+    for row in res["hours"]:
+        r_g = g[row["hour"]][row["patches"]]
+        ratio = r_g / np.asarray(row["mc_rel"])
+        scale = float(np.median(ratio))
+        row.update({"gens_value": r_g.tolist(), "gens_rel": (ratio - 1).tolist(), "gens_median_ratio": scale,
+                    "gens_shape_rel": (ratio / scale - 1).tolist(), "gens_options": "-m 1 -s"})
+    cloudysky_columns(res, load_setup(args.regens.with_suffix(".jobs.pkl")))
+    save(res, args.regens)
+
+
+def load_setup(path: Path) -> dict:
+    from skyscatter.atmosphere.clouds import CloudLayer
+
+    # CloudLayer refuses attribute assignment, which pickle's default state restore uses: allow it while loading
+    guard = CloudLayer.__setattr__
+    CloudLayer.__setattr__ = object.__setattr__
+    try:
+        return pickle.loads(path.read_bytes())
+    finally:
+        CloudLayer.__setattr__ = guard
+
+
+def cloudysky_columns(res: dict, setup: dict) -> None:
+    """For hours with an overcast part: CloudySky (DISORT, the model the matrix's overcast patches follow) at the
+    hour's exact optical depth and sun against that part's Monte Carlo (``cloudysky_vs_mc``), and ours against
+    the blend with CloudySky in place of the overcast Monte Carlo (``ours_vs_cloudysky_blend``): which of the two
+    steps (matrix vs its model, model vs the reference) a difference comes from."""
+    from skymatrix_mc import matrix_directions
+    from skyscatter.sky.cloudy import CloudySky
+
+    wl = np.array(res["wavelengths"])
+    dirs = matrix_directions()
+    jobs = {j["hour"]: j for j in setup["jobs"]}
+    for row in res["hours"]:
+        parts = {s["sky"]: s for s in row["skies"]}
+        if "overcast" not in parts or "mc_rel" not in parts["overcast"]:
+            continue
+        job = jobs[row["hour"]]
+        air = [a for _, what, a in job["parts"] if what == "overcast"][0]
+        air = air.replace(particles=air.particles[:-1])
+        pa = np.asarray(parts["overcast"]["patches_all"])
+        keep = np.isin(pa, row["patches"])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            sky = CloudySky(job["sun_zenith"], job["sun_azimuth"], cloud_optical_depth=row["cloud_optical_depth"],
+                            atmosphere=air)
+            cs = sky.spectral_radiance(dirs[pa], wl) / air.solar_irradiance_at(wl)
+        mc_o = np.asarray(parts["overcast"]["mc_rel"])
+        f = parts["overcast"]["weight"]
+        blend = f * cs + ((1 - f) * np.asarray(parts["clear"]["mc_rel"]) if "clear" in parts else 0.0)
+        row["cloudysky_vs_mc"] = (cs / mc_o - 1)[keep].tolist()
+        row["ours_vs_cloudysky_blend"] = (job["ours"][pa] / blend - 1)[keep].tolist()
+
+
+def prepare(args) -> dict:
+    """Retrieval, our matrix and gensdaymtx's on the made year; per picked hour the reduced patch radiances of
+    both (all 145 patches, the 4 wavelengths) and the Monte Carlo skies (weight, kind, air)."""
+    from skymatrix_mc import band_e0, parts_of
+    from skyscatter.fit.spectral_matrix import band_edges, spectral_sky_matrix
+    from skyscatter.fit.weather import HOUR_STATUS, retrieve_hourly_atmosphere
+    from skyscatter.patches import patch_scheme
+    from weather_synth import write_year_epw
+
+    w_start = time.perf_counter()
     work = Path(tempfile.mkdtemp(prefix="mc-spectral-"))
     epw = write_year_epw(work / "year.epw")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         h = retrieve_hourly_atmosphere(epw)
-    fam = h.family
     counts = {HOUR_STATUS[k]: int((h.status == k).sum()) for k in HOUR_STATUS}
-    print(f"retrieval: {counts}")
-    rng = np.random.default_rng(args.seed)
-    up = h.sun_zenith < np.radians(80)
-    n_clear = int(round(0.4 * args.hours))
-    n_broken = int(round(0.3 * args.hours))
-    picks = []
-    for kind, code, k in (("clear", CLEAR, n_clear), ("broken", BROKEN, n_broken),
-                          ("overcast", CLOUDY, args.hours - n_clear - n_broken)):
-        pool = np.flatnonzero((h.status == code) & up & ((code != CLOUDY) | ~(h.cloud_cover < 0.8)))
-        picks += [(int(i), kind) for i in rng.choice(pool, size=min(k, pool.size), replace=False)]
-    picks.sort()
+    print(f"retrieval: {counts} ({time.perf_counter() - w_start:.0f} s)", flush=True)
+    picks = pick_hours(h, args.hours, args.seed)
     geom = patch_scheme("tregenza")
-    dirs = geom.centre_directions
-    wl = np.array([450.0, 550.0, 650.0])
-    centres = [450.0 + d for d in (-5, 0, 5)] + [550.0 + d for d in (-5, 0, 5)] + [650.0 + d for d in (-5, 0, 5)]
+    wl = np.array(WAVELENGTHS)
+    centres = [w + d for w in WAVELENGTHS for d in (-5.0, 0.0, 5.0)]
+    k_ours = [1 + 3 * j for j in range(len(WAVELENGTHS))]
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ds = spectral_sky_matrix(None, scheme=geom, samples=1, bands=centres, atmosphere=h, gases=False)
-    print(f"our matrix (Tregenza, {len(centres)} bands, the whole year): {time.perf_counter() - t0:.1f} s")
-    k_ours = [1, 4, 7]  # the 5 nm bands centred on 450, 550, 650 nm
+    t_ours = time.perf_counter() - t0
+    print(f"our matrix (Tregenza, {len(centres)} bands, the whole year): {t_ours:.1f} s", flush=True)
     _, edges5 = band_edges(centres)
-    from skyscatter.atmosphere.gas_absorption import broadband_solar_spectrum
-
-    fw, fe = broadband_solar_spectrum()
-    e0_ours = np.array([np.interp(np.linspace(edges5[b], edges5[b + 1], 21), fw, fe).mean() for b in k_ours])
+    e0_ours = band_e0(edges5, k_ours)
     c20, edges20 = band_edges(20)
     b_wl = [int(np.argmin(np.abs(c20 - w))) for w in wl]
+    e0_gens = band_e0(edges20, b_wl)
+    t0 = time.perf_counter()
     try:
-        gens = gensdaymtx_matrix(epw)
+        gens = gensdaymtx_matrix(epw, args.radiance_dir)
+        print(f"gensdaymtx -m 1 (the whole year): {time.perf_counter() - t0:.1f} s", flush=True)
     except Exception as exc:  # noqa: BLE001 - the peer is optional
         print(f"gensdaymtx skipped: {exc}")
         gens = None
-    band_e0 = np.array([fe[(fw >= edges20[b]) & (fw <= edges20[b + 1])].mean() for b in b_wl])
-    rows = []
-    t0 = time.perf_counter()
-    table_air = h.cloud_table.atmosphere if h.cloud_table is not None else None
-
-    def mc_run(params, i, seed_offset=0):
-        return sky_radiance(params, dirs, wl, sun_zenith=float(h.sun_zenith[i]), sun_azimuth=float(h.sun_azimuth[i]),
-                            samples=args.samples, seed=int(i) + seed_offset)
-
-    for i, kind in picks:
-        tau, ssa = float(h.aerosol_optical_depth[i]), float(h.single_scattering_albedo[i])
-        sun = direction_from_angles(h.sun_zenith[i], h.sun_azimuth[i])
-        clear_air = AXIS_SETTERS["aerosol_single_scattering_albedo"](
-            AXIS_SETTERS["aerosol_optical_depth"](fam.base, tau), ssa)
-        parts = []
-        if kind in ("clear", "broken"):
-            mc = mc_run(clear_air, i)
-            parts.append((1.0 - (h.cloud_fraction[i] if kind == "broken" else 0.0), mc, clear_air))
-        if kind in ("broken", "overcast"):
-            cod = float(h.cloud_optical_depth[i])
-            cloudy_air = table_air.replace(particles=(*table_air.particles,
-                                                      CloudLayer(1000.0, 1500.0, cod, effective_radius=10e-6)))
-            mc = mc_run(cloudy_air, i, 1_000_003)
-            parts.append((h.cloud_fraction[i] if kind == "broken" else 1.0, mc, cloudy_air))
-        r_mc = sum(w * m.radiance / air.solar_irradiance_at(wl) for w, m, air in parts)
-        se_mc = np.sqrt(sum((w * m.stderr / air.solar_irradiance_at(wl)) ** 2 for w, m, air in parts))
-        r_ours = ds["sky_radiance"].values[i][:, k_ours] / (e0_ours * h.eccentricity[i])
-        away = (dirs @ sun) < np.cos(np.radians(10.0 if kind == "overcast" else 5.0))
-        d_ours = (r_ours / r_mc - 1)[away].ravel()
-        rel_err = float(np.median((se_mc / np.maximum(r_mc, 1e-30))[away]))
-        line = (f"{kind:8s} hour {i:5d} sun zenith {np.degrees(h.sun_zenith[i]):5.1f} deg, AOD {tau:.3f}"
-                + (f", cloud tau {h.cloud_optical_depth[i]:.1f}, f {h.cloud_fraction[i]:.2f}" if kind != "clear"
-                   else f", albedo {ssa:.3f}")
-                + f": ours vs MC median {np.median(d_ours) * 100:+.1f} %, |.| p95 "
-                  f"{np.percentile(abs(d_ours), 95) * 100:.1f} %")
-        shape = None
-        if gens is not None:
-            r_g = gens[i][:, b_wl] / (band_e0 * h.eccentricity[i])
-            scale = np.median((r_g / r_mc)[away])
-            shape = ((r_g / r_mc) / scale - 1)[away].ravel()
-            line += (f"; gensdaymtx / MC median ratio {scale:.3g}, after that scale median "
-                     f"{np.median(shape) * 100:+.1f} %, p95 {np.percentile(abs(shape), 95) * 100:.1f} %")
-        line += f" (MC median standard error {rel_err * 100:.1f} %)"
-        print(line, flush=True)
-        rows.append((i, kind, d_ours, shape, rel_err))
-    print(f"Monte Carlo time {time.perf_counter() - t0:.0f} s ({args.samples} paths per direction and run)")
-    for kind in ("clear", "broken", "overcast", "all"):
-        sel = [r for r in rows if kind in ("all", r[1])]
-        if not sel:
-            continue
-        a = np.concatenate([r[2] for r in sel])
-        se = [r[4] for r in sel]
-        line = (f"{kind:8s} ({len(sel)} h), ours vs MC: median {np.median(a) * 100:+.2f} %, median |.| "
-                f"{np.median(abs(a)) * 100:.2f} %, p95 |.| {np.percentile(abs(a), 95) * 100:.1f} % (MC standard "
-                f"error {min(se) * 100:.1f}-{max(se) * 100:.1f} %)")
-        if gens is not None:
-            g = np.concatenate([r[3] for r in sel])
-            line += (f"; gensdaymtx after each hour's median scale: median |.| {np.median(abs(g)) * 100:.2f} %, "
-                     f"p95 |.| {np.percentile(abs(g), 95) * 100:.1f} %")
-        print(line)
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, ax = plt.subplots(figsize=(10, 4))
-        pos = np.arange(len(rows))
-        ax.boxplot([r[2] * 100 for r in rows], positions=pos - 0.18, widths=0.3, showfliers=False,
-                   patch_artist=True, boxprops={"facecolor": "tab:blue", "alpha": 0.6})
-        if gens is not None:
-            ax.boxplot([r[3] * 100 for r in rows], positions=pos + 0.18, widths=0.3, showfliers=False,
-                       patch_artist=True, boxprops={"facecolor": "tab:orange", "alpha": 0.6})
-        ax.axhline(0, color="k", lw=0.8)
-        ax.set_xticks(pos, [f"{r[0]} {r[1][0]}" for r in rows], rotation=60, fontsize=7)
-        ax.set_xlabel("hour of the year (c clear, b broken, o overcast; 3 wavelengths x Tregenza patches away from "
-                      "the sun)")
-        ax.set_ylabel("relative to Monte Carlo [%]")
-        ax.set_title("patch radiance / Monte Carlo - 1: skyscatter (blue), gensdaymtx scaled by its median (orange)",
-                     fontsize=9)
-        fig.tight_layout()
-        out = ROOT / "docs" / "images" / "spectral_skymatrix_montecarlo.png"
-        fig.savefig(out, dpi=110)
-        print(f"wrote {out}")
-    except ImportError:
-        pass
-    print(f"load average {os.getloadavg()}")
+    jobs = []
+    for i, kind, low in picks:
+        ecc = float(h.eccentricity[i])
+        jobs.append({"hour": i, "kind": kind, "low_sun": low, "sun_zenith": float(h.sun_zenith[i]),
+                     "sun_azimuth": float(h.sun_azimuth[i]), "parts": parts_of(h, ds, i, kind),
+                     "ours": ds["sky_radiance"].values[i][:, k_ours] / (e0_ours * ecc),
+                     "gens": None if gens is None else gens[i][:, b_wl] / (e0_gens * ecc),
+                     "meta": {"aod": float(h.aerosol_optical_depth[i]),
+                              "ssa": float(ds["single_scattering_albedo"].values[i]),
+                              "cloud_optical_depth": float(h.cloud_optical_depth[i]),
+                              "cloud_fraction": float(h.cloud_fraction[i]), "status": HOUR_STATUS[int(h.status[i])],
+                              "dhi_closure": float(ds["dhi_closure"].values[i])}})
+    return {"epw": "tests/weather_synth.py write_year_epw seed 24", "retrieval_counts": counts,
+            "picked": [list(p) for p in picks], "our_matrix_seconds": t_ours,
+            "setup_wall_s": time.perf_counter() - w_start, "jobs": jobs}
 
 
 if __name__ == "__main__":
