@@ -455,6 +455,13 @@ def test_cloud_layer_optics_and_validation():
     assert CloudLayer(1000.0, 1500.0, liquid_water_path=lwp).optical_depth_550 == pytest.approx(15.0)
     atm = AtmosphereParameters(particles=(layer,))
     assert AtmosphereParameters.from_dict(atm.to_dict()).particles[0] == layer
+    # pickling (Dask's process workers) rebuilds the frozen layer exactly, given by optical depth or by LWP
+    import pickle
+
+    for c in (CloudLayer(500.0, 1500.0, 12.3, effective_radius=8e-6, effective_variance=0.13, name="st"),
+              CloudLayer(1000.0, 1500.0, liquid_water_path=lwp)):
+        back = pickle.loads(pickle.dumps(c))
+        assert back == c and back.to_dict() == c.to_dict() and back.optical_depth_550 == c.optical_depth_550
     for kw, msg in ((dict(base=1500.0, top=1000.0, optical_depth=5.0), "above the cloud base"),
                     (dict(base=0.0, top=100.0, optical_depth=-1.0), "optical depth"),
                     (dict(base=0.0, top=100.0, optical_depth=2000.0), "optical depth"),

@@ -620,6 +620,13 @@ class CloudLayer(ParticleComponent):
     def __setattr__(self, name: str, value: Any) -> None:
         raise AttributeError("CloudLayer is immutable; use replace()")
 
+    def __reduce__(self) -> tuple[Any, tuple[dict[str, Any]]]:
+        # pickle (Dask's distributed scheduler, process pools) would restore the slots by assignment, which the
+        # frozen layer refuses: rebuild it from its exact description instead
+        from .particles import particle_component_from_dict
+
+        return particle_component_from_dict, (self.to_dict(),)
+
     def _extinction_per_mass(self) -> float:
         """Mass extinction coefficient at 550 nm [m^2 kg^-1]: ``C_e / (rho_w 4/3 pi <r^3>)``."""
         from .size_distributions import ModifiedGammaMode
