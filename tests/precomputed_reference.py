@@ -81,18 +81,20 @@ def _cs_phase(nu: float, g: float) -> float:
     return 3 / (8 * np.pi) * (1 - g * g) * (1 + nu * nu) / ((2 + g * g) * (1 + g * g - 2 * g * nu) ** 1.5)
 
 
-def single_scattering(r: float, mu: float, mu_s: float, nu: float, params: AtmosphereParameters, wl: np.ndarray,
-                      n: int = 800) -> np.ndarray:
-    """Singly scattered radiance [W m^-2 sr^-1 nm^-1] seen from (r, mu) with the sun at (mu_s, nu).
+def single_scattering_integrals(r: float, mu: float, mu_s: float, nu: float, params: AtmosphereParameters,
+                                wl: np.ndarray, n: int = 800, pieces: int = 24,
+                                first: float = 1e-4) -> tuple[np.ndarray, np.ndarray]:
+    """``integral rho_i(y) T(x, y) T_sun(y) dy`` for Rayleigh and the aerosol (i = R, M) along the ray from
+    (r, mu), the sun at (mu_s, nu): what the single-scattering tables hold per unit solar irradiance and scattering
+    coefficient, (n_wl,) each [m]. Point sun; the view and sun optical depths integrated along each path.
 
-    The sun is a point source (the visible-disc fraction is ignored; tests avoid the horizon of the sun).
-    """
+    Gauss-Legendre on ``pieces`` pieces growing geometrically from ``first`` of the ray's length (dense near the
+    start, where the aerosols are), ``n`` points in all."""
     d_end, _ = ray_end(r, mu, params)
-    # Dense near the start where the aerosols are: Gauss-Legendre on pieces growing geometrically.
-    edges = np.concatenate([[0.0], d_end * np.geomspace(1e-4, 1.0, 24)])
+    edges = np.concatenate([[0.0], d_end * np.geomspace(first, 1.0, pieces)])
     ts, ws = [], []
     for a, b in zip(edges[:-1], edges[1:], strict=False):
-        t, w = _gauss(max(n // 24, 8), a, b)
+        t, w = _gauss(max(n // pieces, 8), a, b)
         ts.append(t)
         ws.append(w)
     t = np.concatenate(ts)
@@ -105,8 +107,20 @@ def single_scattering(r: float, mu: float, mu_s: float, nu: float, params: Atmos
     tau_sun = optical_depth(ry, mu_s_y, d_sun, params, wl, n=160)
     tr = np.exp(-tau_view - tau_sun) * (~blocked)[:, None]
     h = ry - params.bottom_radius
-    ray = (params.rayleigh_density(h)[:, None] * tr * w[:, None]).sum(0) * params.rayleigh_scattering_at(wl)
-    mie = (params.aerosol_component.density(h)[:, None] * tr * w[:, None]).sum(0) * params.mie_scattering_at(wl)
+    ray = (params.rayleigh_density(h)[:, None] * tr * w[:, None]).sum(0)
+    mie = (params.aerosol_component.density(h)[:, None] * tr * w[:, None]).sum(0)
+    return ray, mie
+
+
+def single_scattering(r: float, mu: float, mu_s: float, nu: float, params: AtmosphereParameters, wl: np.ndarray,
+                      n: int = 800) -> np.ndarray:
+    """Singly scattered radiance [W m^-2 sr^-1 nm^-1] seen from (r, mu) with the sun at (mu_s, nu).
+
+    The sun is a point source (the visible-disc fraction is ignored; tests avoid the horizon of the sun).
+    """
+    ray, mie = single_scattering_integrals(r, mu, mu_s, nu, params, wl, n)
+    ray = ray * params.rayleigh_scattering_at(wl)
+    mie = mie * params.mie_scattering_at(wl)
     p_r = 3 / (16 * np.pi) * (1 + nu * nu)
     return params.solar_irradiance_at(wl) * (ray * p_r + mie * aerosol_phase(nu, params, wl))
 

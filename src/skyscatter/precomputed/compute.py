@@ -143,6 +143,12 @@ class Medium:
                    atmosphere.mie_scattering_at(wavelengths), atmosphere.ozone_absorption_at(wavelengths),
                    atmosphere.ground_albedo_at(wavelengths), atmosphere.solar_irradiance_at(wavelengths))
 
+    @property
+    def extinction(self) -> F64:
+        """Extinction coefficients at relative density 1 [m^-1] of the three profiles of :func:`density_profiles`
+        (Rayleigh, aerosol, ozone absorption), (3, n_wavelengths): the kernels' optical depths along their rays."""
+        return np.ascontiguousarray(np.stack([self.rayleigh_scattering, self.mie_extinction, self.ozone_absorption]))
+
     def channels(self, ch: NDArray[np.intp]) -> Medium:
         """The same medium at the wavelengths of indices ``ch`` (a chunk)."""
         table = self.mie_kind == TABLE_PHASE
@@ -203,8 +209,7 @@ def transmittance_table(medium: Medium, sizes: TableSizes) -> F32:
     lengths = np.zeros((*sizes.transmittance_shape, 3))
     parallel_for(kernels.optical_length_kernel, lengths.shape[0] * lengths.shape[1], medium.bottom, medium.top,
                  medium.profiles, medium.counts, sizes.transmittance_samples, lengths, grain=64)
-    coef = np.stack([medium.rayleigh_scattering, medium.mie_extinction, medium.ozone_absorption])  # (3, n_wl)
-    return np.exp(-(lengths @ coef)).astype(np.float32)
+    return np.exp(-(lengths @ medium.extinction)).astype(np.float32)
 
 
 def direct_irradiance(medium: Medium, sizes: TableSizes, transmittance: F32) -> F32:
@@ -227,8 +232,8 @@ def single_scattering(medium: Medium, sizes: TableSizes, transmittance: F32,
     rayleigh = np.zeros((len(rows), *sizes.scattering_shape[1:], transmittance.shape[-1]), dtype=np.float32)
     mie = np.zeros_like(rayleigh)
     parallel_for(kernels.single_scattering_kernel, rows.stop * n_mu, transmittance, medium.bottom, medium.top,
-                 medium.mu_s_min, medium.sun_angular_radius, medium.profiles, medium.counts, sizes.ray_samples,
-                 n_r, rayleigh, mie, rows.start, begin=rows.start * n_mu)
+                 medium.mu_s_min, medium.sun_angular_radius, medium.profiles, medium.counts, medium.extinction,
+                 sizes.ray_samples, n_r, rayleigh, mie, rows.start, begin=rows.start * n_mu)
     rayleigh *= (medium.solar_irradiance * medium.rayleigh_scattering).astype(np.float32)
     mie *= (medium.solar_irradiance * medium.mie_scattering).astype(np.float32)
     return rayleigh, mie
@@ -278,7 +283,7 @@ def multiple_scattering(medium: Medium, sizes: TableSizes, transmittance: F32, d
     out = np.zeros((len(rows), *density.shape[1:]), dtype=np.float32)
     parallel_for(kernels.multiple_scattering_kernel, rows.stop * sizes.scattering_mu, transmittance,
                  density, medium.rayleigh_scattering, medium.mie_scattering, medium.profiles, medium.counts,
-                 medium.bottom, medium.top, medium.mu_s_min, sizes.ray_samples, out, rows.start,
+                 medium.extinction, medium.bottom, medium.top, medium.mu_s_min, sizes.ray_samples, out, rows.start,
                  begin=rows.start * sizes.scattering_mu)
     return out
 
