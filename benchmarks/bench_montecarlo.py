@@ -111,9 +111,12 @@ def overcast(args) -> None:
     med = float(np.median(pilot.relative_stderr))
     need = pilot.samples * (med / 0.01) ** 2
     rate = n_paths / cpu
+    sd = med * math.sqrt(pilot.samples)  # per-path relative standard deviation
     print(f"4. overcast tau 15: {rate:,.0f} paths per CPU-second on one thread, {pilot.mean_vertices:.1f} scattering "
           f"events per path ({rate * pilot.mean_vertices:,.0f} events per CPU-second); pilot median relative stderr "
-          f"{med:.3f} at {pilot.samples} paths -> {need:,.0f} paths per direction for 1 %, "
+          f"{med:.3f} at {pilot.samples} paths (per-path relative standard deviation {sd:.2f}; efficiency "
+          f"1 / (variance x CPU time per path) {rate / sd**2:,.0f}) -> "
+          f"{need:,.0f} paths per direction for 1 %, "
           f"{200 * need / rate:,.0f} CPU-s = {200 * need / rate / 2 / 60:.0f} min on 2 cores")
     samples = args.overcast_samples or int(min(65536, math.ceil(need / 512) * 512))
     res = sky_radiance(atm, dirs, WAVELENGTHS, sun_zenith=sz, samples=samples, seed=7)
