@@ -448,27 +448,45 @@ def _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t
         if not live:
             return False
     w = 1.0
-    marched = False
     if rr_depth < _NEE_STOP:
         _, deep, _ = _march(px, py, pz, wx, wy, wz, te, rr_depth, kmin, rb, edges, layers, nlay, tot, tmp, rec, False)
-        if deep:
-            if next_uniform(st) >= _NEE_SURVIVAL:
-                return False
-            w = 1.0 / _NEE_SURVIVAL
-        else:
-            marched = True  # to the top: ``tot`` holds the whole columns
-    if not marched:
-        # stop once even the least extinguished wavelength is blocked (exp(-50))
-        _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, tot, tmp, rec,
-                              False)
-        if opaque:
+        if not deep:
+            _transmittances(coef_t, tot, tau, out)  # marched to the top: ``tot`` holds the whole columns
+        elif next_uniform(st) >= _NEE_SURVIVAL:
             return False
-    _optical_depths(coef_t, tot, tau)
+        else:
+            w = 1.0 / _NEE_SURVIVAL
+            if not _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges, layers, nlay, tot, tmp,
+                                         rec, tau, out):
+                return False
+    elif not _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges, layers, nlay, tot, tmp, rec,
+                                   tau, out):
+        return False
     for i in range(n):
-        tr = math.exp(-tau[i])
         if field:
-            tr *= trf[i]
-        out[i] = tr * w
+            out[i] *= trf[i]
+        out[i] *= w
+    return True
+
+
+@helper
+def _transmittances(coef_t, cols, tau, out):
+    """``out[i] = exp(-tau[i])`` with ``tau`` the optical depths of the columns ``cols`` (:func:`_optical_depths`)."""
+    _optical_depths(coef_t, cols, tau)
+    for i in range(out.shape[0]):
+        out[i] = math.exp(-tau[i])
+
+
+@helper
+def _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges, layers, nlay, tot, tmp, rec, tau, out):
+    """The shells' part of :func:`_sun_transmittance` (all of it in a clear medium, whose kernel does not call
+    that: a call passing the field's arrays at every vertex cost the clear sky some 10 %; at medium vertices it
+    marches itself, one call fewer): ``out[i]`` the transmittance along the ray, False where the least extinguished
+    wavelength's optical depth passes ``_NEE_STOP`` (exp(-50))."""
+    _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, tot, tmp, rec, False)
+    if opaque:
+        return False
+    _transmittances(coef_t, tot, tau, out)
     return True
 
 
@@ -937,10 +955,19 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                         wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
                         te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
                         tsun = 0.0
-                        if not blocked and _sun_transmittance(
-                                px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb, edges, layers, nlay,
-                                fs, fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp,
-                                rec, tau, trf, trs):
+                        if blocked:
+                            live = False
+                        elif clouds_on:
+                            live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb,
+                                                      edges, layers, nlay, fs, fsmax, fsmin, fvf, fvi, frho, fbmax,
+                                                      fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf, trs)
+                        else:
+                            _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay,
+                                                  tot, tmp, rec, False)
+                            live = not opaque
+                            if live:
+                                _transmittances(coef_t, tot, tau, trs)
+                        if live:
                             mw = wx * dx + wy * dy + wz * dz
                             _phase_sums(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, False)
                             if peak and not first:
@@ -1020,9 +1047,15 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                         cs = wx * nx + wy * ny + wz * nz
                         if cs > 0.0:
                             te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
-                            if _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb, edges,
-                                                  layers, nlay, fs, fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe,
-                                                  fye, fre, st, fstate, tot, tmp, rec, tau, trf, trs):
+                            if clouds_on:
+                                live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb,
+                                                          edges, layers, nlay, fs, fsmax, fsmin, fvf, fvi, frho, fbmax,
+                                                          fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf,
+                                                          trs)
+                            else:
+                                live = _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges,
+                                                             layers, nlay, tot, tmp, rec, tau, trs)
+                            if live:
                                 for i in range(n):
                                     contrib[i] += f[i] * albedo[i] / math.pi * cs * esun[i] * trs[i]
                         if peak:
