@@ -65,9 +65,8 @@ Estimator (backward paths from the observer; [Veach1997] Ch. 8-9):
   sun's light below 3e-4 there), the ray is continued with probability ``_NEE_SURVIVAL`` = 0.1 and its
   transmittance divided by it. Unbiased (tested against the estimator without it); deep in a thick cloud most
   shadow rays would otherwise march through every shell above the cloud for nothing (overcast of optical depth
-  15: 1.5x the paths per CPU-second at the same variance, docs/clouds.md). Clear media do not use it: their
-  kernel is compiled without the cloud code (``trace_block``'s ``cloudy``), so their results and speed are those
-  of the kernels before the clouds;
+  15: 1.6x the paths per CPU-second at the same per-path variance, docs/clouds.md). Clear media do not use it:
+  their kernel is compiled without the cloud code (``trace_block``'s ``cloudy``), and pays nothing for it;
 * absorption (particle albedos, ozone) enters as a weight, never as termination;
 * directional importance sampling towards the sun (the "DDIS" of [BurasMayer2011] Sec. 3.3, here for backward
   paths), optional: with probability ``ddis`` the new direction is drawn from the cloud's own phase function (the
@@ -787,7 +786,7 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     with probability ``_NEE_SURVIVAL`` only (``_sun_transmittance``; inf or >= ``_NEE_STOP``: never).
     cloudy : None for a medium without a field, a forward peak or directional sampling (then those are off whatever
     the arguments before say), else any array. Numba compiles a separate kernel for ``None`` in which the tests
-    below are the constant False and LLVM removes the cloud code: the clear sky runs as fast as before the clouds.
+    below are the constant False and LLVM removes the cloud code.
     seed, group, batch0 : RNG counters (batch numbers batch0 .. batch0 + n_batches - 1).
     sums, sumsq : (n, n_wl, n_batches) outputs: per batch, sum and sum of squares of the per-path estimate.
     vertices_out : (n, n_batches) output: per batch, the number of scattering and ground vertices of its paths.
