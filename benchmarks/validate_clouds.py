@@ -12,9 +12,10 @@ Sections (``python benchmarks/validate_clouds.py SECTION [--scale S]``; ``all`` 
   DISORT (disortpp, 64 streams, the Legendre moments of the same phase table, delta-M and the Nakajima-Tanaka
   intensity correction, 100 layers): diffuse ground irradiance and radiance 10 deg or more above the horizon.
 * ``waterclouds-irradiance`` - the ground diffuse irradiance of ``waterclouds`` alone, 12 of its cases (minutes).
-* ``waterclouds-radiance`` - the radiance of ``waterclouds`` alone, the same 12 cases, 6 views each (zenith 0, 60,
-  80 deg; azimuth 90 and 180 deg from the sun; those 25 deg or more from the sun compared): per view the relative
-  difference and z-score, per case the largest, and the mean relative difference over all views.
+* ``waterclouds-radiance`` - the radiance of ``waterclouds`` alone, the same 12 cases (``--cases rest``: the other
+  24; ``all``: the 36), 6 views each (zenith 0, 60, 80 deg; azimuth 90 and 180 deg from the sun; those 25 deg or
+  more from the sun compared): per view the relative difference and z-score, per case the largest, and the mean
+  relative difference over all views.
 * ``overcast`` - the luminance gradation under a thick stratus (optical depth 30, base 500 m, top 1000 m,
   Earth air, ground albedo 0.2) against the CIE overcast sky (1 + 2 sin h) / 3, and the correlated colour
   temperature of the diffuse light at sun elevations 60, 30, 10 deg.
@@ -212,17 +213,23 @@ IRRADIANCE_CASES = ((5, "alone", 0.0, 0), (15, "alone", 0.0, 30), (30, "alone", 
                     (15, "rayleigh", 0.6, 60), (30, "rayleigh", 0.6, 0), (5, "rayleigh", 0.0, 60),
                     (15, "rayleigh", 0.0, 0), (30, "rayleigh", 0.0, 30), (5, "alone", 0.6, 60),
                     (15, "alone", 0.6, 0), (30, "alone", 0.6, 30))
+#: All 36 water-cloud cases, in the same order as ``waterclouds``.
+ALL_CASES = tuple((tau, air, albedo, sun) for tau in (5, 15, 30) for air in ("alone", "rayleigh")
+                  for albedo in (0.0, 0.6) for sun in (0, 30, 60))
+#: The 24 cases not in IRRADIANCE_CASES.
+REST_CASES = tuple(c for c in ALL_CASES if c not in IRRADIANCE_CASES)
+CASE_SETS = {"first12": IRRADIANCE_CASES, "rest": REST_CASES, "all": ALL_CASES}
 
 
-def waterclouds_irradiance(scale):
+def waterclouds_irradiance(scale, cases=IRRADIANCE_CASES):
     """The ground diffuse irradiance of ``waterclouds`` alone (forward photons, 20000 x scale per case; no
-    radiances: seconds per case) for the cases of IRRADIANCE_CASES."""
+    radiances: seconds per case) for ``cases`` (default IRRADIANCE_CASES)."""
     wl = 550.0
     n = int(20_000 * scale)
     hg = AnalyticParticles("x", DensityProfile.uniform(), 1.0, 1.0, "henyey-greenstein", 0.85)
     empty = CloudField(np.zeros((1, 1, 1)), 1000.0, 0.0, 1000.0, hg, origin=(0.0, 0.0))
     rel = []
-    for tau, air, albedo, sun in IRRADIANCE_CASES:
+    for tau, air, albedo, sun in cases:
         layer = CloudLayer(1000.0, 1500.0, float(tau), effective_radius=10e-6, effective_variance=0.1)
         kw = dict(rayleigh_scattering=0.0) if air == "alone" else {}
         atm = AtmosphereParameters(bottom_radius=RB, top_radius=RB + 60000.0, mie_angstrom_beta=0.0,
@@ -241,15 +248,15 @@ def waterclouds_irradiance(scale):
           f"{np.max(np.abs(rel)):.2%}")
 
 
-def waterclouds_radiance(scale):
-    """The radiance of ``waterclouds`` for the cases of IRRADIANCE_CASES (16384 x scale paths per view)."""
+def waterclouds_radiance(scale, cases=IRRADIANCE_CASES):
+    """The radiance of ``waterclouds`` for ``cases`` (default IRRADIANCE_CASES; 16384 x scale paths per view)."""
     wl = 550.0
     n = int(16384 * scale)
     vz = np.radians([0.0, 60.0, 80.0])
     va = np.radians([90.0, 180.0])
     dirs = np.array([[math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z)] for z in vz for a in va])
     rels, zs, bad = [], [], 0
-    for tau, air, albedo, sun in IRRADIANCE_CASES:
+    for tau, air, albedo, sun in cases:
         layer = CloudLayer(1000.0, 1500.0, float(tau), effective_radius=10e-6, effective_variance=0.1)
         kw = dict(rayleigh_scattering=0.0) if air == "alone" else {}
         atm = AtmosphereParameters(bottom_radius=RB, top_radius=RB + 60000.0, mie_angstrom_beta=0.0,
@@ -270,7 +277,7 @@ def waterclouds_radiance(scale):
               f"z {', '.join(f'{v:+.1f}' for v in z)}; median rel stderr {np.median(err[keep] / rad[keep]):.2%}; "
               f"{mc.mean_vertices:.1f} events per path ({time.perf_counter() - t0:.0f} s)", flush=True)
     rels, zs = np.array(rels), np.array(zs)
-    print(f"waterclouds-radiance: {rels.size} views in {len(IRRADIANCE_CASES)} cases, {n} paths each; mean rel "
+    print(f"waterclouds-radiance: {rels.size} views in {len(cases)} cases, {n} paths each; mean rel "
           f"{rels.mean():+.2%} +- {rels.std(ddof=1) / math.sqrt(rels.size):.2%}, max |rel| {np.max(np.abs(rels)):.2%}, "
           f"max |z| {np.max(np.abs(zs)):.1f}; views off by more than 2 % + 3 standard errors: {bad}")
 
@@ -343,10 +350,15 @@ def main() -> None:
     ap.add_argument("section", choices=["i3rc", "disort5", "waterclouds", "waterclouds-irradiance",
                                         "waterclouds-radiance", "overcast", "overcast-cct", "all"])
     ap.add_argument("--scale", type=float, default=1.0)
+    ap.add_argument("--cases", choices=sorted(CASE_SETS), default="first12",
+                    help="water-cloud cases of waterclouds-irradiance / -radiance: the first 12, the other 24, all 36")
     args = ap.parse_args()
     print(f"machine: {len(os.sched_getaffinity(0))} cores, load average {os.getloadavg()[0]:.1f} at start")
     for name in (["i3rc", "disort5", "waterclouds", "overcast"] if args.section == "all" else [args.section]):
-        globals()[name.replace("-", "_")](args.scale)
+        if name.startswith("waterclouds-"):
+            globals()[name.replace("-", "_")](args.scale, CASE_SETS[args.cases])
+        else:
+            globals()[name.replace("-", "_")](args.scale)
     print(f"load average at the end {os.getloadavg()[0]:.1f}")
 
 

@@ -44,6 +44,10 @@ DDIS_PROBABILITY = 0.0
 #: docstring, "forward peak"): next-event estimates use the phase function without it, chains of peak scatterings
 #: sampled about the sun carry it. 10 deg: the efficiency measured in docs/clouds.md (2 deg: 3x lower).
 PEAK_ANGLE = math.radians(10.0)
+#: Optical depth (least extinguished wavelength) along a next-event shadow ray of a cloudy medium from which the ray
+#: is continued by Russian roulette only (``kernels._sun_transmittance``; the sun's light there is below
+#: exp(-8) = 3e-4 of its value). math.inf: never. Clear media do not use it.
+NEE_ROULETTE_DEPTH = 8.0
 
 
 @dataclass(frozen=True)
@@ -118,6 +122,13 @@ class Medium:
     pval: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros((1, 2)))
     pcdf: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros((1, 2)))
     pa: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(1))
+    nee_roulette: float = math.inf
+
+    @property
+    def cloud_paths(self) -> bool:
+        """Whether the kernels need their cloud code (a field, a forward peak, directional sampling); without it
+        they run a separate compilation with that code removed (``kernels.trace_block``'s ``cloudy``)."""
+        return bool(self.field.present or self.peak_lobe >= 0 or self.ddis > 0.0 or self.nee_roulette < math.inf)
 
     def subset(self, index: NDArray[np.int64]) -> Medium:
         """The same medium at a subset of its wavelengths."""
@@ -300,7 +311,7 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
         np.ascontiguousarray(atmosphere.solar_irradiance_at(wl), dtype=float),
         atmosphere.sun_angular_radius, field, field_exact, np.ascontiguousarray(fs, dtype=float),
         np.ascontiguousarray(fss, dtype=float), DDIS_PROBABILITY if cloudy else 0.0, ddis_lobe, peak_lobe, pval,
-        pcdf, pa,
+        pcdf, pa, NEE_ROULETTE_DEPTH if cloudy else math.inf,
     )
 
 
@@ -363,6 +374,9 @@ def wavelength_groups(n: int, group_size: int = DEFAULT_GROUP_SIZE) -> list[NDAr
 
 # --------------------------------------------------------------------------------------------- tasks
 
+#: The kernels' ``cloudy`` marker for media that need the cloud code (any array; None compiles it out).
+_CLOUDY = np.zeros(1)
+
 
 def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float64], dirs: NDArray[np.float64],
               mode: NDArray[np.int64], sun: NDArray[np.float64], dir_index: NDArray[np.int64], group: int,
@@ -379,8 +393,9 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
     kernels.trace_block(origins, jitter, dirs, mode, dir_index, sun, math.cos(m.sun_angular_radius),
                         m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.scat, m.lobe, m.lobe_g,
                         m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe,
-                        f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa, seed, group,
-                        batch0, n_batches, batch_size, sums, sumsq, verts)
+                        f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa,
+                        m.nee_roulette, _CLOUDY if m.cloud_paths else None, seed, group, batch0, n_batches,
+                        batch_size, sums, sumsq, verts)
     return sums, sumsq, verts
 
 
