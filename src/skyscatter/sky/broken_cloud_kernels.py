@@ -13,8 +13,9 @@ import math
 
 import numpy as np
 
-from ..jit import CONTRACT_ARCP, helper, kernel
+from ..jit import CONTRACT_ARCP, helper, inline, kernel
 from ..montecarlo.tracking import box_clip, field_transmittance
+from ..precomputed.geometry import bilinear_weights
 
 __all__ = ["march_rays", "shadow_volume", "ground_shadow"]
 
@@ -113,6 +114,20 @@ def _wrap(u, n):
     """``u`` [voxels] folded into ``[0, n)`` (periodic sides): a float floor instead of an integer modulo."""
     u -= math.floor(u / n) * n
     return u if u < n else 0.0
+
+
+@inline
+def _field_coords(px, py, pz, x0, y0, inv_dx, inv_dy, inv_dz, rbase, nx, ny, nz, periodic):
+    """Continuous voxel coordinates ``(fx, fy, fz)`` of ``p`` (voxel ``i`` spans ``[i, i + 1)``; x and y folded
+    into the field when it is periodic), its distance from the planet's centre [m] and whether it is inside."""
+    fx = (px - x0) * inv_dx
+    fy = (py - y0) * inv_dy
+    if periodic:
+        fx = _wrap(fx, nx)
+        fy = _wrap(fy, ny)
+    r = math.sqrt(px * px + py * py + pz * pz)
+    fz = (r - rbase) * inv_dz
+    return fx, fy, fz, r, (0.0 <= fx < nx and 0.0 <= fy < ny and 0.0 <= fz < nz)
 
 
 @kernel(fastmath=CONTRACT_ARCP)
@@ -232,13 +247,9 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
                 py = oy + t * dy
                 pz = oz + t * dz
                 # the voxel at t: in an empty block, jump to the block's exit
-                fx = (px - x0) * inv_dx
-                fy = (py - y0) * inv_dy
-                if periodic:
-                    fx = _wrap(fx, nx)
-                    fy = _wrap(fy, ny)
-                fz = (math.sqrt(px * px + py * py + pz * pz) - rbase) * inv_dz
-                if 0.0 <= fx < nx and 0.0 <= fy < ny and 0.0 <= fz < nz:
+                fx, fy, fz, rr, inside = _field_coords(px, py, pz, x0, y0, inv_dx, inv_dy, inv_dz, rbase, nx, ny, nz,
+                                                       periodic)
+                if inside:
                     ix = int(fx)
                     iy = int(fy)
                     iz = int(fz)
@@ -255,14 +266,9 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
                 px = ox + tm * dx
                 py = oy + tm * dy
                 pz = oz + tm * dz
-                fx = (px - x0) * inv_dx
-                fy = (py - y0) * inv_dy
-                if periodic:
-                    fx = _wrap(fx, nx)
-                    fy = _wrap(fy, ny)
-                rr = math.sqrt(px * px + py * py + pz * pz)
-                fz = (rr - rbase) * inv_dz
-                if not (0.0 <= fx < nx and 0.0 <= fy < ny and 0.0 <= fz < nz):
+                fx, fy, fz, rr, inside = _field_coords(px, py, pz, x0, y0, inv_dx, inv_dy, inv_dz, rbase, nx, ny, nz,
+                                                       periodic)
+                if not inside:
                     continue
                 iz = int(fz)
                 if linear:
@@ -283,14 +289,15 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
                         k0 = 0
                         k1 = 0
                         fw = 0.0
-                    w000 = (1.0 - fu) * (1.0 - fv) * (1.0 - fw)
-                    w100 = fu * (1.0 - fv) * (1.0 - fw)
-                    w010 = (1.0 - fu) * fv * (1.0 - fw)
-                    w110 = fu * fv * (1.0 - fw)
-                    w001 = (1.0 - fu) * (1.0 - fv) * fw
-                    w101 = fu * (1.0 - fv) * fw
-                    w011 = (1.0 - fu) * fv * fw
-                    w111 = fu * fv * fw
+                    q00, q01, q10, q11 = bilinear_weights(fu, fv)
+                    w000 = q00 * (1.0 - fw)
+                    w100 = q10 * (1.0 - fw)
+                    w010 = q01 * (1.0 - fw)
+                    w110 = q11 * (1.0 - fw)
+                    w001 = q00 * fw
+                    w101 = q10 * fw
+                    w011 = q01 * fw
+                    w111 = q11 * fw
                     r = (w000 * vol[i0, j0, k0, 0] + w100 * vol[i0 + 1, j0, k0, 0] + w010 * vol[i0, j0 + 1, k0, 0]
                          + w110 * vol[i0 + 1, j0 + 1, k0, 0] + w001 * vol[i0, j0, k1, 0]
                          + w101 * vol[i0 + 1, j0, k1, 0] + w011 * vol[i0, j0 + 1, k1, 0]
