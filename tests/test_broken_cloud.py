@@ -79,6 +79,21 @@ def test_transmittance_of_a_uniform_layer_is_exact(elevation):
     np.testing.assert_allclose(-np.log(tr[0]), expected, rtol=2e-6)
 
 
+@pytest.mark.parametrize("altitude", [0.0, 500.0])
+def test_views_into_the_ground_stop_there(altitude):
+    """From an eye on the ground (or below the cloud base) the views below the horizon end on the ground: no cloud,
+    transmittance 1 (the ground sphere is met at t = 0 up to rounding from an eye on it; such rays once went on
+    through the planet to the layer on its far side), while the views above meet the layer."""
+    sky = BrokenCloudSky(SUN_Z, SUN_A, clouds=_layer(5.0), altitude=altitude)
+    # 2 deg below the horizon: below the horizon's dip from 500 m (0.72 deg), so every one of these meets the ground
+    down = _dirs([-2.0, -5.0, -30.0, -60.0, -89.0], [0.0, 45.0, 135.0, 200.0, 290.0])
+    rad, tr, _, hit = sky.march(down)
+    assert not hit.any()
+    assert np.all(tr == 1.0) and np.all(rad == 0.0)
+    _, _, _, hit_up = sky.march(_dirs([5.0, 45.0, 89.0], [0.0, 135.0]))
+    assert hit_up.all()
+
+
 def test_transmittance_of_layers_within_the_step_bound():
     """Four layers of different density: the midpoint steps straddle the layer boundaries; each straddling step
     errs by at most (step) x (density jump), so the optical depth is within sum |jump| x step of the analytic."""

@@ -48,8 +48,8 @@ from numpy.typing import NDArray
 from ..jit import helper, inline
 from .rng import next_uniform
 
-__all__ = ["PackedField", "STOP_OPTICAL_DEPTH", "empty_field", "field_box_hit", "field_density", "field_density_at",
-           "field_free_path", "field_transmittance", "pack_grid"]
+__all__ = ["PackedField", "STOP_OPTICAL_DEPTH", "box_clip", "empty_field", "field_box_hit", "field_density",
+           "field_density_at", "field_free_path", "field_transmittance", "pack_grid"]
 
 #: Control optical depth beyond which a shadow ray counts as blocked (exp(-50) = 2e-22).
 STOP_OPTICAL_DEPTH = 50.0
@@ -114,6 +114,30 @@ def _inner_root(b, c, radius):
 
 
 @helper
+def box_clip(ox, oy, dx, dy, x0, y0, lx, ly, ta, tb):
+    """The part of ``[ta, tb]`` of the ray ``o + t d`` over the horizontal box ``[x0, x0 + lx] x [y0, y0 + ly]``
+    (slabs of vertical planes, [m]); ``tb = -inf`` when the ray runs parallel to a side outside the box, else
+    ``ta >= tb`` when it misses. Shared by the Monte Carlo's open fields and the ray march of
+    :mod:`skyscatter.sky.broken_cloud_kernels`."""
+    for axis in range(2):
+        o = ox if axis == 0 else oy
+        d = dx if axis == 0 else dy
+        lo = x0 if axis == 0 else y0
+        hi = lo + (lx if axis == 0 else ly)
+        if d == 0.0:
+            if o < lo or o > hi:
+                return ta, -_INF
+        else:
+            t1 = (lo - o) / d
+            t2 = (hi - o) / d
+            if t1 > t2:
+                t1, t2 = t2, t1
+            ta = max(ta, t1)
+            tb = min(tb, t2)
+    return ta, tb
+
+
+@helper
 def field_box_hit(ox, oy, oz, dx, dy, dz, t_end, vf):
     """``(ta, tb)``: the part of ``[0, t_end]`` of the ray ``o + t d`` inside the field's horizontal box (all of it
     for a periodic field) and between the spheres of its bottom and top; ``ta >= tb`` when the ray misses it.
@@ -121,21 +145,9 @@ def field_box_hit(ox, oy, oz, dx, dy, dz, t_end, vf):
     ta = 0.0
     tb = t_end
     if vf[PERIODIC] == 0.0:
-        for axis in range(2):
-            o = ox if axis == 0 else oy
-            d = dx if axis == 0 else dy
-            lo = vf[X0] if axis == 0 else vf[Y0]
-            hi = lo + (vf[LX] if axis == 0 else vf[LY])
-            if d == 0.0:
-                if o < lo or o > hi:
-                    return 0.0, -1.0
-            else:
-                t1 = (lo - o) / d
-                t2 = (hi - o) / d
-                if t1 > t2:
-                    t1, t2 = t2, t1
-                ta = max(ta, t1)
-                tb = min(tb, t2)
+        ta, tb = box_clip(ox, oy, dx, dy, vf[X0], vf[Y0], vf[LX], vf[LY], ta, tb)
+        if tb == -_INF:
+            return 0.0, -1.0
     b = ox * dx + oy * dy + oz * dz
     c = ox * ox + oy * oy + oz * oz
     rt = vf[R_TOP]

@@ -12,10 +12,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 
-from ..jit import helper, kernel, parallel_kernel
-from ..montecarlo.tracking import field_transmittance
+from ..jit import CONTRACT_ARCP, helper, inline, kernel
+from ..montecarlo.tracking import box_clip, field_transmittance
+from ..precomputed.geometry import bilinear_weights
 
 __all__ = ["march_rays", "shadow_volume", "ground_shadow"]
 
@@ -35,70 +35,6 @@ def _sphere_roots(b, c, radius):
         return math.inf, -math.inf
     s = math.sqrt(disc)
     return -b - s, -b + s
-
-
-@helper
-def _voxel(px, py, pz, gf, nx, ny, nz):
-    """Voxel indices of ``p`` and whether it is inside the field."""
-    ix = int(math.floor((px - gf[G_X0]) / gf[G_DX]))
-    iy = int(math.floor((py - gf[G_Y0]) / gf[G_DY]))
-    if gf[G_PERIODIC] != 0.0:
-        ix %= nx
-        iy %= ny
-    elif ix < 0 or ix >= nx or iy < 0 or iy >= ny:
-        return 0, 0, 0, False
-    r = math.sqrt(px * px + py * py + pz * pz)
-    iz = int(math.floor((r - gf[G_RBASE]) / gf[G_DZ]))
-    if iz < 0 or iz >= nz:
-        return 0, 0, 0, False
-    return ix, iy, iz, True
-
-
-@helper
-def _trilinear(vol, fx, fy, fz, periodic):
-    """Trilinear interpolation of a cell-centred volume at continuous voxel coordinates ``(fx, fy, fz)`` (voxel
-    ``i`` spans ``[i, i + 1)``): periodic or clamped in x and y, clamped in z (a horizontally uniform field
-    stays uniform up to its faces)."""
-    nx, ny, nz = vol.shape
-    u = fx - 0.5
-    v = fy - 0.5
-    w = min(max(fz - 0.5, 0.0), nz - 1.0)
-    i0 = int(math.floor(u))
-    j0 = int(math.floor(v))
-    k0 = min(int(math.floor(w)), nz - 2) if nz > 1 else 0
-    fu = u - i0
-    fv = v - j0
-    fw = w - k0 if nz > 1 else 0.0
-    i1 = i0 + 1
-    j1 = j0 + 1
-    if periodic:
-        i0 %= nx
-        i1 %= nx
-        j0 %= ny
-        j1 %= ny
-    else:
-        if i0 < 0:
-            i0 = 0
-            fu = 0.0
-        if i1 > nx - 1:
-            i1 = nx - 1
-        if i0 > nx - 1:
-            i0 = nx - 1
-        if j0 < 0:
-            j0 = 0
-            fv = 0.0
-        if j1 > ny - 1:
-            j1 = ny - 1
-        if j0 > ny - 1:
-            j0 = ny - 1
-    k1 = k0 + 1 if nz > 1 else 0
-    c00 = vol[i0, j0, k0] * (1.0 - fu) + vol[i1, j0, k0] * fu
-    c10 = vol[i0, j1, k0] * (1.0 - fu) + vol[i1, j1, k0] * fu
-    c01 = vol[i0, j0, k1] * (1.0 - fu) + vol[i1, j0, k1] * fu
-    c11 = vol[i0, j1, k1] * (1.0 - fu) + vol[i1, j1, k1] * fu
-    c0 = c00 * (1.0 - fv) + c10 * fv
-    c1 = c01 * (1.0 - fv) + c11 * fv
-    return c0 * (1.0 - fw) + c1 * fw
 
 
 @kernel
@@ -173,32 +109,62 @@ def _block_exit(px, py, pz, dx, dy, dz, ix, iy, iz, gf, bsize, nx, ny, nz):
     return max(t, 0.0)
 
 
-@parallel_kernel
-def march_rays(origin, dirs, sun, gf, rho, occupied, bsize, tau_sun, tau_above, tau_below, k, albedo, ph_mu, ph_val,
-               g, solar, mu0, dmu, t_atm, e_down, e_up, mp, n_octaves, linear, thin_aware, radiance, transmittance,
-               depth, hit):
-    """March view rays ``dirs`` (n, 3) from ``origin`` (3,) through the field (module docstring of
-    :mod:`.broken_cloud`): the cloud's radiance reaching the eye through the cloud ``radiance`` (n, n_wl) [W m^-2
-    sr^-1 nm^-1], the cloud's transmittance along the ray ``transmittance`` (n, n_wl), the mean depth of the light's
-    last scattering ``depth`` (n,) [m] (weights ``T (1 - exp(-sigma dt))`` at the first wavelength) and ``hit`` (n,)
-    (the ray met cloud). ``occupied`` (nbx, nby, nbz): 1 where a block of ``bsize`` voxels holds cloud (empty
-    blocks are crossed in one step). ``tau_sun``, ``tau_above``, ``tau_below``: optical depths at the reference
-    wavelength from each voxel centre to the sun, to the field's top and to its base (vertically). ``k`` (n_wl,)
-    extinction relative to the reference wavelength, ``albedo`` single-scattering albedo; ``ph_mu`` (m,),
-    ``ph_val`` (n_wl, m) the droplets' phase table; ``g`` its asymmetry; ``solar`` the extraterrestrial irradiance
-    [W m^-2 nm^-1]; ``t_atm`` (nz, n_mu, n_wl) the clear air's transmittance to the sun and ``e_down`` (nz, n_mu,
-    n_wl) its diffuse irradiance on a horizontal plane [W m^-2 nm^-1] at each voxel layer, for the sun cosines ``mu0
-    + i dmu``; ``e_up`` (n_wl,) the ground's upward irradiance [W m^-2 nm^-1]. ``mp``: a, b, c, d (octaves and
-    ambient extinction), the step as a fraction of the voxel along the axis the ray crosses fastest [-], the
-    level-of-detail factor (step >= lod * distance) and the ray start distance. ``linear``: the densities and
-    optical depths interpolated trilinearly between voxel centres (smooth cloud edges; ``occupied`` must then count
-    a voxel's neighbours); else constant per voxel (the field's definition, the Monte Carlo's). ``thin_aware``:
-    octave ``i`` weighted by ``(1 - exp(-tau_column))^i`` (:mod:`.broken_cloud`).
+@helper
+def _wrap(u, n):
+    """``u`` [voxels] folded into ``[0, n)`` (periodic sides): a float floor instead of an integer modulo."""
+    u -= math.floor(u / n) * n
+    return u if u < n else 0.0
+
+
+@inline
+def _field_coords(px, py, pz, x0, y0, inv_dx, inv_dy, inv_dz, rbase, nx, ny, nz, periodic):
+    """Continuous voxel coordinates ``(fx, fy, fz)`` of a point ``p`` of the march's segments (voxel ``i`` spans
+    ``[i, i + 1)``; x and y folded into the field when it is periodic), its distance from the planet's centre [m]
+    and whether it is over the field's box. The segments lie between the base and top spheres by construction, so
+    ``fz`` is clamped into ``[0, nz)``: a segment starting on the base sphere (a view from below) computes a radius a
+    rounding below it, and a test on ``fz`` then skipped the segment's first step (54 m of cloud at 60 deg)."""
+    fx = (px - x0) * inv_dx
+    fy = (py - y0) * inv_dy
+    if periodic:
+        fx = _wrap(fx, nx)
+        fy = _wrap(fy, ny)
+    r = math.sqrt(px * px + py * py + pz * pz)
+    fz = min(max((r - rbase) * inv_dz, 0.0), nz * (1.0 - 1e-12))
+    return fx, fy, fz, r, (0.0 <= fx < nx and 0.0 <= fy < ny)
+
+
+@kernel(fastmath=CONTRACT_ARCP)
+def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g, solar, mu0, dmu, src_sun, src_amb,
+               amb_up, mp, n_octaves, linear, thin_aware, radiance, transmittance, depth, hit, start, stop):
+    """March view rays ``dirs[start:stop]`` (of (n, 3)) from ``origin`` (3,) through the field (module docstring of
+    :mod:`.broken_cloud`; called through :func:`skyscatter.precomputed.parallel.parallel_for`, no allocation per
+    ray): the cloud's radiance reaching the eye through the cloud ``radiance`` (n, n_wl) [W m^-2 sr^-1 nm^-1], the
+    cloud's transmittance along the ray ``transmittance`` (n, n_wl), the mean depth of the light's last scattering
+    ``depth`` (n,) [m] (weights ``T (1 - exp(-sigma dt))`` at the first wavelength) and ``hit`` (n,) (the ray met
+    cloud).
+
+    ``vol`` (nx + 2, ny + 2, nz, 4): per voxel centre the extinction at the reference wavelength [m^-1], the
+    optical depths at the reference wavelength to the sun, to the field's top and to its base (vertically), with
+    one ghost voxel on each horizontal side (the opposite side's for periodic fields, the edge voxel repeated
+    for open ones), so that the interpolation needs no modulo and no clamping in x and y; float32 (relative
+    rounding 6e-8, far below the march's own error). ``occupied`` (nx, ny, nz): 1 where the voxel's block of
+    ``bsize`` voxels holds cloud (empty blocks are crossed in one step). ``k`` (n_wl,) extinction relative to the
+    reference wavelength; ``ph_mu`` (m,), ``ph_val`` (n_wl, m) the droplets' phase table; ``g`` its asymmetry;
+    ``solar`` the extraterrestrial irradiance [W m^-2 nm^-1]; ``src_sun`` (nz, n_mu, n_wl) the single-scattering
+    albedo times the clear air's transmittance to the sun, ``src_amb`` (nz, n_mu, n_wl) the albedo times the clear
+    air's diffuse irradiance on a horizontal plane / (2 pi) [W m^-2 nm^-1 sr^-1] at each voxel layer, for the sun
+    cosines ``mu0 + i dmu``; ``amb_up`` (n_wl,) the albedo times the ground's upward irradiance / (2 pi). ``mp``:
+    a, b, c, d (octaves and ambient extinction), the step as a fraction of the voxel along the axis the ray crosses
+    fastest [-], the level-of-detail factor (step >= lod * distance) and the ray start distance. ``linear``: the
+    densities and optical depths interpolated trilinearly between voxel centres (smooth cloud edges; ``occupied``
+    must then count a voxel's neighbours); else constant per voxel (the field's definition, the Monte Carlo's).
+    ``thin_aware``: octave ``i`` weighted by ``(1 - exp(-tau_column))^i`` (:mod:`.broken_cloud`).
     """
-    n = dirs.shape[0]
     nwl = k.shape[0]
-    nx, ny, nz = rho.shape
-    nmu = t_atm.shape[1]
+    nx = vol.shape[0] - 2
+    ny = vol.shape[1] - 2
+    nz = vol.shape[2]
+    nmu = src_sun.shape[1]
     m = ph_mu.shape[0]
     a = mp[M_A]
     b = mp[M_B]
@@ -209,76 +175,56 @@ def march_rays(origin, dirs, sun, gf, rho, occupied, bsize, tau_sun, tau_above, 
     ox = origin[0]
     oy = origin[1]
     oz = origin[2]
+    x0 = gf[G_X0]
+    y0 = gf[G_Y0]
+    inv_dx = 1.0 / gf[G_DX]
+    inv_dy = 1.0 / gf[G_DY]
+    inv_dz = 1.0 / gf[G_DZ]
+    rbase = gf[G_RBASE]
     four_pi = 4.0 * math.pi
-    inv_two_pi = 0.5 / math.pi
+    periodic = gf[G_PERIODIC] != 0.0
     kbar = 0.0
     for wl in range(nwl):
         kbar += k[wl] / nwl
+    # the wavelength of the smallest extinction keeps the largest transmittance (every step's factor decreases with
+    # k): the march stops when it is below T_STOP
+    wl_min = 0
     dk = np.empty(nwl)
     dkmax = 0.0
     for wl in range(nwl):
         dk[wl] = k[wl] - kbar
         dkmax = max(dkmax, abs(dk[wl]))
-    periodic = gf[G_PERIODIC] != 0.0
-    for ray in prange(n):
+        if k[wl] < k[wl_min]:
+            wl_min = wl
+    tr = np.empty(nwl)
+    acc = np.empty(nwl)
+    w = np.empty((n_octaves, nwl))
+    direct = np.empty(nwl)
+    for ray in range(start, stop):
         dx = dirs[ray, 0]
         dy = dirs[ray, 1]
         dz = dirs[ray, 2]
         # the step: ``step_fraction`` of the voxel along the axis the ray crosses fastest (the altitude's rate taken
         # at the eye: further out the planet's curvature steepens it by at most t / R)
-        rate = max(abs(dx) / gf[G_DX], abs(dy) / gf[G_DY], abs(dz) / gf[G_DZ])
+        rate = max(abs(dx) * inv_dx, abs(dy) * inv_dy, abs(dz) * inv_dz)
         step0 = step_fraction / rate
-        tr = np.ones(nwl)
-        acc = np.zeros(nwl)
-        w = np.empty((n_octaves, nwl))
-        direct = np.empty(nwl)
-        # phase of each octave towards the eye (a function of the ray only: the sun's rays are parallel)
-        # cosine of the scattering angle: the sunlight's direction of travel (-s) . the light's towards the eye (-d)
-        mu = dx * sun[0] + dy * sun[1] + dz * sun[2]
-        lo = 0
-        hi = m - 1
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if ph_mu[mid] <= mu:
-                lo = mid
-            else:
-                hi = mid
-        f = (mu - ph_mu[lo]) / (ph_mu[hi] - ph_mu[lo]) if ph_mu[hi] > ph_mu[lo] else 0.0
-        f = min(max(f, 0.0), 1.0)
         for wl in range(nwl):
-            p0 = ph_val[wl, lo] * (1.0 - f) + ph_val[wl, hi] * f
-            w[0, wl] = solar[wl] * p0
-            scale = 1.0
-            gi = g[wl]
-            for o in range(1, n_octaves):
-                scale *= b
-                gi *= c
-                hg = (1.0 - gi * gi) / (four_pi * (1.0 + gi * gi - 2.0 * gi * mu) ** 1.5)
-                w[o, wl] = solar[wl] * scale * hg
+            tr[wl] = 1.0
+            acc[wl] = 0.0
         # the part of the ray inside the shell between base and top, before the ground
         bb = ox * dx + oy * dy + oz * dz
         cc = ox * ox + oy * oy + oz * oz
         ta, tb = _sphere_roots(bb, cc, gf[G_RTOP])
         ta = max(ta, mp[M_TMIN])
         tg0, tg1 = _sphere_roots(bb, cc, gf[G_RGROUND])
-        if tg0 > 0.0 and tg0 < tb:
-            tb = tg0
-        tc, td = _sphere_roots(bb, cc, gf[G_RBASE])
+        if bb < 0.0 and tg1 > 0.0:
+            # a ray heading into the ground stops there; from an eye on the ground (tg0 = 0 up to rounding) at once,
+            # not through the planet to the clouds on its far side
+            tb = min(tb, max(tg0, 0.0))
+        tc, td = _sphere_roots(bb, cc, rbase)
         # open sides: the part of the ray over the box
-        if gf[G_PERIODIC] == 0.0:
-            for axis in range(2):
-                o_ = ox if axis == 0 else oy
-                d_ = dx if axis == 0 else dy
-                lo_ = gf[G_X0] if axis == 0 else gf[G_Y0]
-                hi_ = lo_ + (gf[G_LX] if axis == 0 else gf[G_LY])
-                if d_ == 0.0:
-                    if o_ < lo_ or o_ > hi_:
-                        tb = -math.inf
-                else:
-                    t1 = (lo_ - o_) / d_
-                    t2 = (hi_ - o_) / d_
-                    ta = max(ta, min(t1, t2))
-                    tb = min(tb, max(t1, t2))
+        if not periodic:
+            ta, tb = box_clip(ox, oy, dx, dy, x0, y0, gf[G_LX], gf[G_LY], ta, tb)
         wsum = 0.0
         wdepth = 0.0
         met = False
@@ -303,40 +249,114 @@ def march_rays(origin, dirs, sun, gf, rho, occupied, bsize, tau_sun, tau_above, 
                 px = ox + t * dx
                 py = oy + t * dy
                 pz = oz + t * dz
-                ix, iy, iz, inside = _voxel(px, py, pz, gf, nx, ny, nz)
-                if inside and occupied[ix // bsize, iy // bsize, iz // bsize] == 0:
-                    t += _block_exit(px, py, pz, dx, dy, dz, ix, iy, iz, gf, bsize, nx, ny, nz) + 1e-3
-                    continue
-                if not inside:
+                # the voxel at t: in an empty block, jump to the block's exit
+                fx, fy, fz, rr, inside = _field_coords(px, py, pz, x0, y0, inv_dx, inv_dy, inv_dz, rbase, nx, ny, nz,
+                                                       periodic)
+                if inside:
+                    ix = int(fx)
+                    iy = int(fy)
+                    iz = int(fz)
+                    if occupied[ix, iy, iz] == 0:
+                        t += _block_exit(px, py, pz, dx, dy, dz, ix, iy, iz, gf, bsize, nx, ny, nz) + 1e-3
+                        continue
+                else:
                     t += step
                     continue
+                # midpoint sample of the step
                 h = min(step, s1 - t)
                 tm = t + 0.5 * h
+                t += h
                 px = ox + tm * dx
                 py = oy + tm * dy
                 pz = oz + tm * dz
-                ix, iy, iz, inside = _voxel(px, py, pz, gf, nx, ny, nz)
-                t += h
+                fx, fy, fz, rr, inside = _field_coords(px, py, pz, x0, y0, inv_dx, inv_dy, inv_dz, rbase, nx, ny, nz,
+                                                       periodic)
                 if not inside:
                     continue
-                rr = math.sqrt(px * px + py * py + pz * pz)
+                iz = int(fz)
                 if linear:
-                    fx = (px - gf[G_X0]) / gf[G_DX]
-                    fy = (py - gf[G_Y0]) / gf[G_DY]
-                    fz = (rr - gf[G_RBASE]) / gf[G_DZ]
-                    r = _trilinear(rho, fx, fy, fz, periodic)
+                    # trilinear between voxel centres: ghost voxels in x and y, clamped in z (a horizontally uniform
+                    # field stays uniform up to its faces)
+                    u = fx + 0.5
+                    v = fy + 0.5
+                    i0 = int(u)
+                    j0 = int(v)
+                    fu = u - i0
+                    fv = v - j0
+                    if nz > 1:
+                        ww = min(max(fz - 0.5, 0.0), nz - 1.0)
+                        k0 = min(int(ww), nz - 2)
+                        fw = ww - k0
+                        k1 = k0 + 1
+                    else:
+                        k0 = 0
+                        k1 = 0
+                        fw = 0.0
+                    q00, q01, q10, q11 = bilinear_weights(fu, fv)
+                    w000 = q00 * (1.0 - fw)
+                    w100 = q10 * (1.0 - fw)
+                    w010 = q01 * (1.0 - fw)
+                    w110 = q11 * (1.0 - fw)
+                    w001 = q00 * fw
+                    w101 = q10 * fw
+                    w011 = q01 * fw
+                    w111 = q11 * fw
+                    r = (w000 * vol[i0, j0, k0, 0] + w100 * vol[i0 + 1, j0, k0, 0] + w010 * vol[i0, j0 + 1, k0, 0]
+                         + w110 * vol[i0 + 1, j0 + 1, k0, 0] + w001 * vol[i0, j0, k1, 0]
+                         + w101 * vol[i0 + 1, j0, k1, 0] + w011 * vol[i0, j0 + 1, k1, 0]
+                         + w111 * vol[i0 + 1, j0 + 1, k1, 0])
                     if r <= 0.0:
                         continue
-                    ts = _trilinear(tau_sun, fx, fy, fz, periodic)
-                    tup = _trilinear(tau_above, fx, fy, fz, periodic)
-                    tdn = _trilinear(tau_below, fx, fy, fz, periodic)
+                    ts = 0.0
+                    tup = 0.0
+                    tdn = 0.0
+                    for q in range(1, 4):
+                        val = (w000 * vol[i0, j0, k0, q] + w100 * vol[i0 + 1, j0, k0, q]
+                               + w010 * vol[i0, j0 + 1, k0, q] + w110 * vol[i0 + 1, j0 + 1, k0, q]
+                               + w001 * vol[i0, j0, k1, q] + w101 * vol[i0 + 1, j0, k1, q]
+                               + w011 * vol[i0, j0 + 1, k1, q] + w111 * vol[i0 + 1, j0 + 1, k1, q])
+                        if q == 1:
+                            ts = val
+                        elif q == 2:
+                            tup = val
+                        else:
+                            tdn = val
                 else:
-                    r = rho[ix, iy, iz]
+                    ix = int(fx) + 1
+                    iy = int(fy) + 1
+                    r = float(vol[ix, iy, iz, 0])
                     if r <= 0.0:
                         continue
-                    ts = tau_sun[ix, iy, iz]
-                    tup = tau_above[ix, iy, iz]
-                    tdn = tau_below[ix, iy, iz]
+                    ts = float(vol[ix, iy, iz, 1])
+                    tup = float(vol[ix, iy, iz, 2])
+                    tdn = float(vol[ix, iy, iz, 3])
+                if not met:
+                    # phase of each octave towards the eye (a function of the ray only: the sun's rays are parallel),
+                    # computed at the ray's first cloud sample (rays that meet none never need it)
+                    # cosine of the scattering angle: the sunlight's direction of travel (-s) . the light's towards
+                    # the eye (-d)
+                    mu = dx * sun[0] + dy * sun[1] + dz * sun[2]
+                    lo = 0
+                    hi = m - 1
+                    while hi - lo > 1:
+                        mid = (lo + hi) // 2
+                        if ph_mu[mid] <= mu:
+                            lo = mid
+                        else:
+                            hi = mid
+                    f = (mu - ph_mu[lo]) / (ph_mu[hi] - ph_mu[lo]) if ph_mu[hi] > ph_mu[lo] else 0.0
+                    f = min(max(f, 0.0), 1.0)
+                    for wl in range(nwl):
+                        p0 = ph_val[wl, lo] * (1.0 - f) + ph_val[wl, hi] * f
+                        w[0, wl] = solar[wl] * p0
+                        scale = 1.0
+                        gi = g[wl]
+                        for o in range(1, n_octaves):
+                            scale *= b
+                            gi *= c
+                            q = 1.0 + gi * gi - 2.0 * gi * mu
+                            hg = (1.0 - gi * gi) / (four_pi * q * math.sqrt(q))  # q**1.5 by a square root, not a pow
+                            w[o, wl] = solar[wl] * scale * hg
                 met = True
                 # the sun's cosine at the point and the clear air's light there (linear in mu)
                 mus = (px * sun[0] + py * sun[1] + pz * sun[2]) / rr
@@ -345,56 +365,58 @@ def march_rays(origin, dirs, sun, gf, rho, occupied, bsize, tau_sun, tau_above, 
                 j = min(int(fm), nmu - 2)
                 fm -= j
                 # the sun's octaves: exp(-a^i tau k_l) = exp(-x kbar) exp(-x dk_l), x = a^i tau; the second factor by
-                # its Taylor polynomial where x max|dk| < 0.02 (error below 1.4e-6), else exactly
+                # its Taylor polynomial where x max|dk| < 0.02 (error below 1.4e-6), else exactly. Octave i scatters i
+                # more times: in a column of vertical optical depth tau_c the chance of each further scattering is
+                # taken as 1 - exp(-tau_c) (thin wisps do not multiply-scatter)
+                pc = -math.expm1(-(tup + tdn)) if thin_aware else 1.0
+                att = 1.0
+                pw = 1.0
                 for wl in range(nwl):
                     direct[wl] = 0.0
-                att = 1.0
-                # octave i scatters i more times: in a column of vertical optical depth tau_c the chance of each
-                # further scattering is taken as 1 - exp(-tau_c) (thin wisps do not multiply-scatter)
-                pc = -math.expm1(-(tup + tdn)) if thin_aware else 1.0
-                pw = 1.0
                 for o in range(n_octaves):
                     x = att * ts
                     att *= a
                     po = pw
                     pw *= pc
-                    if x * kbar > 40.0:
+                    if x * kbar > 40.0 or po == 0.0:
                         continue
-                    base = po * math.exp(-x * kbar)
                     if x * dkmax < 0.02:
+                        cb = po * math.exp(-x * kbar)
+                        cx = cb * x
+                        cxx = 0.5 * cx * x
                         for wl in range(nwl):
-                            y = x * dk[wl]
-                            direct[wl] += w[o, wl] * base * (1.0 - y + 0.5 * y * y)
+                            e = dk[wl]
+                            direct[wl] += w[o, wl] * (cb - e * cx + e * e * cxx)
                     else:
                         for wl in range(nwl):
                             direct[wl] += po * w[o, wl] * math.exp(-x * k[wl])
+                # the step's transmittance exp(-x k_l), x = sigma h: the same expansion about kbar
                 x = r * h
                 base = math.exp(-x * kbar)
                 poly = x * dkmax < 0.02
-                wmax = 0.0
+                bx = base * x
+                bxx = 0.5 * bx * x
+                amb_down = 1.0 if dd == 0.0 else math.exp(-dd * tup * kbar)
+                t0 = tr[0]
                 for wl in range(nwl):
-                    kk = k[wl]
-                    tatm = t_atm[iz, j, wl] * (1.0 - fm) + t_atm[iz, j + 1, wl] * fm
-                    edn = e_down[iz, j, wl] * (1.0 - fm) + e_down[iz, j + 1, wl] * fm
-                    if dd != 0.0:
-                        amb = (edn * math.exp(-dd * tup * kk) + e_up[wl] * math.exp(-dd * tdn * kk)) * inv_two_pi
+                    ssun = src_sun[iz, j, wl] * (1.0 - fm) + src_sun[iz, j + 1, wl] * fm
+                    samb = src_amb[iz, j, wl] * (1.0 - fm) + src_amb[iz, j + 1, wl] * fm
+                    if dd == 0.0:
+                        src = direct[wl] * ssun + samb + amb_up[wl]
                     else:
-                        amb = (edn + e_up[wl]) * inv_two_pi
-                    src = albedo[wl] * (direct[wl] * tatm + amb)
+                        src = (direct[wl] * ssun + samb * amb_down * math.exp(-dd * tup * dk[wl])
+                               + amb_up[wl] * math.exp(-dd * tdn * k[wl]))
                     if poly:
-                        y = x * dk[wl]
-                        step_t = base * (1.0 - y + 0.5 * y * y)
+                        e = dk[wl]
+                        step_t = base - e * bx + e * e * bxx
                     else:
-                        step_t = math.exp(-x * kk)
+                        step_t = math.exp(-x * k[wl])
                     acc[wl] += tr[wl] * (1.0 - step_t) * src
-                    if wl == 0:
-                        wgt = tr[0] * (1.0 - step_t)
-                        wsum += wgt
-                        wdepth += wgt * tm
                     tr[wl] *= step_t
-                    if tr[wl] > wmax:
-                        wmax = tr[wl]
-                if wmax < T_STOP:
+                wgt = t0 - tr[0]
+                wsum += wgt
+                wdepth += wgt * tm
+                if tr[wl_min] < T_STOP:
                     done = True
                     break
             if done:
@@ -404,4 +426,3 @@ def march_rays(origin, dirs, sun, gf, rho, occupied, bsize, tau_sun, tau_above, 
             transmittance[ray, wl] = tr[wl]
         depth[ray] = wdepth / wsum if wsum > 0.0 else 0.0
         hit[ray] = met
-

@@ -9,6 +9,7 @@ import numpy as np
 from numba import prange
 
 from ..jit import parallel_kernel
+from ..precomputed.geometry import bilinear_weights
 
 __all__ = ["grid_lookup", "patch_field_lookup"]
 
@@ -64,10 +65,7 @@ def patch_field_lookup(fields, k, a, j, b, sun_azimuth, cell_it, cell_u, cell_az
         j0 = j[h]
         wa = a[h]
         wb = b[h]
-        w00 = (1.0 - wa) * (1.0 - wb)
-        w01 = (1.0 - wa) * wb
-        w10 = wa * (1.0 - wb)
-        w11 = wa * wb
+        w00, w01, w10, w11 = bilinear_weights(wa, wb)
         for c in range(nc):
             rel = cell_azimuth[c] - sun_azimuth[h]
             rel = abs((rel + math.pi) % (2.0 * math.pi) - math.pi)
@@ -76,10 +74,7 @@ def patch_field_lookup(fields, k, a, j, b, sun_azimuth, cell_it, cell_u, cell_az
             v = min(1.0, max(0.0, (rel - phi_nodes[ip]) / (phi_nodes[ip + 1] - phi_nodes[ip])))
             it = cell_it[c]
             u = cell_u[c]
-            q00 = (1.0 - u) * (1.0 - v)
-            q01 = (1.0 - u) * v
-            q10 = u * (1.0 - v)
-            q11 = u * v
+            q00, q01, q10, q11 = bilinear_weights(u, v)
             p = cell_patch[c]
             cw = cell_weight[c]
             for w in range(nw):
