@@ -307,7 +307,7 @@ def run_spectral(args: argparse.Namespace) -> int:
     if closure.size:
         print(f"clear hours: DNI closure within {np.nanmax(np.abs(dni_c)) * 100:.2g} %, DHI closure of the matrix "
               f"within {np.nanmax(np.abs(closure)) * 100:.2g} %")
-    for code, what in ((4, "cloudy"), (6, "broken")):
+    for code, what in ((4, "cloudy"), (6, "broken"), (8, "broken, enhanced diffuse (by construction)")):
         c = ds["dhi_closure"].values[st == code]
         c = c[np.isfinite(c)]
         if c.size:

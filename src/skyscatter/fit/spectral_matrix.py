@@ -27,12 +27,13 @@ Radiances are scaled by the day's Sun-Earth distance (Spencer 1971).
 clear hours come from the family's tables; cloudy (overcast) hours from the cloud table of the retrieval
 (:class:`~skyscatter.fit.weather.CloudTable`: the radiance of the fast cloudy sky at the hour's cloud optical
 depth and sun, :func:`_cloud_patches`); broken hours are the blend ``(1 - f) clear + f overcast`` of
-:func:`~skyscatter.fit.weather.fit_broken_sky` (an approximation); low-sun hours the stated fallback of the
-retrieval. Hours without a retrieved sky (cloudy not retrieved, invalid records; ``status``, see
-:data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN, so that nothing downstream mistakes them for a sky; the
+:func:`~skyscatter.fit.weather.fit_broken_sky` (an approximation); broken hours brighter than any blend get its stated
+enhanced-diffuse rule (the closest blend's sun, its overcast sky term scaled to the record's DHI); low-sun hours the
+stated fallback of the retrieval. Hours without a retrieved sky (cloudy not retrieved, invalid records; ``status``,
+see :data:`~skyscatter.fit.weather.HOUR_STATUS`) are NaN, so that nothing downstream mistakes them for a sky; the
 ``status`` and ``reason`` variables say why. ``dhi_matrix`` is the broadband diffuse horizontal irradiance of the
-matrix itself (patch radiances at the table wavelengths integrated over the patches' solid angles and carried
-to broadband as in the retrieval): ``dhi_matrix / dhi - 1`` is the closure of the matrix.
+matrix itself (patch radiances at the table wavelengths integrated over the patches' solid angles and carried to
+broadband as in the retrieval): ``dhi_matrix / dhi - 1`` is the closure of the matrix.
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ from .weather import (
     CLEAR,
     CLEAR_OPEN,
     CLOUDY,
+    ENHANCED,
     HOUR_STATUS,
     LOW_SUN,
     BroadbandClearSky,
@@ -204,13 +206,16 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
     peak_fraction, quad, dhi_scale = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
     # clear skies from the family's tables (broken hours: their clear part), overcast skies from the cloud table
     # (broken hours: their cloudy part); hours without a retrieved sky are NaN
-    clear_sky = np.isin(h.status, (CLEAR, CLEAR_OPEN, BROKEN))
-    cloud_sky = np.isin(h.status, (CLOUDY, BROKEN, LOW_SUN)) & (h.cloud_table is not None)
+    clear_sky = np.isin(h.status, (CLEAR, CLEAR_OPEN, BROKEN, ENHANCED))
+    cloud_sky = np.isin(h.status, (CLOUDY, BROKEN, LOW_SUN, ENHANCED)) & (h.cloud_table is not None)
     rows = np.flatnonzero(clear_sky)
     not_sky = ~clear_sky & ~cloud_sky & (h.status != 0)
     sky[not_sky] = np.nan
     sun[not_sky] = np.nan
-    broken = h.status == BROKEN
+    # broken hours: (1 - f) clear + f overcast (sky and sun); enhanced-diffuse hours: the same sun, and the sky's
+    # overcast term carries its whole diffuse (h.cloud_dhi: DHI - (1 - f) clear_dhi), weight 1
+    broken = np.isin(h.status, (BROKEN, ENHANCED))
+    enhanced = h.status == ENHANCED
     f_cloud = np.where(broken, h.cloud_fraction, 0.0)
     if rows.size:
         dirs = geom.sample_directions(int(samples))  # (n_p, s^2, 3)
@@ -271,7 +276,7 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
                 d_lo = matrix_dhi(res[:, n_p * n_b:].astype(float))
                 d_hi = matrix_dhi(res_hi[:, n_p * n_b:].astype(float))
                 w = (values[:, k_ssa] - lo_v) / (hi_v - lo_v)
-                clear = np.isin(h.status[rows], (CLEAR, BROKEN))
+                clear = np.isin(h.status[rows], (CLEAR, BROKEN, ENHANCED))
                 # the record's DHI; broken hours: their clear part's (the retrieval's blend)
                 target = np.where(broken[rows], h.clear_dhi[rows], h.dhi[rows])
                 with np.errstate(divide="ignore", invalid="ignore"):
@@ -284,7 +289,7 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
                 w = np.where(out_of_grid, np.clip(w_close, 0, 1), w)
                 for j in np.flatnonzero(out_of_grid):
                     i = rows[j]
-                    if h.status[i] == BROKEN:
+                    if h.status[i] in (BROKEN, ENHANCED):
                         h.reason[i] = (f"{h.reason[i]}; the clear part's DHI needs an aerosol albedo outside the grid "
                                        "cell: clamped, not closed")
                         continue
@@ -320,9 +325,11 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
                                                                       masks, gases)
         quad[crow], dhi_scale[crow] = c_quad, c_scale
         f = np.where(broken[crow], f_cloud[crow], 1.0)
-        sky[crow] = np.where(broken[crow, None, None], sky[crow], 0.0) + (c_sky * f[:, None, None]).astype(np.float32)
+        f_sky = np.where(enhanced[crow], 1.0, f)
+        sky[crow] = np.where(broken[crow, None, None], sky[crow], 0.0) + (c_sky * f_sky[:, None, None]).astype(
+            np.float32)
         sun[crow] = np.where(broken[crow, None], sun[crow], 0.0) + c_sun * f[:, None]
-        dhi_matrix[crow] = np.where(broken[crow], dhi_matrix[crow], 0.0) + c_dhi * f
+        dhi_matrix[crow] = np.where(broken[crow], dhi_matrix[crow], 0.0) + c_dhi * f_sky
         peak_fraction[crow] = c_peak
     times = (np.round(h.unix_time).astype(np.int64)).astype("datetime64[s]").astype("datetime64[ns]")
     loc = h.record.location
@@ -363,7 +370,9 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
         "dni_closure": ("time", h.dni_closure, {"units": "1", "long_name": "dni_model / dni - 1"}),
         "dhi_closure": ("time", dhi_closure, {"units": "1", "long_name": "dhi_matrix / dhi - 1"}),
         "cloud_fraction": ("time", h.cloud_fraction, {"units": "1", "long_name": "weight of the overcast sky in "
-                           "the hour's sky (1 overcast, the fitted blend weight of broken hours)"}),
+                           "the hour's sky (1 overcast, the fitted blend weight of broken hours; enhanced-diffuse "
+                           "hours: the weight of the cloud's sun, their overcast sky term holding DHI - (1 - f) "
+                           "clear DHI)"}),
         "forward_peak_fraction": ("time", peak_fraction, {"units": "1", "long_name": "fraction of the overcast "
                                   "sky's 550 nm diffuse irradiance put in the sun's patch (the droplets' forward "
                                   "peak, not on the cloud table's radiance grid)"}),
