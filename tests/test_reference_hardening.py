@@ -198,6 +198,9 @@ def test_ctrl_c_interrupts_a_huge_run_at_once(tmp_path, capsys):
     """SIGINT (Ctrl-C) while the tasks run: main() returns 130 within a second, queued tasks cancelled."""
     import threading
 
+    # Python turns SIGINT into KeyboardInterrupt only where the process did not inherit it ignored (a shell
+    # starts background jobs with SIGINT ignored): the test sets the default handler itself, or it would hang
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()
     t0 = time.monotonic()
@@ -205,6 +208,7 @@ def test_ctrl_c_interrupts_a_huge_run_at_once(tmp_path, capsys):
         code = main(["reference", str(tmp_path / "big.zarr"), *CLI_JOB, "--samples", "1000000000000"])
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert code == 130
     assert time.monotonic() - t0 < 2.0  # 1 s until the signal, then at most one task's remainder
     assert capsys.readouterr().err.strip().splitlines()[-1] == "skyscatter reference: interrupted"
