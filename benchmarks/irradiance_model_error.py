@@ -20,7 +20,6 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from disort_reference import disort_diffuse_irradiance  # noqa: E402
-
 from skyscatter.atmosphere import AtmosphereParameters  # noqa: E402
 from skyscatter.atmosphere.aerosol_types import OpacAerosol  # noqa: E402
 from skyscatter.conventions import direction_from_angles  # noqa: E402

@@ -43,9 +43,9 @@ it carries the tables' systematic error in DHI against DISORT the same way (:dat
 offset common to the wavelengths and a slope in ``ln(lambda / 550 nm)``, sized by the phase kind, analytic or
 tabulated): the tables' first-order diffuse irradiance is a hemisphere quadrature of the aerosol phase (8 x 16
 directions at the fit sizes) that misses a forward peak's aureole, so DHI comes out 0.4-11 % low with the
-analytic aerosol and up to 32 % off with a coarse Mie mode, by amounts that change with the table sizes and the sun; without
-it a fine + coarse mixture from DNI and DHI came back 2.3 stated standard deviations off. ``AtmosphereFit.extra``
-keeps the statistical part alone (``statistical_uncertainties``).
+analytic aerosol and up to 32 % off with a coarse Mie mode, by amounts that change with the table sizes and the sun;
+without it a fine + coarse mixture from DNI and DHI came back 2.3 stated standard deviations off.
+``AtmosphereFit.extra`` keeps the statistical part alone (``statistical_uncertainties``).
 """
 
 from __future__ import annotations
@@ -62,8 +62,8 @@ from ..atmosphere import AtmosphereParameters
 from ..conventions import direction_from_angles
 from ..errors import InvalidParameterError
 
-__all__ = ["FIT_SIZES", "FREE_PARAMETERS", "IRRADIANCE_MODEL_ERROR", "MEMBER", "SCAN_MODEL_ERROR", "AerosolOpticalDepth",
-           "AtmosphereFit", "Irradiance", "SkyScan", "fit_atmosphere"]
+__all__ = ["FIT_SIZES", "FREE_PARAMETERS", "IRRADIANCE_MODEL_ERROR", "MEMBER", "SCAN_MODEL_ERROR",
+           "AerosolOpticalDepth", "AtmosphereFit", "Irradiance", "SkyScan", "fit_atmosphere"]
 
 #: Table sizes of the fits: a third of the default 4D table's radii, mu and mu_s (build about 1 s).
 FIT_SIZES = dict(scattering_r=12, scattering_mu=48, scattering_mu_s=16, scattering_nu=8, transmittance_r=16,
@@ -513,9 +513,9 @@ def _model_error_patterns(scan: SkyScan | None, irradiance: Irradiance | None,
         offset, slope = IRRADIANCE_MODEL_ERROR[phase_kind]
         k = irradiance.wavelengths.size
         first = n_scan + (k if irradiance.direct_normal is not None else 0)
-        for delta in (np.full(k, offset), slope * np.log(irradiance.wavelengths / 550.0)):
+        for shape in (np.full(k, offset), slope * np.log(irradiance.wavelengths / 550.0)):
             u = np.zeros(n)
-            u[first:first + k] = delta / irradiance.relative_noise
+            u[first:first + k] = shape / irradiance.relative_noise
             out.append(u)
     return out
 
