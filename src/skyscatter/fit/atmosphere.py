@@ -88,12 +88,13 @@ MEMBER = "optical_depth:"
 #: -1.7 / -2.0 % at 19 deg, within 1.6 % above 28 deg.
 SCAN_MODEL_ERROR = ((0.0, 15.0, 0.045), (15.0, 30.0, 0.02), (30.0, 90.0, 0.015))
 #: Systematic error of the fit's tables (:data:`FIT_SIZES`, 4 orders) in diffuse horizontal irradiance against
-#: DISORT, by aerosol phase kind: (RMS offset common to all wavelengths, RMS slope per unit ln(lambda / 550 nm)),
-#: relative. Measured by ``benchmarks/irradiance_model_error.py`` (docs/aerosols.md): each case's error
-#: ``DHI_tables / DHI_DISORT - 1`` at 400-830 nm fitted by ``a + b ln(lambda / 550 nm)``, RMS over sun zenith 20,
-#: 40, 60 deg and, for ``"analytic"``, Cornette-Shanks aerosols (optical depth 0.1-0.5, g 0.7-0.8; 9 cases:
-#: a -2 to -10 %), for ``"table"``, Mie phases (OPAC waso, sscm, two waso + sscm mixtures, continental-average,
-#: maritime-clean, desert, urban at optical depth 0.1-0.25; 24 cases: a +5 to -24 %, b +7 to -32 %).
+#: DISORT ([Stamnes1988]), by aerosol phase kind: (RMS offset common to all wavelengths, RMS slope per unit
+#: ln(lambda / 550 nm)), relative. Measured by ``benchmarks/irradiance_model_error.py`` (docs/aerosols.md): each
+#: case's error ``DHI_tables / DHI_DISORT - 1`` at 400-830 nm fitted by ``a + b ln(lambda / 550 nm)``, RMS over
+#: sun zenith 20, 40, 60 deg and, for ``"analytic"``, Cornette-Shanks aerosols (optical depth 0.1-0.5, g 0.7-0.8;
+#: 9 cases: a -2 to -10 %), for ``"table"``, Mie phases (OPAC waso, sscm, two waso + sscm mixtures,
+#: continental-average, maritime-clean, desert, urban at optical depth 0.1-0.25; 24 cases: a +5 to -24 %,
+#: b +7 to -32 %).
 IRRADIANCE_MODEL_ERROR = {"analytic": (0.047, 0.046), "table": (0.103, 0.124)}
 NEAR_SUN = math.radians(20.0)
 HORIZON = math.radians(15.0)
