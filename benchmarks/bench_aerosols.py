@@ -8,17 +8,77 @@
 3. A sky-scan retrieval: 81 directions at 3 wavelengths (synthetic, tables of other sizes), optical depth, g and
    ground albedo free (target < 2 min on 2 cores).
 
+``--processes N``: only section 2, as whole processes (a fresh interpreter per precompute, so neither numba's
+in-process state nor a warm cache favours one side), analytic and tabulated alternated N times; each reports the
+precompute's wall time and CPU time (both threads) and the process's wall time (imports, miepython's and the Mie
+tables included, unless ``--mie-apart``: then the Mie tables are made before the precompute's clock starts); best
+of N each and the ratios, with the load average.
+
     PYTHONPATH=src python benchmarks/bench_aerosols.py
+    PYTHONPATH=src python benchmarks/bench_aerosols.py --processes 3 [--mie-apart]
 """
 
+import argparse
+import json
 import math
 import os
+import subprocess
+import sys
 import time
 
 import numpy as np
 
+_CHILD = """
+import json, sys, time
+t0 = time.perf_counter()
+from skyscatter.atmosphere import AtmosphereParameters
+from skyscatter.precomputed import PrecomputedAtmosphere
+if sys.argv[1] == "analytic":
+    air = AtmosphereParameters.from_aerosol_optical_depth(0.2, 1.3)
+else:
+    air = AtmosphereParameters().with_aerosol_type("continental-average", 0.2)
+    if len(sys.argv) > 2:  # the Mie tables (and miepython's import) first, outside the precompute's time
+        air.aerosol_phase_table([400.0 + 20.0 * i for i in range(16)])
+w, c = time.perf_counter(), time.process_time()
+PrecomputedAtmosphere.compute(air, progress=False)
+print(json.dumps({"compute": time.perf_counter() - w, "cpu": time.process_time() - c,
+                  "before": w - t0}))
+"""
+
+
+def bench_processes(rounds: int, mie_apart: bool) -> None:
+    """Section 2 as whole processes, alternated (module docstring); ``mie_apart``: the tabulated process makes its
+    Mie tables before the precompute's clock starts (they are cached per process, and their own target is
+    separate)."""
+    print(f"load average at start: {os.getloadavg()}")
+    runs: dict[str, list[dict[str, float]]] = {"analytic": [], "tabulated": []}
+    for _ in range(rounds):
+        for name in runs:
+            t = time.perf_counter()
+            cmd = [sys.executable, "-c", _CHILD, name] + (["mie-apart"] if mie_apart else [])
+            out = subprocess.run(cmd, capture_output=True, text=True, check=True)
+            r = json.loads(out.stdout.strip().splitlines()[-1])
+            r["process"] = time.perf_counter() - t
+            runs[name].append(r)
+            print(f"  {name}: precompute {r['compute']:.1f} s wall, {r['cpu']:.1f} s CPU; process {r['process']:.1f} s"
+                  f" (load {os.getloadavg()[0]:.1f})", flush=True)
+    best = {n: {k: min(r[k] for r in rs) for k in ("compute", "cpu", "process")} for n, rs in runs.items()}
+    for k in ("compute", "cpu", "process"):
+        a, b = best["analytic"][k], best["tabulated"][k]
+        print(f"{k}: analytic {a:.1f} s, tabulated {b:.1f} s (best of {rounds}), ratio {b / a:.2f}")
+    print(f"load average at end: {os.getloadavg()}")
+
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--processes", type=int, default=0, metavar="N",
+                    help="only the precompute ratio, as whole processes alternated N times")
+    ap.add_argument("--mie-apart", action="store_true",
+                    help="with --processes: the Mie tables made before the precompute's clock starts")
+    args = ap.parse_args()
+    if args.processes:
+        bench_processes(args.processes, args.mie_apart)
+        return
     print(f"load average at start: {os.getloadavg()}")
     t = time.perf_counter()
     from skyscatter.atmosphere.mie_optics import _mie_optics_cached, _miepython

@@ -75,26 +75,9 @@ def _layer_integral(profile, z_lo: np.ndarray, z_hi: np.ndarray, n_sub: int = 64
     return np.sum(rho * w[None, :], axis=1) * half[:, 0]
 
 
-def disort_radiance(params, wavelength: float, sun_zenith: float, view_zenith, view_azimuth,
-                    *, n_layers: int = 150, n_streams: int = 32, n_moments: int = 400) -> np.ndarray:
-    """Downwelling radiance at the ground per unit solar irradiance [sr^-1] (plane-parallel DISORT).
-
-    Parameters
-    ----------
-    params : AtmosphereParameters
-    wavelength : float
-        [nm].
-    sun_zenith : float
-        [rad].
-    view_zenith : array_like
-        View zenith angles [rad] (looking up, < pi/2).
-    view_azimuth : array_like
-        Azimuths of the views relative to the sun's azimuth [rad].
-
-    Returns
-    -------
-    ndarray, shape (len(view_zenith), len(view_azimuth))
-    """
+def _column(params, wavelength: float, n_layers: int, n_moments: int):
+    """The plane-parallel column of ``params`` at ``wavelength`` [nm]: layer optical depths, single-scattering
+    albedos and Legendre moments (n_layers, n_moments + 1), from the top down; the ground albedo."""
     wl = [float(wavelength)]
     beta_r = float(params.rayleigh_scattering_at(wl)[0])
     beta_me = float(params.mie_extinction_at(wl)[0])
@@ -117,9 +100,50 @@ def disort_radiance(params, wavelength: float, sun_zenith: float, view_zenith, v
     chi_r[0], chi_r[2] = 1.0, 0.1
     f_r = tau_r / (tau_r + tau_ms)
     moments = f_r[:, None] * chi_r[None, :] + (1.0 - f_r)[:, None] * chi_m[None, :]
-    albedo = float(np.mean(params.ground_albedo_at(wl)))
+    return tau, ssa, moments, float(np.mean(params.ground_albedo_at(wl)))
+
+
+def disort_radiance(params, wavelength: float, sun_zenith: float, view_zenith, view_azimuth,
+                    *, n_layers: int = 150, n_streams: int = 32, n_moments: int = 400) -> np.ndarray:
+    """Downwelling radiance at the ground per unit solar irradiance [sr^-1] (plane-parallel DISORT).
+
+    Parameters
+    ----------
+    params : AtmosphereParameters
+    wavelength : float
+        [nm].
+    sun_zenith : float
+        [rad].
+    view_zenith : array_like
+        View zenith angles [rad] (looking up, < pi/2).
+    view_azimuth : array_like
+        Azimuths of the views relative to the sun's azimuth [rad].
+
+    Returns
+    -------
+    ndarray, shape (len(view_zenith), len(view_azimuth))
+    """
+    tau, ssa, moments, albedo = _column(params, wavelength, n_layers, n_moments)
     return solve_ground_radiance(tau, ssa, moments, sun_zenith=sun_zenith, view_zenith=view_zenith,
                                  relative_azimuth=view_azimuth, ground_albedo=albedo, n_streams=n_streams)
+
+
+def disort_diffuse_irradiance(params, wavelength: float, sun_zenith: float, *, n_layers: int = 150,
+                              n_streams: int = 32, n_moments: int = 400) -> float:
+    """Diffuse downward irradiance on the ground per unit solar irradiance [-] (plane-parallel DISORT, fluxes
+    only): DISORT's diffuse down-flux, which is total minus the direct beam without delta-M scaling, so the light
+    of a forward peak is in it (Stamnes et al. 1988; DISORT's RFLDN). Layers and moments as
+    :func:`disort_radiance`."""
+    tau, ssa, moments, albedo = _column(params, wavelength, n_layers, n_moments)
+    disortpp, cfg, dtau, rayleigh, moments = _config(tau, ssa, moments, sun_zenith=sun_zenith,
+                                                     ground_albedo=albedo, n_streams=n_streams, n_moments=None,
+                                                     nakajima=False)
+    cfg.flags.comp_only_fluxes = True
+    cfg.num_user_tau = 1
+    cfg.allocate()
+    _fill(cfg, dtau, ssa, moments, rayleigh, sun_zenith, albedo)
+    cfg.tau_user = [float(dtau.sum())]  # at the ground
+    return float(disortpp.DisortSolver().solve(cfg).flux_down[0])
 
 
 def _config(delta_tau, single_scattering_albedo, phase_moments, *, sun_zenith: float, ground_albedo: float,

@@ -157,15 +157,24 @@ def test_presets_in_the_atmosphere():
 
 
 def test_bad_particle_inputs_are_refused():
-    for bad in (dict(m=complex(1.5, -0.01)), dict(m=complex(-1.0, 0.0))):
-        with pytest.raises(InvalidParameterError):
-            RefractiveIndex.constant(bad["m"])
-    for args in ((0.0, 2.0), (-1e-6, 2.0), (1e-6, 1.0), (1e-6, 0.5), (1e-6, float("nan"))):
-        with pytest.raises(InvalidParameterError):
+    """One specific error each, saying what was wrong and what is allowed."""
+    for m, message in ((complex(1.5, -0.01), "imaginary part k must be >= 0"), (complex(-1.0, 0.0), "n must be > 0")):
+        with pytest.raises(InvalidParameterError, match=message):
+            RefractiveIndex.constant(m)
+    for args, message in (((0.0, 2.0), "median radius must be > 0"), ((-1e-6, 2.0), "median radius must be > 0"),
+                          ((1e-6, 1.0), "sigma .* must be > 1"), ((1e-6, 0.5), "sigma .* must be > 1"),
+                          ((1e-6, float("nan")), "sigma .* must be > 1")):
+        with pytest.raises(InvalidParameterError, match=message):
             LogNormalMode(*args)
-    for args in ((0.0, 0.1), (10e-6, 0.0), (10e-6, 0.5)):
-        with pytest.raises(InvalidParameterError):
+    with pytest.raises(InvalidParameterError, match="radius limits need 0 <= r_min < r_max"):
+        LogNormalMode(1e-6, 2.0, r_min=1e-5, r_max=1e-6)
+    variance = r"effective variance .*\(0, 1/3\)"
+    for args, message in (((0.0, 0.1), "effective radius must be > 0"), ((10e-6, 0.0), variance),
+                          ((10e-6, 0.5), variance)):
+        with pytest.raises(InvalidParameterError, match=message):
             ModifiedGammaMode.from_effective(*args)
+    with pytest.raises(InvalidParameterError, match="aerosol_optical_depth -0.1 is outside 0 to 10"):
+        AtmosphereParameters.from_aerosol_optical_depth(-0.1, 1.3)
     with pytest.raises(InvalidParameterError, match="humidity"):
         OpacAerosol.preset("urban", relative_humidity=100.0)
     with pytest.raises(InvalidParameterError, match="optical depth"):

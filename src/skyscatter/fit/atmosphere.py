@@ -38,8 +38,14 @@ With a sky scan the covariance also carries the tables' systematic error in sky 
 reference (:data:`SCAN_MODEL_ERROR`: 4.5 % below 15 deg elevation, 2 % at 15-30 deg, 1.5 % above, each common to
 its band's directions and wavelengths) propagated through the solution (``model_error=True``, the default): without
 it the ground albedo from a Monte Carlo scan came back 11 % high at 5 stated standard deviations, the horizon
-band's -4.3 % taken up by the parameter the scan is least sensitive to. ``AtmosphereFit.extra`` keeps the
-statistical part alone (``statistical_uncertainties``).
+band's -4.3 % taken up by the parameter the scan is least sensitive to. With a diffuse horizontal irradiance
+it carries the tables' systematic error in DHI against DISORT the same way (:data:`IRRADIANCE_MODEL_ERROR`: an
+offset common to the wavelengths and a slope in ``ln(lambda / 550 nm)``, sized by the phase kind, analytic or
+tabulated): the tables' first-order diffuse irradiance is a hemisphere quadrature of the aerosol phase (8 x 16
+directions at the fit sizes) that misses a forward peak's aureole, so DHI comes out 0.4-11 % low with the
+analytic aerosol and up to 32 % off with a coarse Mie mode, by amounts that change with the table sizes and the sun;
+without it a fine + coarse mixture from DNI and DHI came back 2.3 stated standard deviations off.
+``AtmosphereFit.extra`` keeps the statistical part alone (``statistical_uncertainties``).
 """
 
 from __future__ import annotations
@@ -56,8 +62,8 @@ from ..atmosphere import AtmosphereParameters
 from ..conventions import direction_from_angles
 from ..errors import InvalidParameterError
 
-__all__ = ["FIT_SIZES", "FREE_PARAMETERS", "MEMBER", "AerosolOpticalDepth", "AtmosphereFit", "Irradiance", "SkyScan",
-           "fit_atmosphere"]
+__all__ = ["FIT_SIZES", "FREE_PARAMETERS", "IRRADIANCE_MODEL_ERROR", "MEMBER", "SCAN_MODEL_ERROR",
+           "AerosolOpticalDepth", "AtmosphereFit", "Irradiance", "SkyScan", "fit_atmosphere"]
 
 #: Table sizes of the fits: a third of the default 4D table's radii, mu and mu_s (build about 1 s).
 FIT_SIZES = dict(scattering_r=12, scattering_mu=48, scattering_mu_s=16, scattering_nu=8, transmittance_r=16,
@@ -81,6 +87,15 @@ MEMBER = "optical_depth:"
 #: -4.3 / -4.4 % at 10 deg elevation (-4.6 / -4.2 % with 6 orders and 16 x 64 radii x mu: not the table size),
 #: -1.7 / -2.0 % at 19 deg, within 1.6 % above 28 deg.
 SCAN_MODEL_ERROR = ((0.0, 15.0, 0.045), (15.0, 30.0, 0.02), (30.0, 90.0, 0.015))
+#: Systematic error of the fit's tables (:data:`FIT_SIZES`, 4 orders) in diffuse horizontal irradiance against
+#: DISORT ([Stamnes1988]), by aerosol phase kind: (RMS offset common to all wavelengths, RMS slope per unit
+#: ln(lambda / 550 nm)), relative. Measured by ``benchmarks/irradiance_model_error.py`` (docs/aerosols.md): each
+#: case's error ``DHI_tables / DHI_DISORT - 1`` at 400-830 nm fitted by ``a + b ln(lambda / 550 nm)``, RMS over
+#: sun zenith 20, 40, 60 deg and, for ``"analytic"``, Cornette-Shanks aerosols (optical depth 0.1-0.5, g 0.7-0.8;
+#: 9 cases: a -2 to -10 %), for ``"table"``, Mie phases (OPAC waso, sscm, two waso + sscm mixtures,
+#: continental-average, maritime-clean, desert, urban at optical depth 0.1-0.25; 24 cases: a +5 to -24 %,
+#: b +7 to -32 %).
+IRRADIANCE_MODEL_ERROR = {"analytic": (0.047, 0.046), "table": (0.103, 0.124)}
 NEAR_SUN = math.radians(20.0)
 HORIZON = math.radians(15.0)
 
@@ -329,8 +344,9 @@ def fit_atmosphere(scan: SkyScan | None = None, irradiance: Irradiance | None = 
     max_builds : int
         Limit of table builds (function evaluations).
     model_error : bool
-        Add the tables' systematic error in sky radiance (:data:`SCAN_MODEL_ERROR`) to the covariance (default
-        True; module docstring). Without a scan nothing is added.
+        Add the tables' systematic errors in sky radiance (:data:`SCAN_MODEL_ERROR`) and in diffuse horizontal
+        irradiance (:data:`IRRADIANCE_MODEL_ERROR`) to the covariance (default True; module docstring). Without a
+        scan or a DHI nothing is added.
     """
     from scipy.optimize import least_squares
 
@@ -433,9 +449,11 @@ def fit_atmosphere(scan: SkyScan | None = None, irradiance: Irradiance | None = 
     except np.linalg.LinAlgError:  # pragma: no cover
         cov = np.full((n, n), np.nan)
     statistical = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    if scan is not None and model_error:
-        cov = cov + _model_error_covariance(jac, scan)
     fitted = _air(base, free, res.x, aerosol_type, start, mixture)
+    phase_kind = "analytic" if fitted.aerosol_component.analytic_phase is not None else "table"
+    patterns = _model_error_patterns(scan, irradiance, phase_kind) if model_error else []
+    if patterns:
+        cov = cov + _model_error_covariance(jac, patterns)
     final = model(res.x)
     rms: dict[str, float] = {}
     if scan is not None:
@@ -460,28 +478,57 @@ def fit_atmosphere(scan: SkyScan | None = None, irradiance: Irradiance | None = 
                                                            for k, v in zip(free, statistical, strict=True)}}
     if scan is not None and model_error:
         extra["scan_model_error"] = [list(b) for b in SCAN_MODEL_ERROR]
+    if irradiance is not None and irradiance.diffuse_horizontal is not None and model_error:
+        extra["diffuse_model_error"] = {"phase": phase_kind, "offset": IRRADIANCE_MODEL_ERROR[phase_kind][0],
+                                        "slope_per_ln_wavelength": IRRADIANCE_MODEL_ERROR[phase_kind][1]}
     return AtmosphereFit(fitted, free, {k: float(v) for k, v in zip(free, res.x, strict=True)},
                          {k: float(v) for k, v in zip(free, sd, strict=True)}, cov, rms, chi2, builds,
                          time.perf_counter() - t0, aerosol_type, extra=extra, mixture=mixture, derived=derived)
 
 
-def _model_error_covariance(jac: NDArray[np.float64], scan: SkyScan) -> NDArray[np.float64]:
-    """Covariance of the fitted parameters from the tables' systematic sky-radiance error: an error ``delta_b``
-    (:data:`SCAN_MODEL_ERROR`) common to every direction of elevation band ``b`` and every wavelength, independent
-    between bands, carried by the least-squares solution's linear map ``G = (J^T J)^+ J^T`` (``J`` the Jacobian
-    of the weighted residuals, the scan's first in their order): ``sum_b (G u_b)(G u_b)^T``, ``u_b`` the band's
-    residual pattern ``delta_b / sigma`` (linear propagation through the least-squares solution, [Press2007]
-    Sec. 15.4)."""
-    n_wl = 1 if scan.values.ndim == 1 else scan.values.shape[1]
-    elevation = np.degrees(math.pi / 2 - scan.zenith)
+def _model_error_patterns(scan: SkyScan | None, irradiance: Irradiance | None,
+                          phase_kind: str) -> list[NDArray[np.float64]]:
+    """The tables' systematic errors as patterns ``u`` in the space of the weighted residuals (in their order:
+    the scan's, then DNI's, DHI's, the optical depths'), each a relative error ``delta`` common to its
+    measurements divided by their noise, independent between patterns: one per elevation band of the scan
+    (:data:`SCAN_MODEL_ERROR`), and for DHI an offset and a slope in ``ln(lambda / 550 nm)``
+    (:data:`IRRADIANCE_MODEL_ERROR`). The direct beam's own error (0.26 % at 400 nm against the Monte Carlo
+    reference's exact transmittance, docs/aerosols.md) is left out: below any stated noise."""
+    n_scan = 0 if scan is None else scan.values.size
+    n_irr = 0
+    if irradiance is not None:
+        n_irr = irradiance.wavelengths.size * ((irradiance.direct_normal is not None)
+                                               + (irradiance.diffuse_horizontal is not None))
+    n = n_scan + n_irr  # the optical depths' residuals follow, without a model error
+    out = []
+    if scan is not None:
+        n_wl = 1 if scan.values.ndim == 1 else scan.values.shape[1]
+        elevation = np.degrees(math.pi / 2 - scan.zenith)
+        for lo, hi, delta in SCAN_MODEL_ERROR:
+            sel = (elevation >= lo) & ((elevation < hi) | (hi >= 90.0))
+            if sel.any():
+                u = np.zeros(n)
+                u[:n_scan] = np.repeat(sel, n_wl) * (delta / scan.relative_noise)
+                out.append(u)
+    if irradiance is not None and irradiance.diffuse_horizontal is not None:
+        offset, slope = IRRADIANCE_MODEL_ERROR[phase_kind]
+        k = irradiance.wavelengths.size
+        first = n_scan + (k if irradiance.direct_normal is not None else 0)
+        for shape in (np.full(k, offset), slope * np.log(irradiance.wavelengths / 550.0)):
+            u = np.zeros(n)
+            u[first:first + k] = shape / irradiance.relative_noise
+            out.append(u)
+    return out
+
+
+def _model_error_covariance(jac: NDArray[np.float64], patterns: list[NDArray[np.float64]]) -> NDArray[np.float64]:
+    """Covariance of the fitted parameters from the tables' systematic errors (:func:`_model_error_patterns`):
+    each pattern ``u_b`` carried by the least-squares solution's linear map ``G = (J^T J)^+ J^T`` (``J`` the
+    Jacobian of the weighted residuals), ``sum_b (G u_b)(G u_b)^T`` (linear propagation through the least-squares
+    solution, [Press2007] Sec. 15.4)."""
     gmap = np.linalg.pinv(jac.T @ jac) @ jac.T
     out = np.zeros((jac.shape[1], jac.shape[1]))
-    for lo, hi, delta in SCAN_MODEL_ERROR:
-        sel = (elevation >= lo) & ((elevation < hi) | (hi >= 90.0))
-        if not sel.any():
-            continue
-        u = np.zeros(jac.shape[0])
-        u[:scan.zenith.size * n_wl] = np.repeat(sel, n_wl) * (delta / scan.relative_noise)
-        d = gmap @ u
+    for u in patterns:
+        d = gmap[:, :u.size] @ u
         out += np.outer(d, d)
     return out
