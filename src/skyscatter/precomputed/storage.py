@@ -57,7 +57,9 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: 6: half-precision, wavelength-first scattering tables with power-of-two scales; 64-byte aligned arrays.
 #: 7: the same layout; the scattering density on a double-Gauss zenith grid (low sun; docs/accuracy.md), so
 #: tables of format 6 hold other values.
-FORMAT_VERSION = 7
+#: 8: the same layout; the first-order diffuse irradiance of a tabulated aerosol phase split by delta-M (its
+#: forward peak exact; :func:`.kernels.indirect_irradiance_kernel`), so a Mie air's irradiance table changed.
+FORMAT_VERSION = 8
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).
