@@ -121,11 +121,12 @@ def test_mixture_from_direct_and_diffuse_irradiance():
     """A fine + coarse mixture's member optical depths from DNI and DHI at 4 wavelengths made by tables of other
     sizes and orders (6 orders, radii and mu x 4/3) plus 1 % noise; the fit's tables start from equal shares.
 
-    The two tables' DHI differ by +0.7, -1.2, -1.9, -1.9 % at 440-830 nm for the true air (both 8-18 % below
-    DISORT's: their first-order diffuse irradiance is a hemisphere quadrature that misses sea salt's aureole), which
-    alone moves waso to 0.155 (noise-free); with the noise 0.166. The stated uncertainty carries the tables' DHI
-    model error (fit.atmosphere.IRRADIANCE_MODEL_ERROR, measured against DISORT); without it the statistical
-    uncertainty alone (0.007) put the truth 2.3 sigma off (fails on the code before it)."""
+    With table format 7 the two tables' DHI differed by +0.7, -1.2, -1.9, -1.9 % at 440-830 nm for the true air
+    (both 8-18 % below DISORT's: their first-order diffuse irradiance missed sea salt's aureole), which alone moved
+    waso to 0.155 (noise-free); with the noise 0.166. Format 8 (the aureole kept): waso 0.1654 +- 0.0117 (statistical
+    0.0060), sscm 0.0899 +- 0.0190. The stated uncertainty carries the tables' DHI model error
+    (fit.atmosphere.IRRADIANCE_MODEL_ERROR, measured against DISORT); without it the statistical uncertainty alone
+    put the truth 2.3 sigma off with format 7 (fails on the code before it)."""
     from skyscatter.precomputed import PrecomputedAtmosphere
 
     air = _mixture_air()

@@ -269,8 +269,8 @@ def indirect_irradiance(medium: Medium, sizes: TableSizes, previous: Order) -> F
     n_wavelengths) float32."""
     out = np.zeros((*sizes.irradiance_shape, previous.rayleigh.shape[-1]), dtype=np.float32)
     parallel_for(kernels.indirect_irradiance_kernel, sizes.irradiance_r * sizes.irradiance_mu_s, previous.rayleigh,
-                 previous.mie, previous.single, medium.mie_phase_g, medium.mie_kind, medium.phase_mu,
-                 medium.phase_full, medium.bottom, medium.top,
+                 previous.mie, previous.single, medium.mie_phase_g, medium.mie_kind,
+                 medium.phase_trunc, medium.forward, medium.bottom, medium.top,
                  medium.mu_s_min, sizes.irradiance_sphere_samples, out, grain=16)
     return out
 

@@ -59,7 +59,9 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: tables of format 6 hold other values.
 #: 8: the same layout; the ray integrals' view transmittance integrated along each ray (grazing rays near the
 #: ground; docs/accuracy.md, "Low sun"), so tables of format 7 hold other values.
-FORMAT_VERSION = 8
+#: 9: the same layout; the first-order diffuse irradiance of a tabulated aerosol phase split by delta-M (its
+#: forward peak exact; :func:`.kernels.indirect_irradiance_kernel`), so a Mie air's irradiance table changed.
+FORMAT_VERSION = 9
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).
