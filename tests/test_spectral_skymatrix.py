@@ -756,28 +756,3 @@ def test_air_options_go_with_spectral(epw, tmp_path, capsys):
     assert main(["skymatrix", str(epw), "--aerosol", "urban", "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert "go with --spectral" in err and "Traceback" not in err and not out.exists()
-
-
-def test_clear_hours_keep_the_retrievals_albedo_on_the_matrix(tmp_path, options):
-    """The matrix's clear patches are scaled per wavelength to the tables' own horizontal sky irradiance (the
-    retrieval's DHI), so every hour the retrieval closed stays closed on the matrix with the retrieval's albedo:
-    before, the matrix refitted the albedo to its patches' DHI, which a dense hemisphere quadrature of the coarse
-    tables' radiance puts 2-6 % above their irradiance (sun 4-40 deg), pushing 411 clear hours of the made year out
-    of the albedo grid (sun 5-24 deg, up to 5.6 % off). Hours below the grid state the albedo they would need."""
-    import warnings
-
-    from skyscatter.fit.spectral_matrix import spectral_sky_matrix
-    from skyscatter.fit.weather import CLEAR, CLEAR_OPEN, retrieve_hourly_atmosphere
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        h = retrieve_hourly_atmosphere(clear_day(tmp_path / "clear.epw"), options)
-    status, ssa = h.status.copy(), h.single_scattering_albedo.copy()
-    clear = np.flatnonzero(status == CLEAR)
-    assert clear.size >= 10
-    ds = spectral_sky_matrix(None, scheme="tregenza", samples=1, bands=20, atmosphere=h)
-    np.testing.assert_array_equal(ds["status"].values, status)
-    np.testing.assert_allclose(ds["single_scattering_albedo"].values[clear], ssa[clear], rtol=0, atol=1e-6)  # float32 sky
-    assert np.max(np.abs(ds["dhi_closure"].values[clear])) < 1e-6
-    for i in np.flatnonzero(status == CLEAR_OPEN):
-        assert "outside the grid" in h.reason[i] and "deg up" in h.reason[i], h.reason[i]

@@ -223,7 +223,6 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
         cos_cells = np.maximum(dirs[..., 2], 0.0).mean(axis=1)  # mean cos over each patch
         omega = geom.solid_angles
         ground = np.array([0.0, 0.0, fam.base.bottom_radius])
-        up = np.array([0.0, 0.0, 1.0])
         sun_dirs = direction_from_angles(h.sun_zenith, h.sun_azimuth)
         # the Sun-Earth distance scales the tables (mean distance) to the day
         ecc = h.eccentricity
@@ -241,18 +240,10 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
 
             def evaluate(atm, sub):
                 out = np.empty((sub.size, n_p * n_b + n_t), dtype=np.float32)
-                # the tables' own horizontal sky irradiance (the retrieval's DHI): the patches' quadrature of the
-                # sky (a few cells per patch) misses it by per cents with the sun low (the aureole of the aerosol's
-                # forward peak within a patch or two of the sun); scaled per wavelength to it, as the overcast
-                # patches are to DISORT's diffuse (_cloud_patches), so that the albedo closure of the retrieval
-                # holds on the matrix instead of being pushed out of the grid by the quadrature
-                e_tab = atm.ground_irradiance(ground, up, sun_dirs[rows[sub]])[1]
                 for j, i in enumerate(rows[sub]):
                     rad = atm.sky_radiance(ground, flat, sun_dirs[i]).reshape(n_p, -1, n_t).mean(axis=1)
-                    e_p = (omega * cos_cells) @ rad  # horizontal sky irradiance of the patches
-                    rad = rad * np.where(e_p > 0, e_tab[j] / np.where(e_p > 0, e_p, 1.0), 1.0)
                     out[j, : n_p * n_b] = (rad @ bmat.T).reshape(-1)
-                    out[j, n_p * n_b:] = np.where(e_p > 0, e_tab[j], 0.0)
+                    out[j, n_p * n_b:] = (omega * cos_cells) @ rad  # horizontal sky irradiance
                 return out
 
             return fam.interpolate(values, evaluate, dtype=np.float32,
