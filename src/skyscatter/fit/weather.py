@@ -37,7 +37,8 @@ sun: the circumsolar light they add to DNI is not modelled (it lowers the retrie
    for comparison. The aerosol's single-scattering albedo then closes DHI (closed form: DHI is linear in the albedo
    between the grid's albedo nodes); an albedo outside the grid means the hour is not clear-sky physics: above the
    largest albedo (more diffuse light than clear air can give) it is treated as cloudy, below the smallest it is
-   *clear, not closed* (albedo clamped, closure reported).
+   *clear, not closed* (albedo clamped, closure reported; ``reason`` gives the sun's elevation and the albedo the
+   record would need, the line through the end nodes extrapolated).
 4. *cloudy*: the other daylit hours. Their aerosol is the median of the same day's clear hours (a measurement
    of that day wins), else the file's optical depth where present (converted from TMY's broadband value at
    700 nm, Molineaux et al. 1998, with the Angstrom exponent), else the 6 nearest clear hours within 3 days,
