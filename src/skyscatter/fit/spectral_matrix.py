@@ -294,7 +294,10 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
                                        "cell: clamped, not closed")
                         continue
                     h.status[i] = CLEAR_OPEN
-                    h.reason[i] = "the matrix's DHI needs an aerosol albedo outside the grid cell: clamped, not closed"
+                    need = lo_v[j] + w_close[j] * (hi_v[j] - lo_v[j])
+                    h.reason[i] = (f"the matrix's DHI needs an aerosol albedo outside the grid cell (sun "
+                                   f"{90 - np.degrees(h.sun_zenith[i]):.1f} deg up; the albedo line through the "
+                                   f"cell's nodes reaches the record's DHI at {need:.2f}): clamped, not closed")
                 h.single_scattering_albedo[rows] = lo_v + w * (hi_v - lo_v)
                 res *= (1 - w)[:, None].astype(np.float32)
                 res += w[:, None].astype(np.float32) * res_hi

@@ -37,7 +37,8 @@ sun: the circumsolar light they add to DNI is not modelled (it lowers the retrie
    for comparison. The aerosol's single-scattering albedo then closes DHI (closed form: DHI is linear in the albedo
    between the grid's albedo nodes); an albedo outside the grid means the hour is not clear-sky physics: above the
    largest albedo (more diffuse light than clear air can give) it is treated as cloudy, below the smallest it is
-   *clear, not closed* (albedo clamped, closure reported).
+   *clear, not closed* (albedo clamped, closure reported; ``reason`` gives the sun's elevation and the albedo the
+   record would need, the line through the end nodes extrapolated).
 4. *cloudy*: the other daylit hours. Their aerosol is the median of the same day's clear hours (a measurement
    of that day wins), else the file's optical depth where present (converted from TMY's broadband value at
    700 nm, Molineaux et al. 1998, with the Angstrom exponent), else the 6 nearest clear hours within 3 days,
@@ -1411,8 +1412,14 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
                 ssa[good] = np.clip(s, s_nodes[0], s_nodes[-1])
                 status[good[clear]] = CLEAR
                 status[good[too_dark]] = CLEAR_OPEN
-                reason[good[too_dark]] = (f"DHI below the clear sky with aerosol albedo {s_nodes[0]:g}: "
-                                          "albedo clamped, DHI not closed")
+                # the albedo the record would need (the line through the end nodes, extrapolated) and the sun:
+                # on a clear-sky record from another model (SPECTRL2, Bird & Riordan 1986) these are its low suns,
+                # whose diffuse is below ours for the beam's aerosol, needing albedos no grid node supports
+                reason[good[too_dark]] = [
+                    f"DHI below the clear sky with aerosol albedo {s_nodes[0]:g} (sun {90 - math.degrees(z):.1f} deg "
+                    f"up; the albedo line through the grid's nodes reaches the record's DHI at {x:.2f}, outside "
+                    "the grid): albedo clamped, DHI not closed" for x, z in zip(s[too_dark], zen[good[too_dark]],
+                                                                                 strict=True)]
                 reason[good[too_bright]] = "DHI above the clear sky with aerosol albedo 1: treated as cloudy"
                 frac = np.clip((ssa[good] - s_nodes[0]) / (s_nodes[-1] - s_nodes[0]), 0, 1)
                 dhi_model[good] = lo + frac * (hi - lo)
