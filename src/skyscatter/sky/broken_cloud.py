@@ -44,10 +44,14 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   times ``1 - exp(-tau k)``, ``tau`` the field's optical depth from the ground point to the sun, is taken away.
 * **The solar disc**: the clear sky's disc times the field's transmittance from the eye to the sun.
 
+* **Light shafts** (the clouds' shadows on the air in front of the cloud, :meth:`BrokenCloudSky._shafts`,
+  :func:`.broken_cloud_kernels.shaft_loss`): the air's single-scattered sunlight times ``1 - exp(-tau k)`` is
+  taken away along the view ray below the field's top. Off (``_SHAFTS``) until the octaves are refitted with them:
+  the octaves were fitted to the Monte Carlo without them (docs/clouds.md).
+
 Renderers of terrain take the field's shadows from :meth:`BrokenCloudSky.sun_shadow` (the landscape's
-:class:`~skyscatter.render.scene.Scene`). Not modelled: the clouds' shadows on the air (light shafts) and
-the clouds' light scattered by the air (both
-in the Monte Carlo), the sun's cosine varying across the field with the planet's curvature (taken at each
+:class:`~skyscatter.render.scene.Scene`). Not modelled: the clouds' light scattered by the air (in the Monte
+Carlo), the sun's cosine varying across the field with the planet's curvature (taken at each
 point for the air's transmittance, but the field's shadow volume is for the observer's sun direction).
 
 The irradiance on the ground under the field, at points or averaged over the field's domain (direct through the
@@ -93,6 +97,14 @@ CHUNK = 1 << 17
 STEP_FRACTION = 0.5
 #: Block edge [voxels] of the empty-space skipping.
 _BLOCK = 4
+#: Light shafts (:meth:`BrokenCloudSky._shafts`): off until the octaves are refitted with them (the octaves were
+#: fitted to the Monte Carlo without them, and with them on the model falls 6-13 % below the Monte Carlo's mean:
+#: docs/clouds.md); the first step [m], its growth with distance [-] and the altitude nodes of the air's
+#: coefficients below the field's top.
+_SHAFTS = False
+SHAFT_STEP = 250.0
+SHAFT_GROWTH = 0.02
+SHAFT_NODES = 65
 
 
 class BrokenCloudSky(SunSkyMixin, SkyModel):
@@ -369,12 +381,18 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         ground = t_ground > 0.0
         changed = hit.copy()
         out = np.zeros((d.shape[0], tab.wavelengths.size))
-        idx = np.flatnonzero(hit | ground)
+        loss = self._shafts(d, eye, np.where(hit, depth, np.inf), np.where(ground, t_ground, np.inf)) if _SHAFTS \
+            else None
+        shafted = np.zeros(d.shape[0], dtype=bool) if loss is None else np.any(loss > 0.0, axis=1)
+        changed |= shafted
+        idx = np.flatnonzero(hit | ground | shafted)
         if idx.size == 0:
             return out, changed
         dd = d[idx]
         clear = tab.sky_radiance(eye, dd, sun)
         value = clear.copy()
+        if loss is not None:
+            value -= loss[idx]
         h = hit[idx]
         if np.any(h):
             pts = eye + depth[idx][h, None] * dd[h]
@@ -397,6 +415,92 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
                 changed[idx[rows]] = True
         out[idx] = np.maximum(value, 0.0)
         return out, changed
+
+    @cached_property
+    def _shaft_air(self) -> dict[str, Any]:
+        """The clear air's single-scattering coefficients and sunlight below the field's top for
+        :meth:`shafts`: altitude nodes ``SHAFT_NODES`` from the ground to the top, at the table wavelengths."""
+        tab = self._tables
+        air = tab.parameters
+        wl = np.asarray(tab.wavelengths, dtype=float)
+        h = np.linspace(0.0, self.field.top, SHAFT_NODES)
+        beta_r, beta_m = air.scattering_coefficients(h, wl)
+        beta_e = air.extinction_coefficient(h, wl)
+        bottom = air.bottom_radius
+        r = bottom + h
+        mu = _MU_NODES
+        t_sun = np.asarray(tab.transmittance(r[:, None], mu[None, :]), dtype=float)
+        horizon = -np.sqrt(np.maximum(1.0 - (bottom / r) ** 2, 0.0))
+        t_sun[mu[None, :] < horizon[:, None]] = 0.0
+        src = t_sun * np.asarray(air.solar_irradiance_at(wl), dtype=float)
+        return {"h_step": float(h[1] - h[0]), "beta_r": np.ascontiguousarray(beta_r, dtype=float),
+                "beta_m": np.ascontiguousarray(beta_m, dtype=float),
+                "beta_e": np.ascontiguousarray(beta_e, dtype=float), "src": np.ascontiguousarray(src)}
+
+    def _shafts(self, directions: ArrayLike, eye: ArrayLike | None = None, cloud_depth: ArrayLike | None = None,
+               ground_distance: ArrayLike | None = None) -> NDArray[np.float64]:
+        """The air's single-scattered sunlight that the field's shadow removes along unit view ``directions`` (n, 3)
+        (light shafts), (n, n_table_wavelengths) [W m^-2 sr^-1 nm^-1], >= 0: the single-scattering integral of the air
+        ([Bruneton2008] Eq. 11 with the sun's light L0 of Eq. 9, as its single Rayleigh and Mie tables hold it) times
+        ``1 - exp(-tau k)`` (:func:`.broken_cloud_kernels.shaft_loss`) over the view ray's part below the field's top,
+        from ``eye`` (3,) [m, planet-centred; default the observer] to the first of the cloud's mean depth
+        ``cloud_depth`` (n,) [m], the ground at ``ground_distance`` (n,) [m] (inf: none) and the ray's exit through the
+        field's top sphere. Steps of :data:`SHAFT_STEP` m growing as :data:`SHAFT_GROWTH` x the distance. Only the
+        single scattering: the shadow's effect on the air's multiple scattering (light that reaches the point after
+        scattering elsewhere, most of it from outside the shadow) is kept."""
+        from ..precomputed.parallel import parallel_for
+        from .broken_cloud_kernels import shaft_loss
+
+        tab = self._tables
+        d = np.ascontiguousarray(np.asarray(directions, dtype=float).reshape(-1, 3))
+        n = d.shape[0]
+        nwl = tab.wavelengths.size
+        eye = np.ascontiguousarray(self.clear.position if eye is None else eye, dtype=float)
+        end = np.full(n, np.inf)
+        for limit in (cloud_depth, ground_distance):
+            if limit is not None:
+                end = np.minimum(end, np.asarray(limit, dtype=float).reshape(-1))
+        out = np.zeros((n, nwl))
+        if not np.any(self.field.extinction > 0.0):
+            return out
+        bottom = tab.parameters.bottom_radius
+        r_top = bottom + self.field.top
+        b = d @ eye
+        c = float(eye @ eye)
+        disc = b * b - (c - r_top * r_top)
+        s = np.sqrt(np.maximum(disc, 0.0))
+        inside = c < r_top * r_top
+        t0 = np.where(inside, 0.0, np.maximum(-b - s, 0.0))
+        # the planet: a ray that goes down meets it (from the ground at once: the caller's distance is then <= 0)
+        g_disc = b * b - (c - bottom * bottom)
+        t_planet = np.where((g_disc >= 0.0) & (b < 0.0), np.maximum(-b - np.sqrt(np.maximum(g_disc, 0.0)), 0.0),
+                            np.inf)
+        t1 = np.minimum(np.minimum(-b + s, end), t_planet)
+        seg = np.where(disc >= 0.0, np.maximum(t1 - t0, 0.0), 0.0)
+        seg[~np.isfinite(seg)] = 0.0
+        rows = np.flatnonzero(seg > 0.0)
+        if rows.size == 0:
+            return out
+        sun = self._sun_planet
+        dr = np.ascontiguousarray(d[rows])
+        nu = np.clip(dr @ sun, -1.0, 1.0)
+        air = tab.parameters
+        p_r = np.ascontiguousarray(air.rayleigh_phase(nu), dtype=float)
+        p_m = np.ascontiguousarray(air.aerosol_phase(nu, wavelengths=tab.wavelengths), dtype=float)
+        part = np.ones((rows.size, nwl))
+        far = t0[rows] > 0.0
+        if np.any(far):
+            part[far] = tab.aerial_perspective(eye, eye + t0[rows][far, None] * dr[far], sun)[0]
+        sa = self._shaft_air
+        v = self._volumes
+        mu = _MU_NODES
+        parallel_for(shaft_loss, rows.size, eye, dr, np.ascontiguousarray(seg[rows]),
+                     np.ascontiguousarray(t0[rows]), sun, v["gf"], np.ascontiguousarray(v["tau_ground"]),
+                     np.ascontiguousarray(v["tau_sun"]), sa["h_step"], sa["beta_r"], sa["beta_m"], sa["beta_e"],
+                     sa["src"], float(mu[0]), float(mu[1] - mu[0]), p_r, p_m, self._light["k"], SHAFT_STEP,
+                     SHAFT_GROWTH, part, grain=64)
+        out[rows] = part
+        return out
 
     def _ground_optical_depth(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
         """The field's optical depth to the sun from ground ``points`` (n, 3): bilinear in the map of the voxel

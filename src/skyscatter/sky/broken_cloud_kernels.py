@@ -17,7 +17,7 @@ from ..jit import CONTRACT_ARCP, helper, inline, kernel
 from ..montecarlo.tracking import box_clip, field_transmittance
 from ..precomputed.geometry import bilinear_weights
 
-__all__ = ["march_rays", "shadow_volume", "ground_shadow"]
+__all__ = ["march_rays", "shadow_volume", "ground_shadow", "shaft_loss"]
 
 # layout of the float geometry ``gf``
 G_X0, G_Y0, G_DX, G_DY, G_DZ, G_LX, G_LY, G_RBASE, G_RTOP, G_RGROUND, G_PERIODIC = range(11)
@@ -426,3 +426,110 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
             transmittance[ray, wl] = tr[wl]
         depth[ray] = wdepth / wsum if wsum > 0.0 else 0.0
         hit[ray] = met
+
+
+@kernel(fastmath=CONTRACT_ARCP)
+def shaft_loss(origin, dirs, seg, t0, sun, gf, tau_ground, tau_sun, h_step, beta_r, beta_m, beta_e, src, mu0, dmu,
+               p_r, p_m, k, step, growth, out, start, stop):
+    """The single-scattered sunlight of the air that the field's shadow removes along each view ray (light shafts
+    below the clouds), rays ``start..stop``, into ``out`` (n, n_wl) [W m^-2 sr^-1 nm^-1].
+
+    The single-scattering integral ([Bruneton2008] Eq. 11 with the sun's light L0 of Eq. 9, the one its single Rayleigh
+    and Mie tables hold): ``dL = T(eye, p) (beta_R(h) P_R(nu) + beta_M(h) P_M(nu)) E_0 T_air(h, mu_s) dt``, here times
+    ``1 - exp(-tau k)``, the fraction of the sunlight the field takes away at ``p`` (``tau`` its optical depth to the
+    sun at 550 nm, ``k`` the droplets' relative extinction). Steps along ``[t0, t0 + seg]`` of ``step`` [m] growing as
+    ``growth`` x the distance; each step's coefficients at its midpoint's altitude (linear in the altitude nodes
+    ``h_step`` apart) and ``int_step T dt = T_a (1 - exp(-beta_e dt)) / beta_e`` (exact for a constant coefficient).
+    ``T(eye, p)`` starts at ``out[q]`` (the air's transmittance from the eye to the segment's start, given in ``out``).
+    ``tau``: below the base the ground map ``tau_ground`` (nx, ny) at the foot of the point's sun ray (bilinear between
+    the columns' centres; periodic fields wrap, open ones give 0 outside the box), in the layer the shadow volume
+    ``tau_sun`` (nx, ny, nz) of the voxel."""
+    n_l = k.shape[0]
+    nx, ny, nz = tau_sun.shape
+    x0, y0 = gf[G_X0], gf[G_Y0]
+    inv_dx, inv_dy, inv_dz = 1.0 / gf[G_DX], 1.0 / gf[G_DY], 1.0 / gf[G_DZ]
+    rbase, rground = gf[G_RBASE], gf[G_RGROUND]
+    periodic = gf[G_PERIODIC] != 0.0
+    n_h = beta_e.shape[0]
+    n_mu = src.shape[1]
+    sx, sy, sz = sun[0], sun[1], sun[2]
+    t_view = np.empty(n_l)
+    acc = np.empty(n_l)
+    be = np.empty(n_l)
+    for q in range(start, stop):
+        length = seg[q]
+        for w in range(n_l):
+            t_view[w] = out[q, w]
+            acc[w] = 0.0
+        if not length > 0.0:
+            for w in range(n_l):
+                out[q, w] = 0.0
+            continue
+        dx, dy, dz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
+        t = t0[q]
+        t_end = t0[q] + length
+        while t < t_end:
+            dt = min(max(step, growth * t), t_end - t)
+            tm = t + 0.5 * dt
+            px = origin[0] + tm * dx
+            py = origin[1] + tm * dy
+            pz = origin[2] + tm * dz
+            r = math.sqrt(px * px + py * py + pz * pz)
+            h = r - rground
+            # the field's optical depth to the sun from p
+            if r < rbase:
+                # the foot of the sun ray on the ground (the tangent plane at the point: the sun ray's curvature
+                # over a few km is below a metre)
+                mu_s = (px * sx + py * sy + pz * sz) / r
+                lift = h / max(mu_s, 1e-3)
+                fx = (px - lift * sx - x0) * inv_dx - 0.5
+                fy = (py - lift * sy - y0) * inv_dy - 0.5
+                i0 = int(math.floor(fx))
+                j0 = int(math.floor(fy))
+                ax = fx - i0
+                ay = fy - j0
+                tau = 0.0
+                for a in range(2):
+                    for b in range(2):
+                        ii = i0 + a
+                        jj = j0 + b
+                        if periodic:
+                            ii %= nx
+                            jj %= ny
+                        elif ii < 0 or ii >= nx or jj < 0 or jj >= ny:
+                            continue
+                        wgt = (ax if a else 1.0 - ax) * (ay if b else 1.0 - ay)
+                        tau += wgt * tau_ground[ii, jj]
+            else:
+                fx = (px - x0) * inv_dx
+                fy = (py - y0) * inv_dy
+                if periodic:
+                    fx = _wrap(fx, nx)
+                    fy = _wrap(fy, ny)
+                iz = min(max(int((r - rbase) * inv_dz), 0), nz - 1)
+                if 0.0 <= fx < nx and 0.0 <= fy < ny:
+                    tau = tau_sun[min(int(fx), nx - 1), min(int(fy), ny - 1), iz]
+                else:
+                    tau = 0.0
+            # the air's coefficients at the midpoint
+            u = min(max(h / h_step, 0.0), n_h - 1.0)
+            i_h = min(int(u), n_h - 2)
+            a_h = u - i_h
+            mu_s = (px * sx + py * sy + pz * sz) / r
+            v = min(max((mu_s - mu0) / dmu, 0.0), n_mu - 1.0)
+            i_m = min(int(v), n_mu - 2)
+            a_m = v - i_m
+            for w in range(n_l):
+                be[w] = (1.0 - a_h) * beta_e[i_h, w] + a_h * beta_e[i_h + 1, w]
+                ext = math.exp(-be[w] * dt)
+                if tau > 0.0:
+                    sc = ((1.0 - a_h) * beta_r[i_h, w] + a_h * beta_r[i_h + 1, w]) * p_r[q] \
+                        + ((1.0 - a_h) * beta_m[i_h, w] + a_h * beta_m[i_h + 1, w]) * p_m[q, w]
+                    e0 = ((1.0 - a_h) * ((1.0 - a_m) * src[i_h, i_m, w] + a_m * src[i_h, i_m + 1, w])
+                          + a_h * ((1.0 - a_m) * src[i_h + 1, i_m, w] + a_m * src[i_h + 1, i_m + 1, w]))
+                    seen = t_view[w] * (1.0 - ext) / be[w] if be[w] > 0.0 else t_view[w] * dt
+                    acc[w] += seen * sc * e0 * (1.0 - math.exp(-tau * k[w]))
+                t_view[w] *= ext
+            t += dt
+        for w in range(n_l):
+            out[q, w] = acc[w]
