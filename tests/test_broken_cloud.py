@@ -187,7 +187,7 @@ def _mc_field(cover, meta):
 
 @pytest.mark.parametrize("index", [0, 1, 2])
 def test_fisheye_against_the_monte_carlo(index):
-    """Fisheye from the ground, covers 0.3 / 0.6 / 0.9 (fitted with the irradiances, docs/clouds.md), 450 / 550 / 650 nm,
+    """Fisheye from the ground, covers 0.3 / 0.6 / 0.9 (fitted with the irradiances, docs/clouds.md), 450-650 nm,
     against stored Monte Carlo radiances (1024 paths per pixel, seeds in the file; median relative standard
     error 8-17 % per pixel, heavy-tailed). Measured (docs/clouds.md) with the shipped octaves: mean over the disc
     0.94-1.05 of the Monte Carlo's, per pixel RMS of the relative difference 0.39-0.78 (the first fit's: region
