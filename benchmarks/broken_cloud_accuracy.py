@@ -16,7 +16,7 @@ field as the Monte Carlo traces it; ``--interpolation linear`` for the model's d
   0.6 / 0.9 left to right, 650 / 550 / 450 nm as red / green / blue, one exposure).
 
 Writes benchmarks/broken_cloud_accuracy.json and prints the figures. Usage:
-``python benchmarks/broken_cloud_accuracy.py [irradiance] [above] [--points 8] [--octaves a b c d]``.
+``python benchmarks/broken_cloud_accuracy.py [irradiance] [above] [--points 8] [--octaves a b c d e]``.
 """
 
 from __future__ import annotations
@@ -147,7 +147,7 @@ def main() -> None:
     ap.add_argument("--zeniths", type=int, default=32, help="zenith nodes of the diffuse part")
     ap.add_argument("--azimuths", type=int, default=64, help="azimuth nodes of the diffuse part")
     ap.add_argument("--interpolation", default="voxel", choices=["voxel", "linear"])
-    ap.add_argument("--octaves", type=float, nargs=4, help="(a, b, c, d) instead of FITTED_OCTAVES (refits)")
+    ap.add_argument("--octaves", type=float, nargs=5, help="(a, b, c, d, e) instead of FITTED_OCTAVES (refits)")
     args = ap.parse_args()
     if set(args.what) - {"irradiance", "above"}:
         ap.error("what must be irradiance and/or above")

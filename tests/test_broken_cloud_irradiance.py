@@ -103,11 +103,13 @@ def _cases():
 #: The issue's target for the domain-mean ground irradiance (direct + diffuse).
 GLOBAL_TOLERANCE = 0.05
 #: Cases the model misses the target in, with the measured ratios model / MC at 450 / 550 / 650 nm
-#: (benchmarks/broken_cloud_accuracy.py, 8 x 8 ground points x 32 x 64 directions; docs/clouds.md, "Accuracy"):
-#: the octaves' diffuse light under thick cloud falls short, the more the higher the sun; refits of the octaves
-#: across covers, suns and views (benchmarks/fit_broken_cloud_*.json) move the shortfall without removing it.
-MISSED = {"cover 0.9 sun 30": "0.917 / 0.899 / 0.896", "cover 0.6 sun 60": "0.855 / 0.852 / 0.855",
-          "cover 0.9 sun 60": "0.712 / 0.689 / 0.683"}
+#: (docs/clouds.md, "Accuracy"):
+#: the octaves' diffuse light under thick cloud falls short, the more the higher the sun (at 4 x 4 points x 16 x 32
+#: directions, the test's quadrature). The octaves' entering-energy factors (``entry_factors``, exponent 0.5)
+#: lifted cover 0.6 sun 60 from 0.85 and cover 0.9 sun 60 from 0.68-0.71; a larger exponent (0.6) brings cover
+#: 0.6 sun 60 within 5 % but puts the DISORT uniform layer (tests/test_broken_cloud.py) 24 % above DISORT.
+MISSED = {"cover 0.9 sun 30": "0.934 / 0.921 / 0.919", "cover 0.6 sun 60": "0.945 / 0.952 / 0.959",
+          "cover 0.9 sun 60": "0.866 / 0.863 / 0.865"}
 
 
 @pytest.mark.parametrize("key", [pytest.param(k, marks=pytest.mark.xfail(

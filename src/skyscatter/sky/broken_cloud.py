@@ -19,7 +19,17 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   see an extinction ``a^i`` as large and a Henyey-Greenstein phase of asymmetry ``c^i g``, and are weighted by
   ``(1 - exp(-tau_c))^i`` with ``tau_c`` the vertical optical depth of the point's column (thin wisps do not
   multiply-scatter: without it a layer of optical depth 1 came out 2-3x the DISORT layer's radiance).
-  ``a, b, c`` are **fitted to the Monte Carlo** (:data:`FITTED_OCTAVES`; docs/clouds.md).
+  Octaves ``i >= 1`` are further scaled by the energy the sun puts into the cloud (:func:`entry_factors`):
+  ``(K(mu_0) / K(mu_ref))^e`` for light entering through the cloud's top and ``(K(s_0) / K(s_ref))^e`` through
+  a side facing the sun (``s = sqrt(1 - mu^2)``, the cosine on a vertical face), ``K(mu) = mu (1 + 3/2 mu)``:
+  in the diffusion (Eddington) limit a thick non-absorbing layer lit at the cosine ``mu`` transmits the diffuse
+  flux ``mu E_0 (2 + 3 mu) / (4 + 3 (1 - g) tau)`` ([Liou2002] Sec. 6.5), so the light scattered many times
+  grows with the cosine and more, while the octaves as [Wrenninge2013] wrote them barely depend on the sun's
+  elevation (their extinction ``a^i`` is small). The two are blended per sample by the share of the sun's path
+  through the cloud above the point, ``min(tau_sun mu_s / tau_top, 1)`` (1 under a horizontally uniform top).
+  ``e = 1`` is the slab's limit, ``e = 0`` the octaves unscaled; ``mu_ref`` = cos 55 deg, the sun of the
+  Monte Carlo fisheye, where both factors are 1.
+  ``a, b, c, e`` are **fitted to the Monte Carlo** (:data:`FITTED_OCTAVES`; docs/clouds.md).
 * **The sun's path through the field: a precomputed shadow volume.** ``tau_sun`` of every voxel centre is
   integrated once per sky along the sun's ray exactly (regular tracking through the voxel-constant grid, the
   Monte Carlo's :func:`~skyscatter.montecarlo.tracking.field_transmittance`); the march reads it at the voxel
@@ -75,14 +85,34 @@ from ..spectral import DEFAULT_WAVELENGTHS, as_wavelengths
 from . import registry
 from .base import SkyModel, SunSkyMixin, check_sun_angles
 
-__all__ = ["BrokenCloudSky", "FITTED_OCTAVES", "OCTAVES"]
+__all__ = ["BrokenCloudSky", "FITTED_OCTAVES", "MU_REFERENCE", "OCTAVES", "entry_factors"]
 
 #: Octaves of the multiple-scattering approximation ([Wrenninge2013]).
 OCTAVES = 8
-#: ``(a, b, c, d)``: the octaves' extinction, scattering and eccentricity factors and the ambient light's
-#: extinction factor, fitted by least squares to Monte Carlo radiances (``benchmarks/fit_broken_cloud.py`` on
-#: tests/data/broken_cloud_montecarlo.npz: cover 0.6, seed and path counts stored there; docs/clouds.md).
-FITTED_OCTAVES = (0.4128, 0.7268, 0.6671, 0.0)
+#: ``(a, b, c, d, e)``: the octaves' extinction, scattering and eccentricity factors, the ambient light's
+#: extinction factor and the exponent of the octaves' entering-energy factors (:func:`entry_factors`), fitted by least
+#: squares to Monte Carlo radiances and irradiances (``benchmarks/fit_broken_cloud.py``; docs/clouds.md).
+FITTED_OCTAVES = (0.3245, 0.693, 0.6334, 0.0, 0.5)
+#: Sun cosine at which :func:`entry_factors` are 1: cos 55 deg, the sun of the Monte Carlo fisheye
+#: (tests/data/broken_cloud_montecarlo.npz).
+MU_REFERENCE = math.cos(math.radians(55.0))
+
+
+def entry_factors(mu0: float, exponent: float) -> tuple[float, float]:
+    """Factors of the octaves ``i >= 1`` for the sun's energy entering the cloud through its top and through its
+    sides, ``((K(mu0) / K(mu_ref))^e, (K(s0) / K(s_ref))^e)``: ``K(mu) = mu (1 + 3/2 mu)`` is the diffuse flux a
+    thick non-absorbing layer lit at the cosine ``mu`` transmits in the Eddington approximation,
+    ``mu E0 (2 + 3 mu) / (4 + 3 (1 - g) tau)`` ([Liou2002] Sec. 6.5), the cloud top lit at ``mu0`` and a side
+    facing the sun at ``s0 = sqrt(1 - mu0^2)``; each relative to the reference sun :data:`MU_REFERENCE` (both 1
+    there). ``mu0``: the sun's cosine at the field [-] (clamped to [1e-3, 1]); ``exponent`` ``e`` [-] (0: no
+    factor, the octaves of [Wrenninge2013]; 1: the slab's diffusion limit)."""
+    def k(mu: float) -> float:
+        return mu * (1.0 + 1.5 * mu)
+
+    mu = min(max(mu0, 1e-3), 1.0)
+    side = max(math.sqrt(1.0 - mu * mu), 1e-3)
+    side_ref = math.sqrt(1.0 - MU_REFERENCE**2)
+    return (k(mu) / k(MU_REFERENCE)) ** exponent, (k(side) / k(side_ref)) ** exponent
 #: Octave i weighted by (1 - exp(-tau_column))^i (module docstring).
 THIN_AWARE = True
 #: Procedural fields: horizontal size [m], voxels (x, y, z) and noise feature size [m].
@@ -194,7 +224,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         self.sun_azimuth = azi
         self.altitude = alt
         self.sun_angular_radius = self.clear.sun_angular_radius
-        #: ``(a, b, c, d)`` of the multiple scattering (:data:`FITTED_OCTAVES`; replaceable for fits).
+        #: ``(a, b, c, d, e)`` of the multiple scattering (:data:`FITTED_OCTAVES`; replaceable for fits).
         self.octaves = FITTED_OCTAVES
         if interpolation not in ("linear", "voxel"):
             raise InvalidParameterError(f"interpolation must be 'linear' or 'voxel'; got {interpolation!r}")
@@ -337,11 +367,11 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
 
     # ------------------------------------------------------------------ the march
 
-    def march(self, directions: ArrayLike, octaves: tuple[float, float, float, float] | None = None,
+    def march(self, directions: ArrayLike, octaves: tuple[float, ...] | None = None,
               lod: float = 0.002, interpolation: str | None = None, origin: ArrayLike | None = None):
         """The ray march alone for unit ``directions`` (n, 3): the cloud's radiance at the eye through the cloud
         (n, n_table_wavelengths) [W m^-2 sr^-1 nm^-1], the cloud's transmittance (n, n_wl), the mean depth of the
-        cloud's light (n,) [m] and whether each ray met cloud (n,). ``octaves``: ``(a, b, c, d)`` instead of
+        cloud's light (n,) [m] and whether each ray met cloud (n,). ``octaves``: ``(a, b, c, d, e)`` instead of
         :attr:`octaves`; ``lod``: the step's growth with distance [-]; ``interpolation``: "linear" or "voxel"
         instead of :attr:`interpolation`; ``origin``: the eye (3,) [m, planet-centred] instead of the observer's."""
         from ..precomputed.parallel import parallel_for
@@ -350,14 +380,15 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         d = np.ascontiguousarray(np.asarray(directions, dtype=float).reshape(-1, 3))
         v = self._volumes
         li = self._light
-        a, b, c, dd = self.octaves if octaves is None else octaves
+        a, b, c, dd, e = self.octaves if octaves is None else octaves
         n = d.shape[0]
         nwl = li["k"].size
         rad = np.zeros((n, nwl))
         tr = np.ones((n, nwl))
         depth = np.zeros(n)
         hit = np.zeros(n, dtype=np.bool_)
-        mp = np.array([a, b, c, dd, v["step"], lod, 0.0])
+        # the sun's cosine at the observer: over a field of tens of kilometres the planet turns it by < 1e-3 rad
+        mp = np.array([a, b, c, dd, v["step"], lod, 0.0, *entry_factors(math.cos(self.sun_zenith), e)])
         origin = np.ascontiguousarray(self.clear.position if origin is None else origin, dtype=float)
         mu = _MU_NODES
         parallel_for(march_rays, n, origin, d, self._sun_planet, v["gf"], v["vol"], v["occupied"], _BLOCK,

@@ -22,7 +22,7 @@ __all__ = ["march_rays", "shadow_volume", "ground_shadow", "shaft_loss"]
 # layout of the float geometry ``gf``
 G_X0, G_Y0, G_DX, G_DY, G_DZ, G_LX, G_LY, G_RBASE, G_RTOP, G_RGROUND, G_PERIODIC = range(11)
 # layout of the march parameters ``mp``
-M_A, M_B, M_C, M_D, M_STEP, M_LOD, M_TMIN = range(7)
+M_A, M_B, M_C, M_D, M_STEP, M_LOD, M_TMIN, M_TOP, M_SIDE = range(9)
 #: View transmittance (every wavelength) below which a ray's march stops: what lies behind adds < 1e-3 of it.
 T_STOP = 1e-3
 
@@ -155,7 +155,10 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
     air's diffuse irradiance on a horizontal plane / (2 pi) [W m^-2 nm^-1 sr^-1] at each voxel layer, for the sun
     cosines ``mu0 + i dmu``; ``amb_up`` (n_wl,) the albedo times the ground's upward irradiance / (2 pi). ``mp``:
     a, b, c, d (octaves and ambient extinction), the step as a fraction of the voxel along the axis the ray crosses
-    fastest [-], the level-of-detail factor (step >= lod * distance) and the ray start distance. ``linear``: the
+    fastest [-], the level-of-detail factor (step >= lod * distance), the ray start distance and the factors of the
+    octaves ``i >= 1`` for the energy entering the clouds through their tops and through their sides
+    (:func:`.broken_cloud.entry_factors`), blended per sample by the share of the sun's path that runs through
+    the cloud above the point, ``min(tau_sun mu_s / tau_top, 1)``. ``linear``: the
     densities and optical depths interpolated trilinearly between voxel centres (smooth cloud edges; ``occupied``
     must then count a voxel's neighbours); else constant per voxel (the field's definition, the Monte Carlo's).
     ``thin_aware``: octave ``i`` weighted by ``(1 - exp(-tau_column))^i`` (:mod:`.broken_cloud`).
@@ -369,6 +372,10 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
                 # more times: in a column of vertical optical depth tau_c the chance of each further scattering is
                 # taken as 1 - exp(-tau_c) (thin wisps do not multiply-scatter)
                 pc = -math.expm1(-(tup + tdn)) if thin_aware else 1.0
+                # light entering through the top: the sun's path from the point leaves through the cloud above it,
+                # its optical depth tau_top / mu_s (a horizontally uniform cloud); less means it leaves by a side
+                ftop = min(ts * mus / tup, 1.0) if tup > 1e-6 and mus > 0.0 else 1.0
+                entry = ftop * mp[M_TOP] + (1.0 - ftop) * mp[M_SIDE]
                 att = 1.0
                 pw = 1.0
                 for wl in range(nwl):
@@ -378,6 +385,8 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
                     att *= a
                     po = pw
                     pw *= pc
+                    if o == 0:
+                        pw *= entry  # octaves >= 1 only
                     if x * kbar > 40.0 or po == 0.0:
                         continue
                     if x * dkmax < 0.02:
