@@ -49,6 +49,7 @@ from numpy.typing import ArrayLike, NDArray
 from tqdm.auto import tqdm
 
 from ..atmosphere.phase import aerosol_phase_kind
+from ..atmosphere.phase_table import PhaseTable
 from ..errors import InvalidParameterError
 from ..validation import whole_number
 from . import conversion, kernels
@@ -107,9 +108,10 @@ class Medium:
     The aerosol phase is analytic (``mie_kind`` of :func:`skyscatter.atmosphere.phase.aerosol_phase_kind` with
     ``mie_phase_g``: the formula, bit for bit the tables of before) or tabulated (``mie_kind`` =
     :data:`.sampling.TABLE_PHASE`): ``phase_mu`` (n,) ascending cosines, ``phase_full`` (n_wl, n) the aerosol's
-    phase table at the wavelengths, ``phase_trunc`` (n_wl, :data:`TRUNCATED_PHASE_NODES`) its delta-M truncation
-    for the scattering-density quadrature at even cosines
-    and ``forward`` (n_wl,) the truncated forward fraction (:func:`.kernels.scattering_density_kernel`).
+    phase table at the wavelengths. For either, ``phase_trunc`` (n_wl, :data:`TRUNCATED_PHASE_NODES`) is its
+    delta-M truncation for the scattering-density quadrature at even cosines and ``forward`` (n_wl,) the
+    truncated forward fraction (:func:`.kernels.scattering_density_kernel`; an analytic phase's only for the
+    first-order irradiance, :func:`.kernels.indirect_irradiance_kernel`).
     """
 
     bottom: float
@@ -155,8 +157,7 @@ class Medium:
         return Medium(self.bottom, self.top, self.mu_s_min, self.sun_angular_radius, self.mie_phase_g,
                       self.mie_kind, self.phase_mu,
                       np.ascontiguousarray(self.phase_full[ch]) if table else self.phase_full,
-                      np.ascontiguousarray(self.phase_trunc[ch]) if table else self.phase_trunc,
-                      np.ascontiguousarray(self.forward[ch]) if table else self.forward,
+                      np.ascontiguousarray(self.phase_trunc[ch]), np.ascontiguousarray(self.forward[ch]),
                       self.profiles, self.counts, self.rayleigh_scattering[ch],
                       self.mie_extinction[ch], self.mie_scattering[ch], self.ozone_absorption[ch],
                       self.ground_albedo[ch], self.solar_irradiance[ch])
@@ -167,22 +168,26 @@ def aerosol_phase_arrays(atmosphere: AtmosphereParameters, wavelengths: F64,
     """``(mie_kind, g, (phase_mu, phase_full, phase_trunc, forward))`` of the aerosol for the kernels.
 
     An analytic phase (:attr:`.AtmosphereParameters.aerosol_component` ``.analytic_phase``) gives its kind and
-    ``g`` and placeholder arrays; a tabulated one :data:`.sampling.TABLE_PHASE`, its table at ``wavelengths``
-    and the delta-M truncation for :data:`DELTA_M_STREAMS_PER_SAMPLE` x ``sizes.density_sphere_samples``
-    streams (Medium's docstring).
+    ``g`` and a placeholder full table (the kernels evaluate the formula); a tabulated one
+    :data:`.sampling.TABLE_PHASE` and its table at ``wavelengths``. Both give the delta-M truncation for
+    :data:`DELTA_M_STREAMS_PER_SAMPLE` x ``sizes.density_sphere_samples`` streams (Medium's docstring), an
+    analytic phase's from the formula tabulated (:meth:`.PhaseTable.from_analytic`): one way to split off the
+    forward peak for the first-order irradiance whatever the phase.
     """
+    sz = TableSizes() if sizes is None else sizes
     analytic = atmosphere.aerosol_component.analytic_phase
     if analytic is not None:
-        empty = np.zeros((1, 2))
-        return aerosol_phase_kind(analytic.kind), analytic.g, (np.array([-1.0, 1.0]), empty, empty, np.zeros(1))
-    sz = TableSizes() if sizes is None else sizes
-    table = atmosphere.aerosol_phase_table(wavelengths)
+        table = PhaseTable.from_analytic(analytic.kind, analytic.g, wavelengths)
+        kind, g, mu, full = aerosol_phase_kind(analytic.kind), analytic.g, np.array([-1.0, 1.0]), np.zeros((1, 2))
+    else:
+        table = atmosphere.aerosol_phase_table(wavelengths)
+        arr = table.numba_arrays()
+        kind, g, mu, full = TABLE_PHASE, 0.0, arr.mu, arr.values
     trunc, f = table.delta_m(DELTA_M_STREAMS_PER_SAMPLE * sz.density_sphere_samples)
-    arr = table.numba_arrays()
     # the truncated phase on an even cosine grid (the kernel indexes it without a search; linear between
     # 2049 nodes of a 32-term Legendre series)
     trunc_even = np.ascontiguousarray(trunc.evaluate(np.linspace(-1.0, 1.0, TRUNCATED_PHASE_NODES)).T)
-    return TABLE_PHASE, 0.0, (arr.mu, arr.values, trunc_even, np.ascontiguousarray(f))
+    return kind, g, (mu, full, trunc_even, np.ascontiguousarray(f))
 
 
 @dataclass(frozen=True)

@@ -585,12 +585,14 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_trunc, forwar
     Radiance is ``s_a P_R + s_b P_M`` when ``first`` (single scattering) else ``s_a``; upper hemisphere
     sampled with ``n_theta x 2 n_theta`` directions (:func:`sphere_quadrature`).
 
-    A tabulated aerosol phase (``mie_kind`` :data:`.sampling.TABLE_PHASE`; ``phase_trunc``, ``forward`` as in
-    :func:`scattering_density_kernel`) is split as there ([Wiscombe1977] Eqs. 5-7, delta-M): ``P_M = (1 - f) p*
-    + f delta(1 - nu) / (2 pi)``. A coarse mode's diffraction peak is a few degrees wide and the quadrature's
-    azimuths are midpoints (never the sun's), so summing the full table on the grid missed the aureole: the first
-    order came out 13-30 % low for waso 0.15 + sscm 0.10 at the retrieval's sizes (tests/test_precomputed_
-    irradiance.py). The aerosol part of the first order's ``E[L*]`` ([Bruneton2008] Eq. 15 with the
+    The aerosol phase, tabulated or analytic (``phase_trunc``, ``forward`` as in
+    :func:`scattering_density_kernel`; an analytic phase's from its formula tabulated, :func:`.compute.
+    aerosol_phase_arrays`; ``g`` and ``mie_kind`` are not used here), is split as there ([Wiscombe1977] Eqs.
+    5-7, delta-M): ``P_M = (1 - f) p* + f delta(1 - nu) / (2 pi)``. A coarse mode's diffraction peak is a few
+    degrees wide and the quadrature's azimuths are midpoints (never the sun's), so summing the full table on the
+    grid missed the aureole: the first order came out 13-30 % low for waso 0.15 + sscm 0.10 at the retrieval's
+    sizes (tests/test_precomputed_irradiance.py); the default Cornette-Shanks phase (g = 0.8) the same way, by
+    several per cent. The aerosol part of the first order's ``E[L*]`` ([Bruneton2008] Eq. 15 with the
     single-scattered ``L*`` of Eq. 11, ``S_M(r, mu, mu_s, nu) P_M(nu)``) is then ``(1 - f) sum_w S_M(w) p*(nu_w)
     w_z dw`` on the grid (``p*`` a ``2 x density_sphere_samples``-term Legendre series, smooth on it) plus the
     delta part exactly: the delta picks the sun's own direction, ``f mu_s S_M(r, mu_s, mu_s, 1)`` (for ``mu_s >
@@ -598,7 +600,6 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_trunc, forwar
     ``s_a`` is summed on the grid as it is.
     """
     n_r, n_mu_s, n_l = out.shape
-    table = mie_kind == TABLE_PHASE
     om, dom = sphere_quadrature(n_theta, True)
     acc = np.zeros(n_l)
     tmp = np.empty(n_l)
@@ -619,21 +620,17 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_trunc, forwar
             if first:
                 scattering_lookup(s_a, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min,
                                   scale * rayleigh_phase(nu_w), acc)
-                if table:
-                    tmp[:] = 0.0
-                    scattering_lookup(s_b, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min, scale, tmp)
-                    x = (nu_w + 1.0) * half_u
-                    i = min(int(x), n_u - 2)
-                    t = x - i
-                    for k in range(n_l):
-                        p = (1.0 - t) * phase_trunc[k, i] + t * phase_trunc[k, i + 1]
-                        acc[k] += (1.0 - forward[k]) * p * tmp[k]
-                else:
-                    scattering_lookup(s_b, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min,
-                                      scale * aerosol_phase(nu_w, g, mie_kind), acc)
+                tmp[:] = 0.0
+                scattering_lookup(s_b, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min, scale, tmp)
+                x = (nu_w + 1.0) * half_u
+                i = min(int(x), n_u - 2)
+                t = x - i
+                for k in range(n_l):
+                    p = (1.0 - t) * phase_trunc[k, i] + t * phase_trunc[k, i + 1]
+                    acc[k] += (1.0 - forward[k]) * p * tmp[k]
             else:
                 scattering_lookup(s_a, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min, scale, acc)
-        if first and table and mu_s > 0.0:
+        if first and mu_s > 0.0:
             # the forward delta: the single-scattered aerosol light along the sun's own direction
             tmp[:] = 0.0
             scattering_lookup(s_b, r, mu_s, mu_s, 1.0, False, bottom, top, mu_s_min, mu_s, tmp)

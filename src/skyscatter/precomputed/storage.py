@@ -61,7 +61,9 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: ground; docs/accuracy.md, "Low sun"), so tables of format 7 hold other values.
 #: 9: the same layout; the first-order diffuse irradiance of a tabulated aerosol phase split by delta-M (its
 #: forward peak exact; :func:`.kernels.indirect_irradiance_kernel`), so a Mie air's irradiance table changed.
-FORMAT_VERSION = 9
+#: 10: the same layout; the analytic aerosol phases' (Cornette-Shanks, Henyey-Greenstein) first-order diffuse
+#: irradiance split by delta-M as well, so the default air's irradiance table changed (scattering tables did not).
+FORMAT_VERSION = 10
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).
