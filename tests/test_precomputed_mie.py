@@ -53,7 +53,12 @@ def test_single_scattering_is_exact_to_the_phase_table(mie_params, sizes, rtol):
     np.testing.assert_allclose(atm.sky_xyz([0.0, 0.0, r], d, sun), atm.to_xyz(atm.sky_radiance([0.0, 0.0, r], d, sun)))
 
 
-@pytest.mark.xfail(strict=True, reason="open (docs/accuracy.md, 'Low sun', format 8): 5 deg / 180 deg / 15 km from 10 m, 450 nm, in-scatter +1.00 % (bound 1 %): the lookup's radius interpolation between the texel rows at 0 and 63 m adds +0.7 % at 10 m; the texels are within 0.16 % of the integral (format 7: -0.25 %, which offset it to +0.44 %)")
+@pytest.mark.xfail(strict=True, reason=(
+    "open (docs/accuracy.md, 'Low sun', format 8): 5 deg / 180 deg / 15 km from 10 m, 450 nm, in-scatter "
+    "+1.00 % (bound 1 %): the lookup's radius interpolation between the texel rows at 0 and 63 m adds "
+    "+0.7 % at 10 m; the texels are within 0.16 % of the integral (format 7: -0.25 %, which offset it to "
+    "+0.44 %)"
+))
 def test_aerial_perspective_reads_the_phase_table(mie_params):
     p, wl = mie_params, np.array([450.0, 650.0])
     atm = PrecomputedAtmosphere.compute(p, orders=1, wavelengths=wl, progress=False)
