@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from skyscatter.atmosphere import AtmosphereParameters, DensityProfile
-from skyscatter.atmosphere.clouds import CloudField, CloudLayer
+from skyscatter.atmosphere.clouds import CloudField
 from skyscatter.atmosphere.particles import AnalyticParticles, TabulatedParticles
 from skyscatter.atmosphere.phase_table import PhaseTable
 from skyscatter.atmosphere.spectra import PowerLawSpectrum
@@ -154,6 +154,14 @@ def _disort_cloud(*args, **kw):
     return disort_cloud(*args, **kw)
 
 
+def _case(tau, air, albedo):
+    """(layer, atmosphere) of a water-cloud case, ``air`` "alone" or "rayleigh" (tests/disort_reference.py)."""
+    sys.path.insert(0, str(Path(__file__).parents[1] / "tests"))
+    from disort_reference import water_cloud_case
+
+    return water_cloud_case(tau, air == "rayleigh", albedo, RB)
+
+
 def waterclouds(scale):
     wl = 550.0
     n = int(40_000 * scale)
@@ -163,16 +171,9 @@ def waterclouds(scale):
     empty = CloudField(np.zeros((1, 1, 1)), 1000.0, 0.0, 1000.0, hg, origin=(0.0, 0.0))
     rows = []
     for tau in (5.0, 15.0, 30.0):
-        layer = CloudLayer(1000.0, 1500.0, tau, effective_radius=10e-6, effective_variance=0.1)
         for air in ("alone", "rayleigh"):
             for albedo in (0.0, 0.6):
-                if air == "alone":
-                    atm = AtmosphereParameters(bottom_radius=RB, top_radius=RB + 60000.0, rayleigh_scattering=0.0,
-                                               mie_angstrom_beta=0.0, ozone_column=0.0, ground_albedo=albedo,
-                                               particles=(layer,))
-                else:
-                    atm = AtmosphereParameters(bottom_radius=RB, top_radius=RB + 60000.0, mie_angstrom_beta=0.0,
-                                               ozone_column=0.0, ground_albedo=albedo, particles=(layer,))
+                layer, atm = _case(tau, air, albedo)
                 for sun in (0.0, 30.0, 60.0):
                     sz = math.radians(sun)
                     t0 = time.perf_counter()
@@ -230,10 +231,7 @@ def waterclouds_irradiance(scale, cases=IRRADIANCE_CASES):
     empty = CloudField(np.zeros((1, 1, 1)), 1000.0, 0.0, 1000.0, hg, origin=(0.0, 0.0))
     rel = []
     for tau, air, albedo, sun in cases:
-        layer = CloudLayer(1000.0, 1500.0, float(tau), effective_radius=10e-6, effective_variance=0.1)
-        kw = dict(rayleigh_scattering=0.0) if air == "alone" else {}
-        atm = AtmosphereParameters(bottom_radius=RB, top_radius=RB + 60000.0, mie_angstrom_beta=0.0,
-                                   ozone_column=0.0, ground_albedo=albedo, particles=(layer,), **kw)
+        layer, atm = _case(tau, air, albedo)
         sz = math.radians(sun)
         t0 = time.perf_counter()
         d = domain_quantities(atm, empty, [wl], sun_zenith=sz, up_views=None, samples=n, seed=32)
@@ -257,10 +255,7 @@ def waterclouds_radiance(scale, cases=IRRADIANCE_CASES):
     dirs = np.array([[math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z)] for z in vz for a in va])
     rels, zs, bad = [], [], 0
     for tau, air, albedo, sun in cases:
-        layer = CloudLayer(1000.0, 1500.0, float(tau), effective_radius=10e-6, effective_variance=0.1)
-        kw = dict(rayleigh_scattering=0.0) if air == "alone" else {}
-        atm = AtmosphereParameters(bottom_radius=RB, top_radius=RB + 60000.0, mie_angstrom_beta=0.0,
-                                   ozone_column=0.0, ground_albedo=albedo, particles=(layer,), **kw)
+        layer, atm = _case(tau, air, albedo)
         sz = math.radians(sun)
         t0 = time.perf_counter()
         mc = sky_radiance(atm, dirs, [wl], sun_zenith=sz, samples=n, seed=61)

@@ -213,6 +213,22 @@ def solve_ground_radiance(delta_tau, single_scattering_albedo, phase_moments, *,
     return out
 
 
+def water_cloud_case(tau: float, rayleigh: bool, albedo: float, bottom_radius: float):
+    """The water-cloud case of the DISORT validations (tests/test_montecarlo_clouds.py,
+    benchmarks/validate_clouds.py): a ``CloudLayer`` from 1000 to 1500 m of optical depth ``tau`` at 550 nm (Mie
+    droplets, effective radius 10 um, variance 0.1), alone or over Rayleigh air, no aerosol, no ozone, a Lambertian
+    ground of ``albedo`` [-], the planet's radius ``bottom_radius`` [m] (huge for the plane-parallel limit), the
+    top 60 km above it. Returns ``(layer, atmosphere)``."""
+    from skyscatter.atmosphere import AtmosphereParameters
+    from skyscatter.atmosphere.clouds import CloudLayer
+
+    layer = CloudLayer(1000.0, 1500.0, float(tau), effective_radius=10e-6, effective_variance=0.1)
+    kw = {} if rayleigh else dict(rayleigh_scattering=0.0)
+    atm = AtmosphereParameters(bottom_radius=bottom_radius, top_radius=bottom_radius + 60000.0,
+                               mie_angstrom_beta=0.0, ozone_column=0.0, ground_albedo=albedo, particles=(layer,), **kw)
+    return layer, atm
+
+
 def disort_cloud(atm, layer, wl, sun_zen, view_zen, view_azi, albedo, n_layers=100, n_streams=64):
     """disortpp: Rayleigh (if any) and a cloud layer (``CloudLayer``: its extinction, albedo and the Legendre
     moments of its phase table, 400) over a Lambertian ground of ``albedo``; plane-parallel, 64 streams, delta-M

@@ -241,13 +241,9 @@ def test_ground_interreflection_follows_the_spherical_albedo():
 @pytest.mark.parametrize(("tau", "rayleigh", "albedo", "sun"), [(15.0, False, 0.0, 30.0), (30.0, True, 0.6, 0.0)])
 def test_water_cloud_ground_diffuse_irradiance_against_disort(tau, rayleigh, albedo, sun):
     pytest.importorskip("disortpp")
-    from disort_reference import disort_cloud
-    from skyscatter.atmosphere.clouds import CloudLayer
+    from disort_reference import disort_cloud, water_cloud_case
 
-    layer = CloudLayer(1000.0, 1500.0, tau, effective_radius=10e-6, effective_variance=0.1)
-    kw = {} if rayleigh else dict(rayleigh_scattering=0.0)
-    atm = AtmosphereParameters(bottom_radius=RB, top_radius=RB + 60000.0, mie_angstrom_beta=0.0, ozone_column=0.0,
-                               ground_albedo=albedo, particles=(layer,), **kw)
+    layer, atm = water_cloud_case(tau, rayleigh, albedo, RB)
     sz = math.radians(sun)
     empty = CloudField(np.zeros((1, 1, 1)), 1000.0, 0.0, 1000.0, HG085, origin=(0.0, 0.0))  # marks the domain
     d = domain_quantities(atm, empty, WL, sun_zenith=sz, up_views=None, samples=20_000, seed=32)
@@ -265,13 +261,9 @@ def test_water_cloud_radiance_against_disort(tau, rayleigh, albedo, sun, samples
     next-event estimates (kernels docstring) the per-path relative standard deviation here was 13-14 (a 2 % check
     needed some 4 x 10^6 paths per direction); with it, about 2."""
     pytest.importorskip("disortpp")
-    from disort_reference import disort_cloud
-    from skyscatter.atmosphere.clouds import CloudLayer
+    from disort_reference import disort_cloud, water_cloud_case
 
-    layer = CloudLayer(1000.0, 1500.0, tau, effective_radius=10e-6, effective_variance=0.1)
-    kw = {} if rayleigh else dict(rayleigh_scattering=0.0)
-    atm = AtmosphereParameters(bottom_radius=RB, top_radius=RB + 60000.0, mie_angstrom_beta=0.0, ozone_column=0.0,
-                               ground_albedo=albedo, particles=(layer,), **kw)
+    layer, atm = water_cloud_case(tau, rayleigh, albedo, RB)
     sz = math.radians(sun)
     vz = np.radians([0.0, 60.0, 80.0])
     va = np.radians([90.0, 180.0])  # azimuth 180: away from the sun
