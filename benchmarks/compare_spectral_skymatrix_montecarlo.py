@@ -230,6 +230,9 @@ def main() -> None:
     ap.add_argument("--radiance-dir", type=Path, default=None,
                     help="gensdaymtx's working folder (its atmos_data cache); default SKYSCATTER_CACHE_DIR/radiance")
     ap.add_argument("--until", default=None, help="UTC HH:MM: stop starting new Monte Carlo skies then")
+    ap.add_argument("--gens-calibrated", type=Path, default=None,
+                    help="gensdaymtx with the year file's illuminance filled (Perez 1990) against a results JSON's "
+                         "Monte Carlo; prints a table and exits")
     ap.add_argument("--regens", type=Path, default=None,
                     help="recompute gensdaymtx's columns of a results JSON (with its .jobs.pkl) and exit")
     ap.add_argument("--plot", type=Path, default=None, help="only redraw the figure and print the table of a JSON")
@@ -237,6 +240,9 @@ def main() -> None:
     args = ap.parse_args()
     if args.regens is not None:
         regens(args)
+        return
+    if args.gens_calibrated is not None:
+        gens_calibrated(args)
         return
     if args.plot is not None:
         res = json.loads(args.plot.read_text())
@@ -366,6 +372,61 @@ def gens_reduced(epw: Path, hours: list[int], cache: Path | None) -> dict[int, n
 
     ecc = np.asarray(extraterrestrial_irradiance(read_weather(epw).day_of_year), dtype=float) / SOLAR_CONSTANT
     return {i: gens[i][:, b_wl] / (GENSDAYMTX_SPAN_NM * e0 * ecc[i]) for i in hours}
+
+
+def with_illuminance(src: Path, out: Path) -> Path:
+    """Copy of the EPW ``src`` with its illuminance fields (17-19: global, direct normal, diffuse horizontal [lx])
+    filled from its irradiance by Perez et al. (1990)'s luminous efficacies (Table 4, ``sky.perez.luminous_efficacy``;
+    sky clearness and brightness from DNI and DHI, the file's precipitable water): gensdaymtx scales its sky to the
+    diffuse illuminance, and a file without it (missing, 999999) leaves its sky uncalibrated."""
+    from skyscatter.fit.weather import read_weather
+    from skyscatter.sky.perez import luminous_efficacy, sky_brightness, sky_clearness
+    from skyscatter.sun.position import sun_position_unix
+
+    rec = read_weather(src)
+    zen = np.asarray(sun_position_unix(rec.location.latitude, rec.location.longitude, rec.unix_times(),
+                                       apparent=False).zenith)
+    ghi, dni, dhi = (rec.global_horizontal_irradiance, rec.direct_normal_irradiance,
+                     rec.diffuse_horizontal_irradiance)
+    # the record's precipitable water is in mm; Perez's W in cm
+    water = rec.precipitable_water / 10.0 if rec.precipitable_water is not None else np.full(ghi.size, 1.4)
+    ok = (dhi > 0) & (zen < np.radians(89.5))
+    eps = np.where(ok, sky_clearness(dni, np.where(ok, dhi, 1.0), zen), 1.0)
+    delta = np.maximum(np.where(ok, sky_brightness(np.where(ok, dhi, 0.0), zen, rec.day_of_year), 0.1), 1e-3)
+    k = {kind: luminous_efficacy(kind, eps, delta, zen, water) for kind in ("global", "direct", "diffuse")}
+    lines = src.read_text().splitlines()
+    head, body = lines[:8], lines[8:]
+    for j in np.flatnonzero(ok):
+        f = body[j].split(",")
+        f[16], f[17], f[18] = (f"{k['global'][j] * ghi[j]:.0f}", f"{k['direct'][j] * dni[j]:.0f}",
+                               f"{k['diffuse'][j] * dhi[j]:.0f}")
+        body[j] = ",".join(f)
+    out.write_text("\n".join(head + body) + "\n")
+    return out
+
+
+def gens_calibrated(args) -> None:
+    """gensdaymtx on the year file with illuminance (:func:`with_illuminance`), its patches per nm against the
+    Monte Carlo of a results JSON (patches and wavelengths pooled per kind of hour); prints a table."""
+    from weather_synth import write_year_epw
+
+    res = json.loads(args.gens_calibrated.read_text())
+    work = Path(tempfile.mkdtemp(prefix="mc-spectral-"))
+    epw = with_illuminance(write_year_epw(work / "year.epw"), work / "year_illum.epw")
+    t0 = time.perf_counter()
+    g = gens_reduced(epw, [int(r["hour"]) for r in res["hours"]], args.radiance_dir)
+    print(f"gensdaymtx -m 1 -s (illuminance filled): {time.perf_counter() - t0:.0f} s")
+    groups = [("clear", lambda r: r["kind"] == "clear" and not r["low_sun"]),
+              ("broken", lambda r: r["kind"] == "broken" and not r["low_sun"]),
+              ("overcast", lambda r: r["kind"] == "overcast" and not r["low_sun"]),
+              ("low sun (70-86 deg)", lambda r: r["low_sun"]), ("all", lambda r: True)]
+    print("| hours | n | gensdaymtx calibrated vs MC: median | median abs | p95 abs |\n|---|---|---|---|---|")
+    for name, sel in groups:
+        hs = [r for r in res["hours"] if sel(r)]
+        rel = np.concatenate([(g[r["hour"]][r["patches"]] / np.asarray(r["mc_rel"]) - 1).ravel() for r in hs])
+        rel = rel[np.isfinite(rel)]
+        print(f"| {name} | {len(hs)} | {np.median(rel) * 100:+.1f} % | {np.median(np.abs(rel)) * 100:.1f} % | "
+              f"{np.percentile(np.abs(rel), 95) * 100:.1f} % |")
 
 
 def regens(args) -> None:
