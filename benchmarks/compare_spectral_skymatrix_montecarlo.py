@@ -54,8 +54,8 @@ WAVELENGTHS = (410.0, 490.0, 570.0, 650.0)
 #: gensdaymtx's band values are spectral radiances [W m^-2 sr^-1 nm^-1] times this span [nm] (Radiance,
 #: src/gen/gensdaymtx.c: ``sky_radiance[k] *= WVLSPAN`` for the clear sky of its tables, whose sun is EXTSOL in
 #: W m^-2 nm^-1; src/gen/atmos.c: ``WVLSPAN = 400  // 380nm to 780nm``; the overcast part, the CIE overcast
-#: luminance over 203 lm/W times a relative spectrum of mean 1, is on the same scale): the mean over its 20 bands
-#: is the 380-780 nm radiance, Radiance's convention for spectral channels.
+#: luminance over D65's efficacy times a relative spectrum of mean about 1, is on the same scale): the mean over
+#: its 20 bands is the 380-780 nm radiance, Radiance's convention for spectral channels.
 GENSDAYMTX_SPAN_NM = 400.0
 KINDS = ("clear", "broken", "overcast")
 
