@@ -194,7 +194,8 @@ def plot(res: dict, out: Path) -> None:
     ax.set_ylim(-80, 80)
     ax.set_xlabel("hour of year, kind (c/b/o, L low sun), sun zenith [deg]; whiskers 5-95 % of patches x 4 wavelengths")
     ax.set_ylabel("relative to Monte Carlo [%]")
-    ax.set_title("skyscatter (blue) and gensdaymtx (orange, its band values / 400 nm) vs Monte Carlo", fontsize=9)
+    ax.set_title("skyscatter (blue) and gensdaymtx (orange: band values / 400 nm; no illuminance in the file, so "
+                 "not calibrated to its DHI) vs Monte Carlo", fontsize=9)
     ax.legend(loc="lower left", fontsize=7)
     ax = axes[1]
     for r in rows:
