@@ -403,8 +403,9 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     rad_k = np.empty((n_s, n_om))
     n_u = phase_trunc.shape[1]
     half_u = 0.5 * (n_u - 1)
-    idx_t = np.zeros((n_om if table else 0, n_v), dtype=np.int64)
-    wt_t = np.zeros((n_om if table else 0, n_v))
+    view_x = np.empty(n_v)  # the view directions' components apart: contiguous for the phase fill
+    view_y = np.empty(n_v)
+    view_z = np.empty(n_v)
     pv = np.empty(n_l)
     tmp2 = np.empty(n_l)
     view = np.empty((n_v, 3))
@@ -440,14 +441,10 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 view[v, 0] = vx
                 view[v, 1] = vy
                 view[v, 2] = mu
-                if table:
-                    # cell of v . w on the truncated phase's uniform cosine grid; the values per wavelength below
-                    for w in range(n_om):
-                        x = (clamp(vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], -1.0, 1.0) + 1.0) * half_u
-                        i = min(int(x), n_u - 2)
-                        idx_t[w, v] = i
-                        wt_t[w, v] = x - i
-                else:
+                view_x[v] = vx
+                view_y[v] = vy
+                view_z[v] = mu
+                if not table:
                     nm = 0.0
                     for w in range(n_om):
                         pm = aerosol_phase(vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], g, mie_kind)
@@ -500,12 +497,17 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
             for k in range(n_l):
                 for v in range(n_v):
                     norm_t[k, v] = 0.0
+                pk = phase_trunc[k]
                 for w in range(n_om):
                     dw = dom[w]
+                    ox, oy, oz = om[w, 0], om[w, 1], om[w, 2]
                     for v in range(n_v):
-                        i = idx_t[w, v]
-                        f = wt_t[w, v]
-                        p = (1.0 - f) * phase_trunc[k, i] + f * phase_trunc[k, i + 1]
+                        # the cell of v . w on the truncated phase's even cosine grid, recomputed per wavelength:
+                        # cheaper than reading a stored (n_om, n_v) index and weight (8 MB) 16 times
+                        x = (min(max(view_x[v] * ox + view_y[v] * oy + view_z[v] * oz, -1.0), 1.0) + 1.0) * half_u
+                        i = min(int(x), n_u - 2)
+                        f = x - i
+                        p = (1.0 - f) * pk[i] + f * pk[i + 1]
                         phase_t[w, v] = p
                         norm_t[k, v] += p * dw
                 for i_s in range(n_s):
