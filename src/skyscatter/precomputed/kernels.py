@@ -558,7 +558,10 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_trunc, forwar
     w_z dw`` on the grid (``p*`` a ``2 x density_sphere_samples``-term Legendre series, smooth on it) plus the
     delta part exactly: the delta picks the sun's own direction, ``f mu_s S_M(r, mu_s, mu_s, 1)`` (for ``mu_s >
     0``: a sun below the horizon puts no forward peak on a horizontal surface). The higher orders' radiance
-    ``s_a`` is summed on the grid as it is.
+    ``s_a`` is summed on the grid as it is. A tabulated phase comes here as the delta-M scaled medium's (table
+    format 11, :meth:`.compute.Medium.delta_m_scaled`: ``p*`` and ``f = 0``; its peak's light is the scaled
+    direct beam's excess, which :func:`.compute._orders` adds to the irradiance table), so the split above serves
+    the analytic phases.
     """
     n_r, n_mu_s, n_l = out.shape
     om, dom = sphere_quadrature(n_theta, True)
