@@ -63,7 +63,10 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: forward peak exact; :func:`.kernels.indirect_irradiance_kernel`), so a Mie air's irradiance table changed.
 #: 10: the same layout; the analytic aerosol phases' (Cornette-Shanks, Henyey-Greenstein) first-order diffuse
 #: irradiance split by delta-M as well, so the default air's irradiance table changed (scattering tables did not).
-FORMAT_VERSION = 10
+#: 11: the same layout; a tabulated aerosol phase's orders computed in the delta-M scaled medium, its single
+#: tables (two or more orders) with the scaled transmittances (the TMS correction; :mod:`.tables`), so a Mie air's
+#: scattering and irradiance tables changed (the analytic phases' did not).
+FORMAT_VERSION = 11
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).
