@@ -602,6 +602,47 @@ def _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, den
 
 
 @helper
+def _free_path(px, py, pz, dx, dy, dz, t_end, target, kh, hero, field, rb, edges, layers, nlay, cols, tmp, rec, fs,
+               fsmax, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, f, p, st, fstate):
+    """A free path from ``p`` along ``d`` up to ``t_end`` [m]: the shells' by inverting their optical depth at
+    ``target`` for the hero's coefficients ``kh``, then (``field``) the cloud field tracked up to it by
+    :func:`.tracking.field_free_path` (the wavelengths' weights ``f``, ``p`` updated there); the decomposition of the
+    module docstring. Returns ``(t, reached, rho_f)``: the distance (``t_end`` when nothing is reached), whether a
+    collision was reached, the field's density there (0: a shell collision, or none); ``cols`` the shell columns
+    from ``p`` to ``t``."""
+    t, reached, npc = _march(px, py, pz, dx, dy, dz, t_end, target, kh, rb, edges, layers, nlay, cols, tmp, rec, True)
+    if not reached:
+        t = t_end
+    rho_f = 0.0
+    if field:
+        tv, hit, rv = field_free_path(px, py, pz, dx, dy, dz, t, hero, fs, fsmax, fvf, fvi, frho, fbmax, fbmin, fxe,
+                                      fye, fre, f, p, st, fstate)
+        if hit:
+            _columns_at(px, py, pz, dx, dy, dz, tv, rb, layers, nlay, rec, npc, cols, tmp)
+            t = tv
+            reached = True
+            rho_f = rv
+    return t, reached, rho_f
+
+
+@inline
+def _collide(px, py, pz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers, nlay, coef_t, scat_t, fs, fss, cols,
+             dens, sc, stt, sst, tau):
+    """A collision at distance ``t`` [m] along ``d`` from ``p``: returns the point; fills the medium there
+    (:func:`_medium_at`; the field's density ``rho_f`` looked up unless the field's tracker returned it, i.e. it is
+    not 0) and ``tau[i]``, the optical depth of the free path's shell columns ``cols`` at every wavelength. One
+    description for the paths' vertices, the peak probe's links and the forward photons."""
+    px += t * dx
+    py += t * dy
+    pz += t * dz
+    if field and rho_f == 0.0:
+        rho_f = field_density_at(px, py, pz, fvf, fvi, frho)
+    _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt, sst)
+    _optical_depths(coef_t, cols, tau)
+    return px, py, pz
+
+
+@helper
 def _phase_sums(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, density):
     """``val[i] = sum_c sc[c, i] P_c,i(mu)`` [m^-1 sr^-1] over the active lobes and, with ``density``, ``val2[i] =
     sum_c sc[c, i] q_c,i(mu)`` with ``q`` the density by which lobe ``c`` is sampled (Henyey-Greenstein for a
@@ -704,31 +745,16 @@ def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nl
     for k in range(nl):
         dx, dy, dz = chain[k, 0], chain[k, 1], chain[k, 2]
         t_end, _ = _exit_distance(qx, qy, qz, dx, dy, dz, rb, rt)
-        t, reached, npc = _march(qx, qy, qz, dx, dy, dz, t_end, -math.log1p(-next_uniform(st)), kh, rb, edges,
-                                 layers, nlay, cols, tmp, rec, True)
-        if not reached:
-            t = t_end
-        rho_f = 0.0
         for i in range(n):
             fp[i] = 1.0
             pp[i] = 1.0
-        if field:
-            tv, hit, rv = field_free_path(qx, qy, qz, dx, dy, dz, t, hero, fs, fsmax, fvf, fvi, frho, fbmax, fbmin,
-                                          fxe, fye, fre, fp, pp, st, fstate)
-            if hit:
-                _columns_at(qx, qy, qz, dx, dy, dz, tv, rb, layers, nlay, rec, npc, cols, tmp)
-                t = tv
-                reached = True
-                rho_f = rv
+        t, reached, rho_f = _free_path(qx, qy, qz, dx, dy, dz, t_end, -math.log1p(-next_uniform(st)), kh, hero, field,
+                                       rb, edges, layers, nlay, cols, tmp, rec, fs, fsmax, fvf, fvi, frho, fbmax,
+                                       fbmin, fxe, fye, fre, fp, pp, st, fstate)
         if not reached:
             return False, 0.0, 0.0, 0.0
-        qx += t * dx
-        qy += t * dy
-        qz += t * dz
-        if field and rho_f == 0.0:
-            rho_f = field_density_at(qx, qy, qz, fvf, fvi, frho)
-        _medium_at(qx, qy, qz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt, sst)
-        _optical_depths(coef_t, cols, tau)
+        qx, qy, qz = _collide(qx, qy, qz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers, nlay, coef_t,
+                              scat_t, fs, fss, cols, dens, sc, stt, sst, tau)
         den = stt[hero] * math.exp(-tau[hero]) * pp[hero]
         if not den > 0.0 or sc[peak_lobe, hero] <= 0.0:
             return False, 0.0, 0.0, 0.0
@@ -913,30 +939,16 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                     else:
                         u = next_uniform(st)
                         target = -math.log1p(-u)
-                        t, reached, npc = _march(px, py, pz, dx, dy, dz, t_end, target, kh, rb, edges, layers,
-                                                 nlay, cols, tmp, rec, True)
-                        if not reached:
-                            t = t_end
-                        if field:
-                            tv, hit, rv = field_free_path(px, py, pz, dx, dy, dz, t, hero, fs, fsmax, fvf, fvi, frho,
-                                                          fbmax, fbmin, fxe, fye, fre, f, p, st, fstate)
-                            if hit:
-                                _columns_at(px, py, pz, dx, dy, dz, tv, rb, layers, nlay, rec, npc, cols, tmp)
-                                t = tv
-                                reached = True
-                                rho_f = rv
+                        t, reached, rho_f = _free_path(px, py, pz, dx, dy, dz, t_end, target, kh, hero, field, rb,
+                                                       edges, layers, nlay, cols, tmp, rec, fs, fsmax, fvf, fvi, frho,
+                                                       fbmax, fbmin, fxe, fye, fre, f, p, st, fstate)
                         if reached:
                             collided = True
                         elif not ground:
                             break  # escaped to space; the sun is reached by NEE only
                     if collided:
-                        px += t * dx
-                        py += t * dy
-                        pz += t * dz
-                        if field and rho_f == 0.0:
-                            rho_f = field_density_at(px, py, pz, fvf, fvi, frho)
-                        _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt, sst)
-                        _optical_depths(coef_t, cols, tau)
+                        px, py, pz = _collide(px, py, pz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers,
+                                              nlay, coef_t, scat_t, fs, fss, cols, dens, sc, stt, sst, tau)
                         if forced:
                             _optical_depths(coef_t, tot, tau2)
                         for i in range(n):
@@ -1295,27 +1307,12 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
                 t_end, ground = _exit_distance(px, py, pz, dx, dy, dz, rb, rt)
                 t_if, lev, outward = _next_level(px, py, pz, dx, dy, dz, levels, t_end)
                 u = next_uniform(st)
-                t, reached, npc = _march(px, py, pz, dx, dy, dz, t_if, -math.log1p(-u), kh, rb, edges, layers, nlay,
-                                         cols, tmp, rec, True)
-                if not reached:
-                    t = t_if
-                rho_f = 0.0
-                if field:
-                    tv, hit, rv = field_free_path(px, py, pz, dx, dy, dz, t, hero, fs, fsmax, fvf, fvi, frho, fbmax,
-                                                  fbmin, fxe, fye, fre, f, p, st, fstate)
-                    if hit:
-                        _columns_at(px, py, pz, dx, dy, dz, tv, rb, layers, nlay, rec, npc, cols, tmp)
-                        t = tv
-                        reached = True
-                        rho_f = rv
-                px += t * dx
-                py += t * dy
-                pz += t * dz
-                _optical_depths(coef_t, cols, tau)
+                t, reached, rho_f = _free_path(px, py, pz, dx, dy, dz, t_if, -math.log1p(-u), kh, hero, field, rb,
+                                               edges, layers, nlay, cols, tmp, rec, fs, fsmax, fvf, fvi, frho, fbmax,
+                                               fbmin, fxe, fye, fre, f, p, st, fstate)
                 if reached:
-                    if field and rho_f == 0.0:
-                        rho_f = field_density_at(px, py, pz, fvf, fvi, frho)
-                    _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt, sst)
+                    px, py, pz = _collide(px, py, pz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers, nlay,
+                                          coef_t, scat_t, fs, fss, cols, dens, sc, stt, sst, tau)
                     for i in range(n):
                         tr = math.exp(-tau[i])
                         f[i] *= tr
@@ -1346,6 +1343,10 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
                         p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
                     _normalise(f, p, n)
                 else:
+                    px += t * dx
+                    py += t * dy
+                    pz += t * dz
+                    _optical_depths(coef_t, cols, tau)
                     for i in range(n):
                         tr = math.exp(-tau[i])
                         f[i] *= tr
