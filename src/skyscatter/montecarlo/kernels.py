@@ -746,9 +746,18 @@ def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nl
         for i in range(n):
             fp[i] = 1.0
             pp[i] = 1.0
-        t, reached, rho_f = _free_path(qx, qy, qz, dx, dy, dz, t_end, -math.log1p(-next_uniform(st)), kh, hero, field,
-                                       rb, edges, layers, nlay, cols, tmp, rec, fs, fsmax, fvf, fvi, frho, fbmax,
-                                       fbmin, fxe, fye, fre, fp, pp, st, fstate)
+        target = -math.log1p(-next_uniform(st))
+        if field:
+            t, reached, rho_f = _free_path(qx, qy, qz, dx, dy, dz, t_end, target, kh, hero, field, rb, edges, layers,
+                                           nlay, cols, tmp, rec, fs, fsmax, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre,
+                                           fp, pp, st, fstate)
+        else:
+            # the shells alone, without the call (as in trace_block)
+            rho_f = 0.0
+            t, reached, _ = _march(qx, qy, qz, dx, dy, dz, t_end, target, kh, rb, edges, layers, nlay, cols, tmp, rec,
+                                   True)
+            if not reached:
+                t = t_end
         if not reached:
             return False, 0.0, 0.0, 0.0
         qx, qy, qz = _collide(qx, qy, qz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers, nlay, coef_t,
