@@ -338,6 +338,16 @@ def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int, 
     n_l = transmittance.shape[-1]
     shape = (*sizes.scattering_shape, n_l)
     blocks = [range(a, min(a + ROW_BLOCK, sizes.scattering_r)) for a in range(0, sizes.scattering_r, ROW_BLOCK)]
+    # One buffer for the whole table loaded at a time (the previous order, then the density; in the second order
+    # the two single-scattering tables of a sub-chunk side by side): a new 67 MB array per load had its pages
+    # zeroed by the kernel on first touch, twice per order.
+    sub = max(len(c) for c in np.array_split(np.arange(n_l), min(split, n_l)))
+    texels = math.prod(sizes.scattering_shape)
+    whole = np.empty(texels * max(n_l, 2 * sub), dtype=np.float32)
+
+    def buffer(n_wl: int, part: int = 0) -> F32:
+        return whole[part * texels * n_wl: (part + 1) * texels * n_wl].reshape(*sizes.scattering_shape, n_wl)
+
     with ScratchTable(shape) as s_r, ScratchTable(shape) as s_m, ScratchTable(shape) as density, \
             ScratchTable(shape) as previous, ScratchTable(shape) as total:
         with book.order(1, "single scattering"):
@@ -372,13 +382,14 @@ def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int, 
                         for ch in np.array_split(np.arange(n_l), min(split, n_l)):
                             med = scaled.channels(ch)
                             t_ch = np.ascontiguousarray(t_scaled[..., ch])
-                            light = Order(s_r.load(ch), s_m.load(ch), True, np.ascontiguousarray(e_source[..., ch]))
+                            light = Order(s_r.load(ch, buffer(len(ch), 0)), s_m.load(ch, buffer(len(ch), 1)), True,
+                                          np.ascontiguousarray(e_source[..., ch]))
                             for rows in blocks:
                                 density.write(rows, scattering_density(med, sizes, t_ch, light, rows), ch)
                             d_irradiance[..., ch] = indirect_irradiance(med, sizes, light)
                             del light
                     else:
-                        table = previous.load()
+                        table = previous.load(out=buffer(n_l))
                         light = Order(table, table, False, last_irradiance)
                         for rows in blocks:
                             density.write(rows, scattering_density(scaled, sizes, t_scaled, light, rows))
@@ -386,7 +397,7 @@ def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int, 
                         del light, table
                     irradiance += d_irradiance
                 with book.timed(f"order {k} multiple"):
-                    dens = density.load()
+                    dens = density.load(out=buffer(n_l))
                     order_sum = np.zeros(n_l)
                     for rows in blocks:
                         d_scattering = multiple_scattering(scaled, sizes, t_scaled, dens, rows)
@@ -436,17 +447,20 @@ class ScratchTable:
             block = full
         _pwrite_all(self._fh.fileno(), np.ascontiguousarray(block, dtype=np.float32), rows.start * self._row)
 
-    def read(self, rows: range) -> F32:
-        """The radii ``rows``, all wavelengths."""
-        out = np.empty((len(rows), *self.shape[1:]), dtype=np.float32)
+    def read(self, rows: range, out: F32 | None = None) -> F32:
+        """The radii ``rows``, all wavelengths (into the C-contiguous ``out`` if given)."""
+        if out is None:
+            out = np.empty((len(rows), *self.shape[1:]), dtype=np.float32)
         _pread_all(self._fh.fileno(), out, rows.start * self._row)
         return out
 
-    def load(self, channels: NDArray[np.intp] | None = None) -> F32:
-        """The whole table, at all wavelengths or at those of indices ``channels`` (read by blocks of radii)."""
+    def load(self, channels: NDArray[np.intp] | None = None, out: F32 | None = None) -> F32:
+        """The whole table, at all wavelengths or at those of indices ``channels`` (read by blocks of radii),
+        into the C-contiguous ``out`` if given."""
         if channels is None:
-            return self.read(range(self.shape[0]))
-        out = np.empty((*self.shape[:-1], len(channels)), dtype=np.float32)
+            return self.read(range(self.shape[0]), out)
+        if out is None:
+            out = np.empty((*self.shape[:-1], len(channels)), dtype=np.float32)
         for a in range(0, self.shape[0], ROW_BLOCK):
             rows = range(a, min(a + ROW_BLOCK, self.shape[0]))
             out[a: rows.stop] = self.read(rows)[..., channels]
@@ -493,10 +507,10 @@ class SpillTables:
         ``first..first + chunk - 1`` (the half-precision scales are per radius: a block of whole radii is final)."""
         fd = self._files[name].fileno()
         row_bytes = self._per_wavelength // self._shape[1]
-        for k in range(table.shape[-1]):  # one wavelength at a time: a float16 copy of one wavelength in memory
-            values, scale = encode_half(table[..., k: k + 1])
-            _pwrite_all(fd, values, (first + k) * self._per_wavelength + rows.start * row_bytes)
-            self._scales[name][first + k, rows.start: rows.stop] = scale[0]
+        values, scale = encode_half(table)  # (chunk, len(rows), ...): a block is a few MiB
+        for k in range(table.shape[-1]):
+            _pwrite_all(fd, values[k], (first + k) * self._per_wavelength + rows.start * row_bytes)
+        self._scales[name][first: first + table.shape[-1], rows.start: rows.stop] = scale
 
     def tables(self) -> dict[str, HalfTable]:
         """The finished tables."""

@@ -194,6 +194,7 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
     n_suns = n_mu_s * n_nu
     acc_r = np.empty((n_suns, n_l))
     acc_m = np.empty((n_suns, n_l))
+    t_sun = np.empty(n_l)
     nu_flat = np.empty(n_suns)
     cell = np.empty(n_suns, dtype=np.int64)
     w_sun = np.empty(n_suns)
@@ -253,11 +254,15 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
                 j = cell[u]
                 w = w_sun[u]
                 a00, a01, a10, a11 = bilinear_weights(w_tr, w)
+                # Two loops, not one: each then has few enough possible overlaps between the arrays it writes and
+                # reads for the compiler to check them at run time and vectorise it (in one loop it did not, and
+                # these loops were most of the kernel's time).
                 for k in range(n_l):
-                    t_sun = f * (a00 * transmittance[j_r, j, k] + a01 * transmittance[j_r, j + 1, k]
-                                 + a10 * transmittance[j_r + 1, j, k] + a11 * transmittance[j_r + 1, j + 1, k])
-                    acc_r[u, k] += w_r[i, k] * t_sun
-                    acc_m[u, k] += w_m[i, k] * t_sun
+                    t_sun[k] = f * (a00 * transmittance[j_r, j, k] + a01 * transmittance[j_r, j + 1, k]
+                                    + a10 * transmittance[j_r + 1, j, k] + a11 * transmittance[j_r + 1, j + 1, k])
+                for k in range(n_l):
+                    acc_r[u, k] += w_r[i, k] * t_sun[k]
+                    acc_m[u, k] += w_m[i, k] * t_sun[k]
         for i_s in range(n_mu_s):
             for i_n in range(n_nu):
                 u = i_s * n_nu + i_n
@@ -653,6 +658,7 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     beta = np.empty((n_pts, n_l))
     q = np.empty((n_pts, n_l))
     sl = np.empty((n_s, n_n, n_l), dtype=np.float32)  # as the tables: half the memory traffic
+    sl_flat = sl.reshape(n_s * n_n, n_l)
     acc = np.empty((n_s, n_n, n_l))
     acc_flat = acc.reshape(n_s * n_n, n_l)
     nu_flat = np.empty(n_s * n_n)
@@ -713,16 +719,15 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
             _sun_cells(r, dist[i], rad[i], mu_ray[i], mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a, theta_max,
                        n_s, n_n, cell, w_s, w_n)
             for u in range(n_s * n_n):
-                if cell[u] < 0:
+                c = cell[u]  # the flat (mu_s, nu) cell indexes sl_flat: no integer division per sun (7 % of
+                if c < 0:    # this kernel's time, single thread)
                     continue
-                j_s = cell[u] // n_n
-                j_n = cell[u] - j_s * n_n
                 ws = w_s[u]
                 wn = w_n[u]
                 a00, a01, a10, a11 = bilinear_weights(ws, wn)
                 for k in range(n_l):
-                    acc_flat[u, k] += q[i, k] * (a00 * sl[j_s, j_n, k] + a01 * sl[j_s, j_n + 1, k]
-                                                 + a10 * sl[j_s + 1, j_n, k] + a11 * sl[j_s + 1, j_n + 1, k])
+                    acc_flat[u, k] += q[i, k] * (a00 * sl_flat[c, k] + a01 * sl_flat[c + 1, k]
+                                                 + a10 * sl_flat[c + n_n, k] + a11 * sl_flat[c + n_n + 1, k])
         for i_s in range(n_s):
             for i_n in range(n_n):
                 for k in range(n_l):
