@@ -5,7 +5,11 @@
 the choice options) and requires each in at least one of the runs, so a new option needs a run here.
 The precomputed atmosphere is built at tiny sizes here (the command's own code, with smaller tables, so that
 every atmosphere option costs a second rather than a minute); ``precompute`` and ``export-luts`` are given tiny
-sizes on their command line.
+sizes on their command line; ``skymatrix --spectral``'s table presets (``--tables default`` and ``coarse``)
+keep their wavelengths but take the tiny sizes. Likewise the cloud table of ``skymatrix --spectral``'s cloudy
+hours has 3 x 3 nodes here (9 DISORT solves instead of 108: each air's table cost about 40 s of CPU) and the
+clear-sky tables that light a cloud top are tiny: the retrieval's code runs on every cloudy hour; its accuracy is
+tested with the real nodes and sizes in tests/test_cloud_retrieval.py and tests/test_spectral_skymatrix.py.
 """
 
 from __future__ import annotations
@@ -27,19 +31,37 @@ TINY_FLAGS = ["--transmittance-size", "16x4", "--irradiance-size", "4x4", "--sca
               "--orders", "2", "--no-progress"]
 
 
+#: Cloud optical depths [-] and sun zenith angles [rad] of the cloud table here (the real one: 12 x 9 nodes over
+#: the same ranges, skyscatter.fit.weather.CLOUD_OPTICAL_DEPTH_NODES and CLOUD_ZENITH_NODES_DEG).
+TINY_CLOUD_TAU = (0.5, 5.5, 60.0)
+TINY_CLOUD_ZENITH = tuple(np.radians([0.0, 62.0, 87.0]))
+
+
 @pytest.fixture(autouse=True)
 def _tiny_tables(monkeypatch):
+    import skyscatter.fit.weather as weather
     import skyscatter.precomputed.cache as cache
+    import skyscatter.sky.cloudy as cloudy
 
     real = cache.load_or_compute
 
     def tiny(params=None, **kwargs):
-        if kwargs.get("sizes") is None:
+        if kwargs.get("sizes") is None or kwargs.get("sizes") is TINY:
             kwargs["sizes"] = TINY
             kwargs["orders"] = 2
         return real(params, **kwargs)
 
     monkeypatch.setattr(cache, "load_or_compute", tiny)
+    for preset in weather.TABLE_PRESETS.values():  # skymatrix --spectral's family (--tables default and coarse)
+        monkeypatch.setitem(preset, "sizes", TINY)
+        monkeypatch.setitem(preset, "orders", 2)
+    monkeypatch.setattr(cloudy, "COUPLING_TABLE_SIZES", TINY)
+    real_cloud_table = weather.cloud_table
+
+    def tiny_cloud_table(atmosphere, optical_depth_nodes=TINY_CLOUD_TAU, zenith_nodes=TINY_CLOUD_ZENITH):
+        return real_cloud_table(atmosphere, optical_depth_nodes, zenith_nodes)
+
+    monkeypatch.setattr(weather, "cloud_table", tiny_cloud_table)
 
 
 # -------------------------------------------------------------------------------------------- checks

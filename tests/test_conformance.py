@@ -48,6 +48,20 @@ def _sky(spec, **parameters) -> SkyModel:
     return registry.build(spec.name, *SUN, **{**QUICK.get(spec.name, {}), **parameters})
 
 
+#: The default sky of each model that is not cheap to build, built once for the tests below that only evaluate it
+#: (a broken-cloud sky's procedural 128 x 128 x 32 field alone took 2.3 s of CPU, and five tests, one of them with
+#: five cases, asked for it); a cheap model is built afresh each time.
+_DEFAULT_SKIES: dict[str, SkyModel] = {}
+
+
+def _default_sky(spec) -> SkyModel:
+    if spec.cost == "cheap":
+        return _sky(spec)
+    if spec.name not in _DEFAULT_SKIES:
+        _DEFAULT_SKIES[spec.name] = _sky(spec)
+    return _DEFAULT_SKIES[spec.name]
+
+
 def _random_directions(rng, n: int, *, upper: bool = True) -> np.ndarray:
     z = rng.uniform(0.0 if upper else -1.0, 1.0, n)
     phi = rng.uniform(0.0, 2 * np.pi, n)
@@ -106,7 +120,7 @@ def test_spec_is_complete(spec):
 
 @pytest.mark.parametrize("spec", SPECS, ids=IDS)
 def test_shapes(spec):
-    sky = _sky(spec)
+    sky = _default_sky(spec)
     one = direction_from_angles(0.6, 1.0)
     assert np.shape(sky.luminance(one)) == ()
     assert sky.xyz(one).shape == (3,)
@@ -127,7 +141,7 @@ def test_shapes(spec):
 @pytest.mark.parametrize("bad", [[np.nan, 0.0, 1.0], [0.0, 0.0, 0.0], [np.inf, 0.0, 1.0], [[0.0, 1.0]], "up"],
                          ids=["nan", "zero", "inf", "wrong-shape", "string"])
 def test_bad_directions_are_one_error_class(spec, bad):
-    sky = _sky(spec)
+    sky = _default_sky(spec)
     for method in (sky.luminance, sky.xyz, lambda d: sky.spectral_radiance(d, [550.0])):
         with pytest.raises(InvalidDirectionError):
             method(bad)
@@ -188,7 +202,7 @@ def test_no_nan_or_negative_over_random_valid_inputs(spec):
 
 @pytest.mark.parametrize("spec", SPECS, ids=IDS)
 def test_xyz_luminance_and_spectrum_agree(spec):
-    sky = _sky(spec)
+    sky = _default_sky(spec)
     d = _random_directions(np.random.default_rng(5), 50)
     y = sky.luminance(d)
     np.testing.assert_allclose(sky.xyz(d)[..., 1], y, rtol=1e-12, atol=1e-9)
@@ -223,7 +237,7 @@ def test_dict_and_pickle_round_trips_are_exact(spec):
 @pytest.mark.parametrize("spec", SPECS, ids=IDS)
 def test_below_horizon_as_documented(spec):
     """Models that do not render the ground give 0 below the horizon; the others give finite values >= 0."""
-    sky = _sky(spec)
+    sky = _default_sky(spec)
     below = direction_from_angles(np.radians([91.0, 120.0, 180.0]), np.radians([0.0, 90.0, 200.0]))
     lum = sky.luminance(below)
     if sky.renders_ground:
@@ -234,7 +248,7 @@ def test_below_horizon_as_documented(spec):
 
 @pytest.mark.parametrize("spec", SPECS, ids=IDS)
 def test_solar_disc_is_declared(spec):
-    sky = _sky(spec)
+    sky = _default_sky(spec)
     sun = sky.sun
     if not spec.uses_sun:
         assert sun is None and not sky.has_sun
