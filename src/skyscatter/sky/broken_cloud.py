@@ -145,6 +145,10 @@ COUPLING_DIRECTIONS = (8, 16)
 SHAFT_STEP = 250.0
 SHAFT_GROWTH = 0.02
 SHAFT_NODES = 65
+#: The shafts' nodes of the air's spectral integrand (:func:`.broken_cloud_kernels.shaft_loss`): at most this many
+#: steps and this optical length of the air [-] (along the ray, or the altitude change's towards the sun) between
+#: two (a ray's loss within 0.2 % of every step a node, tests/test_broken_cloud_shaft_nodes.py; docs/clouds.md).
+SHAFT_GROUP = (16, 0.1)
 
 
 class BrokenCloudSky(SunSkyMixin, SkyModel):
@@ -543,7 +547,17 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         horizon = -np.sqrt(np.maximum(1.0 - (bottom / r) ** 2, 0.0))
         t_sun[mu[None, :] < horizon[:, None]] = 0.0
         src = t_sun * np.asarray(air.solar_irradiance_at(wl), dtype=float)
-        return {"h_step": float(h[1] - h[0]), "beta_r": np.ascontiguousarray(beta_r, dtype=float),
+        # the scalar altitude profiles of the shafts' nodes (the sums over wavelength); the nodes need the
+        # coefficients separable, beta(h, l) = rho(h) beta(l) (exponential Rayleigh and one aerosol profile), else
+        # every step is a node
+        rho_r, rho_m = beta_r.sum(axis=1), beta_m.sum(axis=1)
+        separable = all(np.allclose(b, np.outer(p, b.sum(axis=0) / max(p.sum(), 1e-300)), rtol=1e-9, atol=0.0)
+                        for b, p in ((beta_r, rho_r), (beta_m, rho_m)))
+        group = np.array(SHAFT_GROUP if separable else (1, 0.0), dtype=float)
+        phase = air.aerosol_phase_table(wl).numba_arrays()
+        return {"rho_r": np.ascontiguousarray(rho_r), "rho_m": np.ascontiguousarray(rho_m), "group": group,
+                "ph_mu": np.ascontiguousarray(phase.mu), "ph_val": np.ascontiguousarray(phase.values),
+                "h_step": float(h[1] - h[0]), "beta_r": np.ascontiguousarray(beta_r, dtype=float),
                 "beta_m": np.ascontiguousarray(beta_m, dtype=float),
                 "beta_e": np.ascontiguousarray(beta_e, dtype=float), "src": np.ascontiguousarray(src)}
 
@@ -599,7 +613,6 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         nu = np.clip(dr @ sun, -1.0, 1.0)
         air = tab.parameters
         p_r = np.ascontiguousarray(air.rayleigh_phase(nu), dtype=float)
-        p_m = np.ascontiguousarray(air.aerosol_phase(nu, wavelengths=tab.wavelengths), dtype=float)
         part = np.ones((rows.size, nwl))
         part_gain = np.zeros((rows.size, nwl))
         far = t0[rows] > 0.0
@@ -611,9 +624,9 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         parallel_for(shaft_loss, rows.size, eye, dr, np.ascontiguousarray(seg[rows]),
                      np.ascontiguousarray(t0[rows]), sun, v["gf"], np.ascontiguousarray(v["tau_ground"]),
                      np.ascontiguousarray(v["tau_sun"]), sa["h_step"], sa["beta_r"], sa["beta_m"], sa["beta_e"],
-                     sa["src"], float(mu[0]), float(mu[1] - mu[0]), p_r, p_m, self._light["k"], SHAFT_STEP,
-                     SHAFT_GROWTH, self._ground_up["air_light"] if cloud_light else np.zeros(nwl), part, part_gain,
-                     grain=64)
+                     sa["rho_r"], sa["rho_m"], sa["src"], float(mu[0]), float(mu[1] - mu[0]), p_r, sa["ph_mu"],
+                     sa["ph_val"], self._light["k"], SHAFT_STEP, SHAFT_GROWTH, sa["group"],
+                     self._ground_up["air_light"] if cloud_light else np.zeros(nwl), part, part_gain, grain=64)
         out[rows] = part
         gain[rows] = part_gain
         return (out, gain) if cloud_light else out
