@@ -157,3 +157,24 @@ def test_last_sky_texel_is_the_horizon_itself():
         assert not hits
         rho = H * i_r / (n_r - 1)  # as the mapping defines it (sqrt(r^2 - R_g^2) loses digits to cancellation)
         assert math.isclose(mu, -rho / r, rel_tol=1e-15)
+
+
+def test_log_lerp_weight_is_the_geometric_interpolation(rng):
+    """With the weight of :func:`log_lerp_weight` the linear interpolation ``a + w' (b - a)`` is the geometric one
+    ``a^(1 - w) b^w`` (closed form, computed here with numpy's power) for end values within the floor's ratio of each
+    other (1e-3 to 1e3, and nearly equal ones); the weight runs from 0 to 1 with ``w`` and increases with it; below
+    the floor the weight is that of the floor (a texel in the Earth's shadow), applied to the values themselves (the
+    ends are kept); zero end values give ``w``."""
+    a = 10.0 ** rng.uniform(-8.0, 8.0, 2000)
+    b = a * np.concatenate([10.0 ** rng.uniform(-2.99, 2.99, 1500), 1.0 + rng.uniform(-3e-6, 3e-6, 500)])
+    w = rng.uniform(0.0, 1.0, a.size)
+    got = np.array([g.log_lerp_weight(x, y, t) for x, y, t in zip(a, b, w, strict=True)])
+    np.testing.assert_allclose(a + got * (b - a), a ** (1.0 - w) * b ** w, rtol=1e-9)
+    for x, y in ((1.0, 50.0), (3.0, 0.01), (2.0, 2.0)):
+        ws = [g.log_lerp_weight(x, y, t) for t in np.linspace(0.0, 1.0, 11)]
+        assert ws[0] == 0.0 and math.isclose(ws[-1], 1.0, rel_tol=1e-12) and np.all(np.diff(ws) > 0)
+    floor = g.LOG_LERP_FLOOR
+    for t in (0.1, 0.5, 0.9):
+        assert math.isclose(g.log_lerp_weight(0.0, 2.0, t), (floor ** (1.0 - t) - floor) / (1.0 - floor), rel_tol=1e-9)
+        assert math.isclose(g.log_lerp_weight(5.0, 1e-9, t), (1.0 - floor ** t) / (1.0 - floor), rel_tol=1e-9)
+        assert g.log_lerp_weight(0.0, 0.0, t) == t

@@ -55,6 +55,7 @@ __all__ = [
     "irradiance_coord",
     "irradiance_params",
     "lerp_index",
+    "log_lerp_weight",
     "point_along_ray",
     "ray_hits_ground",
     "scattering_nu_azimuth",
@@ -155,6 +156,39 @@ def lerp_index(p: float, lo: int, hi: int) -> tuple[int, float]:
     pc = min(max(p, float(lo)), float(hi)) if p == p else float(lo)
     i = min(int(pc), hi - 1)  # pc >= 0: truncation is the floor
     return i, pc - i
+
+
+#: Floor of the smaller end value, as a fraction of the larger, in :func:`log_lerp_weight`: a texel in the Earth's
+#: shadow holds zero (or rounding noise), whose logarithm is not finite; with the floor the interpolated value falls
+#: from the lit texel by at most this factor across the cell.
+LOG_LERP_FLOOR = 1e-3
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def log_lerp_weight(a: float, b: float, w: float) -> float:
+    """Weight ``w'`` of the second of two values ``a``, ``b`` (>= 0) such that the linear interpolation
+    ``a + w' (b - a)`` is their geometric interpolation ``a^(1 - w) b^w`` at the fraction ``w`` of the cell:
+    ``w' = ((b / a)^w - 1) / (b / a - 1)``; ``w`` itself where the two are equal to 1e-6 (or both zero).
+
+    Used along the view-sun azimuth of the scattering tables. At low sun the single-scattered radiance falls by
+    orders of magnitude across one azimuth cell where the view ray passes into the Earth's shadow, and a linear
+    interpolation of such a fall overshoots: +255 % single scattering at 90 deg from a sun 6 deg below the horizon
+    (2 deg view elevation, 560 nm) against the independent integral of ``tests/precomputed_reference.py``, and too
+    bright a scattering density in the precomputed orders (docs/accuracy.md, "Low sun"). Radiance that varies
+    exponentially is interpolated exactly. The weight is computed from one value per texel (the sum over the table's
+    wavelengths) and applied to every wavelength, so the interpolation stays linear in the table values for given
+    coordinates: the observer's slices projected to colour give the same values as the per-wavelength lookup
+    (:func:`.lookup.observer_slices`). The weight is that of the smaller value floored at :data:`LOG_LERP_FLOOR`
+    times the larger (applied to the values themselves, so the interpolation still meets both ends).
+    """
+    m = max(a, b)
+    if not m > 0.0:
+        return w
+    lo = LOG_LERP_FLOOR * m
+    ratio = max(b, lo) / max(a, lo)
+    if abs(ratio - 1.0) < 1e-6:
+        return w
+    return (ratio ** w - 1.0) / (ratio - 1.0)
 
 
 @helper(fastmath=CONTRACT_ARCP)

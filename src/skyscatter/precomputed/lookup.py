@@ -36,6 +36,7 @@ from .geometry import (
     horizon_constants,
     irradiance_coord,
     lerp_index,
+    log_lerp_weight,
     point_along_ray,
     ray_hits_ground,
     scattering_nu_coord,
@@ -246,18 +247,21 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     (n_mu, n_nu, C, 4) holding, for each channel, single Rayleigh, single Mie and multiple scattering over the
     view axes (and a zero, so that each texel's three values are one aligned 32-byte load), each
     ``table @ projection.T`` (``projection`` (C, n_wavelengths): the identity for spectra, the XYZ matrix for
-    colour).
+    colour); channel C (the last of C + 1) holds each table's sum over its wavelengths, from which the azimuth
+    weight of the lookup is computed (:func:`.sampling.nu_weight`).
 
-    Quadrilinear interpolation is linear in each axis, so fixing the ``r`` and ``mu_s`` weights once and
-    interpolating the slice bilinearly in (``mu``, ``nu``) gives the same values as the 4D lookup; and the
-    inscattered radiance is a sum of table values times wavelength-independent phase factors, so projecting the
-    slice first gives the same XYZ as projecting each looked-up spectrum (Bruneton's 2017 rewrite folds its
-    tables to luminance the same way). Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables' sun
-    limit; :data:`.geometry.MU_S_LIMIT_TOLERANCE` for rounding).
+    The lookup is linear in ``r``, ``mu`` and ``mu_s``, so fixing the ``r`` and ``mu_s`` weights once and
+    interpolating the slice in (``mu``, ``nu``) gives the same values as the 4D lookup; its weight along ``nu`` is
+    one for all wavelengths (from the sums), so the lookup is linear in the table values and the inscattered
+    radiance a sum of table values times wavelength-independent phase factors: projecting the slice first gives the
+    same XYZ as projecting each looked-up spectrum (Bruneton's 2017 rewrite folds its tables to luminance the same
+    way). Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables' sun limit;
+    :data:`.geometry.MU_S_LIMIT_TOLERANCE` for rounding).
     """
     n_r, n_mu, n_s, n_nu, _ = single_rayleigh.shape
     proj = np.asarray(projection, dtype=np.float64)
-    out = np.zeros((n_mu, n_nu, proj.shape[0], 4))
+    n_c = proj.shape[0]
+    out = np.zeros((n_mu, n_nu, n_c + 1, 4))
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
         return out
     mu_s = max(mu_s, mu_s_min)
@@ -268,7 +272,8 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
             for c, wc in ((0, 1.0 - w_s), (1, w_s)):
                 if wa * wc > 0.0:
                     acc += (wa * wc) * table[i_r + a, :, i_s + c, :, :]
-        out[:, :, :, j] = acc @ proj.T
+        out[:, :, :n_c, j] = acc @ proj.T
+        out[:, :, n_c, j] = acc.sum(axis=-1)
     return out
 
 
@@ -327,38 +332,52 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
 
 
 @helper(fastmath=CONTRACT_ARCP)
+def _slice_nu_weight(slices, a, b, n_c, t, wm, wn):
+    """The azimuth weight (:func:`.sampling.nu_weight`) of table ``t`` of the observer slices (n_mu * n_nu,
+    n_c + 1, 4) in the cell of texels ``a``, ``a + 1`` (one mu row) and ``b``, ``b + 1`` (the next), from the sums
+    over wavelengths in channel ``n_c`` (``wm``, ``wn``: the linear weights along mu and nu)."""
+    s0 = (1.0 - wm) * slices[a, n_c, t] + wm * slices[b, n_c, t]
+    s1 = (1.0 - wm) * slices[a + 1, n_c, t] + wm * slices[b + 1, n_c, t]
+    return log_lerp_weight(s0, s1, wn)
+
+
+@helper(fastmath=CONTRACT_ARCP)
 def _observer_gather(slices, n_nu, cell, w_mu, w_nu, p_r, p_m, out):
-    """Bilinear interpolation of the observer slices (:func:`observer_slices` as (n_mu * n_nu, C, 4)) for a block
-    of rays from :func:`_observer_coords`, phase factors applied: ``out`` (m, C).
+    """Interpolation of the observer slices (:func:`observer_slices` as (n_mu * n_nu, C + 1, 4)) for a block of
+    rays from :func:`_observer_coords`, linear along mu and geometric along nu (:func:`_slice_nu_weight`), phase
+    factors applied: ``out`` (m, C).
 
     One channel (luminance) has its own loop: with the channel count known to be 1 the compiler turns the four
     texel reads into SIMD gathers (gather 6.6 -> 4.7 ns per ray); for C channels it leaves the loop scalar."""
-    if out.shape[1] == 1:
+    n_c = out.shape[1]
+    if n_c == 1:
         for k in range(cell.shape[0]):
-            w00, w01, w10, w11 = bilinear_weights(w_mu[k], w_nu[k])
             a = cell[k]
             b = a + n_nu
-            v = p_r[k] * (w00 * slices[a, 0, 0] + w01 * slices[a + 1, 0, 0] + w10 * slices[b, 0, 0]
-                          + w11 * slices[b + 1, 0, 0])
-            v += p_m[k] * (w00 * slices[a, 0, 1] + w01 * slices[a + 1, 0, 1] + w10 * slices[b, 0, 1]
-                           + w11 * slices[b + 1, 0, 1])
-            out[k, 0] = v + (w00 * slices[a, 0, 2] + w01 * slices[a + 1, 0, 2] + w10 * slices[b, 0, 2]
-                             + w11 * slices[b + 1, 0, 2])
+            wm = w_mu[k]
+            v = 0.0
+            for t in range(3):
+                wn = _slice_nu_weight(slices, a, b, 1, t, wm, w_nu[k])
+                w00, w01, w10, w11 = bilinear_weights(wm, wn)
+                f = p_r[k] if t == 0 else (p_m[k] if t == 1 else 1.0)
+                v += f * (w00 * slices[a, 0, t] + w01 * slices[a + 1, 0, t] + w10 * slices[b, 0, t]
+                          + w11 * slices[b + 1, 0, t])
+            out[k, 0] = v
         return
     for k in range(cell.shape[0]):
         wm = w_mu[k]
-        wn = w_nu[k]
-        w00, w01, w10, w11 = bilinear_weights(wm, wn)
         c0 = cell[k]
+        c1 = c0 + n_nu
         pr = p_r[k]
         pm = p_m[k]
-        for c in range(out.shape[1]):
-            v = 0.0
-            for t in range(3):
-                f = pr if t == 0 else (pm if t == 1 else 1.0)
-                v += f * (w00 * slices[c0, c, t] + w01 * slices[c0 + 1, c, t] + w10 * slices[c0 + n_nu, c, t]
-                          + w11 * slices[c0 + n_nu + 1, c, t])
-            out[k, c] = v
+        for c in range(n_c):
+            out[k, c] = 0.0
+        for t in range(3):
+            w00, w01, w10, w11 = bilinear_weights(wm, _slice_nu_weight(slices, c0, c1, n_c, t, wm, w_nu[k]))
+            f = pr if t == 0 else (pm if t == 1 else 1.0)
+            for c in range(n_c):
+                out[k, c] += f * (w00 * slices[c0, c, t] + w01 * slices[c0 + 1, c, t] + w10 * slices[c1, c, t]
+                                  + w11 * slices[c1 + 1, c, t])
 
 
 @kernel
@@ -367,8 +386,8 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     """:func:`sky_kernel`'s radiance (no shadows) for rays ``start..stop`` from one ``position`` inside the
     atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C)).
 
-    Inscattering from :func:`observer_slices` (bilinear in ``mu`` and ``nu``: the same values as the 4D
-    lookup); the ground term, a product of spectra (transmittance times irradiance), is formed per wavelength
+    Inscattering from :func:`observer_slices` (in ``mu`` and ``nu``: the same values as the 4D lookup); the
+    ground term, a product of spectra (transmittance times irradiance), is formed per wavelength
     and then projected with ``projection`` (C, n_wavelengths). ``dirs`` need not be unit vectors; a zero,
     infinite or NaN one sets ``bad[q]`` (the caller raises). Rays go in blocks of :data:`OBSERVER_BLOCK` in
     passes: coordinates (vectorised), the ground half's ``mu`` cell for rays that meet the ground (only in blocks
@@ -376,7 +395,7 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     the ground term (vectorised) and its spectrum, projected.
     """
     n_l = transmittance.shape[2]
-    n_c = out.shape[1]
+    n_c = out.shape[1]  # slices: n_c channels and the sums over wavelengths
     n_mu, n_nu = slices.shape[0], slices.shape[1]
     half = n_mu // 2
     flat = slices.reshape(n_mu * n_nu, slices.shape[2], 4)
