@@ -673,11 +673,11 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     with the total scattering coefficient ``beta_r rho_r + beta_m rho_m`` as the exponential factor; at each
     sample ``J = (beta_R rho_R(y) + beta_M rho_M(y)) density`` with the exact coefficient at the sample and the
     density per unit scattering coefficient of :func:`scattering_density_kernel` interpolated: linearly in r and mu,
-    geometrically in the sample's sun zenith and azimuth (:func:`.geometry.log_lerp_weight` of the sums over
-    wavelengths). Along a ray at twilight the sun sets for the samples one after another and the density falls by
-    orders of magnitude from one sun-zenith texel to the next; a linear interpolation of that fall made the
-    multiple scattering of clear air at a sun 6 deg below the horizon 20-66 % too bright against the Monte Carlo
-    (docs/accuracy.md, "Low sun"). ``T(x, y)`` is integrated along the ray's samples
+    log-linearly in the sample's sun zenith and azimuth (:func:`.geometry.log_lerp_weight` of the middle
+    wavelength, as :func:`.sampling.nu_weight`). Along a ray at twilight the sun sets for the samples one after
+    another and the density falls by orders of magnitude from one sun-zenith texel to the next; a linear
+    interpolation of that fall made the multiple scattering of clear air at a sun 6 deg below the horizon 20-66 %
+    too bright against the Monte Carlo (docs/accuracy.md, "Low sun"). ``T(x, y)`` is integrated along the ray's samples
     (:func:`.sampling.ray_transmittance`; ``extinction`` as for :func:`single_scattering_kernel`); ``transmittance``
     is unused here and kept for the common signature.
     """
@@ -695,7 +695,7 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     beta = np.empty((n_pts, n_l))
     q = np.empty((n_pts, n_l))
     sl = np.empty((n_s, n_n, n_l), dtype=np.float32)  # as the tables: half the memory traffic
-    rep = np.empty((n_s, n_n))  # sl summed over wavelengths: the interpolation weights
+    k_w = n_l // 2  # the wavelength of the interpolation weights (.sampling.nu_weight)
     acc = np.empty((n_s, n_n, n_l))
     acc_flat = acc.reshape(n_s * n_n, n_l)
     nu_flat = np.empty(n_s * n_n)
@@ -748,15 +748,11 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
             c00, c01, c10, c11 = bilinear_weights(wr, wmu)
             for j_s in range(n_s):
                 for j_n in range(n_n):
-                    tot = 0.0
                     for k in range(n_l):
-                        v = beta[i, k] * (c00 * density[ir, imu, j_s, j_n, k]
-                                          + c01 * density[ir, imu + 1, j_s, j_n, k]
-                                          + c10 * density[ir + 1, imu, j_s, j_n, k]
-                                          + c11 * density[ir + 1, imu + 1, j_s, j_n, k])
-                        sl[j_s, j_n, k] = v
-                        tot += v
-                    rep[j_s, j_n] = tot
+                        sl[j_s, j_n, k] = beta[i, k] * (c00 * density[ir, imu, j_s, j_n, k]
+                                                        + c01 * density[ir, imu + 1, j_s, j_n, k]
+                                                        + c10 * density[ir + 1, imu, j_s, j_n, k]
+                                                        + c11 * density[ir + 1, imu + 1, j_s, j_n, k])
             _sun_cells(r, dist[i], rad[i], mu_ray[i], mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a, theta_max,
                        n_s, n_n, cell, w_s, w_n)
             for u in range(n_s * n_n):
@@ -766,9 +762,10 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
                 j_n = cell[u] - j_s * n_n
                 ws = w_s[u]
                 wn = w_n[u]
-                # geometric along mu_s and nu (the sums over wavelengths; .geometry.log_lerp_weight): the density
-                # falls by orders of magnitude from texel to texel where the sun sets for the sample
-                r00, r01, r10, r11 = rep[j_s, j_n], rep[j_s, j_n + 1], rep[j_s + 1, j_n], rep[j_s + 1, j_n + 1]
+                # log-linear along mu_s and nu (.geometry.log_lerp_weight, from the middle wavelength as in
+                # .sampling.nu_weight): the density falls by orders of magnitude where the sun sets for the sample
+                r00, r01 = sl[j_s, j_n, k_w], sl[j_s, j_n + 1, k_w]
+                r10, r11 = sl[j_s + 1, j_n, k_w], sl[j_s + 1, j_n + 1, k_w]
                 ws_g = log_lerp_weight((1.0 - wn) * r00 + wn * r01, (1.0 - wn) * r10 + wn * r11, ws)
                 wn_g = log_lerp_weight((1.0 - ws) * r00 + ws * r10, (1.0 - ws) * r01 + ws * r11, wn)
                 a00, a01, a10, a11 = bilinear_weights(ws_g, wn_g)

@@ -247,12 +247,12 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     (n_mu, n_nu, C, 4) holding, for each channel, single Rayleigh, single Mie and multiple scattering over the
     view axes (and a zero, so that each texel's three values are one aligned 32-byte load), each
     ``table @ projection.T`` (``projection`` (C, n_wavelengths): the identity for spectra, the XYZ matrix for
-    colour); channel C (the last of C + 1) holds each table's sum over its wavelengths, from which the azimuth
-    weight of the lookup is computed (:func:`.sampling.nu_weight`).
+    colour); channel C (the last of C + 1) holds each table at its middle wavelength, from which the azimuth weight
+    of the lookup is computed (:func:`.sampling.nu_weight`).
 
     The lookup is linear in ``r``, ``mu`` and ``mu_s``, so fixing the ``r`` and ``mu_s`` weights once and
     interpolating the slice in (``mu``, ``nu``) gives the same values as the 4D lookup; its weight along ``nu`` is
-    one for all wavelengths (from the sums), so the lookup is linear in the table values and the inscattered
+    one for all wavelengths (from the middle one), so the lookup is linear in the table values and the inscattered
     radiance a sum of table values times wavelength-independent phase factors: projecting the slice first gives the
     same XYZ as projecting each looked-up spectrum (Bruneton's 2017 rewrite folds its tables to luminance the same
     way). Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables' sun limit;
@@ -273,7 +273,7 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
                 if wa * wc > 0.0:
                     acc += (wa * wc) * table[i_r + a, :, i_s + c, :, :]
         out[:, :, :n_c, j] = acc @ proj.T
-        out[:, :, n_c, j] = acc.sum(axis=-1)
+        out[:, :, n_c, j] = acc[:, :, acc.shape[-1] // 2]
     return out
 
 
@@ -334,18 +334,32 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
 @helper(fastmath=CONTRACT_ARCP)
 def _slice_nu_weight(slices, a, b, n_c, t, wm, wn):
     """The azimuth weight (:func:`.sampling.nu_weight`) of table ``t`` of the observer slices (n_mu * n_nu,
-    n_c + 1, 4) in the cell of texels ``a``, ``a + 1`` (one mu row) and ``b``, ``b + 1`` (the next), from the sums
-    over wavelengths in channel ``n_c`` (``wm``, ``wn``: the linear weights along mu and nu)."""
+    n_c + 1, 4) in the cell of texels ``a``, ``a + 1`` (one mu row) and ``b``, ``b + 1`` (the next), from the middle
+    wavelength in channel ``n_c`` (``wm``, ``wn``: the linear weights along mu and nu)."""
     s0 = (1.0 - wm) * slices[a, n_c, t] + wm * slices[b, n_c, t]
     s1 = (1.0 - wm) * slices[a + 1, n_c, t] + wm * slices[b + 1, n_c, t]
     return log_lerp_weight(s0, s1, wn)
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _observer_gather(slices, n_nu, cell, w_mu, w_nu, p_r, p_m, out):
+def _observer_nu_weights(slices, n_nu, n_c, cell, w_mu, w_nu, w_tab):
+    """The azimuth weights of the three tables (:func:`_slice_nu_weight`) for a block of rays into ``w_tab``
+    (3, >= m): a pass of its own (the tables written out), which runs on SIMD lanes."""
+    for k in range(cell.shape[0]):
+        a = cell[k]
+        b = a + n_nu
+        wm = w_mu[k]
+        wn = w_nu[k]
+        w_tab[0, k] = _slice_nu_weight(slices, a, b, n_c, 0, wm, wn)
+        w_tab[1, k] = _slice_nu_weight(slices, a, b, n_c, 1, wm, wn)
+        w_tab[2, k] = _slice_nu_weight(slices, a, b, n_c, 2, wm, wn)
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, out):
     """Interpolation of the observer slices (:func:`observer_slices` as (n_mu * n_nu, C + 1, 4)) for a block of
-    rays from :func:`_observer_coords`, linear along mu and geometric along nu (:func:`_slice_nu_weight`), phase
-    factors applied: ``out`` (m, C).
+    rays from :func:`_observer_coords`, linear along mu and along nu with the weights ``w_tab`` (3, >= m) of
+    :func:`_observer_nu_weights`, phase factors applied: ``out`` (m, C).
 
     One channel (luminance) has its own loop: with the channel count known to be 1 the compiler turns the four
     texel reads into SIMD gathers (gather 6.6 -> 4.7 ns per ray); for C channels it leaves the loop scalar."""
@@ -355,29 +369,35 @@ def _observer_gather(slices, n_nu, cell, w_mu, w_nu, p_r, p_m, out):
             a = cell[k]
             b = a + n_nu
             wm = w_mu[k]
-            v = 0.0
-            for t in range(3):
-                wn = _slice_nu_weight(slices, a, b, 1, t, wm, w_nu[k])
-                w00, w01, w10, w11 = bilinear_weights(wm, wn)
-                f = p_r[k] if t == 0 else (p_m[k] if t == 1 else 1.0)
-                v += f * (w00 * slices[a, 0, t] + w01 * slices[a + 1, 0, t] + w10 * slices[b, 0, t]
-                          + w11 * slices[b + 1, 0, t])
-            out[k, 0] = v
+            w00, w01, w10, w11 = bilinear_weights(wm, w_tab[0, k])
+            v = p_r[k] * (w00 * slices[a, 0, 0] + w01 * slices[a + 1, 0, 0] + w10 * slices[b, 0, 0]
+                          + w11 * slices[b + 1, 0, 0])
+            w00, w01, w10, w11 = bilinear_weights(wm, w_tab[1, k])
+            v += p_m[k] * (w00 * slices[a, 0, 1] + w01 * slices[a + 1, 0, 1] + w10 * slices[b, 0, 1]
+                           + w11 * slices[b + 1, 0, 1])
+            w00, w01, w10, w11 = bilinear_weights(wm, w_tab[2, k])
+            out[k, 0] = v + (w00 * slices[a, 0, 2] + w01 * slices[a + 1, 0, 2] + w10 * slices[b, 0, 2]
+                             + w11 * slices[b + 1, 0, 2])
         return
     for k in range(cell.shape[0]):
         wm = w_mu[k]
-        c0 = cell[k]
-        c1 = c0 + n_nu
+        a = cell[k]
+        b = a + n_nu
+        # the phase factors folded into each table's four weights, held for every channel
+        r00, r01, r10, r11 = bilinear_weights(wm, w_tab[0, k])
         pr = p_r[k]
+        r00, r01, r10, r11 = pr * r00, pr * r01, pr * r10, pr * r11
+        m00, m01, m10, m11 = bilinear_weights(wm, w_tab[1, k])
         pm = p_m[k]
+        m00, m01, m10, m11 = pm * m00, pm * m01, pm * m10, pm * m11
+        u00, u01, u10, u11 = bilinear_weights(wm, w_tab[2, k])
         for c in range(n_c):
-            out[k, c] = 0.0
-        for t in range(3):
-            w00, w01, w10, w11 = bilinear_weights(wm, _slice_nu_weight(slices, c0, c1, n_c, t, wm, w_nu[k]))
-            f = pr if t == 0 else (pm if t == 1 else 1.0)
-            for c in range(n_c):
-                out[k, c] += f * (w00 * slices[c0, c, t] + w01 * slices[c0 + 1, c, t] + w10 * slices[c1, c, t]
-                                  + w11 * slices[c1 + 1, c, t])
+            out[k, c] = (r00 * slices[a, c, 0] + r01 * slices[a + 1, c, 0] + r10 * slices[b, c, 0]
+                         + r11 * slices[b + 1, c, 0]
+                         + m00 * slices[a, c, 1] + m01 * slices[a + 1, c, 1] + m10 * slices[b, c, 1]
+                         + m11 * slices[b + 1, c, 1]
+                         + u00 * slices[a, c, 2] + u01 * slices[a + 1, c, 2] + u10 * slices[b, c, 2]
+                         + u11 * slices[b + 1, c, 2])
 
 
 @kernel
@@ -391,8 +411,8 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     and then projected with ``projection`` (C, n_wavelengths). ``dirs`` need not be unit vectors; a zero,
     infinite or NaN one sets ``bad[q]`` (the caller raises). Rays go in blocks of :data:`OBSERVER_BLOCK` in
     passes: coordinates (vectorised), the ground half's ``mu`` cell for rays that meet the ground (only in blocks
-    that have such rays or bad directions), table reads, then for the rays that meet the ground the coordinates of
-    the ground term (vectorised) and its spectrum, projected.
+    that have such rays or bad directions), the azimuth weights (vectorised), table reads, then for the rays that
+    meet the ground the coordinates of the ground term (vectorised) and its spectrum, projected.
     """
     n_l = transmittance.shape[2]
     n_c = out.shape[1]  # slices: n_c channels and the sums over wavelengths
@@ -408,6 +428,7 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     kind = np.empty(OBSERVER_BLOCK, dtype=np.int64)
     w_mu = np.empty(OBSERVER_BLOCK)
     w_nu = np.empty(OBSERVER_BLOCK)
+    w_tab = np.empty((3, OBSERVER_BLOCK))
     p_r = np.empty(OBSERVER_BLOCK)
     p_m = np.empty(OBSERVER_BLOCK)
     g_idx = np.empty(OBSERVER_BLOCK, dtype=np.int64)
@@ -447,7 +468,8 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
                 n_ground += 1
             elif kind[k] == 0:
                 bad[b0 + k] = True
-        _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], out[b0:b1])
+        _observer_nu_weights(flat, n_nu, n_c, cell[:m], w_mu[:m], w_nu[:m], w_tab)
+        _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_tab, p_r[:m], p_m[:m], out[b0:b1])
         if n_ground == 0 or not include_ground:
             continue
         _ground_coords_block(n_ground, g_v, g_mu, px, py, pz, sx, sy, sz, rc, bottom, top, alpha, n_tr, n_tmu, n_er,

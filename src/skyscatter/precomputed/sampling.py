@@ -214,9 +214,12 @@ def r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_mu_s):
 @helper
 def nu_weight(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n):
     """The weight of texel ``i_n + 1`` along the azimuth (nu) axis of a cell of a 4D table (..., n_wavelengths):
-    the geometric interpolation (:func:`.geometry.log_lerp_weight`) of the sums over wavelengths of the two
-    trilinearly interpolated (r, mu, mu_s) columns at ``i_n`` and ``i_n + 1``; linear in r, mu and mu_s."""
-    n_l = table.shape[4]
+    :func:`.geometry.log_lerp_weight` of the table's middle wavelength (index ``n_wavelengths // 2``: 560 nm of the
+    default 16 and of 400, 560, 700 nm) in the two columns at ``i_n`` and ``i_n + 1``, each interpolated linearly in
+    r, mu and mu_s; ``w_n`` the linear weight. One wavelength, not all: the weight then reads 16 texel values instead of
+    16 per wavelength, and a table's radiance at a wavelength depends on its other wavelengths only through the
+    middle one's."""
+    k = table.shape[4] // 2
     s0 = 0.0
     s1 = 0.0
     for a in range(2):
@@ -225,18 +228,15 @@ def nu_weight(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n):
             wb = wa * (w_mu if b else 1.0 - w_mu)
             for c in range(2):
                 wc = wb * (w_s if c else 1.0 - w_s)
-                if wc == 0.0:
-                    continue
-                for k in range(n_l):
-                    s0 += wc * table[i_r + a, i_mu + b, i_s + c, i_n, k]
-                    s1 += wc * table[i_r + a, i_mu + b, i_s + c, i_n + 1, k]
+                s0 += wc * table[i_r + a, i_mu + b, i_s + c, i_n, k]
+                s1 += wc * table[i_r + a, i_mu + b, i_s + c, i_n + 1, k]
     return log_lerp_weight(s0, s1, w_n)
 
 
 @helper
 def lookup4_cell(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scale, out):
     """``out += scale * table(cell)``: interpolation of a 4D table (..., n_wavelengths), linear in r, mu and mu_s
-    and geometric along nu (:func:`nu_weight`; ``w_n`` the linear weight)."""
+    and log-linear along nu (:func:`nu_weight`; ``w_n`` the linear weight)."""
     n_l = table.shape[4]
     w_n = nu_weight(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n)
     for a in range(2):
