@@ -676,7 +676,7 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     log-linearly in the sample's sun zenith and azimuth (:func:`.geometry.log_lerp_weight` of the middle
     wavelength, as :func:`.sampling.nu_weight`). Along a ray at twilight the sun sets for the samples one after
     another and the density falls by orders of magnitude from one sun-zenith texel to the next; a linear
-    interpolation of that fall made the multiple scattering of clear air at a sun 6 deg below the horizon 20-66 %
+    interpolation of that fall made the multiple scattering of clear air at a sun 6 deg below the horizon 11-66 %
     too bright against the Monte Carlo (docs/accuracy.md, "Low sun"). ``T(x, y)`` is integrated along the ray's samples
     (:func:`.sampling.ray_transmittance`; ``extinction`` as for :func:`single_scattering_kernel`); ``transmittance``
     is unused here and kept for the common signature.
