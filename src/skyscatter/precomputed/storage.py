@@ -63,9 +63,9 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: forward peak exact; :func:`.kernels.indirect_irradiance_kernel`), so a Mie air's irradiance table changed.
 #: 10: the same layout; the analytic aerosol phases' (Cornette-Shanks, Henyey-Greenstein) first-order diffuse
 #: irradiance split by delta-M as well, so the default air's irradiance table changed (scattering tables did not).
-#: 11: the same layout; the scattering tables interpolated log-linearly along the view-sun azimuth
-#: (:func:`.geometry.log_lerp_weight`) in the scattering density and the irradiance of the orders (twilight: the
-#: Earth's shadow), so the multiple-scattering and irradiance tables of format 10 hold other values.
+#: 11: the same layout; the scattering density interpolated log-linearly along the sun zenith and the view-sun
+#: azimuth in the multiple-scattering ray integrals (:func:`.geometry.log_lerp_weight`; twilight: the Earth's
+#: shadow), so the multiple-scattering tables of format 10 hold other values.
 FORMAT_VERSION = 11
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
