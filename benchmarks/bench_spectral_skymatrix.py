@@ -3,9 +3,9 @@
 One site, 8760 hours (tests/weather_synth.py ``write_year_epw``: SPECTRL2 clear days, broken and overcast days),
 20 bands 380-780 nm, Reinhart MF 2: ``skyscatter skymatrix --spectral`` as a process and Radiance's
 ``gensdaymtx -m 2`` (pyradiance) on the same file, alternated for ``--repeat`` rounds; wall time and peak RSS of
-each process (``resource.getrusage`` of the finished child). The tables (ours: the 18-node family, gensdaymtx:
-its ``atmos_data``) are built once before the timed rounds and reported separately. Then the multi-site Dask
-runner on 4 copies of the file with 1 and 2 threads (``--sites``).
+each process (``resource.getrusage`` of the finished child). The tables (ours: the 36-node family, 27 of them
+used, gensdaymtx: its ``atmos_data``) are built once before the timed rounds and reported separately. Then the
+multi-site Dask runner on 4 copies of the file with 1 and 2 threads (``--sites``).
 
 Usage: ``python benchmarks/bench_spectral_skymatrix.py [--repeat 2] [--sites 4] [--skip-gensdaymtx]``.
 Set SKYSCATTER_CACHE_DIR to a cache that holds (or may hold) the family. State the load average with the numbers.

@@ -21,9 +21,10 @@ scheduler: one core.
 
 **Ours** is the matrix itself (``spectral_sky_matrix``, Tregenza, one cell per patch, 5 nm bands centred at those
 wavelengths with their neighbours, no gases, over the band's E0 and the day's eccentricity); **gensdaymtx's** the
-patch value of its ``-m 1`` matrix in the 20 nm bands centred there, over the band's E0 and eccentricity. Its
-numbers are a few hundred times a spectral radiance in W m^-2 sr^-1 nm^-1 (unit or scale not established),
-so it is compared twice: as it is and divided by its per-hour median ratio (the shape of its sky).
+patch value of its ``-m 1`` matrix in the 20 nm bands centred there, divided by 400 nm (:data:`GENSDAYMTX_SPAN_NM`:
+each of its band values is a spectral radiance in W m^-2 sr^-1 nm^-1 times the 380-780 nm span), over the band's
+E0 and eccentricity. It is compared twice: on that scale and divided by its per-hour median ratio (the shape of
+its sky).
 
 Results go to ``--out`` (JSON, rewritten atomically after every hour, so a stopped run keeps what finished);
 ``--plot`` redraws the figure docs/images/spectral_skymatrix_montecarlo.png and prints the table from a JSON.
@@ -50,6 +51,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 WAVELENGTHS = (410.0, 490.0, 570.0, 650.0)
+#: gensdaymtx's band values are spectral radiances [W m^-2 sr^-1 nm^-1] times this span [nm] (Radiance,
+#: src/gen/gensdaymtx.c: ``sky_radiance[k] *= WVLSPAN`` for the clear sky of its tables, whose sun is EXTSOL in
+#: W m^-2 nm^-1; src/gen/atmos.c: ``WVLSPAN = 400  // 380nm to 780nm``; the overcast part, the CIE overcast
+#: luminance over D65's efficacy times a relative spectrum of mean about 1, is on the same scale): the mean over
+#: its 20 bands is the 380-780 nm radiance, Radiance's convention for spectral channels.
+GENSDAYMTX_SPAN_NM = 400.0
 KINDS = ("clear", "broken", "overcast")
 
 
@@ -100,13 +107,29 @@ def pick_hours(h, n: int, seed: int) -> list[tuple[int, str]]:
     return out
 
 
+def gens_per_nm(res: dict) -> bool:
+    """Put gensdaymtx's columns of a results JSON written before 2026-12-02 (its band values as they are) on the
+    per-nm scale (over :data:`GENSDAYMTX_SPAN_NM`); True if anything changed. The shape columns do not change."""
+    if res.get("gens_scale") == "per nm":
+        return False
+    for row in res["hours"]:
+        if row.get("gens_value") is None:
+            continue
+        r_g = np.asarray(row["gens_value"]) / GENSDAYMTX_SPAN_NM
+        ratio = r_g / np.asarray(row["mc_rel"])
+        row.update({"gens_value": r_g.tolist(), "gens_rel": (ratio - 1).tolist(),
+                    "gens_median_ratio": float(np.median(ratio))})
+    res["gens_scale"] = "per nm"
+    return True
+
+
 def summarise(res: dict) -> list[str]:
     """Table rows: per hour type and wavelength, median / p95 |error| of ours and gensdaymtx's vs the MC."""
     rows = res["hours"]
     wl = res["wavelengths"]
     lines = ["| hours | n | wavelength [nm] | MC SE median | ours median | ours median abs | ours p95 abs | "
-             "gensdaymtx / MC (median) | gensdaymtx shape: median abs | p95 abs |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "gensdaymtx / MC (median) | gensdaymtx median abs | p95 abs | gensdaymtx shape: median abs | p95 abs |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     groups = [("clear", lambda r: r["kind"] == "clear" and not r["low_sun"]),
               ("broken", lambda r: r["kind"] == "broken" and not r["low_sun"]),
               ("overcast", lambda r: r["kind"] == "overcast" and not r["low_sun"]),
@@ -127,8 +150,8 @@ def summarise(res: dict) -> list[str]:
             m = lambda a: float(np.median(a)) * 100 if a.size else float("nan")  # noqa: E731
             ratio = float(np.median(g + 1.0)) if g.size else float("nan")
             lines.append(f"| {name} | {len(hs)} | {w if w == 'all' else int(w)} | {m(se):.1f} % | {m(o):+.1f} % | "
-                         f"{f(o, 50):.1f} % | {f(o, 95):.1f} % | {ratio:.0f} | {f(gs, 50):.1f} % | "
-                         f"{f(gs, 95):.1f} % |")
+                         f"{f(o, 50):.1f} % | {f(o, 95):.1f} % | {ratio:.2f} | {f(g, 50):.1f} % | {f(g, 95):.1f} % | "
+                         f"{f(gs, 50):.1f} % | {f(gs, 95):.1f} % |")
     cloudy = [r for r in rows if "cloudysky_vs_mc" in r]
     if cloudy:
         lines += ["", "| hours with an overcast part | n | CloudySky vs MC overcast: median | median abs | p95 abs | "
@@ -157,7 +180,7 @@ def plot(res: dict, out: Path) -> None:
     ax = axes[0]
     pos = np.arange(len(rows))
     ours = [np.asarray(r["ours_rel"]).ravel() * 100 for r in rows]
-    shape = [np.asarray(r["gens_shape_rel"]).ravel() * 100 if r.get("gens_shape_rel") is not None else [np.nan]
+    shape = [np.asarray(r["gens_rel"]).ravel() * 100 if r.get("gens_rel") is not None else [np.nan]
              for r in rows]
     se = [2 * np.median(np.asarray(r["mc_rel_se"])) * 100 for r in rows]
     ax.boxplot(ours, positions=pos - 0.18, widths=0.3, whis=(5, 95), showfliers=False, patch_artist=True,
@@ -168,10 +191,11 @@ def plot(res: dict, out: Path) -> None:
     ax.axhline(0, color="k", lw=0.8)
     ax.set_xticks(pos, [f"{r['hour']} {r['kind'][0]}{'L' if r['low_sun'] else ''} {r['sun_zenith_deg']:.0f}"
                         for r in rows], rotation=70, fontsize=7)
-    ax.set_ylim(-60, 60)
+    ax.set_ylim(-80, 80)
     ax.set_xlabel("hour of year, kind (c/b/o, L low sun), sun zenith [deg]; whiskers 5-95 % of patches x 4 wavelengths")
     ax.set_ylabel("relative to Monte Carlo [%]")
-    ax.set_title("skyscatter (blue) and gensdaymtx / its hourly median ratio (orange) vs Monte Carlo", fontsize=9)
+    ax.set_title("skyscatter (blue) and gensdaymtx (orange: band values / 400 nm; no illuminance in the file, so "
+                 "not calibrated to its DHI) vs Monte Carlo", fontsize=9)
     ax.legend(loc="lower left", fontsize=7)
     ax = axes[1]
     for r in rows:
@@ -182,7 +206,7 @@ def plot(res: dict, out: Path) -> None:
     lim = ax.get_xlim()
     ax.plot(lim, lim, "k-", lw=0.7)
     ax.set_xlabel("Monte Carlo reduced radiance [sr^-1]")
-    ax.set_ylabel("ours (blue), gensdaymtx as is (orange)")
+    ax.set_ylabel("ours (blue), gensdaymtx / 400 nm (orange) [sr^-1]")
     fig.tight_layout()
     fig.savefig(out, dpi=110)
     plt.close(fig)
@@ -207,6 +231,9 @@ def main() -> None:
     ap.add_argument("--radiance-dir", type=Path, default=None,
                     help="gensdaymtx's working folder (its atmos_data cache); default SKYSCATTER_CACHE_DIR/radiance")
     ap.add_argument("--until", default=None, help="UTC HH:MM: stop starting new Monte Carlo skies then")
+    ap.add_argument("--gens-calibrated", type=Path, default=None,
+                    help="gensdaymtx with the year file's illuminance filled (Perez 1990) against a results JSON's "
+                         "Monte Carlo; prints a table and exits")
     ap.add_argument("--regens", type=Path, default=None,
                     help="recompute gensdaymtx's columns of a results JSON (with its .jobs.pkl) and exit")
     ap.add_argument("--plot", type=Path, default=None, help="only redraw the figure and print the table of a JSON")
@@ -215,8 +242,14 @@ def main() -> None:
     if args.regens is not None:
         regens(args)
         return
+    if args.gens_calibrated is not None:
+        gens_calibrated(args)
+        return
     if args.plot is not None:
         res = json.loads(args.plot.read_text())
+        if gens_per_nm(res):
+            save(res, args.plot)
+            print(f"{args.plot}: gensdaymtx's columns put on the per-nm scale (/ {GENSDAYMTX_SPAN_NM:g})")
         plot(res, args.figure)
         print("\n".join(summarise(res)))
         print(f"wrote {args.figure}")
@@ -240,6 +273,7 @@ def main() -> None:
         jobs_path.write_bytes(pickle.dumps(setup))
     wl = np.array(WAVELENGTHS)
     res = {k: v for k, v in setup.items() if k not in ("jobs", "dirs")}
+    res["gens_scale"] = "per nm"
     res["directions"] = "the matrix's evaluation point of each patch (one equal-area cell: mid sin(altitude))"
     res.update({"description": __doc__.split("\n\n")[0], "seed": args.seed, "wavelengths": list(WAVELENGTHS),
                 "pilot": args.pilot, "target": args.target, "budget_cpu_min": args.budget, "until_utc": args.until,
@@ -325,7 +359,8 @@ def main() -> None:
 
 
 def gens_reduced(epw: Path, hours: list[int], cache: Path | None) -> dict[int, np.ndarray]:
-    """gensdaymtx's patches of ``hours`` over its bands' E0 and the eccentricity (145, 4) [sr^-1]."""
+    """gensdaymtx's patches of ``hours`` per nm (over :data:`GENSDAYMTX_SPAN_NM`), over its bands' E0 and the
+    eccentricity (145, 4) [sr^-1]."""
     from skymatrix_mc import band_e0
     from skyscatter.fit.spectral_matrix import band_edges
 
@@ -337,7 +372,62 @@ def gens_reduced(epw: Path, hours: list[int], cache: Path | None) -> dict[int, n
     from skyscatter.sky.perez import SOLAR_CONSTANT, extraterrestrial_irradiance
 
     ecc = np.asarray(extraterrestrial_irradiance(read_weather(epw).day_of_year), dtype=float) / SOLAR_CONSTANT
-    return {i: gens[i][:, b_wl] / (e0 * ecc[i]) for i in hours}
+    return {i: gens[i][:, b_wl] / (GENSDAYMTX_SPAN_NM * e0 * ecc[i]) for i in hours}
+
+
+def with_illuminance(src: Path, out: Path) -> Path:
+    """Copy of the EPW ``src`` with its illuminance fields (17-19: global, direct normal, diffuse horizontal [lx])
+    filled from its irradiance by Perez et al. (1990)'s luminous efficacies (Table 4, ``sky.perez.luminous_efficacy``;
+    sky clearness and brightness from DNI and DHI, the file's precipitable water): gensdaymtx scales its sky to the
+    diffuse illuminance, and a file without it (missing, 999999) leaves its sky uncalibrated."""
+    from skyscatter.fit.weather import read_weather
+    from skyscatter.sky.perez import luminous_efficacy, sky_brightness, sky_clearness
+    from skyscatter.sun.position import sun_position_unix
+
+    rec = read_weather(src)
+    zen = np.asarray(sun_position_unix(rec.location.latitude, rec.location.longitude, rec.unix_times(),
+                                       apparent=False).zenith)
+    ghi, dni, dhi = (rec.global_horizontal_irradiance, rec.direct_normal_irradiance,
+                     rec.diffuse_horizontal_irradiance)
+    # the record's precipitable water is in mm; Perez's W in cm
+    water = rec.precipitable_water / 10.0 if rec.precipitable_water is not None else np.full(ghi.size, 1.4)
+    ok = (dhi > 0) & (zen < np.radians(89.5))
+    eps = np.where(ok, sky_clearness(dni, np.where(ok, dhi, 1.0), zen), 1.0)
+    delta = np.maximum(np.where(ok, sky_brightness(np.where(ok, dhi, 0.0), zen, rec.day_of_year), 0.1), 1e-3)
+    k = {kind: luminous_efficacy(kind, eps, delta, zen, water) for kind in ("global", "direct", "diffuse")}
+    lines = src.read_text().splitlines()
+    head, body = lines[:8], lines[8:]
+    for j in np.flatnonzero(ok):
+        f = body[j].split(",")
+        f[16], f[17], f[18] = (f"{k['global'][j] * ghi[j]:.0f}", f"{k['direct'][j] * dni[j]:.0f}",
+                               f"{k['diffuse'][j] * dhi[j]:.0f}")
+        body[j] = ",".join(f)
+    out.write_text("\n".join(head + body) + "\n")
+    return out
+
+
+def gens_calibrated(args) -> None:
+    """gensdaymtx on the year file with illuminance (:func:`with_illuminance`), its patches per nm against the
+    Monte Carlo of a results JSON (patches and wavelengths pooled per kind of hour); prints a table."""
+    from weather_synth import write_year_epw
+
+    res = json.loads(args.gens_calibrated.read_text())
+    work = Path(tempfile.mkdtemp(prefix="mc-spectral-"))
+    epw = with_illuminance(write_year_epw(work / "year.epw"), work / "year_illum.epw")
+    t0 = time.perf_counter()
+    g = gens_reduced(epw, [int(r["hour"]) for r in res["hours"]], args.radiance_dir)
+    print(f"gensdaymtx -m 1 -s (illuminance filled): {time.perf_counter() - t0:.0f} s")
+    groups = [("clear", lambda r: r["kind"] == "clear" and not r["low_sun"]),
+              ("broken", lambda r: r["kind"] == "broken" and not r["low_sun"]),
+              ("overcast", lambda r: r["kind"] == "overcast" and not r["low_sun"]),
+              ("low sun (70-86 deg)", lambda r: r["low_sun"]), ("all", lambda r: True)]
+    print("| hours | n | gensdaymtx calibrated vs MC: median | median abs | p95 abs |\n|---|---|---|---|---|")
+    for name, sel in groups:
+        hs = [r for r in res["hours"] if sel(r)]
+        rel = np.concatenate([(g[r["hour"]][r["patches"]] / np.asarray(r["mc_rel"]) - 1).ravel() for r in hs])
+        rel = rel[np.isfinite(rel)]
+        print(f"| {name} | {len(hs)} | {np.median(rel) * 100:+.1f} % | {np.median(np.abs(rel)) * 100:.1f} % | "
+              f"{np.percentile(np.abs(rel), 95) * 100:.1f} % |")
 
 
 def regens(args) -> None:
@@ -345,7 +435,7 @@ def regens(args) -> None:
     from weather_synth import write_year_epw
 
     res = json.loads(args.regens.read_text())
-    cache = args.regens.with_suffix(".gens.npz")
+    cache = args.regens.with_suffix(".gens-per-nm.npz")
     if cache.exists():
         with np.load(cache) as z:
             g = {int(k): z[k] for k in z.files}
@@ -361,6 +451,7 @@ def regens(args) -> None:
         scale = float(np.median(ratio))
         row.update({"gens_value": r_g.tolist(), "gens_rel": (ratio - 1).tolist(), "gens_median_ratio": scale,
                     "gens_shape_rel": (ratio / scale - 1).tolist(), "gens_options": "-m 1 -s"})
+    res["gens_scale"] = "per nm"
     cloudysky_columns(res, load_setup(args.regens.with_suffix(".jobs.pkl")))
     save(res, args.regens)
 
@@ -455,7 +546,7 @@ def prepare(args) -> dict:
         jobs.append({"hour": i, "kind": kind, "low_sun": low, "sun_zenith": float(h.sun_zenith[i]),
                      "sun_azimuth": float(h.sun_azimuth[i]), "parts": parts_of(h, ds, i, kind),
                      "ours": ds["sky_radiance"].values[i][:, k_ours] / (e0_ours * ecc),
-                     "gens": None if gens is None else gens[i][:, b_wl] / (e0_gens * ecc),
+                     "gens": None if gens is None else gens[i][:, b_wl] / (GENSDAYMTX_SPAN_NM * e0_gens * ecc),
                      "meta": {"aod": float(h.aerosol_optical_depth[i]),
                               "ssa": float(ds["single_scattering_albedo"].values[i]),
                               "cloud_optical_depth": float(h.cloud_optical_depth[i]),

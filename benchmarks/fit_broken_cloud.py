@@ -30,6 +30,9 @@ before and after the fit. The numbers are then copied by hand into
 benchmarks/fit_broken_cloud_all.json: the same with ``--above``) were not adopted (docs/clouds.md). With the
 entering-energy exponent ``e`` (benchmarks/fit_broken_cloud_entry.json and fit_broken_cloud_entry_above.json,
 ``--max-nfev 30``/``40``) the shipped octaves lie between those fits and the first (the JSON's "chosen" field).
+With the ground-cloud coupling and the light shafts on (2026-12-02), benchmarks/fit_broken_cloud_shafts.json
+(``--fit-cover 0.3 0.6 0.9 --irradiance --above --max-nfev 12``) was not adopted either (docs/clouds.md, "Why
+dense fields were short").
 
 Usage: ``python benchmarks/fit_broken_cloud.py [--fit-cover 0.6 ...] [--irradiance] [--above] [--out FILE]``.
 """

@@ -54,13 +54,15 @@ def matrix_directions(scheme: str = "tregenza") -> np.ndarray:
     return patch_scheme(scheme).sample_directions(1)[:, 0]
 
 
-def clear_air(h, i: int, ssa: float):
-    """The family's base medium with hour ``i``'s aerosol optical depth and albedo ``ssa``."""
+def clear_air(h, i: int, ssa: float, phase_g: float | None = None):
+    """The family's base medium with hour ``i``'s aerosol optical depth, albedo ``ssa`` and phase g (default:
+    the base's)."""
     from skyscatter.precomputed.family import AXIS_SETTERS
 
     tau = float(h.aerosol_optical_depth[i])
-    return AXIS_SETTERS["aerosol_single_scattering_albedo"](AXIS_SETTERS["aerosol_optical_depth"](h.family.base, tau),
+    air = AXIS_SETTERS["aerosol_single_scattering_albedo"](AXIS_SETTERS["aerosol_optical_depth"](h.family.base, tau),
                                                           ssa)
+    return air if phase_g is None or not np.isfinite(phase_g) else air.replace(mie_phase_g=float(phase_g))
 
 
 def cloudy_air(h, i: int):
@@ -96,7 +98,8 @@ def parts_of(h, ds, i: int, kind: str):
     f = float(h.cloud_fraction[i]) if kind == "broken" else (1.0 if kind == "overcast" else 0.0)
     out = []
     if f < 1.0:
-        out.append((1.0 - f, "clear", clear_air(h, i, float(ds["single_scattering_albedo"].values[i]))))
+        g = float(ds["aerosol_phase_g"].values[i]) if "aerosol_phase_g" in ds else None
+        out.append((1.0 - f, "clear", clear_air(h, i, float(ds["single_scattering_albedo"].values[i]), g)))
     if f > 0.0:
         out.append((f, "overcast", cloudy_air(h, i)))
     return out

@@ -1,6 +1,6 @@
-"""Light shafts of the ``broken-cloud`` sky (:meth:`BrokenCloudSky._shafts`, off by default until the octaves are
-refitted with them; switched on here): the clouds' shadows on the air below them take away the air's
-single-scattered sunlight. Against an independent numerical integral of the single
+"""Light shafts of the ``broken-cloud`` sky (:meth:`BrokenCloudSky._shafts`, on by default; the fixture makes sure):
+the clouds' shadows on the air below them take away the air's single-scattered sunlight (and the air there
+scatters the clouds' light, the ``cloud_light`` gain). Against an independent numerical integral of the single
 scattering (fine trapezoids of the air's coefficients, its own optical depths to the sun: no table), the clear sky
 bit for bit without a shadow, and the radiance never negative."""
 
@@ -96,23 +96,23 @@ def test_opaque_layer_removes_the_single_scattering_below_its_base(elevation, az
 
 def test_the_composite_subtracts_the_shafts(monkeypatch):
     """The sky's radiance is the radiance without shafts less :meth:`shafts` to the cloud's mean depth or the
-    ground (never below zero)."""
+    ground, plus the clouds' light the air scatters over the same path (never below zero)."""
     sky = BrokenCloudSky(SUN_Z, SUN_A, cloud_cover=0.5, cloud_seed=3)
     d = _dirs([-10, 1, 3, 6, 12, 30, 60], [0, 60, 135, 200, 300])
     with_shafts = sky.table_radiance(d)
     monkeypatch.setattr(broken_cloud, "_SHAFTS", False)
-    without = BrokenCloudSky(SUN_Z, SUN_A, cloud_cover=0.5, cloud_seed=3).table_radiance(d)
+    without = sky.table_radiance(d)  # the same sky: its ground-cloud coupling (solved with the shafts) kept
     _, _, depth, hit = sky.march(d)
     eye = sky.clear.position
     bottom = sky.clear.precomputed.parameters.bottom_radius
     b = d @ eye
     disc = b * b - (eye @ eye - bottom**2)
     t_ground = np.where(disc >= 0, -b - np.sqrt(np.maximum(disc, 0)), -1.0)
-    loss = sky._shafts(d, cloud_depth=np.where(hit, depth, np.inf),
-                      ground_distance=np.where(t_ground > 0, t_ground, np.inf))
-    assert np.any(loss > 0)
-    np.testing.assert_allclose(with_shafts, np.maximum(without - loss, 0.0), rtol=1e-12, atol=1e-15)
-    assert np.all(with_shafts <= without + 1e-15)
+    loss, gain = sky._shafts(d, cloud_depth=np.where(hit, depth, np.inf),
+                             ground_distance=np.where(t_ground > 0, t_ground, np.inf), cloud_light=True)
+    assert np.any(loss > 0) and np.any(gain > 0) and np.all(gain >= 0)
+    np.testing.assert_allclose(with_shafts, np.maximum(without + gain - loss, 0.0), rtol=1e-12, atol=1e-15)
+    assert np.all(with_shafts <= without + gain + 1e-15)
 
 
 def test_rays_far_from_any_shadow_are_unchanged():

@@ -339,11 +339,11 @@ def test_forward_peak_split_is_unbiased():
 
 
 def test_shadow_ray_roulette_is_unbiased(monkeypatch):
-    """The shadow rays' Russian roulette (``driver.NEE_ROULETTE_DEPTH``, ``kernels._sun_transmittance``) against
-    the estimator without it: a Mie water layer (r_e 10 um) of optical depth 8 at 1000-1500 m in the Earth's air,
-    sun zenith 50 deg, 4 directions from the ground, 450 and 650 nm; the roulette made to bite hard (from optical
-    depth 1 of the shadow ray, where the default is 8): within 4 combined standard errors, and not the same
-    numbers (the roulette ran)."""
+    """The shadow rays' Russian roulette (``driver.NEE_ROULETTE_DEPTH``, ``kernels._sun_transmittance``: survival
+    ``exp(-(tau - depth))`` beyond that optical depth) against the estimator without it: a Mie water layer (r_e 10
+    um) of optical depth 8 at 1000-1500 m in the Earth's air, sun zenith 50 deg, 4 directions from the ground, 450
+    and 650 nm; the roulette made to bite hard (from optical depth 1 of the shadow ray, where the default is 8):
+    within 4 combined standard errors, and not the same numbers (the roulette ran)."""
     from skyscatter.atmosphere.clouds import CloudLayer
     from skyscatter.montecarlo import driver
 

@@ -135,7 +135,7 @@ def _density_of(field, params, sizes, first=False, n_theta=16):
     parallel_for(kernels.scattering_density_kernel, sizes.scattering_r, t, field, field, first, e, np.zeros(1),
                  params.rayleigh_scattering_at(wl), params.mie_scattering_at(wl), params.mie_phase_g,
                  aerosol_phase_kind(params.mie_phase_function), np.array([-1.0, 1.0]), np.zeros((1, 2)),
-                 np.zeros((1, 2)), np.zeros(1), prof, counts, params.bottom_radius,
+                 np.zeros((1, 2)), prof, counts, params.bottom_radius,
                  params.top_radius, params.mu_s_min, n_theta, out, 0)
     return out
 

@@ -7,6 +7,7 @@ preset over a 3 x 2 grid (six small builds, shared by the tests of the session).
 
 from __future__ import annotations
 
+import itertools
 import re
 import shutil
 import subprocess
@@ -151,7 +152,7 @@ def test_diffuse_ozone_counted_once(options):
     ground, up = np.array([0.0, 0.0, fam.base.bottom_radius]), np.array([0.0, 0.0, 1.0])
     dhi = {}
     for o3 in (300.0, 0.0):
-        atm = fam.parameters((1, 1)).replace(ozone_column=o3)  # AOD 0.2, albedo 1
+        atm = fam.parameters((1, 1, 1)).replace(ozone_column=o3)  # AOD 0.2, albedo 1, phase g 0.8
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             tab = cached_atmosphere(atm, orders=fam.orders, wavelengths=fam.wavelengths, sizes=fam.sizes,
@@ -175,7 +176,7 @@ def test_clear_sky_model_against_spectrl2():
 
     fam = default_family(RetrievalOptions(aerosol_optical_depth_nodes=AOD_NODES, tables="coarse"))
     model = BroadbandClearSky(fam.base, 1.3)
-    zdeg, tau, ssa = 30.0, 0.1, 0.9
+    zdeg, tau, ssa = 30.0, 0.1, 0.9  # phase g 0.8: the base's
     z = np.radians([zdeg])
     one = np.ones(1)
     direct = model.direct_normal_spectral(z, [tau], 1.4 * one, 101325 * one, 300 * one, one, weighted=False)[0]
@@ -183,7 +184,8 @@ def test_clear_sky_model_against_spectrl2():
     sun = direction_from_angles(z, np.zeros(1))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        esky = fam.interpolate([[tau, ssa]], lambda atm, sub: atm.ground_irradiance(ground, [0, 0, 1.0], sun[sub])[1])
+        esky = fam.interpolate([[tau, ssa, 0.8]],
+                               lambda atm, sub: atm.ground_irradiance(ground, [0, 0, 1.0], sun[sub])[1])
     e0t = fam.base.solar_irradiance_at(fam.wavelengths)
     wl = model.wavelengths
     tg = model.gas_transmittance(z, 1.4 * one, 101325 * one)[0]
@@ -327,13 +329,13 @@ def test_family_interpolation_is_linear_in_the_nodes(options):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        at_node = fam.interpolate([[0.2, 1.0]], f)
-        mid = fam.interpolate([[0.1, 0.9]], f)
-        corners = [f(fam.node(i), np.arange(1)) for i in ((0, 0), (0, 1), (1, 0), (1, 1))]
-    np.testing.assert_allclose(at_node, corners[3], rtol=1e-12)
+        at_node = fam.interpolate([[0.2, 1.0, 0.8]], f)
+        mid = fam.interpolate([[0.1, 0.9, 0.65]], f)
+        corners = [f(fam.node(i), np.arange(1)) for i in itertools.product((0, 1), repeat=3)]
+    np.testing.assert_allclose(at_node, corners[-1], rtol=1e-12)
     np.testing.assert_allclose(mid, np.mean(corners, axis=0), rtol=1e-12)
-    lower, frac, outside = fam.cells([[0.7, 0.5]])
-    assert outside.tolist() == [[True, True]] and frac[0, 0] == 1.0
+    lower, frac, outside = fam.cells([[0.7, 0.5, 0.9]])
+    assert outside.tolist() == [[True, True, True]] and frac[0, 0] == 1.0
 
 
 # ------------------------------------------------------------------ the matrix
@@ -380,7 +382,8 @@ def test_matrix_closure_and_sun(matrix, hourly, options):
     s = direction_from_angles(hourly.sun_zenith[i], hourly.sun_azimuth[i])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        t = fam.interpolate([[hourly.aerosol_optical_depth[i], hourly.single_scattering_albedo[i]]],
+        t = fam.interpolate([[hourly.aerosol_optical_depth[i], hourly.single_scattering_albedo[i],
+                              hourly.aerosol_phase_g[i]]],
                             lambda atm, sub: atm.sun_transmittance(pos, s)[None])
     e0 = fam.base.solar_irradiance_at(fam.wavelengths)
     for wl in (450.0, 550.0):
@@ -679,8 +682,8 @@ def test_ground_only_family_equals_full_tables(options):
     assert fam.ground_only
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        small = fam.node((1, 0))
-        full = cached_atmosphere(fam.parameters((1, 0)), orders=fam.orders, wavelengths=fam.wavelengths,
+        small = fam.node((1, 0, 0))
+        full = cached_atmosphere(fam.parameters((1, 0, 0)), orders=fam.orders, wavelengths=fam.wavelengths,
                                  sizes=fam.sizes, progress=False)
     assert small.tables["multiple"].shape[0] == 2 and full.tables["multiple"].shape[0] == fam.sizes.scattering_r
     pos = np.array([0.0, 0.0, fam.base.bottom_radius])
@@ -762,11 +765,12 @@ def test_air_options_go_with_spectral(epw, tmp_path, capsys):
 
 def test_clear_hours_not_closed_state_why(tmp_path, options):
     """Every clear hour whose DHI the sky cannot close (status 'clear, DHI not closed') of a SPECTRL2 clear day
-    (no cloud: a model difference, not thin cloud; 1 March, its suns at 4.7 and 3.6 deg, one left open by the
-    retrieval, one by the matrix's albedo closure) has a sky giving more diffuse light than the record even at the
-    grid's lowest aerosol albedo, and its reason gives the sun's elevation and the albedo the record would need
-    (the albedo line through the nodes, extrapolated), below the grid. Made year (coarse tables): 471 such hours,
-    sun 3-30 deg, needing albedos 0.43-0.80 (docs/sky_matrices.md)."""
+    (no cloud: a model difference, not thin cloud; 1 March: its sun at 3.6 deg; the one at 4.7 deg, open with the
+    albedo alone, closes on the phase leg since 2026-12-02) has a sky giving more
+    diffuse light than the record even at the closure path's end (aerosol albedo 0.8, phase g 0.5), and its reason
+    gives the sun's elevation and the phase g the record would need (the phase leg extrapolated), below the grid's
+    0.5. Made year (coarse tables): 108 such hours, sun 3-8 deg (docs/sky_matrices.md, "The second aerosol
+    parameter"); with the albedo alone they were 471, sun 3-30 deg."""
     import warnings
 
     from skyscatter.fit.spectral_matrix import spectral_sky_matrix
@@ -776,16 +780,132 @@ def test_clear_hours_not_closed_state_why(tmp_path, options):
         warnings.simplefilter("ignore")
         h = retrieve_hourly_atmosphere(write_epw(tmp_path / "march.epw", days=((3, 1, "clear"),),
                                                  tweak=dark_below_cloud_table), options)
-    s_low = options.single_scattering_albedo_nodes[0]
+    g_low = options.phase_g_min
     ds = spectral_sky_matrix(None, scheme="tregenza", samples=1, atmosphere=h)
     st = ds["status"].values
     open_ = np.flatnonzero(st == CLEAR_OPEN)
-    assert open_.size >= 2
+    assert open_.size >= 1
     for i in open_:
         why = str(ds["reason"].values[i])
-        m = re.search(r"sun ([0-9.]+) deg up; the albedo line through the (?:grid's|cell's) nodes reaches the "
-                      r"record's DHI at ([0-9.]+)", why)
+        m = re.search(r"sun ([0-9.]+) deg up; the phase line at albedo 0.8 through the (?:grid's|cell's) g nodes "
+                      r"reaches the record's DHI at g (-?[0-9.]+), below the published range", why)
         assert m is not None, why
         assert float(m.group(1)) == pytest.approx(90 - np.degrees(h.sun_zenith[i]), abs=0.06)
-        assert float(m.group(2)) < s_low
+        assert float(m.group(2)) < g_low
         assert ds["dhi_closure"].values[i] > 0  # the sky's diffuse above the record's
+        assert ds["aerosol_phase_g"].values[i] == pytest.approx(g_low)
+        assert ds["single_scattering_albedo"].values[i] == pytest.approx(options.single_scattering_albedo_nodes[0])
+
+
+def test_clear_hours_close_on_the_phase_leg(tmp_path, options):
+    """The second aerosol parameter recovers a known phase: clear hours of the SPECTRL2 day whose DHI is replaced by
+    the sky's at the hour's optical depth (from DNI), aerosol albedo 0.8 and a Cornette-Shanks g of 0.55, 0.65 or
+    0.75 (the family interpolated there directly, not through the closure path) are retrieved clear with that g
+    (within 0.005: the record's DHI is written to 1 mW m^-2) and albedo 0.8, DHI closed by the retrieval (1e-9);
+    with the albedo alone (``phase_g_min=None``) the same hours stay open. The matrix's patches (2-6 % more diffuse
+    than the tables' irradiance with the sun low, docs/sky_matrices.md) close them within 1 % at a smaller g, or
+    leave an hour open at g 0.5 with its sky above the record (measured: the 12 deg hour of g 0.55)."""
+    import dataclasses
+    import warnings
+
+    from skyscatter.conventions import direction_from_angles
+    from skyscatter.fit.spectral_matrix import spectral_sky_matrix
+    from skyscatter.fit.weather import CLEAR, CLEAR_OPEN, BroadbandClearSky, retrieve_hourly_atmosphere
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        h0 = retrieve_hourly_atmosphere(clear_day(tmp_path / "june.epw"), options)
+        fam = h0.family
+        clear = np.flatnonzero(h0.status == CLEAR)
+        el = 90 - np.degrees(h0.sun_zenith[clear])
+        picks = [int(clear[np.argmin(np.abs(el - e))]) for e in (12.0, 35.0, 60.0)]
+        truth = dict(zip(picks, (0.55, 0.65, 0.75), strict=True))
+        ground, up = np.array([0.0, 0.0, fam.base.bottom_radius]), np.array([0.0, 0.0, 1.0])
+        rows = np.array(picks)
+        sun = direction_from_angles(h0.sun_zenith[rows], h0.sun_azimuth[rows])
+        vals = np.column_stack([h0.aerosol_optical_depth[rows], np.full(rows.size, 0.8), [truth[i] for i in picks]])
+        spec = fam.interpolate(vals, lambda atm, sub: atm.ground_irradiance(ground, up, sun[sub])[1])
+        dhi = BroadbandClearSky(fam.base, options.angstrom_alpha).broadband_diffuse(
+            spec, h0.sun_zenith[rows], h0.precipitable_water[rows], h0.pressure[rows], h0.ozone[rows],
+            h0.eccentricity[rows], fam.wavelengths)
+
+        def tweak(recs):
+            for i, d in zip(picks, dhi, strict=True):
+                r = recs[i]
+                dni = float(r[14])
+                r[15] = f"{d:.3f}"
+                r[13] = f"{d + dni * np.cos(h0.sun_zenith[i]):.3f}"
+
+        path = clear_day(tmp_path / "june_phase.epw", tweak)
+        h = retrieve_hourly_atmosphere(path, options)
+        h_albedo = retrieve_hourly_atmosphere(path, dataclasses.replace(options, phase_g_min=None))
+    for i in picks:
+        assert h.status[i] == CLEAR, h.reason[i]
+        assert h.aerosol_phase_g[i] == pytest.approx(truth[i], abs=0.005)
+        assert h.single_scattering_albedo[i] == pytest.approx(0.8, abs=1e-12)
+        assert abs(h.dhi_closure[i]) < 1e-9
+        assert h_albedo.status[i] == CLEAR_OPEN  # the albedo alone cannot
+    g_retrieved = h.aerosol_phase_g[picks].copy()
+    ds = spectral_sky_matrix(None, scheme="tregenza", samples=1, atmosphere=h)
+    st, c, g = ds["status"].values[picks], ds["dhi_closure"].values[picks], ds["aerosol_phase_g"].values[picks]
+    # the patches integrate the tables' radiance, a few per cent more diffuse than their irradiance: the matrix
+    # closes with a smaller g than the retrieval, or, below 0.5, leaves the hour open with its sky above the record
+    assert np.all(g <= g_retrieved + 1e-12)
+    closed = st == CLEAR
+    assert closed.sum() >= 2, (st, c, g)
+    assert np.all(np.abs(c[closed]) < 0.01) and np.all((g[closed] >= 0.5) & (g[closed] < 0.8))
+    assert np.all((st[~closed] == CLEAR_OPEN) & (c[~closed] > 0) & (g[~closed] == pytest.approx(0.5)))
+
+
+@pytest.mark.slow
+def test_gensdaymtx_unit_is_radiance_per_nm_times_400(tmp_path):
+    """Radiance's gensdaymtx (pyradiance's binary) writes per band the spectral radiance times 400 nm (``WVLSPAN``,
+    380-780 nm; src/gen/gensdaymtx.c, src/gen/atmos.c) and scales its sky to the EPW's diffuse horizontal
+    illuminance as ``DHI_lux / 179 / E_d / 1.15`` (E_d its own 380-780 nm diffuse). So its patches divided by 400 nm,
+    summed over the 20 bands of 20 nm and the hemisphere (Tregenza patch centres, solid angle x cos), give
+    ``DHI_lux / (179 x 1.15)``: within 0 to +10 % with the sun 15 deg or more up (the patch quadrature of its
+    radiance against its irradiance table; measured +6 to +9 %). A reading per nm would be 20 times off, one in
+    Radiance's luminance units 179 times. Doubling the illuminance doubles every patch. The first run precomputes
+    gensdaymtx's tables (minutes) in its working folder: ``$SKYSCATTER_RADIANCE_DIR`` if set (kept between
+    sessions), else the session's cache."""
+    import os
+
+    from skyscatter.patches import patch_scheme
+    from skyscatter.precomputed.cache import cache_dir
+    from skyscatter.sun.position import sun_position_unix
+    from weather_synth import SITE
+
+    pyradiance = pytest.importorskip("pyradiance")
+    root = Path(pyradiance.__file__).parent
+    work = Path(os.environ.get("SKYSCATTER_RADIANCE_DIR") or cache_dir() / "radiance")
+    work.mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ, RAYPATH=f".{os.pathsep}{root / 'lib'}")
+
+    def run(lux: float) -> np.ndarray:
+        def tweak(rows):
+            for r in rows:
+                if float(r[15]) > 0:
+                    r[16], r[17], r[18] = "50000", "30000", f"{lux:.0f}"  # global, direct, diffuse illuminance
+                r[29] = "0.120"  # the aerosol field gensdaymtx reads (one table set)
+        epw = write_epw(tmp_path / f"lux{lux:.0f}.epw", days=((6, 20, "clear"),), tweak=tweak)
+        out = subprocess.run([str(root / "bin" / "gensdaymtx"), "-m", "1", "-s", str(epw)], cwd=work, env=env,
+                             capture_output=True, check=True).stdout
+        head, body = out.split(b"\n\n", 1)
+        text = head.decode()
+        n = [int(text.split(f"{k}=")[1].split()[0]) for k in ("NROWS", "NCOLS", "NCOMP")]
+        return np.array(body.split(), dtype=float).reshape(*n)[1:]  # sky patches (145, 24 hours, 20 bands)
+
+    a, b = run(20000.0), run(40000.0)
+    geom = patch_scheme("tregenza")
+    weight = geom.solid_angles * geom.sample_directions(1)[:, 0, 2]
+    e_vis = np.einsum("phk,p->h", a / 400.0 * 20.0, weight)
+    start = np.datetime64("2023-06-20T00:00").astype("datetime64[s]").astype(np.int64)
+    unix = start + (np.arange(1, 25) - 0.5) * 3600.0 - SITE["timezone"] * 3600.0
+    el = 90 - np.degrees(np.asarray(sun_position_unix(np.radians(SITE["latitude"]), np.radians(SITE["longitude"]),
+                                                      unix, apparent=False).zenith))
+    up = el >= 15.0
+    assert up.sum() >= 10
+    ratio = e_vis[up] / (20000.0 / 179.0 / 1.15)
+    assert np.all((ratio > 1.0) & (ratio < 1.10)), ratio
+    lit = a[:, up] > 0.05  # (hours without the record's light keep 999999, missing: not calibrated)
+    np.testing.assert_allclose(b[:, up][lit], 2.0 * a[:, up][lit], rtol=0.01)  # ASCII: 3 significant digits

@@ -104,6 +104,34 @@ def _e(a):
     return -math.expm1(-a) / a
 
 
+#: ``|z|`` up to which :func:`_expm1_halved` is used (and the wavelength loop vectorised); beyond it libm's expm1.
+EXPM1_RANGE = 4.0
+#: Halvings of the argument in :func:`_expm1_halved`: ``|z| / 2^5 <= 1/8`` within EXPM1_RANGE.
+_EXPM1_HALVINGS = 5
+#: ``1 / k!`` for k = 1..11: the Taylor series of ``expm1(r) / r`` in Horner form.
+_INV_FACTORIAL = np.array([1.0 / math.factorial(k) for k in range(1, 12)])
+
+
+@inline
+def _expm1_halved(z):
+    """``expm1(z)`` for ``|z| <= EXPM1_RANGE`` in arithmetic only, so that a loop of them vectorises (numba calls
+    libm's scalar ``expm1``; llvmlite has no vector math library here): the Taylor series of ``expm1`` to
+    ``r^11 / 11!`` at ``r = z / 32`` (truncation below 1e-17 relative for ``|r| <= 1/8``), then five doublings
+    ``expm1(2x) = expm1(x) (expm1(x) + 2)`` ([Abramowitz1964] 4.2.1 with ``e^{2x} = (e^x)^2``), which keep the
+    relative accuracy of small arguments. For ``z <= 0`` (every use here: minus an optical depth) a doubling
+    does not amplify the relative error (its factor is ``2 (e + 1) / (e + 2) <= 1``); measured against libm over
+    ``[-4, 0]``: at most 4 ulp."""
+    r = z * (1.0 / 32.0)
+    c = _INV_FACTORIAL
+    p = c[10]
+    for k in range(9, -1, -1):
+        p = p * r + c[k]
+    e = r * p
+    for _ in range(_EXPM1_HALVINGS):
+        e = e * (e + 2.0)
+    return e
+
+
 #: Taylor coefficients ``1 / (k! (n + k + 1))`` of the moments ``m_n`` (n = 0..3, k = 0..7) of _hermite_integral.
 _MOMENT_TAYLOR = np.array([[1.0 / (math.factorial(k) * (n + k + 1)) for k in range(8)] for n in range(4)])
 
@@ -241,6 +269,15 @@ def _integrals_many(cos_t, h0, s, beta1, beta2, a1, a2, method, threshold, segme
             out2[i, j] = 0.0
             depth[j] = 0.0
         near = method == 0 or (method == 2 and abs(a1 * dx * c) < threshold)
+        if nseg == 1 and not near:
+            # A single piece (every ray of a landscape): its Hermite form for all wavelengths in three loops
+            # that vectorise (the expm1 of both species first, kept in the output rows, libm only outside
+            # EXPM1_RANGE; then the moments), the same formula as the general loop below, whose first piece
+            # needs no attenuation and no optical-depth test.
+            _single_piece(c, hh, ss, beta1, beta2, a1, a2, out1[i], out2[i], depth)
+            for j in range(nw):
+                depth[j] = math.exp(-depth[j])
+            continue
         for k in range(nseg):
             hk = hh + k * dx * c
             e1 = math.exp(-a1 * hk)  # H_1, H_2 of this piece
@@ -284,6 +321,40 @@ def _integrals_many(cos_t, h0, s, beta1, beta2, a1, a2, method, threshold, segme
                 break
         for j in range(nw):
             depth[j] = math.exp(-depth[j])
+
+
+@inline
+def _single_piece(c, hh, ss, beta1, beta2, a1, a2, out1, out2, depth):
+    """(I_1, I_2) of a path of one piece (length ``ss`` [m]) from height ``hh`` by the Hermite form for every
+    wavelength, into ``out1`` and ``out2``, and its optical depth into ``depth`` (the general loop of
+    :func:`_integrals_many` for ``nseg == 1``, arranged so that the wavelength loops vectorise)."""
+    nw = beta1.shape[0]
+    e1 = math.exp(-a1 * hh)
+    e2 = math.exp(-a2 * hh)
+    l1 = e1 * ss * _e(a1 * c * ss)
+    l2 = e2 * ss * _e(a2 * c * ss)
+    r21_near = math.exp((a1 - a2) * hh)
+    r21_far = math.exp((a1 - a2) * (hh + c * ss))
+    for j in range(nw):
+        out1[j] = _expm1_halved(-beta1[j] * l1)
+        out2[j] = _expm1_halved(-beta2[j] * l2)
+    for j in range(nw):  # outside the polynomial's range (a piece of optical depth > 4: rare)
+        if abs(beta1[j] * l1) > EXPM1_RANGE:
+            out1[j] = math.expm1(-beta1[j] * l1)
+        if abs(beta2[j] * l2) > EXPM1_RANGE:
+            out2[j] = math.expm1(-beta2[j] * l2)
+    for j in range(nw):
+        b1 = beta1[j]
+        b2 = beta2[j]
+        z1 = -b1 * l1
+        z2 = -b2 * l2
+        em1 = out1[j]
+        em2 = out2[j]
+        t1 = 1.0 + em1
+        t2 = 1.0 + em2
+        out1[j] = l1 * _hermite_integral(z1, t1, em1, 1.0, t2, -b2 * l1 * r21_near, -b2 * l1 * t2 * r21_far)
+        out2[j] = l2 * _hermite_integral(z2, t2, em2, 1.0, t1, -b1 * l2 / r21_near, -b1 * l2 * t1 / r21_far)
+        depth[j] = b1 * l1 + b2 * l2
 
 
 @helper

@@ -183,9 +183,9 @@ def _csv_report(ds, path: Path) -> None:
     import numpy as np
 
     cols = ["status", "reason", "ghi", "dni", "dhi", "aerosol_optical_depth", "aerosol_source",
-            "aerosol_optical_depth_file", "single_scattering_albedo", "precipitable_water", "precipitable_water_source",
-            "ozone", "pressure", "cloud_optical_depth", "cloud_cover", "cloud_fraction", "dni_model", "dhi_matrix",
-            "dni_closure", "dhi_closure"]
+            "aerosol_optical_depth_file", "single_scattering_albedo", "aerosol_phase_g", "precipitable_water",
+            "precipitable_water_source", "ozone", "pressure", "cloud_optical_depth", "cloud_cover", "cloud_fraction",
+            "dni_model", "dhi_matrix", "dni_closure", "dhi_closure"]
     times = [str(t)[:19] + "Z" for t in ds["time"].values]
     with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="\n") as fh:
         fh.write("time," + ",".join(cols) + "\n")

@@ -42,10 +42,9 @@ band's -4.3 % taken up by the parameter the scan is least sensitive to. With a d
 it carries the tables' systematic error in DHI against DISORT the same way (:data:`IRRADIANCE_MODEL_ERROR`: an
 offset common to the wavelengths and a slope in ``ln(lambda / 550 nm)``, sized by the phase kind, analytic or
 tabulated): the tables' diffuse irradiance is a hemisphere quadrature of the sky (8 x 16 directions at the fit
-sizes), so DHI comes out 0.2-10 % low with the analytic aerosol and 0-6 % off with most Mie airs, but up to 38 %
-high with coarse sea salt alone (its higher orders' forward peak, interpolated in the 4D table, on the grid), by
-amounts that change with the table sizes and the sun; without it a fine + coarse mixture from DNI and DHI came back
-2.3 stated standard deviations off.
+sizes), so DHI comes out 0.2-10 % low with the analytic aerosol and 0.1-6 % low with Mie airs (the higher
+orders at the fit sizes; most at 400 nm), by amounts that change with the table sizes and the sun; without it a
+fine + coarse mixture from DNI and DHI came back 2.3 stated standard deviations off (table format 8).
 ``AtmosphereFit.extra`` keeps the statistical part alone (``statistical_uncertainties``).
 """
 
@@ -96,10 +95,9 @@ SCAN_MODEL_ERROR = ((0.0, 15.0, 0.045), (15.0, 30.0, 0.02), (30.0, 90.0, 0.015))
 #: 9 cases: a -1.0 to -7.2 %, b +2.7 to +8.3 %; table format 10, whose first-order irradiance keeps the
 #: analytic phase's forward peak: format 9 gave 0.045, 0.047 with a -1.5 to -9.4 %), for ``"table"``, Mie
 #: phases (OPAC waso, sscm, two waso + sscm mixtures, continental-average, maritime-clean, desert, urban at
-#: optical depth 0.1-0.25; 24 cases: a -4.9 to +3.9 % but
-#: sscm alone at sun 40 / 60 deg +32 / +16 %, b -8 to +16 %; table format 8, whose first-order irradiance keeps a
-#: coarse mode's aureole: format 7 gave 0.103, 0.124 with a +5 to -24 %).
-IRRADIANCE_MODEL_ERROR = {"analytic": (0.035, 0.055), "table": (0.076, 0.062)}
+#: optical depth 0.1-0.25; 24 cases: a -3.0 to -0.8 %, b +1.5 to +7.4 %; table format 11, whose orders run in
+#: the delta-M scaled medium: format 10 gave 0.076, 0.062 with sscm alone at sun 40 / 60 deg a +32 / +16 %).
+IRRADIANCE_MODEL_ERROR = {"analytic": (0.035, 0.055), "table": (0.018, 0.039)}
 NEAR_SUN = math.radians(20.0)
 HORIZON = math.radians(15.0)
 

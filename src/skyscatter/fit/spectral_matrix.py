@@ -67,6 +67,9 @@ from .weather import (
     BroadbandClearSky,
     HourlyAtmosphere,
     RetrievalOptions,
+    _path_position,
+    _path_values,
+    closure_path,
     retrieve_hourly_atmosphere,
 )
 
@@ -232,15 +235,15 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
 
             bar = tqdm(total=rows.size, unit="h", desc=f"spectral sky ({geom.name}, {n_b} bands)")
 
-        names = [ax.name for ax in fam.axes]
-        k_ssa = names.index("aerosol_single_scattering_albedo") if "aerosol_single_scattering_albedo" in names else None
+        k_path, verts = closure_path(fam)
 
-        def patch_pass(values: NDArray[np.float64]) -> NDArray[np.float32]:
-            """Band radiances (n_p * n_b) and horizontal sky irradiance at the table wavelengths (n_t) per hour."""
+        def patch_pass(values: NDArray[np.float64], hours: NDArray[np.int64]) -> NDArray[np.float32]:
+            """Band radiances (n_p * n_b) and horizontal sky irradiance at the table wavelengths (n_t) of the
+            ``hours`` (indices of the record), ``values`` their grid coordinates."""
 
             def evaluate(atm, sub):
                 out = np.empty((sub.size, n_p * n_b + n_t), dtype=np.float32)
-                for j, i in enumerate(rows[sub]):
+                for j, i in enumerate(hours[sub]):
                     rad = atm.sky_radiance(ground, flat, sun_dirs[i]).reshape(n_p, -1, n_t).mean(axis=1)
                     out[j, : n_p * n_b] = (rad @ bmat.T).reshape(-1)
                     out[j, n_p * n_b:] = (omega * cos_cells) @ rad  # horizontal sky irradiance
@@ -249,60 +252,92 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
             return fam.interpolate(values, evaluate, dtype=np.float32,
                                    progress=(lambda k: bar.update(k)) if bar is not None else None)
 
-        def matrix_dhi(e_sky):
-            return model.broadband_diffuse(e_sky, h.sun_zenith[rows], h.precipitable_water[rows], h.pressure[rows],
-                                           h.ozone[rows], ecc[rows], table_wl)
+        def matrix_dhi(e_sky, hours):
+            return model.broadband_diffuse(e_sky, h.sun_zenith[hours], h.precipitable_water[hours],
+                                           h.pressure[hours], h.ozone[hours], ecc[hours], table_wl)
 
         values = np.stack([_axis_values(fam, a.name, h) for a in fam.axes], axis=1)[rows]
         try:
-            if k_ssa is None:
-                res = patch_pass(values)
-                dhi_matrix[rows] = matrix_dhi(res[:, n_p * n_b:].astype(float))
+            if verts.shape[0] < 2:
+                res = patch_pass(values, rows)
+                dhi_matrix[rows] = matrix_dhi(res[:, n_p * n_b:].astype(float), rows)
             else:
-                # The sky is linear in the albedo within its grid cell: compute it at the cell's two albedo nodes
-                # (each pass interpolates along the other axes only), then choose the albedo that makes the
-                # matrix's own DHI equal the record's (the retrieval closed DHI with the tables' irradiance; the
-                # patches are another quadrature of the same sky, a few per cent apart with the sun low).
-                nodes = np.asarray(fam.axes[k_ssa].values)
-                lower, _, _ = fam.cells(values)
-                lo_v, hi_v = nodes[lower[:, k_ssa]], nodes[lower[:, k_ssa] + 1]
-                v_lo, v_hi = values.copy(), values.copy()
-                v_lo[:, k_ssa], v_hi[:, k_ssa] = lo_v, hi_v
+                # The sky is linear along each leg of the closure path (weather.closure_path; the family is
+                # multilinear): compute it at the two vertices of the hour's leg (each pass interpolates along the
+                # aerosol optical depth only), then take the point of the leg that makes the matrix's own DHI equal
+                # the record's (the retrieval closed DHI with the tables' irradiance; the patches integrate the
+                # tables' radiance, a few per cent apart with the sun low). Beyond the leg's ends the hour moves to
+                # the next leg (computed again there) until the path ends.
+                last = verts.shape[0] - 1
+                pos = _path_position(verts, values[:, k_path[0]],
+                                     values[:, k_path[1]] if len(k_path) > 1 else None)
+                seg = np.clip(np.floor(pos).astype(np.int64), 0, last - 1)
+                w = pos - seg
+                closable = np.isin(h.status[rows], (CLEAR, BROKEN, ENHANCED))
+                # the record's DHI; broken hours: their clear part's (the retrieval's blend)
+                target = np.where(broken[rows], h.clear_dhi[rows], h.dhi[rows])
+                res = np.empty((rows.size, n_p * n_b + n_t), dtype=np.float32)
+                d_row = np.full(rows.size, np.nan)
+                w_need = np.full(rows.size, np.nan)  # the leg's position the record needs (beyond its ends)
+                pending = np.ones(rows.size, dtype=bool)
+                visited = np.zeros((rows.size, last), dtype=bool)
                 if bar is not None:
                     bar.total = 2 * rows.size
                     bar.refresh()
-                res = patch_pass(v_lo)
-                res_hi = patch_pass(v_hi)
-                d_lo = matrix_dhi(res[:, n_p * n_b:].astype(float))
-                d_hi = matrix_dhi(res_hi[:, n_p * n_b:].astype(float))
-                w = (values[:, k_ssa] - lo_v) / (hi_v - lo_v)
-                clear = np.isin(h.status[rows], (CLEAR, BROKEN, ENHANCED))
-                # the record's DHI; broken hours: their clear part's (the retrieval's blend)
-                target = np.where(broken[rows], h.clear_dhi[rows], h.dhi[rows])
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    w_close = (target - d_lo) / (d_hi - d_lo)
-                ok = clear & np.isfinite(w_close) & (d_hi > d_lo)
-                inside = ok & (w_close >= 0) & (w_close <= 1)
-                # at the grid's first or last cell an albedo beyond the cell is beyond the grid
-                w = np.where(inside, w_close, w)
-                out_of_grid = ok & ~inside
-                w = np.where(out_of_grid, np.clip(w_close, 0, 1), w)
-                for j in np.flatnonzero(out_of_grid):
-                    i = rows[j]
+                while np.any(pending):
+                    k = int(seg[np.flatnonzero(pending)[0]])
+                    sel = np.flatnonzero(pending & (seg == k))
+                    visited[sel, k] = True
+                    v_lo, v_hi = values[sel].copy(), values[sel].copy()
+                    for c, kk in enumerate(k_path):
+                        v_lo[:, kk], v_hi[:, kk] = verts[k, c], verts[k + 1, c]
+                    r_lo = patch_pass(v_lo, rows[sel])
+                    r_hi = patch_pass(v_hi, rows[sel])
+                    d_lo = matrix_dhi(r_lo[:, n_p * n_b:].astype(float), rows[sel])
+                    d_hi = matrix_dhi(r_hi[:, n_p * n_b:].astype(float), rows[sel])
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        w_close = (target[sel] - d_lo) / (d_hi - d_lo)
+                    ok = closable[sel] & np.isfinite(w_close) & (d_hi > d_lo)
+                    inside = ok & (w_close >= 0) & (w_close <= 1)
+                    down = ok & (w_close < 0) & (k > 0)
+                    up = ok & (w_close > 1) & (k < last - 1)
+                    move = (down & ~visited[sel, max(k - 1, 0)]) | (up & ~visited[sel, min(k + 1, last - 1)])
+                    beyond = ok & ~inside & ~move
+                    w_sel = np.where(inside, w_close, np.where(beyond, np.clip(w_close, 0, 1), w[sel]))
+                    w_need[sel[beyond]] = w_close[beyond]
+                    done = ~move
+                    out_rows = sel[done]
+                    wd = w_sel[done]
+                    res[out_rows] = (1 - wd)[:, None].astype(np.float32) * r_lo[done] \
+                        + wd[:, None].astype(np.float32) * r_hi[done]
+                    d_row[out_rows] = (1 - wd) * d_lo[done] + wd * d_hi[done]
+                    w[out_rows] = wd
+                    seg[sel[move]] = np.where(down[move], k - 1, k + 1)
+                    pending[out_rows] = False
+                    del r_lo, r_hi
+                dhi_matrix[rows] = d_row
+                on_path = _path_values(verts, seg + w)
+                h.single_scattering_albedo[rows] = on_path[:, 0]
+                if len(k_path) > 1:
+                    h.aerosol_phase_g[rows] = on_path[:, 1]
+                for j in np.flatnonzero(np.isfinite(w_need)):
+                    i, k = rows[j], int(seg[j])
                     if h.status[i] in (BROKEN, ENHANCED):
-                        h.reason[i] = (f"{h.reason[i]}; the clear part's DHI needs an aerosol albedo outside the grid "
-                                       "cell: clamped, not closed")
+                        h.reason[i] = (f"{h.reason[i]}; the clear part's DHI needs aerosol parameters beyond the "
+                                       "closure path: clamped, not closed")
                         continue
                     h.status[i] = CLEAR_OPEN
-                    need = lo_v[j] + w_close[j] * (hi_v[j] - lo_v[j])
-                    h.reason[i] = (f"the matrix's DHI needs an aerosol albedo outside the grid cell (sun "
-                                   f"{90 - np.degrees(h.sun_zenith[i]):.1f} deg up; the albedo line through the "
-                                   f"cell's nodes reaches the record's DHI at {need:.2f}): clamped, not closed")
-                h.single_scattering_albedo[rows] = lo_v + w * (hi_v - lo_v)
-                res *= (1 - w)[:, None].astype(np.float32)
-                res += w[:, None].astype(np.float32) * res_hi
-                del res_hi
-                dhi_matrix[rows] = (1 - w) * d_lo + w * d_hi
+                    need = verts[k] + w_need[j] * (verts[k + 1] - verts[k])
+                    el = 90 - np.degrees(h.sun_zenith[i])
+                    if len(k_path) > 1 and k < verts.shape[0] - len(fam.axes[k_path[0]].values):
+                        h.reason[i] = (f"the matrix's DHI needs a phase beyond the grid (sun {el:.1f} deg up; the "
+                                       f"phase line at albedo {verts[0, 0]:g} through the cell's g nodes reaches "
+                                       f"the record's DHI at g {need[1]:.2f}, below the published range): "
+                                       "clamped, not closed")
+                    else:
+                        h.reason[i] = (f"the matrix's DHI needs an aerosol albedo outside the grid cell (sun "
+                                       f"{el:.1f} deg up; the albedo line through the cell's nodes reaches the "
+                                       f"record's DHI at {need[0]:.2f}): clamped, not closed")
         finally:
             if bar is not None:
                 bar.close()
@@ -357,7 +392,10 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
         "aerosol_source": ("time", h.aerosol_source.astype(str)),
         "aerosol_optical_depth_file": ("time", h.aerosol_optical_depth_file,
                                        {"units": "1", "long_name": "the file's aerosol optical depth at 550 nm"}),
-        "single_scattering_albedo": ("time", h.single_scattering_albedo, {"units": "1"}),
+        "single_scattering_albedo": ("time", h.single_scattering_albedo, {"units": "1", "long_name":
+                                     "aerosol single-scattering albedo (closes DHI in clear hours)"}),
+        "aerosol_phase_g": ("time", h.aerosol_phase_g, {"units": "1", "long_name": "aerosol phase parameter g "
+                            "(Cornette-Shanks; closes DHI in clear hours below the smallest albedo node)"}),
         "cloud_optical_depth": ("time", h.cloud_optical_depth, {"units": "1"}),
         "cloud_cover": ("time", h.cloud_cover, {"units": "1"}),
         "precipitable_water": ("time", h.precipitable_water, {"units": "cm"}),
@@ -498,6 +536,8 @@ def _axis_values(fam, name: str, h: HourlyAtmosphere) -> NDArray[np.float64]:
         return np.nan_to_num(h.aerosol_optical_depth, nan=0.0)
     if name == "aerosol_single_scattering_albedo":
         return np.nan_to_num(h.single_scattering_albedo, nan=fam.base.mie_single_scattering_albedo)
+    if name == "aerosol_phase_g":
+        return np.nan_to_num(h.aerosol_phase_g, nan=fam.base.mie_phase_g)
     if name == "cloud_optical_depth":
         return np.nan_to_num(h.cloud_optical_depth, nan=0.0)
     raise InvalidParameterError(f"no hourly value for the grid axis {name!r}")

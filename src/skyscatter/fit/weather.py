@@ -34,11 +34,12 @@ sun: the circumsolar light they add to DNI is not modelled (it lowers the retrie
    up (the cloud table's last zenith), a direct beam, and the aerosol optical depth from DNI (Newton's method on the
    broadband model, monotonic in tau) within the grid. **The DNI retrieval wins over the file's aerosol optical
    depth field in clear hours** (the field is usually a monthly climatology); the file's value is kept next to it
-   for comparison. The aerosol's single-scattering albedo then closes DHI (closed form: DHI is linear in the albedo
-   between the grid's albedo nodes); an albedo outside the grid means the hour is not clear-sky physics: above the
-   largest albedo (more diffuse light than clear air can give) it is treated as cloudy, below the smallest it is
-   *clear, not closed* (albedo clamped, closure reported; ``reason`` gives the sun's elevation and the albedo the
-   record would need, the line through the end nodes extrapolated).
+   for comparison. DHI then fixes a second aerosol property along the closure path (:func:`closure_path`): the
+   single-scattering albedo from 1 down to 0.8, then the phase's g from 0.8 down to 0.5 at that albedo (closed
+   form: DHI is linear along each leg of the path). Beyond the path the hour is not clear-sky physics of this
+   medium: above its top (more diffuse light than clear air can give) it is treated as cloudy, below its end it
+   is *clear, not closed* (clamped, closure reported; ``reason`` gives the sun's elevation and the phase g the
+   record would need, the phase leg extrapolated).
 4. *cloudy*: the other daylit hours. Their aerosol is the median of the same day's clear hours (a measurement
    of that day wins), else the file's optical depth where present (converted from TMY's broadband value at
    700 nm, Molineaux et al. 1998, with the Angstrom exponent), else the 6 nearest clear hours within 3 days,
@@ -64,7 +65,9 @@ Precipitable water: the file's field, else Gueymard (1994) from temperature and 
 not carry it). The ground albedo of the tables is the base atmosphere's (the file's albedo is reported, not
 used: it would be one more grid axis).
 
-References: [BirdRiordan1986], [Gueymard1994], [Molineaux1998], [Spencer1971], [Bruneton2008], [Stamnes1988].
+References: [BirdRiordan1986], [Gueymard1994], [Molineaux1998], [Spencer1971], [Bruneton2008], [Stamnes1988];
+the closure path: Petters et al. (2003, JGR 108(D9), 4288), Leahy et al. (2007, GRL 34, L12814), Dubovik et al.
+(2002, J. Atmos. Sci. 59, 590), Cornette & Shanks (1992).
 """
 
 from __future__ import annotations
@@ -91,11 +94,13 @@ from ..atmosphere.medium import AtmosphereParameters
 from ..conventions import direction_from_angles
 from ..epw import EPWData, EPWLocation, read_epw
 from ..errors import FileFormatError, InvalidParameterError
-from ..precomputed.family import FAMILY_WAVELENGTHS, GridAxis, TableFamily
+from ..precomputed.family import AXIS_SETTERS, FAMILY_WAVELENGTHS, GridAxis, TableFamily, register_axis
 
 __all__ = [
     "DEFAULT_AOD_NODES",
     "DEFAULT_ALBEDO_NODES",
+    "DEFAULT_PHASE_G_MIN",
+    "closure_path",
     "HOUR_STATUS",
     "LOW_SUN_OPTICAL_DEPTH",
     "BroadbandClearSky",
@@ -120,14 +125,33 @@ __all__ = [
 
 #: Aerosol optical depth nodes [-] at 550 nm of the default family (dense where clear skies are).
 DEFAULT_AOD_NODES = (0.0, 0.05, 0.1, 0.2, 0.3, 0.45, 0.65, 1.0, 1.5)
-#: Aerosol single-scattering albedo nodes [-] of the default family.
+#: Aerosol single-scattering albedo nodes [-] of the default family. 0.8 is about the most absorbing ambient
+#: aerosol measured at 550 nm: southern African biomass smoke, 0.85 +/- 0.02 (Leahy et al. 2007, GRL 34, L12814).
 DEFAULT_ALBEDO_NODES = (0.8, 1.0)
+#: Smallest Cornette-Shanks parameter g [-] of the aerosol phase the clear hours' DHI closure may take (the
+#: second leg of the closure path, :func:`closure_path`): 0.5, a mean scattering cosine of 0.57, about the least
+#: forward-scattering aerosol AERONET retrieves (fine-mode smoke at red wavelengths, Dubovik et al. 2002, Table 1).
+DEFAULT_PHASE_G_MIN = 0.5
 #: Scale height [m] of the default base medium's molecules: the column of the standard atmosphere, 101325 Pa /
 #: (m_air g) = 2.148e29 m^-2, over the sea-level number density 2.5469e25 m^-3 of the physical Rayleigh
 #: coefficient (:func:`~skyscatter.atmosphere.spectra.rayleigh_scattering_physical`), so that the Rayleigh optical
 #: depth is 0.0980 at 550 nm (Bodhaine et al. 1999, Table 3: 0.0973) rather than the 0.108 of the medium's
 #: default (Bruneton 2017's coefficient with H = 8 km).
 RAYLEIGH_SCALE_HEIGHT = 8434.0
+
+
+def _aerosol_phase_g(atmosphere: AtmosphereParameters, value: float) -> AtmosphereParameters:
+    """Grid-axis setter ``aerosol_phase_g``: the parameter g [-] of the analytic aerosol phase (the default,
+    Cornette & Shanks 1992: Bruneton & Neyret 2008, Eq. 4; mean scattering cosine ``3 g (4 + g^2) / (5 (2 +
+    g^2))``)."""
+    if atmosphere.aerosol is not None:
+        raise InvalidParameterError("the aerosol_phase_g axis sets the Angstrom aerosol's analytic phase; a "
+                                    "particle-component aerosol has its Mie phase")
+    return atmosphere.replace(mie_phase_g=float(value))
+
+
+if "aerosol_phase_g" not in AXIS_SETTERS:
+    register_axis("aerosol_phase_g", _aerosol_phase_g)
 #: Ground albedo [-] of the default base medium (Radiance's gendaymtx default, ``-g 0.2``).
 DEFAULT_GROUND_ALBEDO = 0.2
 #: Status codes of :attr:`HourlyAtmosphere.status`.
@@ -1060,6 +1084,11 @@ class RetrievalOptions:
         Angstrom exponent of the aerosol (default 1.3).
     aerosol_optical_depth_nodes, single_scattering_albedo_nodes : tuple of float
         The family's grid (:data:`DEFAULT_AOD_NODES`, :data:`DEFAULT_ALBEDO_NODES`).
+    phase_g_min : float or None
+        Smallest aerosol phase parameter g [-] of the clear hours' DHI closure (default
+        :data:`DEFAULT_PHASE_G_MIN`): the family gets an ``aerosol_phase_g`` axis with nodes (this, the base's g)
+        and the closure path its second leg (:func:`closure_path`). ``None`` (or a base g at or below it): the
+        albedo alone (the family before 2026-12-02).
     clear_sky_cover : float
         Largest total sky cover [tenths] of a clear hour (default 3).
     default_aerosol_optical_depth : float
@@ -1087,6 +1116,7 @@ class RetrievalOptions:
     angstrom_alpha: float = 1.3
     aerosol_optical_depth_nodes: tuple[float, ...] = DEFAULT_AOD_NODES
     single_scattering_albedo_nodes: tuple[float, ...] = DEFAULT_ALBEDO_NODES
+    phase_g_min: float | None = DEFAULT_PHASE_G_MIN
     clear_sky_cover: float = 3.0
     default_aerosol_optical_depth: float = 0.1
     default_precipitable_water: float = 1.4
@@ -1111,6 +1141,11 @@ class RetrievalOptions:
             raise InvalidParameterError("single-scattering albedo nodes must lie in [0, 1]")
         if self.bad_hours not in ("error", "flag"):
             raise InvalidParameterError(f"bad_hours must be 'error' or 'flag'; got {self.bad_hours!r}")
+        if self.phase_g_min is not None:
+            g = float(self.phase_g_min)
+            if not (math.isfinite(g) and 0.0 <= g < 1.0):
+                raise InvalidParameterError(f"phase_g_min must be in [0, 1) or None; got {self.phase_g_min!r}")
+            object.__setattr__(self, "phase_g_min", g)
         if not -1.0 <= float(self.angstrom_alpha) <= 4.0:
             raise InvalidParameterError(f"angstrom_alpha must be in [-1, 4]; got {self.angstrom_alpha!r}")
         for name in ("default_aerosol_optical_depth", "default_precipitable_water", "default_ozone"):
@@ -1146,8 +1181,9 @@ TABLE_PRESETS = {
 
 
 def default_family(options: RetrievalOptions | None = None) -> TableFamily:
-    """The table family of a retrieval: aerosol optical depth x single-scattering albedo over the base medium
-    (the optical depth alone for a particle aerosol such as an OPAC type, whose albedo is its Mie optics'),
+    """The table family of a retrieval: aerosol optical depth x single-scattering albedo x phase g (the last with
+    ``phase_g_min`` set, the default) over the base medium (the optical depth alone for a particle aerosol such
+    as an OPAC type, whose albedo and phase are its Mie optics'),
     with the options' table preset, for ground observers (every node kept in memory: 4.5 MB each by default)."""
     o = RetrievalOptions() if options is None else options
     preset = TABLE_PRESETS[o.tables]
@@ -1155,6 +1191,10 @@ def default_family(options: RetrievalOptions | None = None) -> TableFamily:
     axes = [GridAxis("aerosol_optical_depth", tuple(o.aerosol_optical_depth_nodes))]
     if base.aerosol is None:  # a particle aerosol (an OPAC type) has the albedo of its Mie optics: no such axis
         axes.append(GridAxis("aerosol_single_scattering_albedo", tuple(o.single_scattering_albedo_nodes)))
+        # the phase leg of the closure path runs from the base's g down to phase_g_min (none for a base whose g
+        # is already at or below it)
+        if o.phase_g_min is not None and o.phase_g_min < base.mie_phase_g:
+            axes.append(GridAxis("aerosol_phase_g", (o.phase_g_min, float(base.mie_phase_g))))
     return TableFamily(axes, base=base, wavelengths=preset["wavelengths"],
                        sizes=o.sizes if o.sizes is not None else preset["sizes"],
                        orders=o.orders if o.orders is not None else preset["orders"], ground_only=True,
@@ -1167,7 +1207,8 @@ class HourlyAtmosphere:
 
     ``status`` codes are keys of :data:`HOUR_STATUS`; ``reason`` says why an hour is not clear-retrieved.
     Inputs as used (after fallbacks) and their ``*_source``; the retrieved ``aerosol_optical_depth`` (550 nm,
-    vertical) and ``single_scattering_albedo``; ``cloud_optical_depth`` and ``cloud_cover`` (NaN until
+    vertical), ``single_scattering_albedo`` and ``aerosol_phase_g`` (the analytic phase's g; NaN for a particle
+    aerosol); ``cloud_optical_depth`` and ``cloud_cover`` (NaN until
     retrieved); the model's ``dni_model``/``dhi_model`` [W m^-2] and the relative closure
     ``model / record - 1`` (NaN where not computed); ``dhi_albedo_slope`` d DHI / d albedo [W m^-2] of the clear
     hours (for a closure step on another discretisation of the same sky, :mod:`.spectral_matrix`);
@@ -1196,6 +1237,7 @@ class HourlyAtmosphere:
     aerosol_source: NDArray[np.str_]
     aerosol_optical_depth_file: NDArray[np.float64]
     single_scattering_albedo: NDArray[np.float64]
+    aerosol_phase_g: NDArray[np.float64]
     cloud_optical_depth: NDArray[np.float64]
     cloud_cover: NDArray[np.float64]
     status: NDArray[np.int64]
@@ -1375,6 +1417,8 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
     # the aerosol albedo where no axis retrieves it: the base's (a particle aerosol's from its Mie optics, 550 nm)
     base_ssa = (fam.base.mie_single_scattering_albedo if fam.base.aerosol is None else
                 float(fam.base.aerosol_component.single_scattering_albedo_at([550.0])[0]))
+    # the analytic phase's g (a particle aerosol has its Mie phase: NaN)
+    base_g = fam.base.mie_phase_g if fam.base.aerosol is None else np.nan
     aod_axis = next(a for a in fam.axes if a.name == "aerosol_optical_depth")
     ssa_axis = next((a for a in fam.axes if a.name == "aerosol_single_scattering_albedo"), None)
     cover = rec.total_sky_cover if rec.total_sky_cover is not None else np.full(n, np.nan)
@@ -1382,6 +1426,7 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
     aod = np.full(n, np.nan)
     aod_src = np.full(n, "", dtype="<U12")
     ssa = np.full(n, np.nan)
+    phase_g = np.full(n, np.nan)
     dni_model = np.full(n, np.nan)
     dhi_model = np.full(n, np.nan)
     slope = np.full(n, np.nan)
@@ -1397,37 +1442,48 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
         good = ci[ok]
         aod[good] = tau[ok]
         aod_src[good] = "dni"
-        # DHI at the albedo nodes, at the retrieved AOD (interpolated along the AOD axis only)
+        # DHI at the vertices of the closure path, at the retrieved AOD (interpolated along the AOD axis only)
         if good.size:
-            d_nodes = _diffuse_at_albedo_nodes(fam, model, good, aod, zen, azi, pw, pressure, ozone, ecc)
-            if ssa_axis is not None and len(ssa_axis.values) > 1:
-                s_nodes = np.asarray(ssa_axis.values)
-                lo, hi = d_nodes[:, 0], d_nodes[:, -1]
-                # linear in the albedo between the two end nodes (the default grid has exactly two)
-                w = (dhi[good] - lo) / np.where(hi > lo, hi - lo, np.nan)
-                s = s_nodes[0] + w * (s_nodes[-1] - s_nodes[0])
-                clear = np.isfinite(s) & (s >= s_nodes[0]) & (s <= s_nodes[-1])
-                too_bright = np.isfinite(s) & (s > s_nodes[-1])
-                too_dark = np.isfinite(s) & (s < s_nodes[0])
-                ssa[good] = np.clip(s, s_nodes[0], s_nodes[-1])
+            k_path, verts = closure_path(fam)
+            d_v = _diffuse_on_path(fam, model, good, aod, zen, azi, pw, pressure, ozone, ecc, k_path, verts)
+            if verts.shape[0] > 1:
+                last = verts.shape[0] - 1
+                p = _path_invert(d_v, dhi[good])
+                clear = np.isfinite(p) & (p >= 0) & (p <= last)
+                too_bright = np.isfinite(p) & (p > last)
+                too_dark = np.isfinite(p) & (p < 0)
+                pc = np.clip(p, 0, last)
+                on_path = _path_values(verts, np.nan_to_num(pc))
+                ssa[good] = np.where(np.isfinite(p), on_path[:, 0], np.nan)
+                phase_g[good] = on_path[:, 1] if verts.shape[1] > 1 else base_g
                 status[good[clear]] = CLEAR
                 status[good[too_dark]] = CLEAR_OPEN
-                # the albedo the record would need (the line through the end nodes, extrapolated) and the sun:
-                # on a clear-sky record from another model (SPECTRL2, Bird & Riordan 1986) these are its low suns,
-                # whose diffuse is below ours for the beam's aerosol, needing albedos no grid node supports
-                reason[good[too_dark]] = [
-                    f"DHI below the clear sky with aerosol albedo {s_nodes[0]:g} (sun {90 - math.degrees(z):.1f} deg "
-                    f"up; the albedo line through the grid's nodes reaches the record's DHI at {x:.2f}, outside "
-                    "the grid): albedo clamped, DHI not closed" for x, z in zip(s[too_dark], zen[good[too_dark]],
-                                                                                 strict=True)]
+                # what the record would need: the path's first leg extrapolated (the phase's g at the smallest
+                # albedo; without a g axis the albedo). On a clear-sky record from another model (SPECTRL2, Bird
+                # & Riordan 1986) these are its low suns, whose diffuse is below ours for the beam's aerosol
+                first = verts[0] + p[too_dark, None] * (verts[1] - verts[0])
+                if verts.shape[1] > 1:
+                    reason[good[too_dark]] = [
+                        f"DHI below the clear sky with aerosol albedo {verts[0, 0]:g} and phase g {verts[0, 1]:g} "
+                        f"(sun {90 - math.degrees(z):.1f} deg up; the phase line at albedo {verts[0, 0]:g} through "
+                        f"the grid's g nodes reaches the record's DHI at g {x:.2f}, below the published range): "
+                        "clamped, DHI not closed" for x, z in zip(first[:, 1], zen[good[too_dark]], strict=True)]
+                else:
+                    reason[good[too_dark]] = [
+                        f"DHI below the clear sky with aerosol albedo {verts[0, 0]:g} (sun {90 - math.degrees(z):.1f} "
+                        f"deg up; the albedo line through the grid's nodes reaches the record's DHI at {x:.2f}, "
+                        "outside the grid): albedo clamped, DHI not closed"
+                        for x, z in zip(first[:, 0], zen[good[too_dark]], strict=True)]
                 reason[good[too_bright]] = "DHI above the clear sky with aerosol albedo 1: treated as cloudy"
-                frac = np.clip((ssa[good] - s_nodes[0]) / (s_nodes[-1] - s_nodes[0]), 0, 1)
-                dhi_model[good] = lo + frac * (hi - lo)
-                slope[good] = (hi - lo) / (s_nodes[-1] - s_nodes[0])
+                dhi_model[good] = _path_dhi(d_v, pc)
+                # d DHI / d albedo along the albedo leg (the last vertices, at the largest g)
+                n_s = len(fam.axes[k_path[0]].values)
+                slope[good] = (d_v[:, -1] - d_v[:, -n_s]) / (verts[-1, 0] - verts[-n_s, 0])
             else:
                 ssa[good] = base_ssa if ssa_axis is None else ssa_axis.values[0]
+                phase_g[good] = base_g
                 status[good] = CLEAR
-                dhi_model[good] = d_nodes[:, 0]
+                dhi_model[good] = d_v[:, 0]
             dni_model[good] = model.direct_normal(zen[good], aod[good], pw[good], pressure[good], ozone[good],
                                                   ecc[good])
 
@@ -1441,6 +1497,7 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
         _cloudy_aerosol(rec, cl, status, aod, aod_src, aod_file, float(o.default_aerosol_optical_depth), unix)
         aod[cl] = np.minimum(aod[cl], tau_max)
         ssa[cl] = base_ssa
+        phase_g[cl] = base_g
         opaque = rec.opaque_sky_cover if rec.opaque_sky_cover is not None else np.full(n, np.nan)
         clouds = retrieve_clouds(ghi[cl], dhi[cl], zen[cl], aod[cl], cover[cl], opaque[cl],
                                  precipitable_water=pw[cl], pressure=pressure[cl], ozone=ozone[cl],
@@ -1472,12 +1529,16 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
                                                            ecc[own], tau_max=tau_max)
                     aod[own[ok_own]] = t_own[ok_own]
                     aod_src[own[ok_own]] = "dni"
-                d_nodes = _diffuse_at_albedo_nodes(fam, model, br, aod, zen, azi, pw, pressure, ozone, ecc)
-                if ssa_axis is not None and len(ssa_axis.values) > 1:
-                    s_nodes = np.asarray(ssa_axis.values)
-                    d_clear = np.array([np.interp(s_b, s_nodes, row) for row in d_nodes])
+                k_path, verts = closure_path(fam)
+                d_v = _diffuse_on_path(fam, model, br, aod, zen, azi, pw, pressure, ozone, ecc, k_path, verts)
+                if verts.shape[0] > 1:
+                    # the base albedo on the path's albedo leg (at the base's g, the largest g node)
+                    n_s = len(ssa_axis.values) if ssa_axis is not None else 1
+                    p_b = verts.shape[0] - n_s + float(np.interp(s_b, ssa_axis.values, np.arange(n_s))) \
+                        if ssa_axis is not None else 0.0
+                    d_clear = _path_dhi(d_v, np.full(br.size, p_b))
                 else:
-                    d_clear = d_nodes[:, 0]
+                    d_clear = d_v[:, 0]
                 fit = fit_broken_sky(ghi[br], dni[br], zen[br], aod[br], d_clear, table=table, model=model,
                                      precipitable_water=pw[br], pressure=pressure[br], ozone=ozone[br],
                                      eccentricity=ecc[br], dhi=dhi[br])
@@ -1488,6 +1549,7 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
                 status[br[ok]] = BROKEN
                 status[br[enh]] = ENHANCED
                 ssa[b_ok] = s_b
+                phase_g[b_ok] = base_g
                 cod[b_ok], frac[b_ok] = fit.optical_depth[use], fit.cloud_fraction[use]
                 clear_dhi[b_ok], cloud_dhi[b_ok] = d_clear[use], fit.cloud_dhi[use]
                 dhi_model[b_ok], dni_model[b_ok] = fit.dhi_model[use], fit.dni_model[use]
@@ -1526,30 +1588,105 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
         record=rec, unix_time=unix, sun_zenith=zen, sun_azimuth=azi, ghi=ghi, dni=dni, dhi=dhi, eccentricity=ecc,
         precipitable_water=pw, precipitable_water_source=pw_src, pressure=pressure, ozone=ozone,
         ozone_source=o3_src, aerosol_optical_depth=aod, aerosol_source=aod_src,
-        aerosol_optical_depth_file=aod_file, single_scattering_albedo=ssa, cloud_optical_depth=cod,
+        aerosol_optical_depth_file=aod_file, single_scattering_albedo=ssa, aerosol_phase_g=phase_g,
+        cloud_optical_depth=cod,
         cloud_cover=ccv, status=status, reason=reason, dni_model=dni_model, dhi_model=dhi_model,
         dhi_albedo_slope=slope, cloud_fraction=frac, clear_dhi=clear_dhi, cloud_dhi=cloud_dhi, options=o,
         family=fam, notes=notes, cloud_table=table)
 
 
-def _diffuse_at_albedo_nodes(fam: TableFamily, model: BroadbandClearSky, rows, aod, zen, azi, pw, pressure, ozone,
-                             ecc) -> NDArray[np.float64]:
-    """Broadband DHI [W m^-2] of hours ``rows`` at their AOD and at each albedo node, shape (len(rows), n_albedo)."""
+def closure_path(family: TableFamily) -> tuple[list[int], NDArray[np.float64]]:
+    """The one-parameter path in the family's grid along which a clear hour's DHI is closed.
+
+    DNI fixes the aerosol optical depth; DHI then constrains one more property of the aerosol (as in the
+    albedo retrievals from direct and diffuse irradiance, Petters et al. 2003, JGR 108(D9), 4288). Two properties
+    move DHI: the single-scattering albedo (absorption) and the phase's forward peak (a less forward-peaked aerosol
+    sends more of its light back up). One number cannot fix both, so the path takes them in turn, each within its
+    published range: first the albedo from 1 down to the smallest node (0.8, about the most absorbing ambient
+    aerosol: :data:`DEFAULT_ALBEDO_NODES`) at the base's phase (Cornette-Shanks g = 0.8, mean cosine 0.84, a
+    forward-peaked coarse-rich aerosol); below that the record's diffuse cannot be absorption, and the path
+    lowers g at that albedo down to ``phase_g_min`` (:data:`DEFAULT_PHASE_G_MIN`, fine-mode smoke). DHI grows
+    along the path (both properties raise it), so the closure is unique.
+
+    Returns
+    -------
+    axes : list of int
+        Indices of the path's axes in ``family.axes``: the albedo's, then the phase g's (absent axes left out).
+    vertices : ndarray, shape (n_vertices, len(axes))
+        The path's vertices (grid nodes), in order of increasing DHI: (albedo_0, g_0), ..., (albedo_0, g_last),
+        (albedo_1, g_last), ..., (albedo_last, g_last). A single vertex (or none) without a closure axis.
+    """
+    names = [a.name for a in family.axes]
+    if "aerosol_single_scattering_albedo" not in names:
+        return [], np.zeros((1, 0))
+    k_s = names.index("aerosol_single_scattering_albedo")
+    s_nodes = family.axes[k_s].values
+    if "aerosol_phase_g" not in names:
+        return [k_s], np.asarray(s_nodes, dtype=float)[:, None]
+    k_g = names.index("aerosol_phase_g")
+    g_nodes = family.axes[k_g].values
+    verts = [(s_nodes[0], g) for g in g_nodes] + [(s, g_nodes[-1]) for s in s_nodes[1:]]
+    return [k_s, k_g], np.asarray(verts, dtype=float)
+
+
+def _path_values(vertices: NDArray[np.float64], position: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Axis values at path positions ``position`` in [0, n_vertices - 1] (piecewise linear between vertices)."""
+    k = np.clip(np.floor(position).astype(np.int64), 0, max(vertices.shape[0] - 2, 0))
+    w = (position - k)[:, None]
+    upper = np.minimum(k + 1, vertices.shape[0] - 1)
+    return (1 - w) * vertices[k] + w * vertices[upper]
+
+
+def _path_position(vertices: NDArray[np.float64], albedo: NDArray[np.float64],
+                   phase_g: NDArray[np.float64] | None) -> NDArray[np.float64]:
+    """Position on the closure path (:func:`closure_path`) of hours with these albedos and phase g's: on the g
+    leg where g is below the largest g node, else on the albedo leg."""
+    if vertices.shape[1] == 1 or phase_g is None:
+        return np.interp(albedo, vertices[:, 0], np.arange(vertices.shape[0], dtype=float))
+    n_g = int(np.sum(vertices[:, 0] == vertices[0, 0]))
+    g_nodes, s_nodes = vertices[:n_g, 1], vertices[n_g - 1:, 0]
+    on_g = np.interp(phase_g, g_nodes, np.arange(n_g, dtype=float))
+    on_s = n_g - 1 + np.interp(albedo, s_nodes, np.arange(s_nodes.size, dtype=float))
+    return np.where(phase_g < g_nodes[-1], on_g, on_s)
+
+
+def _path_dhi(d_vertices: NDArray[np.float64], position: NDArray[np.float64]) -> NDArray[np.float64]:
+    """DHI at path positions (the family is multilinear, so linear along each leg), rows of ``d_vertices``."""
+    rows = np.arange(d_vertices.shape[0])
+    k = np.clip(np.floor(position).astype(np.int64), 0, max(d_vertices.shape[1] - 2, 0))
+    upper = np.minimum(k + 1, d_vertices.shape[1] - 1)
+    w = position - k
+    return (1 - w) * d_vertices[rows, k] + w * d_vertices[rows, upper]
+
+
+def _path_invert(d_vertices: NDArray[np.float64], target: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Path position where the piecewise-linear DHI equals ``target`` (extrapolated linearly beyond the ends:
+    below 0 or above n_vertices - 1); NaN where a leg's DHI does not increase."""
+    n_v = d_vertices.shape[1]
+    rows = np.arange(d_vertices.shape[0])
+    # the leg that holds the target: the number of inner vertices below it
+    k = np.clip(np.sum(d_vertices[:, 1:-1] < target[:, None], axis=1), 0, n_v - 2)
+    lo, hi = d_vertices[rows, k], d_vertices[rows, k + 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(hi > lo, k + (target - lo) / (hi - lo), np.nan)
+
+
+def _diffuse_on_path(fam: TableFamily, model: BroadbandClearSky, rows, aod, zen, azi, pw, pressure, ozone, ecc,
+                     k_path: list[int], vertices: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Broadband DHI [W m^-2] of hours ``rows`` at their AOD and at each vertex of the closure path
+    (:func:`closure_path`), shape (len(rows), n_vertices)."""
     k_aod = [a.name for a in fam.axes].index("aerosol_optical_depth")
-    k_ssa = next((k for k, a in enumerate(fam.axes) if a.name == "aerosol_single_scattering_albedo"), None)
-    ssa_values = fam.axes[k_ssa].values if k_ssa is not None else (0.0,)
     sun = direction_from_angles(zen[rows], azi[rows])
     ground = np.array([0.0, 0.0, fam.base.bottom_radius])
     up = np.array([0.0, 0.0, 1.0])
-    out = np.zeros((rows.size, len(ssa_values)))
-    for j, s in enumerate(ssa_values):
+    out = np.zeros((rows.size, vertices.shape[0]))
+    for j, vertex in enumerate(vertices):
         vals = np.zeros((rows.size, len(fam.axes)))
-        vals[:, k_aod] = aod[rows]
-        if k_ssa is not None:
-            vals[:, k_ssa] = s
         for k, a in enumerate(fam.axes):
-            if k not in (k_aod, k_ssa):
-                vals[:, k] = a.values[0]
+            vals[:, k] = a.values[0]
+        vals[:, k_aod] = aod[rows]
+        for k, v in zip(k_path, vertex, strict=True):
+            vals[:, k] = v
 
         def sky_irradiance(atm, sub):
             return atm.ground_irradiance(ground, up, sun[sub])[1]

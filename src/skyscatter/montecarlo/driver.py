@@ -44,9 +44,10 @@ DDIS_PROBABILITY = 0.0
 #: docstring, "forward peak"): next-event estimates use the phase function without it, chains of peak scatterings
 #: sampled about the sun carry it. 10 deg: the efficiency measured in docs/clouds.md (2 deg: 3x lower).
 PEAK_ANGLE = math.radians(10.0)
-#: Optical depth (least extinguished wavelength) along a next-event shadow ray of a cloudy medium from which the ray
-#: is continued by Russian roulette only (``kernels._sun_transmittance``; the sun's light there is below
-#: exp(-8) = 3e-4 of its value). math.inf: never. Clear media do not use it.
+#: Optical depth (least extinguished wavelength) along a next-event shadow ray of a cloudy medium beyond which the
+#: ray survives by Russian roulette only, to optical depth tau with probability exp(-(tau - depth))
+#: (``kernels._sun_transmittance``; the sun's light there is below exp(-8) = 3e-4 of its value). math.inf: never.
+#: Clear media do not use it.
 NEE_ROULETTE_DEPTH = 8.0
 
 

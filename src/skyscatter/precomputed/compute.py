@@ -5,7 +5,8 @@
 
 1. :func:`transmittance_table` - ``T(r, mu)`` to the top of the atmosphere (Eq. 5);
 2. :func:`direct_irradiance` ``DE = E[L0]`` and :func:`single_scattering` ``DS = S[L0]``, Rayleigh and Mie
-   apart (Sec. 4);
+   apart (Sec. 4); with a tabulated aerosol phase, in the delta-M scaled medium (:meth:`Medium.delta_m_scaled`),
+   in which the following steps run too;
 3. for each further order: :func:`scattering_density` ``DJ = J[(a / pi) T DE + DS]`` (Eqs. 6, 7),
    :func:`indirect_irradiance` ``DE = E[DS]`` (Eq. 15) and :func:`multiple_scattering` ``DS = integral T DJ``
    (Eq. 11), summed into the irradiance table ``E`` and the scattering table ``S``;
@@ -35,6 +36,7 @@ Reference: [Bruneton2008].
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import sys
@@ -109,9 +111,10 @@ class Medium:
     ``mie_phase_g``: the formula, bit for bit the tables of before) or tabulated (``mie_kind`` =
     :data:`.sampling.TABLE_PHASE`): ``phase_mu`` (n,) ascending cosines, ``phase_full`` (n_wl, n) the aerosol's
     phase table at the wavelengths. For either, ``phase_trunc`` (n_wl, :data:`TRUNCATED_PHASE_NODES`) is its
-    delta-M truncation for the scattering-density quadrature at even cosines and ``forward`` (n_wl,) the
-    truncated forward fraction (:func:`.kernels.scattering_density_kernel`; an analytic phase's only for the
-    first-order irradiance, :func:`.kernels.indirect_irradiance_kernel`).
+    delta-M truncation ``p*`` at even cosines and ``forward`` (n_wl,) the truncated forward fraction ``f``: a
+    tabulated phase's orders after the first run in :meth:`delta_m_scaled` (``p*`` the phase, ``f`` in the
+    coefficients); an analytic phase's split serves only its first-order irradiance
+    (:func:`.kernels.indirect_irradiance_kernel`).
     """
 
     bottom: float
@@ -150,6 +153,24 @@ class Medium:
         """Extinction coefficients at relative density 1 [m^-1] of the three profiles of :func:`density_profiles`
         (Rayleigh, aerosol, ozone absorption), (3, n_wavelengths): the kernels' optical depths along their rays."""
         return np.ascontiguousarray(np.stack([self.rayleigh_scattering, self.mie_extinction, self.ozone_absorption]))
+
+    def delta_m_scaled(self) -> Medium:
+        """The delta-M scaled medium of the orders after the first, for a tabulated aerosol phase
+        ([Wiscombe1977] Eqs. 5-7 and 13): the phase ``P_M = (1 - f) p* + f delta(1 - nu) / (2 pi)`` with the
+        forward peak as a delta, which scatters light on in its own direction, so that light is never removed
+        from the beam: the aerosol's extinction coefficient becomes ``beta_ext - f beta_sca``, its scattering
+        coefficient ``(1 - f) beta_sca``, its phase the truncated ``p*`` (tabulated at the even cosines of
+        ``phase_trunc``) and its forward fraction 0. Every table the orders read (transmittance, the sunlight
+        on the ground, single scattering as their source) and every order's density and ray integral use it,
+        so no table carries the diffraction peak but the exact single scattering (which keeps the full phase,
+        applied at the exact view-sun angle at lookup): the TMS correction of [NakajimaTanaka1988], as DISORT
+        does it."""
+        f = self.forward
+        return dataclasses.replace(
+            self, mie_kind=TABLE_PHASE, phase_mu=np.linspace(-1.0, 1.0, self.phase_trunc.shape[1]),
+            phase_full=self.phase_trunc, forward=np.zeros_like(f),
+            mie_extinction=self.mie_extinction - f * self.mie_scattering,
+            mie_scattering=(1.0 - f) * self.mie_scattering)
 
     def channels(self, ch: NDArray[np.intp]) -> Medium:
         """The same medium at the wavelengths of indices ``ch`` (a chunk)."""
@@ -254,9 +275,8 @@ def scattering_density(medium: Medium, sizes: TableSizes, transmittance: F32, pr
     args = (kernels.scattering_density_kernel, rows.stop, transmittance, previous.rayleigh,
             previous.mie, previous.single, previous.irradiance, medium.ground_albedo,
             medium.rayleigh_scattering, medium.mie_scattering, medium.mie_phase_g, medium.mie_kind,
-            medium.phase_mu, medium.phase_full, medium.phase_trunc, medium.forward,
-            medium.profiles, medium.counts, medium.bottom, medium.top, medium.mu_s_min,
-            sizes.density_sphere_samples, out, rows.start)
+            medium.phase_mu, medium.phase_full, medium.phase_trunc, medium.profiles, medium.counts, medium.bottom,
+            medium.top, medium.mu_s_min, sizes.density_sphere_samples, out, rows.start)
     # The kernel runs on all cores (parallel_for); OpenBLAS's own threads on top of it only spin: one BLAS thread
     # per pool thread. Measured: a tabulated phase's density step took 32.8 s instead of 7.3 s with them (default
     # sizes, 16 wavelengths, busy 2-core machine); the default precomputation (analytic phase, one product per
@@ -318,19 +338,41 @@ def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int, 
     n_l = transmittance.shape[-1]
     shape = (*sizes.scattering_shape, n_l)
     blocks = [range(a, min(a + ROW_BLOCK, sizes.scattering_r)) for a in range(0, sizes.scattering_r, ROW_BLOCK)]
+    # One buffer for the whole table loaded at a time (the previous order, then the density; in the second order
+    # the two single-scattering tables of a sub-chunk side by side): a new 67 MB array per load had its pages
+    # zeroed by the kernel on first touch, twice per order.
+    sub = max(len(c) for c in np.array_split(np.arange(n_l), min(split, n_l)))
+    texels = math.prod(sizes.scattering_shape)
+    whole = np.empty(texels * max(n_l, 2 * sub), dtype=np.float32)
+
+    def buffer(n_wl: int, part: int = 0) -> F32:
+        return whole[part * texels * n_wl: (part + 1) * texels * n_wl].reshape(*sizes.scattering_shape, n_wl)
+
     with ScratchTable(shape) as s_r, ScratchTable(shape) as s_m, ScratchTable(shape) as density, \
             ScratchTable(shape) as previous, ScratchTable(shape) as total:
         with book.order(1, "single scattering"):
             e_direct = direct_irradiance(medium, sizes, transmittance)
+            # A tabulated phase: the orders in the delta-M scaled medium (Medium.delta_m_scaled), whose single
+            # scattering is both their source (with (1 - f) beta_sca and p*) and, per unit beta_sca, the stored
+            # single scattering (with the full phase at lookup: the TMS correction, tables.py).
+            scaled, t_scaled, e_source = medium, transmittance, e_direct
+            per_beta = np.ones(n_l, dtype=np.float32)
+            if medium.mie_kind == TABLE_PHASE and orders >= 2:
+                scaled = medium.delta_m_scaled()
+                t_scaled = transmittance_table(scaled, sizes)
+                e_source = direct_irradiance(scaled, sizes, t_scaled)
+                per_beta = (1.0 / (1.0 - medium.forward)).astype(np.float32)
             for rows in blocks:
-                ray, mie = single_scattering(medium, sizes, transmittance, rows)
+                ray, mie = single_scattering(scaled, sizes, t_scaled, rows)
                 s_r.write(rows, ray)
                 s_m.write(rows, mie)
                 spill.put("single_rayleigh", first_channel, rows, ray)
-                spill.put("single_mie", first_channel, rows, mie)
+                spill.put("single_mie", first_channel, rows, mie * per_beta)
                 del ray, mie
-        irradiance = np.zeros_like(e_direct)
-        last_irradiance = e_direct
+        # The sunlight scattered into the forward peak stays in the scaled beam (e_source); on the ground it is
+        # diffuse light, as DISORT counts it (its diffuse flux is the total minus the unscaled direct beam).
+        irradiance = e_source - e_direct if orders >= 2 else np.zeros_like(e_direct)
+        last_irradiance = e_source
         sums: list[tuple[F64, F64]] = []  # per order: sums of its scattering and irradiance tables per wavelength
         for k in range(2, orders + 1):
             with book.order(k):
@@ -338,26 +380,27 @@ def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int, 
                 with book.timed(f"order {k} density"):
                     if k == 2:
                         for ch in np.array_split(np.arange(n_l), min(split, n_l)):
-                            med = medium.channels(ch)
-                            t_ch = np.ascontiguousarray(transmittance[..., ch])
-                            light = Order(s_r.load(ch), s_m.load(ch), True, np.ascontiguousarray(e_direct[..., ch]))
+                            med = scaled.channels(ch)
+                            t_ch = np.ascontiguousarray(t_scaled[..., ch])
+                            light = Order(s_r.load(ch, buffer(len(ch), 0)), s_m.load(ch, buffer(len(ch), 1)), True,
+                                          np.ascontiguousarray(e_source[..., ch]))
                             for rows in blocks:
                                 density.write(rows, scattering_density(med, sizes, t_ch, light, rows), ch)
                             d_irradiance[..., ch] = indirect_irradiance(med, sizes, light)
                             del light
                     else:
-                        table = previous.load()
+                        table = previous.load(out=buffer(n_l))
                         light = Order(table, table, False, last_irradiance)
                         for rows in blocks:
-                            density.write(rows, scattering_density(medium, sizes, transmittance, light, rows))
-                        d_irradiance = indirect_irradiance(medium, sizes, light)
+                            density.write(rows, scattering_density(scaled, sizes, t_scaled, light, rows))
+                        d_irradiance = indirect_irradiance(scaled, sizes, light)
                         del light, table
                     irradiance += d_irradiance
                 with book.timed(f"order {k} multiple"):
-                    dens = density.load()
+                    dens = density.load(out=buffer(n_l))
                     order_sum = np.zeros(n_l)
                     for rows in blocks:
-                        d_scattering = multiple_scattering(medium, sizes, transmittance, dens, rows)
+                        d_scattering = multiple_scattering(scaled, sizes, t_scaled, dens, rows)
                         order_sum += d_scattering.sum(axis=(0, 1, 2, 3), dtype=np.float64)
                         previous.write(rows, d_scattering)
                         if k > 2:
@@ -404,17 +447,20 @@ class ScratchTable:
             block = full
         _pwrite_all(self._fh.fileno(), np.ascontiguousarray(block, dtype=np.float32), rows.start * self._row)
 
-    def read(self, rows: range) -> F32:
-        """The radii ``rows``, all wavelengths."""
-        out = np.empty((len(rows), *self.shape[1:]), dtype=np.float32)
+    def read(self, rows: range, out: F32 | None = None) -> F32:
+        """The radii ``rows``, all wavelengths (into the C-contiguous ``out`` if given)."""
+        if out is None:
+            out = np.empty((len(rows), *self.shape[1:]), dtype=np.float32)
         _pread_all(self._fh.fileno(), out, rows.start * self._row)
         return out
 
-    def load(self, channels: NDArray[np.intp] | None = None) -> F32:
-        """The whole table, at all wavelengths or at those of indices ``channels`` (read by blocks of radii)."""
+    def load(self, channels: NDArray[np.intp] | None = None, out: F32 | None = None) -> F32:
+        """The whole table, at all wavelengths or at those of indices ``channels`` (read by blocks of radii),
+        into the C-contiguous ``out`` if given."""
         if channels is None:
-            return self.read(range(self.shape[0]))
-        out = np.empty((*self.shape[:-1], len(channels)), dtype=np.float32)
+            return self.read(range(self.shape[0]), out)
+        if out is None:
+            out = np.empty((*self.shape[:-1], len(channels)), dtype=np.float32)
         for a in range(0, self.shape[0], ROW_BLOCK):
             rows = range(a, min(a + ROW_BLOCK, self.shape[0]))
             out[a: rows.stop] = self.read(rows)[..., channels]
@@ -461,10 +507,10 @@ class SpillTables:
         ``first..first + chunk - 1`` (the half-precision scales are per radius: a block of whole radii is final)."""
         fd = self._files[name].fileno()
         row_bytes = self._per_wavelength // self._shape[1]
-        for k in range(table.shape[-1]):  # one wavelength at a time: a float16 copy of one wavelength in memory
-            values, scale = encode_half(table[..., k: k + 1])
-            _pwrite_all(fd, values, (first + k) * self._per_wavelength + rows.start * row_bytes)
-            self._scales[name][first + k, rows.start: rows.stop] = scale[0]
+        values, scale = encode_half(table)  # (chunk, len(rows), ...): a block is a few MiB
+        for k in range(table.shape[-1]):
+            _pwrite_all(fd, values[k], (first + k) * self._per_wavelength + rows.start * row_bytes)
+        self._scales[name][first: first + table.shape[-1], rows.start: rows.stop] = scale
 
     def tables(self) -> dict[str, HalfTable]:
         """The finished tables."""

@@ -195,6 +195,7 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
     n_suns = n_mu_s * n_nu
     acc_r = np.empty((n_suns, n_l))
     acc_m = np.empty((n_suns, n_l))
+    t_sun = np.empty(n_l)
     nu_flat = np.empty(n_suns)
     cell = np.empty(n_suns, dtype=np.int64)
     w_sun = np.empty(n_suns)
@@ -254,11 +255,15 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
                 j = cell[u]
                 w = w_sun[u]
                 a00, a01, a10, a11 = bilinear_weights(w_tr, w)
+                # Two loops, not one: each then has few enough possible overlaps between the arrays it writes and
+                # reads for the compiler to check them at run time and vectorise it (in one loop it did not, and
+                # these loops were most of the kernel's time).
                 for k in range(n_l):
-                    t_sun = f * (a00 * transmittance[j_r, j, k] + a01 * transmittance[j_r, j + 1, k]
-                                 + a10 * transmittance[j_r + 1, j, k] + a11 * transmittance[j_r + 1, j + 1, k])
-                    acc_r[u, k] += w_r[i, k] * t_sun
-                    acc_m[u, k] += w_m[i, k] * t_sun
+                    t_sun[k] = f * (a00 * transmittance[j_r, j, k] + a01 * transmittance[j_r, j + 1, k]
+                                    + a10 * transmittance[j_r + 1, j, k] + a11 * transmittance[j_r + 1, j + 1, k])
+                for k in range(n_l):
+                    acc_r[u, k] += w_r[i, k] * t_sun[k]
+                    acc_m[u, k] += w_m[i, k] * t_sun[k]
         for i_s in range(n_mu_s):
             for i_n in range(n_nu):
                 u = i_s * n_nu + i_n
@@ -342,8 +347,8 @@ def sphere_quadrature(n_theta, hemisphere):
 
 @kernel(fastmath=CONTRACT_REASSOC)
 def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance, albedo, beta_r, beta_m, g, mie_kind,
-                              phase_mu, phase_full, phase_trunc, forward, profiles, counts, bottom, top, mu_s_min,
-                              n_theta, out, first_r, start, stop):
+                              phase_mu, phase_full, phase_trunc, profiles, counts, bottom, top, mu_s_min, n_theta, out,
+                              first_r, start, stop):
     """Scattering density J (Eq. 7) of one order per unit total scattering coefficient, ``J / (beta_R rho_R(r) +
     beta_M rho_M(r))`` at each texel's radius, into ``out`` (n_rows, n_mu, n_mu_s, n_nu, n_wl) float32 (radius
     indices ``first_r`` to ``first_r + n_rows - 1``: a block of rows), for radius indices ``start..stop``: the
@@ -375,16 +380,16 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     quadrature radiance.
 
     A tabulated aerosol phase (``mie_kind`` :data:`.sampling.TABLE_PHASE`; ``phase_mu`` (n,) ascending cosines,
-    ``phase_full`` (n_wl, n) the phase table, ``phase_trunc`` (n_wl, n_u) its delta-M truncation sampled at
-    ``n_u`` cosines evenly spaced from -1 to 1 (a smooth Legendre series: one index per direction pair instead of a
-    search), ``forward`` (n_wl,)
-    the truncated forward fraction ``f``; :meth:`skyscatter.atmosphere.phase_table.PhaseTable.delta_m`) depends on
-    wavelength and may have a diffraction peak far narrower than the quadrature's 180 / n_theta deg: the aerosol
-    part of J is ``(1 - f) sum_w p*(v . w) L(w) dw / norm* + f L(v)``, the truncated phase on the grid (normalised
-    per view as above) and the forward peak, a delta function, exactly: it scatters the texel's own incident
-    radiance ``L(v)`` on in its direction ([Wiscombe1977], without scaling the optical depth: that light is not
-    removed from the beam but re-emitted forward, which the next orders carry). The single-scattered light of the
-    first order uses the full table.
+    ``phase_full`` (n_wl, n) the phase table that the first order's single-scattered light is weighted with,
+    ``phase_trunc`` (n_wl, n_u) the phase the density scatters with, sampled at ``n_u`` cosines evenly spaced from
+    -1 to 1: one index per direction pair instead of a search) is always the delta-M scaled medium's
+    (:meth:`.compute.Medium.delta_m_scaled`): both are the truncated ``p*``, a Legendre series smooth on the
+    quadrature, and the forward peak is not scattered here at all (it is in the scaled extinction). Until table
+    format 11 the density scattered the unscaled medium's light with ``(1 - f) p*`` on the grid plus the delta
+    ``f L(v)`` exactly: the texel's own incident radiance, whose first order carries the full table's diffraction
+    peak, went into the density table, and the next order's ray integral interpolated that peak linearly in the
+    view-sun axis; with sea salt (OPAC sscm, AOD 0.2-0.5) the diffuse irradiance came out up to 38 % above DISORT
+    (docs/aerosols.md).
     """
     n_r, n_mu, n_s, n_n, n_l = s_a.shape
     table = mie_kind == TABLE_PHASE
@@ -401,12 +406,12 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     phase_t = np.empty((n_om if table else 0, n_v))
     norm_t = np.empty((n_lt, n_v))
     mie_t = np.empty((n_lt, n_s, n_v))
-    own = np.empty((n_lt, n_s, n_v))  # L(v) at each texel (the delta part)
     rad_k = np.empty((n_s, n_om))
     n_u = phase_trunc.shape[1]
     half_u = 0.5 * (n_u - 1)
-    idx_t = np.zeros((n_om if table else 0, n_v), dtype=np.int64)
-    wt_t = np.zeros((n_om if table else 0, n_v))
+    view_x = np.empty(n_v)  # the view directions' components apart: contiguous for the phase fill
+    view_y = np.empty(n_v)
+    view_z = np.empty(n_v)
     pv = np.empty(n_l)
     tmp2 = np.empty(n_l)
     view = np.empty((n_v, 3))
@@ -442,14 +447,10 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 view[v, 0] = vx
                 view[v, 1] = vy
                 view[v, 2] = mu
-                if table:
-                    # cell of v . w on the truncated phase's uniform cosine grid; the values per wavelength below
-                    for w in range(n_om):
-                        x = (clamp(vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], -1.0, 1.0) + 1.0) * half_u
-                        i = min(int(x), n_u - 2)
-                        idx_t[w, v] = i
-                        wt_t[w, v] = x - i
-                else:
+                view_x[v] = vx
+                view_y[v] = vy
+                view_z[v] = mu
+                if not table:
                     nm = 0.0
                     for w in range(n_om):
                         pm = aerosol_phase(vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], g, mie_kind)
@@ -502,20 +503,23 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
             for k in range(n_l):
                 for v in range(n_v):
                     norm_t[k, v] = 0.0
+                pk = phase_trunc[k]
                 for w in range(n_om):
                     dw = dom[w]
+                    ox, oy, oz = om[w, 0], om[w, 1], om[w, 2]
                     for v in range(n_v):
-                        i = idx_t[w, v]
-                        f = wt_t[w, v]
-                        p = (1.0 - f) * phase_trunc[k, i] + f * phase_trunc[k, i + 1]
+                        # the cell of v . w on the truncated phase's even cosine grid, recomputed per wavelength:
+                        # cheaper than reading a stored (n_om, n_v) index and weight (8 MB) 16 times
+                        x = (min(max(view_x[v] * ox + view_y[v] * oy + view_z[v] * oz, -1.0), 1.0) + 1.0) * half_u
+                        i = min(int(x), n_u - 2)
+                        f = x - i
+                        p = (1.0 - f) * pk[i] + f * pk[i + 1]
                         phase_t[w, v] = p
                         norm_t[k, v] += p * dw
                 for i_s in range(n_s):
                     for w in range(n_om):
                         rad_k[i_s, w] = radiance[i_s * n_l + k, w]
                 mie_t[k] = np.dot(rad_k, phase_t)  # (n_s, n_v): sum over quadrature directions of L dw p*
-            _own_radiance(s_a, s_b, first, ground_irradiance, transmittance, albedo, phase_mu, phase_full, i_r,
-                          view, mu_s_tab, bottom, top, n_n, own, buf, e_buf, t_buf, tmp, pv)
             mie = phase_m[:0]
         else:
             mie = np.dot(radiance, phase_m)  # (n_s n_l, n_v): sum over quadrature directions of L dw P_M
@@ -533,48 +537,10 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                     for k in range(n_l):
                         acc_r = m0[i_s, k] + _quadratic_form(m2[i_s, k], vx, vy, vz)
                         if table:
-                            acc_m = ((1.0 - forward[k]) * mie_t[k, i_s, v] / norm_t[k, v]
-                                     + forward[k] * own[k, i_s, v])
+                            acc_m = mie_t[k, i_s, v] / norm_t[k, v]
                         else:
                             acc_m = mie[i_s * n_l + k, v] / norm_m[v]
                         out[i_r - first_r, i_mu, i_s, i_n, k] = f_r[k] * acc_r / norm_r[v] + f_m[k] * acc_m
-
-
-@helper
-def _own_radiance(s_a, s_b, first, ground_irradiance, transmittance, albedo, phase_mu, phase_full, i_r, view,
-                  mu_s_tab, bottom, top, n_n, own, buf, e_buf, t_buf, tmp, pv):
-    """The previous order's radiance ``L(v)`` at every texel of radius index ``i_r``, in the texel's own view
-    direction (the light the forward delta of a truncated phase scatters on), into ``own`` (n_wl, n_s, n_v):
-    the table value at the texel (first order: ``s_a P_R + s_b P_M`` with the full phase table), plus the ground's
-    reflection for views that meet the ground (the lower half of the mu axis)."""
-    n_r, n_mu, n_s, _, n_l = s_a.shape
-    inv_pi = 1.0 / PI
-    r, _, _ = scattering_r_mu_params(i_r, n_mu // 2, bottom, top, n_r, n_mu)
-    for i_s in range(n_s):
-        mu_s = mu_s_tab[i_s]
-        sx = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
-        for v in range(view.shape[0]):
-            i_mu = v // n_n
-            i_n = v % n_n
-            vx, mu = view[v, 0], view[v, 2]
-            nu = clamp(vx * sx + mu * mu_s, -1.0, 1.0)
-            if first:
-                pr = rayleigh_phase(nu)
-                phase_table_values(phase_mu, phase_full, nu, pv)
-                for k in range(n_l):
-                    buf[k] = s_a[i_r, i_mu, i_s, i_n, k] * pr + s_b[i_r, i_mu, i_s, i_n, k] * pv[k]
-            else:
-                for k in range(n_l):
-                    buf[k] = s_a[i_r, i_mu, i_s, i_n, k]
-            if i_mu < n_mu // 2:
-                d_g = distance_to_bottom(r, mu, bottom)
-                mu_s_g = clamp((d_g * vx * sx + (r + d_g * mu) * mu_s) / bottom, -1.0, 1.0)
-                irradiance_lookup(ground_irradiance, bottom, mu_s_g, bottom, top, e_buf)
-                transmittance_segment(transmittance, r, mu, d_g, True, bottom, top, t_buf, tmp)
-                for k in range(n_l):
-                    buf[k] += t_buf[k] * albedo[k] * inv_pi * e_buf[k]
-            for k in range(n_l):
-                own[k, i_s, v] = buf[k]
 
 
 @kernel
@@ -598,7 +564,10 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_trunc, forwar
     w_z dw`` on the grid (``p*`` a ``2 x density_sphere_samples``-term Legendre series, smooth on it) plus the
     delta part exactly: the delta picks the sun's own direction, ``f mu_s S_M(r, mu_s, mu_s, 1)`` (for ``mu_s >
     0``: a sun below the horizon puts no forward peak on a horizontal surface). The higher orders' radiance
-    ``s_a`` is summed on the grid as it is.
+    ``s_a`` is summed on the grid as it is. A tabulated phase comes here as the delta-M scaled medium's (table
+    format 11, :meth:`.compute.Medium.delta_m_scaled`: ``p*`` and ``f = 0``; its peak's light is the scaled
+    direct beam's excess, which :func:`.compute._orders` adds to the irradiance table), so the split above serves
+    the analytic phases.
     """
     n_r, n_mu_s, n_l = out.shape
     om, dom = sphere_quadrature(n_theta, True)
@@ -673,12 +642,13 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     with the total scattering coefficient ``beta_r rho_r + beta_m rho_m`` as the exponential factor; at each
     sample ``J = (beta_R rho_R(y) + beta_M rho_M(y)) density`` with the exact coefficient at the sample and the
     density per unit scattering coefficient of :func:`scattering_density_kernel` interpolated: linearly in r and mu,
-    log-linearly in the sample's sun zenith and azimuth (:func:`.geometry.log_lerp_weight` of the middle
-    wavelength, as :func:`.sampling.nu_weight`). Along a ray at twilight the sun sets for the samples one after
-    another and the density falls by orders of magnitude from one sun-zenith texel to the next; a linear
-    interpolation of that fall made the multiple scattering of clear air at a sun 6 deg below the horizon 11-66 %
-    too bright against the Monte Carlo (docs/accuracy.md, "Low sun"). ``T(x, y)`` is integrated along the ray's samples
-    (:func:`.sampling.ray_transmittance`; ``extinction`` as for :func:`single_scattering_kernel`); ``transmittance``
+    log-linearly in the sample's sun zenith and azimuth (:func:`.geometry.log_lerp_weight` of each wavelength's
+    own values, so the tables do not depend on the wavelength chunking). Along a ray at twilight the sun sets for
+    the samples one after another and the density falls by orders of magnitude from one sun-zenith texel to the
+    next; a linear interpolation of that fall made the multiple scattering of clear air at a sun 6 deg below the
+    horizon 11-66 % too bright against the Monte Carlo (docs/accuracy.md, "Low sun"). ``T(x, y)`` is integrated
+    along the ray's samples (:func:`.sampling.ray_transmittance`; ``extinction`` as for
+    :func:`single_scattering_kernel`); ``transmittance``
     is unused here and kept for the common signature.
     """
     n_r, n_mu, n_s, n_n, n_l = density.shape
@@ -695,7 +665,7 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     beta = np.empty((n_pts, n_l))
     q = np.empty((n_pts, n_l))
     sl = np.empty((n_s, n_n, n_l), dtype=np.float32)  # as the tables: half the memory traffic
-    k_w = n_l // 2  # the wavelength of the interpolation weights (.sampling.nu_weight)
+    sl_flat = sl.reshape(n_s * n_n, n_l)
     acc = np.empty((n_s, n_n, n_l))
     acc_flat = acc.reshape(n_s * n_n, n_l)
     nu_flat = np.empty(n_s * n_n)
@@ -756,22 +726,21 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
             _sun_cells(r, dist[i], rad[i], mu_ray[i], mu_s_flat, nu_flat, bottom, top, mu_s_min, big_a, theta_max,
                        n_s, n_n, cell, w_s, w_n)
             for u in range(n_s * n_n):
-                if cell[u] < 0:
+                c = cell[u]  # the flat (mu_s, nu) cell indexes sl_flat: no integer division per sun (7 % of
+                if c < 0:    # this kernel's time, single thread)
                     continue
-                j_s = cell[u] // n_n
-                j_n = cell[u] - j_s * n_n
                 ws = w_s[u]
                 wn = w_n[u]
-                # log-linear along mu_s and nu (.geometry.log_lerp_weight, from the middle wavelength as in
-                # .sampling.nu_weight): the density falls by orders of magnitude where the sun sets for the sample
-                r00, r01 = sl[j_s, j_n, k_w], sl[j_s, j_n + 1, k_w]
-                r10, r11 = sl[j_s + 1, j_n, k_w], sl[j_s + 1, j_n + 1, k_w]
-                ws_g = log_lerp_weight((1.0 - wn) * r00 + wn * r01, (1.0 - wn) * r10 + wn * r11, ws)
-                wn_g = log_lerp_weight((1.0 - ws) * r00 + ws * r10, (1.0 - ws) * r01 + ws * r11, wn)
-                a00, a01, a10, a11 = bilinear_weights(ws_g, wn_g)
                 for k in range(n_l):
-                    acc_flat[u, k] += q[i, k] * (a00 * sl[j_s, j_n, k] + a01 * sl[j_s, j_n + 1, k]
-                                                 + a10 * sl[j_s + 1, j_n, k] + a11 * sl[j_s + 1, j_n + 1, k])
+                    # log-linear along mu_s and nu (.geometry.log_lerp_weight), each wavelength's weights from its
+                    # own values: the density falls by orders of magnitude where the sun sets for the sample, and
+                    # per-wavelength weights keep the tables independent of the wavelength chunking
+                    v00, v01 = sl_flat[c, k], sl_flat[c + 1, k]
+                    v10, v11 = sl_flat[c + n_n, k], sl_flat[c + n_n + 1, k]
+                    ws_g = log_lerp_weight((1.0 - wn) * v00 + wn * v01, (1.0 - wn) * v10 + wn * v11, ws)
+                    wn_g = log_lerp_weight((1.0 - ws) * v00 + ws * v10, (1.0 - ws) * v01 + ws * v11, wn)
+                    a00, a01, a10, a11 = bilinear_weights(ws_g, wn_g)
+                    acc_flat[u, k] += q[i, k] * (a00 * v00 + a01 * v01 + a10 * v10 + a11 * v11)
         for i_s in range(n_s):
             for i_n in range(n_n):
                 for k in range(n_l):

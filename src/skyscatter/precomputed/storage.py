@@ -63,10 +63,13 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: forward peak exact; :func:`.kernels.indirect_irradiance_kernel`), so a Mie air's irradiance table changed.
 #: 10: the same layout; the analytic aerosol phases' (Cornette-Shanks, Henyey-Greenstein) first-order diffuse
 #: irradiance split by delta-M as well, so the default air's irradiance table changed (scattering tables did not).
-#: 11: the same layout; the scattering density interpolated log-linearly along the sun zenith and the view-sun
+#: 11: the same layout; a tabulated aerosol phase's orders computed in the delta-M scaled medium, its single
+#: tables (two or more orders) with the scaled transmittances (the TMS correction; :mod:`.tables`), so a Mie air's
+#: scattering and irradiance tables changed (the analytic phases' did not).
+#: 12: the same layout; the scattering density interpolated log-linearly along the sun zenith and the view-sun
 #: azimuth in the multiple-scattering ray integrals (:func:`.geometry.log_lerp_weight`; twilight: the Earth's
-#: shadow), so the multiple-scattering tables of format 10 hold other values.
-FORMAT_VERSION = 11
+#: shadow), so the multiple-scattering tables of format 11 hold other values.
+FORMAT_VERSION = 12
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).
@@ -192,9 +195,12 @@ class HalfTable:
 def encode_half(table: NDArray[np.floating]) -> tuple[NDArray[np.float16], NDArray[np.float32]]:
     """``(values, scale)`` of :class:`HalfTable` for a table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths) >= 0: per
     (wavelength, r, mu_s) the power of two that brings the largest value into (2^12, 2^13] (module docstring)."""
-    t = np.moveaxis(np.asarray(table, dtype=np.float32), -1, 0)  # (n_wl, n_r, n_mu, n_s, n_nu), a view
-    peak = t.max(axis=(2, 4))
-    if not np.all(np.isfinite(peak)) or np.any(t.min(axis=(2, 4)) < 0):
+    t = np.asarray(table, dtype=np.float32)
+    # Reductions and division in the table's own layout, one radius at a time: over the moved (wavelength-first)
+    # view numpy strides across every value and the encoding took 0.6 s of CPU in a default precomputation; the
+    # same arithmetic this way 0.15 s, with the same bits (the max over mu then over nu is the max over both).
+    peak = t.max(axis=1).max(axis=2)  # (n_r, n_s, n_wl)
+    if not np.all(np.isfinite(peak)) or np.any(t.min(axis=1).min(axis=2) < 0):
         raise InvalidParameterError("scattering tables must be finite and >= 0 to be stored in half precision")
     mantissa, exponent = np.frexp(peak)  # peak = m 2^e, m in [0.5, 1)
     ceil_log2 = np.where(mantissa > 0.5, exponent, exponent - 1)  # peak in (2^(k-1), 2^k]
@@ -203,9 +209,10 @@ def encode_half(table: NDArray[np.floating]) -> tuple[NDArray[np.float16], NDArr
     # fewer bits, which at that level is nothing
     exponent = np.maximum(ceil_log2 - _SCALED_MAX_EXPONENT, _MIN_SCALE_EXPONENT)
     scale = np.where(peak > 0, np.ldexp(np.float32(1.0), exponent), 1.0).astype(np.float32)
-    values = np.empty(t.shape, dtype=np.float16)
-    for w in range(t.shape[0]):  # one wavelength at a time: no float32 copy of the whole table
-        np.divide(t[w], scale[w][:, None, :, None], out=values[w], casting="unsafe")
+    values = np.empty((t.shape[-1], *t.shape[:-1]), dtype=np.float16)
+    for i in range(t.shape[0]):  # one radius at a time: no float32 copy of the whole table
+        values[:, i] = np.moveaxis(t[i] / scale[i][None, :, None, :], -1, 0)
+    scale = np.ascontiguousarray(np.moveaxis(scale, -1, 0))  # (n_wl, n_r, n_s)
     return values, scale
 
 

@@ -19,6 +19,12 @@ scattering into the Rayleigh channel as ``C* = S_R[L0] + S[L*] / P_R``; where a 
 the range its ``mu`` and ``mu_s`` allow (views or sun near the zenith) that division and the multiplication
 by ``P_R`` of the looked-up ``nu`` do not cancel, which skews multiple scattering towards the sun by up to 40 %
 (measured against DISORT, ``docs/bruneton.md``). The packed ``C*`` is still produced by :meth:`export`.
+With a tabulated (Mie) aerosol phase and two or more orders, the orders are computed in the delta-M scaled
+medium (:meth:`.compute.Medium.delta_m_scaled`: the phase's forward peak left in the beam) and the two single
+tables are its single scattering, with the scaled transmittances and per unit unscaled scattering coefficient,
+so that ``P_M(nu)`` at lookup is the full phase: the TMS correction of [NakajimaTanaka1988], as DISORT's; they
+then include the light the forward peak scattered on before or after the one scattering at ``nu`` (one order's
+tables hold the exact single scattering).
 Tables are float32 with a trailing wavelength axis: transmittance (n_r, n_mu), irradiance (n_r, n_mu_s),
 scattering (n_r, n_mu, n_mu_s, n_nu); ``irradiance`` is the sky's (orders 1 and up), not the sun's. The three
 scattering tables are kept and stored in half precision with a power-of-two scale per wavelength, radius and sun

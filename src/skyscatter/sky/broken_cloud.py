@@ -22,8 +22,10 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   Octaves ``i >= 1`` are further scaled by the energy the sun puts into the cloud (:func:`entry_factors`):
   ``(K(mu_0) / K(mu_ref))^e`` for light entering through the cloud's top and ``(K(s_0) / K(s_ref))^e`` through
   a side facing the sun (``s = sqrt(1 - mu^2)``, the cosine on a vertical face), ``K(mu) = mu (1 + 3/2 mu)``:
-  in the diffusion (Eddington) limit a thick non-absorbing layer lit at the cosine ``mu`` transmits the diffuse
-  flux ``mu E_0 (2 + 3 mu) / (4 + 3 (1 - g) tau)`` ([Liou2002] Sec. 6.5), so the light scattered many times
+  in the Eddington approximation a thick non-absorbing layer lit at the cosine ``mu`` transmits the diffuse
+  flux ``mu E_0 (2 + 3 mu) / (4 + 3 (1 - g) tau)`` (the Eddington equations of [Joseph1976] without the
+  delta scaling, solved for single-scattering albedo 1 with no light entering from below, the limit ``tau -> inf``;
+  tests/test_broken_cloud.py solves those equations numerically), so the light scattered many times
   grows with the cosine and more, while the octaves as [Wrenninge2013] wrote them barely depend on the sun's
   elevation (their extinction ``a^i`` is small). The two are blended per sample by the share of the sun's path
   through the cloud above the point, ``min(tau_sun mu_s / tau_top, 1)`` (1 under a horizontally uniform top).
@@ -39,8 +41,8 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   transmittance from the point's altitude to the sun and the ambient light the tables' sky irradiance there
   (:meth:`~skyscatter.precomputed.evaluation.TableLookups.ground_irradiance`), isotropic:
   ``J_amb = omega (E_down exp(-d tau_above k) + rho_g E_ground exp(-d tau_below k)) / (2 pi)`` with the
-  vertical optical depths to the field's top and base and the ground's upward light (the clear-sky global
-  irradiance with the sun's part times the field's mean shadow); ``d`` is fitted with ``a, b, c``.
+  vertical optical depths to the field's top and base and the ground's upward light ``E_up`` (below); ``d`` is
+  fitted with ``a, b, c``.
 * **Along the view ray**: midpoint steps of half a voxel along the axis the ray crosses fastest (growing as
   0.002 x the distance, about a pixel of a 2048-wide panorama), empty blocks of 4^3 voxels crossed in one
   step, the march stopping once
@@ -56,8 +58,12 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
 
 * **Light shafts** (the clouds' shadows on the air in front of the cloud, :meth:`BrokenCloudSky._shafts`,
   :func:`.broken_cloud_kernels.shaft_loss`): the air's single-scattered sunlight times ``1 - exp(-tau k)`` is
-  taken away along the view ray below the field's top. Off (``_SHAFTS``) until the octaves are refitted with them:
-  the octaves were fitted to the Monte Carlo without them (docs/clouds.md).
+  taken away along the view ray below the field's top, and the clouds' light the air there scatters added (on;
+  docs/clouds.md has the accuracy with and without).
+* **The ground's light on the cloud bases** (:attr:`BrokenCloudSky._ground_up`): the ground (Lambertian, the
+  air's ground albedo) sends up its albedo times the domain-mean direct and diffuse light it receives under the
+  field, the diffuse part the model's own (the cloud bases' light included, solved with the bounces between
+  ground and bases); the march adds it as an isotropic source ``omega E_up / (2 pi)`` in the cloud.
 
 Renderers of terrain take the field's shadows from :meth:`BrokenCloudSky.sun_shadow` (the landscape's
 :class:`~skyscatter.render.scene.Scene`). Not modelled: the clouds' light scattered by the air (in the Monte
@@ -102,10 +108,11 @@ def entry_factors(mu0: float, exponent: float) -> tuple[float, float]:
     """Factors of the octaves ``i >= 1`` for the sun's energy entering the cloud through its top and through its
     sides, ``((K(mu0) / K(mu_ref))^e, (K(s0) / K(s_ref))^e)``: ``K(mu) = mu (1 + 3/2 mu)`` is the diffuse flux a
     thick non-absorbing layer lit at the cosine ``mu`` transmits in the Eddington approximation,
-    ``mu E0 (2 + 3 mu) / (4 + 3 (1 - g) tau)`` ([Liou2002] Sec. 6.5), the cloud top lit at ``mu0`` and a side
-    facing the sun at ``s0 = sqrt(1 - mu0^2)``; each relative to the reference sun :data:`MU_REFERENCE` (both 1
-    there). ``mu0``: the sun's cosine at the field [-] (clamped to [1e-3, 1]); ``exponent`` ``e`` [-] (0: no
-    factor, the octaves of [Wrenninge2013]; 1: the slab's diffusion limit)."""
+    ``mu E0 (2 + 3 mu) / (4 + 3 (1 - g) tau)`` (the conservative solution of the Eddington equations of
+    [Joseph1976] for ``tau -> inf``; derived here, checked numerically in the tests), the cloud top lit at
+    ``mu0`` and a side facing the sun at ``s0 = sqrt(1 - mu0^2)``; each relative to the reference sun
+    :data:`MU_REFERENCE` (both 1 there). ``mu0``: the sun's cosine at the field [-] (clamped to [1e-3, 1]);
+    ``exponent`` ``e`` [-] (0: no factor, the octaves of [Wrenninge2013]; 1: the slab's diffusion limit)."""
     def k(mu: float) -> float:
         return mu * (1.0 + 1.5 * mu)
 
@@ -127,11 +134,14 @@ CHUNK = 1 << 17
 STEP_FRACTION = 0.5
 #: Block edge [voxels] of the empty-space skipping.
 _BLOCK = 4
-#: Light shafts (:meth:`BrokenCloudSky._shafts`): off until the octaves are refitted with them (the octaves were
-#: fitted to the Monte Carlo without them, and with them on the model falls 6-13 % below the Monte Carlo's mean:
-#: docs/clouds.md); the first step [m], its growth with distance [-] and the altitude nodes of the air's
-#: coefficients below the field's top.
-_SHAFTS = False
+#: Light shafts (:meth:`BrokenCloudSky._shafts`): on (with the ground-cloud coupling and the clouds' light on the
+#: air; docs/clouds.md has the accuracy with and without them); the first step [m], its growth with distance [-] and
+#: the altitude nodes of the air's coefficients below the field's top.
+_SHAFTS = True
+#: The ground-cloud coupling (:attr:`BrokenCloudSky._ground_up`): its domain means of the diffuse light on
+#: ``COUPLING_POINTS`` x ``COUPLING_POINTS`` ground points, ``COUPLING_DIRECTIONS`` (zeniths, azimuths) each.
+COUPLING_POINTS = 4
+COUPLING_DIRECTIONS = (8, 16)
 SHAFT_STEP = 250.0
 SHAFT_GROWTH = 0.02
 SHAFT_NODES = 65
@@ -353,6 +363,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         e_sun_g, e_sky_g = tab.ground_irradiance(ground, np.array([0.0, 0.0, 1.0]), self._sun_planet)
         shadow = np.exp(-np.multiply.outer(self._volumes["tau_ground"].ravel(), k)).mean(axis=0)
         albedo_g = np.asarray(tab.parameters.ground_albedo_at(wl), dtype=float)
+        # the ground's upward light before the clouds' own diffuse light on it is added (:attr:`_ground_up`)
         e_up = albedo_g * (e_sun_g * shadow + e_sky_g)
         # the march's source tables: the albedo times the sun's transmittance, times the diffuse light / (2 pi)
         src_sun = np.ascontiguousarray(albedo * t_atm)
@@ -363,17 +374,74 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
                 "ph_val": np.ascontiguousarray(arr.values), "g": g,
                 "solar": np.asarray(tab.parameters.solar_irradiance_at(wl), dtype=float),
                 "t_atm": np.ascontiguousarray(t_atm), "e_down": np.ascontiguousarray(e_down),
-                "e_up": np.ascontiguousarray(np.asarray(e_up, dtype=float).reshape(-1)), "ground_albedo": albedo_g}
+                "e_up": np.ascontiguousarray(np.asarray(e_up, dtype=float).reshape(-1)), "ground_albedo": albedo_g,
+                "e_direct_mean": np.asarray(e_sun_g, dtype=float).reshape(-1) * shadow,
+                "e_sun_ground": np.asarray(e_sun_g, dtype=float).reshape(-1),
+                "e_sky_ground": np.asarray(e_sky_g, dtype=float).reshape(-1)}
+
+    @property
+    def _ground_up(self) -> dict[str, Any]:
+        """:meth:`_ground_coupling` for the current :attr:`octaves` (computed once per octaves: fits change them)."""
+        key = tuple(self.octaves)
+        cache = self.__dict__.setdefault("_coupling_cache", {})
+        if key not in cache:
+            cache.clear()
+            cache[key] = self._ground_coupling()
+        return cache[key]
+
+    def _ground_coupling(self) -> dict[str, Any]:
+        """The ground's upward irradiance under the field [W m^-2 nm^-1] at the table wavelengths, solved with the
+        clouds' light on the ground (the ground-cloud coupling), and the march's source term of it.
+
+        The ground (albedo ``rho_g``, Lambertian) sends up ``E_up = rho_g (E_dir + E_dif)``, the domain means of the
+        direct sun through the field and of the diffuse light; under cloud ``E_dif`` is mostly the clouds' light and
+        itself grows with ``E_up`` (the cloud bases send part of it back down). The model's diffuse light is linear
+        in ``E_up`` (an isotropic source ``omega E_up / (2 pi)`` in the march), so two domain means of the diffuse
+        part, ``f0`` with ``E_up = 0`` and ``f1`` with ``E_up = E_1``, give the slope ``R = (f1 - f0) / E_1`` (the
+        bases' reflectance seen from the ground) and the geometric series of the bounces
+        ``E_up = rho_g (E_dir + f0) / (1 - rho_g R)`` (each bounce between the ground and the bases returns
+        ``rho_g R`` of the one before: a geometric series; per wavelength, on the domain means). The march scales
+        the source by the column's reflectance (:func:`.broken_cloud_kernels.march_rays`). Until 2026-12-02 the
+        ground sent up the clear sky's diffuse light instead (2-6x too little under cover 0.9): the domain-mean
+        ground irradiance of dense fields was 5-14 % below the Monte Carlo's (docs/clouds.md)."""
+        li = self._light
+        tab = self._tables
+        rho = li["ground_albedo"]
+        zero = np.zeros_like(li["amb_up"])
+        if not np.any(rho > 0.0) or not np.any(self.field.extinction > 0.0):
+            return {"e_up": li["e_up"], "amb_up": li["amb_up"], "air_light": np.zeros_like(li["amb_up"])}
+        f = self.field
+        m = COUPLING_POINTS
+        u = (np.arange(m) + 0.5) / m
+        grid = np.stack(np.meshgrid(f.origin[0] + u * f.size[0], f.origin[1] + u * f.size[1], indexing="ij"),
+                        axis=-1).reshape(-1, 2)
+        e1 = np.asarray(tab.parameters.solar_irradiance_at(tab.wavelengths), dtype=float) * math.pi / 10.0
+        nz, na = COUPLING_DIRECTIONS
+        f0 = self._ground_diffuse(grid, nz, na, amb_up=zero).mean(axis=0)
+        f1 = self._ground_diffuse(grid, nz, na, amb_up=np.ascontiguousarray(li["albedo"] * e1 / (2.0 * math.pi))
+                                  ).mean(axis=0)
+        reflect = np.clip((f1 - f0) / e1, 0.0, 1.0)
+        e_up = rho * (li["e_direct_mean"] + f0) / (1.0 - rho * reflect)
+        # the clouds' change to the mean radiance over the sphere below the field's top (the air's extra light,
+        # :meth:`_shafts`): down, the diffuse light at the ground less the clear sky's; up, the ground's light less
+        # the clear ground's (each hemisphere isotropic: L = E / pi, the sphere's mean their average)
+        down = f0 + reflect * e_up - li["e_sky_ground"]
+        up = e_up - rho * (li["e_sun_ground"] + li["e_sky_ground"])
+        air_light = np.ascontiguousarray(np.maximum((down + up) / (2.0 * math.pi), 0.0))
+        return {"e_up": e_up, "amb_up": np.ascontiguousarray(li["albedo"] * e_up / (2.0 * math.pi)),
+                "reflectance": reflect, "air_light": air_light}
 
     # ------------------------------------------------------------------ the march
 
     def march(self, directions: ArrayLike, octaves: tuple[float, ...] | None = None,
-              lod: float = 0.002, interpolation: str | None = None, origin: ArrayLike | None = None):
+              lod: float = 0.002, interpolation: str | None = None, origin: ArrayLike | None = None,
+              amb_up: NDArray[np.float64] | None = None):
         """The ray march alone for unit ``directions`` (n, 3): the cloud's radiance at the eye through the cloud
         (n, n_table_wavelengths) [W m^-2 sr^-1 nm^-1], the cloud's transmittance (n, n_wl), the mean depth of the
         cloud's light (n,) [m] and whether each ray met cloud (n,). ``octaves``: ``(a, b, c, d, e)`` instead of
         :attr:`octaves`; ``lod``: the step's growth with distance [-]; ``interpolation``: "linear" or "voxel"
-        instead of :attr:`interpolation`; ``origin``: the eye (3,) [m, planet-centred] instead of the observer's."""
+        instead of :attr:`interpolation`; ``origin``: the eye (3,) [m, planet-centred] instead of the observer's;
+        ``amb_up``: the march's source of the ground's upward light (n_wl,) instead of :attr:`_ground_up`'s."""
         from ..precomputed.parallel import parallel_for
         from .broken_cloud_kernels import march_rays
 
@@ -393,16 +461,19 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         mu = _MU_NODES
         parallel_for(march_rays, n, origin, d, self._sun_planet, v["gf"], v["vol"], v["occupied"], _BLOCK,
                      li["k"], li["ph_mu"], li["ph_val"], li["g"], li["solar"], float(mu[0]), float(mu[1] - mu[0]),
-                     li["src_sun"], li["src_amb"], li["amb_up"], mp, OCTAVES,
+                     li["src_sun"], li["src_amb"], self._ground_up["amb_up"] if amb_up is None else amb_up, mp,
+                     OCTAVES,
                      (interpolation or self.interpolation) == "linear", THIN_AWARE, rad, tr, depth, hit, grain=256)
         return rad, tr, depth, hit
 
-    def _composite(self, d: NDArray[np.float64], hit_only: bool = False, eye: NDArray[np.float64] | None = None):
+    def _composite(self, d: NDArray[np.float64], hit_only: bool = False, eye: NDArray[np.float64] | None = None,
+                   amb_up: NDArray[np.float64] | None = None):
         """Table-wavelength radiance of the rays ``d`` (n, 3) that meet cloud or ground shadow, and the mask of
-        the rays that differ from the clear sky; seen from ``eye`` (3,) [m] (default: the observer)."""
+        the rays that differ from the clear sky; seen from ``eye`` (3,) [m] (default: the observer); ``amb_up``
+        as in :meth:`march`."""
         tab = self._tables
         eye = self.clear.position if eye is None else eye
-        rad, tr, depth, hit = self.march(d, origin=eye)
+        rad, tr, depth, hit = self.march(d, origin=eye, amb_up=amb_up)
         sun = self._sun_planet
         # views that meet the ground (before leaving the atmosphere): the clouds' shadows there
         bottom = tab.parameters.bottom_radius
@@ -412,9 +483,17 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         ground = t_ground > 0.0
         changed = hit.copy()
         out = np.zeros((d.shape[0], tab.wavelengths.size))
-        loss = self._shafts(d, eye, np.where(hit, depth, np.inf), np.where(ground, t_ground, np.inf)) if _SHAFTS \
-            else None
-        shafted = np.zeros(d.shape[0], dtype=bool) if loss is None else np.any(loss > 0.0, axis=1)
+        # the shafts and the clouds' light scattered by the air (not while the ground-cloud coupling is solved: that
+        # light is the coupling's result)
+        air = None  # the air's light below the field's top: gain - loss (n, n_wl)
+        if _SHAFTS:
+            limits = (np.where(hit, depth, np.inf), np.where(ground, t_ground, np.inf))
+            if amb_up is None:
+                loss, gain = self._shafts(d, eye, *limits, cloud_light=True)
+            else:
+                loss, gain = self._shafts(d, eye, *limits), 0.0
+            air = gain - loss
+        shafted = np.zeros(d.shape[0], dtype=bool) if air is None else np.any(air != 0.0, axis=1)
         changed |= shafted
         idx = np.flatnonzero(hit | ground | shafted)
         if idx.size == 0:
@@ -422,8 +501,8 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         dd = d[idx]
         clear = tab.sky_radiance(eye, dd, sun)
         value = clear.copy()
-        if loss is not None:
-            value -= loss[idx]
+        if air is not None:
+            value += air[idx]
         h = hit[idx]
         if np.any(h):
             pts = eye + depth[idx][h, None] * dd[h]
@@ -469,7 +548,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
                 "beta_e": np.ascontiguousarray(beta_e, dtype=float), "src": np.ascontiguousarray(src)}
 
     def _shafts(self, directions: ArrayLike, eye: ArrayLike | None = None, cloud_depth: ArrayLike | None = None,
-               ground_distance: ArrayLike | None = None) -> NDArray[np.float64]:
+               ground_distance: ArrayLike | None = None, cloud_light: bool = False):
         """The air's single-scattered sunlight that the field's shadow removes along unit view ``directions`` (n, 3)
         (light shafts), (n, n_table_wavelengths) [W m^-2 sr^-1 nm^-1], >= 0: the single-scattering integral of the air
         ([Bruneton2008] Eq. 11 with the sun's light L0 of Eq. 9, as its single Rayleigh and Mie tables hold it) times
@@ -478,7 +557,9 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         ``cloud_depth`` (n,) [m], the ground at ``ground_distance`` (n,) [m] (inf: none) and the ray's exit through the
         field's top sphere. Steps of :data:`SHAFT_STEP` m growing as :data:`SHAFT_GROWTH` x the distance. Only the
         single scattering: the shadow's effect on the air's multiple scattering (light that reaches the point after
-        scattering elsewhere, most of it from outside the shadow) is kept."""
+        scattering elsewhere, most of it from outside the shadow) is kept. ``cloud_light``: also return the clouds'
+        light the air scatters towards the eye over the same part of the ray (:attr:`_ground_up`'s change of the mean
+        radiance, :func:`.broken_cloud_kernels.shaft_loss`), ``(loss, gain)``."""
         from ..precomputed.parallel import parallel_for
         from .broken_cloud_kernels import shaft_loss
 
@@ -492,8 +573,9 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
             if limit is not None:
                 end = np.minimum(end, np.asarray(limit, dtype=float).reshape(-1))
         out = np.zeros((n, nwl))
+        gain = np.zeros((n, nwl))
         if not np.any(self.field.extinction > 0.0):
-            return out
+            return (out, gain) if cloud_light else out
         bottom = tab.parameters.bottom_radius
         r_top = bottom + self.field.top
         b = d @ eye
@@ -511,7 +593,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         seg[~np.isfinite(seg)] = 0.0
         rows = np.flatnonzero(seg > 0.0)
         if rows.size == 0:
-            return out
+            return (out, gain) if cloud_light else out
         sun = self._sun_planet
         dr = np.ascontiguousarray(d[rows])
         nu = np.clip(dr @ sun, -1.0, 1.0)
@@ -519,6 +601,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         p_r = np.ascontiguousarray(air.rayleigh_phase(nu), dtype=float)
         p_m = np.ascontiguousarray(air.aerosol_phase(nu, wavelengths=tab.wavelengths), dtype=float)
         part = np.ones((rows.size, nwl))
+        part_gain = np.zeros((rows.size, nwl))
         far = t0[rows] > 0.0
         if np.any(far):
             part[far] = tab.aerial_perspective(eye, eye + t0[rows][far, None] * dr[far], sun)[0]
@@ -529,9 +612,11 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
                      np.ascontiguousarray(t0[rows]), sun, v["gf"], np.ascontiguousarray(v["tau_ground"]),
                      np.ascontiguousarray(v["tau_sun"]), sa["h_step"], sa["beta_r"], sa["beta_m"], sa["beta_e"],
                      sa["src"], float(mu[0]), float(mu[1] - mu[0]), p_r, p_m, self._light["k"], SHAFT_STEP,
-                     SHAFT_GROWTH, part, grain=64)
+                     SHAFT_GROWTH, self._ground_up["air_light"] if cloud_light else np.zeros(nwl), part, part_gain,
+                     grain=64)
         out[rows] = part
-        return out
+        gain[rows] = part_gain
+        return (out, gain) if cloud_light else out
 
     def _ground_optical_depth(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
         """The field's optical depth to the sun from ground ``points`` (n, 3): bilinear in the map of the voxel
@@ -667,6 +752,12 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         if pts.ndim != 2 or pts.shape[1] != 2 or not np.all(np.isfinite(pts)) or np.any(np.abs(pts) > 1e6):
             raise InvalidParameterError("points must be (n, 2) finite (east, north) offsets within 1000 km [m]")
         wl = DEFAULT_WAVELENGTHS if wavelengths is None else as_wavelengths(wavelengths)
+        return self._ground_direct(pts, wl), self._tables.resample(self._ground_diffuse(pts, nz, na), wl)
+
+    def _ground_diffuse(self, pts: NDArray[np.float64], nz: int, na: int,
+                        amb_up: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+        """The diffuse part of :meth:`ground_irradiance` at the table wavelengths (n, n_table_wavelengths)
+        [W m^-2 nm^-1] on ``nz`` x ``na`` directions; ``amb_up`` as in :meth:`march`."""
         tab = self._tables
         bottom = tab.parameters.bottom_radius
         ground = np.stack([pts[:, 0], pts[:, 1], np.sqrt(bottom**2 - pts[:, 0] ** 2 - pts[:, 1] ** 2)], axis=-1)
@@ -682,10 +773,10 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         diffuse = np.empty((pts.shape[0], tab.wavelengths.size))
         for i in range(pts.shape[0]):  # one eye per call (the march takes one origin); directions vectorised
             d = np.ascontiguousarray(local @ _rotation_to(up[i]).T)
-            rad, changed = self._composite(d, eye=ground[i])
+            rad, changed = self._composite(d, eye=ground[i], amb_up=amb_up)
             change = rad[changed] - tab.sky_radiance(ground[i], d[changed], sun)
             diffuse[i] = e_sky[i] + math.pi * change.sum(axis=0) / d.shape[0]
-        return self._ground_direct(pts, wl), tab.resample(diffuse, wl)
+        return diffuse
 
     def domain_ground_irradiance(self, wavelengths: ArrayLike | None = None, *, points_per_axis: int = 8,
                                  direct_points: int = 4, zeniths: int = 32,
