@@ -729,16 +729,19 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
                 c = cell[u]  # the flat (mu_s, nu) cell indexes sl_flat: no integer division per sun (7 % of
                 if c < 0:    # this kernel's time, single thread)
                     continue
-                ws = w_s[u]
-                wn = w_n[u]
+                # float32 like the slice: the weights per wavelength on 8 SIMD lanes
+                ws = np.float32(w_s[u])
+                wn = np.float32(w_n[u])
+                ws0 = np.float32(1.0 - w_s[u])
+                wn0 = np.float32(1.0 - w_n[u])
                 for k in range(n_l):
                     # log-linear along mu_s and nu (.geometry.log_lerp_weight), each wavelength's weights from its
                     # own values: the density falls by orders of magnitude where the sun sets for the sample, and
                     # per-wavelength weights keep the tables independent of the wavelength chunking
                     v00, v01 = sl_flat[c, k], sl_flat[c + 1, k]
                     v10, v11 = sl_flat[c + n_n, k], sl_flat[c + n_n + 1, k]
-                    ws_g = log_lerp_weight((1.0 - wn) * v00 + wn * v01, (1.0 - wn) * v10 + wn * v11, ws)
-                    wn_g = log_lerp_weight((1.0 - ws) * v00 + ws * v10, (1.0 - ws) * v01 + ws * v11, wn)
+                    ws_g = log_lerp_weight(wn0 * v00 + wn * v01, wn0 * v10 + wn * v11, ws)
+                    wn_g = log_lerp_weight(ws0 * v00 + ws * v10, ws0 * v01 + ws * v11, wn)
                     a00, a01, a10, a11 = bilinear_weights(ws_g, wn_g)
                     acc_flat[u, k] += q[i, k] * (a00 * v00 + a01 * v01 + a10 * v10 + a11 * v11)
         for i_s in range(n_s):
