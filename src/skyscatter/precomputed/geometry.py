@@ -42,6 +42,7 @@ Reference: [Bruneton2008].
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 
@@ -163,9 +164,10 @@ def lerp_index(p: float, lo: int, hi: int) -> tuple[int, float]:
 #: Floor of the smaller end value, as a fraction of the larger, in :func:`log_lerp_weight`: a texel in the Earth's
 #: shadow holds zero (or rounding noise), whose ratio to its lit neighbour is not finite; with the floor the weight is
 #: that of a fall by this factor across the cell.
-LOG_LERP_FLOOR = 1e-3
-_FLOOR32 = np.float32(LOG_LERP_FLOOR)  # float32 constants: they keep float32 arithmetic float32 (log_lerp_weight)
-_ONE32 = np.float32(1.0)
+LOG_LERP_FLOOR = float(np.float32(1e-3))  # 1e-3 as float32 holds it (1.00000005e-3): one floor in float32 and float64
+# float32 constants: they keep float32 arithmetic float32 (log_lerp_weight); typed float for the annotations
+_FLOOR32 = cast(float, np.float32(LOG_LERP_FLOOR))
+_ONE32 = cast(float, np.float32(1.0))
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -185,12 +187,14 @@ def log_lerp_weight(a: float, b: float, w: float) -> float:
     fall overshoots: +255 % single scattering at 90 deg from a sun 6 deg below the horizon (2 deg view elevation,
     560 nm) against the independent integral of ``tests/precomputed_reference.py``; in the ray integrals of the
     multiple scattering, too bright a density wherever the sun sets for the ray's samples (docs/accuracy.md, "Low
-    sun"). The weight is computed from one value per texel (the table's middle wavelength,
+    sun"). In the lookups the weight is computed from one value per texel (the table's middle wavelength,
     :func:`.sampling.nu_weight`) and applied to every wavelength, so the interpolation stays linear in the table
     values for given coordinates: the observer's slices projected to colour give the same values as the
-    per-wavelength lookup (:func:`.lookup.observer_slices`). The smaller value counts as at least
-    :data:`LOG_LERP_FLOOR` times the larger in the ratio (the weight is applied to the values themselves, so the
-    interpolation still meets both ends). Branch-free, so loops over rays vectorise.
+    per-wavelength lookup (:func:`.lookup.observer_slices`). In the orders' ray integrals each wavelength has its
+    own weight, so that the tables do not depend on how the wavelengths are chunked. The smaller value counts as at
+    least :data:`LOG_LERP_FLOOR` times the larger in the ratio (the weight is applied to the
+    values themselves, so the interpolation still meets both ends). Branch-free: loops of weights over contiguous
+    values vectorise (not loops that also gather the values: :func:`.lookup.observer_kernel`).
     """
     # As w a' / (w a' + (1 - w) sqrt(a' b')) (a', b' floored): one division, selects instead of max() (loops of
     # weights over contiguous values vectorise), and float32 constants so that float32 arguments keep the arithmetic

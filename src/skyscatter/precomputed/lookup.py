@@ -332,27 +332,26 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _slice_nu_weight(slices, a, b, n_c, t, wm, wn):
-    """The azimuth weight (:func:`.sampling.nu_weight`) of table ``t`` of the observer slices (n_mu * n_nu,
-    n_c + 1, 4) in the cell of texels ``a``, ``a + 1`` (one mu row) and ``b``, ``b + 1`` (the next), from the middle
-    wavelength in channel ``n_c`` (``wm``, ``wn``: the linear weights along mu and nu)."""
-    s0 = (1.0 - wm) * slices[a, n_c, t] + wm * slices[b, n_c, t]
-    s1 = (1.0 - wm) * slices[a + 1, n_c, t] + wm * slices[b + 1, n_c, t]
-    return log_lerp_weight(s0, s1, wn)
-
-
-@helper(fastmath=CONTRACT_ARCP)
-def _observer_nu_weights(slices, n_nu, n_c, cell, w_mu, w_nu, w_tab):
-    """The azimuth weights of the three tables (:func:`_slice_nu_weight`) for a block of rays into ``w_tab``
-    (3, >= m): a pass of its own (the tables written out), which runs on SIMD lanes."""
-    for k in range(cell.shape[0]):
+def _observer_nu_weights(slices, n_nu, n_c, cell, w_mu, w_nu, w_tab, ends):
+    """The azimuth weights (:func:`.sampling.nu_weight`) of the three tables of the observer slices (n_mu * n_nu,
+    n_c + 1, 4) for a block of rays into ``w_tab`` (3, >= m), from the middle wavelength in channel ``n_c``. Two
+    passes: the ends of each table's cell (linear along mu at the two nu texels) gathered into ``ends`` (2, 3, >= m,
+    float32), then :func:`.geometry.log_lerp_weight` over those contiguous values in float32, which runs on SIMD
+    lanes (a loop that gathers and divides at once stays scalar; measured)."""
+    m = cell.shape[0]
+    for k in range(m):
         a = cell[k]
         b = a + n_nu
         wm = w_mu[k]
-        wn = w_nu[k]
-        w_tab[0, k] = _slice_nu_weight(slices, a, b, n_c, 0, wm, wn)
-        w_tab[1, k] = _slice_nu_weight(slices, a, b, n_c, 1, wm, wn)
-        w_tab[2, k] = _slice_nu_weight(slices, a, b, n_c, 2, wm, wn)
+        for t in range(3):
+            ends[0, t, k] = (1.0 - wm) * slices[a, n_c, t] + wm * slices[b, n_c, t]
+            ends[1, t, k] = (1.0 - wm) * slices[a + 1, n_c, t] + wm * slices[b + 1, n_c, t]
+    for t in range(3):
+        e0 = ends[0, t]
+        e1 = ends[1, t]
+        wt = w_tab[t]
+        for k in range(m):
+            wt[k] = log_lerp_weight(e0[k], e1[k], np.float32(w_nu[k]))
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -429,6 +428,7 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     w_mu = np.empty(OBSERVER_BLOCK)
     w_nu = np.empty(OBSERVER_BLOCK)
     w_tab = np.empty((3, OBSERVER_BLOCK))
+    ends = np.empty((2, 3, OBSERVER_BLOCK), dtype=np.float32)
     p_r = np.empty(OBSERVER_BLOCK)
     p_m = np.empty(OBSERVER_BLOCK)
     g_idx = np.empty(OBSERVER_BLOCK, dtype=np.int64)
@@ -468,7 +468,7 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
                 n_ground += 1
             elif kind[k] == 0:
                 bad[b0 + k] = True
-        _observer_nu_weights(flat, n_nu, n_c, cell[:m], w_mu[:m], w_nu[:m], w_tab)
+        _observer_nu_weights(flat, n_nu, n_c, cell[:m], w_mu[:m], w_nu[:m], w_tab, ends)
         _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_tab, p_r[:m], p_m[:m], out[b0:b1])
         if n_ground == 0 or not include_ground:
             continue
