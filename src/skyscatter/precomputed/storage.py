@@ -68,7 +68,8 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: scattering and irradiance tables changed (the analytic phases' did not).
 #: 12: the same layout; the scattering density interpolated log-linearly along the sun zenith and the view-sun
 #: azimuth in the multiple-scattering ray integrals (:func:`.geometry.log_lerp_weight`; twilight: the Earth's
-#: shadow), so the multiple-scattering tables of format 11 hold other values.
+#: shadow), each wavelength's weight its own; the geometric tail of the orders with its ratio per sun zenith texel
+#: (:func:`.compute.add_geometric_tail`), so the multiple-scattering tables of format 11 hold other values.
 FORMAT_VERSION = 12
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
