@@ -157,3 +157,29 @@ def test_last_sky_texel_is_the_horizon_itself():
         assert not hits
         rho = H * i_r / (n_r - 1)  # as the mapping defines it (sqrt(r^2 - R_g^2) loses digits to cancellation)
         assert math.isclose(mu, -rho / r, rel_tol=1e-15)
+
+
+def test_log_lerp_weight_follows_the_geometric_interpolation(rng):
+    """With the weight of :func:`log_lerp_weight` the linear interpolation ``a + w' (b - a)`` equals the geometric
+    one ``a^(1 - w) b^w`` (computed here with numpy's power) at both ends and the centre of the cell, stays within
+    0.15 % of it in between for end values a factor 2 apart and within a factor 1.4 for 100 (the linear
+    interpolation is up to 8.3 times too high there); the weight runs from 0 to 1 and increases with ``w``; below
+    the floor the weight is that of the floor (a texel in the Earth's shadow), applied to the values themselves (the
+    ends are kept); equal or zero end values give ``w``."""
+    a = 10.0 ** rng.uniform(-8.0, 8.0, 3000)
+    b = a * 10.0 ** rng.uniform(-2.99, 2.99, a.size)
+    for w in (0.0, 0.5, 1.0):
+        got = np.array([g.log_lerp_weight(x, y, w) for x, y in zip(a, b, strict=True)])
+        np.testing.assert_allclose(a + got * (b - a), a ** (1.0 - w) * b ** w, rtol=1e-12)
+    w = np.linspace(0.0, 1.0, 201)
+    for ratio, bound in ((2.0, 1.0015), (0.5, 1.0015), (100.0, 1.4), (0.01, 1.4)):
+        wp = np.array([g.log_lerp_weight(3.0, 3.0 * ratio, t) for t in w])
+        q = (1.0 + wp * (ratio - 1.0)) / ratio ** w
+        assert q.max() < bound and q.min() > 1.0 / bound, (ratio, q.min(), q.max())
+        assert wp[0] == 0.0 and math.isclose(wp[-1], 1.0, rel_tol=1e-12) and np.all(np.diff(wp) > 0)
+    floor = g.LOG_LERP_FLOOR
+    for t in (0.1, 0.5, 0.9):
+        assert math.isclose(g.log_lerp_weight(0.0, 2.0, t), t / (t + (1.0 - t) / math.sqrt(floor)), rel_tol=1e-12)
+        assert math.isclose(g.log_lerp_weight(5.0, 1e-9, t), t / (t + (1.0 - t) * math.sqrt(floor)), rel_tol=1e-12)
+        assert g.log_lerp_weight(0.0, 0.0, t) == t
+        assert math.isclose(g.log_lerp_weight(7.0, 7.0, t), t, rel_tol=1e-15)

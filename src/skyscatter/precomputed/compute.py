@@ -24,9 +24,13 @@ Orders. Each order of the radiance field is, after a few orders, close to the pr
 ``lambda < 1`` (the dominant eigenvalue of the scattering operator with the ground's reflection: successive
 orders settle on its eigenfunction), so the orders after the last computed one ``K`` sum to
 ``DS_K lambda / (1 - lambda)``. From ``orders >= 3`` on this tail is added to the scattering and to the irradiance
-table, with ``lambda`` per wavelength the ratio of the sums of the last two orders' tables (at most
-:data:`MAX_ORDER_RATIO`). Measured against 16 orders computed one by one (400 and 550 nm, largest error over
-sky and ground, sun 60 / 10 / -3 deg): Earth defaults, 4 orders without the tail 4.3 / 6.7 / 13.8 %, 6 orders with
+table, with ``lambda`` the ratio of the sums of the last two orders' tables (at most :data:`MAX_ORDER_RATIO`), per
+wavelength and, for the scattering table (format 12), per sun zenith texel: the orders' ratio differs between sun
+zeniths, and with one ratio for the whole table the 3-order tail was larger than order 4 plus its own tail at the
+zenith with the sun 0.5 deg up on the tiny test tables (there the ratio of order 4 to 3 is 0.222 with every order
+positive; ``tests/test_precomputed_tables.py::test_each_order_adds_less_light``). Measured with one ratio per
+wavelength against 16 orders computed one by one (400 and 550 nm, largest error over sky and ground, sun 60 / 10 /
+-3 deg): Earth defaults, 4 orders without the tail 4.3 / 6.7 / 13.8 %, 6 orders with
 it 0.00 / 0.01 / 0.26 %; turbidity 3 over albedo 0.3, 23 / 34 / 43 % and 0.15 / 0.22 / 2.2 %; against DISORT,
 aerosol optical depth 0.5 over albedo 0.8, 6 orders with the tail are within 0.9 % of 16 orders
 (``docs/bruneton.md``). Four orders are too few for the tail (the shape has not settled: +10 % in that case).
@@ -315,11 +319,13 @@ def multiple_scattering(medium: Medium, sizes: TableSizes, transmittance: F32, d
 
 def add_geometric_tail(table: F32, last: F32, last_sum: F64, before_sum: F64) -> None:
     """Step 4: add the orders after the last one to ``table`` in place: ``last lambda / (1 - lambda)`` with
-    ``lambda`` per wavelength the ratio ``last_sum / before_sum`` of the last two orders' sums, in
-    [0, :data:`MAX_ORDER_RATIO`] (module docstring, "Orders")."""
+    ``lambda`` the ratio ``last_sum / before_sum`` of the last two orders' sums, in [0, :data:`MAX_ORDER_RATIO`],
+    per wavelength (sums (n_wavelengths,)) or per sun zenith texel and wavelength (sums (n_mu_s, n_wavelengths) for
+    a 4D table) (module docstring, "Orders")."""
     ratio = np.clip(np.divide(last_sum, before_sum, out=np.zeros_like(last_sum), where=before_sum > 0), 0.0,
                     MAX_ORDER_RATIO)
-    table += last * (ratio / (1.0 - ratio)).astype(np.float32)
+    factor = (ratio / (1.0 - ratio)).astype(np.float32)
+    table += last * (factor[:, None, :] if factor.ndim == 2 else factor)
 
 
 def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int, book: Bookkeeping,
@@ -373,7 +379,8 @@ def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int, 
         # diffuse light, as DISORT counts it (its diffuse flux is the total minus the unscaled direct beam).
         irradiance = e_source - e_direct if orders >= 2 else np.zeros_like(e_direct)
         last_irradiance = e_source
-        sums: list[tuple[F64, F64]] = []  # per order: sums of its scattering and irradiance tables per wavelength
+        # per order: sums of its scattering table per sun zenith texel and wavelength, of its irradiance per wavelength
+        sums: list[tuple[F64, F64]] = []
         for k in range(2, orders + 1):
             with book.order(k):
                 d_irradiance = np.empty_like(e_direct)
@@ -398,10 +405,10 @@ def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int, 
                     irradiance += d_irradiance
                 with book.timed(f"order {k} multiple"):
                     dens = density.load(out=buffer(n_l))
-                    order_sum = np.zeros(n_l)
+                    order_sum = np.zeros((sizes.scattering_mu_s, n_l))
                     for rows in blocks:
                         d_scattering = multiple_scattering(scaled, sizes, t_scaled, dens, rows)
-                        order_sum += d_scattering.sum(axis=(0, 1, 2, 3), dtype=np.float64)
+                        order_sum += d_scattering.sum(axis=(0, 1, 3), dtype=np.float64)
                         previous.write(rows, d_scattering)
                         if k > 2:
                             d_scattering += total.read(rows)  # the sum of the orders

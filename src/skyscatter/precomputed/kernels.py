@@ -38,6 +38,7 @@ from .geometry import (
     distance_to_boundary,
     irradiance_params,
     lerp_index,
+    log_lerp_weight,
     mu_s_limit_a,
     point_along_ray,
     ray_hits_ground,
@@ -640,9 +641,15 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
     ``integral T(x, y) J(y, v, s) dy`` from the point to the ground or the top, by product integration
     with the total scattering coefficient ``beta_r rho_r + beta_m rho_m`` as the exponential factor; at each
     sample ``J = (beta_R rho_R(y) + beta_M rho_M(y)) density`` with the exact coefficient at the sample and the
-    density per unit scattering coefficient of :func:`scattering_density_kernel` interpolated. ``T(x, y)`` is
-    integrated along the ray's samples (:func:`.sampling.ray_transmittance`; ``extinction`` as for
-    :func:`single_scattering_kernel`); ``transmittance`` is unused here and kept for the common signature.
+    density per unit scattering coefficient of :func:`scattering_density_kernel` interpolated: linearly in r and mu,
+    log-linearly in the sample's sun zenith and azimuth (:func:`.geometry.log_lerp_weight` of each wavelength's
+    own values, so the tables do not depend on the wavelength chunking). Along a ray at twilight the sun sets for
+    the samples one after another and the density falls by orders of magnitude from one sun-zenith texel to the
+    next; a linear interpolation of that fall made the multiple scattering of clear air at a sun 6 deg below the
+    horizon 11-66 % too bright against the Monte Carlo (docs/accuracy.md, "Low sun"). ``T(x, y)`` is integrated
+    along the ray's samples (:func:`.sampling.ray_transmittance`; ``extinction`` as for
+    :func:`single_scattering_kernel`); ``transmittance``
+    is unused here and kept for the common signature.
     """
     n_r, n_mu, n_s, n_n, n_l = density.shape
     n_pts = n_samples + 1
@@ -722,12 +729,21 @@ def multiple_scattering_kernel(transmittance, density, beta_r, beta_m, profiles,
                 c = cell[u]  # the flat (mu_s, nu) cell indexes sl_flat: no integer division per sun (7 % of
                 if c < 0:    # this kernel's time, single thread)
                     continue
-                ws = w_s[u]
-                wn = w_n[u]
-                a00, a01, a10, a11 = bilinear_weights(ws, wn)
+                # float32 like the slice: the weights per wavelength on 8 SIMD lanes
+                ws = np.float32(w_s[u])
+                wn = np.float32(w_n[u])
+                ws0 = np.float32(1.0 - w_s[u])
+                wn0 = np.float32(1.0 - w_n[u])
                 for k in range(n_l):
-                    acc_flat[u, k] += q[i, k] * (a00 * sl_flat[c, k] + a01 * sl_flat[c + 1, k]
-                                                 + a10 * sl_flat[c + n_n, k] + a11 * sl_flat[c + n_n + 1, k])
+                    # log-linear along mu_s and nu (.geometry.log_lerp_weight), each wavelength's weights from its
+                    # own values: the density falls by orders of magnitude where the sun sets for the sample, and
+                    # per-wavelength weights keep the tables independent of the wavelength chunking
+                    v00, v01 = sl_flat[c, k], sl_flat[c + 1, k]
+                    v10, v11 = sl_flat[c + n_n, k], sl_flat[c + n_n + 1, k]
+                    ws_g = log_lerp_weight(wn0 * v00 + wn * v01, wn0 * v10 + wn * v11, ws)
+                    wn_g = log_lerp_weight(ws0 * v00 + ws * v10, ws0 * v01 + ws * v11, wn)
+                    a00, a01, a10, a11 = bilinear_weights(ws_g, wn_g)
+                    acc_flat[u, k] += q[i, k] * (a00 * v00 + a01 * v01 + a10 * v10 + a11 * v11)
         for i_s in range(n_s):
             for i_n in range(n_n):
                 for k in range(n_l):

@@ -36,6 +36,7 @@ from .geometry import (
     horizon_constants,
     irradiance_coord,
     lerp_index,
+    log_lerp_weight,
     point_along_ray,
     ray_hits_ground,
     scattering_nu_coord,
@@ -246,18 +247,21 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     (n_mu, n_nu, C, 4) holding, for each channel, single Rayleigh, single Mie and multiple scattering over the
     view axes (and a zero, so that each texel's three values are one aligned 32-byte load), each
     ``table @ projection.T`` (``projection`` (C, n_wavelengths): the identity for spectra, the XYZ matrix for
-    colour).
+    colour); channel C (the last of C + 1) holds each table at its middle wavelength, from which the azimuth weight
+    of the lookup is computed (:func:`.sampling.nu_weight`).
 
-    Quadrilinear interpolation is linear in each axis, so fixing the ``r`` and ``mu_s`` weights once and
-    interpolating the slice bilinearly in (``mu``, ``nu``) gives the same values as the 4D lookup; and the
-    inscattered radiance is a sum of table values times wavelength-independent phase factors, so projecting the
-    slice first gives the same XYZ as projecting each looked-up spectrum (Bruneton's 2017 rewrite folds its
-    tables to luminance the same way). Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables' sun
-    limit; :data:`.geometry.MU_S_LIMIT_TOLERANCE` for rounding).
+    The lookup is linear in ``r``, ``mu`` and ``mu_s``, so fixing the ``r`` and ``mu_s`` weights once and
+    interpolating the slice in (``mu``, ``nu``) gives the same values as the 4D lookup; its weight along ``nu`` is
+    one for all wavelengths (from the middle one), so the lookup is linear in the table values and the inscattered
+    radiance a sum of table values times wavelength-independent phase factors: projecting the slice first gives the
+    same XYZ as projecting each looked-up spectrum (Bruneton's 2017 rewrite folds its tables to luminance the same
+    way). Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables' sun limit;
+    :data:`.geometry.MU_S_LIMIT_TOLERANCE` for rounding).
     """
     n_r, n_mu, n_s, n_nu, _ = single_rayleigh.shape
     proj = np.asarray(projection, dtype=np.float64)
-    out = np.zeros((n_mu, n_nu, proj.shape[0], 4))
+    n_c = proj.shape[0]
+    out = np.zeros((n_mu, n_nu, n_c + 1, 4))
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
         return out
     mu_s = max(mu_s, mu_s_min)
@@ -268,7 +272,8 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
             for c, wc in ((0, 1.0 - w_s), (1, w_s)):
                 if wa * wc > 0.0:
                     acc += (wa * wc) * table[i_r + a, :, i_s + c, :, :]
-        out[:, :, :, j] = acc @ proj.T
+        out[:, :, :n_c, j] = acc @ proj.T
+        out[:, :, n_c, j] = acc[:, :, acc.shape[-1] // 2]
     return out
 
 
@@ -327,38 +332,71 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _observer_gather(slices, n_nu, cell, w_mu, w_nu, p_r, p_m, out):
-    """Bilinear interpolation of the observer slices (:func:`observer_slices` as (n_mu * n_nu, C, 4)) for a block
-    of rays from :func:`_observer_coords`, phase factors applied: ``out`` (m, C).
+def _observer_nu_weights(slices, n_nu, n_c, cell, w_mu, w_nu, w_tab, ends):
+    """The azimuth weights (:func:`.sampling.nu_weight`) of the three tables of the observer slices (n_mu * n_nu,
+    n_c + 1, 4) for a block of rays into ``w_tab`` (3, >= m), from the middle wavelength in channel ``n_c``. Two
+    passes: the ends of each table's cell (linear along mu at the two nu texels) gathered into ``ends`` (2, 3, >= m,
+    float32), then :func:`.geometry.log_lerp_weight` over those contiguous values in float32, which runs on SIMD
+    lanes (a loop that gathers and divides at once stays scalar; measured)."""
+    m = cell.shape[0]
+    for k in range(m):
+        a = cell[k]
+        b = a + n_nu
+        wm = w_mu[k]
+        for t in range(3):
+            ends[0, t, k] = (1.0 - wm) * slices[a, n_c, t] + wm * slices[b, n_c, t]
+            ends[1, t, k] = (1.0 - wm) * slices[a + 1, n_c, t] + wm * slices[b + 1, n_c, t]
+    for t in range(3):
+        e0 = ends[0, t]
+        e1 = ends[1, t]
+        wt = w_tab[t]
+        for k in range(m):
+            wt[k] = log_lerp_weight(e0[k], e1[k], np.float32(w_nu[k]))
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, out):
+    """Interpolation of the observer slices (:func:`observer_slices` as (n_mu * n_nu, C + 1, 4)) for a block of
+    rays from :func:`_observer_coords`, linear along mu and along nu with the weights ``w_tab`` (3, >= m) of
+    :func:`_observer_nu_weights`, phase factors applied: ``out`` (m, C).
 
     One channel (luminance) has its own loop: with the channel count known to be 1 the compiler turns the four
     texel reads into SIMD gathers (gather 6.6 -> 4.7 ns per ray); for C channels it leaves the loop scalar."""
-    if out.shape[1] == 1:
+    n_c = out.shape[1]
+    if n_c == 1:
         for k in range(cell.shape[0]):
-            w00, w01, w10, w11 = bilinear_weights(w_mu[k], w_nu[k])
             a = cell[k]
             b = a + n_nu
+            wm = w_mu[k]
+            w00, w01, w10, w11 = bilinear_weights(wm, w_tab[0, k])
             v = p_r[k] * (w00 * slices[a, 0, 0] + w01 * slices[a + 1, 0, 0] + w10 * slices[b, 0, 0]
                           + w11 * slices[b + 1, 0, 0])
+            w00, w01, w10, w11 = bilinear_weights(wm, w_tab[1, k])
             v += p_m[k] * (w00 * slices[a, 0, 1] + w01 * slices[a + 1, 0, 1] + w10 * slices[b, 0, 1]
                            + w11 * slices[b + 1, 0, 1])
+            w00, w01, w10, w11 = bilinear_weights(wm, w_tab[2, k])
             out[k, 0] = v + (w00 * slices[a, 0, 2] + w01 * slices[a + 1, 0, 2] + w10 * slices[b, 0, 2]
                              + w11 * slices[b + 1, 0, 2])
         return
     for k in range(cell.shape[0]):
         wm = w_mu[k]
-        wn = w_nu[k]
-        w00, w01, w10, w11 = bilinear_weights(wm, wn)
-        c0 = cell[k]
+        a = cell[k]
+        b = a + n_nu
+        # the phase factors folded into each table's four weights, held for every channel
+        r00, r01, r10, r11 = bilinear_weights(wm, w_tab[0, k])
         pr = p_r[k]
+        r00, r01, r10, r11 = pr * r00, pr * r01, pr * r10, pr * r11
+        m00, m01, m10, m11 = bilinear_weights(wm, w_tab[1, k])
         pm = p_m[k]
-        for c in range(out.shape[1]):
-            v = 0.0
-            for t in range(3):
-                f = pr if t == 0 else (pm if t == 1 else 1.0)
-                v += f * (w00 * slices[c0, c, t] + w01 * slices[c0 + 1, c, t] + w10 * slices[c0 + n_nu, c, t]
-                          + w11 * slices[c0 + n_nu + 1, c, t])
-            out[k, c] = v
+        m00, m01, m10, m11 = pm * m00, pm * m01, pm * m10, pm * m11
+        u00, u01, u10, u11 = bilinear_weights(wm, w_tab[2, k])
+        for c in range(n_c):
+            out[k, c] = (r00 * slices[a, c, 0] + r01 * slices[a + 1, c, 0] + r10 * slices[b, c, 0]
+                         + r11 * slices[b + 1, c, 0]
+                         + m00 * slices[a, c, 1] + m01 * slices[a + 1, c, 1] + m10 * slices[b, c, 1]
+                         + m11 * slices[b + 1, c, 1]
+                         + u00 * slices[a, c, 2] + u01 * slices[a + 1, c, 2] + u10 * slices[b, c, 2]
+                         + u11 * slices[b + 1, c, 2])
 
 
 @kernel
@@ -367,16 +405,16 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     """:func:`sky_kernel`'s radiance (no shadows) for rays ``start..stop`` from one ``position`` inside the
     atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C)).
 
-    Inscattering from :func:`observer_slices` (bilinear in ``mu`` and ``nu``: the same values as the 4D
-    lookup); the ground term, a product of spectra (transmittance times irradiance), is formed per wavelength
+    Inscattering from :func:`observer_slices` (in ``mu`` and ``nu``: the same values as the 4D lookup); the
+    ground term, a product of spectra (transmittance times irradiance), is formed per wavelength
     and then projected with ``projection`` (C, n_wavelengths). ``dirs`` need not be unit vectors; a zero,
     infinite or NaN one sets ``bad[q]`` (the caller raises). Rays go in blocks of :data:`OBSERVER_BLOCK` in
     passes: coordinates (vectorised), the ground half's ``mu`` cell for rays that meet the ground (only in blocks
-    that have such rays or bad directions), table reads, then for the rays that meet the ground the coordinates of
-    the ground term (vectorised) and its spectrum, projected.
+    that have such rays or bad directions), the azimuth weights (vectorised), table reads, then for the rays that
+    meet the ground the coordinates of the ground term (vectorised) and its spectrum, projected.
     """
     n_l = transmittance.shape[2]
-    n_c = out.shape[1]
+    n_c = out.shape[1]  # slices: n_c channels and the sums over wavelengths
     n_mu, n_nu = slices.shape[0], slices.shape[1]
     half = n_mu // 2
     flat = slices.reshape(n_mu * n_nu, slices.shape[2], 4)
@@ -389,6 +427,8 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     kind = np.empty(OBSERVER_BLOCK, dtype=np.int64)
     w_mu = np.empty(OBSERVER_BLOCK)
     w_nu = np.empty(OBSERVER_BLOCK)
+    w_tab = np.empty((3, OBSERVER_BLOCK))
+    ends = np.empty((2, 3, OBSERVER_BLOCK), dtype=np.float32)
     p_r = np.empty(OBSERVER_BLOCK)
     p_m = np.empty(OBSERVER_BLOCK)
     g_idx = np.empty(OBSERVER_BLOCK, dtype=np.int64)
@@ -428,7 +468,8 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
                 n_ground += 1
             elif kind[k] == 0:
                 bad[b0 + k] = True
-        _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m], p_m[:m], out[b0:b1])
+        _observer_nu_weights(flat, n_nu, n_c, cell[:m], w_mu[:m], w_nu[:m], w_tab, ends)
+        _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_tab, p_r[:m], p_m[:m], out[b0:b1])
         if n_ground == 0 or not include_ground:
             continue
         _ground_coords_block(n_ground, g_v, g_mu, px, py, pz, sx, sy, sz, rc, bottom, top, alpha, n_tr, n_tmu, n_er,

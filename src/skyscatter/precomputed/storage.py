@@ -66,7 +66,11 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: 11: the same layout; a tabulated aerosol phase's orders computed in the delta-M scaled medium, its single
 #: tables (two or more orders) with the scaled transmittances (the TMS correction; :mod:`.tables`), so a Mie air's
 #: scattering and irradiance tables changed (the analytic phases' did not).
-FORMAT_VERSION = 11
+#: 12: the same layout; the scattering density interpolated log-linearly along the sun zenith and the view-sun
+#: azimuth in the multiple-scattering ray integrals (:func:`.geometry.log_lerp_weight`; twilight: the Earth's
+#: shadow), each wavelength's weight its own; the geometric tail of the orders with its ratio per sun zenith texel
+#: (:func:`.compute.add_geometric_tail`), so the multiple-scattering tables of format 11 hold other values.
+FORMAT_VERSION = 12
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).
