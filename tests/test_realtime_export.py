@@ -35,18 +35,16 @@ def luts(atm, tmp_path_factory):
 
 
 def _gpu_sky(ns, tex, r, mu, mu_s, nu):
-    """Sky radiance (RGB) and its Y as a shader computes it, from the manifest's Python mappings."""
+    """Sky radiance (RGB) as a shader computes it, from the manifest's Python mappings."""
     if mu_s < ns["MU_S_MIN"]:
-        return np.zeros(4)
+        return np.zeros(3)
     hits = ns["ray_hits_ground"](r, mu)
     uvw0, uvw1, w = ns["scattering_uvw"](r, mu, mu_s, nu, hits)
-    parts = [(1 - w) * _sample(tex[n], uvw0) + w * _sample(tex[n], uvw1) for n in ("rayleigh", "mie", "multiple")]
+    parts = [ns["azimuth_lerp"](_sample(tex[n], uvw0), _sample(tex[n], uvw1), w)
+             for n in ("rayleigh", "mie", "multiple")]
     return np.array(ns["inscattered_radiance"](*parts, nu))
 
 
-@pytest.mark.xfail(strict=True, reason="format 12's log-linear azimuth weights (from the tables' middle wavelength, "
-                   "which the RGBA textures do not carry) are not in the manifest's mappings (docs/realtime.md, "
-                   "'Open'): luminance off by 1.3e-3 of the scale (bound 2e-5)")
 def test_manifest_mappings_and_textures_give_the_spectral_lookup(atm, luts):
     data = load_realtime(luts)
     ns = data.mappings()
@@ -64,10 +62,41 @@ def test_manifest_mappings_and_textures_give_the_spectral_lookup(atm, luts):
             for d, ref in zip(dirs, want, strict=True):
                 got = _gpu_sky(ns, data.textures, r, d[2], sun[2], float(d @ sun))
                 scale = max(np.abs(ref).max(), 1e-6)
-                worst = max(worst, float(np.abs(got[:3] - ref).max() / scale))
-                assert abs(got[3] - ref @ [0.2126, 0.7152, 0.0722]) <= 2e-5 * scale + 1e-9
+                worst = max(worst, float(np.abs(got - ref).max() / scale))
     # float32 textures: the mapping code and the GPU read reproduce the float64 lookup to rounding
     assert worst < 2e-5, worst
+
+
+def test_scattering_alpha_is_the_middle_wavelength_and_its_weight_the_lookups(atm, luts):
+    """The scattering textures' alpha is each table at its middle wavelength (the lookups' azimuth weight comes
+    from it: sampling.nu_weight), at the texel of the same (r, mu, mu_s, nu); the manifest's weight is
+    geometry.log_lerp_weight, the floor included."""
+    from skyscatter.precomputed.geometry import log_lerp_weight
+
+    data = load_realtime(luts)
+    k = atm.wavelengths.size // 2
+    assert data.manifest["azimuth_weight_wavelength_nm"] == float(atm.wavelengths[k])
+    n_r, n_mu, n_s, n_n = atm.sizes.scattering_shape
+    for name, key in (("rayleigh", "single_rayleigh"), ("mie", "single_mie"), ("multiple", "multiple")):
+        alpha = data.textures[name][..., 3].reshape(n_r, n_mu, n_n, n_s)
+        table = np.asarray(atm.tables[key][..., k], dtype=np.float32)
+        np.testing.assert_array_equal(alpha, table.transpose(0, 1, 3, 2))
+    ns = data.mappings()
+    rng = np.random.default_rng(11)
+    a = rng.uniform(0.0, 1.0, 300) * 10.0 ** rng.uniform(-6, 1, 300)
+    b = a * 10.0 ** rng.uniform(-5, 5, 300)
+    a[:20], b[10:20], b[20:30] = 0.0, 0.0, a[20:30]  # one or both zero (the Earth's shadow), equal values
+    w = rng.uniform(0.0, 1.0, 300)
+    got = np.array([ns["log_lerp_weight"](x, y, t) for x, y, t in zip(a, b, w, strict=True)])
+    want = np.array([log_lerp_weight(x, y, t) for x, y, t in zip(a, b, w, strict=True)])
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(got[20:30], w[20:30], rtol=1e-12)  # equal values: the linear weight
+    # the geometric interpolation a^(1 - w) b^w at the centre of a cell (within the floor)
+    c = np.array([ns["log_lerp_weight"](x, y, 0.5) for x, y in zip(a[30:], b[30:], strict=True)])
+    lo, hi = np.minimum(a[30:], b[30:]), np.maximum(a[30:], b[30:])
+    keep = lo > 1e-3 * hi
+    mid = a[30:] + c * (b[30:] - a[30:])
+    np.testing.assert_allclose(mid[keep], np.sqrt(a[30:] * b[30:])[keep], rtol=1e-12)
 
 
 def test_transmittance_and_irradiance_textures(atm, luts):
@@ -112,7 +141,7 @@ def test_half_and_exr_match_float32(luts):
 
 def test_manifest_states_version_units_scale_and_code(luts):
     manifest = json.loads((luts / MANIFEST_NAME).read_text())
-    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 1
+    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 2
     assert manifest["hdr_scale"]["cd_m2_per_unit_Y"] == 683.0
     assert manifest["mappings"]["glsl"] == glsl_mappings() and manifest["mappings"]["glsl"] in glsl_library()
     for name in ("transmittance_uv", "irradiance_uv", "scattering_uvw"):
@@ -141,7 +170,7 @@ def test_loader_refuses_another_version_a_missing_and_a_truncated_file(luts, tmp
     (bad / MANIFEST_NAME).write_text(json.dumps(manifest))
     with pytest.raises(FileFormatError, match="version 99"):
         load_realtime(bad)
-    manifest["version"] = 1
+    manifest["version"] = 2
     (bad / MANIFEST_NAME).write_text(json.dumps(manifest))
     (bad / "mie.rgba32f").unlink()
     with pytest.raises(FileFormatError, match="mie.rgba32f: texture file missing"):
@@ -183,7 +212,7 @@ def test_server_serves_the_viewer_and_only_the_exports_files(luts, tmp_path):
         assert b"GetSkyRadianceToPoint" in get("/glsl/atmosphere.glsl")
         for path in ("/", "/viewer/viewer.js", "/viewer/style.css"):  # nothing loaded from the network
             assert b"http://" not in get(path) and b"https://" not in get(path) and b"//cdn" not in get(path)
-        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 1
+        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 2
         assert len(get("/luts/rayleigh.rgba32f")) == (luts / "rayleigh.rgba32f").stat().st_size
         for path in ("/luts/secret.txt", "/luts/../secret.txt", "/etc/passwd", "/viewer/../export.py"):
             with pytest.raises(urllib.error.HTTPError, match="404"):

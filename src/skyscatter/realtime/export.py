@@ -28,7 +28,15 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
   luminance's; for the transmittance between two points where a ratio of sunlight transmittances is ill-conditioned.
 * ``irradiance`` 2D, width n_mu_s x height n_r: RGB sky irradiance on a horizontal surface [HDR scale], A its Y.
 * ``rayleigh``, ``mie``, ``multiple`` 3D, width n_nu * n_mu_s (x = i_nu * n_mu_s + i_mu_s), height n_mu, depth n_r:
-  single Rayleigh and single Mie scattering without their phase functions, multiple scattering with it; A = Y.
+  RGB single Rayleigh and single Mie scattering without their phase functions, multiple scattering with it; A the
+  table's own value at its middle wavelength (index n_wavelengths // 2, the manifest's
+  ``azimuth_weight_wavelength_nm``; spectral, W m^-2 nm^-1 or W m^-2 sr^-1 nm^-1, not on the HDR scale). The
+  library's lookups (table format 12) interpolate between the two nu slices of a lookup with the weight
+  :func:`skyscatter.precomputed.geometry.log_lerp_weight` of that wavelength's values in the two slices, each
+  interpolated linearly in (mu_s, mu, r) (:func:`skyscatter.precomputed.sampling.nu_weight`), and apply it to every
+  wavelength: the texture unit's trilinear read of A gives those two values, so a shader computes the same weight
+  and applies it to RGB (``log_lerp_weight`` and ``azimuth_lerp`` of the mappings). The luminance (Y) that A held in
+  manifest version 1 is the RGB's dot product with ``hdr_scale.luminance_from_rgb``.
 
 in ``.rgba32f`` (float32), ``.rgba16f`` (IEEE half) and ``.exr`` (OpenEXR, float32 R, G, B, A; a 3D texture's
 depth slices stacked vertically) form, with ``skyscatter_realtime.json``: the version, sizes, constants, units, the
@@ -60,8 +68,9 @@ __all__ = ["FORMATS", "MANIFEST_FORMAT", "MANIFEST_NAME", "MANIFEST_VERSION", "P
 
 MANIFEST_NAME = "skyscatter_realtime.json"
 MANIFEST_FORMAT = "skyscatter-realtime-luts"
-#: Raised whenever a file's layout or meaning changes; readers refuse other versions.
-MANIFEST_VERSION = 1
+#: Raised whenever a file's layout or meaning changes; readers refuse other versions. 2: the scattering textures'
+#: alpha holds each table's middle wavelength (was Y), from which the azimuth weight is computed.
+MANIFEST_VERSION = 2
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -79,7 +88,7 @@ SEGMENT_RULE = ("T(x, y)_c = mix(exp(-max(tau_c(x) - tau_c(y), 0)), clamp(T_c(x)
 HALF_MAX = 65504.0
 
 #: The texture-coordinate mappings as Python (standard library only), the same functions as the GLSL library's
-#: mapping section; ``exec`` it with the manifest's constants (``BOTTOM_RADIUS`` ... ``SCATTERING_N_NU``) defined.
+#: mapping section; ``exec`` it with the manifest's constants (``BOTTOM_RADIUS`` ... ``LOG_LERP_FLOOR``) defined.
 PYTHON_MAPPINGS = '''
 import math
 
@@ -166,8 +175,8 @@ def scattering_nu_index(mu, mu_s, nu):
     return (1.0 - math.acos(cphi) / math.pi) * (SCATTERING_N_NU - 1)
 
 def scattering_uvw(r, mu, mu_s, nu, hits_ground):
-    """The two texture coordinates (u, v, w) of the nu slices around nu and the weight of the second: a lookup is
-    (1 - w) texture(uvw0) + w texture(uvw1), each trilinear."""
+    """The two texture coordinates (u, v, w) of the nu slices around nu and the fraction w of the cell between
+    them: a lookup is azimuth_lerp(texture(uvw0), texture(uvw1), w), each read trilinear."""
     v, w = scattering_mu_r_coords(r, mu, hits_ground)
     p_s = scattering_mu_s_index(max(mu_s, MU_S_MIN))
     p_n = clamp(scattering_nu_index(mu, mu_s, nu), 0.0, SCATTERING_N_NU - 1)
@@ -175,6 +184,24 @@ def scattering_uvw(r, mu, mu_s, nu, hits_ground):
     n_x = SCATTERING_N_NU * SCATTERING_N_MU_S
     u0 = (i_n * SCATTERING_N_MU_S + p_s + 0.5) / n_x
     return (u0, v, w), (u0 + SCATTERING_N_MU_S / n_x, v, w), p_n - i_n
+
+def log_lerp_weight(a, b, w):
+    """Weight of the second of two values a, b (>= 0) at the fraction w of the cell for a + weight (b - a) that
+    follows a log-linear (exponential) variation: w a' / (w a' + (1 - w) sqrt(a' b')), a' and b' the values with
+    the smaller raised to at least LOG_LERP_FLOOR times the larger; w where both are zero."""
+    m = max(a, b)
+    lo = LOG_LERP_FLOOR * m
+    a2 = max(a, lo)
+    b2 = max(b, lo)
+    wa = w * a2
+    d = wa + (1.0 - w) * math.sqrt(a2 * b2)
+    return wa / d if d > 0.0 else w
+
+def azimuth_lerp(s0, s1, w):
+    """RGB of a scattering texture between the reads s0, s1 (RGBA) of its two nu slices: the weight is
+    log_lerp_weight of their alpha (the table's middle wavelength), applied to every channel."""
+    k = log_lerp_weight(s0[3], s1[3], w)
+    return [a + k * (b - a) for a, b in zip(s0[:3], s1[:3])]
 
 def segment_transmittance(t_x, t_y, tau_x, tau_y):
     """Transmittance between x and y per channel from the two texture reads at each end (x nearer, both towards the
@@ -252,7 +279,7 @@ def _with_y(rgb: NDArray[np.float64]) -> NDArray[np.float32]:
 
 
 def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]]:
-    """The five RGBA textures of the module docstring as float32 arrays: 2D (height, width, 4), 3D
+    """The six RGBA textures of the module docstring as float32 arrays: 2D (height, width, 4), 3D
     (depth, height, width, 4).
 
     Raises
@@ -271,10 +298,12 @@ def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]
     out = {"transmittance": _sun_weighted(t["transmittance"], solar, m).astype(np.float32),
            "optical_depth": (tau @ w.T).astype(np.float32),
            "irradiance": _with_y(t["irradiance"].astype(np.float64) @ m.T)}
-    m4 = np.vstack([m, _y_row(m)]).astype(np.float32)  # R, G, B and Y rows
+    m4 = np.vstack([m, np.zeros(m.shape[1])]).astype(np.float32)  # R, G, B rows; A is filled below
     for name, key in (("rayleigh", "single_rayleigh"), ("mie", "single_mie"), ("multiple", "multiple")):
         # einsum, not matmul: a (1M, 16) x (16, 4) product is 4x quicker without BLAS's threads
         rgba = np.einsum("ij,kj->ik", t[key].reshape(-1, atm.wavelengths.size), m4)
+        # A: the middle wavelength, from which the lookups' azimuth weight is computed (sampling.nu_weight)
+        rgba[:, 3] = t[key].reshape(-1, atm.wavelengths.size)[:, atm.wavelengths.size // 2]
         # (r, mu, mu_s, nu, 4) -> (r, mu, nu, mu_s, 4): x = i_nu * n_mu_s + i_mu_s
         out[name] = rgba.reshape(n_r, n_mu, n_s, n_n, 4).transpose(0, 1, 3, 2, 4).reshape(n_r, n_mu, n_n * n_s, 4)
     return {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in out.items()}
@@ -282,6 +311,7 @@ def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]
 
 def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
     from ..atmosphere.phase import aerosol_phase_kind
+    from ..precomputed.geometry import LOG_LERP_FLOOR
     from ..sun.disc import solar_disc_solid_angle
 
     p = atm.parameters
@@ -300,6 +330,7 @@ def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
         "TRANSMITTANCE_N_R": atm.sizes.transmittance_r, "TRANSMITTANCE_N_MU": atm.sizes.transmittance_mu,
         "IRRADIANCE_N_R": atm.sizes.irradiance_r, "IRRADIANCE_N_MU_S": atm.sizes.irradiance_mu_s,
         "SCATTERING_N_R": n_r, "SCATTERING_N_MU": n_mu, "SCATTERING_N_MU_S": n_s, "SCATTERING_N_NU": n_n,
+        "LOG_LERP_FLOOR": float(LOG_LERP_FLOOR),
     }
 
 
@@ -322,6 +353,12 @@ def _glsl_float(v: float) -> str:
     return text if ("." in text or "e" in text) else text + ".0"
 
 
+#: What the scattering textures' alpha holds (manifest meaning).
+_ALPHA = ("the table's spectral value at azimuth_weight_wavelength_nm (its middle wavelength) [W m^-2 nm^-1; multiple: "
+          "W m^-2 sr^-1 nm^-1; not folded, not on the HDR scale], for the weight of the interpolation between two nu slices: log_lerp_weight(A0, A1, w) of the "
+          "mappings, applied to RGB (azimuth_lerp)")
+
+
 def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
     meaning = {
         "transmittance": "RGB: transmittance of sunlight from (r, mu) to the top of the atmosphere, (M (E_sun T)) / "
@@ -330,9 +367,10 @@ def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
                          "tau(l), w_c = max(M_c, 0) E_sun normalised [1]; A: the same for luminance",
         "irradiance": "RGB: sky irradiance on a horizontal surface at (r, mu_s) [W m^-2, HDR scale]; A: its Y",
         "rayleigh": "RGB: single Rayleigh scattering S_R[L0] without its phase function [W m^-2, HDR scale; times "
-                    "P_R [sr^-1] gives radiance]; A: its Y",
-        "mie": "RGB: single Mie scattering S_M[L0] without its phase function [W m^-2, HDR scale]; A: its Y",
-        "multiple": "RGB: multiple scattering S[L*], orders >= 2, phase included [W m^-2 sr^-1, HDR scale]; A: its Y",
+                    "P_R [sr^-1] gives radiance]; A: " + _ALPHA,
+        "mie": "RGB: single Mie scattering S_M[L0] without its phase function [W m^-2, HDR scale]; A: " + _ALPHA,
+        "multiple": "RGB: multiple scattering S[L*], orders >= 2, phase included [W m^-2 sr^-1, HDR scale]; A: "
+                    + _ALPHA,
     }[name]
     entry: dict[str, Any] = {"meaning": meaning, "channels": 4}
     if len(shape) == 3:
@@ -421,7 +459,8 @@ def export_realtime(atm: PrecomputedAtmosphere, folder: str | Path, *,
             "formats": {f: FORMATS[f] for f in formats},
             "constants": constants,
             "textures": entries,
-            "filtering": "LINEAR with CLAMP_TO_EDGE on every axis; nu is interpolated by hand between two lookups",
+            "filtering": "LINEAR with CLAMP_TO_EDGE on every axis; nu is interpolated by hand between two lookups "
+                         "with the log-linear weight of their alpha (azimuth_lerp of the mappings)",
             "mappings": {"python": PYTHON_MAPPINGS, "glsl": glsl_mappings()},
             "glsl_constants": glsl_constants(constants),
             "segment_transmittance": SEGMENT_RULE,
@@ -431,6 +470,7 @@ def export_realtime(atm: PrecomputedAtmosphere, folder: str | Path, *,
             "atmosphere_parameters": atm.parameters.to_dict(),
             "orders": atm.orders,
             "table_wavelengths_nm": [float(w) for w in atm.wavelengths],
+            "azimuth_weight_wavelength_nm": float(atm.wavelengths[atm.wavelengths.size // 2]),
             "fold_matrix": fold_matrix(atm).tolist(),
             "cache_key": atm.cache_key,
         }

@@ -1,5 +1,5 @@
 // skyscatter real-time atmosphere: GLSL ES 3.00 functions reading the textures of `skyscatter export-luts`
-// (manifest skyscatter_realtime.json, format "skyscatter-realtime-luts" version 1).
+// (manifest skyscatter_realtime.json, format "skyscatter-realtime-luts" version 2).
 //
 // Reference: E. Bruneton, F. Neyret, Precomputed Atmospheric Scattering, EGSR 2008 [Bruneton2008], equation numbers
 // below are the paper's; the distance-based texture mappings and the horizon blend follow Bruneton's 2017 rewrite
@@ -16,6 +16,7 @@
 //   const vec3 GROUND_ALBEDO                                 Lambertian ground, linear sRGB (sunlight-weighted)
 //   const int TRANSMITTANCE_N_R, TRANSMITTANCE_N_MU, IRRADIANCE_N_R, IRRADIANCE_N_MU_S,
 //             SCATTERING_N_R, SCATTERING_N_MU, SCATTERING_N_MU_S, SCATTERING_N_NU   texel counts
+//   const float LOG_LERP_FLOOR                               floor of the smaller value's ratio in LogLerpWeight
 // Units: lengths in metres, positions planet-centred (the planet's centre at the origin), directions unit vectors.
 // Colour: linear sRGB (IEC 61966-2-1 primaries, D65) with Y = luminance [cd m^-2] / 683 (skyscatter's HDR scale):
 // radiance-like values in W m^-2 sr^-1 weighted by the photopic curve; irradiance in W m^-2 likewise.
@@ -25,9 +26,11 @@
 uniform highp sampler2D transmittance_texture;   // RGB: sunlight-weighted transmittance to the top; A: luminance's
 uniform highp sampler2D optical_depth_texture;   // RGB: optical depth to the top averaged over each channel; A: Y's
 uniform highp sampler2D irradiance_texture;      // RGB: sky irradiance on a horizontal surface; A: its Y
-uniform highp sampler3D rayleigh_texture;        // RGB: single Rayleigh scattering S_R[L0] without phase; A: Y
-uniform highp sampler3D mie_texture;             // RGB: single Mie scattering S_M[L0] without phase; A: Y
-uniform highp sampler3D multiple_texture;        // RGB: multiple scattering S[L*] (orders >= 2, phase included); A: Y
+// The scattering textures' A: each table's spectral value at its middle wavelength (not folded), for the azimuth
+// weight (LogLerpWeight).
+uniform highp sampler3D rayleigh_texture;        // RGB: single Rayleigh scattering S_R[L0] without phase; A: see above
+uniform highp sampler3D mie_texture;             // RGB: single Mie scattering S_M[L0] without phase; A: see above
+uniform highp sampler3D multiple_texture;        // RGB: multiple scattering S[L*] (orders >= 2, phase included); A: idem
 
 const float PI = 3.14159265358979;
 //: sun zenith cosines this close below MU_S_MIN count as at the limit (as skyscatter.precomputed.geometry)
@@ -148,6 +151,25 @@ float ScatteringNuIndex(float mu, float mu_s, float nu) {
   float cphi = clamp((nu - mu * mu_s) / s, -1.0, 1.0);
   return (1.0 - Acos(cphi) / PI) * float(SCATTERING_N_NU - 1);
 }
+
+// Weight of the second of two values a, b (>= 0) at the fraction w of the cell, for a + weight (b - a) following a
+// log-linear (exponential) variation between them: w a' / (w a' + (1 - w) sqrt(a' b')), a' and b' the values with
+// the smaller raised to at least LOG_LERP_FLOOR times the larger; w where both are zero. It meets the geometric
+// interpolation a^(1 - w) b^w at both ends and the centre (skyscatter.precomputed.geometry.log_lerp_weight, whose
+// docstring gives the derivation and the error; the lookups along the view-sun azimuth, table format 12).
+float LogLerpWeight(float a, float b, float w) {
+  float lo = LOG_LERP_FLOOR * max(a, b);
+  float a2 = max(a, lo);
+  float b2 = max(b, lo);
+  float wa = w * a2;
+  float d = wa + (1.0 - w) * sqrt(a2 * b2);
+  return d > 0.0 ? wa / d : w;
+}
+
+// RGB of a scattering texture between the reads s0, s1 of its two nu slices: the weight from their alpha (the
+// table's middle wavelength, interpolated in mu_s, mu and r by the texture unit as skyscatter's
+// sampling.nu_weight does), applied to every channel.
+vec3 AzimuthLerp(vec4 s0, vec4 s1, float w) { return mix(s0.rgb, s1.rgb, LogLerpWeight(s0.a, s1.a, w)); }
 // END MAPPINGS ---------------------------------------------------------------------------------------------------
 
 // Texture reads. GPUs interpolate with a fixed-point fraction (8 bits is common; SwiftShader too), which where the
@@ -245,9 +267,9 @@ vec3 GetTransmittanceToSun(float r, float mu_s) {
   return f <= 0.0 ? vec3(0.0) : GetTransmittanceToTop(r, mu_s) * f;
 }
 
-// The three scattering textures at (r, mu, mu_s, nu): quadrilinear interpolation, trilinear by the texture unit in
-// (mu_s, mu, r) and linear by hand along nu (the nu slices lie side by side along x: x = i_nu * n_mu_s + i_mu_s,
-// [Bruneton2008] Sec. 6). Returns single Rayleigh (no phase); single Mie (no phase) and multiple scattering in the
+// The three scattering textures at (r, mu, mu_s, nu): trilinear by the texture unit in (mu_s, mu, r) and by hand
+// along nu (the nu slices lie side by side along x: x = i_nu * n_mu_s + i_mu_s, [Bruneton2008] Sec. 6), log-linear
+// there with each texture's own weight (AzimuthLerp), as skyscatter's lookups since table format 12. Returns single Rayleigh (no phase); single Mie (no phase) and multiple scattering in the
 // out parameters. Zero below the tables' sun limit MU_S_MIN.
 vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, out vec3 mie, out vec3 multiple) {
   mie = vec3(0.0);
@@ -262,9 +284,9 @@ vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, ou
   float n_x = float(SCATTERING_N_NU * SCATTERING_N_MU_S);
   vec3 uvw0 = vec3((i_n * float(SCATTERING_N_MU_S) + p_s + 0.5) / n_x, vw.x, vw.y);
   vec3 uvw1 = vec3(uvw0.x + float(SCATTERING_N_MU_S) / n_x, vw.x, vw.y);
-  mie = mix(Texture3D(mie_texture, uvw0).rgb, Texture3D(mie_texture, uvw1).rgb, w_n);
-  multiple = mix(Texture3D(multiple_texture, uvw0).rgb, Texture3D(multiple_texture, uvw1).rgb, w_n);
-  return mix(Texture3D(rayleigh_texture, uvw0).rgb, Texture3D(rayleigh_texture, uvw1).rgb, w_n);
+  mie = AzimuthLerp(Texture3D(mie_texture, uvw0), Texture3D(mie_texture, uvw1), w_n);
+  multiple = AzimuthLerp(Texture3D(multiple_texture, uvw0), Texture3D(multiple_texture, uvw1), w_n);
+  return AzimuthLerp(Texture3D(rayleigh_texture, uvw0), Texture3D(rayleigh_texture, uvw1), w_n);
 }
 
 // Inscattered radiance S[L](x, v, s) = S_R[L0] P_R(nu) + S_M[L0] P_M(nu) + S[L*] ([Bruneton2008] Eqs. 7-8 with the
