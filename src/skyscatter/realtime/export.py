@@ -354,9 +354,9 @@ def _glsl_float(v: float) -> str:
 
 
 #: What the scattering textures' alpha holds (manifest meaning).
-_ALPHA = ("the table's spectral value at azimuth_weight_wavelength_nm (its middle wavelength) [W m^-2 nm^-1; multiple: "
-          "W m^-2 sr^-1 nm^-1; not folded, not on the HDR scale], for the weight of the interpolation between two nu slices: log_lerp_weight(A0, A1, w) of the "
-          "mappings, applied to RGB (azimuth_lerp)")
+_ALPHA = ("the table's spectral value at azimuth_weight_wavelength_nm (its middle wavelength) [W m^-2 nm^-1; "
+          "multiple: W m^-2 sr^-1 nm^-1; not folded, not on the HDR scale], for the weight of the interpolation "
+          "between two nu slices: log_lerp_weight(A0, A1, w) of the mappings, applied to RGB (azimuth_lerp)")
 
 
 def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
