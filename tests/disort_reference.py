@@ -282,9 +282,10 @@ def water_cloud_case(tau: float, rayleigh: bool, albedo: float, bottom_radius: f
 
 def disort_cloud(atm, layer, wl, sun_zen, view_zen, view_azi, albedo, n_layers=100, n_streams=64):
     """disortpp: Rayleigh (if any) and a cloud layer (``CloudLayer``: its extinction, albedo and the Legendre
-    moments of its phase table, 400) over a Lambertian ground of ``albedo``; plane-parallel, 64 streams, delta-M
-    and the intensity correction with the exact phase (its table; module docstring). Returns the downward radiance at the ground per unit solar irradiance
-    [sr^-1], (n_view_zenith, n_view_azimuth), and the diffuse downward flux at the ground / (mu0 F0)."""
+    moments of its phase table, 400) over a Lambertian ground of ``albedo``; plane-parallel, 64 streams, delta-M and the
+    intensity correction with the exact phase (its table; module docstring). Returns the downward radiance at the ground
+    per unit solar irradiance [sr^-1], (n_view_zenith, n_view_azimuth), and the diffuse downward flux at the ground /
+    (mu0 F0)."""
     import disortpp
 
     n_mom = 400
