@@ -89,7 +89,7 @@ def _layer_integral(profile, z_lo: np.ndarray, z_hi: np.ndarray, n_sub: int = 64
 
 
 #: Cosines at which a Cornette-Shanks phase is tabulated for DISORT's intensity correction: 0.02 deg steps in the
-#: scattering angle (linear interpolation in the cosine between them is within 1e-5 of the formula for g = 0.8).
+#: scattering angle (linear interpolation in the cosine between them is within 1.2e-6 of the formula for g = 0.8).
 CORNETTE_SHANKS_MU = np.cos(np.radians(np.linspace(180.0, 0.0, 9001)))
 
 
