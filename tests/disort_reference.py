@@ -18,13 +18,13 @@ disortpp applies an intensity correction only when ``flags.intensity_corr_buras`
 ``intensity_correction``); ``flags.intensity_corr_nakajima`` alone (DISORT's ``old_intensity_correction``) only
 chooses the older of the two and corrects nothing. Until 2026-12-02 this module set that flag alone: its
 radiances were the delta-M solution, whose single scattering has the phase truncated to 32 Legendre terms
-(sea salt's phase 10 deg from the sun 9-15 % off; docs/aerosols.md). The Nakajima-Tanaka correction summed from
+(coarse sea salt's tables were 9-15 % above it 10 deg from the sun; docs/aerosols.md). The Nakajima-Tanaka correction summed from
 400 moments is no cure for a diffraction peak either: sea salt's (OPAC sscm) phase rebuilt from 400 moments is
 +3 % at 10 deg, +34 % at 20 deg and -106 % at 60 deg from the sun (Gibbs oscillation; 2000 moments: within
 0.13 %), hence the tabulated phase.
 
 This is independent of the code under test: only the atmosphere's parameters (coefficients, scale heights,
-albedo, g) are shared.
+albedo, g, a tabulated phase's values) are shared.
 
 The DISORT problem itself (beam from the top onto a Lambertian ground, radiance looking up at the ground or the
 upward flux at the top) is set up once, in :func:`solve_ground_radiance` and :func:`solve_upward_flux`, for
