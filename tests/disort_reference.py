@@ -18,8 +18,9 @@ disortpp applies an intensity correction only when ``flags.intensity_corr_buras`
 ``intensity_correction``); ``flags.intensity_corr_nakajima`` alone (DISORT's ``old_intensity_correction``) only
 chooses the older of the two and corrects nothing. Until 2026-12-02 this module set that flag alone: its
 radiances were the delta-M solution, whose single scattering has the phase truncated to 32 Legendre terms
-(coarse sea salt's tables were 9-15 % above it 10 deg from the sun; docs/aerosols.md). The Nakajima-Tanaka correction summed from
-400 moments is no cure for a diffraction peak either: sea salt's (OPAC sscm) phase rebuilt from 400 moments is
+(coarse sea salt's tables were 9-15 % above it 10 deg from the sun; docs/aerosols.md). The Nakajima-Tanaka
+correction summed from 400 moments is no cure for a diffraction peak either: sea salt's (OPAC sscm) phase rebuilt
+from 400 moments is
 +3 % at 10 deg, +34 % at 20 deg and -106 % at 60 deg from the sun (Gibbs oscillation; 2000 moments: within
 0.13 %), hence the tabulated phase.
 
