@@ -9,8 +9,9 @@ Sections (``python benchmarks/validate_clouds.py SECTION [--scale S]``; ``all`` 
   (omega = 1) and the fluxes at optical depths 3.2, 12.8 and 48 (omega = 0.9), shells and field.
 * ``waterclouds`` - plane-parallel water clouds (Mie droplets r_e = 10 um, v_e = 0.1, 550 nm; optical depth 5,
   15, 30; sun zenith 0, 30, 60 deg; alone or over a Rayleigh atmosphere; ground albedo 0 and 0.6) against
-  DISORT (disortpp, 64 streams, the Legendre moments of the same phase table, delta-M and the Nakajima-Tanaka
-  intensity correction, 100 layers): diffuse ground irradiance and radiance 10 deg or more above the horizon.
+  DISORT (disortpp, 64 streams, the Legendre moments of the same phase table, delta-M and the intensity correction with
+  the table itself (tests/disort_reference.py; before 2026-12-02 none was applied), 100 layers): diffuse ground
+  irradiance and radiance 10 deg or more above the horizon.
 * ``waterclouds-irradiance`` - the ground diffuse irradiance of ``waterclouds`` alone, 12 of its cases (minutes).
 * ``waterclouds-radiance`` - the radiance of ``waterclouds`` alone, the same 12 cases (``--cases rest``: the other
   24; ``all``: the 36), 6 views each (zenith 0, 60, 80 deg; azimuth 90 and 180 deg from the sun; those 25 deg or

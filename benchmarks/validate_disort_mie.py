@@ -5,11 +5,12 @@ The OPAC aerosol types continental-average and maritime-clean (Hess et al. 1998;
 albedo 0.1, sun zenith 30 and 70 deg; radiance at the ground in the solar principal plane, view zenith 0-70 deg.
 The last column is the diffuse horizontal irradiance against DISORT's diffuse flux. ``--types`` also takes single
 OPAC components (``waso``, ``sscm``, ...; with continental-average's profile).
-DISORT (disortpp, plane-parallel, tests/disort_reference.py) gets the same layers and 400 Legendre moments of the
-same phase table (``PhaseTable.legendre_moments``, exact for the table), 32 streams, its own delta-M and the
-Nakajima-Tanaka intensity correction. The tables handle the diffraction peak by computing the orders in the delta-M
-scaled medium (:meth:`skyscatter.precomputed.compute.Medium.delta_m_scaled`); ``--no-delta-m`` sets the forward
-fraction to 0 (the full table as the scaled phase: on the density quadrature, normalised per view) to measure what
+DISORT (disortpp, plane-parallel, tests/disort_reference.py) gets the same layers and 400 Legendre moments of the same
+phase table (``PhaseTable.legendre_moments``, exact for the table), 32 streams, its own delta-M and its intensity
+correction with the phase table itself (Buras, Dowling & Emde 2011; tests/disort_reference.py). The tables handle the
+diffraction peak by computing the orders in the delta-M scaled medium
+(:meth:`skyscatter.precomputed.compute.Medium.delta_m_scaled`); ``--no-delta-m`` sets the forward fraction to 0 (the
+full table as the scaled phase: on the density quadrature, normalised per view) to measure what
 the scaling brings.
 
     PYTHONPATH=src python benchmarks/validate_disort_mie.py [--default-sizes] [--no-delta-m]

@@ -7,11 +7,25 @@ integrals of the exponential (or tent) density profiles over it. The layer phase
 weighted mix of the Rayleigh moments (chi_0 = 1, chi_2 = 1/10 for 3/(16 pi)(1 + nu^2)) and the Legendre moments
 of the Cornette-Shanks phase (Bruneton & Neyret 2008, Eq. 4), computed by Gauss-Legendre quadrature with 4000
 nodes, or those of a tabulated aerosol phase (its ``PhaseTable.legendre_moments``, exact for the table).
-Delta-M scaling and the Nakajima-Tanaka intensity correction (DISORT's defaults with many moments) keep
-the forward peak accurate.
+Delta-M scaling and an intensity correction keep the forward peak accurate: the radiances take DISORT's
+correction with the exact phase function ([BurasDowlingEmde2011], DISORT 4's default: the TMS single scattering
+of [NakajimaTanaka1988] with the phase tabulated, not summed from its moments, and a secondary-scattering
+correction near the sun), given per layer as the scattering-weighted mix of the Rayleigh phase and the aerosol's
+(the Cornette-Shanks formula, or the phase table's nodes, between which DISORT interpolates linearly in the
+cosine as the table itself does).
+
+disortpp applies an intensity correction only when ``flags.intensity_corr_buras`` is set (DISORT's
+``intensity_correction``); ``flags.intensity_corr_nakajima`` alone (DISORT's ``old_intensity_correction``) only
+chooses the older of the two and corrects nothing. Until 2026-12-02 this module set that flag alone: its
+radiances were the delta-M solution, whose single scattering has the phase truncated to 32 Legendre terms
+(coarse sea salt's tables were 9-15 % above it 10 deg from the sun; docs/aerosols.md). The Nakajima-Tanaka
+correction summed from 400 moments is no cure for a diffraction peak either: sea salt's (OPAC sscm) phase rebuilt
+from 400 moments is
++3 % at 10 deg, +34 % at 20 deg and -106 % at 60 deg from the sun (Gibbs oscillation; 2000 moments: within
+0.13 %), hence the tabulated phase.
 
 This is independent of the code under test: only the atmosphere's parameters (coefficients, scale heights,
-albedo, g) are shared.
+albedo, g, a tabulated phase's values) are shared.
 
 The DISORT problem itself (beam from the top onto a Lambertian ground, radiance looking up at the ground or the
 upward flux at the top) is set up once, in :func:`solve_ground_radiance` and :func:`solve_upward_flux`, for
@@ -75,9 +89,29 @@ def _layer_integral(profile, z_lo: np.ndarray, z_hi: np.ndarray, n_sub: int = 64
     return np.sum(rho * w[None, :], axis=1) * half[:, 0]
 
 
+#: Cosines at which a Cornette-Shanks phase is tabulated for DISORT's intensity correction: 0.02 deg steps in the
+#: scattering angle (linear interpolation in the cosine between them is within 1.2e-6 of the formula for g = 0.8).
+CORNETTE_SHANKS_MU = np.cos(np.radians(np.linspace(180.0, 0.0, 9001)))
+
+
+def cornette_shanks_phase(g: float, mu: np.ndarray) -> np.ndarray:
+    """The Cornette-Shanks phase function (Bruneton & Neyret 2008, Eq. 4) at cosines ``mu`` [sr^-1]."""
+    k = 3.0 / (8.0 * math.pi) * (1.0 - g * g) / (2.0 + g * g)
+    return k * (1.0 + mu * mu) / (1.0 + g * g - 2.0 * g * mu) ** 1.5
+
+
+def mixed_phase(rayleigh_fraction: np.ndarray, mu: np.ndarray, particles: np.ndarray) -> np.ndarray:
+    """Per layer the phase function normalised to a mean of 1 over the sphere, as DISORT's intensity correction
+    reads it: ``f_R 3/4 (1 + mu^2) + (1 - f_R) 4 pi p(mu)`` with ``f_R`` (n_layers,) the Rayleigh share of the
+    scattering and ``particles`` the particles' phase [sr^-1] at the cosines ``mu``; (n_layers, n_mu)."""
+    f_r = np.asarray(rayleigh_fraction, dtype=float)[:, None]
+    return f_r * 0.75 * (1.0 + mu * mu)[None, :] + (1.0 - f_r) * (4.0 * math.pi) * np.asarray(particles)[None, :]
+
+
 def _column(params, wavelength: float, n_layers: int, n_moments: int):
     """The plane-parallel column of ``params`` at ``wavelength`` [nm]: layer optical depths, single-scattering
-    albedos and Legendre moments (n_layers, n_moments + 1), from the top down; the ground albedo."""
+    albedos and Legendre moments (n_layers, n_moments + 1), from the top down; the ground albedo; the exact
+    phase per layer for the intensity correction, ``(mu, values)`` (:func:`mixed_phase`; ``mu`` ascending)."""
     wl = [float(wavelength)]
     beta_r = float(params.rayleigh_scattering_at(wl)[0])
     beta_me = float(params.mie_extinction_at(wl)[0])
@@ -94,13 +128,18 @@ def _column(params, wavelength: float, n_layers: int, n_moments: int):
     analytic = params.aerosol_component.analytic_phase
     if analytic is not None and analytic.kind == "cornette-shanks":
         chi_m = cornette_shanks_moments(analytic.g, n_moments)
+        mu = CORNETTE_SHANKS_MU
+        p_m = cornette_shanks_phase(analytic.g, mu)
     else:  # a tabulated phase: the exact moments of its table (DISORT applies delta-M to them itself)
-        chi_m = params.aerosol_phase_table(wl).legendre_moments(n_moments + 1)[0]
+        table = params.aerosol_phase_table(wl)
+        chi_m = table.legendre_moments(n_moments + 1)[0]
+        mu = np.cos(np.asarray(table.angles))[::-1]
+        p_m = np.ravel(table.evaluate(mu))
     chi_r = np.zeros(n_moments + 1)
     chi_r[0], chi_r[2] = 1.0, 0.1
     f_r = tau_r / (tau_r + tau_ms)
     moments = f_r[:, None] * chi_r[None, :] + (1.0 - f_r)[:, None] * chi_m[None, :]
-    return tau, ssa, moments, float(np.mean(params.ground_albedo_at(wl)))
+    return tau, ssa, moments, float(np.mean(params.ground_albedo_at(wl))), (mu, mixed_phase(f_r, mu, p_m))
 
 
 def disort_radiance(params, wavelength: float, sun_zenith: float, view_zenith, view_azimuth,
@@ -123,9 +162,10 @@ def disort_radiance(params, wavelength: float, sun_zenith: float, view_zenith, v
     -------
     ndarray, shape (len(view_zenith), len(view_azimuth))
     """
-    tau, ssa, moments, albedo = _column(params, wavelength, n_layers, n_moments)
+    tau, ssa, moments, albedo, phase = _column(params, wavelength, n_layers, n_moments)
     return solve_ground_radiance(tau, ssa, moments, sun_zenith=sun_zenith, view_zenith=view_zenith,
-                                 relative_azimuth=view_azimuth, ground_albedo=albedo, n_streams=n_streams)
+                                 relative_azimuth=view_azimuth, ground_albedo=albedo, n_streams=n_streams,
+                                 exact_phase=phase)
 
 
 def disort_diffuse_irradiance(params, wavelength: float, sun_zenith: float, *, n_layers: int = 150,
@@ -134,10 +174,9 @@ def disort_diffuse_irradiance(params, wavelength: float, sun_zenith: float, *, n
     only): DISORT's diffuse down-flux, which is total minus the direct beam without delta-M scaling, so the light
     of a forward peak is in it (Stamnes et al. 1988; DISORT's RFLDN). Layers and moments as
     :func:`disort_radiance`."""
-    tau, ssa, moments, albedo = _column(params, wavelength, n_layers, n_moments)
+    tau, ssa, moments, albedo, _ = _column(params, wavelength, n_layers, n_moments)
     disortpp, cfg, dtau, rayleigh, moments = _config(tau, ssa, moments, sun_zenith=sun_zenith,
-                                                     ground_albedo=albedo, n_streams=n_streams, n_moments=None,
-                                                     nakajima=False)
+                                                     ground_albedo=albedo, n_streams=n_streams, n_moments=None)
     cfg.flags.comp_only_fluxes = True
     cfg.num_user_tau = 1
     cfg.allocate()
@@ -147,11 +186,14 @@ def disort_diffuse_irradiance(params, wavelength: float, sun_zenith: float, *, n
 
 
 def _config(delta_tau, single_scattering_albedo, phase_moments, *, sun_zenith: float, ground_albedo: float,
-            n_streams: int, n_moments: int | None, nakajima: bool):
+            n_streams: int, n_moments: int | None, nakajima: bool = False, exact_phase=None):
     """The DISORT problem of every comparison: plane-parallel layers listed from the top down, a unit beam flux
     from the top at ``sun_zenith`` [rad] (azimuth 0), a Lambertian ground of albedo ``ground_albedo``.
     ``phase_moments`` is (n_layers, n_moments + 1) Legendre moments per layer, or "rayleigh" (DISORT's own
-    Rayleigh moments, then ``n_moments`` is required)."""
+    Rayleigh moments, then ``n_moments`` is required). The intensity correction (module docstring): with
+    ``exact_phase`` ``(mu, values)`` (ascending cosines (n,), (n_layers, n) :func:`mixed_phase`) that of
+    [BurasDowlingEmde2011]; else with ``nakajima`` that of [NakajimaTanaka1988] from the moments; else none (the
+    phase is filled by :func:`_fill`)."""
     import disortpp
 
     dtau = np.asarray(delta_tau, dtype=float)
@@ -164,12 +206,20 @@ def _config(delta_tau, single_scattering_albedo, phase_moments, *, sun_zenith: f
     cfg = disortpp.DisortConfig(dtau.size, n_streams, n_moments)
     cfg.flags.use_lambertian_surface = True
     cfg.flags.use_user_tau = True
-    if nakajima:
-        cfg.flags.intensity_corr_nakajima = True
+    if exact_phase is not None or nakajima:
+        cfg.flags.intensity_corr_buras = True  # disortpp's switch for any intensity correction
+        cfg.flags.intensity_corr_nakajima = exact_phase is None
+    if exact_phase is not None:
+        cfg.num_phase_func_angles = int(np.asarray(exact_phase[0]).size)
     return disortpp, cfg, dtau, rayleigh, phase_moments
 
 
-def _fill(cfg, dtau, single_scattering_albedo, phase_moments, rayleigh, sun_zenith, ground_albedo):
+def _fill(cfg, dtau, single_scattering_albedo, phase_moments, rayleigh, sun_zenith, ground_albedo, exact_phase=None):
+    if exact_phase is not None:
+        mu, values = (np.asarray(a, dtype=float) for a in exact_phase)
+        assert values.shape == (dtau.size, mu.size) and np.all(np.diff(mu) > 0)
+        cfg.mu_phase_function = mu.tolist()
+        cfg.phase_function = values.tolist()
     cfg.delta_tau = [float(t) for t in dtau]
     cfg.single_scat_albedo = [float(s) for s in np.asarray(single_scattering_albedo, dtype=float)]
     if rayleigh:
@@ -184,14 +234,16 @@ def _fill(cfg, dtau, single_scattering_albedo, phase_moments, rayleigh, sun_zeni
 
 def solve_ground_radiance(delta_tau, single_scattering_albedo, phase_moments, *, sun_zenith: float, view_zenith,
                           relative_azimuth, ground_albedo: float, n_streams: int = 32, n_moments: int | None = None,
-                          nakajima: bool = True) -> np.ndarray:
+                          nakajima: bool = True, exact_phase=None) -> np.ndarray:
     """Downwelling radiance at the ground per unit beam flux [sr^-1] looking up at ``view_zenith`` [rad]
     (< pi/2) and ``relative_azimuth`` [rad] from the sun's azimuth, shape (n_view, n_azimuth). Layers, phase
-    moments and the boundary as in :func:`_config`; ``nakajima``: DISORT's Nakajima-Tanaka intensity correction.
+    moments, the boundary and the intensity correction (``exact_phase``, else ``nakajima``) as in
+    :func:`_config`.
     """
     disortpp, cfg, dtau, rayleigh, moments = _config(delta_tau, single_scattering_albedo, phase_moments,
                                                      sun_zenith=sun_zenith, ground_albedo=ground_albedo,
-                                                     n_streams=n_streams, n_moments=n_moments, nakajima=nakajima)
+                                                     n_streams=n_streams, n_moments=n_moments, nakajima=nakajima,
+                                                     exact_phase=exact_phase)
     vz = np.atleast_1d(np.asarray(view_zenith, dtype=float))
     va = np.atleast_1d(np.asarray(relative_azimuth, dtype=float))
     mu = -np.cos(vz)  # downwelling: DISORT's negative cosines
@@ -201,7 +253,7 @@ def solve_ground_radiance(delta_tau, single_scattering_albedo, phase_moments, *,
     cfg.num_user_mu = vz.size
     cfg.num_phi = va.size
     cfg.allocate()
-    _fill(cfg, dtau, single_scattering_albedo, moments, rayleigh, sun_zenith, ground_albedo)
+    _fill(cfg, dtau, single_scattering_albedo, moments, rayleigh, sun_zenith, ground_albedo, exact_phase)
     cfg.tau_user = [float(dtau.sum())]  # at the ground
     cfg.mu_user = [float(m) for m in mu[order]]
     cfg.phi_user = [float(math.degrees(a)) for a in va]
@@ -231,9 +283,10 @@ def water_cloud_case(tau: float, rayleigh: bool, albedo: float, bottom_radius: f
 
 def disort_cloud(atm, layer, wl, sun_zen, view_zen, view_azi, albedo, n_layers=100, n_streams=64):
     """disortpp: Rayleigh (if any) and a cloud layer (``CloudLayer``: its extinction, albedo and the Legendre
-    moments of its phase table, 400) over a Lambertian ground of ``albedo``; plane-parallel, 64 streams, delta-M
-    and the Nakajima-Tanaka correction. Returns the downward radiance at the ground per unit solar irradiance
-    [sr^-1], (n_view_zenith, n_view_azimuth), and the diffuse downward flux at the ground / (mu0 F0)."""
+    moments of its phase table, 400) over a Lambertian ground of ``albedo``; plane-parallel, 64 streams, delta-M and the
+    intensity correction with the exact phase (its table; module docstring). Returns the downward radiance at the ground
+    per unit solar irradiance [sr^-1], (n_view_zenith, n_view_azimuth), and the diffuse downward flux at the ground /
+    (mu0 F0)."""
     import disortpp
 
     n_mom = 400
@@ -250,7 +303,8 @@ def disort_cloud(atm, layer, wl, sun_zen, view_zen, view_azi, albedo, n_layers=1
     tau_c = sigma_c * overlap
     tau = tau_r + tau_c
     sca = tau_r + tau_c * ssa_c
-    chi_c = layer.phase_table([wl]).legendre_moments(n_mom + 1)[0]
+    table = layer.phase_table([wl])
+    chi_c = table.legendre_moments(n_mom + 1)[0]
     chi_r = np.zeros(n_mom + 1)
     chi_r[0], chi_r[2] = 1.0, 0.1
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -265,11 +319,15 @@ def disort_cloud(atm, layer, wl, sun_zen, view_zen, view_azi, albedo, n_layers=1
     cfg.flags.use_user_mu = True
     cfg.flags.use_user_tau = True
     cfg.flags.use_lambertian_surface = True
-    cfg.flags.intensity_corr_nakajima = True
+    cfg.flags.intensity_corr_buras = True  # the correction with the exact phase (module docstring)
+    mu_p = np.cos(np.asarray(table.angles))[::-1]
+    cfg.num_phase_func_angles = mu_p.size
     cfg.num_user_tau = 1
     cfg.num_user_mu = vz.size
     cfg.num_phi = len(view_azi)
     cfg.allocate()
+    cfg.mu_phase_function = mu_p.tolist()
+    cfg.phase_function = mixed_phase(f_r, mu_p, np.ravel(table.evaluate(mu_p))).tolist()
     cfg.delta_tau = [float(t) for t in tau]
     cfg.single_scat_albedo = [float(s) for s in ssa]
     cfg.phase_function_moments = [[float(c) for c in row] for row in moments]
@@ -294,7 +352,7 @@ def solve_upward_flux(delta_tau, single_scattering_albedo, phase_moments, *, sun
     :func:`_config`)."""
     disortpp, cfg, dtau, rayleigh, moments = _config(delta_tau, single_scattering_albedo, phase_moments,
                                                      sun_zenith=sun_zenith, ground_albedo=ground_albedo,
-                                                     n_streams=n_streams, n_moments=n_moments, nakajima=False)
+                                                     n_streams=n_streams, n_moments=n_moments)
     cfg.flags.comp_only_fluxes = True
     cfg.num_user_tau = 1
     cfg.allocate()

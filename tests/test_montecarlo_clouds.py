@@ -18,7 +18,8 @@ long runs and their figures: benchmarks/validate_clouds.py, docs/clouds.md).
 * Ground-cloud interreflection: T over a ground of albedo A equals ``T0 / (1 - A r)`` with the slab's spherical
   albedo ``r`` from DISORT (disortpp), within 3 standard errors + 0.5 %.
 * Plane-parallel water clouds (Mie droplets r_e 10 um, v_e 0.1, 550 nm) against disortpp with the Legendre moments
-  of the same phase table (tests/disort_reference.disort_cloud: 64 streams, 400 moments, delta-M, Nakajima-Tanaka):
+  of the same phase table (tests/disort_reference.disort_cloud: 64 streams, 400 moments, delta-M, the intensity
+  correction with the table):
   the ground's diffuse irradiance within 1 % + 3 standard errors, two of the cases (12 in
   benchmarks/validate_clouds.py waterclouds-irradiance: all within 1 %, worst +0.97 % +- 1.00 %).
 * Plane-parallel water clouds, radiance 10 deg or more above the horizon and 25 deg or more from the sun (DISORT
