@@ -294,8 +294,8 @@ def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min
 
     The precomputation's integrals over the sphere (scattering density, irradiance) read the tables here, linearly
     also along nu (except the second order's density, which reads the single scattering with the shadow-following
-    weights of :func:`scattering_lookup_shadow`): the log-linear weight of the rendering lookups (:func:`lookup4_cell`) is never above the linear
-    one, so over a whole sphere of smooth daytime radiance it biased these integrals low (the hardest daytime case of
+    weights of :func:`scattering_lookup_shadow`): the log-linear weight of the rendering lookups
+    (:func:`lookup4_cell`) is never above the linear one, so over a whole sphere of smooth daytime radiance it biased these integrals low (the hardest daytime case of
     ``tests/test_precomputed_disort.py`` against the Monte Carlo, optical depth 0.5 over albedo 0.8: mean -1.15 ->
     -2.03 %, measured); there it had taken the low-sun directions outside the target from 68 to 48 of 225 (hazy,
     near the sun: docs/accuracy.md, "Low sun")."""
