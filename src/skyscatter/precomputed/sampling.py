@@ -295,10 +295,10 @@ def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min
     The precomputation's integrals over the sphere (scattering density, irradiance) read the tables here, linearly
     also along nu (except the second order's density, which reads the single scattering with the shadow-following
     weights of :func:`scattering_lookup_shadow`): the log-linear weight of the rendering lookups
-    (:func:`lookup4_cell`) is never above the linear one, so over a whole sphere of smooth daytime radiance it biased these integrals low (the hardest daytime case of
-    ``tests/test_precomputed_disort.py`` against the Monte Carlo, optical depth 0.5 over albedo 0.8: mean -1.15 ->
-    -2.03 %, measured); there it had taken the low-sun directions outside the target from 68 to 48 of 225 (hazy,
-    near the sun: docs/accuracy.md, "Low sun")."""
+    (:func:`lookup4_cell`) is never above the linear one, so over a whole sphere of smooth daytime radiance it
+    biased these integrals low (the hardest daytime case of ``tests/test_precomputed_disort.py`` against the Monte
+    Carlo, optical depth 0.5 over albedo 0.8: mean -1.15 -> -2.03 %, measured); there it had taken the low-sun
+    directions outside the target from 68 to 48 of 225 (hazy, near the sun: docs/accuracy.md, "Low sun")."""
     n_r, n_mu, n_s, n_n, n_l = table.shape
     i_r, w_r, i_mu, w_mu = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
