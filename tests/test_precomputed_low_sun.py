@@ -71,25 +71,25 @@ def test_reference_records_how_it_was_made(reference):
         assert np.all(np.array(c["radiance"]) > 0.0) and np.all(np.array(c["radiance_stderr"]) > 0.0)
 
 
-#: Cases (atmosphere, sun elevation [deg]) with directions outside the target with table format 12 (the rendering
-#: lookups interpolate log-linearly along the view-sun azimuth, and the orders' ray integrals the scattering density
-#: along the sun zenith and azimuth; docs/accuracy.md, "Low sun"): how many directions, and the one furthest outside
-#: (largest excess over the target) at 400/560/700 nm, as measured against the stored values. Held as strict expected
-#: failures, so that a fix shows (and must then move the case out of this table).
+#: Cases (atmosphere, sun elevation [deg]) with directions outside the target with table format 13 (the rendering
+#: lookups interpolate log-linearly along the view-sun azimuth, the orders' ray integrals the scattering density
+#: along the sun zenith and azimuth, and the second order's density reads the single scattering along the azimuth
+#: with weights that follow the Earth's shadow; docs/accuracy.md, "Low sun"): how many directions, and the one
+#: furthest outside (largest excess over the target) at 400/560/700 nm, as measured against the stored values. Held
+#: as strict expected failures, so that a fix shows (and must then move the case out of this table).
 OUTSIDE = {
     ("earth", 0.0): "2 of 15 directions outside; worst 2/180 deg: +8.6±0.7 %",
-    ("earth", -3.0): "3 of 15 directions outside; worst 2/90 deg: -11.3±1.4 %",
-    ("earth", -6.0): "6 of 15 directions outside; worst 2/90 deg: -22.0±4.3 %",
+    ("earth", -3.0): "4 of 15 directions outside; worst 2/90 deg: -11.7±1.4 %",
+    ("earth", -6.0): "5 of 15 directions outside; worst 2/90 deg: -25.6±4.3 %",
     ("turbidity3", 10.0): "2 of 15 directions outside; worst 2/45 deg: +5.4±1.2 %",
     ("turbidity3", 3.0): "3 of 15 directions outside; worst 5/45 deg: +7.5±1.3 %",
     ("turbidity3", 0.0): "5 of 15 directions outside; worst 2/0 deg: +21.6±3.0 %",
-    ("turbidity3", -3.0): "2 of 15 directions outside; worst 2/135 deg: +7.2±3.8 %",
-    ("turbidity3", -6.0): "6 of 15 directions outside; worst 15/135 deg: +42.7±8.2 %",
+    ("turbidity3", -6.0): "5 of 15 directions outside; worst 15/135 deg: +37.4±8.2 %",
     ("aod05", 10.0): "6 of 15 directions outside; worst 5/45 deg: +10.7±1.5 %",
     ("aod05", 3.0): "6 of 15 directions outside; worst 5/45 deg: +16.7±2.5 %",
     ("aod05", 0.0): "7 of 15 directions outside; worst 2/45 deg: +15.7±3.7 %",
-    ("aod05", -3.0): "4 of 15 directions outside; worst 5/90 deg: +20.5±6.4 %",
-    ("aod05", -6.0): "8 of 15 directions outside; worst 5/135 deg: +45.4±11.7 %",
+    ("aod05", -3.0): "3 of 15 directions outside; worst 5/90 deg: +20.1±6.4 %",
+    ("aod05", -6.0): "6 of 15 directions outside; worst 5/180 deg: +46.9±11.4 %",
 }
 
 CASES = [(a, s) for a in ATMOSPHERES for s in (10.0, 3.0, 0.0, -3.0, -6.0)]
@@ -171,3 +171,80 @@ def test_single_scattering_of_grazing_rays_near_the_ground():
                     checked += 1
     assert checked >= 40
     assert worst < 0.03, worst
+
+
+def _shadow_exit_by_marching(r, mu, mu_s, nu, bottom):
+    """Altitudes [m] of the last point in the shadow and the first that the point sun lights, of 20000 points along
+    the ray (to 3000 km): the test's own search (no closed form); (inf, inf) if none is lit."""
+    t = np.concatenate([[0.0], np.geomspace(0.01, 3e6, 20000)])
+    ry = np.sqrt(t * t + 2 * r * mu * t + r * r)
+    ms = (r * mu_s + t * nu) / ry
+    lit = (ms >= 0.0) | (ry * ry * (1.0 - ms * ms) >= bottom * bottom)
+    if not lit.any():
+        return np.inf, np.inf
+    i = int(np.argmax(lit))
+    return ry[max(i - 1, 0)] - bottom, ry[i] - bottom
+
+
+def test_shadow_exit_altitude_against_marching():
+    """:func:`geometry.shadow_exit_altitude` against a search along the ray for the first lit point (sun 1-12 deg
+    below the horizon, observers at 0, 5 and 20 km, view elevations from the planet's horizon to 60 deg, all
+    azimuths): between the altitudes of the search's last shadowed and first lit points (1 m of rounding), or both
+    at or above the top of the atmosphere; a start in the light gives its own altitude."""
+    from skyscatter.precomputed.geometry import shadow_exit_altitude
+
+    p = AtmosphereParameters()
+    rb, rt = p.bottom_radius, p.top_radius
+    rng = np.random.default_rng(3)
+    checked = 0
+    for _ in range(300):
+        h = float(rng.choice([0.0, 5e3, 20e3]))
+        lowest = -math.degrees(math.acos(rb / (rb + h))) + 0.1  # above the planet's horizon
+        e, a, s = (math.radians(x) for x in (rng.uniform(lowest, 60), rng.uniform(0, 180), rng.uniform(-12, -1)))
+        v = np.array([math.cos(e) * math.sin(a), math.cos(e) * math.cos(a), math.sin(e)])
+        sun = np.array([0.0, math.cos(s), math.sin(s)])
+        r = rb + h
+        lo, hi = _shadow_exit_by_marching(r, v[2], sun[2], float(v @ sun), rb)
+        got = shadow_exit_altitude(r, v[2], sun[2], float(v @ sun), rb, rt)
+        if min(lo, hi) >= rt - rb:
+            assert got == pytest.approx(rt - rb)
+        elif max(lo, hi) < rt - rb:
+            assert min(lo, hi) - 1.0 <= got <= max(lo, hi) + 1.0, (h, e, a, s, got, lo, hi)
+        checked += 1
+    assert checked == 300
+    assert shadow_exit_altitude(rb + 1e3, 0.2, 0.1, 0.3, rb, rt) == pytest.approx(1e3)
+
+
+def test_shadow_weights_follow_the_single_scattering_into_the_shadow():
+    """:func:`sampling.shadow_nu_weights` applied to the independent single-scattering integrals of
+    ``tests/precomputed_reference.py`` at two azimuth texels (77.1 and 102.9 deg from the sun) against the integral
+    between them (90 deg), Rayleigh, Earth defaults, 560 nm, the sun 6 deg below the horizon, view elevations 2, 5
+    and 15 deg from the ground: within 12 % (measured +10, -5, -10 %) where the linear interpolation is +219, +94
+    and +16 % (the single scattering falls 200 times across the cell at 2 deg); with the sun up the weights are the
+    linear ones."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    import precomputed_reference as ref
+    from skyscatter.precomputed.compute import density_profiles
+    from skyscatter.precomputed.geometry import scattering_nu_param
+    from skyscatter.precomputed.sampling import shadow_nu_weights
+
+    p = AtmosphereParameters()
+    rb, rt = p.bottom_radius, p.top_radius
+    profiles, counts = density_profiles(p)
+    wl = np.array([560.0])
+    n_nu, i_n = 8, 3  # texels 77.1 and 102.9 deg from the sun
+    mu_s = math.sin(math.radians(-6.0))
+    for elev, bound_linear in ((2.0, 2.0), (5.0, 0.9), (15.0, 0.15)):
+        mu = math.sin(math.radians(elev))
+        s = math.sqrt((1 - mu * mu) * (1 - mu_s * mu_s))
+        nu = mu * mu_s + s * math.cos(math.radians(90.0))
+        vals = [ref.single_scattering_integrals(rb, mu, mu_s, n, p, wl, n=960, pieces=40, first=1e-5)[0][0]
+                for n in (scattering_nu_param(i_n, mu, mu_s, n_nu), nu, scattering_nu_param(i_n + 1, mu, mu_s, n_nu))]
+        w = 0.5
+        a, b = shadow_nu_weights(rb, mu, mu_s, nu, i_n, w, n_nu, rb, rt, profiles[0], counts[0])
+        assert abs((a * vals[0] + b * vals[2]) / vals[1] - 1.0) < 0.12
+        assert ((1 - w) * vals[0] + w * vals[2]) / vals[1] - 1.0 > bound_linear  # what the rule is for
+    a, b = shadow_nu_weights(rb, 0.1, 0.05, 0.0, i_n, 0.3, n_nu, rb, rt, profiles[0], counts[0])
+    assert (a, b) == (pytest.approx(0.7), pytest.approx(0.3))

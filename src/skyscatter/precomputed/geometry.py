@@ -65,6 +65,7 @@ __all__ = [
     "scattering_nu_coord",
     "scattering_nu_param",
     "scattering_params",
+    "shadow_exit_altitude",
     "transmittance_coord",
     "transmittance_params",
 ]
@@ -206,6 +207,33 @@ def log_lerp_weight(a: float, b: float, w: float) -> float:
     wa = w * a2
     d = wa + (_ONE32 - w) * math.sqrt(a2 * b2)
     return wa / d if d > 0.0 else w
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def shadow_exit_altitude(r: float, mu: float, mu_s: float, nu: float, bottom: float, top: float) -> float:
+    """Altitude [m] at which the ray from radius ``r`` [m] (view zenith cosine ``mu``, sun zenith cosine ``mu_s``,
+    view-sun cosine ``nu``) leaves the Earth's geometric shadow; the start's altitude if it is lit there; at most
+    ``top - bottom``.
+
+    The shadow is the half cylinder of radius ``R_g`` behind the planet (points ``y`` with ``y . s < 0`` and
+    ``|y - (y . s) s| < R_g``, ``s`` the sun direction; no refraction, the shadow of the tables' transmittance to
+    the sun). With ``x`` the start, ``|x|`` = ``r``, the ray ``x + t v`` crosses the cylinder where
+    ``(1 - nu^2) t^2 + 2 r (mu - mu_s nu) t + r^2 (1 - mu_s^2) - R_g^2 = 0`` (the larger root) and the plane
+    ``y . s = 0`` at ``t = -r mu_s / nu`` (if ``nu > 0``); it leaves at the nearer of the two.
+    """
+    c = r * r * (1.0 - mu_s * mu_s) - bottom * bottom
+    if mu_s >= 0.0 or c >= 0.0:
+        return clamp(r - bottom, 0.0, top - bottom)
+    a = 1.0 - nu * nu
+    b = r * (mu - mu_s * nu)
+    t = math.inf
+    if a > 1e-12:
+        t = (-b + math.sqrt(max(b * b - a * c, 0.0))) / a
+    if nu > 0.0:
+        t = min(t, -r * mu_s / nu)
+    if t == math.inf:
+        return top - bottom
+    return clamp(math.sqrt(max(t * t + 2.0 * r * mu * t + r * r, 0.0)) - bottom, 0.0, top - bottom)
 
 
 @helper(fastmath=CONTRACT_ARCP)

@@ -62,6 +62,7 @@ from .sampling import (
     ray_transmittance,
     rayleigh_phase,
     scattering_lookup,
+    scattering_lookup_shadow,
     sun_visible_fraction,
     transmittance_segment,
     transmittance_to_top,
@@ -471,18 +472,20 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 for k in range(n_l):
                     buf[k] = 0.0
                 if first:
-                    scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, rayleigh_phase(nu_w),
-                                      buf)
+                    # the single scattering along the azimuth follows the Earth's shadow (sampling.shadow_nu_weights)
+                    scattering_lookup_shadow(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min,
+                                             rayleigh_phase(nu_w), profiles[0], counts[0], buf)
                     if table:
                         for k in range(n_l):
                             tmp2[k] = 0.0
-                        scattering_lookup(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, 1.0, tmp2)
+                        scattering_lookup_shadow(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, 1.0,
+                                                 profiles[1], counts[1], tmp2)
                         phase_table_values(phase_mu, phase_full, nu_w, pv)
                         for k in range(n_l):
                             buf[k] += pv[k] * tmp2[k]
                     else:
-                        scattering_lookup(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min,
-                                          aerosol_phase(nu_w, g, mie_kind), buf)
+                        scattering_lookup_shadow(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min,
+                                                 aerosol_phase(nu_w, g, mie_kind), profiles[1], counts[1], buf)
                 else:
                     scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, 1.0, buf)
                 if hits:

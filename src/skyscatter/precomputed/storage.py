@@ -70,7 +70,10 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: azimuth in the multiple-scattering ray integrals (:func:`.geometry.log_lerp_weight`; twilight: the Earth's
 #: shadow), each wavelength's weight its own; the geometric tail of the orders with its ratio per sun zenith texel
 #: (:func:`.compute.add_geometric_tail`), so the multiple-scattering tables of format 11 hold other values.
-FORMAT_VERSION = 12
+#: 13: the same layout; the second order's scattering density reads the single-scattering tables along the view-sun
+#: azimuth with weights that follow the Earth's shadow (:func:`.sampling.shadow_nu_weights`; the same as before
+#: wherever the sun is up at the texel), so the multiple-scattering tables of sun zeniths below the horizon changed.
+FORMAT_VERSION = 13
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).
