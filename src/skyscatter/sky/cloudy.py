@@ -8,8 +8,9 @@ cloud optical depths the exact integrals of the medium's density profiles over i
 and wavelength by the discrete-ordinate method, DISORT ([Stamnes1988]; the ``disortpp`` binding): all orders of
 scattering, exactly in optical depth (an optical depth of 60 costs what 1 costs), delta-M scaling of the
 droplets' forward peak ([Wiscombe1977]); the Nakajima-Tanaka intensity correction ([NakajimaTanaka1988]) is
-requested, but disortpp 1.2.1's flag changes no intensity (docs/clouds.md), so the forward peak's light is
-restored about the sun instead (:func:`_restore_forward_peak`).
+requested, but disortpp 1.2.1's flag changes no intensity (docs/clouds.md), so its TMS single-scattering
+correction is added here for the light seen looking up (:func:`_single_scatter_correction`) and the forward peak's
+light is restored about the sun (:func:`_restore_forward_peak`).
 
 Light on the cloud top (``illumination="tables"``, the default, for observers at or below the highest cloud
 top; always in twilight): the column is solved from the cloud top down, lit there by the clear sky of the
@@ -36,10 +37,11 @@ the cloud shell show the tables' clear air (the limb from orbit), rays that hit 
 hit point's local angles and sun zenith through the air's chord.
 
 Why this design, its accuracy against the Monte Carlo and its limits (the air's in-scatter above the clouds
-plane-parallel at an equivalent angle; radiance under clouds not verified by the Monte Carlo): docs/clouds.md,
-"Fast cloud layers". In short, the cloud inside the precomputed tables (it fits their spherical symmetry) was off
-by +135 to +330 % in the diffuse irradiance under optical depth 15: a 500 m layer falls between their altitude
-samples and ray steps, and a thick cloud's orders do not settle into the tables' geometric tail after six.
+plane-parallel at an equivalent angle; radiance under clouds measured against DISORT, not the Monte Carlo):
+docs/clouds.md, "Fast cloud layers". In short, the cloud inside the precomputed tables (it fits their spherical
+symmetry) was off by +135 to +330 % in the diffuse irradiance under optical depth 15: a 500 m layer falls between
+their altitude samples and ray steps, and a thick cloud's orders do not settle into the tables' geometric tail
+after six.
 """
 
 from __future__ import annotations
