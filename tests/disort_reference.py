@@ -281,12 +281,20 @@ def water_cloud_case(tau: float, rayleigh: bool, albedo: float, bottom_radius: f
     return layer, atm
 
 
-def disort_cloud(atm, layer, wl, sun_zen, view_zen, view_azi, albedo, n_layers=100, n_streams=64):
+def disort_cloud(atm, layer, wl, sun_zen, view_zen, view_azi, albedo, n_layers=100, n_streams=64,
+                 single_scatter=False):
     """disortpp: Rayleigh (if any) and a cloud layer (``CloudLayer``: its extinction, albedo and the Legendre
     moments of its phase table, 400) over a Lambertian ground of ``albedo``; plane-parallel, 64 streams, delta-M and the
     intensity correction with the exact phase (its table; module docstring). Returns the downward radiance at the ground
     per unit solar irradiance [sr^-1], (n_view_zenith, n_view_azimuth), and the diffuse downward flux at the ground /
-    (mu0 F0)."""
+    (mu0 F0).
+
+    ``single_scatter``: instead of disortpp's correction, add the TMS correction of [NakajimaTanaka1988] (their Eq.
+    14-15) explicitly, the single-scattered radiance with the exact phase function (the cloud's table, Rayleigh's
+    ``3/(16 pi)(1 + cos^2)``) over ``1 - f`` minus that with delta-M's truncated Legendre series, both attenuated
+    through the delta-M scaled layers (``tau' = (1 - omega f) tau``, ``omega' = (1 - f) omega / (1 - omega f)``,
+    ``f`` the layer's moment of order ``n_streams`` as DISORT takes it): a second, independent form of the same
+    correction (benchmarks/cloudy_radiance_disort.py wrote its stored values with it)."""
     import disortpp
 
     n_mom = 400
@@ -319,7 +327,8 @@ def disort_cloud(atm, layer, wl, sun_zen, view_zen, view_azi, albedo, n_layers=1
     cfg.flags.use_user_mu = True
     cfg.flags.use_user_tau = True
     cfg.flags.use_lambertian_surface = True
-    cfg.flags.intensity_corr_buras = True  # the correction with the exact phase (module docstring)
+    # the correction with the exact phase (module docstring), unless it is added explicitly below
+    cfg.flags.intensity_corr_buras = not single_scatter
     mu_p = np.cos(np.asarray(table.angles))[::-1]
     cfg.num_phase_func_angles = mu_p.size
     cfg.num_user_tau = 1
@@ -343,7 +352,42 @@ def disort_cloud(atm, layer, wl, sun_zen, view_zen, view_azi, albedo, n_layers=1
     for k, idx in enumerate(order):
         for j in range(len(view_azi)):
             rad[idx, j] = res.intensities(k, 0, j)
+    if single_scatter:
+        rad += _tms_correction(tau, ssa, moments, f_r, layer.phase_table([wl]), sun_zen, vz,
+                               np.asarray(view_azi, dtype=float), n_streams)
     return rad, res.flux_down[0] / math.cos(sun_zen)
+
+
+def _tms_correction(tau, ssa, moments, f_r, cloud_phase, sun_zen, view_zen, view_azi, n_streams):
+    """Nakajima & Tanaka (1988) TMS correction of DISORT's delta-M radiance at the bottom of the layers looking up
+    at ``view_zen`` (n_v,) x ``view_azi`` (n_a,) [rad] from the sun: (n_v, n_a) per unit solar irradiance
+    [sr^-1]. Layers from the top down: ``tau``, ``ssa``, ``moments`` (n, m + 1), ``f_r`` the Rayleigh fraction of
+    each layer's scattering; the cloud's exact phase from ``cloud_phase`` (a PhaseTable [sr^-1])."""
+    mu0 = math.cos(sun_zen)
+    mu = np.cos(view_zen)[:, None]  # the light travels down at this cosine
+    cos_scat = mu * mu0 + np.sqrt(1 - mu ** 2) * math.sin(sun_zen) * np.cos(view_azi)[None, :]
+    exact = (f_r[:, None, None] * 3.0 / (16.0 * math.pi) * (1.0 + cos_scat[None] ** 2)
+             + (1.0 - f_r)[:, None, None] * cloud_phase.evaluate(cos_scat, 0)[None])  # (n, n_v, n_a) [sr^-1]
+    f = moments[:, n_streams]
+    ell = np.arange(n_streams)
+    leg = np.empty((n_streams,) + cos_scat.shape)  # Legendre polynomials P_l(cos_scat), l < n_streams
+    leg[0] = 1.0
+    if n_streams > 1:
+        leg[1] = cos_scat
+    for n in range(1, n_streams - 1):
+        leg[n + 1] = ((2 * n + 1) * cos_scat * leg[n] - n * leg[n - 1]) / (n + 1)
+    chi_star = (moments[:, :n_streams] - f[:, None]) / (1.0 - f[:, None])
+    truncated = np.einsum("il,l...->i...", chi_star * (2 * ell + 1), leg) / (4.0 * math.pi)
+    tau_s = (1.0 - ssa * f) * tau
+    ssa_s = (1.0 - f) * ssa / (1.0 - ssa * f)
+    top = np.concatenate([[0.0], np.cumsum(tau_s)])
+    total = top[-1]
+    k = 1.0 / mu0 - 1.0 / mu  # (n_v, 1)
+    a, b = top[:-1, None, None], top[1:, None, None]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        integral = np.where(np.abs(k) > 1e-9, (np.exp(-a * k) - np.exp(-b * k)) / np.where(k == 0, 1, k), b - a)
+    atten = np.exp(-total / mu)[None] * integral / mu[None]
+    return np.sum(ssa_s[:, None, None] * (exact / (1.0 - f[:, None, None]) - truncated) * atten, axis=0)
 
 
 def solve_upward_flux(delta_tau, single_scattering_albedo, phase_moments, *, sun_zenith: float,

@@ -384,8 +384,8 @@ class PhaseTable:
             v = self._values_mu[self._wavelength_index(wavelength_index)]
             return (1.0 - w) * v[i] + w * v[i + 1]
         v = self._values_mu
-        return (1.0 - w)[..., None] * v[:, i].T.reshape(*mu.shape, -1) + w[..., None] * v[:, i + 1].T.reshape(
-            *mu.shape, -1)
+        # the wavelength axis moved last (``.T`` would also reverse the axes of a 2D or higher ``cos_theta``)
+        return (1.0 - w)[..., None] * np.moveaxis(v[:, i], 0, -1) + w[..., None] * np.moveaxis(v[:, i + 1], 0, -1)
 
     def __call__(self, cos_theta: ArrayLike) -> NDArray[np.float64]:
         """Same as :meth:`evaluate` for every wavelength: shape (..., n_wl) [sr^-1]."""

@@ -8,8 +8,10 @@ cloud optical depths the exact integrals of the medium's density profiles over i
 and wavelength by the discrete-ordinate method, DISORT ([Stamnes1988]; the ``disortpp`` binding): all orders of
 scattering, exactly in optical depth (an optical depth of 60 costs what 1 costs), delta-M scaling of the
 droplets' forward peak ([Wiscombe1977]); the Nakajima-Tanaka intensity correction ([NakajimaTanaka1988]) is
-requested, but disortpp 1.2.1's flag changes no intensity (docs/clouds.md), so the forward peak's light is
-restored about the sun instead (:func:`_restore_forward_peak`).
+requested, but disortpp 1.2.1's flag alone changes no intensity (it acts only with `intensity_corr_buras`;
+docs/clouds.md), so its TMS single-scattering correction is added here for the light seen looking up
+(:func:`_single_scatter_correction`) and the forward peak's light is restored about the sun
+(:func:`_restore_forward_peak`).
 
 Light on the cloud top (``illumination="tables"``, the default, for observers at or below the highest cloud
 top; always in twilight): the column is solved from the cloud top down, lit there by the clear sky of the
@@ -36,10 +38,11 @@ the cloud shell show the tables' clear air (the limb from orbit), rays that hit 
 hit point's local angles and sun zenith through the air's chord.
 
 Why this design, its accuracy against the Monte Carlo and its limits (the air's in-scatter above the clouds
-plane-parallel at an equivalent angle; radiance under clouds not verified by the Monte Carlo): docs/clouds.md,
-"Fast cloud layers". In short, the cloud inside the precomputed tables (it fits their spherical symmetry) was off
-by +135 to +330 % in the diffuse irradiance under optical depth 15: a 500 m layer falls between their altitude
-samples and ray steps, and a thick cloud's orders do not settle into the tables' geometric tail after six.
+plane-parallel at an equivalent angle; radiance under clouds measured against DISORT, not the Monte Carlo):
+docs/clouds.md, "Fast cloud layers". In short, the cloud inside the precomputed tables (it fits their spherical
+symmetry) was off by +135 to +330 % in the diffuse irradiance under optical depth 15: a 500 m layer falls between
+their altitude samples and ray steps, and a thick cloud's orders do not settle into the tables' geometric tail
+after six.
 """
 
 from __future__ import annotations
@@ -71,6 +74,9 @@ AZIMUTH_STEP_DEG = 5.0
 AUREOLE_OFFSETS_DEG = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0)
 #: Legendre moments of the phase functions given to DISORT (delta-M keeps the first 2 x streams).
 PHASE_MOMENTS = 256
+#: Angles from the sun [deg] over which the TMS single-scattering correction fades in (nearer the sun the forward
+#: peak's lobe, :func:`_restore_forward_peak`, carries delta-M's missing light).
+TMS_FADE_DEG = (5.0, 10.0)
 #: Gauss-Legendre nodes in the cosine of the clear sky's light on the cloud top (its angular distribution).
 SKY_NODES = 8
 #: Sun elevation [rad] below which the direct beam is not traced (twilight: the tables' clear sky lights the
@@ -179,6 +185,68 @@ def cloud_column(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, obser
     moments[..., 0] = 1.0
     ssa = np.clip(sca / ext, 0.0, 1.0 - 1e-9)
     return edges, ext, ssa, moments
+
+
+def _exact_phase(atmosphere: AtmosphereParameters, wl: NDArray[np.float64], edges: NDArray[np.float64],
+                 cos_scat: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each layer's phase function [sr^-1] at the scattering cosines ``cos_scat`` (any shape), (n, n_wl, ...):
+    Rayleigh's ``3 / (16 pi) (1 + cos^2)`` and each particle component's full table (diffraction peak included),
+    weighted by their scattering optical depths in the layers of :func:`cloud_column` (the same integrals; the
+    full tables, where ``cloud_column`` gives their Legendre moments)."""
+    hi, lo = edges[:-1], edges[1:]
+    c = np.asarray(cos_scat, dtype=float)
+    sca = _profile_integral(atmosphere.rayleigh_density, lo, hi)[:, None] * atmosphere.rayleigh_scattering_at(wl)
+    total = sca.reshape(sca.shape + (1,) * c.ndim) * (3.0 / (16.0 * math.pi) * (1.0 + c * c))
+    sca_sum = sca.copy()
+    for comp in atmosphere.particle_components:
+        column = _profile_integral(comp.density, lo, hi)
+        if hasattr(comp, "base") and hasattr(comp, "top"):
+            column = np.clip(np.minimum(hi, comp.top) - np.maximum(lo, comp.base), 0.0, None)
+        c_sca = column[:, None] * comp.scattering_at(wl)[None, :]
+        if not np.any(c_sca > 0):
+            continue
+        p = np.moveaxis(comp.phase_table(wl).evaluate(c), -1, 0)  # (n_wl, ...)
+        total = total + c_sca.reshape(c_sca.shape + (1,) * c.ndim) * p[None]
+        sca_sum += c_sca
+    return total / np.maximum(sca_sum, 1e-300).reshape(sca_sum.shape + (1,) * c.ndim)
+
+
+def _single_scatter_correction(tau: NDArray[np.float64], ssa: NDArray[np.float64], moments: NDArray[np.float64],
+                               phase: NDArray[np.float64], cos_scat: NDArray[np.float64], mu_view: NDArray[np.float64],
+                               mu_beam: float, streams: int) -> NDArray[np.float64]:
+    """The TMS correction of [NakajimaTanaka1988] (Eqs. 14-15) to DISORT's delta-M radiance of downward light at
+    the bottom of the layers ``tau``, ``ssa``, ``moments`` (n,) (n,) (n, m + 1) (one wavelength, from the top
+    down), per unit beam flux [sr^-1], at scattering cosines ``cos_scat`` (n_v, n_a) of views whose light travels
+    down at cosines ``mu_view`` (n_v,) (> 0), the beam at cosine ``mu_beam``: the single scattering with the
+    exact phase ``phase`` (n, n_v, n_a) [sr^-1] over ``1 - f`` minus that with delta-M's truncated series (the
+    first ``streams`` moments, ``chi* = (chi - f) / (1 - f)``), both through the scaled layers
+    (``tau' = (1 - omega f) tau``, ``omega' = (1 - f) omega / (1 - omega f)``, ``f`` the moment of order
+    ``streams``, as DISORT scales; [Wiscombe1977]). disortpp 1.2.1's own flag for it acts only with
+    ``intensity_corr_buras`` (docs/clouds.md): without it a thin cloud's radiance away from the sun carries
+    delta-M's single-scattering error (-15..+10 % at 16 streams under optical depth 1)."""
+    f = moments[:, streams]
+    leg = np.empty((streams,) + cos_scat.shape)  # Legendre polynomials P_l(cos_scat), l < streams
+    leg[0] = 1.0
+    leg[1] = cos_scat
+    for n in range(1, streams - 1):
+        leg[n + 1] = ((2 * n + 1) * cos_scat * leg[n] - n * leg[n - 1]) / (n + 1)
+    ell = np.arange(streams)
+    chi_star = (moments[:, :streams] - f[:, None]) / (1.0 - f[:, None])
+    truncated = np.tensordot(chi_star * (2 * ell + 1), leg, axes=(1, 0)) / (4.0 * math.pi)  # (n, n_v, n_a)
+    tau_s = (1.0 - ssa * f) * tau
+    ssa_s = (1.0 - f) * ssa / (1.0 - ssa * f)
+    depth = np.concatenate([[0.0], np.cumsum(tau_s)])
+    a, b = depth[:-1, None], depth[1:, None]
+    # the beam to depth t, scattered there, then to the bottom: exp(-t / mu_beam - (D - t) / mu) integrated over
+    # the layer [a, b], written without exp(+...) (no overflow at grazing views)
+    mv = mu_view[None, :]
+    k = 1.0 / mu_beam - 1.0 / mv  # (1, n_v)
+    small = np.abs(k) < 1e-9
+    e_a = np.exp(-a / mu_beam - (depth[-1] - a) / mv)
+    e_b = np.exp(-b / mu_beam - (depth[-1] - b) / mv)
+    atten = np.where(small, (b - a) * np.exp(-depth[-1] / mv), (e_a - e_b) / np.where(small, 1.0, k)) / mv
+    excess = phase / (1.0 - f)[:, None, None] - truncated
+    return np.einsum("i,iva,iv->va", ssa_s, excess, atten)
 
 
 def slant_optical_depth(edges: NDArray[np.float64], tau: NDArray[np.float64], bottom_radius: float,
@@ -437,6 +505,20 @@ class CloudySky(SunSkyMixin, SkyModel):
             sky_top = self._table_sky(wl, ref, theta[up_rows], np.radians(phi))  # (n_up, n_phi, n_wl)
             gain = np.divide(iso_top, self._table_iso, out=np.ones(wl.size), where=self._table_iso > 0)
             rad[up_rows] += sky_top * gain * t_unscattered[:, None, :]
+        if beam and level > 0:
+            # delta-M's single scattering replaced by the exact phase's (TMS) for the light seen looking up,
+            # faded in from 5 to 10 deg from the sun (nearer, the forward peak's lobe below carries that light)
+            up_rows = np.nonzero(theta < 0.5 * math.pi)[0]
+            gt, gp = np.meshgrid(theta[up_rows], np.radians(phi), indexing="ij")
+            cos_scat = np.cos(gt) * mu0 + np.sin(gt) * math.sin(self.sun_zenith) * np.cos(gp)
+            gamma = np.degrees(np.arccos(np.clip(cos_scat, -1.0, 1.0)))
+            fade = np.clip((gamma - TMS_FADE_DEG[0]) / (TMS_FADE_DEG[1] - TMS_FADE_DEG[0]), 0.0, 1.0)
+            phase = _exact_phase(atm, wl, edges[:level + 1], cos_scat)  # (level, n_wl, n_up, n_phi)
+            mu_view = np.cos(theta[up_rows])
+            for k in range(wl.size):
+                corr = _single_scatter_correction(tau[:level, k], ssa[:level, k], moments[:level, k], phase[:, k],
+                                                  cos_scat, mu_view, float(mu_eff[k]), self.streams)
+                rad[up_rows, :, k] += beam_flux[k] * fade * corr
         rad = np.maximum(rad, 0.0)
         smooth = rad  # without the forward peak's lobe (a table on a coarser grid puts that light back itself)
         peak = np.zeros(wl.size)
