@@ -142,10 +142,11 @@ def _cases():
 GLOBAL_TOLERANCE = 0.05
 #: Cases the model misses the target in, with the measured ratios model / MC at 450 / 550 / 650 nm
 #: (docs/clouds.md, "Accuracy"; at 4 x 4 points x 16 x 32 directions, the test's quadrature): the diffuse light
-#: under thick cloud still falls short, most at 450 nm. The ground-cloud coupling (``_ground_up``) lifted cover
-#: 0.9 sun 30 from 0.934 / 0.921 / 0.919, cover 0.9 sun 60 from 0.866 / 0.863 / 0.865 and cover 0.6 sun 60 (now
-#: passing) from 0.945 / 0.952 / 0.959, with the shafts on (which take 1-3 % away at 450 nm).
-MISSED = {"cover 0.9 sun 30": "0.937 / 0.961 / 0.977", "cover 0.9 sun 60": "0.904 / 0.920 / 0.930"}
+#: under thick cloud with a high sun still falls short. The ground-cloud coupling lifted cover 0.9 sun 60 from
+#: 0.866 / 0.863 / 0.865 to 0.904 / 0.920 / 0.930 (with the shafts on), the cloud-top-air coupling (the air above
+#: sending back the clouds' extra upward light, ``_ground_up["top_down"]``) to 0.934 / 0.935 / 0.939 and cover 0.9
+#: sun 30 (now passing) from 0.937 / 0.961 / 0.977 to 0.981 / 0.985 / 0.991.
+MISSED = {"cover 0.9 sun 60": "0.934 / 0.935 / 0.939"}
 
 
 @pytest.mark.parametrize("key", [pytest.param(k, marks=pytest.mark.xfail(
@@ -192,3 +193,26 @@ def test_view_from_above_against_the_monte_carlo(index):
     assert np.all(np.abs(ratio - 1.0) < MEAN_ABOVE), ratio
     rel = model / mc - 1.0
     assert np.all(np.sqrt(np.mean(rel**2, axis=0)) < RMS_ABOVE)
+
+
+def test_air_spherical_albedo_against_the_rayleigh_formula():
+    """``air_spherical_albedo`` (DISORT on the reversed air column, the cloud-top-air coupling's ``s``) of a pure
+    molecular air (no aerosol, no ozone) above 0 and 2500 m against the spherical albedo of a Rayleigh layer of
+    optical depth ``tau``, ``s = (3 tau - E_3(tau) (4 + 2 tau) + 2 exp(-tau)) / (4 + 3 tau)`` (Vermote & Tanre
+    1992, JQSRT 47, 305, the formula of 6S's CSALBR; ``E_3`` the exponential integral), 400-700 nm (``tau``
+    0.39-0.03). Measured +0.2 to +1.3 % (the largest at 400 nm, optical depth 0.39, where the formula is least
+    exact). Tolerance 2 %."""
+    pytest.importorskip("disortpp")
+    from scipy.special import expn
+
+    from skyscatter.sky.cloudy import air_spherical_albedo
+
+    air = AtmosphereParameters(mie_angstrom_beta=0.0, ozone_column=0.0)
+    wl = np.array([400.0, 450.0, 550.0, 700.0])
+    for h in (0.0, 2500.0):
+        tau = air.rayleigh_scattering_at(wl) * 8000.0 * math.exp(-h / 8000.0)
+        # the exponential profile's column above h up to the atmosphere's top
+        tau = tau * (1.0 - math.exp(-(air.thickness - h) / 8000.0))
+        formula = (3.0 * tau - expn(3, tau) * (4.0 + 2.0 * tau) + 2.0 * np.exp(-tau)) / (4.0 + 3.0 * tau)
+        got = air_spherical_albedo(air, wl, h)
+        np.testing.assert_allclose(got, formula, rtol=0.02)
