@@ -64,6 +64,11 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   air's ground albedo) sends up its albedo times the domain-mean direct and diffuse light it receives under the
   field, the diffuse part the model's own (the cloud bases' light included, solved with the bounces between
   ground and bases); the march adds it as an isotropic source ``omega E_up / (2 pi)`` in the cloud.
+* **The air above the field sends back the clouds' light** (the cloud-top-air coupling, :meth:`_ground_coupling`):
+  the extra downward irradiance ``D = s dU`` at the field's top ([Liou2002] Sec. 6.2, the adding method; ``dU``
+  the field's change of the upward irradiance there, ``s`` the spherical albedo of the air above from below,
+  :func:`.cloudy.air_spherical_albedo`), isotropic, in the march's sky source and through the gaps; solved with
+  the ground coupling.
 
 Renderers of terrain take the field's shadows from :meth:`BrokenCloudSky.sun_shadow` (the landscape's
 :class:`~skyscatter.render.scene.Scene`). Not modelled: the clouds' light scattered by the air (in the Monte
@@ -458,7 +463,9 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         a21, a22, b2 = -s_air * ue, 1.0 - s_air * udd, s_air * u0
         det = a11 * a22 - a12 * a21
         e_up = (b1 * a22 - a12 * b2) / det
-        top_down = np.maximum((a11 * b2 - a21 * b1) / det, 0.0)
+        # D < 0 where the field reflects less than the clear ground it hides (a bright ground): the tables' sky
+        # holds more of the ground's light sent back than there is
+        top_down = (a11 * b2 - a21 * b1) / det
         diffuse = f0 + fe * e_up + fdd * top_down
         # the clouds' change to the mean radiance over the sphere below the field's top (the air's extra light,
         # :meth:`_shafts`): down, the diffuse light at the ground less the clear sky's; up, the ground's light less
