@@ -491,7 +491,9 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
             return self._ground_up["src_amb"]
         if not np.any(top_down != 0.0):
             return li["src_amb"]
-        return np.ascontiguousarray(li["src_amb"] + (li["albedo"] * top_down / (2.0 * math.pi))[None, None, :])
+        # D < 0 (a bright ground) takes back at most the sky light there is
+        extra = li["albedo"] * top_down / (2.0 * math.pi)
+        return np.ascontiguousarray(np.maximum(li["src_amb"] + extra[None, None, :], 0.0))
 
     def march(self, directions: ArrayLike, octaves: tuple[float, ...] | None = None,
               lod: float = 0.002, interpolation: str | None = None, origin: ArrayLike | None = None,
