@@ -64,6 +64,11 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   air's ground albedo) sends up its albedo times the domain-mean direct and diffuse light it receives under the
   field, the diffuse part the model's own (the cloud bases' light included, solved with the bounces between
   ground and bases); the march adds it as an isotropic source ``omega E_up / (2 pi)`` in the cloud.
+* **The air above the field sends back the clouds' light** (the cloud-top-air coupling, :meth:`_ground_coupling`):
+  the extra downward irradiance ``D = s dU`` at the field's top ([Liou2002] Sec. 6.2, the adding method; ``dU``
+  the field's change of the upward irradiance there, ``s`` the spherical albedo of the air above from below,
+  :func:`.cloudy.air_spherical_albedo`), isotropic, in the march's sky source and through the gaps; solved with
+  the ground coupling.
 
 Renderers of terrain take the field's shadows from :meth:`BrokenCloudSky.sun_shadow` (the landscape's
 :class:`~skyscatter.render.scene.Scene`). Not modelled: the clouds' light scattered by the air (in the Monte
@@ -394,58 +399,113 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         return cache[key]
 
     def _ground_coupling(self) -> dict[str, Any]:
-        """The ground's upward irradiance under the field [W m^-2 nm^-1] at the table wavelengths, solved with the
-        clouds' light on the ground (the ground-cloud coupling), and the march's source term of it.
+        """The field's couplings with the ground below and the air above, at the table wavelengths: the ground's
+        upward irradiance ``E_up`` under the field and the air's extra downward irradiance ``D`` at the field's
+        top [W m^-2 nm^-1], solved together with the model's own light, and the march's source terms of them.
 
-        The ground (albedo ``rho_g``, Lambertian) sends up ``E_up = rho_g (E_dir + E_dif)``, the domain means of the
-        direct sun through the field and of the diffuse light; under cloud ``E_dif`` is mostly the clouds' light and
-        itself grows with ``E_up`` (the cloud bases send part of it back down). The model's diffuse light is linear
-        in ``E_up`` (an isotropic source ``omega E_up / (2 pi)`` in the march), so two domain means of the diffuse
-        part, ``f0`` with ``E_up = 0`` and ``f1`` with ``E_up = E_1``, give the slope ``R = (f1 - f0) / E_1`` (the
-        bases' reflectance seen from the ground) and the geometric series of the bounces
-        ``E_up = rho_g (E_dir + f0) / (1 - rho_g R)`` (each bounce between the ground and the bases returns
-        ``rho_g R`` of the one before: a geometric series; per wavelength, on the domain means). The march scales
-        the source by the column's reflectance (:func:`.broken_cloud_kernels.march_rays`). Until 2026-12-02 the
-        ground sent up the clear sky's diffuse light instead (2-6x too little under cover 0.9): the domain-mean
-        ground irradiance of dense fields was 5-14 % below the Monte Carlo's (docs/clouds.md)."""
+        *Ground* (since 2026-12-02): the ground (albedo ``rho_g``, Lambertian) sends up ``E_up = rho_g (E_dir +
+        E_dif)``, the domain means of the direct sun through the field and of the diffuse light; under cloud
+        ``E_dif`` is mostly the clouds' light and grows with ``E_up`` (the bases send part of it back down). The
+        march adds ``E_up`` as an isotropic source ``omega E_up / (2 pi)`` scaled by the column's reflectance
+        (:func:`.broken_cloud_kernels.march_rays`). Until 2026-12-02 the ground sent up the clear sky's diffuse
+        light instead (2-6x too little under cover 0.9).
+
+        *Air above* (the cloud-top-air coupling): the clear tables' sky at the field already holds the light the
+        air sends back of the clear ground's upward light; the field changes the upward irradiance at its top by
+        ``dU`` (the clouds reflect far more than the ground they hide), and the air above sends ``D = s dU`` of it
+        back down ([Liou2002] Sec. 6.2, the adding method: a reflector under a layer of spherical albedo ``s`` gets
+        the geometric series of the bounces, here solved with ``dU``'s own growth with ``D``). ``s``: the clear
+        air above the field's top lit from below by isotropic light (:func:`.cloudy.air_spherical_albedo`,
+        DISORT). ``D`` is isotropic radiance ``D / pi`` coming down at the top: in the march's sky source
+        (:meth:`_ambient`) and through the gaps (:meth:`_composite`). Rayleigh's backscatter makes it bluish:
+        the model's diffuse light was 3-5 % redder than the Monte Carlo's without it (docs/clouds.md).
+
+        Solved on the domain means (``COUPLING_POINTS`` x ``COUPLING_POINTS`` points, ``COUPLING_DIRECTIONS``
+        directions): the diffuse light on the ground ``f`` and the upward change at the top ``u`` are affine in
+        ``(E_up, D)`` (sources of the march and of the gaps), so three evaluations of each (``(0, 0)``, ``(E_1,
+        0)``, ``(0, D_1)``) give their slopes, and per wavelength the two equations ``E_up = rho_g (E_dir + f)``,
+        ``D = s u`` are a 2 x 2 linear system."""
         li = self._light
         tab = self._tables
         rho = li["ground_albedo"]
         zero = np.zeros_like(li["amb_up"])
-        if not np.any(rho > 0.0) or not np.any(self.field.extinction > 0.0):
-            return {"e_up": li["e_up"], "amb_up": li["amb_up"], "air_light": np.zeros_like(li["amb_up"])}
+        if not np.any(self.field.extinction > 0.0):
+            return {"e_up": li["e_up"], "amb_up": li["amb_up"], "air_light": zero, "top_down": zero,
+                    "src_amb": li["src_amb"]}
+        from .cloudy import air_spherical_albedo
+
         f = self.field
         m = COUPLING_POINTS
         u = (np.arange(m) + 0.5) / m
         grid = np.stack(np.meshgrid(f.origin[0] + u * f.size[0], f.origin[1] + u * f.size[1], indexing="ij"),
                         axis=-1).reshape(-1, 2)
-        e1 = np.asarray(tab.parameters.solar_irradiance_at(tab.wavelengths), dtype=float) * math.pi / 10.0
+        bottom = tab.parameters.bottom_radius
+        ground = np.stack([grid[:, 0], grid[:, 1], np.sqrt(bottom**2 - (grid**2).sum(axis=1))], axis=-1)
+        # just above the top (the eyes of the upward light; the march starts at the eye)
+        tops = ground * ((bottom + f.top + 1.0) / bottom)
+        s_air = air_spherical_albedo(tab.parameters, tab.wavelengths, f.top)
+        unit = np.asarray(tab.parameters.solar_irradiance_at(tab.wavelengths), dtype=float) * math.pi / 10.0
         nz, na = COUPLING_DIRECTIONS
-        f0 = self._ground_diffuse(grid, nz, na, amb_up=zero).mean(axis=0)
-        f1 = self._ground_diffuse(grid, nz, na, amb_up=np.ascontiguousarray(li["albedo"] * e1 / (2.0 * math.pi))
-                                  ).mean(axis=0)
-        reflect = np.clip((f1 - f0) / e1, 0.0, 1.0)
-        e_up = rho * (li["e_direct_mean"] + f0) / (1.0 - rho * reflect)
+
+        def means(e_up: NDArray[np.float64], top_down: NDArray[np.float64]):
+            amb = np.ascontiguousarray(li["albedo"] * e_up / (2.0 * math.pi))
+            fd = self._ground_diffuse(grid, nz, na, amb_up=amb, top_down=top_down).mean(axis=0)
+            uu = self._flux_change(tops, -1.0, nz, na, amb, top_down).mean(axis=0)
+            return fd, uu
+
+        f0, u0 = means(zero, zero)
+        f1, u1 = means(unit, zero)
+        f2, u2 = means(zero, unit)
+        fe, ue = (f1 - f0) / unit, (u1 - u0) / unit  # slopes in E_up
+        fdd, udd = (f2 - f0) / unit, (u2 - u0) / unit  # slopes in D
+        # E_up (1 - rho fe) - rho fdd D = rho (E_dir + f0);  -s ue E_up + (1 - s udd) D = s u0
+        a11, a12, b1 = 1.0 - rho * fe, -rho * fdd, rho * (li["e_direct_mean"] + f0)
+        a21, a22, b2 = -s_air * ue, 1.0 - s_air * udd, s_air * u0
+        det = a11 * a22 - a12 * a21
+        e_up = (b1 * a22 - a12 * b2) / det
+        # D < 0 where the field reflects less than the clear ground it hides (a bright ground): the tables' sky
+        # holds more of the ground's light sent back than there is
+        top_down = (a11 * b2 - a21 * b1) / det
+        diffuse = f0 + fe * e_up + fdd * top_down
         # the clouds' change to the mean radiance over the sphere below the field's top (the air's extra light,
         # :meth:`_shafts`): down, the diffuse light at the ground less the clear sky's; up, the ground's light less
         # the clear ground's (each hemisphere isotropic: L = E / pi, the sphere's mean their average)
-        down = f0 + reflect * e_up - li["e_sky_ground"]
+        down = diffuse - li["e_sky_ground"]
         up = e_up - rho * (li["e_sun_ground"] + li["e_sky_ground"])
         air_light = np.ascontiguousarray(np.maximum((down + up) / (2.0 * math.pi), 0.0))
+        top_down = np.ascontiguousarray(top_down)
         return {"e_up": e_up, "amb_up": np.ascontiguousarray(li["albedo"] * e_up / (2.0 * math.pi)),
-                "reflectance": reflect, "air_light": air_light}
+                "reflectance": np.clip(fe, 0.0, 1.0), "air_light": air_light, "top_down": top_down,
+                "spherical_albedo": s_air, "upward_change": u0 + ue * e_up + udd * top_down,
+                "src_amb": self._ambient(top_down)}
 
     # ------------------------------------------------------------------ the march
 
+    def _ambient(self, top_down: NDArray[np.float64] | None) -> NDArray[np.float64]:
+        """The march's source of the sky's light (n_layers, n_mu, n_wl): the clear tables' (:attr:`_light`) plus
+        the albedo times ``top_down`` / (2 pi), the air's extra downward irradiance at the field's top
+        [W m^-2 nm^-1] (None: :attr:`_ground_up`'s), isotropic like the tables' (the air within the field, a
+        few per cent of an optical depth, neither dims nor adds to it)."""
+        li = self._light
+        if top_down is None:
+            return self._ground_up["src_amb"]
+        if not np.any(top_down != 0.0):
+            return li["src_amb"]
+        # D < 0 (a bright ground) takes back at most the sky light there is
+        extra = li["albedo"] * top_down / (2.0 * math.pi)
+        return np.ascontiguousarray(np.maximum(li["src_amb"] + extra[None, None, :], 0.0))
+
     def march(self, directions: ArrayLike, octaves: tuple[float, ...] | None = None,
               lod: float = 0.002, interpolation: str | None = None, origin: ArrayLike | None = None,
-              amb_up: NDArray[np.float64] | None = None):
+              amb_up: NDArray[np.float64] | None = None, top_down: NDArray[np.float64] | None = None):
         """The ray march alone for unit ``directions`` (n, 3): the cloud's radiance at the eye through the cloud
         (n, n_table_wavelengths) [W m^-2 sr^-1 nm^-1], the cloud's transmittance (n, n_wl), the mean depth of the
         cloud's light (n,) [m] and whether each ray met cloud (n,). ``octaves``: ``(a, b, c, d, e)`` instead of
         :attr:`octaves`; ``lod``: the step's growth with distance [-]; ``interpolation``: "linear" or "voxel"
         instead of :attr:`interpolation`; ``origin``: the eye (3,) [m, planet-centred] instead of the observer's;
-        ``amb_up``: the march's source of the ground's upward light (n_wl,) instead of :attr:`_ground_up`'s."""
+        ``amb_up``: the march's source of the ground's upward light (n_wl,) instead of :attr:`_ground_up`'s;
+        ``top_down``: the air's extra downward irradiance at the field's top (n_wl,) [W m^-2 nm^-1] instead of
+        :attr:`_ground_up`'s (the light the air above sends back of the clouds' upward light)."""
         from ..precomputed.parallel import parallel_for
         from .broken_cloud_kernels import march_rays
 
@@ -465,19 +525,21 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         mu = _MU_NODES
         parallel_for(march_rays, n, origin, d, self._sun_planet, v["gf"], v["vol"], v["occupied"], _BLOCK,
                      li["k"], li["ph_mu"], li["ph_val"], li["g"], li["solar"], float(mu[0]), float(mu[1] - mu[0]),
-                     li["src_sun"], li["src_amb"], self._ground_up["amb_up"] if amb_up is None else amb_up, mp,
+                     li["src_sun"], self._ambient(top_down),
+                     self._ground_up["amb_up"] if amb_up is None else amb_up, mp,
                      OCTAVES,
                      (interpolation or self.interpolation) == "linear", THIN_AWARE, rad, tr, depth, hit, grain=256)
         return rad, tr, depth, hit
 
     def _composite(self, d: NDArray[np.float64], hit_only: bool = False, eye: NDArray[np.float64] | None = None,
-                   amb_up: NDArray[np.float64] | None = None):
+                   amb_up: NDArray[np.float64] | None = None, top_down: NDArray[np.float64] | None = None):
         """Table-wavelength radiance of the rays ``d`` (n, 3) that meet cloud or ground shadow, and the mask of
         the rays that differ from the clear sky; seen from ``eye`` (3,) [m] (default: the observer); ``amb_up``
-        as in :meth:`march`."""
+        and ``top_down`` as in :meth:`march` (both given while the coupling is solved)."""
         tab = self._tables
         eye = self.clear.position if eye is None else eye
-        rad, tr, depth, hit = self.march(d, origin=eye, amb_up=amb_up)
+        top_down = self._ground_up["top_down"] if top_down is None else top_down
+        rad, tr, depth, hit = self.march(d, origin=eye, amb_up=amb_up, top_down=top_down)
         sun = self._sun_planet
         # views that meet the ground (before leaving the atmosphere): the clouds' shadows there
         bottom = tab.parameters.bottom_radius
@@ -485,7 +547,26 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         disc = b * b - (eye @ eye - bottom * bottom)
         t_ground = np.where(disc >= 0.0, -b - np.sqrt(np.maximum(disc, 0.0)), -1.0)
         ground = t_ground > 0.0
+        # the air's extra light from above the field's top (``top_down``, isotropic, radiance top_down / pi), seen
+        # from below the top along rays that leave through it (over the field's box when it is open), dimmed by the
+        # cloud on the way and the air up to the top
+        sky_up = None
+        r_top = bottom + self.field.top
+        if np.any(top_down != 0.0) and float(eye @ eye) < r_top * r_top:
+            t_top = -b + np.sqrt(np.maximum(b * b - (eye @ eye - r_top * r_top), 0.0))
+            up_rows = np.flatnonzero(~ground)
+            if not self.field.periodic and up_rows.size:
+                f = self.field
+                exit_pts = eye + t_top[up_rows, None] * d[up_rows]
+                over = ((exit_pts[:, 0] >= f.origin[0]) & (exit_pts[:, 0] < f.origin[0] + f.size[0])
+                        & (exit_pts[:, 1] >= f.origin[1]) & (exit_pts[:, 1] < f.origin[1] + f.size[1]))
+                up_rows = up_rows[over]
+            if up_rows.size:
+                t_air, _ = tab.aerial_perspective(eye, eye + t_top[up_rows, None] * d[up_rows], sun)
+                sky_up = (up_rows, t_air * tr[up_rows] * (top_down / math.pi)[None, :])
         changed = hit.copy()
+        if sky_up is not None:
+            changed[sky_up[0]] = True
         out = np.zeros((d.shape[0], tab.wavelengths.size))
         # the shafts and the clouds' light scattered by the air (not while the ground-cloud coupling is solved: that
         # light is the coupling's result)
@@ -499,7 +580,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
             air = gain - loss
         shafted = np.zeros(d.shape[0], dtype=bool) if air is None else np.any(air != 0.0, axis=1)
         changed |= shafted
-        idx = np.flatnonzero(hit | ground | shafted)
+        idx = np.flatnonzero(hit | ground | changed)
         if idx.size == 0:
             return out, changed
         dd = d[idx]
@@ -507,6 +588,10 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         value = clear.copy()
         if air is not None:
             value += air[idx]
+        if sky_up is not None:
+            extra = np.zeros_like(out)
+            extra[sky_up[0]] = sky_up[1]
+            value += extra[idx]
         h = hit[idx]
         if np.any(h):
             pts = eye + depth[idx][h, None] * dd[h]
@@ -768,28 +853,39 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         return self._ground_direct(pts, wl), self._tables.resample(self._ground_diffuse(pts, nz, na), wl)
 
     def _ground_diffuse(self, pts: NDArray[np.float64], nz: int, na: int,
-                        amb_up: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+                        amb_up: NDArray[np.float64] | None = None,
+                        top_down: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
         """The diffuse part of :meth:`ground_irradiance` at the table wavelengths (n, n_table_wavelengths)
-        [W m^-2 nm^-1] on ``nz`` x ``na`` directions; ``amb_up`` as in :meth:`march`."""
+        [W m^-2 nm^-1] on ``nz`` x ``na`` directions; ``amb_up`` and ``top_down`` as in :meth:`march`."""
         tab = self._tables
         bottom = tab.parameters.bottom_radius
         ground = np.stack([pts[:, 0], pts[:, 1], np.sqrt(bottom**2 - pts[:, 0] ** 2 - pts[:, 1] ** 2)], axis=-1)
-        up = ground / bottom
+        _, e_sky = tab.ground_irradiance(ground, ground / bottom, self._sun_planet)
+        return e_sky + self._flux_change(ground, 1.0, nz, na, amb_up, top_down)
+
+    def _flux_change(self, eyes: NDArray[np.float64], side: float, nz: int, na: int,
+                     amb_up: NDArray[np.float64] | None, top_down: NDArray[np.float64] | None) -> NDArray[np.float64]:
+        """The field's change of the irradiance [W m^-2 nm^-1] at the table wavelengths (n, n_wl) on horizontal
+        planes at ``eyes`` (n, 3) [m, planet-centred], from the hemisphere above them (``side`` 1: downward light)
+        or below them (-1: upward light): ``pi mean(L - L_clear)`` over ``nz`` x ``na`` directions of equal
+        projected solid angle about each eye's vertical (the clear sky's own peaks, the aureole and the horizon,
+        need no quadrature: they cancel in the difference); ``amb_up`` and ``top_down`` as in :meth:`march`."""
+        tab = self._tables
         sun = self._sun_planet
-        _, e_sky = tab.ground_irradiance(ground, up, sun)
         # equal projected solid angle: s = sin^2(theta) uniform, E = (1/2) int ds dphi L = pi mean(L)
         s = (np.arange(nz) + 0.5) / nz
         phi = (np.arange(na) + 0.5) / na * 2.0 * math.pi
         st, ct = np.sqrt(s)[:, None], np.sqrt(1.0 - s)[:, None]
         local = np.stack([np.broadcast_to(st * np.sin(phi), (nz, na)), np.broadcast_to(st * np.cos(phi), (nz, na)),
-                          np.broadcast_to(ct, (nz, na))], axis=-1).reshape(-1, 3)  # (east, north, up)
-        diffuse = np.empty((pts.shape[0], tab.wavelengths.size))
-        for i in range(pts.shape[0]):  # one eye per call (the march takes one origin); directions vectorised
-            d = np.ascontiguousarray(local @ _rotation_to(up[i]).T)
-            rad, changed = self._composite(d, eye=ground[i], amb_up=amb_up)
-            change = rad[changed] - tab.sky_radiance(ground[i], d[changed], sun)
-            diffuse[i] = e_sky[i] + math.pi * change.sum(axis=0) / d.shape[0]
-        return diffuse
+                          np.broadcast_to(side * ct, (nz, na))], axis=-1).reshape(-1, 3)  # (east, north, up)
+        out = np.zeros((eyes.shape[0], tab.wavelengths.size))
+        for i in range(eyes.shape[0]):  # one eye per call (the march takes one origin); directions vectorised
+            up = eyes[i] / np.linalg.norm(eyes[i])
+            d = np.ascontiguousarray(local @ _rotation_to(up).T)
+            rad, changed = self._composite(d, eye=eyes[i], amb_up=amb_up, top_down=top_down)
+            change = rad[changed] - tab.sky_radiance(eyes[i], d[changed], sun)
+            out[i] = math.pi * change.sum(axis=0) / d.shape[0]
+        return out
 
     def domain_ground_irradiance(self, wavelengths: ArrayLike | None = None, *, points_per_axis: int = 8,
                                  direct_points: int = 4, zeniths: int = 32,

@@ -60,7 +60,7 @@ from ..errors import InvalidParameterError, MissingDependencyError
 from ..spectral import DEFAULT_WAVELENGTHS, REFERENCE_WAVELENGTHS, as_wavelengths, spectrum_to_xyz
 from .base import SkyModel, SunSkyMixin, check_sun_angles
 
-__all__ = ["CloudySky", "GRID_WAVELENGTHS", "MAX_CLOUD_OPTICAL_DEPTH", "cloud_column"]
+__all__ = ["CloudySky", "GRID_WAVELENGTHS", "MAX_CLOUD_OPTICAL_DEPTH", "air_spherical_albedo", "cloud_column"]
 
 #: Wavelengths [nm] at which the radiance field is solved: 380-780 nm every 25 nm (17).
 GRID_WAVELENGTHS = np.arange(380.0, 781.0, 25.0)
@@ -265,6 +265,44 @@ def slant_optical_depth(edges: NDArray[np.float64], tau: NDArray[np.float64], bo
     chord = np.maximum(dist(hi) - dist(lo), 0.0)
     k = tau / np.maximum(hi - lo, 1e-9)[:, None]
     return (k * chord[:, None]).sum(axis=0)
+
+
+def air_spherical_albedo(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, altitude: float, *,
+                         streams: int = 16) -> NDArray[np.float64]:
+    """Spherical albedo from below (n_wl,) [-] of the air above ``altitude`` [m]: the fraction of an isotropic
+    (Lambertian) upward irradiance at ``altitude`` that the air above sends back down through it (the ``s`` of the
+    adding method, [Liou2002] Sec. 6.2: a surface of albedo ``r`` under the air receives ``F / (1 - r s)``).
+
+    The air (molecules, aerosol, ozone; ``atmosphere``'s cloud layers left out) above ``altitude`` as the
+    plane-parallel layers of :func:`cloud_column`, turned upside down (a plane-parallel medium whose phase functions
+    depend on the scattering angle only, lit from below, is the reversed stack lit from above), solved by DISORT
+    ([Stamnes1988], flux only, ``streams`` streams) with isotropic light of unit flux on its top and a black floor:
+    the reflected flux. Exact for the plane-parallel air, absorption included; the sphere's curvature is left
+    out (the upward light of a field tens of kilometres wide meets the air within a few scale heights)."""
+    import disortpp
+
+    wl = np.atleast_1d(np.asarray(wavelengths, dtype=float))
+    edges, tau, ssa, moments = cloud_column(atmosphere.replace(particles=()), wl, observer_altitude=altitude)
+    above = np.flatnonzero(edges[1:] >= altitude - 1e-6)  # layers whose lower edge is at or above ``altitude``
+    out = np.zeros(wl.size)
+    if above.size == 0:
+        return out
+    rev = above[::-1]  # the layer next to ``altitude`` first
+    for k in range(wl.size):
+        cfg = disortpp.DisortConfig(int(rev.size), streams, streams)
+        cfg.flags.comp_only_fluxes = True
+        cfg.flags.use_lambertian_surface = True
+        cfg.allocate()
+        cfg.delta_tau = [float(t) for t in tau[rev, k]]
+        cfg.single_scat_albedo = [float(w) for w in ssa[rev, k]]
+        cfg.phase_function_moments = moments[rev, k, : streams + 1].tolist()
+        cfg.bc.direct_beam_flux = 0.0
+        cfg.bc.direct_beam_mu = 0.5
+        cfg.bc.isotropic_flux_top = 1.0 / math.pi  # radiance 1 / pi: a flux of 1
+        cfg.bc.surface_albedo = 0.0
+        res = disortpp.DisortSolver().solve(cfg)
+        out[k] = float(res.flux_up[0])
+    return out
 
 
 def _restore_forward_peak(rad: NDArray[np.float64], theta: NDArray[np.float64], phi: NDArray[np.float64],
