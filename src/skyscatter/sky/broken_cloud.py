@@ -328,7 +328,11 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         occupied = np.ascontiguousarray(np.repeat(np.repeat(np.repeat(blocks, b, 0), b, 1), b, 2)[:nx, :ny, :nz])
         # the march's volume: density and the three optical depths side by side, with one ghost voxel on each
         # horizontal side (wrapped or the edge repeated: the interpolation then needs no modulo), single precision
-        packed = np.stack([rho, tau_sun, above, below], axis=-1)
+        # the vertical optical depths are stored times the density, so that the march's trilinear read weights
+        # them by the cloud present (divided by the interpolated density there): a point at a cloud's side wall
+        # then has its own column's depth, not one mixed with the clear columns' zeros (vertical streaks at
+        # grazing views, docs/clouds.md)
+        packed = np.stack([rho, tau_sun, rho * above, rho * below], axis=-1)
         packed = np.pad(packed, ((1, 1), (1, 1), (0, 0), (0, 0)), mode="wrap" if f.periodic else "edge")
         vol = np.ascontiguousarray(packed, dtype=np.float32)
         # the ground's mean shadow (the sun's share of the light the ground sends up to the cloud bases)

@@ -323,9 +323,9 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
                         if q == 1:
                             ts = val
                         elif q == 2:
-                            tup = val
+                            tup = val / r
                         else:
-                            tdn = val
+                            tdn = val / r
                 else:
                     ix = int(fx) + 1
                     iy = int(fy) + 1
@@ -333,8 +333,8 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
                     if r <= 0.0:
                         continue
                     ts = float(vol[ix, iy, iz, 1])
-                    tup = float(vol[ix, iy, iz, 2])
-                    tdn = float(vol[ix, iy, iz, 3])
+                    tup = float(vol[ix, iy, iz, 2]) / r
+                    tdn = float(vol[ix, iy, iz, 3]) / r
                 if not met:
                     # phase of each octave towards the eye (a function of the ray only: the sun's rays are parallel),
                     # computed at the ray's first cloud sample (rays that meet none never need it)
