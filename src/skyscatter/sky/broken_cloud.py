@@ -507,16 +507,16 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         if idx.size == 0:
             return out, changed
         dd = d[idx]
-        clear = tab.sky_radiance(eye, dd, sun)
-        value = clear.copy()
+        value = tab.sky_radiance(eye, dd, sun)  # a new array: updated in place below
         if air is not None:
             value += air[idx]
         h = hit[idx]
         if np.any(h):
-            pts = eye + depth[idx][h, None] * dd[h]
+            ih = idx[h]  # the rays' own rows (indexing twice, rad[idx][h], copied every ray's row first)
+            pts = eye + depth[ih, None] * d[ih]
             t_air, _ = tab.aerial_perspective(eye, pts, sun)
-            behind = tab.sky_radiance(pts, dd[h], sun)
-            value[h] += t_air * (rad[idx][h] - (1.0 - tr[idx][h]) * behind)
+            behind = tab.sky_radiance(pts, d[ih], sun)
+            value[h] += t_air * (rad[ih] - (1.0 - tr[ih]) * behind)
         gsel = ground[idx]
         if np.any(gsel):
             gpts = eye + t_ground[idx][gsel, None] * dd[gsel]
@@ -528,7 +528,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
                 e_sun, _ = tab.ground_irradiance(gpts[shadowed], gpts[shadowed] / bottom, sun)
                 t_air, _ = tab.aerial_perspective(eye, gpts[shadowed], sun)
                 rows = np.flatnonzero(gsel)[shadowed]
-                value[rows] -= (t_air * tr[idx][rows] * self._light["ground_albedo"] / math.pi * e_sun
+                value[rows] -= (t_air * tr[idx[rows]] * self._light["ground_albedo"] / math.pi * e_sun
                                 * lit[shadowed])
                 changed[idx[rows]] = True
         out[idx] = np.maximum(value, 0.0)
