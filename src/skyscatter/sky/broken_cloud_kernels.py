@@ -144,7 +144,10 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
     cloud).
 
     ``vol`` (nx + 2, ny + 2, nz, 4): per voxel centre the extinction at the reference wavelength [m^-1], the
-    optical depths at the reference wavelength to the sun, to the field's top and to its base (vertically), with
+    optical depth at the reference wavelength to the sun, and the extinction times the (vertical) optical depths to
+    the field's top and to its base (divided by the interpolated extinction after the read: the depths weighted by
+    the cloud each voxel brings to the point, so that a cloud's side wall is not given its clear neighbours' zero
+    depths; docs/clouds.md, "Vertical streaks"), with
     one ghost voxel on each horizontal side (the opposite side's for periodic fields, the edge voxel repeated
     for open ones), so that the interpolation needs no modulo and no clamping in x and y; float32 (relative
     rounding 6e-8, far below the march's own error). ``occupied`` (nx, ny, nz): 1 where the voxel's block of
