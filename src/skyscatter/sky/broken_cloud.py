@@ -333,7 +333,11 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         occupied = np.ascontiguousarray(np.repeat(np.repeat(np.repeat(blocks, b, 0), b, 1), b, 2)[:nx, :ny, :nz])
         # the march's volume: density and the three optical depths side by side, with one ghost voxel on each
         # horizontal side (wrapped or the edge repeated: the interpolation then needs no modulo), single precision
-        packed = np.stack([rho, tau_sun, above, below], axis=-1)
+        # the vertical optical depths are stored times the density, so that the march's trilinear read weights
+        # them by the cloud present (divided by the interpolated density there): a point at a cloud's side wall
+        # then has its own column's depth, not one mixed with the clear columns' zeros (vertical streaks at
+        # grazing views, docs/clouds.md)
+        packed = np.stack([rho, tau_sun, rho * above, rho * below], axis=-1)
         packed = np.pad(packed, ((1, 1), (1, 1), (0, 0), (0, 0)), mode="wrap" if f.periodic else "edge")
         vol = np.ascontiguousarray(packed, dtype=np.float32)
         # the ground's mean shadow (the sun's share of the light the ground sends up to the cloud bases)
@@ -584,8 +588,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         if idx.size == 0:
             return out, changed
         dd = d[idx]
-        clear = tab.sky_radiance(eye, dd, sun)
-        value = clear.copy()
+        value = tab.sky_radiance(eye, dd, sun)  # a new array: updated in place below
         if air is not None:
             value += air[idx]
         if sky_up is not None:
@@ -594,10 +597,11 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
             value += extra[idx]
         h = hit[idx]
         if np.any(h):
-            pts = eye + depth[idx][h, None] * dd[h]
+            ih = idx[h]  # the rays' own rows (indexing twice, rad[idx][h], copied every ray's row first)
+            pts = eye + depth[ih, None] * d[ih]
             t_air, _ = tab.aerial_perspective(eye, pts, sun)
-            behind = tab.sky_radiance(pts, dd[h], sun)
-            value[h] += t_air * (rad[idx][h] - (1.0 - tr[idx][h]) * behind)
+            behind = tab.sky_radiance(pts, d[ih], sun)
+            value[h] += t_air * (rad[ih] - (1.0 - tr[ih]) * behind)
         gsel = ground[idx]
         if np.any(gsel):
             gpts = eye + t_ground[idx][gsel, None] * dd[gsel]
@@ -609,7 +613,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
                 e_sun, _ = tab.ground_irradiance(gpts[shadowed], gpts[shadowed] / bottom, sun)
                 t_air, _ = tab.aerial_perspective(eye, gpts[shadowed], sun)
                 rows = np.flatnonzero(gsel)[shadowed]
-                value[rows] -= (t_air * tr[idx][rows] * self._light["ground_albedo"] / math.pi * e_sun
+                value[rows] -= (t_air * tr[idx[rows]] * self._light["ground_albedo"] / math.pi * e_sun
                                 * lit[shadowed])
                 changed[idx[rows]] = True
         out[idx] = np.maximum(value, 0.0)
