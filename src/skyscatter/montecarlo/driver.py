@@ -49,6 +49,14 @@ PEAK_ANGLE = math.radians(10.0)
 #: (``kernels._sun_transmittance``; the sun's light there is below exp(-8) = 3e-4 of its value). math.inf: never.
 #: Clear media do not use it.
 NEE_ROULETTE_DEPTH = 8.0
+#: Splitting and roulette by importance in cloudy media (``kernels`` module docstring, "splitting"): a path's
+#: medium vertex is in class ``k`` when its next-event shadow ray's optical depth (least extinguished wavelength) is
+#: below ``k`` of :data:`SPLIT_DEPTHS`; a path that climbs ``k`` classes above its first medium vertex's is split
+#: into ``SPLIT_FACTOR ** k`` copies (each with that fraction of the weight), and one that falls back is rouletted
+#: by the same ratio. 1: off. Clear media do not use it.
+SPLIT_FACTOR = 1
+#: Optical depths [-] of the shadow ray that bound the classes of :data:`SPLIT_FACTOR`.
+SPLIT_DEPTHS = (6.0, 3.0, 1.5)
 
 
 @dataclass(frozen=True)
@@ -124,12 +132,14 @@ class Medium:
     pcdf: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros((1, 2)))
     pa: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(1))
     nee_roulette: float = math.inf
+    split: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.ones(1))
 
     @property
     def cloud_paths(self) -> bool:
         """Whether the kernels need their cloud code (a field, a forward peak, directional sampling); without it
         they run a separate compilation with that code removed (``kernels.trace_block``'s ``cloudy``)."""
-        return bool(self.field.present or self.peak_lobe >= 0 or self.ddis > 0.0 or self.nee_roulette < math.inf)
+        return bool(self.field.present or self.peak_lobe >= 0 or self.ddis > 0.0 or self.nee_roulette < math.inf
+                    or self.split[0] > 1.0)
 
     def subset(self, index: NDArray[np.int64]) -> Medium:
         """The same medium at a subset of its wavelengths."""
@@ -312,8 +322,19 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
         np.ascontiguousarray(atmosphere.solar_irradiance_at(wl), dtype=float),
         atmosphere.sun_angular_radius, field, field_exact, np.ascontiguousarray(fs, dtype=float),
         np.ascontiguousarray(fss, dtype=float), DDIS_PROBABILITY if cloudy else 0.0, ddis_lobe, peak_lobe, pval,
-        pcdf, pa, NEE_ROULETTE_DEPTH if cloudy else math.inf,
+        pcdf, pa, NEE_ROULETTE_DEPTH if cloudy else math.inf, _split_table() if cloudy else np.ones(1),
     )
+
+
+def _split_table() -> NDArray[np.float64]:
+    """The kernels' ``split``: :data:`SPLIT_FACTOR`, then the transmittances ``exp(-d)`` of :data:`SPLIT_DEPTHS`
+    (``d`` descending, so the classes' bounds ascend)."""
+    if int(SPLIT_FACTOR) < 1:
+        raise InvalidParameterError(f"SPLIT_FACTOR must be a whole number >= 1; got {SPLIT_FACTOR!r}")
+    if int(SPLIT_FACTOR) == 1:
+        return np.ones(1)
+    depths = sorted((float(d) for d in SPLIT_DEPTHS), reverse=True)
+    return np.array([float(int(SPLIT_FACTOR))] + [math.exp(-d) for d in depths])
 
 
 # --------------------------------------------------------------------------------------------- validation
@@ -395,7 +416,7 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
                         m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.scat, m.lobe, m.lobe_g,
                         m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe,
                         f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa,
-                        m.nee_roulette, _CLOUDY if m.cloud_paths else None, seed, group, batch0, n_batches,
+                        m.nee_roulette, m.split, _CLOUDY if m.cloud_paths else None, seed, group, batch0, n_batches,
                         batch_size, sums, sumsq, verts)
     return sums, sumsq, verts
 
