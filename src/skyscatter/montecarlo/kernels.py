@@ -74,8 +74,23 @@ Estimator (backward paths from the observer; [Veach1997] Ch. 8-9):
 * directional importance sampling towards the sun (the "DDIS" of [BurasMayer2011] Sec. 3.3, here for backward
   paths), optional: with probability ``ddis`` the new direction is drawn from the cloud's own phase function (the
   hero's table) centred on the sun, otherwise from the medium's lobes, and every wavelength's direction density
-  is the mixture of the two. Unbiased; measured not to pay under overcast layers (0.6-0.7x the efficiency at
-  equal CPU time, docs/clouds.md), so the driver passes ``ddis = 0`` and the paths are those of plain sampling;
+  is the mixture of the two. With the forward peak split off, the directions about the sun are drawn from the
+  cloud's phase function without its peak (``dval``, the lobe of the next-event estimates), and the driver's
+  ``DDIS_DEPTH`` restricts them to vertices whose shadow ray's transmittance (largest over the wavelengths, the
+  same for every hero) exceeds ``ddis_gate``: the mixture's weight is then a function of the path so far, the same
+  for every wavelength's density. Unbiased; measured not to pay under overcast layers (0.6-0.7x the efficiency
+  at equal CPU time everywhere with the full table, 0.6-0.85x near the top with the table without its peak,
+  docs/clouds.md), so the driver passes ``ddis = 0`` and the paths are those of plain sampling;
+* splitting and roulette by importance (cloudy media, optional; [ArvoKirk1990]; the driver's ``SPLIT_FACTOR``,
+  ``SPLIT_DEPTHS``): a medium vertex is in class ``k`` when its shadow ray's transmittance (largest over the
+  wavelengths) exceeds ``k`` of the bounds ``split[1:]``; a copy whose class is ``k`` above the class of its path's
+  first medium vertex should carry ``split[0]^-k`` of the path's weight (``ws``): with more it is split into
+  ``round(ws / target)`` copies (each ``ws / m``; each new copy draws its own direction at the vertex and waits on a
+  stack of at most ``_SPLIT_STACK``), with less it survives with probability ``ws / target`` and is divided by it.
+  Every copy's estimates are multiplied by its ``ws``, and the path's estimate is the sum over its copies. The
+  decisions depend on the path only (not on the hero), so the spectral MIS weights are untouched. Unbiased
+  (tested against the estimator without it). The driver splits in two where the shadow ray's optical depth is
+  below 4 (+7-13 % efficiency under the overcast of optical depth 15, docs/clouds.md);
 * scattering direction: the lobe (Rayleigh, each particle component, the cloud field) chosen by the hero's
   scattering coefficients at the collision point, the cosine drawn by the exact inverse CDFs of
   :mod:`skyscatter.atmosphere.phase` (Rayleigh; Henyey-Greenstein; a Cornette-Shanks aerosol is sampled as
@@ -791,17 +806,23 @@ def _without_peak(mu, peak_lobe, tmu, pval, pa, pk, sc, ph, val):
 
 
 @inline
-def _scatter(dx, dy, dz, hero, st, use_ddis, ddis, ddis_lobe, ddis_active, sx, sy, sz, active, lobe, lobe_g, lobe_tab,
-             tmu, tval, tcdf, sc, sst, ph, val, val2, ph2, qs2, f, p):
+def _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy, sz, active, lobe, lobe_g, lobe_tab,
+             tmu, tval, tcdf, sc, sst, ph, val, val2, ph2, qs2, f, p, dval, dcdf):
     """The scattering direction at a medium vertex (incoming direction ``d``, the medium there in ``sc``, ``sst``):
     the lobe chosen by the hero's scattering coefficients and its cosine drawn for the hero, or (with probability
-    ``ddis``) about the sun; multiplies every wavelength's ``f`` by its phase sum and ``p`` by its density of that
-    direction, normalised (module docstring). Returns the new direction."""
+    ``eps``) about the sun; multiplies every wavelength's ``f`` by its phase sum and ``p`` by its density of that
+    direction, normalised (module docstring). With a table ``dval``, ``dcdf`` (n_wl, m) on ``tmu`` (more than 2
+    nodes; the cloud's phase function without its forward peak) the direction about the sun is drawn from it
+    instead. Returns the new direction."""
     n = f.shape[0]
     n_active = active.shape[0]
-    if use_ddis and next_uniform(st) < ddis:
-        ms = _sample_lobe(lobe[ddis_lobe], lobe_g[ddis_lobe], lobe_tab[ddis_lobe], hero,
-                          next_uniform(st), tmu, tval, tcdf)
+    drest = dval.shape[1] > 2
+    if use_ddis and eps > 0.0 and next_uniform(st) < eps:
+        if drest:
+            ms = phase_table_inverse_cdf(tmu, dval, dcdf, hero, next_uniform(st))
+        else:
+            ms = _sample_lobe(lobe[ddis_lobe], lobe_g[ddis_lobe], lobe_tab[ddis_lobe], hero,
+                              next_uniform(st), tmu, tval, tcdf)
         ex, ey, ez = direction_about_axis(sx, sy, sz, ms, 2.0 * math.pi * next_uniform(st))
         mu = min(max(ex * dx + ey * dy + ez * dz, -1.0), 1.0)
         dx, dy, dz = ex, ey, ez
@@ -819,15 +840,18 @@ def _scatter(dx, dy, dz, hero, st, use_ddis, ddis, ddis_lobe, ddis_active, sx, s
                           tval, tcdf)
         dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
     _phase_sums(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, True)
-    if use_ddis:
+    if use_ddis and eps > 0.0:
         # each wavelength's density of that direction: the lobes' mixture or, with
         # probability ddis, the cloud's phase function of its own wavelength about the sun
-        _lobe_values(dx * sx + dy * sy + dz * sz, ddis_active, lobe, lobe_g, lobe_tab, tmu, tval,
-                     ph2, qs2)
+        if drest:
+            phase_table_values(tmu, dval, dx * sx + dy * sy + dz * sz, ph2[ddis_lobe])
+        else:
+            _lobe_values(dx * sx + dy * sy + dz * sz, ddis_active, lobe, lobe_g, lobe_tab, tmu, tval,
+                         ph2, qs2)
         for i in range(n):
             f[i] *= val[i]
             lobes = val2[i] / sst[i] if sst[i] > 0.0 else 0.0
-            p[i] *= (1.0 - ddis) * lobes + ddis * ph2[ddis_lobe, i]
+            p[i] *= (1.0 - eps) * lobes + eps * ph2[ddis_lobe, i]
     else:
         for i in range(n):
             f[i] *= val[i]
@@ -839,8 +863,8 @@ def _scatter(dx, dy, dz, hero, st, use_ddis, ddis, ddis_lobe, ddis_active, sx, s
 @kernel
 def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, scat,
                 lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
-                fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, nee_roulette, split, cloudy, seed, group,
-                batch0, n_batches, batch_size, sums, sumsq, vertices_out):
+                fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, nee_roulette, split, dval, dcdf,
+                ddis_gate, cloudy, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
     """Trace ``n_batches`` batches of ``batch_size`` paths for each entry of a block; one wavelength group.
 
     Parameters (all SI; arrays float64 unless stated)
@@ -859,7 +883,12 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     fvf ... fre : the packed cloud field (:class:`.tracking.PackedField`; ``fvf[PRESENT] = 0`` for none);
     fs, fss : (n_wl,) its extinction and scattering per unit density [-].
     ddis, ddis_lobe : probability of drawing a scattering direction about the sun instead (0: never), from the
-    phase function of lobe ``ddis_lobe`` (the cloud's) centred on the sun; see the module docstring.
+    phase function of lobe ``ddis_lobe`` (the cloud's) centred on the sun; see the module docstring. dval, dcdf
+    (n_wl, m): with a forward peak split off, that lobe without its peak, normalised (the directions about the sun
+    are drawn from it instead). ddis_gate: directions about the sun only at medium vertices whose next-event
+    transmittance (largest over the wavelengths) exceeds it (0: everywhere).
+    split : (1 + k,) importance splitting (module docstring): the factor (1: off), then the transmittances bounding
+    the k classes, ascending.
     peak_lobe : the lobe whose forward peak is split off (-1: none; module docstring, "forward peak"); pval, pcdf
     (n_wl, m): its peak, normalised, as a table on ``tmu`` (0 below the split cosine); pa (n_wl,): the peak's
     fraction of the lobe's scattering.
@@ -1080,11 +1109,12 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                             # importance splitting / roulette (cloudy media; module docstring, "splitting"), then
                             # the scattering direction of this copy and of each new one
                             m_split = 1
+                            tm = 0.0
+                            if (split_on or use_ddis) and live:
+                                for i in range(n):
+                                    tm = max(tm, trs[i])
+                            eps = ddis if use_ddis and tm > ddis_gate else 0.0
                             if split_on:
-                                tm = 0.0
-                                if live:
-                                    for i in range(n):
-                                        tm = max(tm, trs[i])
                                 cls = 0
                                 for k in range(1, split.shape[0]):
                                     if tm > split[k]:
@@ -1103,9 +1133,9 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                                         f0[i] = f[i]
                                         p0[i] = p[i]
                             for _ in range(m_split - 1):
-                                ex, ey, ez = _scatter(dx, dy, dz, hero, st, use_ddis, ddis, ddis_lobe, ddis_active, sx,
+                                ex, ey, ez = _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx,
                                                       sy, sz, active, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, sc, sst,
-                                                      ph, val, val2, ph2, qs2, f, p)
+                                                      ph, val, val2, ph2, qs2, f, p, dval, dcdf)
                                 stk[nstk, 0] = px
                                 stk[nstk, 1] = py
                                 stk[nstk, 2] = pz
@@ -1119,9 +1149,9 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                                     f[i] = f0[i]
                                     p[i] = p0[i]
                                 nstk += 1
-                            dx, dy, dz = _scatter(dx, dy, dz, hero, st, use_ddis, ddis, ddis_lobe, ddis_active, sx, sy,
+                            dx, dy, dz = _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy,
                                                   sz, active, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, sc, sst, ph, val,
-                                                  val2, ph2, qs2, f, p)
+                                                  val2, ph2, qs2, f, p, dval, dcdf)
                         else:
                             # ground (Lambertian)
                             px += t_end * dx
