@@ -16,9 +16,10 @@
 Wavelengths: 11 from 360 to 760 nm (40 nm steps). The issue asks for 320-720 nm, but the ozone cross-sections
 of the Earth defaults (Serdyuchenko et al. 2014) start at 360 nm and the medium refuses wavelengths outside its
 spectra. Usage: ``python benchmarks/bench_montecarlo.py [--directions N] [--target 0.01] [--no-cluster]
-[--overcast [--overcast-samples N] [--roulette-ab]]`` (``--roulette-ab``: the overcast pilot with and without
-the shadow-ray roulette, alternating). The clear-sky throughput against the kernels before the clouds:
-``benchmarks/bench_montecarlo_clear_ab.py``.
+[--overcast [--overcast-samples N] [--roulette-ab | --split-ab]]`` (``--roulette-ab``: the overcast pilot with and
+without the shadow-ray roulette, alternating; ``--split-ab``: with and without the importance splitting,
+``driver.SPLIT_FACTOR`` 1 / default, 4096 paths, 3 rounds, seeds 1-3). The clear-sky throughput against the
+kernels before the clouds: ``benchmarks/bench_montecarlo_clear_ab.py``.
 Run on an otherwise idle machine: other processes on the cores inflate every figure.
 """
 
@@ -48,6 +49,8 @@ def main() -> None:
     ap.add_argument("--overcast-samples", type=int, default=None)
     ap.add_argument("--roulette-ab", action="store_true",
                     help="with --overcast: only the pilot, with and without the shadow-ray roulette, alternating")
+    ap.add_argument("--split-ab", action="store_true",
+                    help="with --overcast: only the pilot, with and without the importance splitting, alternating")
     args = ap.parse_args()
     if args.overcast:
         overcast(args)
@@ -111,6 +114,9 @@ def overcast(args) -> None:
     if args.roulette_ab:
         roulette_ab(atm, sub, sz)
         return
+    if args.split_ab:
+        split_ab(atm, sub, sz)
+        return
     c0 = time.process_time()
     pilot = sky_radiance(atm, sub, WAVELENGTHS, sun_zenith=sz, samples=1024, scheduler="synchronous", seed=1)
     cpu = time.process_time() - c0
@@ -163,6 +169,34 @@ def roulette_ab(atm, sub, sz, rounds=2) -> None:
                   f"path, per-path relative std {sd:.2f}, efficiency {rate / sd**2:,.0f}; 1 %: {need:,.0f} paths per "
                   f"direction, {200 * need / rate / 2 / 60:.1f} min on 2 cores")
     driver.NEE_ROULETTE_DEPTH = default
+    print(f"load average at the end {os.getloadavg()[0]:.1f}")
+
+
+def split_ab(atm, sub, sz, rounds=3, samples=4096) -> None:
+    """The overcast pilot without and with the importance splitting (``driver.SPLIT_FACTOR`` 1 / default),
+    alternating ``rounds`` times in this process (seed 1 + round): the figures of :func:`roulette_ab`, and per round
+    the z-scores of the two estimates' difference."""
+    from skyscatter.montecarlo import driver
+
+    default = driver.SPLIT_FACTOR
+    for k in range(rounds):
+        out = {}
+        for factor in (1, default):
+            driver.SPLIT_FACTOR = factor
+            c0 = time.process_time()
+            r = sky_radiance(atm, sub, WAVELENGTHS, sun_zenith=sz, samples=samples, scheduler="synchronous", seed=1 + k)
+            rate = sub.shape[0] * r.samples / (time.process_time() - c0)
+            sd = float(np.median(r.relative_stderr)) * math.sqrt(r.samples)
+            need = r.samples * (sd / math.sqrt(r.samples) / 0.01) ** 2
+            out[factor] = r
+            print(f"   split factor {factor}: {rate:,.0f} paths per CPU-second, {r.mean_vertices:.1f} events per path, "
+                  f"per-path relative std {sd:.2f}, efficiency {rate / sd**2:,.0f}; 1 %: {need:,.0f} paths per "
+                  f"direction, {200 * need / rate / 2 / 60:.1f} min on 2 cores (load {os.getloadavg()[0]:.1f})")
+        a, b = out[1], out[default]
+        z = (b.radiance - a.radiance) / np.hypot(a.stderr, b.stderr)
+        print(f"   round {k}: z split - plain: mean {z.mean():+.2f}, std {z.std():.2f}, "
+              f"largest |z| {np.abs(z).max():.2f}")
+    driver.SPLIT_FACTOR = default
     print(f"load average at the end {os.getloadavg()[0]:.1f}")
 
 

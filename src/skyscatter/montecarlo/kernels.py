@@ -74,8 +74,23 @@ Estimator (backward paths from the observer; [Veach1997] Ch. 8-9):
 * directional importance sampling towards the sun (the "DDIS" of [BurasMayer2011] Sec. 3.3, here for backward
   paths), optional: with probability ``ddis`` the new direction is drawn from the cloud's own phase function (the
   hero's table) centred on the sun, otherwise from the medium's lobes, and every wavelength's direction density
-  is the mixture of the two. Unbiased; measured not to pay under overcast layers (0.6-0.7x the efficiency at
-  equal CPU time, docs/clouds.md), so the driver passes ``ddis = 0`` and the paths are those of plain sampling;
+  is the mixture of the two. With the forward peak split off, the directions about the sun are drawn from the
+  cloud's phase function without its peak (``dval``, the lobe of the next-event estimates), and the driver's
+  ``DDIS_DEPTH`` restricts them to vertices whose shadow ray's transmittance (largest over the wavelengths, the
+  same for every hero) exceeds ``ddis_gate``: the mixture's weight is then a function of the path so far, the same
+  for every wavelength's density. Unbiased; measured not to pay under overcast layers (0.6-0.7x the efficiency
+  at equal CPU time everywhere with the full table, 0.6-0.85x near the top with the table without its peak,
+  docs/clouds.md), so the driver passes ``ddis = 0`` and the paths are those of plain sampling;
+* splitting and roulette by importance (cloudy media, optional; [ArvoKirk1990]; the driver's ``SPLIT_FACTOR``,
+  ``SPLIT_DEPTHS``): a medium vertex is in class ``k`` when its shadow ray's transmittance (largest over the
+  wavelengths) exceeds ``k`` of the bounds ``split[1:]``; a copy whose class is ``k`` above the class of its path's
+  first medium vertex should carry ``split[0]^-k`` of the path's weight (``ws``): with more it is split into
+  ``round(ws / target)`` copies (each ``ws / m``; each new copy draws its own direction at the vertex and waits on a
+  stack of at most ``_SPLIT_STACK``), with less it survives with probability ``ws / target`` and is divided by it.
+  Every copy's estimates are multiplied by its ``ws``, and the path's estimate is the sum over its copies. The
+  decisions depend on the path only (not on the hero), so the spectral MIS weights are untouched. Unbiased
+  (tested against the estimator without it). The driver splits in two where the shadow ray's optical depth is
+  below 4 (+7-13 % efficiency under the overcast of optical depth 15, docs/clouds.md);
 * scattering direction: the lobe (Rayleigh, each particle component, the cloud field) chosen by the hero's
   scattering coefficients at the collision point, the cosine drawn by the exact inverse CDFs of
   :mod:`skyscatter.atmosphere.phase` (Rayleigh; Henyey-Greenstein; a Cornette-Shanks aerosol is sampled as
@@ -700,6 +715,8 @@ _PEAK_MAX_ORDER = 64
 #: nothing, and they cost several rays each.
 _PEAK_PROBE_MIN = 0.1
 _PEAK_PROBE_GAIN = 100.0
+#: Most copies of a path waiting to be traced (importance splitting; a split that would exceed it is made smaller).
+_SPLIT_STACK = 64
 
 
 @helper
@@ -788,11 +805,66 @@ def _without_peak(mu, peak_lobe, tmu, pval, pa, pk, sc, ph, val):
         val[i] -= sc[peak_lobe, i] * min(ph[peak_lobe, i], pa[i] * pk[i])
 
 
+@inline
+def _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy, sz, active, lobe, lobe_g, lobe_tab,
+             tmu, tval, tcdf, sc, sst, ph, val, val2, ph2, qs2, f, p, dval, dcdf):
+    """The scattering direction at a medium vertex (incoming direction ``d``, the medium there in ``sc``, ``sst``):
+    the lobe chosen by the hero's scattering coefficients and its cosine drawn for the hero, or (with probability
+    ``eps``) about the sun; multiplies every wavelength's ``f`` by its phase sum and ``p`` by its density of that
+    direction, normalised (module docstring). With a table ``dval``, ``dcdf`` (n_wl, m) on ``tmu`` (more than 2
+    nodes; the cloud's phase function without its forward peak) the direction about the sun is drawn from it
+    instead. Returns the new direction."""
+    n = f.shape[0]
+    n_active = active.shape[0]
+    drest = dval.shape[1] > 2
+    if use_ddis and eps > 0.0 and next_uniform(st) < eps:
+        if drest:
+            ms = phase_table_inverse_cdf(tmu, dval, dcdf, hero, next_uniform(st))
+        else:
+            ms = _sample_lobe(lobe[ddis_lobe], lobe_g[ddis_lobe], lobe_tab[ddis_lobe], hero,
+                              next_uniform(st), tmu, tval, tcdf)
+        ex, ey, ez = direction_about_axis(sx, sy, sz, ms, 2.0 * math.pi * next_uniform(st))
+        mu = min(max(ex * dx + ey * dy + ez * dz, -1.0), 1.0)
+        dx, dy, dz = ex, ey, ez
+    else:
+        u = next_uniform(st) * sst[hero]
+        pick = active[n_active - 1]
+        acc = 0.0
+        for a in range(n_active):
+            c = active[a]
+            acc += sc[c, hero]
+            if u < acc:
+                pick = c
+                break
+        mu = _sample_lobe(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st), tmu,
+                          tval, tcdf)
+        dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
+    _phase_sums(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, True)
+    if use_ddis and eps > 0.0:
+        # each wavelength's density of that direction: the lobes' mixture or, with
+        # probability ddis, the cloud's phase function of its own wavelength about the sun
+        if drest:
+            phase_table_values(tmu, dval, dx * sx + dy * sy + dz * sz, ph2[ddis_lobe])
+        else:
+            _lobe_values(dx * sx + dy * sy + dz * sz, ddis_active, lobe, lobe_g, lobe_tab, tmu, tval,
+                         ph2, qs2)
+        for i in range(n):
+            f[i] *= val[i]
+            lobes = val2[i] / sst[i] if sst[i] > 0.0 else 0.0
+            p[i] *= (1.0 - eps) * lobes + eps * ph2[ddis_lobe, i]
+    else:
+        for i in range(n):
+            f[i] *= val[i]
+            p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
+    _normalise(f, p, n)
+    return dx, dy, dz
+
+
 @kernel
 def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, scat,
                 lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
-                fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, nee_roulette, cloudy, seed, group, batch0,
-                n_batches, batch_size, sums, sumsq, vertices_out):
+                fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, nee_roulette, split, dval, dcdf,
+                ddis_gate, cloudy, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
     """Trace ``n_batches`` batches of ``batch_size`` paths for each entry of a block; one wavelength group.
 
     Parameters (all SI; arrays float64 unless stated)
@@ -811,7 +883,12 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     fvf ... fre : the packed cloud field (:class:`.tracking.PackedField`; ``fvf[PRESENT] = 0`` for none);
     fs, fss : (n_wl,) its extinction and scattering per unit density [-].
     ddis, ddis_lobe : probability of drawing a scattering direction about the sun instead (0: never), from the
-    phase function of lobe ``ddis_lobe`` (the cloud's) centred on the sun; see the module docstring.
+    phase function of lobe ``ddis_lobe`` (the cloud's) centred on the sun; see the module docstring. dval, dcdf
+    (n_wl, m): with a forward peak split off, that lobe without its peak, normalised (the directions about the sun
+    are drawn from it instead). ddis_gate: directions about the sun only at medium vertices whose next-event
+    transmittance (largest over the wavelengths) exceeds it (0: everywhere).
+    split : (1 + k,) importance splitting (module docstring): the factor (1: off), then the transmittances bounding
+    the k classes, ascending.
     peak_lobe : the lobe whose forward peak is split off (-1: none; module docstring, "forward peak"); pval, pcdf
     (n_wl, m): its peak, normalised, as a table on ``tmu`` (0 below the split cosine); pa (n_wl,): the peak's
     fraction of the lobe's scattering.
@@ -872,6 +949,12 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     stt3 = np.empty(n)
     sst3 = np.empty(n)
     chain = np.empty((_PEAK_MAX_ORDER, 3))
+    split_on = clouds_on and split[0] > 1.0
+    stk = np.empty((_SPLIT_STACK, 7))
+    stk_f = np.empty((_SPLIT_STACK, n))
+    stk_p = np.empty((_SPLIT_STACK, n))
+    f0 = np.empty(n)
+    p0 = np.empty(n)
     kmin = np.empty(nc)
     for q in range(nc):
         kmin[q] = coef[0, q]
@@ -925,197 +1008,221 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                 dx, dy, dz = d0x, d0y, d0z
                 first = True
                 vertices = 0
-                while True:
-                    t_end, ground = _exit_distance(px, py, pz, dx, dy, dz, rb, rt)
-                    collided = False
-                    forced = first and not ground
-                    if forced and field:
-                        ta, tb = field_box_hit(px, py, pz, dx, dy, dz, t_end, fvf)
-                        forced = ta >= tb
-                    rho_f = 0.0
-                    if forced:
-                        _, _, npc = _march(px, py, pz, dx, dy, dz, t_end, np.inf, kh, rb, edges, layers, nlay, tot,
-                                           tmp, rec, True)
-                        tau_tot = _dot(kh, tot)
-                        if tau_tot <= 0.0:
-                            break
-                        u = next_uniform(st)
-                        target = -math.log1p(u * math.expm1(-tau_tot))
-                        t, reached = _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, kh, rb, layers,
-                                                         nlay, rec, npc, cols, tmp)
-                        collided = True
-                    else:
-                        u = next_uniform(st)
-                        target = -math.log1p(-u)
-                        if field:
-                            t, reached, rho_f = _free_path(px, py, pz, dx, dy, dz, t_end, target, kh, hero, field, rb,
-                                                           edges, layers, nlay, cols, tmp, rec, fs, fsmax, fvf, fvi,
-                                                           frho, fbmax, fbmin, fxe, fye, fre, f, p, st, fstate)
-                        else:
-                            # the shells alone, without the call (the clear sky's paths: 9 % of their time)
-                            t, reached, _ = _march(px, py, pz, dx, dy, dz, t_end, target, kh, rb, edges, layers, nlay,
-                                                   cols, tmp, rec, True)
-                            if not reached:
-                                t = t_end
-                        if reached:
-                            collided = True
-                        elif not ground:
-                            break  # escaped to space; the sun is reached by NEE only
-                    if collided:
-                        px, py, pz = _collide(px, py, pz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers,
-                                              nlay, coef_t, scat_t, fs, fss, cols, dens, sc, stt, sst, tau)
+                ws = 1.0  # the copy's share of the path's weight (splitting; 1 without)
+                c_ref = -1  # the class of the path's first medium vertex (splitting)
+                nstk = 0
+                while True:  # the path, then each copy split off it
+                    while True:
+                        t_end, ground = _exit_distance(px, py, pz, dx, dy, dz, rb, rt)
+                        collided = False
+                        forced = first and not ground
+                        if forced and field:
+                            ta, tb = field_box_hit(px, py, pz, dx, dy, dz, t_end, fvf)
+                            forced = ta >= tb
+                        rho_f = 0.0
                         if forced:
-                            _optical_depths(coef_t, tot, tau2)
-                        for i in range(n):
-                            tr = math.exp(-tau[i])
-                            pdf = stt[i] * tr
+                            _, _, npc = _march(px, py, pz, dx, dy, dz, t_end, np.inf, kh, rb, edges, layers, nlay, tot,
+                                               tmp, rec, True)
+                            tau_tot = _dot(kh, tot)
+                            if tau_tot <= 0.0:
+                                break
+                            u = next_uniform(st)
+                            target = -math.log1p(u * math.expm1(-tau_tot))
+                            t, reached = _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, kh, rb, layers,
+                                                             nlay, rec, npc, cols, tmp)
+                            collided = True
+                        else:
+                            u = next_uniform(st)
+                            target = -math.log1p(-u)
+                            if field:
+                                t, reached, rho_f = _free_path(px, py, pz, dx, dy, dz, t_end, target, kh, hero, field,
+                                                               rb, edges, layers, nlay, cols, tmp, rec, fs, fsmax, fvf,
+                                                               fvi, frho, fbmax, fbmin, fxe, fye, fre, f, p, st, fstate)
+                            else:
+                                # the shells alone, without the call (the clear sky's paths: 9 % of their time)
+                                t, reached, _ = _march(px, py, pz, dx, dy, dz, t_end, target, kh, rb, edges, layers,
+                                                       nlay, cols, tmp, rec, True)
+                                if not reached:
+                                    t = t_end
+                            if reached:
+                                collided = True
+                            elif not ground:
+                                break  # escaped to space; the sun is reached by NEE only
+                        if collided:
+                            px, py, pz = _collide(px, py, pz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers,
+                                                  nlay, coef_t, scat_t, fs, fss, cols, dens, sc, stt, sst, tau)
                             if forced:
-                                ttot = -math.expm1(-tau2[i])
-                                pdf = pdf / ttot if ttot > 0.0 else 0.0
-                            f[i] *= tr
-                            p[i] *= pdf
-                        _normalise(f, p, n)
-                        if sst[hero] <= 0.0:
-                            break  # absorbed for the hero: no continuation can be sampled
-                        # next-event estimation to the sun
-                        wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
-                        te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
-                        tsun = 0.0
-                        if blocked:
-                            live = False
-                        elif clouds_on:
-                            live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb,
-                                                      edges, layers, nlay, fs, fsmax, fsmin, fvf, fvi, frho, fbmax,
-                                                      fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf, trs)
-                        else:
-                            _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay,
-                                                  tot, tmp, rec, False)
-                            live = not opaque
-                            if live:
-                                _transmittances(coef_t, tot, tau, trs)
-                        if live:
-                            mw = wx * dx + wy * dy + wz * dz
-                            _phase_sums(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, False)
-                            if peak and not first:
-                                _without_peak(mw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
+                                _optical_depths(coef_t, tot, tau2)
                             for i in range(n):
-                                contrib[i] += f[i] * val[i] * esun[i] * trs[i]
-                            tsun = trs[hero]
-                        # the sun through a chain of forward-peak scatterings (module docstring), probed with
-                        # probability 1 where the sun is seen, _PEAK_PROBE_MIN where it is not
-                        qprobe = 1.0
-                        if peak:
-                            qprobe = min(1.0, max(_PEAK_PROBE_MIN, _PEAK_PROBE_GAIN * tsun))
-                        if peak and (qprobe >= 1.0 or next_uniform(st) < qprobe):
-                            alive, wx, wy, wz = _peak_probe(
-                                px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nlay, coef_t, scat_t, kh,
-                                kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
-                                fre, fs, fss, fsmax, fsmin, rr_depth, st, fstate, cols, tot, tmp, rec, dens, sc3, stt3,
-                                sst3, tau, trf, pk, fp, pp, chain, gch)
-                            if alive:
-                                mw = wx * dx + wy * dy + wz * dz
-                                _phase_sums(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, False)
-                                if not first:
-                                    _without_peak(mw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
-                                for i in range(n):
-                                    contrib[i] += f[i] * val[i] * gch[i] / qprobe
-                        # scattering direction: lobe chosen by the hero's scattering coefficients, or (with
-                        # probability ddis) about the sun
-                        if use_ddis and next_uniform(st) < ddis:
-                            ms = _sample_lobe(lobe[ddis_lobe], lobe_g[ddis_lobe], lobe_tab[ddis_lobe], hero,
-                                              next_uniform(st), tmu, tval, tcdf)
-                            ex, ey, ez = direction_about_axis(sx, sy, sz, ms, 2.0 * math.pi * next_uniform(st))
-                            mu = min(max(ex * dx + ey * dy + ez * dz, -1.0), 1.0)
-                            dx, dy, dz = ex, ey, ez
-                        else:
-                            u = next_uniform(st) * sst[hero]
-                            pick = active[n_active - 1]
-                            acc = 0.0
-                            for a in range(n_active):
-                                c = active[a]
-                                acc += sc[c, hero]
-                                if u < acc:
-                                    pick = c
-                                    break
-                            mu = _sample_lobe(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st), tmu,
-                                              tval, tcdf)
-                            dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
-                        _phase_sums(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, True)
-                        if use_ddis:
-                            # each wavelength's density of that direction: the lobes' mixture or, with
-                            # probability ddis, the cloud's phase function of its own wavelength about the sun
-                            _lobe_values(dx * sx + dy * sy + dz * sz, ddis_active, lobe, lobe_g, lobe_tab, tmu, tval,
-                                         ph2, qs2)
-                            for i in range(n):
-                                f[i] *= val[i]
-                                lobes = val2[i] / sst[i] if sst[i] > 0.0 else 0.0
-                                p[i] *= (1.0 - ddis) * lobes + ddis * ph2[ddis_lobe, i]
-                        else:
-                            for i in range(n):
-                                f[i] *= val[i]
-                                p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
-                        _normalise(f, p, n)
-                    else:
-                        # ground (Lambertian)
-                        px += t_end * dx
-                        py += t_end * dy
-                        pz += t_end * dz
-                        rr = math.sqrt(px * px + py * py + pz * pz)
-                        nx, ny, nz = px / rr, py / rr, pz / rr
-                        px, py, pz = nx * rb, ny * rb, nz * rb
-                        _optical_depths(coef_t, cols, tau)
-                        for i in range(n):
-                            tr = math.exp(-tau[i])
-                            f[i] *= tr
-                            p[i] *= tr
-                        _normalise(f, p, n)
-                        wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
-                        cs = wx * nx + wy * ny + wz * nz
-                        if cs > 0.0:
+                                tr = math.exp(-tau[i])
+                                pdf = stt[i] * tr
+                                if forced:
+                                    ttot = -math.expm1(-tau2[i])
+                                    pdf = pdf / ttot if ttot > 0.0 else 0.0
+                                f[i] *= tr
+                                p[i] *= pdf
+                            _normalise(f, p, n)
+                            if sst[hero] <= 0.0:
+                                break  # absorbed for the hero: no continuation can be sampled
+                            # next-event estimation to the sun
+                            wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
                             te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
-                            if clouds_on:
+                            tsun = 0.0
+                            if blocked:
+                                live = False
+                            elif clouds_on:
                                 live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb,
                                                           edges, layers, nlay, fs, fsmax, fsmin, fvf, fvi, frho, fbmax,
                                                           fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf,
                                                           trs)
                             else:
-                                live = _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges,
-                                                             layers, nlay, tot, tmp, rec, tau, trs)
+                                _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers,
+                                                      nlay, tot, tmp, rec, False)
+                                live = not opaque
+                                if live:
+                                    _transmittances(coef_t, tot, tau, trs)
                             if live:
+                                mw = wx * dx + wy * dy + wz * dz
+                                _phase_sums(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, False)
+                                if peak and not first:
+                                    _without_peak(mw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
                                 for i in range(n):
-                                    contrib[i] += f[i] * albedo[i] / math.pi * cs * esun[i] * trs[i]
-                        if peak:
-                            alive, wx, wy, wz = _peak_probe(
-                                px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nlay, coef_t, scat_t, kh,
-                                kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
-                                fre, fs, fss, fsmax, fsmin, rr_depth, st, fstate, cols, tot, tmp, rec, dens, sc3, stt3,
-                                sst3, tau, trf, pk, fp, pp, chain, gch)
+                                    contrib[i] += ws * f[i] * val[i] * esun[i] * trs[i]
+                                tsun = trs[hero]
+                            # the sun through a chain of forward-peak scatterings (module docstring), probed with
+                            # probability 1 where the sun is seen, _PEAK_PROBE_MIN where it is not
+                            qprobe = 1.0
+                            if peak:
+                                qprobe = min(1.0, max(_PEAK_PROBE_MIN, _PEAK_PROBE_GAIN * tsun))
+                            if peak and (qprobe >= 1.0 or next_uniform(st) < qprobe):
+                                alive, wx, wy, wz = _peak_probe( px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges,
+                                    layers, nlay, coef_t, scat_t, kh, kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf,
+                                    fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth, st, fstate,
+                                    cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain, gch)
+                                if alive:
+                                    mw = wx * dx + wy * dy + wz * dz
+                                    _phase_sums(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, False)
+                                    if not first:
+                                        _without_peak(mw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
+                                    for i in range(n):
+                                        contrib[i] += ws * f[i] * val[i] * gch[i] / qprobe
+                            # importance splitting / roulette (cloudy media; module docstring, "splitting"), then
+                            # the scattering direction of this copy and of each new one
+                            m_split = 1
+                            tm = 0.0
+                            if (split_on or use_ddis) and live:
+                                for i in range(n):
+                                    tm = max(tm, trs[i])
+                            eps = ddis if use_ddis and tm > ddis_gate else 0.0
+                            if split_on:
+                                cls = 0
+                                for k in range(1, split.shape[0]):
+                                    if tm > split[k]:
+                                        cls += 1
+                                if c_ref < 0:
+                                    c_ref = cls
+                                ratio = ws * split[0] ** (cls - c_ref)
+                                if ratio < 0.75:
+                                    if next_uniform(st) >= ratio:
+                                        break  # this copy ends (roulette: it fell to a less important class)
+                                    ws /= ratio
+                                elif ratio > 1.5:
+                                    m_split = min(int(ratio + 0.5), _SPLIT_STACK - nstk + 1)
+                                    ws /= m_split
+                                    for i in range(n):
+                                        f0[i] = f[i]
+                                        p0[i] = p[i]
+                            for _ in range(m_split - 1):
+                                ex, ey, ez = _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx,
+                                                      sy, sz, active, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, sc, sst,
+                                                      ph, val, val2, ph2, qs2, f, p, dval, dcdf)
+                                stk[nstk, 0] = px
+                                stk[nstk, 1] = py
+                                stk[nstk, 2] = pz
+                                stk[nstk, 3] = ex
+                                stk[nstk, 4] = ey
+                                stk[nstk, 5] = ez
+                                stk[nstk, 6] = ws
+                                for i in range(n):
+                                    stk_f[nstk, i] = f[i]
+                                    stk_p[nstk, i] = p[i]
+                                    f[i] = f0[i]
+                                    p[i] = p0[i]
+                                nstk += 1
+                            dx, dy, dz = _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy,
+                                                  sz, active, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, sc, sst, ph, val,
+                                                  val2, ph2, qs2, f, p, dval, dcdf)
+                        else:
+                            # ground (Lambertian)
+                            px += t_end * dx
+                            py += t_end * dy
+                            pz += t_end * dz
+                            rr = math.sqrt(px * px + py * py + pz * pz)
+                            nx, ny, nz = px / rr, py / rr, pz / rr
+                            px, py, pz = nx * rb, ny * rb, nz * rb
+                            _optical_depths(coef_t, cols, tau)
+                            for i in range(n):
+                                tr = math.exp(-tau[i])
+                                f[i] *= tr
+                                p[i] *= tr
+                            _normalise(f, p, n)
+                            wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
                             cs = wx * nx + wy * ny + wz * nz
-                            if alive and cs > 0.0:
-                                for i in range(n):
-                                    contrib[i] += f[i] * albedo[i] / math.pi * cs * gch[i]
-                        # cosine-weighted hemisphere: weight albedo
-                        u1 = next_uniform(st)
-                        mu = math.sqrt(u1)
-                        dx, dy, dz = direction_about_axis(nx, ny, nz, mu, 2.0 * math.pi * next_uniform(st))
-                        for i in range(n):
-                            f[i] *= albedo[i]
-                    first = False
-                    vertices += 1
-                    if vertices >= _MAX_VERTICES:
-                        break
-                    wmax = 0.0
-                    for i in range(n):
-                        if f[i] > wmax:
-                            wmax = f[i]
-                    if wmax <= 0.0:
-                        break
-                    if vertices >= 2 and wmax < _RR_THRESHOLD:
-                        q = wmax / _RR_THRESHOLD
-                        if next_uniform(st) >= q:
+                            if cs > 0.0:
+                                te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
+                                if clouds_on:
+                                    live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t,
+                                                              rb, edges, layers, nlay, fs, fsmax, fsmin, fvf, fvi, frho,
+                                                              fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec,
+                                                              tau, trf, trs)
+                                else:
+                                    live = _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges,
+                                                                 layers, nlay, tot, tmp, rec, tau, trs)
+                                if live:
+                                    for i in range(n):
+                                        contrib[i] += ws * f[i] * albedo[i] / math.pi * cs * esun[i] * trs[i]
+                            if peak:
+                                alive, wx, wy, wz = _peak_probe( px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges,
+                                    layers, nlay, coef_t, scat_t, kh, kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf,
+                                    fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth, st, fstate,
+                                    cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain, gch)
+                                cs = wx * nx + wy * ny + wz * nz
+                                if alive and cs > 0.0:
+                                    for i in range(n):
+                                        contrib[i] += ws * f[i] * albedo[i] / math.pi * cs * gch[i]
+                            # cosine-weighted hemisphere: weight albedo
+                            u1 = next_uniform(st)
+                            mu = math.sqrt(u1)
+                            dx, dy, dz = direction_about_axis(nx, ny, nz, mu, 2.0 * math.pi * next_uniform(st))
+                            for i in range(n):
+                                f[i] *= albedo[i]
+                        first = False
+                        vertices += 1
+                        if vertices >= _MAX_VERTICES:
                             break
+                        wmax = 0.0
                         for i in range(n):
-                            f[i] /= q
+                            if f[i] > wmax:
+                                wmax = f[i]
+                        if wmax <= 0.0:
+                            break
+                        if vertices >= 2 and wmax < _RR_THRESHOLD:
+                            q = wmax / _RR_THRESHOLD
+                            if next_uniform(st) >= q:
+                                break
+                            for i in range(n):
+                                f[i] /= q
+                    if nstk == 0:
+                        break
+                    # the next copy split off this path: from its vertex along its own direction
+                    nstk -= 1
+                    px, py, pz = stk[nstk, 0], stk[nstk, 1], stk[nstk, 2]
+                    dx, dy, dz = stk[nstk, 3], stk[nstk, 4], stk[nstk, 5]
+                    ws = stk[nstk, 6]
+                    for i in range(n):
+                        f[i] = stk_f[nstk, i]
+                        p[i] = stk_p[nstk, i]
+                    first = False
                 nvert += vertices
                 scale = math.pi if cosine else 1.0
                 for i in range(n):
