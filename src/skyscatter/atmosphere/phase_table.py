@@ -71,6 +71,12 @@ __all__ = [
 ]
 
 _TWO_PI = 2.0 * math.pi
+#: Legendre moments computed in this process, by (number of moments, shape and digest of the table's nodes and
+#: values), at most :data:`_MOMENTS_KEPT`: the cloudy sky's layer columns (sky.cloudy.cloud_column) ask for the same
+#: droplets' moments for every optical depth and sun zenith, each time from a new but equal table (a cloud table's
+#: 128 columns took 141 evaluations of the same 257 moments).
+_MOMENTS: dict[tuple[int, tuple[int, ...], bytes], NDArray[np.float64]] = {}
+_MOMENTS_KEPT = 64
 
 
 class PhaseTableArrays(NamedTuple):
@@ -467,8 +473,15 @@ class PhaseTable:
         ``chi_l = 2 pi int_{-1}^{1} p(mu) P_l(mu) dmu`` (module docstring): ``chi_0 = 1``, ``chi_1 = g``; DISORT's
         ``PMOM`` (Stamnes et al. 1988).
         """
+        import hashlib
+
         n = whole_number("number of Legendre moments", n_moments, 1, integral_floats=True)
         mu = self._mu
+        digest = hashlib.blake2b(mu.tobytes() + self._values_mu.tobytes(), digest_size=20).digest()
+        key = (n, self._values_mu.shape, digest)
+        kept = _MOMENTS.get(key)
+        if kept is not None:
+            return kept.copy()
         a, b = mu[:-1], mu[1:]
         pl = _legendre_table(mu, n + 2)  # P_0 .. P_{n+1} at the nodes
         # I_l = int_a^b P_l dmu per segment, l = 0 .. n
@@ -487,7 +500,10 @@ class PhaseTable:
         c0 = v[:, :-1] - s * a  # p = c0 + s mu on each segment
         chi = _TWO_PI * (c0 @ big_i[:n].T + s @ big_j.T)
         chi[:, 0] = 1.0
-        return chi
+        if len(_MOMENTS) >= _MOMENTS_KEPT:
+            _MOMENTS.pop(next(iter(_MOMENTS)))  # the oldest
+        _MOMENTS[key] = chi
+        return chi.copy()
 
     @property
     def asymmetry(self) -> NDArray[np.float64]:
