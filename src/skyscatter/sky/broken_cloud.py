@@ -535,6 +535,41 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
                      (interpolation or self.interpolation) == "linear", THIN_AWARE, rad, tr, depth, hit, grain=256)
         return rad, tr, depth, hit
 
+    def _air_to_top(self, eye: NDArray[np.float64], d: NDArray[np.float64], r_top: float,
+                    n_nodes: int = 2049) -> NDArray[np.float64]:
+        """The air's transmittance (n, n_wl) from ``eye`` (3,) [m], below the field's top, along the directions
+        ``d`` (n, 3) that do not meet the ground to the sphere of radius ``r_top`` [m].
+
+        Seen from one eye the path, and so the transmittance, depends only on the cosine ``mu`` of a direction
+        with the eye's vertical (the atmosphere is spherically symmetric): it is looked up
+        (:meth:`aerial_perspective`, [Bruneton2008] Eq. 16) at ``n_nodes`` cosines spread with a square law
+        towards the lowest (where the path to the top lengthens fastest) and interpolated linearly in its
+        logarithm, rather than once per ray (a map's whole upper half): 2.2 CPU-s less per 2048 x 1024 map, the
+        map within 6.2e-7 relative of the per-ray lookup (docs/clouds.md, Speed)."""
+        tab = self._tables
+        r_eye = float(np.sqrt(eye @ eye))
+        mu = d @ (eye / r_eye)
+        lo, hi = float(mu.min()), float(mu.max())
+        s = np.linspace(0.0, 1.0, n_nodes)
+        nodes = lo + (hi - lo) * s * s
+        # node directions in the plane of the eye's vertical (the azimuth does not matter)
+        up = eye / r_eye
+        side = np.cross(up, [1.0, 0.0, 0.0] if abs(up[0]) < 0.9 else [0.0, 1.0, 0.0])
+        side /= np.linalg.norm(side)
+        dn = nodes[:, None] * up[None, :] + np.sqrt(np.maximum(1.0 - nodes * nodes, 0.0))[:, None] * side[None, :]
+        b = dn @ eye
+        t_top = -b + np.sqrt(np.maximum(b * b - (eye @ eye - r_top * r_top), 0.0))
+        t_nodes, _ = tab.aerial_perspective(eye, eye + t_top[:, None] * dn, self._sun_planet)
+        if hi <= lo:
+            return np.repeat(t_nodes[:1], mu.size, axis=0)
+        # the node below each cosine: invert the square law, then step back where rounding put it one too far
+        k = np.clip(np.floor(np.sqrt(np.clip((mu - lo) / (hi - lo), 0.0, 1.0)) * (n_nodes - 1)).astype(np.int64),
+                    0, n_nodes - 2)
+        k -= (nodes[k] > mu) & (k > 0)
+        w = np.clip((mu - nodes[k]) / np.maximum(nodes[k + 1] - nodes[k], 1e-300), 0.0, 1.0)[:, None]
+        log_t = np.log(np.maximum(t_nodes, 1e-300))  # nearly linear in the path length: interpolated in log
+        return np.exp(log_t[k] * (1.0 - w) + log_t[k + 1] * w)
+
     def _composite(self, d: NDArray[np.float64], hit_only: bool = False, eye: NDArray[np.float64] | None = None,
                    amb_up: NDArray[np.float64] | None = None, top_down: NDArray[np.float64] | None = None):
         """Table-wavelength radiance of the rays ``d`` (n, 3) that meet cloud or ground shadow, and the mask of
@@ -566,7 +601,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
                         & (exit_pts[:, 1] >= f.origin[1]) & (exit_pts[:, 1] < f.origin[1] + f.size[1]))
                 up_rows = up_rows[over]
             if up_rows.size:
-                t_air, _ = tab.aerial_perspective(eye, eye + t_top[up_rows, None] * d[up_rows], sun)
+                t_air = self._air_to_top(eye, d[up_rows], r_top)
                 sky_up = (up_rows, t_air * tr[up_rows] * (top_down / math.pi)[None, :])
         changed = hit.copy()
         if sky_up is not None:
