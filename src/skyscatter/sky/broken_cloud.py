@@ -626,10 +626,8 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         value = tab.sky_radiance(eye, dd, sun)  # a new array: updated in place below
         if air is not None:
             value += air[idx]
-        if sky_up is not None:
-            extra = np.zeros_like(out)
-            extra[sky_up[0]] = sky_up[1]
-            value += extra[idx]
+        if sky_up is not None:  # its rows are among idx (both sorted): added in place, no full-size copy
+            value[np.searchsorted(idx, sky_up[0])] += sky_up[1]
         h = hit[idx]
         if np.any(h):
             ih = idx[h]  # the rays' own rows (indexing twice, rad[idx][h], copied every ray's row first)
