@@ -401,7 +401,10 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     n_v = n_mu * n_n
     inv_pi = 1.0 / PI
     radiance = np.zeros((n_s * n_l, n_om))
-    phase_m = np.empty((n_om, n_v))
+    # the analytic phase's product in single precision (SGEMM): 20 % less time in this kernel for a relative change
+    # of the tables near 1e-6; its operands are float32 copies, the sums around it stay float64
+    radiance32 = np.zeros((n_s * n_l, n_om), dtype=np.float32)
+    phase_m = np.empty((n_om, n_v), dtype=np.float32)
     # tabulated phase: per wavelength (empty otherwise)
     n_lt = n_l if table else 0
     # one wavelength's truncated phase at a time (n_om, n_v), filled just before its product: a table of all
@@ -456,9 +459,9 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 if not table:
                     nm = 0.0
                     for w in range(n_om):
-                        pm = aerosol_phase(vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], g, mie_kind)
+                        pm = np.float32(aerosol_phase(vx * om[w, 0] + vy * om[w, 1] + mu * om[w, 2], g, mie_kind))
                         phase_m[w, v] = pm
-                        nm += pm * dom[w]
+                        nm += pm * dom[w]  # of the rounded values the product uses: energy kept to float64
                     norm_m[v] = nm
                 norm_r[v] = w0 + _quadratic_form(w2, vx, vy, mu)
         m0[:] = 0.0
@@ -527,7 +530,8 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 mie_t[k] = np.dot(rad_k, phase_t)  # (n_s, n_v): sum over quadrature directions of L dw p*
             mie = phase_m[:0]
         else:
-            mie = np.dot(radiance, phase_m)  # (n_s n_l, n_v): sum over quadrature directions of L dw P_M
+            radiance32[:] = radiance
+            mie = np.dot(radiance32, phase_m)  # (n_s n_l, n_v): sum over quadrature directions of L dw P_M
         rho_r = density_at(profiles[0], counts[0], r - bottom)
         rho_m = density_at(profiles[1], counts[1], r - bottom)
         for k in range(n_l):
