@@ -379,8 +379,9 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     The view direction of texel (mu, nu) in that frame is ``(sin theta cos phi, sin theta sin phi, mu)`` with
     ``phi`` the texel's view-sun azimuth (:func:`.geometry.scattering_nu_azimuth`), the same for every sun
     zenith; so the aerosol phase between every texel's view and every quadrature direction is one matrix per
-    radius, and the Mie part of J for all sun zeniths and wavelengths is one matrix product (BLAS) with the
-    quadrature radiance.
+    radius, and the Mie part of J for all sun zeniths and wavelengths is one matrix product (BLAS, in single
+    precision: float32 copies of both operands; the phase's normalisation sums the same rounded values in float64)
+    with the quadrature radiance.
 
     A tabulated aerosol phase (``mie_kind`` :data:`.sampling.TABLE_PHASE`; ``phase_mu`` (n,) ascending cosines,
     ``phase_full`` (n_wl, n) the phase table that the first order's single-scattered light is weighted with,
@@ -401,8 +402,9 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     n_v = n_mu * n_n
     inv_pi = 1.0 / PI
     radiance = np.zeros((n_s * n_l, n_om))
-    # the analytic phase's product in single precision (SGEMM): 20 % less time in this kernel for a relative change
-    # of the tables near 1e-6; its operands are float32 copies, the sums around it stay float64
+    # the analytic phase's product in single precision (SGEMM): 3-7 % less CPU for the whole default precompute,
+    # the tables change by float32 rounding (docs/bruneton.md); its operands are float32 copies, the sums around it
+    # stay float64
     radiance32 = np.zeros((n_s * n_l, n_om), dtype=np.float32)
     phase_m = np.empty((n_om, n_v), dtype=np.float32)
     # tabulated phase: per wavelength (empty otherwise)
