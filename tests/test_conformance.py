@@ -183,9 +183,19 @@ def _fill(spec, name, value) -> dict:
     return out
 
 
+#: Voxels of the broken-cloud sky's procedural field in the random-input test: its resolution is no parameter of
+#: the model, and at the default 128 x 128 x 32 the 20 fields and their light took 60 of that test's 68 CPU-s
+#: (32 x 32 x 8: 7.6 CPU-s; the same extent, features and drawn parameters).
+RANDOM_INPUT_FIELD = (32, 32, 8)
+
+
 @pytest.mark.parametrize("spec", SPECS, ids=IDS)
-def test_no_nan_or_negative_over_random_valid_inputs(spec):
+def test_no_nan_or_negative_over_random_valid_inputs(spec, monkeypatch):
     """10^4 random (parameters, sun, direction) samples: every value finite and >= 0 (fewer for costly models)."""
+    if spec.name == "broken-cloud":
+        from skyscatter.sky import broken_cloud
+
+        monkeypatch.setattr(broken_cloud, "PROCEDURAL_RESOLUTION", RANDOM_INPUT_FIELD)
     rng = np.random.default_rng(1234)
     n_skies, n_dirs = {"cheap": (100, 100), "tables": (20, 100)}.get(spec.cost, (5, 20))
     for _ in range(n_skies):
