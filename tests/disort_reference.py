@@ -403,3 +403,18 @@ def solve_upward_flux(delta_tau, single_scattering_albedo, phase_moments, *, sun
     _fill(cfg, dtau, single_scattering_albedo, moments, rayleigh, sun_zenith, ground_albedo)
     cfg.tau_user = [0.0]  # at the top
     return float(disortpp.DisortSolver().solve(cfg).flux_up[0])
+
+
+def sphericity_allowance(params, sun_zenith: float, view_zenith: np.ndarray) -> np.ndarray:
+    """The first-order plane-parallel vs spherical difference bound (tests/test_precomputed_disort.py's module
+    docstring) of ``params`` (AtmosphereParameters) at ``sun_zenith`` [rad] and ``view_zenith`` [rad] (array) [-]."""
+    wl = [550.0]
+    r = params.bottom_radius
+    layers = ((8000.0, params.rayleigh_scattering_at(wl)[0] * 8000.0),
+              (1200.0, params.mie_extinction_at(wl)[0] * 1200.0))
+    t2s = math.tan(sun_zenith) ** 2
+    t2v = np.tan(view_zenith) ** 2
+    out = 8000.0 / r * t2v
+    for h, tau in layers:
+        out = out + tau * h / r * (t2s / math.cos(sun_zenith) + t2v / np.cos(view_zenith))
+    return out

@@ -30,7 +30,7 @@ import numpy as np
 import pytest
 
 from disort_reference import TABLE_SIZES as SIZES
-from disort_reference import disort_radiance
+from disort_reference import disort_radiance, sphericity_allowance
 from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
 
 disortpp = pytest.importorskip("disortpp")
@@ -52,20 +52,6 @@ def disort_tables():
         for albedo in (0.1, 0.8):
             out[aod, albedo] = PrecomputedAtmosphere.compute(_params(aod, albedo), orders=6, wavelengths=[550.0],
                                                              sizes=SIZES, progress=False)
-    return out
-
-
-def sphericity_allowance(params: AtmosphereParameters, sun_zenith: float, view_zenith: np.ndarray) -> np.ndarray:
-    """The first-order plane-parallel vs spherical difference bound of the module docstring."""
-    wl = [550.0]
-    r = params.bottom_radius
-    layers = ((8000.0, params.rayleigh_scattering_at(wl)[0] * 8000.0),
-              (1200.0, params.mie_extinction_at(wl)[0] * 1200.0))
-    t2s = math.tan(sun_zenith) ** 2
-    t2v = np.tan(view_zenith) ** 2
-    out = 8000.0 / r * t2v
-    for h, tau in layers:
-        out = out + tau * h / r * (t2s / math.cos(sun_zenith) + t2v / np.cos(view_zenith))
     return out
 
 

@@ -114,9 +114,8 @@ def test_sea_salt_against_disort_with_its_intensity_correction():
     the correction (its single scattering with the 32-term delta-M phase, the reference until 2026-12-02) the
     tables were +13 % 10 deg from the sun and -7.5 % 40 deg from it."""
     pytest.importorskip("disortpp")
-    from disort_reference import TABLE_SIZES, disort_radiance
+    from disort_reference import TABLE_SIZES, disort_radiance, sphericity_allowance
     from skyscatter.atmosphere.aerosol_types import OpacAerosol
-    from test_precomputed_disort import sphericity_allowance
 
     p = AtmosphereParameters(ozone_column=0.0, ground_albedo=0.1, solar_irradiance=1.0)
     p = p.replace(aerosol=OpacAerosol.mixture((("sscm", 0.2),), column_height=p.thickness))
