@@ -185,6 +185,27 @@ def _densities(r, rb, layers, nlay, out):
 
 
 @helper
+def _roulette(f, n, vertices, st):
+    """Russian roulette on a path's throughput ``f`` (n wavelengths) after its vertex number ``vertices``: False
+    ends the path (no throughput left, or it lost the draw); below :data:`_RR_THRESHOLD` (largest wavelength) from
+    the second vertex on it survives with probability ``wmax / _RR_THRESHOLD`` and ``f`` is divided by that, so
+    the estimate stays unbiased."""
+    wmax = 0.0
+    for i in range(n):
+        if f[i] > wmax:
+            wmax = f[i]
+    if wmax <= 0.0:
+        return False
+    if vertices >= 2 and wmax < _RR_THRESHOLD:
+        q = wmax / _RR_THRESHOLD
+        if next_uniform(st) >= q:
+            return False
+        for i in range(n):
+            f[i] /= q
+    return True
+
+
+@helper
 def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     """Distance [m] along the ray to the ground or out of the top of the atmosphere, and whether it is the ground."""
     r2 = px * px + py * py + pz * pz
@@ -1200,18 +1221,8 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                         vertices += 1
                         if vertices >= _MAX_VERTICES:
                             break
-                        wmax = 0.0
-                        for i in range(n):
-                            if f[i] > wmax:
-                                wmax = f[i]
-                        if wmax <= 0.0:
+                        if not _roulette(f, n, vertices, st):
                             break
-                        if vertices >= 2 and wmax < _RR_THRESHOLD:
-                            q = wmax / _RR_THRESHOLD
-                            if next_uniform(st) >= q:
-                                break
-                            for i in range(n):
-                                f[i] /= q
                     if nstk == 0:
                         break
                     # the next copy split off this path: from its vertex along its own direction
@@ -1497,18 +1508,8 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
                 vertices += 1
                 if vertices >= _MAX_VERTICES:
                     break
-                wmax = 0.0
-                for i in range(n):
-                    if f[i] > wmax:
-                        wmax = f[i]
-                if wmax <= 0.0:
+                if not _roulette(f, n, vertices, st):
                     break
-                if vertices >= 2 and wmax < _RR_THRESHOLD:
-                    q = wmax / _RR_THRESHOLD
-                    if next_uniform(st) >= q:
-                        break
-                    for i in range(n):
-                        f[i] /= q
             nvert += vertices
         for k in range(npix):
             for i in range(n):
