@@ -40,8 +40,9 @@ def _gpu_sky(ns, tex, r, mu, mu_s, nu):
         return np.zeros(3)
     hits = ns["ray_hits_ground"](r, mu)
     uvw0, uvw1, w = ns["scattering_uvw"](r, mu, mu_s, nu, hits)
-    parts = [ns["azimuth_lerp"](_sample(tex[n], uvw0), _sample(tex[n], uvw1), w)
-             for n in ("rayleigh", "mie", "multiple")]
+    parts = [ns["single_scattering_lerp"](_sample(tex[n], uvw0), _sample(tex[n], uvw1), r, mu, mu_s, nu, w, n)
+             for n in ("rayleigh", "mie")]
+    parts.append(ns["azimuth_lerp"](_sample(tex["multiple"], uvw0), _sample(tex["multiple"], uvw1), w))
     return np.array(ns["inscattered_radiance"](*parts, nu))
 
 
@@ -52,10 +53,13 @@ def test_manifest_mappings_and_textures_give_the_spectral_lookup(atm, luts):
     p = atm.parameters
     m = fold_matrix(atm)
     worst = 0.0
+    shadowed = 0
     for alt in (0.0, 1500.0, 12e3, 45e3):
         pos = np.array([0.0, 0.0, p.bottom_radius + alt])
-        for _ in range(3):
-            sun = direction_from_angles(rng.uniform(0.0, 1.75), rng.uniform(0, 2 * np.pi))
+        # three random suns and two in twilight (-3 and -6 deg: the observer in the Earth's shadow below 12 km)
+        for zenith in (*rng.uniform(0.0, 1.75, 3), np.radians(93.0), np.radians(96.0)):
+            sun = direction_from_angles(zenith, rng.uniform(0, 2 * np.pi))
+            shadowed += ns["in_earth_shadow"](float(pos[2]), max(float(sun[2]), ns["MU_S_MIN"]))
             dirs = direction_from_angles(rng.uniform(0.0, np.pi, 40), rng.uniform(0, 2 * np.pi, 40))
             want = atm.sky_radiance(pos, dirs, sun, include_ground=False) @ m.T
             r = float(pos[2])
@@ -63,7 +67,9 @@ def test_manifest_mappings_and_textures_give_the_spectral_lookup(atm, luts):
                 got = _gpu_sky(ns, data.textures, r, d[2], sun[2], float(d @ sun))
                 scale = max(np.abs(ref).max(), 1e-6)
                 worst = max(worst, float(np.abs(got - ref).max() / scale))
-    # float32 textures: the mapping code and the GPU read reproduce the float64 lookup to rounding
+    # float32 textures: the mapping code and the GPU read reproduce the float64 lookup to rounding, also where the
+    # observer is in the Earth's shadow (the single scattering's shadow factors: shadow_factors of the mappings)
+    assert shadowed >= 2, shadowed
     assert worst < 2e-5, worst
 
 
@@ -141,7 +147,7 @@ def test_half_and_exr_match_float32(luts):
 
 def test_manifest_states_version_units_scale_and_code(luts):
     manifest = json.loads((luts / MANIFEST_NAME).read_text())
-    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 2
+    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 3
     assert manifest["hdr_scale"]["cd_m2_per_unit_Y"] == 683.0
     assert manifest["mappings"]["glsl"] == glsl_mappings() and manifest["mappings"]["glsl"] in glsl_library()
     for name in ("transmittance_uv", "irradiance_uv", "scattering_uvw"):
@@ -170,7 +176,7 @@ def test_loader_refuses_another_version_a_missing_and_a_truncated_file(luts, tmp
     (bad / MANIFEST_NAME).write_text(json.dumps(manifest))
     with pytest.raises(FileFormatError, match="version 99"):
         load_realtime(bad)
-    manifest["version"] = 2
+    manifest["version"] = 3
     (bad / MANIFEST_NAME).write_text(json.dumps(manifest))
     (bad / "mie.rgba32f").unlink()
     with pytest.raises(FileFormatError, match="mie.rgba32f: texture file missing"):
@@ -212,7 +218,7 @@ def test_server_serves_the_viewer_and_only_the_exports_files(luts, tmp_path):
         assert b"GetSkyRadianceToPoint" in get("/glsl/atmosphere.glsl")
         for path in ("/", "/viewer/viewer.js", "/viewer/style.css"):  # nothing loaded from the network
             assert b"http://" not in get(path) and b"https://" not in get(path) and b"//cdn" not in get(path)
-        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 2
+        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 3
         assert len(get("/luts/rayleigh.rgba32f")) == (luts / "rayleigh.rgba32f").stat().st_size
         for path in ("/luts/secret.txt", "/luts/../secret.txt", "/etc/passwd", "/viewer/../export.py"):
             with pytest.raises(urllib.error.HTTPError, match="404"):

@@ -137,6 +137,18 @@ class TableLookups:
             self._aerosol_phase_cache = cached
         return cached
 
+    @property
+    def _profiles(self) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """The density profiles of :func:`.compute.density_profiles` for the lookup kernels (the Earth's shadow in
+        the single scattering: :func:`.lookup._inscatter`), built once."""
+        cached = getattr(self, "_profiles_cache", None)
+        if cached is None:
+            from .compute import density_profiles
+
+            cached = density_profiles(self.parameters)
+            self._profiles_cache = cached
+        return cached
+
     def _geometry(self) -> tuple[float, float, float]:
         p = self.parameters
         return p.bottom_radius, p.top_radius, p.mu_s_min
@@ -209,7 +221,7 @@ class TableLookups:
         parallel_for(lookup.sky_kernel, n, pos, dirs, sun, sh, self.tables["transmittance"],
                      self.tables["single_rayleigh"], self.tables["single_mie"], self.tables["multiple"],
                      self.tables["irradiance"], self._albedo, self._solar, bottom, top,
-                     mu_s_min, self._mie_g, self._mie_kind, *self._aerosol_phase[2:],
+                     mu_s_min, self._mie_g, self._mie_kind, *self._aerosol_phase[2:], *self._profiles,
                      self.parameters.sun_angular_radius, include_ground, rad, tr,
                      grain=2048)
         return rad, tr
@@ -304,7 +316,8 @@ class TableLookups:
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
         parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, stored["transmittance"],
                      stored["irradiance"], self._albedo, self._solar, projection,
-                     bottom, top, self._mie_g, self._mie_kind, self.parameters.sun_angular_radius,
+                     bottom, top, mu_s_min, self._mie_g, self._mie_kind, *self._profiles,
+                     self.parameters.sun_angular_radius,
                      bool(include_ground), dirs, out, bad, grain=2048)
         if bad.any():
             return None
@@ -380,7 +393,7 @@ class TableLookups:
         tab = self.tables
         parallel_for(lookup.aerial_kernel, n, cam, pts, sun, sh, tab["transmittance"], tab["single_rayleigh"],
                      tab["single_mie"], tab["multiple"], bottom, top, mu_s_min, self._mie_g,
-                     self._mie_kind, *self._aerosol_phase[2:], t, s, grain=2048)
+                     self._mie_kind, *self._aerosol_phase[2:], *self._profiles, t, s, grain=2048)
         return t.reshape(*shape, -1), s.reshape(*shape, -1)
 
     def sun_transmittance(self, positions: ArrayLike, sun_direction: ArrayLike) -> NDArray[np.float64]:

@@ -55,6 +55,7 @@ __all__ = [
     "distance_to_bottom",
     "distance_to_boundary",
     "distance_to_top",
+    "in_earth_shadow",
     "irradiance_coord",
     "irradiance_params",
     "lerp_index",
@@ -207,6 +208,14 @@ def log_lerp_weight(a: float, b: float, w: float) -> float:
     wa = w * a2
     d = wa + (_ONE32 - w) * math.sqrt(a2 * b2)
     return wa / d if d > 0.0 else w
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def in_earth_shadow(r: float, mu_s: float, bottom: float) -> bool:
+    """True if the point at radius ``r`` [m] with sun zenith cosine ``mu_s`` lies in the Earth's geometric shadow
+    (the half cylinder of :func:`shadow_exit_altitude`: ``mu_s < 0`` and ``r^2 (1 - mu_s^2) < R_g^2``); where it
+    does not, every ray from it starts lit and :func:`shadow_exit_altitude` is the start's altitude."""
+    return mu_s < 0.0 and r * r * (1.0 - mu_s * mu_s) - bottom * bottom < 0.0
 
 
 @helper(fastmath=CONTRACT_ARCP)

@@ -338,18 +338,60 @@ def shadow_nu_weights(r, mu, mu_s, nu, i_n, w_n, n_nu, bottom, top, profile, n_l
     ``tests/precomputed_reference.py`` (docs/accuracy.md, "Low sun"). Where the ray starts lit (every ray with the
     sun above the horizon seen from below the shadow's edge) all three densities are equal and this is the linear
     interpolation exactly."""
-    fq = density_at(profile, n_layers, shadow_exit_altitude(r, mu, mu_s, nu, bottom, top))
-    f0 = density_at(profile, n_layers, shadow_exit_altitude(r, mu, mu_s, scattering_nu_param(i_n, mu, mu_s, n_nu),
-                                                            bottom, top))
-    f1 = density_at(profile, n_layers, shadow_exit_altitude(r, mu, mu_s,
-                                                            scattering_nu_param(i_n + 1, mu, mu_s, n_nu), bottom,
-                                                            top))
+    h_q, h_0, h_1 = shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_nu, bottom, top)
+    a, b = shadow_ratios(h_q, h_0, h_1, profile, n_layers)
+    return (1.0 - w_n) * a, w_n * b
+
+
+@helper
+def shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_nu, bottom, top):
+    """Altitudes [m] where the ray of the query (r [m], mu, mu_s, nu) and the rays of the nu texels ``i_n`` and
+    ``i_n + 1`` (the query's r, mu and mu_s; ``n_nu`` texels) leave the Earth's shadow
+    (:func:`.geometry.shadow_exit_altitude`): ``(h_q, h_0, h_1)``."""
+    return (shadow_exit_altitude(r, mu, mu_s, nu, bottom, top),
+            shadow_exit_altitude(r, mu, mu_s, scattering_nu_param(i_n, mu, mu_s, n_nu), bottom, top),
+            shadow_exit_altitude(r, mu, mu_s, scattering_nu_param(i_n + 1, mu, mu_s, n_nu), bottom, top))
+
+
+@helper
+def shadow_ratios(h_q, h_0, h_1, profile, n_layers):
+    """Shadow factors ``(a, b)`` of the two nu texels of a single-scattering table (:func:`shadow_nu_weights`): the
+    density of the constituent (``profile``, ``n_layers`` layers) at the query's shadow exit ``h_q`` [m] over its
+    density at each texel's exit ``h_0``, ``h_1`` [m] (:func:`shadow_exit_altitudes`), each at most 1."""
+    fq = density_at(profile, n_layers, h_q)
+    f0 = density_at(profile, n_layers, h_0)
+    f1 = density_at(profile, n_layers, h_1)
     # never above 1: the rule only takes light away from a texel whose ray leaves the shadow lower (denser air)
     # than the query's, so it stays between 0 and the linear interpolation; the tables' shadow is soft (the
     # sun's disc), the exit altitude a point sun's, and a ratio above 1 would multiply their penumbra
     a = fq / f0 if f0 > fq else 1.0
     b = fq / f1 if f1 > fq else 1.0
-    return (1.0 - w_n) * a, w_n * b
+    return a, b
+
+
+@helper
+def lookup4_cell_weighted(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, n0, n1, scale, out):
+    """``out += scale * table(cell)``, linear in r, mu and mu_s, with the weights ``n0``, ``n1`` of the nu texels
+    ``i_n``, ``i_n + 1`` (:func:`shadow_nu_weights` in the rendering lookups for a ray that starts in the Earth's
+    shadow)."""
+    _lookup4_weighted(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, n0 * scale, n1 * scale, out)
+
+
+@helper
+def lookup4_cell_weighted_spectral(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, n0, n1, scales, out):
+    """``out[k] += scales[k] * table(cell)[k]``: :func:`lookup4_cell_weighted` with a scale per wavelength (a
+    tabulated aerosol phase)."""
+    n_l = table.shape[4]
+    for a in range(2):
+        wa = w_r if a else 1.0 - w_r
+        for b in range(2):
+            wb = wa * (w_mu if b else 1.0 - w_mu)
+            for c in range(2):
+                wc = wb * (w_s if c else 1.0 - w_s)
+                for e in range(2):
+                    we = wc * (n1 if e else n0)
+                    for k in range(n_l):
+                        out[k] += we * scales[k] * table[i_r + a, i_mu + b, i_s + c, i_n + e, k]
 
 
 @helper

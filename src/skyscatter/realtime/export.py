@@ -35,8 +35,13 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
   :func:`skyscatter.precomputed.geometry.log_lerp_weight` of that wavelength's values in the two slices, each
   interpolated linearly in (mu_s, mu, r) (:func:`skyscatter.precomputed.sampling.nu_weight`), and apply it to every
   wavelength: the texture unit's trilinear read of A gives those two values, so a shader computes the same weight
-  and applies it to RGB (``log_lerp_weight`` and ``azimuth_lerp`` of the mappings). The luminance (Y) that A held in
-  manifest version 1 is the RGB's dot product with ``hdr_scale.luminance_from_rgb``.
+  and applies it to RGB (``log_lerp_weight`` and ``azimuth_lerp`` of the mappings). Except for the single scattering
+  where the point is in the Earth's shadow (manifest version 3): there the library interpolates the two slices
+  linearly, each times the density of its constituent where the query's ray leaves the shadow over that where the
+  slice's ray leaves it, at most 1 (:func:`skyscatter.precomputed.sampling.shadow_nu_weights`;
+  ``single_scattering_lerp``, ``shadow_factors`` of the mappings, with the density profiles ``RAYLEIGH_DENSITY``,
+  ``MIE_DENSITY`` of the constants). The luminance (Y) that A held in manifest version 1 is the RGB's dot product
+  with ``hdr_scale.luminance_from_rgb``.
 
 in ``.rgba32f`` (float32), ``.rgba16f`` (IEEE half) and ``.exr`` (OpenEXR, float32 R, G, B, A; a 3D texture's
 depth slices stacked vertically) form, with ``skyscatter_realtime.json``: the version, sizes, constants, units, the
@@ -69,8 +74,10 @@ __all__ = ["FORMATS", "MANIFEST_FORMAT", "MANIFEST_NAME", "MANIFEST_VERSION", "P
 MANIFEST_NAME = "skyscatter_realtime.json"
 MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: Raised whenever a file's layout or meaning changes; readers refuse other versions. 2: the scattering textures'
-#: alpha holds each table's middle wavelength (was Y), from which the azimuth weight is computed.
-MANIFEST_VERSION = 2
+#: alpha holds each table's middle wavelength (was Y), from which the azimuth weight is computed. 3: the constants
+#: hold the Rayleigh and aerosol density profiles, and the single scattering's azimuth weight follows the Earth's
+#: shadow (shadow_factors of the mappings).
+MANIFEST_VERSION = 3
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -88,7 +95,7 @@ SEGMENT_RULE = ("T(x, y)_c = mix(exp(-max(tau_c(x) - tau_c(y), 0)), clamp(T_c(x)
 HALF_MAX = 65504.0
 
 #: The texture-coordinate mappings as Python (standard library only), the same functions as the GLSL library's
-#: mapping section; ``exec`` it with the manifest's constants (``BOTTOM_RADIUS`` ... ``LOG_LERP_FLOOR``) defined.
+#: mapping section; ``exec`` it with the manifest's constants (``BOTTOM_RADIUS`` ... ``MIE_DENSITY``) defined.
 PYTHON_MAPPINGS = '''
 import math
 
@@ -176,7 +183,8 @@ def scattering_nu_index(mu, mu_s, nu):
 
 def scattering_uvw(r, mu, mu_s, nu, hits_ground):
     """The two texture coordinates (u, v, w) of the nu slices around nu and the fraction w of the cell between
-    them: a lookup is azimuth_lerp(texture(uvw0), texture(uvw1), w), each read trilinear."""
+    them: a lookup is azimuth_lerp(texture(uvw0), texture(uvw1), w), each read trilinear (the single scattering:
+    single_scattering_lerp)."""
     v, w = scattering_mu_r_coords(r, mu, hits_ground)
     p_s = scattering_mu_s_index(max(mu_s, MU_S_MIN))
     p_n = clamp(scattering_nu_index(mu, mu_s, nu), 0.0, SCATTERING_N_NU - 1)
@@ -202,6 +210,85 @@ def azimuth_lerp(s0, s1, w):
     log_lerp_weight of their alpha (the table's middle wavelength), applied to every channel."""
     k = log_lerp_weight(s0[3], s1[3], w)
     return [a + k * (b - a) for a, b in zip(s0[:3], s1[:3])]
+
+def shadow_lerp(s0, s1, w, f):
+    """RGB of a single-scattering texture between the reads s0, s1 (RGBA) of its two nu slices where the point is
+    in the Earth's shadow (in_earth_shadow): linear, each slice times its shadow factor f[0], f[1]
+    (shadow_factors)."""
+    return [(1.0 - w) * f[0] * a + w * f[1] * b for a, b in zip(s0[:3], s1[:3])]
+
+def single_scattering_lerp(s0, s1, r, mu, mu_s, nu, w, constituent):
+    """A single-scattering lookup ("rayleigh" or "mie") between its two nu slices: shadow_lerp where the point is in
+    the Earth's shadow, else azimuth_lerp (the multiple scattering is always azimuth_lerp)."""
+    if in_earth_shadow(r, max(mu_s, MU_S_MIN)):
+        return shadow_lerp(s0, s1, w, shadow_factors(r, mu, mu_s, nu, constituent))
+    return azimuth_lerp(s0, s1, w)
+
+def shadow_cylinder_c(r, mu_s):
+    """r^2 (1 - mu_s^2) - R_g^2 [m^2], negative inside the Earth's shadow cylinder (written without cancellation)."""
+    s = safe_sqrt((1.0 - mu_s) * (1.0 + mu_s))
+    return ((r - BOTTOM_RADIUS) - r * mu_s * mu_s / (1.0 + s)) * (r * s + BOTTOM_RADIUS)
+
+def in_earth_shadow(r, mu_s):
+    """True if the point (r [m], sun zenith cosine mu_s) is in the Earth's geometric shadow."""
+    return mu_s < 0.0 and shadow_cylinder_c(r, mu_s) < 0.0
+
+def shadow_exit_altitude(r, mu, mu_s, nu):
+    """Altitude [m] where the ray (r, mu; view-sun cosine nu) leaves the Earth's shadow (the start's if it is lit; at
+    most TOP_RADIUS - BOTTOM_RADIUS): the larger root of (1 - nu^2) t^2 + 2 r (mu - mu_s nu) t + r^2 (1 - mu_s^2)
+    - R_g^2 = 0, or the plane y.s = 0 at t = -r mu_s / nu if nearer."""
+    c = shadow_cylinder_c(r, mu_s)
+    if mu_s >= 0.0 or c >= 0.0:
+        return clamp(r - BOTTOM_RADIUS, 0.0, TOP_RADIUS - BOTTOM_RADIUS)
+    a = (1.0 - nu) * (1.0 + nu)
+    b = r * (mu - mu_s * nu)
+    q = safe_sqrt(b * b - a * c)
+    t = math.inf
+    if b > 0.0:
+        t = -c / (b + q)
+    elif a > 1e-12:
+        t = (q - b) / a
+    if nu > 0.0:
+        t = min(t, -r * mu_s / nu)
+    if t == math.inf:
+        return TOP_RADIUS - BOTTOM_RADIUS
+    e2 = t * t + 2.0 * r * mu * t + (r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS)
+    h = e2 / (safe_sqrt(t * t + 2.0 * r * mu * t + r * r) + BOTTOM_RADIUS)
+    return clamp(h, 0.0, TOP_RADIUS - BOTTOM_RADIUS)
+
+def density_at(profile, layers, h):
+    """Relative density of a profile (flat rows of width [m], exp_term, exp_scale [1/m], linear_term [1/m],
+    constant_term) at altitude h [m]: the first layer whose top is above h, the last above all; at least 0."""
+    start = 0.0
+    for k in range(layers):
+        w, e, sc, lin, const = profile[5 * k:5 * k + 5]
+        if k == layers - 1 or h < start + w:
+            return max(e * math.exp(sc * h) + lin * h + const, 0.0)
+        start += w
+    return 0.0
+
+def scattering_nu_param(i_n, mu, mu_s):
+    """nu of texel index i_n for view and sun zenith cosines mu, mu_s."""
+    s = safe_sqrt((1.0 - mu * mu) * (1.0 - mu_s * mu_s))
+    return clamp(mu * mu_s + s * math.cos(math.pi * (1.0 - i_n / (SCATTERING_N_NU - 1))), -1.0, 1.0)
+
+def shadow_factors(r, mu, mu_s, nu, constituent):
+    """Shadow factors (a, b) of the two nu slices of a lookup (those of scattering_uvw) for the single scattering of
+    constituent "rayleigh" or "mie": (1, 1) where the point is lit, else the constituent's density where the query's
+    ray leaves the Earth's shadow over that where each slice's ray leaves it, each at most 1 (mu_s at least
+    MU_S_MIN, as in scattering_uvw). A ray that starts in the shadow scatters sunlight only beyond its exit, nearly
+    in proportion to the density there."""
+    mu_s = max(mu_s, MU_S_MIN)
+    if not in_earth_shadow(r, mu_s):
+        return (1.0, 1.0)
+    p_n = clamp(scattering_nu_index(mu, mu_s, nu), 0.0, SCATTERING_N_NU - 1)
+    i_n = min(math.floor(p_n), SCATTERING_N_NU - 2)
+    profile, layers = ((RAYLEIGH_DENSITY, RAYLEIGH_DENSITY_LAYERS) if constituent == "rayleigh"
+                       else (MIE_DENSITY, MIE_DENSITY_LAYERS))
+    fq = density_at(profile, layers, shadow_exit_altitude(r, mu, mu_s, nu))
+    f0 = density_at(profile, layers, shadow_exit_altitude(r, mu, mu_s, scattering_nu_param(i_n, mu, mu_s)))
+    f1 = density_at(profile, layers, shadow_exit_altitude(r, mu, mu_s, scattering_nu_param(i_n + 1, mu, mu_s)))
+    return (fq / f0 if f0 > fq else 1.0, fq / f1 if f1 > fq else 1.0)
 
 def segment_transmittance(t_x, t_y, tau_x, tau_y):
     """Transmittance between x and y per channel from the two texture reads at each end (x nearer, both towards the
@@ -311,6 +398,7 @@ def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]
 
 def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
     from ..atmosphere.phase import aerosol_phase_kind
+    from ..precomputed.compute import density_profiles
     from ..precomputed.geometry import LOG_LERP_FLOOR
     from ..sun.disc import solar_disc_solid_angle
 
@@ -320,6 +408,8 @@ def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
     solar = p.solar_irradiance_at(atm.wavelengths)
     albedo = p.ground_albedo_at(atm.wavelengths)
     n_r, n_mu, n_s, n_n = atm.sizes.scattering_shape
+    profiles, counts = density_profiles(p)
+    n_layers = int(max(counts[0], counts[1]))
     return {
         "BOTTOM_RADIUS": float(p.bottom_radius), "TOP_RADIUS": float(p.top_radius), "MU_S_MIN": float(p.mu_s_min),
         "SUN_ANGULAR_RADIUS": float(p.sun_angular_radius),
@@ -331,6 +421,10 @@ def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
         "IRRADIANCE_N_R": atm.sizes.irradiance_r, "IRRADIANCE_N_MU_S": atm.sizes.irradiance_mu_s,
         "SCATTERING_N_R": n_r, "SCATTERING_N_MU": n_mu, "SCATTERING_N_MU_S": n_s, "SCATTERING_N_NU": n_n,
         "LOG_LERP_FLOOR": float(LOG_LERP_FLOOR),
+        "DENSITY_MAX_LAYERS": n_layers,
+        "RAYLEIGH_DENSITY_LAYERS": int(counts[0]), "MIE_DENSITY_LAYERS": int(counts[1]),
+        "RAYLEIGH_DENSITY": [float(v) for v in profiles[0, :n_layers].ravel()],
+        "MIE_DENSITY": [float(v) for v in profiles[1, :n_layers].ravel()],
     }
 
 
@@ -339,7 +433,11 @@ def glsl_constants(constants: dict[str, Any]) -> str:
     ``constants``."""
     lines = []
     for name, value in constants.items():
-        if isinstance(value, list):
+        if name.endswith("_DENSITY"):  # a density profile: 5 floats per layer, padded to DENSITY_MAX_LAYERS
+            n = 5 * int(constants["DENSITY_MAX_LAYERS"])
+            vals = ", ".join(_glsl_float(v) for v in list(value) + [0.0] * (n - len(value)))
+            lines.append(f"const float {name}[{n}] = float[{n}]({vals});")
+        elif isinstance(value, list):
             lines.append(f"const vec3 {name} = vec3({', '.join(_glsl_float(v) for v in value)});")
         elif isinstance(value, int):
             lines.append(f"const int {name} = {value};")
@@ -356,7 +454,8 @@ def _glsl_float(v: float) -> str:
 #: What the scattering textures' alpha holds (manifest meaning).
 _ALPHA = ("the table's spectral value at azimuth_weight_wavelength_nm (its middle wavelength) [W m^-2 nm^-1; "
           "multiple: W m^-2 sr^-1 nm^-1; not folded, not on the HDR scale], for the weight of the interpolation "
-          "between two nu slices: log_lerp_weight(A0, A1, w) of the mappings, applied to RGB (azimuth_lerp)")
+          "between two nu slices: log_lerp_weight(A0, A1, w) of the mappings, applied to RGB (azimuth_lerp; the single "
+          "scattering where the point is in the Earth's shadow: shadow_lerp, which does not read A)")
 
 
 def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
@@ -460,7 +559,9 @@ def export_realtime(atm: PrecomputedAtmosphere, folder: str | Path, *,
             "constants": constants,
             "textures": entries,
             "filtering": "LINEAR with CLAMP_TO_EDGE on every axis; nu is interpolated by hand between two lookups "
-                         "with the log-linear weight of their alpha (azimuth_lerp of the mappings)",
+                         "with the log-linear weight of their alpha (azimuth_lerp of the mappings); the single "
+                         "scattering where the point is in the Earth's shadow linearly with the shadow factors of "
+                         "its constituent's density (single_scattering_lerp)",
             "mappings": {"python": PYTHON_MAPPINGS, "glsl": glsl_mappings()},
             "glsl_constants": glsl_constants(constants),
             "segment_transmittance": SEGMENT_RULE,

@@ -1,5 +1,5 @@
 // skyscatter real-time atmosphere: GLSL ES 3.00 functions reading the textures of `skyscatter export-luts`
-// (manifest skyscatter_realtime.json, format "skyscatter-realtime-luts" version 2).
+// (manifest skyscatter_realtime.json, format "skyscatter-realtime-luts" version 3).
 //
 // Reference: E. Bruneton, F. Neyret, Precomputed Atmospheric Scattering, EGSR 2008 [Bruneton2008], equation numbers
 // below are the paper's; the distance-based texture mappings and the horizon blend follow Bruneton's 2017 rewrite
@@ -17,6 +17,9 @@
 //   const int TRANSMITTANCE_N_R, TRANSMITTANCE_N_MU, IRRADIANCE_N_R, IRRADIANCE_N_MU_S,
 //             SCATTERING_N_R, SCATTERING_N_MU, SCATTERING_N_MU_S, SCATTERING_N_NU   texel counts
 //   const float LOG_LERP_FLOOR                               floor of the smaller value's ratio in LogLerpWeight
+//   const int DENSITY_MAX_LAYERS; const int RAYLEIGH_DENSITY_LAYERS, MIE_DENSITY_LAYERS   layers of the profiles
+//   const float RAYLEIGH_DENSITY[5 * DENSITY_MAX_LAYERS], MIE_DENSITY[...]   relative density profiles of air and
+//             aerosol, per layer (width [m], exp_term, exp_scale [1/m], linear_term [1/m], constant_term)
 // Units: lengths in metres, positions planet-centred (the planet's centre at the origin), directions unit vectors.
 // Colour: linear sRGB (IEC 61966-2-1 primaries, D65) with Y = luminance [cd m^-2] / 683 (skyscatter's HDR scale):
 // radiance-like values in W m^-2 sr^-1 weighted by the photopic curve; irradiance in W m^-2 likewise.
@@ -170,6 +173,80 @@ float LogLerpWeight(float a, float b, float w) {
 // table's middle wavelength, interpolated in mu_s, mu and r by the texture unit as skyscatter's
 // sampling.nu_weight does), applied to every channel.
 vec3 AzimuthLerp(vec4 s0, vec4 s1, float w) { return mix(s0.rgb, s1.rgb, LogLerpWeight(s0.a, s1.a, w)); }
+
+// RGB of a single-scattering texture between the reads s0, s1 of its two nu slices where the point is in the Earth's
+// shadow: linear, each slice times its shadow factor f.x, f.y (ShadowFactors; skyscatter.precomputed.sampling.
+// shadow_nu_weights).
+vec3 ShadowLerp(vec4 s0, vec4 s1, float w, vec2 f) { return (1.0 - w) * f.x * s0.rgb + w * f.y * s1.rgb; }
+
+// True if the point at radius r with sun zenith cosine mu_s is in the Earth's geometric shadow (the half cylinder of
+// radius R_g behind the planet: mu_s < 0 and r^2 (1 - mu_s^2) < R_g^2; skyscatter.precomputed.geometry.
+// in_earth_shadow). r sin(theta_s) - R_g is written (r - R_g) - r mu_s^2 / (1 + sin(theta_s)) (no cancellation).
+float ShadowCylinderC(float r, float mu_s) {
+  float s = SafeSqrt((1.0 - mu_s) * (1.0 + mu_s));
+  float rs = r * s;
+  return ((r - BOTTOM_RADIUS) - r * mu_s * mu_s / (1.0 + s)) * (rs + BOTTOM_RADIUS);
+}
+bool InEarthShadow(float r, float mu_s) { return mu_s < 0.0 && ShadowCylinderC(r, mu_s) < 0.0; }
+
+// Altitude [m] where the ray (r, mu) with view-sun cosine nu leaves the Earth's shadow (the start's if it is lit), at
+// most TOP_RADIUS - BOTTOM_RADIUS (skyscatter.precomputed.geometry.shadow_exit_altitude): the larger root of
+// (1 - nu^2) t^2 + 2 r (mu - mu_s nu) t + r^2 (1 - mu_s^2) - R_g^2 = 0 (the cylinder), or the plane y.s = 0 at
+// t = -r mu_s / nu if nearer; roots and the altitude written without cancellation for float32.
+float ShadowExitAltitude(float r, float mu, float mu_s, float nu) {
+  float c = ShadowCylinderC(r, mu_s);
+  if (mu_s >= 0.0 || c >= 0.0) return clamp(r - BOTTOM_RADIUS, 0.0, TOP_RADIUS - BOTTOM_RADIUS);
+  float a = (1.0 - nu) * (1.0 + nu);
+  float b = r * (mu - mu_s * nu);
+  float q = SafeSqrt(b * b - a * c);
+  float t = 1e30;
+  if (b > 0.0) t = -c / (b + q);
+  else if (a > 1e-12) t = (q - b) / a;
+  if (nu > 0.0) t = min(t, -r * mu_s / nu);
+  if (t >= 1e30) return TOP_RADIUS - BOTTOM_RADIUS;
+  // r_exit - R_g = (t^2 + 2 r mu t + (r - R_g)(r + R_g)) / (r_exit + R_g)
+  float e2 = t * t + 2.0 * r * mu * t + (r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS);
+  float h = e2 / (SafeSqrt(t * t + 2.0 * r * mu * t + r * r) + BOTTOM_RADIUS);
+  return clamp(h, 0.0, TOP_RADIUS - BOTTOM_RADIUS);
+}
+
+// Relative density of a profile at altitude h [m]: the first layer whose top is above h (the last layer above all),
+// exp_term exp(exp_scale h) + linear_term h + constant_term, at least 0 (skyscatter.precomputed.sampling.density_at).
+float DensityAt(float p[5 * DENSITY_MAX_LAYERS], int layers, float h) {
+  float start = 0.0;
+  for (int k = 0; k < DENSITY_MAX_LAYERS; ++k) {
+    if (k == layers - 1 || h < start + p[5 * k]) {
+      return max(p[5 * k + 1] * exp(p[5 * k + 2] * h) + p[5 * k + 3] * h + p[5 * k + 4], 0.0);
+    }
+    start += p[5 * k];
+  }
+  return 0.0;
+}
+
+// Shadow factors (a, b) of the two nu texels of a single-scattering texture (skyscatter.precomputed.sampling.
+// shadow_ratios): the density at the query's shadow exit h.x over the density at each texel's exit h.y, h.z, each at
+// most 1. A ray that starts in the Earth's shadow scatters sunlight only beyond its exit, nearly in proportion to the
+// density there.
+vec2 ShadowFactors(vec3 h, float p[5 * DENSITY_MAX_LAYERS], int layers) {
+  float fq = DensityAt(p, layers, h.x);
+  float f0 = DensityAt(p, layers, h.y);
+  float f1 = DensityAt(p, layers, h.z);
+  return vec2(f0 > fq ? fq / f0 : 1.0, f1 > fq ? fq / f1 : 1.0);
+}
+
+// nu of texel index i_n for view and sun zenith cosines mu, mu_s: mu mu_s + sqrt((1 - mu^2)(1 - mu_s^2)) cos(phi),
+// phi = pi (1 - i_n / (n - 1)) (skyscatter.precomputed.geometry.scattering_nu_param).
+float ScatteringNuParam(float i_n, float mu, float mu_s) {
+  float s = SafeSqrt((1.0 - mu * mu) * (1.0 - mu_s * mu_s));
+  return clamp(mu * mu_s + s * cos(PI * (1.0 - i_n / float(SCATTERING_N_NU - 1))), -1.0, 1.0);
+}
+
+// Shadow exit altitudes [m] of the query (x) and of the rays of the nu texels i_n (y) and i_n + 1 (z), with the
+// query's r, mu and mu_s (skyscatter.precomputed.sampling.shadow_exit_altitudes).
+vec3 ShadowExitAltitudes(float r, float mu, float mu_s, float nu, float i_n) {
+  return vec3(ShadowExitAltitude(r, mu, mu_s, nu), ShadowExitAltitude(r, mu, mu_s, ScatteringNuParam(i_n, mu, mu_s)),
+              ShadowExitAltitude(r, mu, mu_s, ScatteringNuParam(i_n + 1.0, mu, mu_s)));
+}
 // END MAPPINGS ---------------------------------------------------------------------------------------------------
 
 // Texture reads. GPUs interpolate with a fixed-point fraction (8 bits is common; SwiftShader too), which where the
@@ -269,8 +346,11 @@ vec3 GetTransmittanceToSun(float r, float mu_s) {
 
 // The three scattering textures at (r, mu, mu_s, nu): trilinear by the texture unit in (mu_s, mu, r) and by hand
 // along nu (the nu slices lie side by side along x: x = i_nu * n_mu_s + i_mu_s, [Bruneton2008] Sec. 6), log-linear
-// there with each texture's own weight (AzimuthLerp), as skyscatter's lookups since table format 12. Returns single Rayleigh (no phase); single Mie (no phase) and multiple scattering in the
-// out parameters. Zero below the tables' sun limit MU_S_MIN.
+// there with each texture's own weight (AzimuthLerp), as skyscatter's lookups since table format 12, except the
+// single-scattering textures where the point is in the Earth's shadow: linear with the shadow factors of their
+// constituent's density (ShadowLerp, ShadowFactors), as skyscatter's lookups (skyscatter.precomputed.lookup). Returns single
+// Rayleigh (no phase); single Mie (no phase) and multiple scattering in the out parameters. Zero below the tables'
+// sun limit MU_S_MIN.
 vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, out vec3 mie, out vec3 multiple) {
   mie = vec3(0.0);
   multiple = vec3(0.0);
@@ -284,8 +364,15 @@ vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, ou
   float n_x = float(SCATTERING_N_NU * SCATTERING_N_MU_S);
   vec3 uvw0 = vec3((i_n * float(SCATTERING_N_MU_S) + p_s + 0.5) / n_x, vw.x, vw.y);
   vec3 uvw1 = vec3(uvw0.x + float(SCATTERING_N_MU_S) / n_x, vw.x, vw.y);
-  mie = AzimuthLerp(Texture3D(mie_texture, uvw0), Texture3D(mie_texture, uvw1), w_n);
   multiple = AzimuthLerp(Texture3D(multiple_texture, uvw0), Texture3D(multiple_texture, uvw1), w_n);
+  if (InEarthShadow(r, mu_s)) {
+    vec3 h = ShadowExitAltitudes(r, mu, mu_s, nu, i_n);
+    mie = ShadowLerp(Texture3D(mie_texture, uvw0), Texture3D(mie_texture, uvw1), w_n,
+                     ShadowFactors(h, MIE_DENSITY, MIE_DENSITY_LAYERS));
+    return ShadowLerp(Texture3D(rayleigh_texture, uvw0), Texture3D(rayleigh_texture, uvw1), w_n,
+                      ShadowFactors(h, RAYLEIGH_DENSITY, RAYLEIGH_DENSITY_LAYERS));
+  }
+  mie = AzimuthLerp(Texture3D(mie_texture, uvw0), Texture3D(mie_texture, uvw1), w_n);
   return AzimuthLerp(Texture3D(rayleigh_texture, uvw0), Texture3D(rayleigh_texture, uvw1), w_n);
 }
 
