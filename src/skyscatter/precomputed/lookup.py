@@ -40,6 +40,7 @@ from .geometry import (
     log_lerp_weight,
     point_along_ray,
     ray_hits_ground,
+    scattering_nu_azimuth,
     scattering_nu_coord,
     sky_mu_unit,
     transmittance_coord,
@@ -59,6 +60,7 @@ from .sampling import (
     r_mu_s_cell,
     rayleigh_phase,
     shadow_exit_altitudes,
+    shadow_exit_altitudes_cos,
     shadow_ratios,
     transmittance_ratio,
     transmittance_segment,
@@ -387,16 +389,18 @@ def _observer_nu_weights(slices, n_nu, n_c, cell, w_mu, w_nu, w_tab, ends):
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _observer_shadow_weights(dirs, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, n_nu, profiles, counts, cell,
-                             w_nu, w_tab, p_r, p_m):
+def _observer_shadow_weights(dirs, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, cos_phi, profiles, counts,
+                             cell, w_nu, w_tab, p_r, p_m):
     """For an observer in the Earth's shadow (:func:`.geometry.in_earth_shadow`), the azimuth weights of the two
     single-scattering tables of a block of rays (flat x, y, z triples ``dirs``; cells and linear weights of
     :func:`_observer_coords`) by the rule of :func:`_inscatter` (:func:`.sampling.shadow_nu_weights`): the texels'
     weights ``(1 - w) a`` and ``w b`` are written as their sum, folded into the phase factors ``p_r``, ``p_m``, and
     the share of the second, in ``w_tab[0]``, ``w_tab[1]``, so that the gather (:func:`_observer_gather`) is that of
     the lit sky. ``r``: the observer's radius, ``rc`` the same clamped to the atmosphere; ``mu_s`` the sun zenith
-    cosine of the slices (at least the tables' limit)."""
+    cosine of the slices (at least the tables' limit); ``cos_phi`` the cosines of the texels' azimuths
+    (:func:`.geometry.scattering_nu_azimuth`)."""
     inv_r = 1.0 / r
+    n_nu = cos_phi.shape[0]
     for k in range(cell.shape[0]):
         vx = dirs[3 * k]
         vy = dirs[3 * k + 1]
@@ -405,7 +409,8 @@ def _observer_shadow_weights(dirs, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, 
         inv = 1.0 / math.sqrt(n2) if n2 > 0.0 and n2 < math.inf else 0.0
         mu = clamp((px * vx + py * vy + pz * vz) * (inv * inv_r), -1.0, 1.0)
         nu = clamp((vx * sx + vy * sy + vz * sz) * inv, -1.0, 1.0)
-        h_q, h_0, h_1 = shadow_exit_altitudes(rc, mu, mu_s, nu, cell[k] % n_nu, n_nu, bottom, top)
+        i_n = cell[k] % n_nu
+        h_q, h_0, h_1 = shadow_exit_altitudes_cos(rc, mu, mu_s, nu, cos_phi[i_n], cos_phi[i_n + 1], bottom, top)
         w = w_nu[k]
         for t in range(2):
             a, b = shadow_ratios(h_q, h_0, h_1, profiles[t], counts[t])
@@ -513,6 +518,9 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     rho, big_h, theta_h = horizon_constants(rc, bottom, top)
     mu_s_t = max(mu_s, mu_s_min)  # the sun of the slices (observer_slices)
     shadowed = in_earth_shadow(rc, mu_s_t, bottom)
+    cos_phi = np.empty(n_nu)
+    for i in range(n_nu):
+        cos_phi[i] = math.cos(scattering_nu_azimuth(i, n_nu))
     flat_dirs = dirs.reshape(-1)
     for b0 in range(start, stop, OBSERVER_BLOCK):
         b1 = min(b0 + OBSERVER_BLOCK, stop)
@@ -540,8 +548,8 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
                 bad[b0 + k] = True
         _observer_nu_weights(flat, n_nu, n_c, cell[:m], w_mu[:m], w_nu[:m], w_tab, ends)
         if shadowed:
-            _observer_shadow_weights(block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, n_nu, profiles, counts,
-                                     cell[:m], w_nu[:m], w_tab, p_r[:m], p_m[:m])
+            _observer_shadow_weights(block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, cos_phi, profiles,
+                                     counts, cell[:m], w_nu[:m], w_tab, p_r[:m], p_m[:m])
         _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_tab, p_r[:m], p_m[:m], out[b0:b1])
         if n_ground == 0 or not include_ground:
             continue

@@ -354,6 +354,18 @@ def shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_nu, bottom, top):
 
 
 @helper
+def shadow_exit_altitudes_cos(r, mu, mu_s, nu, cos_0, cos_1, bottom, top):
+    """:func:`shadow_exit_altitudes` with the cosines ``cos_0``, ``cos_1`` of the two texels' azimuths given (a
+    table of :func:`.geometry.scattering_nu_azimuth`'s cosines: no libm cosine per ray); the texels' ``nu`` is
+    :func:`.geometry.scattering_nu_param`'s ``mu mu_s + sqrt((1 - mu^2)(1 - mu_s^2)) cos(phi)``."""
+    s = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+    m = mu * mu_s
+    return (shadow_exit_altitude(r, mu, mu_s, nu, bottom, top),
+            shadow_exit_altitude(r, mu, mu_s, clamp(m + s * cos_0, -1.0, 1.0), bottom, top),
+            shadow_exit_altitude(r, mu, mu_s, clamp(m + s * cos_1, -1.0, 1.0), bottom, top))
+
+
+@helper
 def shadow_ratios(h_q, h_0, h_1, profile, n_layers):
     """Shadow factors ``(a, b)`` of the two nu texels of a single-scattering table (:func:`shadow_nu_weights`): the
     density of the constituent (``profile``, ``n_layers`` layers) at the query's shadow exit ``h_q`` [m] over its
