@@ -183,8 +183,9 @@ def log_lerp_weight(a: float, b: float, w: float) -> float:
     root and a division, where the exact ``((b / a)^w - 1) / (b / a - 1)`` costs a power, a libm call that keeps the
     lookup loops off the SIMD lanes (4x slower luminance lookups, measured).
 
-    Used along the view-sun azimuth of the scattering tables and, in the orders' ray integrals, along the sun zenith
-    and azimuth of the scattering density. At low sun the single-scattered radiance falls by orders of magnitude
+    Used along the view-sun azimuth of the scattering tables (except the single-scattering tables read from a point
+    in the Earth's shadow, :func:`.sampling.shadow_nu_weights`) and, in the orders' ray integrals, along the sun
+    zenith and azimuth of the scattering density. At low sun the single-scattered radiance falls by orders of magnitude
     across one azimuth cell where the view ray passes into the Earth's shadow, and a linear interpolation of such a
     fall overshoots: +255 % single scattering at 90 deg from a sun 6 deg below the horizon (2 deg view elevation,
     560 nm) against the independent integral of ``tests/precomputed_reference.py``; in the ray integrals of the

@@ -337,7 +337,8 @@ def shadow_nu_weights(r, mu, mu_s, nu, i_n, w_n, n_nu, bottom, top, profile, n_l
     defaults) where this gives +10 % (log-linear: -67 %), against the independent integral of
     ``tests/precomputed_reference.py`` (docs/accuracy.md, "Low sun"). Where the ray starts lit (every ray with the
     sun above the horizon seen from below the shadow's edge) all three densities are equal and this is the linear
-    interpolation exactly."""
+    interpolation exactly. Used by the second order's scattering density (:func:`scattering_lookup_shadow`) and by
+    the rendering lookups for points in the shadow (:func:`.lookup._inscatter`, :func:`lookup4_cell_weighted`)."""
     h_q, h_0, h_1 = shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_nu, bottom, top)
     a, b = shadow_ratios(h_q, h_0, h_1, profile, n_layers)
     return (1.0 - w_n) * a, w_n * b
