@@ -61,7 +61,7 @@ from .sampling import (
     rayleigh_phase,
     shadow_exit_altitudes,
     shadow_exit_altitudes_cos,
-    shadow_ratios,
+    shadow_ratios_fast,
     transmittance_ratio,
     transmittance_segment,
     transmittance_to_sun,
@@ -118,9 +118,9 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
     if in_earth_shadow(r, mu_s, bottom):
         h_q, h_0, h_1 = shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_n, bottom, top)
-        a, b = shadow_ratios(h_q, h_0, h_1, profiles[0], counts[0])
+        a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[0], counts[0])
         lookup4_cell_weighted(ray, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, (1.0 - w_n) * a, w_n * b, p_r, out)
-        a, b = shadow_ratios(h_q, h_0, h_1, profiles[1], counts[1])
+        a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[1], counts[1])
         if p_m_spec.shape[0]:
             lookup4_cell_weighted_spectral(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, (1.0 - w_n) * a, w_n * b,
                                            p_m_spec, out)
@@ -413,7 +413,7 @@ def _observer_shadow_weights(dirs, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, 
         h_q, h_0, h_1 = shadow_exit_altitudes_cos(rc, mu, mu_s, nu, cos_phi[i_n], cos_phi[i_n + 1], bottom, top)
         w = w_nu[k]
         for t in range(2):
-            a, b = shadow_ratios(h_q, h_0, h_1, profiles[t], counts[t])
+            a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[t], counts[t])
             n0 = (1.0 - w) * a
             n1 = w * b
             total = n0 + n1

@@ -383,6 +383,21 @@ def shadow_ratios(h_q, h_0, h_1, profile, n_layers):
 
 
 @helper
+def shadow_ratios_fast(h_q, h_0, h_1, profile, n_layers):
+    """:func:`shadow_ratios` for the rendering lookups: for a one-layer profile ``exp_term exp(exp_scale h)``
+    (``exp_term > 0``, no linear or constant term: the Rayleigh and aerosol layers of Bruneton & Neyret 2008,
+    Eqs. 1 and 3) each ratio is ``exp(exp_scale (h_q - h_i))``, one ``exp`` per texel and none where the ratio is at
+    least 1 (the texel's ray leaves the shadow in thinner air than the query's); otherwise :func:`shadow_ratios`. The
+    same values to rounding; the precomputation keeps :func:`shadow_ratios` (its tables unchanged bit for bit)."""
+    if n_layers == 1 and profile[0, 1] > 0.0 and profile[0, 3] == 0.0 and profile[0, 4] == 0.0:
+        sc = profile[0, 2]
+        x0 = sc * (h_q - h_0)
+        x1 = sc * (h_q - h_1)
+        return (math.exp(x0) if x0 < 0.0 else 1.0), (math.exp(x1) if x1 < 0.0 else 1.0)
+    return shadow_ratios(h_q, h_0, h_1, profile, n_layers)
+
+
+@helper
 def lookup4_cell_weighted(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, n0, n1, scale, out):
     """``out += scale * table(cell)``, linear in r, mu and mu_s, with the weights ``n0``, ``n1`` of the nu texels
     ``i_n``, ``i_n + 1`` (:func:`shadow_nu_weights` in the rendering lookups for a ray that starts in the Earth's
