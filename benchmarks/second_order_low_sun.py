@@ -18,8 +18,12 @@ The tables: ``PrecomputedAtmosphere.compute(orders=2)`` (no tail below 3 orders)
 multiple-scattering table alone (the second order), read with the rendering lookups; and ``orders=1``'s single
 scattering against ``L1`` of the same integrator along the view ray (a check of the integrator itself).
 
+``--irradiance=-6,-3,0,10`` instead: the first order's sky irradiance on a horizontal surface on the ground (the
+irradiance table of ``orders=2``, read by ``ground_irradiance``) against ``L1`` of the same integrator summed over
+the upper hemisphere (32 Gauss-Legendre cosines x 64 azimuths), at the given sun elevations [deg].
+
 ``python benchmarks/second_order_low_sun.py [--atm turbidity3] [--suns=-6,10] [--wavelength 560]
-[--n-mu 48 --n-phi 48]``
+[--n-mu 48 --n-phi 48] [--irradiance=-6,-3,0,10]``
 """
 
 from __future__ import annotations
@@ -183,6 +187,33 @@ def unit(elev_deg: float, az_deg: float) -> np.ndarray:
     return np.array([math.cos(e) * math.sin(a), math.cos(e) * math.cos(a), math.sin(e)])
 
 
+def irradiance(params: AtmosphereParameters, wl: np.ndarray, sizes: dict | None, suns: list[float], dens: np.ndarray,
+               sig: np.ndarray, grid: np.ndarray, gx: np.ndarray, gw: np.ndarray) -> None:
+    """The first order's sky irradiance on the ground: the tables' against the hemisphere integral of ``L1``."""
+    rb, rt = params.bottom_radius, params.top_radius
+    g = params.aerosol_component.analytic_phase.g
+    x, w = np.polynomial.legendre.leggauss(32)
+    mus, muw = 0.5 * (x + 1.0), 0.5 * w
+    n_phi = 64
+    two = PrecomputedAtmosphere.compute(params, orders=2, wavelengths=wl, sizes=sizes, progress=False)
+    e_sun = params.solar_irradiance_at(wl)[0]
+    print("| sun [deg] | integral [W m^-2 nm^-1] | tables | tables / integral - 1 [%] |")
+    print("|---|---|---|---|")
+    for s_deg in suns:
+        s = unit(s_deg, 0.0)
+        e = 0.0
+        for a in range(mus.size):
+            st = math.sqrt(1.0 - mus[a] ** 2)
+            for b in range(n_phi):
+                ph = 2.0 * math.pi * (b + 0.5) / n_phi
+                e += muw[a] * mus[a] * (2.0 * math.pi / n_phi) * _single(
+                    0.0, 0.0, rb, st * math.sin(ph), st * math.cos(ph), mus[a], s[0], s[1], s[2], rb, rt, dens, sig,
+                    g, grid, gx, gw, 16)
+        e *= e_sun
+        _, sky = two.ground_irradiance(np.array([[0.0, 0.0, rb]]), np.array([[0.0, 0.0, 1.0]]), s)
+        print(f"| {s_deg:+g} | {e:.4e} | {sky[0, 0]:.4e} | {100 * (sky[0, 0] / e - 1):+.1f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--atm", default="turbidity3", choices=sorted(ATMOSPHERES))
@@ -193,6 +224,7 @@ def main() -> None:
     ap.add_argument("--n-grid", type=int, default=160, help="points along each secondary ray")
     ap.add_argument("--views", default="", help="elev/az pairs, e.g. 15/135,5/180")
     ap.add_argument("--sizes", default="", help="table size overrides, e.g. scattering_mu_s=64")
+    ap.add_argument("--irradiance", default="", help="sun elevations [deg]: the first-order irradiance instead")
     args = ap.parse_args()
     params = ATMOSPHERES[args.atm](ground_albedo=0.0)
     analytic = params.aerosol_component.analytic_phase
@@ -212,6 +244,9 @@ def main() -> None:
     gx, gw = np.polynomial.legendre.leggauss(4)
     sizes = {k: int(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)} or None
     views = [tuple(float(a) for a in p.split("/")) for p in args.views.split(",")] if args.views else VIEWS
+    if args.irradiance:
+        irradiance(params, wl, sizes, [float(a) for a in args.irradiance.split(",")], dens, sig, grid, gx, gw)
+        return
     t0 = time.process_time()
     one = PrecomputedAtmosphere.compute(params, orders=1, wavelengths=wl, sizes=sizes, progress=False)
     two = PrecomputedAtmosphere.compute(params, orders=2, wavelengths=wl, sizes=sizes, progress=False)
