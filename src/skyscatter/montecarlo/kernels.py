@@ -143,7 +143,10 @@ __all__ = ["column_along", "disc_transmittance", "trace_block", "LOBE_NONE", "LO
            "LOBE_CORNETTE_SHANKS", "LOBE_HENYEY_GREENSTEIN", "LOBE_TABLE"]
 
 # Small per-collision helpers with many array arguments are inlined (``inline``): a call passes 7 words per array
-# argument, about what their loops over a dozen wavelengths cost.
+# argument, about what their loops over a dozen wavelengths cost. They are inlined into helpers only (the paths'
+# loop is :func:`_trace_paths`, not the kernel that allocates its buffers): inlined into a kernel, numba counts
+# every array argument's references up and down at each call (two atomic operations per array), which took some
+# 15 % of a cloudy path's time.
 
 # 4-point Gauss-Legendre nodes and weights on [-1, 1] ([Abramowitz1964] Table 25.4)
 _GX = (-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526)
@@ -992,6 +995,33 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
         if lobe[c] != LOBE_NONE:
             active[n_active] = c
             n_active += 1
+    _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, lobe,
+                 lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
+                 fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, seed, group, batch0,
+                 n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp,
+                 dens, kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate,
+                 rec, cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3,
+                 chain, split_on, stk, stk_f, stk_p, f0, p0, kmin, active)
+
+
+@helper
+def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, lobe,
+                 lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
+                 fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, seed, group, batch0,
+                 n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp,
+                 dens, kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate,
+                 rec, cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3,
+                 chain, split_on, stk, stk_f, stk_p, f0, p0, kmin, active):
+    """The paths of :func:`trace_block` (its loop over entries, batches and paths), with the buffers it allocated.
+    A helper (no reference counting, ``skyscatter.jit``): compiled inside the kernel, every array passed to an
+    inlined function was counted up and down at each vertex (atomic operations, some 15 % of the time of a
+    cloudy path). ``cloudy`` is the kernel's (None: a separate compilation without the cloud code), so the tests
+    below are compile-time constants here too."""
+    clouds_on = cloudy is not None
+    field = clouds_on and field
+    use_ddis = clouds_on and use_ddis
+    peak = clouds_on and peak
+    split_on = clouds_on and split_on
     sx, sy, sz = sun[0], sun[1], sun[2]
     for j in range(ndir):
         ax, ay, az = dirs[j, 0], dirs[j, 1], dirs[j, 2]
