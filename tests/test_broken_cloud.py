@@ -51,6 +51,17 @@ def test_empty_field_is_the_clear_sky_bit_for_bit():
     assert np.array_equal(sky.sun_spectral_radiance([500, 600]), sky.clear.sun_spectral_radiance([500, 600]))
 
 
+def test_the_ground_seen_from_the_ground_is_the_clear_skys():
+    """From an eye on the ground, rays below the horizon meet the ground at once: no cloud, no shadow on the air
+    and no light from the field's top (the air's return, ``top_down``, is nonzero here) reach them, so they are the
+    clear sky's bit for bit. Until 2026-12-02 the return's light was added along a path through the planet (1.2 %
+    of the ground's luminance, the transmittance of that path up to 0.27)."""
+    sky = BrokenCloudSky(SUN_Z, SUN_A, cloud_cover=0.6, cloud_seed=2)
+    assert np.any(sky._ground_up["top_down"] != 0.0)
+    d = _dirs([-90, -60, -30, -5, -0.5], [0, 90, 135, 200, 300])
+    assert np.array_equal(sky.xyz(d), sky.clear.xyz(d))
+
+
 def test_vanishing_cloud_tends_to_the_clear_sky():
     """A layer of optical depth 1e-9 changes the sky by about 1e-9 of the sun's light (the composition's cloud
     and sky-behind terms are continuous as the cloud vanishes; at 1e-6 the cloud's own light was measured at 1e-5
