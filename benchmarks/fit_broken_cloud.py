@@ -208,7 +208,8 @@ def main() -> None:
     out = {"octaves_a_b_c_d": theta, "fit_cover": args.fit_cover, "irradiance": args.irradiance, "above": args.above,
            "irradiance_diffuse_ratio": irr, "cost": float(fit.cost), "nfev": int(fit.nfev),
            "seconds": round(secs, 1), "cpu_seconds": round(cpu, 1), "load_average": os.getloadavg()[0],
-           "free": args.free, "truncation_streams": broken_cloud.TRUNCATION_STREAMS, "monte_carlo": {k: meta[k] for k in meta},
+           "free": args.free, "truncation_streams": broken_cloud.TRUNCATION_STREAMS,
+           "monte_carlo": {k: meta[k] for k in meta},
            "wavelengths_nm": wl.tolist(), "before_fit_with": list(FITTED_OCTAVES), "before": before, "after": after}
     args.out.write_text(json.dumps(out, indent=1) + "\n")
     print(json.dumps({"octaves": theta, "after": after, "before": before}, indent=1))
