@@ -15,7 +15,13 @@ from skyscatter.atmosphere import AtmosphereParameters
 from skyscatter.atmosphere.clouds import CloudField, CloudLayer
 from skyscatter.conventions import direction_from_angles
 from skyscatter.errors import FileFormatError, InvalidParameterError
-from skyscatter.sky.broken_cloud import FITTED_OCTAVES, MU_REFERENCE, BrokenCloudSky, entry_factors
+from skyscatter.sky.broken_cloud import (
+    FITTED_OCTAVES,
+    MU_REFERENCE,
+    BrokenCloudSky,
+    delta_m_octaves,
+    entry_factors,
+)
 
 DATA = Path(__file__).parent / "data" / "broken_cloud_montecarlo.npz"
 FIT = Path(__file__).parents[1] / "benchmarks" / "fit_broken_cloud.json"
@@ -77,7 +83,9 @@ def test_transmittance_of_a_uniform_layer_is_exact(elevation):
     """One layer (voxel-constant): the march's transmittance equals exp(-sigma k chord) with the spherical chord
     between the base and top spheres: 2e-6 relative in the optical depth (the steps end on the layer's
     boundaries; each step's exp(-x k_l) = exp(-x kbar) exp(-x (k_l - kbar)) takes the second factor's Taylor
-    polynomial of degree 2 where |x (k_l - kbar)| < 0.02: error below 0.02^3 / 6 = 1.3e-6 per step)."""
+    polynomial of degree 2 where |x (k_l - kbar)| < 0.02: error below 0.02^3 / 6 = 1.3e-6 per step). The march's
+    extinction, ``k (1 - omega f)`` with the delta-M option (:func:`test_delta_m_octaves_are_wiscombes_truncation`;
+    ``k`` with it off, as shipped)."""
     tau = 0.8  # the slant optical depth stays below 6.9, where the march stops (transmittance 1e-3)
     sky = BrokenCloudSky(SUN_Z, SUN_A, clouds=_layer(tau), interpolation="voxel")
     d = _dirs([elevation], [10.0])
@@ -86,7 +94,7 @@ def test_transmittance_of_a_uniform_layer_is_exact(elevation):
     r0 = sky.clear.position[2]
     bottom = r0
     chord = _chord(r0, math.sin(math.radians(elevation)), bottom + 1000.0, bottom + 1500.0)
-    expected = tau / 500.0 * chord * sky._light["k"]
+    expected = tau / 500.0 * chord * sky._light["k_march"]
     np.testing.assert_allclose(-np.log(tr[0]), expected, rtol=2e-6)
 
 
@@ -120,7 +128,7 @@ def test_transmittance_of_layers_within_the_step_bound():
     exact = sum(ext[i] * _chord(r0, mu, edges[i], edges[i + 1]) for i in range(4))
     step = 0.5 * 125.0 / mu
     bound = np.abs(np.diff(ext)).sum() * step
-    got = -np.log(tr[0, 7]) / sky._light["k"][7]
+    got = -np.log(tr[0, 7]) / sky._light["k_march"][7]
     assert abs(got - exact) <= bound  # measured: 0.116 of 4.67 (2.5 %), the bound 0.37
 
 
@@ -216,6 +224,29 @@ def test_entry_factor_is_the_thick_eddington_layer(tau):
     np.testing.assert_allclose(got, closed, rtol=2e-5)
     ratios = [entry_factors(m, 1.0)[0] / entry_factors(0.5, 1.0)[0] for m in mus]
     np.testing.assert_allclose(ratios, got / got[1], rtol=2e-5)
+
+
+def test_delta_m_octaves_are_wiscombes_truncation():
+    """The march's delta-M scaling against :meth:`PhaseTable.delta_m` (the truncated table built from its own
+    Legendre series): the forward fraction ``f`` gives the scaled extinction ``k (1 - omega f)`` and octave 0's
+    factor ``1 / (1 - omega f)``, and the octaves' asymmetry is the truncated table's; 0 streams change nothing."""
+    wl = np.array([450.0, 550.0, 650.0])
+    table = DROPS.phase_table(wl)
+    k = DROPS.extinction_at(wl) / DROPS.extinction_at([550.0])[0]
+    omega = np.asarray(DROPS.single_scattering_albedo_at(wl), dtype=float)
+    moments = table.legendre_moments(17)
+    got = delta_m_octaves(k, omega, moments, 16)
+    truncated, f = table.delta_m(16, clip_negative=False)
+    assert np.all((f > 0.3) & (f < 0.6))  # the diffraction peak of 10 um droplets holds about half the scattering
+    np.testing.assert_allclose(got[0], k * (1.0 - omega * f), rtol=1e-12)
+    np.testing.assert_allclose(got[1], 1.0 / (1.0 - omega * f), rtol=1e-12)
+    np.testing.assert_allclose(got[2], truncated.asymmetry, rtol=1e-3)
+    plain = delta_m_octaves(k, omega, moments, 0)
+    np.testing.assert_array_equal(plain[0], k)
+    np.testing.assert_array_equal(plain[1], np.ones(3))
+    np.testing.assert_allclose(plain[2], table.asymmetry, rtol=1e-12)
+    with pytest.raises(InvalidParameterError, match="moments"):
+        delta_m_octaves(k, omega, moments[:, :4], 16)
 
 
 def test_fitted_octaves_are_the_fit_scripts():

@@ -134,8 +134,8 @@ def _field_coords(px, py, pz, x0, y0, inv_dx, inv_dy, inv_dz, rbase, nx, ny, nz,
 
 
 @kernel(fastmath=CONTRACT_ARCP)
-def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g, solar, mu0, dmu, src_sun, src_amb,
-               amb_up, mp, n_octaves, linear, thin_aware, radiance, transmittance, depth, hit, start, stop):
+def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g, trunc, solar, mu0, dmu, src_sun,
+               src_amb, amb_up, mp, n_octaves, linear, thin_aware, radiance, transmittance, depth, hit, start, stop):
     """March view rays ``dirs[start:stop]`` (of (n, 3)) from ``origin`` (3,) through the field (module docstring of
     :mod:`.broken_cloud`; called through :func:`skyscatter.precomputed.parallel.parallel_for`, no allocation per
     ray): the cloud's radiance reaching the eye through the cloud ``radiance`` (n, n_wl) [W m^-2 sr^-1 nm^-1], the
@@ -152,7 +152,10 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
     for open ones), so that the interpolation needs no modulo and no clamping in x and y; float32 (relative
     rounding 6e-8, far below the march's own error). ``occupied`` (nx, ny, nz): 1 where the voxel's block of
     ``bsize`` voxels holds cloud (empty blocks are crossed in one step). ``k`` (n_wl,) extinction relative to the
-    reference wavelength; ``ph_mu`` (m,), ``ph_val`` (n_wl, m) the droplets' phase table; ``g`` its asymmetry;
+    reference wavelength (the march's: delta-M scaled, :func:`.broken_cloud.delta_m_octaves`); ``ph_mu`` (m,),
+    ``ph_val`` (n_wl, m) the droplets' phase table; ``g`` its asymmetry; ``trunc`` (2, n_wl): octave 0's factor
+    ``1 / (1 - omega f)`` (the full phase on the scaled optical depth) and the octaves' asymmetry ``g*`` of the
+    truncated phase (:func:`.broken_cloud.delta_m_octaves`);
     ``solar`` the extraterrestrial irradiance [W m^-2 nm^-1]; ``src_sun`` (nz, n_mu, n_wl) the single-scattering
     albedo times the clear air's transmittance to the sun, ``src_amb`` (nz, n_mu, n_wl) the albedo times the clear
     air's diffuse irradiance on a horizontal plane / (2 pi) [W m^-2 nm^-1 sr^-1] at each voxel layer, for the sun
@@ -364,9 +367,9 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
                     f = min(max(f, 0.0), 1.0)
                     for wl in range(nwl):
                         p0 = ph_val[wl, lo] * (1.0 - f) + ph_val[wl, hi] * f
-                        w[0, wl] = solar[wl] * p0
+                        w[0, wl] = solar[wl] * p0 * trunc[0, wl]
                         scale = 1.0
-                        gi = g[wl]
+                        gi = trunc[1, wl]
                         for o in range(1, n_octaves):
                             scale *= b
                             gi *= c
