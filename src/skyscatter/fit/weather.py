@@ -17,7 +17,9 @@ Rayleigh scattering, aerosol extinction and ozone (ozone outside the medium's 36
 slant_optical_masses`, the geometry of the tables, no refraction), water vapour and mixed-gas band
 transmittances T_w, T_u (Bird & Riordan 1986, Eqs. 2-8 and 2-11; air mass the Rayleigh one) and Spencer's
 (1971) eccentricity factor f_ecc (:func:`skyscatter.sky.perez.extraterrestrial_irradiance`). The diffuse
-horizontal irradiance is the tables' sky irradiance on a horizontal plane at the table wavelengths, reduced by
+horizontal irradiance is the tables' sky radiance integrated over the hemisphere at the table wavelengths
+(:meth:`~skyscatter.precomputed.evaluation.TableLookups.horizontal_sky_irradiance`: the quantity the sky matrix's
+patches are scaled to, and the closer to DISORT than the tables' irradiance texture), reduced by
 E0 there, carried to the fine grid by linear interpolation (and beyond 830 nm and below 360 nm by a power law
 through the two nearest table wavelengths), times E0 and the same gas transmittances (the diffuse light takes
 the sun's gas path, as in Bird & Riordan 1986, Sec. 3), summed. Pyrheliometers see about 2.5 deg around the
