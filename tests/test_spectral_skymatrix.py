@@ -207,7 +207,8 @@ def test_clear_sky_model_against_spectrl2():
 
 def test_horizontal_sky_irradiance_against_disort(options):
     """The one DHI of retrieval and matrix: the tables' radiance over the hemisphere (``horizontal_sky_irradiance``,
-    tabulated in sun zenith) equals the direct Gauss-Legendre sum off its nodes within 0.05 %, and is closer to
+    tabulated in sun zenith) equals the direct Gauss-Legendre sum off its nodes within 0.05 %, the rule a 4x denser
+    one within 0.05 %, and it is closer to
     DISORT (plane-parallel, independent) than the tables' irradiance texture: coarse tables, AOD 0.5, albedo 1,
     g 0.8, sun 30 deg, 550 nm: within 1.5 % (measured +0.84 %; the texture -2.93 %)."""
     pytest.importorskip("disortpp")
@@ -215,6 +216,7 @@ def test_horizontal_sky_irradiance_against_disort(options):
 
     from disort_reference import disort_diffuse_irradiance
     from skyscatter.fit.weather import default_family
+    from skyscatter.precomputed.evaluation import HORIZONTAL_SKY_NODES
     from skyscatter.quadrature import plane_quadrature
 
     with warnings.catch_warnings():
@@ -224,10 +226,13 @@ def test_horizontal_sky_irradiance_against_disort(options):
         atm, p = fam.node(index), fam.parameters(index)
     assert p.mie_phase_g == pytest.approx(0.8)
     ground = np.array([0.0, 0.0, p.bottom_radius])
-    d, w = plane_quadrature(0.0, 0.0)
     z = np.radians([37.3, 84.2])
-    direct = np.stack([w @ atm.sky_radiance(ground, d, np.array([np.sin(zk), 0.0, np.cos(zk)])) for zk in z])
-    np.testing.assert_allclose(atm.horizontal_sky_irradiance(z), direct, rtol=5e-4)
+    suns = [np.array([np.sin(zk), 0.0, np.cos(zk)]) for zk in z]
+    rule = plane_quadrature(0.0, 0.0, nodes=HORIZONTAL_SKY_NODES)
+    fine = plane_quadrature(0.0, 0.0, nodes=(192, 384))
+    direct, dense = (np.stack([w @ atm.sky_radiance(ground, d, s) for s in suns]) for d, w in (rule, fine))
+    np.testing.assert_allclose(atm.horizontal_sky_irradiance(z), direct, rtol=5e-4)  # the tabulation
+    np.testing.assert_allclose(direct, dense, rtol=5e-4)  # the rule (measured within 0.04 %)
     zs = np.radians(30.0)
     k = list(fam.wavelengths).index(550.0)
     ref = disort_diffuse_irradiance(p, 550.0, zs) * float(p.solar_irradiance_at([550.0])[0])

@@ -56,6 +56,10 @@ def _as_dirs(name: str, value: ArrayLike) -> NDArray[np.float64]:
 
 
 
+#: Gauss-Legendre nodes (zenith, azimuth) of :meth:`TableLookups.horizontal_sky_irradiance`.
+HORIZONTAL_SKY_NODES = (48, 96)
+
+
 class TableLookups:
     """The lookups of a precomputed atmosphere: a base of :class:`.PrecomputedAtmosphere`, which provides the
     attributes below. Positions are in metres in a planet-centred frame (the planet's centre at the origin);
@@ -407,10 +411,11 @@ class TableLookups:
 
             E(theta_s) = integral over the upper hemisphere of L(theta, phi; theta_s) cos(theta) dOmega
 
-        by the Gauss-Legendre rule of :func:`skyscatter.quadrature.plane_quadrature` (96 x 192 nodes; within
-        0.005 % of a 0.25 deg midpoint grid for aerosol optical depths up to 0.5, sun zenith 0-90 deg). Tabulated
-        once per tables on sun zeniths every 2 deg to 80 deg and every 0.5 deg from 80 to 98 deg (77 radiance
-        integrals, about 0.3 CPU-s) and interpolated linearly; beyond 98 deg computed directly.
+        by the Gauss-Legendre rule of :func:`skyscatter.quadrature.plane_quadrature` with
+        :data:`HORIZONTAL_SKY_NODES` (48 x 96 nodes; within 0.04 % of a 0.25 deg midpoint grid for aerosol optical
+        depths up to 0.5, sun zenith 0-90 deg, 96 x 192 nodes within 0.005 %). Tabulated once per tables on sun
+        zeniths every 2 deg to 80 deg and every 0.5 deg from 80 to 98 deg (77 radiance integrals) and interpolated
+        linearly; beyond 98 deg computed directly.
 
         This is the quantity a sky matrix integrates over its patches. The precomputed irradiance of
         :meth:`ground_irradiance` (Eq. 14) integrates the scattering orders on the coarser sphere quadrature of the
@@ -422,7 +427,7 @@ class TableLookups:
         if z.ndim != 1 or not np.all(np.isfinite(z)):
             raise InvalidParameterError("sun_zenith must be a 1-D array of finite angles in radians")
         cached = getattr(self, "_horizontal_sky_cache", None)
-        directions, weights = plane_quadrature(0.0, 0.0)
+        directions, weights = plane_quadrature(0.0, 0.0, nodes=HORIZONTAL_SKY_NODES)
         ground = np.array([0.0, 0.0, self._geometry()[0]])
 
         def integrate(zeniths: NDArray[np.float64]) -> NDArray[np.float64]:
