@@ -17,7 +17,9 @@ Rayleigh scattering, aerosol extinction and ozone (ozone outside the medium's 36
 slant_optical_masses`, the geometry of the tables, no refraction), water vapour and mixed-gas band
 transmittances T_w, T_u (Bird & Riordan 1986, Eqs. 2-8 and 2-11; air mass the Rayleigh one) and Spencer's
 (1971) eccentricity factor f_ecc (:func:`skyscatter.sky.perez.extraterrestrial_irradiance`). The diffuse
-horizontal irradiance is the tables' sky irradiance on a horizontal plane at the table wavelengths, reduced by
+horizontal irradiance is the tables' sky radiance integrated over the hemisphere at the table wavelengths
+(:meth:`~skyscatter.precomputed.evaluation.TableLookups.horizontal_sky_irradiance`: the quantity the sky matrix's
+patches are scaled to, and the closer to DISORT than the tables' irradiance texture), reduced by
 E0 there, carried to the fine grid by linear interpolation (and beyond 830 nm and below 360 nm by a power law
 through the two nearest table wavelengths), times E0 and the same gas transmittances (the diffuse light takes
 the sun's gas path, as in Bird & Riordan 1986, Sec. 3), summed. Pyrheliometers see about 2.5 deg around the
@@ -1445,7 +1447,7 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
         # DHI at the vertices of the closure path, at the retrieved AOD (interpolated along the AOD axis only)
         if good.size:
             k_path, verts = closure_path(fam)
-            d_v = _diffuse_on_path(fam, model, good, aod, zen, azi, pw, pressure, ozone, ecc, k_path, verts)
+            d_v = _diffuse_on_path(fam, model, good, aod, zen, pw, pressure, ozone, ecc, k_path, verts)
             if verts.shape[0] > 1:
                 last = verts.shape[0] - 1
                 p = _path_invert(d_v, dhi[good])
@@ -1530,7 +1532,7 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
                     aod[own[ok_own]] = t_own[ok_own]
                     aod_src[own[ok_own]] = "dni"
                 k_path, verts = closure_path(fam)
-                d_v = _diffuse_on_path(fam, model, br, aod, zen, azi, pw, pressure, ozone, ecc, k_path, verts)
+                d_v = _diffuse_on_path(fam, model, br, aod, zen, pw, pressure, ozone, ecc, k_path, verts)
                 if verts.shape[0] > 1:
                     # the base albedo on the path's albedo leg (at the base's g, the largest g node)
                     n_s = len(ssa_axis.values) if ssa_axis is not None else 1
@@ -1671,14 +1673,12 @@ def _path_invert(d_vertices: NDArray[np.float64], target: NDArray[np.float64]) -
         return np.where(hi > lo, k + (target - lo) / (hi - lo), np.nan)
 
 
-def _diffuse_on_path(fam: TableFamily, model: BroadbandClearSky, rows, aod, zen, azi, pw, pressure, ozone, ecc,
+def _diffuse_on_path(fam: TableFamily, model: BroadbandClearSky, rows, aod, zen, pw, pressure, ozone, ecc,
                      k_path: list[int], vertices: NDArray[np.float64]) -> NDArray[np.float64]:
     """Broadband DHI [W m^-2] of hours ``rows`` at their AOD and at each vertex of the closure path
     (:func:`closure_path`), shape (len(rows), n_vertices)."""
     k_aod = [a.name for a in fam.axes].index("aerosol_optical_depth")
-    sun = direction_from_angles(zen[rows], azi[rows])
-    ground = np.array([0.0, 0.0, fam.base.bottom_radius])
-    up = np.array([0.0, 0.0, 1.0])
+    z_rows = np.asarray(zen[rows], dtype=float)
     out = np.zeros((rows.size, vertices.shape[0]))
     for j, vertex in enumerate(vertices):
         vals = np.zeros((rows.size, len(fam.axes)))
@@ -1689,7 +1689,8 @@ def _diffuse_on_path(fam: TableFamily, model: BroadbandClearSky, rows, aod, zen,
             vals[:, k] = v
 
         def sky_irradiance(atm, sub):
-            return atm.ground_irradiance(ground, up, sun[sub])[1]
+            # the tables' radiance integrated over the hemisphere: what the sky matrix's patches integrate
+            return atm.horizontal_sky_irradiance(z_rows[sub])
 
         spectral = fam.interpolate(vals, sky_irradiance)
         out[:, j] = model.broadband_diffuse(spectral, zen[rows], pw[rows], pressure[rows], ozone[rows], ecc[rows],
