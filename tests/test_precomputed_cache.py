@@ -138,3 +138,44 @@ def test_first_build_says_so_and_a_cached_atmosphere_is_silent(tmp_path, monkeyp
     with warnings.catch_warnings():
         warnings.simplefilter("error", TableBuildWarning)
         cached_atmosphere(params, orders=1, wavelengths=[550.0], sizes=small)  # from the disk cache: no warning
+
+
+_BUILDER = """
+import hashlib, sys, time
+from skyscatter.precomputed import PrecomputedAtmosphere
+from skyscatter.precomputed.cache import load_or_compute
+compute = PrecomputedAtmosphere.compute.__func__
+
+def slow(cls, *args, **kwargs):  # a build that lasts: the other process arrives while it runs
+    time.sleep(1.5)
+    return compute(cls, *args, **kwargs)
+
+PrecomputedAtmosphere.compute = classmethod(slow)
+while time.time() < float(sys.argv[1]):  # start together
+    pass
+atm, computed = load_or_compute(orders=1, sizes=%r, wavelengths=[550.0], progress=False)
+print(computed, hashlib.sha256(atm.tables["multiple"].tobytes()).hexdigest())
+"""
+
+
+def test_two_processes_needing_the_same_tables_build_them_once(tmp_path):
+    """Parallel test workers (pytest -n 2) or Dask workers share the cache folder: two processes asking for the
+    same missing tables at the same instant get the same tables, built by one of them (the other waits for its
+    lock, then loads its file), and the folder holds the one table file and its lock, no temporary."""
+    import os
+    import subprocess
+    import sys
+    import time
+
+    env = {**os.environ, "SKYSCATTER_CACHE_DIR": str(tmp_path)}
+    start = repr(time.time() + 3.0)
+    procs = [subprocess.Popen([sys.executable, "-c", _BUILDER % (TINY,), start], env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    outs = [p.communicate(timeout=300) for p in procs]
+    assert all(p.returncode == 0 for p in procs), [err for _, err in outs]
+    results = [out.split() for out, _ in outs]
+    assert sorted(r[0] for r in results) == ["False", "True"], results
+    assert results[0][1] == results[1][1]
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert len(names) == 2 and names[0].startswith(".bruneton-") and names[0].endswith(".npz.lock"), names
+    assert names[1] == names[0][1:-len(".lock")], names

@@ -7,16 +7,22 @@ and verified when read (format, per-table SHA-256 checksums, stored key): a corr
 file triggers a :class:`CacheRebuildWarning` and is recomputed, never trusted. Tables loaded once are also
 kept in memory for the life of the process; their scattering tables stay memory maps of the file
 (:mod:`.storage`), which another process may replace (by renaming) without changing what this one reads.
+Processes that need the same missing tables at once (parallel test workers, Dask workers, two commands) build
+them once: the builder holds an exclusive lock (``.NAME.lock`` beside the file, :func:`fcntl.flock`, released
+when its process ends, even killed) and the others wait for it, then load its file.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import os
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 
-from numpy.typing import ArrayLike
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ..deprecation import renamed_keywords
 from ..errors import FileFormatError, InvalidParameterError, OutputError
@@ -106,35 +112,87 @@ def load_or_compute(atmosphere: AtmosphereParameters | None = None, *, orders: i
     path = cache_path(key)
     if require_saved:
         check_cache_dir()
-    atm = None
-    if path.exists() and not force:
-        try:
-            atm = PrecomputedAtmosphere.load(path, expected_key=key)
-        except (FileFormatError, OSError) as exc:
-            warnings.warn(f"rebuilding cached atmosphere tables: {exc}", CacheRebuildWarning, stacklevel=3)
+    atm, seen = (None, None) if force else _load(path, key)
     computed = atm is None
     if computed:
-        if progress is None:  # a library call that did not choose: say once why it takes a while
-            warnings.warn(f"building the precomputed tables for this atmosphere once ({wl.size} wavelengths, "
-                          f"{orders} orders; typically 30-60 s on 2 cores, and about 20 s more the first time, "
-                          f"to compile the kernels); they are then cached in {path.parent}",
-                          TableBuildWarning, stacklevel=3)
-        atm = PrecomputedAtmosphere.compute(params, orders=orders, wavelengths=wl, sizes=sz, progress=progress)
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            atm.save(path)
-        except (OSError, OutputError) as exc:
-            if isinstance(exc, OutputError):  # already names the file and the reason
-                what = f"the table cache: {exc}"
-            else:
-                what = f"the table cache {path}: {exc.strerror or exc}"
-            if require_saved:
-                raise OutputError(f"could not write {what}") from None
-            warnings.warn(f"could not write {what}; the tables are used without being cached", RuntimeWarning,
-                          stacklevel=3)
+        with _build_lock(path):  # one process builds; the others wait here, then load its file
+            if not force and _identity(path) not in (None, seen):  # written by another process while we waited
+                atm, _ = _load(path, key)
+            computed = atm is None
+            if computed:
+                atm = _build_and_save(path, params, orders, wl, sz, progress, require_saved)
     if keep_in_memory:
         _MEMORY[key] = atm
     return atm, computed
+
+
+def _build_and_save(path: Path, params: AtmosphereParameters, orders: int, wl: NDArray[np.float64],
+                    sz: TableSizes, progress: bool | None, require_saved: bool) -> PrecomputedAtmosphere:
+    """Compute the tables (:meth:`PrecomputedAtmosphere.compute`) and store them at ``path`` (atomically); an
+    unwritable cache is a warning, or an :class:`~skyscatter.errors.OutputError` with ``require_saved``."""
+    if progress is None:  # a library call that did not choose: say once why it takes a while
+        warnings.warn(f"building the precomputed tables for this atmosphere once ({wl.size} wavelengths, "
+                      f"{orders} orders; typically 30-60 s on 2 cores, and about 20 s more the first time, "
+                      f"to compile the kernels); they are then cached in {path.parent}",
+                      TableBuildWarning, stacklevel=4)
+    atm = PrecomputedAtmosphere.compute(params, orders=orders, wavelengths=wl, sizes=sz, progress=progress)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atm.save(path)
+    except (OSError, OutputError) as exc:
+        if isinstance(exc, OutputError):  # already names the file and the reason
+            what = f"the table cache: {exc}"
+        else:
+            what = f"the table cache {path}: {exc.strerror or exc}"
+        if require_saved:
+            raise OutputError(f"could not write {what}") from None
+        warnings.warn(f"could not write {what}; the tables are used without being cached", RuntimeWarning,
+                      stacklevel=4)
+    return atm
+
+
+def _identity(path: Path) -> tuple[int, int] | None:
+    """(inode, modification time in ns) of the file at ``path``, or None if there is none: a file another
+    process renamed into place has another identity."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return st.st_ino, st.st_mtime_ns
+
+
+def _load(path: Path, key: str) -> tuple[PrecomputedAtmosphere | None, tuple[int, int] | None]:
+    """The tables cached at ``path`` (None if missing, or damaged: with a :class:`CacheRebuildWarning`) and the
+    identity (:func:`_identity`) of the file read."""
+    seen = _identity(path)
+    if seen is None:
+        return None, None
+    try:
+        return PrecomputedAtmosphere.load(path, expected_key=key), seen
+    except (FileFormatError, OSError) as exc:
+        warnings.warn(f"rebuilding cached atmosphere tables: {exc}", CacheRebuildWarning, stacklevel=4)
+        return None, seen
+
+
+@contextlib.contextmanager
+def _build_lock(path: Path) -> Iterator[None]:
+    """Hold the exclusive lock of the tables at ``path`` (``.NAME.lock`` beside it, :func:`fcntl.flock`) while
+    they are looked up again and built: another process building them is waited for. The lock goes with its
+    file descriptor, so the kernel releases it when the process ends, however it ends (no stale locks). Where
+    the cache folder cannot be written there is no lock (the tables are built, and a warning says they are not
+    cached)."""
+    lock = path.with_name(f".{path.name}.lock")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+    except OSError:
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
 
 
 @renamed_keywords(wavelengths="tables")
