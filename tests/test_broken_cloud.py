@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -320,10 +321,12 @@ def test_fisheye_per_pixel_rms_against_the_monte_carlo(index):
     assert np.all(np.sqrt(np.mean(rel**2, axis=0)) < 0.8)
 
 
+@cache
 def _uniform_layer_against_disort():
     """Relative difference model / DISORT ``cloudy`` - 1 (directions, 450 / 550 / 650 nm) of a one-column periodic
     field (an exact infinite layer) of optical depth 5 at 1000-1500 m, sun 30 deg from the zenith, the 14 of 16
-    directions at least 20 deg from the sun."""
+    directions at least 20 deg from the sun. Computed once per process (read-only) for the two tests that read
+    it."""
     pytest.importorskip("disortpp")
     from skyscatter.sky.cloudy import CloudySky
 
@@ -333,7 +336,9 @@ def _uniform_layer_against_disort():
     c = CloudySky(sz, SUN_A, cloud_optical_depth=5.0, cloud_base=1000.0, cloud_top=1500.0)
     d = _dirs([15, 40, 65, 90], [0, 135, 250, 315])
     d = d[np.degrees(np.arccos(np.clip(d @ b.sun_direction, -1, 1))) >= 20.0]
-    return b.spectral_radiance(d, [450, 550, 650]) / c.spectral_radiance(d, [450, 550, 650]) - 1.0
+    rel = b.spectral_radiance(d, [450, 550, 650]) / c.spectral_radiance(d, [450, 550, 650]) - 1.0
+    rel.flags.writeable = False
+    return rel
 
 
 def test_uniform_field_against_the_cloudy_layer_model():
