@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 
 from skyscatter.cli import build_parser, main
+from skyscatter.realtime.export import MANIFEST_VERSION
 
 DATA = Path(__file__).parent / "data"
 TINY = dict(transmittance_mu=16, transmittance_r=4, irradiance_mu_s=4, irradiance_r=4, scattering_r=4,
@@ -456,10 +457,10 @@ RUNS = {
                              _realtime("rt", ("rgba32f", "rgba16f", "exr"))),
     # view (--check: serve on 127.0.0.1, fetch the page and every file over HTTP, exit)
     "view-luts": (["export-luts", "--out-dir", "rt", *TINY_FLAGS, "--formats", "rgba32f", "&&", "view", "--luts", "rt",
-                   "--port", "0", "--no-browser", "--check"], _stdout("manifest (version 2) and 6 textures")),
+                   "--port", "0", "--no-browser", "--check"], _stdout(f"manifest (version {MANIFEST_VERSION}) and 6 textures")),
     "view-cache": (["view", *TINY_FLAGS, "--turbidity", "3", "--ground-albedo", "0.2", "--ozone", "280", "--mie-g",
                     "0.7", "--max-sun-zenith", "104", "--tables", "spectral", "--port", "0", "--check"],
-                   _stdout("manifest (version 2) and 12 textures")),
+                   _stdout(f"manifest (version {MANIFEST_VERSION}) and 12 textures")),
     # reference
     "reference-turbidity": (["reference", "r.zarr", "--sun-elevation", "30,-3", "--turbidity", "2,4", "--ground-albedo",
                              "0.1", "--wavelengths", "450,550", "--directions", "3", "--samples", "8", "--seed",
