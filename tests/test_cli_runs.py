@@ -457,7 +457,8 @@ RUNS = {
                              _realtime("rt", ("rgba32f", "rgba16f", "exr"))),
     # view (--check: serve on 127.0.0.1, fetch the page and every file over HTTP, exit)
     "view-luts": (["export-luts", "--out-dir", "rt", *TINY_FLAGS, "--formats", "rgba32f", "&&", "view", "--luts", "rt",
-                   "--port", "0", "--no-browser", "--check"], _stdout(f"manifest (version {MANIFEST_VERSION}) and 6 textures")),
+                   "--port", "0", "--no-browser", "--check"],
+                  _stdout(f"manifest (version {MANIFEST_VERSION}) and 6 textures")),
     "view-cache": (["view", *TINY_FLAGS, "--turbidity", "3", "--ground-albedo", "0.2", "--ozone", "280", "--mie-g",
                     "0.7", "--max-sun-zenith", "104", "--tables", "spectral", "--port", "0", "--check"],
                    _stdout(f"manifest (version {MANIFEST_VERSION}) and 12 textures")),
