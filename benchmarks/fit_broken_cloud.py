@@ -38,7 +38,8 @@ With the droplets' forward peak truncated delta-M style in the march (2026-12-02
 benchmarks/fit_broken_cloud_delta_m.json (``--fit-cover 0.3 0.6 0.9 --free a b c --x0 0.3245 0.55 0.6334 0 0.5
 --max-nfev 10``: ``d`` and ``e`` held) and fit_broken_cloud_delta_m_irradiance.json (``--irradiance --free b --x0
 0.4559 0.70 0.6411 0 0.5 --max-nfev 5``, the same covers); neither adopted, the truncation is off (docs/clouds.md,
-"The forward peak kept near the sun").
+"The forward peak kept near the sun"). The joint fit of ``a, b, c, e`` against every guard of the tests at once
+(minimax over the guards' margins): ``benchmarks/fit_broken_cloud_joint.py``.
 ``--free`` names the parameters fitted (the others held at ``--x0``).
 
 Usage: ``python benchmarks/fit_broken_cloud.py [--fit-cover 0.6 ...] [--irradiance] [--above] [--free a b c]

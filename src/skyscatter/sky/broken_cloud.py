@@ -141,7 +141,9 @@ def entry_factors(mu0: float, exponent: float) -> tuple[float, float]:
 #: forward fraction ``f = chi_N`` (16: DISORT's stream count in :mod:`.cloudy`); 0, shipped, no truncation (the
 #: octaves of [Wrenninge2013]; within rounding, 4.4e-16, of the march before the option). Measured with ``N`` = 16
 #: and the octaves refitted (docs/clouds.md, "The forward peak kept near the sun"): the fits to the broken fields'
-#: Monte Carlo and the uniform layer against DISORT pulled ``b`` apart, so it is not switched on.
+#: Monte Carlo and the uniform layer against DISORT pulled ``b`` apart, and a joint fit of ``a, b, c, e`` against
+#: every accuracy guard (``benchmarks/fit_broken_cloud_joint.py``) found no octaves that pass them all, so it is
+#: not switched on.
 TRUNCATION_STREAMS = 0
 
 
