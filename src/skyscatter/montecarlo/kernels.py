@@ -1437,6 +1437,23 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
             n_active += 1
     lx = dom[2] * dom[4]
     ly = dom[3] * dom[5]
+    vertices_out[0] += _flux_paths(sun, rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, tmu, tval, tcdf,
+                                   albedo, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, dom, levels, seed,
+                                   group, batch0, n_batches, batch_size, up, down, absorbed, n, nc, npix, nlev, r_base,
+                                   r_top, st, f, p, cols, tmp, dens, kh, coef_t, scat_t, sc, ph, stt, sst, tau, val,
+                                   val2, bu, bd, ba, fstate, rec, field, fsmax, active, lx, ly)
+
+
+@helper
+def _flux_paths(sun, rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, fvf, fvi,
+                frho, fbmax, fbmin, fxe, fye, fre, fs, fss, dom, levels, seed, group, batch0, n_batches, batch_size, up,
+                down, absorbed, n, nc, npix, nlev, r_base, r_top, st, f, p, cols, tmp, dens, kh, coef_t, scat_t, sc, ph,
+                stt, sst, tau, val, val2, bu, bd, ba, fstate, rec, field, fsmax, active, lx, ly):
+    """The photons of :func:`flux_block` (its loop over batches and photons), with the buffers it allocated; returns
+    the number of vertices. A helper (no reference counting, ``skyscatter.jit``), as :func:`_trace_paths`: compiled
+    inside the kernel, every array passed to the inlined :func:`_collide` was counted up and down at each collision
+    (atomic operations)."""
+    n_active = active.shape[0]
     nvert = 0
     for bi in range(n_batches):
         key = stream_key(seed, 0, group, batch0 + bi)
@@ -1553,4 +1570,4 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
                 v = ba[k, i]
                 absorbed[k, i, 0] += v
                 absorbed[k, i, 1] += v * v
-    vertices_out[0] += nvert
+    return nvert
