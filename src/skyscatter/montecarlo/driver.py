@@ -54,6 +54,13 @@ PEAK_ANGLE = math.radians(10.0)
 #: (``kernels._sun_transmittance``; the sun's light there is below exp(-8) = 3e-4 of its value). math.inf: never.
 #: Clear media do not use it.
 NEE_ROULETTE_DEPTH = 8.0
+#: Next-event shadow rays of a cloudy medium from below the top of its cloud layers (and field) take the shells'
+#: columns above that top from a table over the cosine there (``kernels._shadow_march``, :func:`columns_above`):
+#: that many nodes uniform in ln(mu) from :data:`SHADOW_TABLE_MU` to 1 (within 5e-10 relative of the march at 400
+#: random cosines, docs/clouds.md; against QUADPACK in the tests). 0: off (every shadow ray marched to the top).
+SHADOW_TABLE_NODES = 512
+#: Smallest cosine [-] of the shadow rays' table; rays leaving the cloud tops more grazing are marched.
+SHADOW_TABLE_MU = 0.005
 #: Splitting and roulette by importance in cloudy media (``kernels`` module docstring, "splitting"): a path's
 #: medium vertex is in class ``k`` when its next-event shadow ray's optical depth (least extinguished wavelength) is
 #: below ``k`` of :data:`SPLIT_DEPTHS`; a path that climbs ``k`` classes above its first medium vertex's is split
@@ -109,7 +116,8 @@ class Medium:
     field's. ``field`` is the field for tracking (majorant blocks), ``field_exact`` the same field with every
     voxel its own block (exact transmittance of the direct sun); both :func:`.tracking.empty_field` without one.
     ``peak_lobe``, ``pval``, ``pcdf``, ``pa``: the lobe whose forward peak is split off the next-event estimates
-    (-1: none) and the peak as :func:`forward_peak` returns it.
+    (-1: none) and the peak as :func:`forward_peak` returns it. ``sgeo``, ``stab``: the shadow rays' table of the
+    columns above the cloud tops (:func:`columns_above`; ``sgeo[0] = 0``: none).
     """
 
     bottom_radius: float
@@ -143,6 +151,8 @@ class Medium:
     dval: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros((1, 2)))
     dcdf: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros((1, 2)))
     ddis_gate: float = 0.0
+    sgeo: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(3))
+    stab: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros((4, 1)))
 
     @property
     def cloud_paths(self) -> bool:
@@ -323,9 +333,20 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
             peak_lobe = ddis_lobe
             pval, pcdf, pa = split
             dval, dcdf = _without_peak_table(tmu, tval[lobes[ddis_lobe][2]], pval, pa)
+    edges = quadrature_edges(atmosphere)
+    nlay = np.array([a.shape[0] for a in arrs], dtype=np.int64)
+    sgeo, stab = np.zeros(3), np.zeros((4, 1))
+    if cloudy and SHADOW_TABLE_NODES > 0:
+        tops = [_profile_top(c.density, atmosphere.thickness) for c in comps[1:]]
+        if clouds is not None:
+            tops.append(clouds.top)
+        top = max(tops)
+        if top < atmosphere.thickness - 1.0:
+            sgeo, stab = columns_above(rb, atmosphere.top_radius, edges, layers, nlay, rb + top, SHADOW_TABLE_MU,
+                                       SHADOW_TABLE_NODES)
     return Medium(
-        rb, atmosphere.top_radius, quadrature_edges(atmosphere), layers,
-        np.array([a.shape[0] for a in arrs], dtype=np.int64),
+        rb, atmosphere.top_radius, edges, layers,
+        nlay,
         np.ascontiguousarray(np.stack(coef, axis=-1), dtype=float),
         np.ascontiguousarray(np.stack(scat, axis=-1), dtype=float),
         np.array([lo[0] for lo in lobes], dtype=np.int64), np.array([lo[1] for lo in lobes]),
@@ -335,8 +356,41 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
         atmosphere.sun_angular_radius, field, field_exact, np.ascontiguousarray(fs, dtype=float),
         np.ascontiguousarray(fss, dtype=float), DDIS_PROBABILITY if cloudy else 0.0, ddis_lobe, peak_lobe, pval,
         pcdf, pa, NEE_ROULETTE_DEPTH if cloudy else math.inf, _split_table() if cloudy else np.ones(1),
-        dval, dcdf, math.exp(-DDIS_DEPTH),
+        dval, dcdf, math.exp(-DDIS_DEPTH), sgeo, stab,
     )
+
+
+def _profile_top(profile: Any, thickness: float) -> float:
+    """Altitude [m] above which ``profile`` is zero (its last layer identically 0), else ``thickness``."""
+    last = profile.layers[-1]
+    if len(profile.layers) < 2 or (last.exp_term, last.linear_term, last.constant_term) != (0.0, 0.0, 0.0):
+        return thickness
+    return float(sum(lay.width for lay in profile.layers[:-1]))
+
+
+def columns_above(rb: float, rt: float, edges: NDArray[np.float64], layers: NDArray[np.float64],
+                  nlay: NDArray[np.int64], rc: float, mu_min: float, nodes: int
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The shadow rays' table (``kernels._add_columns_above``): the columns [m] of every shell component along a
+    ray from the sphere of radius ``rc`` [m] at the cosine ``mu`` to the local vertical up to the top ``rt`` [m],
+    at ``nodes`` cosines uniform in ``ln mu`` from ``mu_min`` to 1, each by the kernels' own march
+    (``kernels.column_along``: the same pieces and Gauss-Legendre sums). In spherical shells the column from a
+    point to the top depends on its radius and that cosine only, so a shadow ray that leaves the cloud tops (radius
+    ``rc``) needs no march above them. Returns ``sgeo`` (``rc``, ``ln mu_min``, 1 / node spacing in ``ln mu``) and
+    the table (nodes, n_comp)."""
+    x0 = math.log(mu_min)
+    xs = np.linspace(x0, 0.0, nodes)
+    nc = layers.shape[0]
+    table = np.zeros((nodes, nc))
+    tmp = np.empty(nc)
+    kinf = np.zeros(nc)
+    for j, x in enumerate(xs):
+        mu = math.exp(x) if j < nodes - 1 else 1.0
+        sn = math.sqrt(max(1.0 - mu * mu, 0.0))
+        b = rc * mu
+        te = -b + math.sqrt(b * b - (rc * rc - rt * rt))
+        kernels.column_along(0.0, 0.0, rc, sn, 0.0, mu, te, math.inf, kinf, rb, edges, layers, nlay, table[j], tmp)
+    return np.array([rc, x0, (nodes - 1) / -x0]), table
 
 
 def _without_peak_table(tmu: NDArray[np.float64], tval: NDArray[np.float64], pval: NDArray[np.float64],
@@ -438,7 +492,8 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
     verts = np.zeros((n, n_batches))
     f = m.field
     kernels.trace_block(origins, jitter, dirs, mode, dir_index, sun, math.cos(m.sun_angular_radius),
-                        m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.scat, m.lobe, m.lobe_g,
+                        m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.sgeo, m.stab, m.coef, m.scat,
+                        m.lobe, m.lobe_g,
                         m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe,
                         f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa,
                         m.nee_roulette, m.split, m.dval, m.dcdf, m.ddis_gate, _CLOUDY if m.cloud_paths else None,

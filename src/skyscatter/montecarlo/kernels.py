@@ -70,6 +70,12 @@ Estimator (backward paths from the observer; [Veach1997] Ch. 8-9):
   probability 0.1 beyond depth 8, which re-marched a survivor from its start; the exponential survival about 5 %
   more, docs/clouds.md). Clear media do not use it:
   their kernel is compiled without the cloud code (``trace_block``'s ``cloudy``), and pays nothing for it;
+* shadow rays of cloudy media from below the top of the cloud layers (and field) are marched only up to the sphere
+  of that top (``_shadow_march``): in spherical shells the columns from there to the top of the atmosphere depend
+  on the ray's cosine to the vertical there only, and come from a table over it (``driver.columns_above``: the
+  kernels' own march at 512 cosines uniform in ``ln mu`` from 0.005 to 1, 4-point Lagrange interpolation; the
+  columns agree with adaptive quadrature within the bounds above, tested). Near the top of an overcast layer a
+  shadow ray's ten-odd pieces through the air above become one or two;
 * absorption (particle albedos, ozone) enters as a weight, never as termination;
 * directional importance sampling towards the sun (the "DDIS" of [BurasMayer2011] Sec. 3.3, here for backward
   paths), optional: with probability ``ddis`` the new direction is drawn from the cloud's own phase function (the
@@ -463,8 +469,59 @@ def _sun_sample(sx, sy, sz, cos_max, u1, u2):
 
 
 @helper
-def _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb, edges, layers, nlay, fs, fsmax,
-                       fsmin, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf, out):
+def _add_columns_above(sgeo, stab, mu, cols):
+    """Adds to ``cols`` (n_comp,) the columns [m] of the shells above the radius ``sgeo[0]`` along a ray leaving that
+    sphere at the cosine ``mu`` to the local vertical, from the table ``stab`` (n, n_comp) of :func:`.driver.
+    columns_above` (nodes uniform in ``ln mu`` from ``sgeo[1]`` by ``1 / sgeo[2]``): 4-point Lagrange interpolation
+    in ``ln mu`` ([Abramowitz1964] 25.2.13). Returns False (``cols`` unchanged) below the table's smallest cosine."""
+    if not mu > 0.0:
+        return False
+    u = (math.log(mu) - sgeo[1]) * sgeo[2]
+    if u < 0.0:
+        return False
+    nt = stab.shape[0]
+    j = min(max(int(u), 1), nt - 3)
+    s = u - j
+    # weights of the nodes j - 1, j, j + 1, j + 2 at s (s = 0 at node j)
+    w0 = -s * (s - 1.0) * (s - 2.0) / 6.0
+    w1 = (s + 1.0) * (s - 1.0) * (s - 2.0) / 2.0
+    w2 = -(s + 1.0) * s * (s - 2.0) / 2.0
+    w3 = (s + 1.0) * s * (s - 1.0) / 6.0
+    for q in range(cols.shape[0]):
+        cols[q] += w0 * stab[j - 1, q] + w1 * stab[j, q] + w2 * stab[j + 1, q] + w3 * stab[j + 2, q]
+    return True
+
+
+@helper
+def _shadow_march(px, py, pz, wx, wy, wz, te, target, kmin, rb, edges, layers, nlay, sgeo, stab, tot, tmp, rec):
+    """The shells' columns ``tot`` [m] of a shadow ray over ``[0, te]`` (to the top of the atmosphere) unless the
+    optical depth ``kmin . tot`` reaches ``target`` first (returns True then; ``tot`` undefined): :func:`_march`
+    without locating the end, except that a ray from below the radius ``sgeo[0]`` (> 0: the top of the cloud layers)
+    is marched only up to that sphere and the columns above it come from the table of :func:`_add_columns_above`
+    (they depend on the cosine there only, the shells being spherically symmetric). The table's nodes are the
+    same pieces and Gauss-Legendre sums as the march (the sphere is a quadrature shell), so the only difference is
+    the interpolation (within 5e-10 relative, docs/clouds.md). Near the top of a cloud the ray's 10-odd pieces
+    above it become one or two."""
+    rc = sgeo[0]
+    r2 = px * px + py * py + pz * pz
+    if rc > 0.0 and r2 < rc * rc:
+        b = px * wx + py * wy + pz * wz
+        tc = -b + math.sqrt(max(b * b - (r2 - rc * rc), 0.0))
+        if tc < te:
+            _, deep, _ = _march(px, py, pz, wx, wy, wz, tc, target, kmin, rb, edges, layers, nlay, tot, tmp, rec,
+                                False)
+            if deep:
+                return True
+            if _add_columns_above(sgeo, stab, (b + tc) / rc, tot):
+                return _dot(kmin, tot) >= target
+    _, deep, _ = _march(px, py, pz, wx, wy, wz, te, target, kmin, rb, edges, layers, nlay, tot, tmp, rec, False)
+    return deep
+
+
+@helper
+def _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb, edges, layers, nlay, sgeo, stab,
+                       fs, fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau,
+                       trf, out):
     """The shadow ray of a next-event estimate: ``out[i]`` the transmittance [-] from ``p`` [m] along the unit
     direction ``w`` over ``te`` [m] (to the top of the atmosphere) per wavelength, through the shells (exact) and
     the field (ratio tracking, into ``trf``). Returns False (``out`` not set) where it is zero for every
@@ -488,16 +545,17 @@ def _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t
     w = 1.0
     if rr_depth < _NEE_STOP:
         end = min(rr_depth - math.log1p(-next_uniform(st)), _NEE_STOP)
-        _, deep, _ = _march(px, py, pz, wx, wy, wz, te, end, kmin, rb, edges, layers, nlay, tot, tmp, rec, False)
-        if deep:
+        if _shadow_march(px, py, pz, wx, wy, wz, te, end, kmin, rb, edges, layers, nlay, sgeo, stab, tot, tmp, rec):
             return False
-        _transmittances(coef_t, tot, tau, out)  # marched to the top: ``tot`` holds the whole columns
+        _transmittances(coef_t, tot, tau, out)  # to the top: ``tot`` holds the whole columns
         excess = _dot(kmin, tot) - rr_depth
         if excess > 0.0:
             w = math.exp(excess)
-    elif not _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges, layers, nlay, tot, tmp, rec,
-                                   tau, out):
-        return False
+    else:
+        if _shadow_march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, sgeo, stab, tot, tmp,
+                         rec):
+            return False
+        _transmittances(coef_t, tot, tau, out)
     for i in range(n):
         if field:
             out[i] *= trf[i]
@@ -744,8 +802,8 @@ _SPLIT_STACK = 64
 
 
 @helper
-def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nlay, coef_t, scat_t, kh, kmin,
-                peak_lobe, tmu, pval, pcdf, pa, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax,
+def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, coef_t, scat_t, kh,
+                kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax,
                 fsmin, rr_depth, st, fstate, cols, tot, tmp, rec, dens, sc, stt, sst, tau, trf, pk, fp, pp, chain, g):
     """The sunlight reaching ``p`` [m] after a chain of L >= 1 forward-peak scatterings (module docstring, "forward
     peak"): draws L, a direction ``w`` uniform over the solar disc, directions ``omega_L`` about ``w``, ...,
@@ -811,9 +869,9 @@ def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nl
     te, blocked = _exit_distance(qx, qy, qz, wx, wy, wz, rb, rt)
     if blocked:
         return False, 0.0, 0.0, 0.0
-    if not _sun_transmittance(qx, qy, qz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb, edges, layers, nlay, fs,
-                              fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau,
-                              trf, fp):
+    if not _sun_transmittance(qx, qy, qz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb, edges, layers, nlay, sgeo,
+                              stab, fs, fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp,
+                              rec, tau, trf, fp):
         return False, 0.0, 0.0, 0.0
     for i in range(n):
         g[i] *= esun[i] * fp[i]
@@ -885,10 +943,10 @@ def _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy
 
 
 @kernel
-def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, scat,
-                lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
-                fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, nee_roulette, split, dval, dcdf,
-                ddis_gate, cloudy, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
+def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, coef,
+                scat, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
+                fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, nee_roulette, split, dval, dcdf, ddis_gate,
+                cloudy, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
     """Trace ``n_batches`` batches of ``batch_size`` paths for each entry of a block; one wavelength group.
 
     Parameters (all SI; arrays float64 unless stated)
@@ -900,6 +958,8 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     sun : (3,) unit vector to the sun centre. cos_sun : cosine of the solar angular radius.
     rb, rt : planet and top-of-atmosphere radii [m]. edges : sorted radii [m] of the quadrature shells.
     layers : (C, L, 5) density layers of the shell components; nlay : (C,) int64 layer counts.
+    sgeo (3,), stab (m, C): the shadow rays' table of the shells' columns [m] above the cloud tops
+    (:func:`_shadow_march`, ``driver.columns_above``; ``sgeo[0] = 0``: none, every shadow ray marched).
     coef, scat : (n_wl, C) extinction and scattering coefficients at relative density 1 [m^-1].
     lobe, lobe_g, lobe_tab : (C + 1,) phase code (``LOBE_*``), asymmetry and table index of each shell component
     and, last, of the cloud field. tmu (m,), tval and tcdf (n_tab, n_wl, m): the phase tables (ascending mu).
@@ -995,23 +1055,23 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
         if lobe[c] != LOBE_NONE:
             active[n_active] = c
             n_active += 1
-    _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, lobe,
-                 lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
+    _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, coef,
+                 lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
                  fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, seed, group, batch0,
-                 n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp,
-                 dens, kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate,
-                 rec, cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3,
-                 chain, split_on, stk, stk_f, stk_p, f0, p0, kmin, active)
+                 n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp, dens,
+                 kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate, rec,
+                 cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3, chain,
+                 split_on, stk, stk_f, stk_p, f0, p0, kmin, active)
 
 
 @helper
-def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, coef, lobe,
-                 lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
+def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, coef,
+                 lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
                  fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, seed, group, batch0,
-                 n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp,
-                 dens, kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate,
-                 rec, cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3,
-                 chain, split_on, stk, stk_f, stk_p, f0, p0, kmin, active):
+                 n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp, dens,
+                 kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate, rec,
+                 cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3, chain,
+                 split_on, stk, stk_f, stk_p, f0, p0, kmin, active):
     """The paths of :func:`trace_block` (its loop over entries, batches and paths), with the buffers it allocated.
     A helper (no reference counting, ``skyscatter.jit``): compiled inside the kernel, every array passed to an
     inlined function was counted up and down at each vertex (atomic operations, some 15 % of the time of a
@@ -1123,9 +1183,9 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                 live = False
                             elif clouds_on:
                                 live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb,
-                                                          edges, layers, nlay, fs, fsmax, fsmin, fvf, fvi, frho, fbmax,
-                                                          fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf,
-                                                          trs)
+                                                          edges, layers, nlay, sgeo, stab, fs, fsmax, fsmin, fvf, fvi,
+                                                          frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec,
+                                                          tau, trf, trs)
                             else:
                                 _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers,
                                                       nlay, tot, tmp, rec, False)
@@ -1146,10 +1206,11 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                             if peak:
                                 qprobe = min(1.0, max(_PEAK_PROBE_MIN, _PEAK_PROBE_GAIN * tsun))
                             if peak and (qprobe >= 1.0 or next_uniform(st) < qprobe):
-                                alive, wx, wy, wz = _peak_probe( px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges,
-                                    layers, nlay, coef_t, scat_t, kh, kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf,
-                                    fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth, st, fstate,
-                                    cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain, gch)
+                                alive, wx, wy, wz = _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges,
+                                    layers, nlay, sgeo, stab, coef_t, scat_t, kh, kmin, peak_lobe, tmu, pval, pcdf, pa,
+                                    esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth,
+                                    st, fstate, cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain,
+                                    gch)
                                 if alive:
                                     mw = wx * dx + wy * dy + wz * dz
                                     _phase_sums(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, False)
@@ -1223,9 +1284,8 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                 te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
                                 if clouds_on:
                                     live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t,
-                                                              rb, edges, layers, nlay, fs, fsmax, fsmin, fvf, fvi, frho,
-                                                              fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec,
-                                                              tau, trf, trs)
+                                        rb, edges, layers, nlay, sgeo, stab, fs, fsmax, fsmin, fvf, fvi, frho, fbmax,
+                                        fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf, trs)
                                 else:
                                     live = _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges,
                                                                  layers, nlay, tot, tmp, rec, tau, trs)
@@ -1233,10 +1293,11 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                     for i in range(n):
                                         contrib[i] += ws * f[i] * albedo[i] / math.pi * cs * esun[i] * trs[i]
                             if peak:
-                                alive, wx, wy, wz = _peak_probe( px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges,
-                                    layers, nlay, coef_t, scat_t, kh, kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf,
-                                    fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth, st, fstate,
-                                    cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain, gch)
+                                alive, wx, wy, wz = _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges,
+                                    layers, nlay, sgeo, stab, coef_t, scat_t, kh, kmin, peak_lobe, tmu, pval, pcdf, pa,
+                                    esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth,
+                                    st, fstate, cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain,
+                                    gch)
                                 cs = wx * nx + wy * ny + wz * nz
                                 if alive and cs > 0.0:
                                     for i in range(n):
@@ -1437,6 +1498,23 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
             n_active += 1
     lx = dom[2] * dom[4]
     ly = dom[3] * dom[5]
+    vertices_out[0] += _flux_paths(sun, rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, tmu, tval, tcdf,
+                                   albedo, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, dom, levels, seed,
+                                   group, batch0, n_batches, batch_size, up, down, absorbed, n, nc, npix, nlev, r_base,
+                                   r_top, st, f, p, cols, tmp, dens, kh, coef_t, scat_t, sc, ph, stt, sst, tau, val,
+                                   val2, bu, bd, ba, fstate, rec, field, fsmax, active, lx, ly)
+
+
+@helper
+def _flux_paths(sun, rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, fvf, fvi,
+                frho, fbmax, fbmin, fxe, fye, fre, fs, fss, dom, levels, seed, group, batch0, n_batches, batch_size, up,
+                down, absorbed, n, nc, npix, nlev, r_base, r_top, st, f, p, cols, tmp, dens, kh, coef_t, scat_t, sc, ph,
+                stt, sst, tau, val, val2, bu, bd, ba, fstate, rec, field, fsmax, active, lx, ly):
+    """The photons of :func:`flux_block` (its loop over batches and photons), with the buffers it allocated; returns
+    the number of vertices. A helper (no reference counting, ``skyscatter.jit``), as :func:`_trace_paths`: compiled
+    inside the kernel, every array passed to the inlined :func:`_collide` was counted up and down at each collision
+    (atomic operations)."""
+    n_active = active.shape[0]
     nvert = 0
     for bi in range(n_batches):
         key = stream_key(seed, 0, group, batch0 + bi)
@@ -1553,4 +1631,4 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
                 v = ba[k, i]
                 absorbed[k, i, 0] += v
                 absorbed[k, i, 1] += v * v
-    vertices_out[0] += nvert
+    return nvert
