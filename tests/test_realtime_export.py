@@ -15,7 +15,7 @@ from skyscatter.conventions import direction_from_angles
 from skyscatter.errors import FileFormatError, InvalidParameterError
 from skyscatter.precomputed import PrecomputedAtmosphere
 from skyscatter.realtime import MANIFEST_NAME, export_realtime, load_realtime
-from skyscatter.realtime.export import fold_matrix, glsl_library, glsl_mappings
+from skyscatter.realtime.export import MANIFEST_VERSION, fold_matrix, glsl_library, glsl_mappings
 from skyscatter.spectral import HDR_SCALE, xyz_to_linear_srgb
 
 SMALL = dict(transmittance_mu=32, transmittance_r=8, irradiance_mu_s=8, irradiance_r=4, scattering_r=6,
@@ -180,7 +180,7 @@ def test_loader_refuses_another_version_a_missing_and_a_truncated_file(luts, tmp
     (bad / MANIFEST_NAME).write_text(json.dumps(manifest))
     with pytest.raises(FileFormatError, match="version 99"):
         load_realtime(bad)
-    manifest["version"] = 3
+    manifest["version"] = MANIFEST_VERSION
     (bad / MANIFEST_NAME).write_text(json.dumps(manifest))
     (bad / "mie.rgba32f").unlink()
     with pytest.raises(FileFormatError, match="mie.rgba32f: texture file missing"):
