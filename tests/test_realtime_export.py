@@ -15,7 +15,7 @@ from skyscatter.conventions import direction_from_angles
 from skyscatter.errors import FileFormatError, InvalidParameterError
 from skyscatter.precomputed import PrecomputedAtmosphere
 from skyscatter.realtime import MANIFEST_NAME, export_realtime, load_realtime
-from skyscatter.realtime.export import fold_matrix, glsl_library, glsl_mappings
+from skyscatter.realtime.export import MANIFEST_VERSION, fold_matrix, glsl_library, glsl_mappings
 from skyscatter.spectral import HDR_SCALE, xyz_to_linear_srgb
 
 SMALL = dict(transmittance_mu=32, transmittance_r=8, irradiance_mu_s=8, irradiance_r=4, scattering_r=6,
@@ -124,8 +124,12 @@ def test_transmittance_and_irradiance_textures(atm, luts):
             sun = direction_from_angles(np.radians(90 - el), 0.3)
             point = np.array([0.0, 0.0, r])
             _, e_sky = atm.ground_irradiance(point, [0.0, 0.0, 1.0], sun)
-            got = _sample(data.textures["irradiance"], ns["irradiance_uv"](r, sun[2]))
-            np.testing.assert_allclose(got[:3], m @ e_sky, rtol=2e-6, atol=1e-9)
+            uv0, uv1, w, below = ns["irradiance_uvs"](r, sun[2])
+            # the SMALL table's 8 texels: +-4 deg lie in the cell across the horizon (-8.2..+8.2 deg), read log-linearly
+            assert below == (abs(el) < 8.0)
+            tex = data.textures["irradiance"]
+            got = ns["irradiance_lerp"](_sample(tex, uv0), _sample(tex, uv1), w, below)
+            np.testing.assert_allclose(got, m @ e_sky, rtol=2e-6, atol=1e-9)
 
 
 def test_fold_matrix_is_the_libraries_colour(atm):
@@ -147,13 +151,13 @@ def test_half_and_exr_match_float32(luts):
 
 def test_manifest_states_version_units_scale_and_code(luts):
     manifest = json.loads((luts / MANIFEST_NAME).read_text())
-    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 3
+    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 4
     assert manifest["hdr_scale"]["cd_m2_per_unit_Y"] == 683.0
     assert manifest["mappings"]["glsl"] == glsl_mappings() and manifest["mappings"]["glsl"] in glsl_library()
-    for name in ("transmittance_uv", "irradiance_uv", "scattering_uvw"):
+    for name in ("transmittance_uv", "irradiance_uv", "irradiance_uvs", "irradiance_lerp", "scattering_uvw"):
         assert f"def {name}(" in manifest["mappings"]["python"]
-    for glsl in ("TransmittanceUv", "IrradianceUv", "ScatteringMuRCoords", "ScatteringMuSIndex",
-                 "ScatteringNuIndex"):
+    for glsl in ("TransmittanceUv", "IrradianceUv", "IrradianceUvs", "IrradianceLerp", "ScatteringMuRCoords",
+                 "ScatteringMuSIndex", "ScatteringNuIndex"):
         assert glsl in manifest["mappings"]["glsl"]
     for name, entry in manifest["textures"].items():
         f = entry["files"]["rgba32f"]
@@ -176,7 +180,7 @@ def test_loader_refuses_another_version_a_missing_and_a_truncated_file(luts, tmp
     (bad / MANIFEST_NAME).write_text(json.dumps(manifest))
     with pytest.raises(FileFormatError, match="version 99"):
         load_realtime(bad)
-    manifest["version"] = 3
+    manifest["version"] = MANIFEST_VERSION
     (bad / MANIFEST_NAME).write_text(json.dumps(manifest))
     (bad / "mie.rgba32f").unlink()
     with pytest.raises(FileFormatError, match="mie.rgba32f: texture file missing"):
@@ -218,7 +222,7 @@ def test_server_serves_the_viewer_and_only_the_exports_files(luts, tmp_path):
         assert b"GetSkyRadianceToPoint" in get("/glsl/atmosphere.glsl")
         for path in ("/", "/viewer/viewer.js", "/viewer/style.css"):  # nothing loaded from the network
             assert b"http://" not in get(path) and b"https://" not in get(path) and b"//cdn" not in get(path)
-        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 3
+        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 4
         assert len(get("/luts/rayleigh.rgba32f")) == (luts / "rayleigh.rgba32f").stat().st_size
         for path in ("/luts/secret.txt", "/luts/../secret.txt", "/etc/passwd", "/viewer/../export.py"):
             with pytest.raises(urllib.error.HTTPError, match="404"):

@@ -57,6 +57,7 @@ __all__ = [
     "distance_to_top",
     "in_earth_shadow",
     "irradiance_coord",
+    "irradiance_log_cell",
     "irradiance_params",
     "lerp_index",
     "log_lerp_weight",
@@ -300,6 +301,20 @@ def irradiance_params(i_r: int, i_mu_s: int, bottom: float, top: float, n_r: int
     r = bottom + (top - bottom) * i_r / (n_r - 1)
     mu_s = 2.0 * i_mu_s / (n_mu_s - 1) - 1.0
     return r, clamp(mu_s, -1.0, 1.0)
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def irradiance_log_cell(i_mu_s: int, n_mu_s: int) -> bool:
+    """True if the sun-zenith cell from texel ``i_mu_s`` to ``i_mu_s + 1`` of an irradiance table of ``n_mu_s``
+    texels starts below the horizon (texel ``i_mu_s`` at ``mu_s < 0``: the cell below the horizon and the one
+    across it), where the reads interpolate log-linearly along ``mu_s`` (:func:`log_lerp_weight`).
+
+    There the sky irradiance on the ground falls nearly exponentially as the sun sets (turbidity 3, 560 nm: 10.8x
+    between the texels at -4.55 and -6.38 deg of the default 64), and a linear interpolation of such a fall
+    overshoots: +160 % at -6 deg against the hemisphere integral of the independent single scattering of
+    ``benchmarks/second_order_low_sun.py`` (docs/accuracy.md, "Low sun"). Above the horizon the irradiance grows
+    more slowly than exponentially with ``mu_s`` and the linear interpolation stays (daytime unchanged)."""
+    return 2 * i_mu_s < n_mu_s - 1
 
 
 # --------------------------------------------------------------------------------------------- scattering

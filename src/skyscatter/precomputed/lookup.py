@@ -50,6 +50,7 @@ from .sampling import (
     aerosol_phase,
     bilinear_read,
     irradiance_lookup,
+    irradiance_read,
     lookup4_cell,
     lookup4_cell_spectral,
     lookup4_cell_weighted,
@@ -175,7 +176,7 @@ def _ground_from_coords(transmittance, irradiance, albedo, solar, pa_r, pa_mu, p
     bilinear_read(transmittance, pa_r, pa_mu, t)
     bilinear_read(transmittance, pb_r, pb_mu, tmp)
     transmittance_ratio(t, tmp)
-    bilinear_read(irradiance, pe_r, pe_mu, e_sky)
+    irradiance_read(irradiance, pe_r, pe_mu, False, e_sky)
     bilinear_read(transmittance, ps_r, ps_mu, e_sun)
     for k in range(out.shape[0]):
         out[k] = t[k] * albedo[k] / PI * (solar[k] * e_sun[k] * cf + e_sky[k])
@@ -667,7 +668,7 @@ def irradiance_kernel(points, normals, suns, transmittance, irradiance, solar, b
         mu_s = clamp(ux * sx + uy * sy + uz * sz, -1.0, 1.0)
         transmittance_to_sun(transmittance, rc, mu_s, bottom, top, alpha, t)
         cos_n = max(nx * sx + ny * sy + nz * sz, 0.0)
-        irradiance_lookup(irradiance, rc, mu_s, bottom, top, e)
+        irradiance_lookup(irradiance, rc, mu_s, bottom, top, False, e)
         occl = 0.5 * (1.0 + nx * ux + ny * uy + nz * uz)
         for k in range(n_l):
             sun_out[q, k] = solar[k] * t[k] * cos_n

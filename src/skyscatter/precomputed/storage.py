@@ -73,7 +73,12 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: 13: the same layout; the second order's scattering density reads the single-scattering tables along the view-sun
 #: azimuth with weights that follow the Earth's shadow (:func:`.sampling.shadow_nu_weights`; the same as before
 #: wherever the sun is up at the texel), so the multiple-scattering tables of sun zeniths below the horizon changed.
-FORMAT_VERSION = 13
+#: 14: the same layout; the irradiance table read log-linearly along the sun zenith in its cells that start below the
+#: horizon (:func:`.sampling.irradiance_read`: the ground term of the orders' scattering density) and the irradiance
+#: integral of a sun below the horizon reading the scattering tables log-linearly along the sun zenith
+#: (:func:`.sampling.scattering_lookup_log_mu_s`), so the irradiance and multiple-scattering tables of sun zeniths
+#: below the horizon changed.
+FORMAT_VERSION = 14
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).

@@ -26,7 +26,12 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
 * ``transmittance`` 2D, width n_mu x height n_r: RGB sunlight transmittance to the top, A the same for luminance.
 * ``optical_depth`` 2D, same layout: RGB the optical depth to the top averaged over each channel's band, A over the
   luminance's; for the transmittance between two points where a ratio of sunlight transmittances is ill-conditioned.
-* ``irradiance`` 2D, width n_mu_s x height n_r: RGB sky irradiance on a horizontal surface [HDR scale], A its Y.
+* ``irradiance`` 2D, width n_mu_s x height n_r: RGB sky irradiance on a horizontal surface [HDR scale], A the
+  table's own value at its middle wavelength (manifest version 4; W m^-2 nm^-1, not on the HDR scale). The library
+  reads it linearly along mu_s except in the cells that start below the horizon, where the twilight irradiance falls
+  nearly exponentially with the sun's depression: there the weight is log_lerp_weight of that wavelength's values
+  in the two texel columns (each linear in r; :func:`skyscatter.precomputed.sampling.irradiance_read`), applied to
+  every wavelength (``irradiance_uvs`` and ``irradiance_lerp`` of the mappings).
 * ``rayleigh``, ``mie``, ``multiple`` 3D, width n_nu * n_mu_s (x = i_nu * n_mu_s + i_mu_s), height n_mu, depth n_r:
   RGB single Rayleigh and single Mie scattering without their phase functions, multiple scattering with it; A the
   table's own value at its middle wavelength (index n_wavelengths // 2, the manifest's
@@ -76,8 +81,9 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: Raised whenever a file's layout or meaning changes; readers refuse other versions. 2: the scattering textures'
 #: alpha holds each table's middle wavelength (was Y), from which the azimuth weight is computed. 3: the constants
 #: hold the Rayleigh and aerosol density profiles, and the single scattering's azimuth weight follows the Earth's
-#: shadow (shadow_factors of the mappings).
-MANIFEST_VERSION = 3
+#: shadow (shadow_factors of the mappings). 4: the irradiance texture's alpha holds its middle wavelength (was Y),
+#: from which the weight along mu_s below the horizon is computed (irradiance_uvs, irradiance_lerp).
+MANIFEST_VERSION = 4
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -140,6 +146,24 @@ def irradiance_uv(r, mu_s):
     x_mu_s = clamp(0.5 * (mu_s + 1.0), 0.0, 1.0)
     return (tex_coord(x_mu_s * (IRRADIANCE_N_MU_S - 1), IRRADIANCE_N_MU_S),
             tex_coord(x_r * (IRRADIANCE_N_R - 1), IRRADIANCE_N_R))
+
+def irradiance_uvs(r, mu_s):
+    """The texture coordinates (u, v) of the two mu_s texel columns around mu_s in the irradiance texture (each read
+    linear in r), the fraction w of the cell between them and whether the cell starts below the horizon (its first
+    column at mu_s < 0): a lookup is irradiance_lerp(texture(uv0), texture(uv1), w, below)."""
+    x_r = clamp((r - BOTTOM_RADIUS) / (TOP_RADIUS - BOTTOM_RADIUS), 0.0, 1.0)
+    p = clamp(0.5 * (mu_s + 1.0), 0.0, 1.0) * (IRRADIANCE_N_MU_S - 1)
+    j = min(math.floor(p), IRRADIANCE_N_MU_S - 2)
+    v = tex_coord(x_r * (IRRADIANCE_N_R - 1), IRRADIANCE_N_R)
+    return (tex_coord(j, IRRADIANCE_N_MU_S), v), (tex_coord(j + 1, IRRADIANCE_N_MU_S), v), p - j, \
+        2 * j < IRRADIANCE_N_MU_S - 1
+
+def irradiance_lerp(e0, e1, w, below):
+    """RGB of the irradiance texture between the reads e0, e1 (RGBA) of its two mu_s columns: where the cell starts
+    below the horizon the weight is log_lerp_weight of their alpha (the table's middle wavelength), else w; applied
+    to every channel."""
+    k = log_lerp_weight(e0[3], e1[3], w) if below else w
+    return [a + k * (b - a) for a, b in zip(e0[:3], e1[:3])]
 
 def scattering_mu_r_coords(r, mu, hits_ground):
     """(v, w) in the 3D scattering textures: the mu coordinate (height) and the r coordinate (depth)."""
@@ -360,11 +384,6 @@ def _y_row(m: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.array([0.2126, 0.7152, 0.0722]) @ m
 
 
-def _with_y(rgb: NDArray[np.float64]) -> NDArray[np.float32]:
-    y = rgb @ np.array([0.2126, 0.7152, 0.0722])
-    return np.concatenate([rgb, y[..., None]], axis=-1).astype(np.float32)
-
-
 def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]]:
     """The six RGBA textures of the module docstring as float32 arrays: 2D (height, width, 4), 3D
     (depth, height, width, 4).
@@ -384,7 +403,9 @@ def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]
     w /= w.sum(axis=1, keepdims=True)
     out = {"transmittance": _sun_weighted(t["transmittance"], solar, m).astype(np.float32),
            "optical_depth": (tau @ w.T).astype(np.float32),
-           "irradiance": _with_y(t["irradiance"].astype(np.float64) @ m.T)}
+           # A: the middle wavelength, from which the lookups' weight along mu_s is computed (sampling.irradiance_read)
+           "irradiance": np.concatenate([t["irradiance"].astype(np.float64) @ m.T,
+                                         t["irradiance"][..., atm.wavelengths.size // 2, None]], axis=-1)}
     m4 = np.vstack([m, np.zeros(m.shape[1])]).astype(np.float32)  # R, G, B rows; A is filled below
     for name, key in (("rayleigh", "single_rayleigh"), ("mie", "single_mie"), ("multiple", "multiple")):
         # einsum, not matmul: a (1M, 16) x (16, 4) product is 4x quicker without BLAS's threads
@@ -464,7 +485,10 @@ def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
                          "(M E_sun) per channel [1]; A: the same for luminance",
         "optical_depth": "RGB: optical depth from (r, mu) to the top averaged over each channel's band, sum_l w_c(l) "
                          "tau(l), w_c = max(M_c, 0) E_sun normalised [1]; A: the same for luminance",
-        "irradiance": "RGB: sky irradiance on a horizontal surface at (r, mu_s) [W m^-2, HDR scale]; A: its Y",
+        "irradiance": "RGB: sky irradiance on a horizontal surface at (r, mu_s) [W m^-2, HDR scale]; A: its "
+                      "spectral value at azimuth_weight_wavelength_nm (its middle wavelength) [W m^-2 nm^-1; not "
+                      "folded, not on the HDR scale], for the weight along mu_s in the cells that start below the "
+                      "horizon: irradiance_lerp of the mappings",
         "rayleigh": "RGB: single Rayleigh scattering S_R[L0] without its phase function [W m^-2, HDR scale; times "
                     "P_R [sr^-1] gives radiance]; A: " + _ALPHA,
         "mie": "RGB: single Mie scattering S_M[L0] without its phase function [W m^-2, HDR scale]; A: " + _ALPHA,

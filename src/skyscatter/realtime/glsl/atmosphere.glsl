@@ -28,7 +28,7 @@
 
 uniform highp sampler2D transmittance_texture;   // RGB: sunlight-weighted transmittance to the top; A: luminance's
 uniform highp sampler2D optical_depth_texture;   // RGB: optical depth to the top averaged over each channel; A: Y's
-uniform highp sampler2D irradiance_texture;      // RGB: sky irradiance on a horizontal surface; A: its Y
+uniform highp sampler2D irradiance_texture;      // RGB: sky irradiance on a horizontal surface; A: middle wavelength
 // The scattering textures' A: each table's spectral value at its middle wavelength (not folded), for the azimuth
 // weight (LogLerpWeight).
 uniform highp sampler3D rayleigh_texture;        // RGB: single Rayleigh scattering S_R[L0] without phase; A: see above
@@ -99,6 +99,17 @@ vec2 IrradianceUv(float r, float mu_s) {
   float x_mu_s = clamp(0.5 * (mu_s + 1.0), 0.0, 1.0);
   return vec2(TexCoord(x_mu_s * float(IRRADIANCE_N_MU_S - 1), IRRADIANCE_N_MU_S),
               TexCoord(x_r * float(IRRADIANCE_N_R - 1), IRRADIANCE_N_R));
+}
+
+// The two mu_s texel columns of the irradiance texture around mu_s: (u0, v, w, below), the columns at u0 and
+// u0 + 1 / IRRADIANCE_N_MU_S (each read linear in r), w the fraction of the cell between them, below 1.0 if the cell
+// starts below the horizon (its first column at mu_s < 0), else 0.0 (irradiance_uvs of the Python mappings).
+vec4 IrradianceUvs(float r, float mu_s) {
+  float x_r = clamp((r - BOTTOM_RADIUS) / (TOP_RADIUS - BOTTOM_RADIUS), 0.0, 1.0);
+  float p = clamp(0.5 * (mu_s + 1.0), 0.0, 1.0) * float(IRRADIANCE_N_MU_S - 1);
+  float j = min(floor(p), float(IRRADIANCE_N_MU_S - 2));
+  return vec4(TexCoord(j, IRRADIANCE_N_MU_S), TexCoord(x_r * float(IRRADIANCE_N_R - 1), IRRADIANCE_N_R), p - j,
+              2.0 * j < float(IRRADIANCE_N_MU_S - 1) ? 1.0 : 0.0);
 }
 
 // Scattering textures, (v, w) = (mu, r) coordinates. r: x_r = rho / H. mu is split at the horizon ([Bruneton2008]
@@ -173,6 +184,14 @@ float LogLerpWeight(float a, float b, float w) {
 // table's middle wavelength, interpolated in mu_s, mu and r by the texture unit as skyscatter's
 // sampling.nu_weight does), applied to every channel.
 vec3 AzimuthLerp(vec4 s0, vec4 s1, float w) { return mix(s0.rgb, s1.rgb, LogLerpWeight(s0.a, s1.a, w)); }
+
+// RGB of the irradiance texture between the reads e0, e1 of its two mu_s columns (IrradianceUvs): where the cell
+// starts below the horizon the weight is LogLerpWeight of their alpha (the table's middle wavelength: the twilight
+// sky irradiance falls nearly exponentially with the sun's depression; skyscatter.precomputed.sampling.
+// irradiance_read), else w; applied to every channel.
+vec3 IrradianceLerp(vec4 e0, vec4 e1, float w, bool below) {
+  return mix(e0.rgb, e1.rgb, below ? LogLerpWeight(e0.a, e1.a, w) : w);
+}
 
 // RGB of a single-scattering texture between the reads s0, s1 of its two nu slices where the point is in the Earth's
 // shadow: linear, each slice times its shadow factor f.x, f.y (ShadowFactors; skyscatter.precomputed.sampling.
@@ -283,6 +302,15 @@ vec4 Texture3D(highp sampler3D t, vec3 uvw) { return texture(t, uvw); }
 #endif
 
 // Phase functions [sr^-1]: Rayleigh [Bruneton2008] Eq. 2; Cornette-Shanks Eq. 4; Henyey-Greenstein.
+// Sky irradiance on a horizontal surface at radius r [m] with sun zenith cosine mu_s: the irradiance texture's two
+// mu_s columns around mu_s (IrradianceUvs), interpolated by IrradianceLerp.
+vec3 GetHorizontalSkyIrradiance(float r, float mu_s) {
+  vec4 c = IrradianceUvs(r, mu_s);
+  vec4 e0 = Texture2D(irradiance_texture, c.xy);
+  vec4 e1 = Texture2D(irradiance_texture, vec2(c.x + 1.0 / float(IRRADIANCE_N_MU_S), c.y));
+  return IrradianceLerp(e0, e1, c.z, c.w > 0.5);
+}
+
 float RayleighPhase(float nu) { return 3.0 / (16.0 * PI) * (1.0 + nu * nu); }
 float MiePhase(float nu) {
   float g = MIE_G;
@@ -426,7 +454,7 @@ vec3 GetSunAndSkyIrradiance(vec3 point, vec3 normal, vec3 sun_direction, out vec
   vec3 up = point / r;
   float rc = clamp(r, BOTTOM_RADIUS, TOP_RADIUS);
   float mu_s = clamp(dot(up, sun_direction), -1.0, 1.0);
-  sky_irradiance = Texture2D(irradiance_texture, IrradianceUv(rc, mu_s)).rgb * 0.5 * (1.0 + dot(normal, up));
+  sky_irradiance = GetHorizontalSkyIrradiance(rc, mu_s) * 0.5 * (1.0 + dot(normal, up));
   return SOLAR_IRRADIANCE * GetTransmittanceToSun(rc, mu_s) * max(dot(normal, sun_direction), 0.0);
 }
 
@@ -451,7 +479,7 @@ vec3 GetGroundRadiance(vec3 camera, vec3 view_ray, vec3 sun_direction, vec3 albe
   vec3 t = GetTransmittance(r, mu, d, true);
   vec3 g = camera + d * view_ray;
   float mu_s_g = clamp(dot(g, sun_direction) / length(g), -1.0, 1.0);
-  vec3 e_sky = Texture2D(irradiance_texture, IrradianceUv(BOTTOM_RADIUS, mu_s_g)).rgb;
+  vec3 e_sky = GetHorizontalSkyIrradiance(BOTTOM_RADIUS, mu_s_g);
   vec3 t_sun = GetTransmittanceToTop(BOTTOM_RADIUS, mu_s_g);
   return t * albedo / PI * (SOLAR_IRRADIANCE * t_sun * SunCosineFactor(mu_s_g) + e_sky);
 }
