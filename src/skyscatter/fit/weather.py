@@ -75,6 +75,7 @@ the closure path: Petters et al. (2003, JGR 108(D9), 4288), Leahy et al. (2007, 
 from __future__ import annotations
 
 import csv
+import hashlib
 import math
 import os
 import warnings
@@ -380,6 +381,23 @@ class BroadbandClearSky:
                 * mixed_gas_transmittance(self.wavelengths, m.rayleigh, pressure))
 
     def _gas(self, zenith, precipitable_water, pressure, ozone):
+        # The same hours' gases are asked for several times in a row (the retrieval's closure steps, the cloud
+        # inversion's chunks, each twice): the last two answers are kept, keyed by the inputs' bytes, and handed
+        # out read-only. On the made year 92 calls of which 21 distinct; each is (n_hours, 2002) float64.
+        arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (zenith, precipitable_water, pressure,
+                                                                            ozone)))
+        key = hashlib.blake2b(repr(arrays[0].shape).encode()
+                              + b"".join(np.ascontiguousarray(a).tobytes() for a in arrays), digest_size=16).digest()
+        cache = self.__dict__.setdefault("_gas_cache", {})
+        hit = cache.pop(key, None)
+        if hit is None:
+            hit = self._gas_uncached(zenith, precipitable_water, pressure, ozone)
+            while len(cache) >= 2:
+                cache.pop(next(iter(cache)))
+        cache[key] = hit
+        return hit
+
+    def _gas_uncached(self, zenith, precipitable_water, pressure, ozone):
         m = slant_optical_masses(self.base, zenith)
         tg = (water_vapour_transmittance(self.wavelengths, precipitable_water, m.rayleigh)
               * mixed_gas_transmittance(self.wavelengths, m.rayleigh, pressure))
@@ -387,7 +405,9 @@ class BroadbandClearSky:
         t_o = np.exp(-(o3 * m.ozone)[:, None] * self.tau_ozone_per_du)
         outside = ozone_transmittance_bird_riordan(self.wavelengths, o3, m.ozone)
         t_o = np.where(self.ozone_inside, t_o, outside)
-        return m, tg * t_o
+        out = tg * t_o
+        out.flags.writeable = False
+        return m, out
 
     def direct_normal(self, zenith: ArrayLike, aerosol_optical_depth: ArrayLike, precipitable_water: ArrayLike,
                       pressure: ArrayLike, ozone: ArrayLike, eccentricity: ArrayLike) -> NDArray[np.float64]:

@@ -567,6 +567,72 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
                 out[q, ch] += acc
 
 
+@helper
+def _slice_layers(l0, l1, w_r, i_s, w_s, projection, identity, j, acc, out):
+    """Table ``j`` (0 single Rayleigh, 1 single Mie, 2 multiple) of :func:`observer_slices` into ``out`` (n_mu,
+    n_nu, C + 1, 4) from the table's two radius layers ``l0``, ``l1`` (n_mu, n_mu_s, n_nu, n_wavelengths) float32
+    around the observer: the same sums in the same order as :func:`observer_slices` (each corner's weight rounded
+    to float32 and multiplied in float32, as numpy does there, then summed in float64), so that the slices agree
+    to the bit for an ``identity`` projection and to rounding for another. ``acc``: a buffer (n_wavelengths,)."""
+    n_mu, _, n_nu, n_l = l0.shape
+    n_c = projection.shape[0]
+    mid = n_l // 2
+    for i in range(n_mu):
+        for q in range(n_nu):
+            for k in range(n_l):
+                acc[k] = 0.0
+            for a in range(2):
+                wa = w_r if a else 1.0 - w_r
+                layer = l1 if a else l0
+                for c in range(2):
+                    wc = w_s if c else 1.0 - w_s
+                    w = wa * wc
+                    if w > 0.0:
+                        wf = np.float32(w)
+                        for k in range(n_l):
+                            acc[k] += np.float64(wf * layer[i, i_s + c, q, k])
+            if identity:
+                for k in range(n_c):
+                    out[i, q, k, j] = acc[k]
+            else:
+                for ch in range(n_c):
+                    v = 0.0
+                    for k in range(n_l):
+                        v += projection[ch, k] * acc[k]
+                    out[i, q, ch, j] = v
+            out[i, q, n_c, j] = acc[mid]
+
+
+@kernel
+def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0, ray1, mie1, mult1, transmittance,
+                         irradiance, albedo, solar, projection, identity, bottom, top, mu_s_min, g, mie_kind, profiles,
+                         counts, alpha, include_ground, dirs, out, bad, start, stop):
+    """:func:`observer_kernel` for suns ``start..stop`` of ``suns`` (n, 3) (unit vectors; ``mu_s`` their zenith
+    cosines at the observer, as :func:`observer_slices` takes them) seen from one ``position``: per sun the slices
+    of :func:`observer_slices` (at the radius ``r_slices`` [m], clamped to the atmosphere, of tables with ``n_r``
+    radii) from the scattering tables' two radius layers around the observer (``ray0``, ``mie0``, ``mult0`` and
+    ``ray1``, ``mie1``, ``mult1``: (n_mu, n_mu_s, n_nu, n_wavelengths) float32), then the rays ``dirs`` into
+    ``out[h]`` (n_suns, n_rays, C) and ``bad[h]``. One call for many suns: the loop over the suns (a year of
+    hours) runs here, in parallel chunks, instead of one Python call and one slice per sun."""
+    n_mu, n_s, n_nu, _ = ray0.shape
+    n_c = projection.shape[0]
+    slices = np.zeros((n_mu, n_nu, n_c + 1, 4))
+    acc = np.empty(ray0.shape[3])
+    n_rays = dirs.shape[0]
+    for h in range(start, stop):
+        slices[:] = 0.0
+        m = mu_s[h]
+        if m >= mu_s_min - MU_S_LIMIT_TOLERANCE:
+            m = max(m, mu_s_min)
+            _, w_r, i_s, w_s = r_mu_s_cell(r_slices, m, bottom, top, mu_s_min, n_r, n_s)
+            _slice_layers(ray0, ray1, w_r, i_s, w_s, projection, identity, 0, acc, slices)
+            _slice_layers(mie0, mie1, w_r, i_s, w_s, projection, identity, 1, acc, slices)
+            _slice_layers(mult0, mult1, w_r, i_s, w_s, projection, identity, 2, acc, slices)
+        observer_kernel(position, suns[h], slices, transmittance, irradiance, albedo, solar, projection, bottom, top,
+                        mu_s_min, g, mie_kind, profiles, counts, alpha, include_ground, dirs, out[h], bad[h], 0,
+                        n_rays)
+
+
 @helper(fastmath=CONTRACT_ARCP)
 def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, p_r, p_m,
                         p_m_spec, profiles, counts, c, t, c2, tmp):
