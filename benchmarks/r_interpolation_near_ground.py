@@ -5,12 +5,13 @@ the ground is at 62.5 m (default 32 rows), and a lookup at 10 m falls 0.40 of th
 0.16 in height. This script compares ``sky_radiance`` of single-scattering tables (orders=1, default sizes, the
 continental-average Mie aerosol of tests/test_precomputed_mie.py and the default Cornette-Shanks one) with the
 brute-force integral of tests/precomputed_reference.py over many directions from several altitudes, and prints
-the max / median relative error per altitude. Run: PYTHONPATH=src:tests python benchmarks/r_interpolation_near_ground.py
+the max / median relative error per altitude. Run: PYTHONPATH=src:tests python benchmarks/r_interpolation_near_ground.py (altitudes [m]: HEIGHTS="0 10 ...")
 """
 
 from __future__ import annotations
 
 import math
+import os
 import sys
 import time
 
@@ -22,7 +23,7 @@ from skyscatter.atmosphere import AtmosphereParameters  # noqa: E402
 from skyscatter.precomputed import PrecomputedAtmosphere  # noqa: E402
 
 WL = np.array([450.0, 650.0])
-HEIGHTS = (0.0, 10.0, 30.0, 62.5, 150.0, 2000.0)
+HEIGHTS = tuple(float(h) for h in os.environ.get("HEIGHTS", "0 10 30 62.5 150 2000").split())
 
 
 def directions():

@@ -56,13 +56,6 @@ def test_single_scattering_is_exact_to_the_phase_table(mie_params, sizes, rtol):
     np.testing.assert_allclose(atm.sky_xyz([0.0, 0.0, r], d, sun), atm.to_xyz(atm.sky_radiance([0.0, 0.0, r], d, sun)))
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "open (docs/aerosols.md, 'Tabulated phase in the solvers'): 5 deg / 180 deg / 15 km from 10 m, 450 nm, "
-    "in-scatter +1.00 % (bound 1 %). Not the phase table nor the TMS correction (one order: nothing scaled; "
-    "both ends go through the sky's own lookup): S(camera) is +0.86 % at 10 m (+0.15 / +0.16 % on the texel "
-    "rows at 0 and 63 m); the integral is linear in the height there, the lookup linear in rho ~ sqrt(h), "
-    "which weights the 63 m row 0.40 instead of 0.16"
-))
 def test_aerial_perspective_reads_the_phase_table(mie_params):
     p, wl = mie_params, np.array([450.0, 650.0])
     atm = PrecomputedAtmosphere.compute(p, orders=1, wavelengths=wl, progress=False)

@@ -369,6 +369,11 @@ def _sky_mu_x(r: float, mu: float, bottom: float, top: float) -> float:
     return sky_mu_unit(r, mu, top, rho, big_h, theta_h)
 
 
+#: Altitude [m] below which a cell of rows of the 4D scattering tables starts if the radius weight within it is linear
+#: in the altitude (:func:`scattering_r_index`): the cells from 0, 63, 251 and 564 m of the default 32 rows.
+ALTITUDE_LINEAR_BELOW = 1000.0
+
+
 @helper(fastmath=CONTRACT_ARCP)
 def scattering_r_index(r: float, rho: float, bottom: float, big_h: float, n_r: int) -> float:
     """Index position of radius ``r`` [m] (``rho = sqrt(r^2 - R_g^2)`` [m], ``big_h = sqrt(R_t^2 - R_g^2)`` [m])
@@ -381,13 +386,19 @@ def scattering_r_index(r: float, rho: float, bottom: float, big_h: float, n_r: i
     every cell (``h_1`` = 62.5 m, the first row above the ground of the default 32), and in the cell touching the
     ground it puts 10 m 0.40 of the way to the 62.5 m row instead of 0.16 (+0.86 % single scattering 5 deg up
     from 10 m against the independent integral, continental aerosol; docs/aerosols.md, "Tabulated phase in the
-    solvers"). ``r - r_i`` is formed as ``(rho^2 - rho_i^2) / (r + r_i)``, without cancellation. Texel rows map to
-    their integer positions exactly, as before."""
+    solvers"). Only in the cells whose lower row lies below :data:`ALTITUDE_LINEAR_BELOW`: higher up the cells are
+    thicker (``(2 i + 1) h_1``) and the radiance's convexity in the altitude (the aerosol's exponential profile)
+    outweighs that error, which the weight linear in ``rho`` partly offsets (benchmarks/r_interpolation_near_ground.py:
+    linear in the altitude is better up to 780 m, even at 1.3 km and worse at 2 km with the sun at 30 deg). ``r - r_i``
+    is formed as ``(rho^2 - rho_i^2) / (r + r_i)``, without cancellation. Texel rows map to their integer positions
+    exactly, as before."""
     x = clamp(rho / big_h, 0.0, 1.0) * (n_r - 1)
     i = min(int(x), n_r - 2)
     rho0 = big_h * i / (n_r - 1)
     rho1 = big_h * (i + 1) / (n_r - 1)
     r0 = math.sqrt(rho0 * rho0 + bottom * bottom)
+    if rho0 * rho0 >= ALTITUDE_LINEAR_BELOW * (r0 + bottom):
+        return x
     r1 = math.sqrt(rho1 * rho1 + bottom * bottom)
     rr = max(r, bottom)
     w = (rho * rho - rho0 * rho0) * (r1 + r0) / ((rho1 * rho1 - rho0 * rho0) * (rr + r0))
