@@ -5,7 +5,8 @@ the ground is at 62.5 m (default 32 rows), and a lookup at 10 m falls 0.40 of th
 0.16 in height. This script compares ``sky_radiance`` of single-scattering tables (orders=1, default sizes, the
 continental-average Mie aerosol of tests/test_precomputed_mie.py and the default Cornette-Shanks one) with the
 brute-force integral of tests/precomputed_reference.py over many directions from several altitudes, and prints
-the max / median relative error per altitude. Run: PYTHONPATH=src:tests python benchmarks/r_interpolation_near_ground.py (altitudes [m]: HEIGHTS="0 10 ...")
+the max / median relative error per altitude. Run: PYTHONPATH=src:tests python benchmarks/r_interpolation_near_ground.py
+(altitudes [m]: HEIGHTS="0 10 ...")
 """
 
 from __future__ import annotations

@@ -52,11 +52,11 @@ def main():
         vals, refs = {}, {}
         for hh in (0.0, h, h1):
             r = p.bottom_radius + hh
-            vals[hh] = atm.sky_radiance([0.0, 0.0, r], d, sun, include_ground=False)[0]
-            refs[hh] = single_scattering(r, float(d[2]), math.cos(ts), float(d @ sun), p, WL)
+            vals[hh] = np.ravel(atm.sky_radiance([0.0, 0.0, r], d, sun, include_ground=False))
+            refs[hh] = np.ravel(single_scattering(r, float(d[2]), math.cos(ts), float(d @ sun), p, WL))
         ref = refs[h]
 
-        def pct(x):
+        def pct(x, ref=ref):
             return " ".join(f"{v:+6.2f}" for v in 100 * (x / ref - 1.0))
 
         print(f"el {el:2d} az {az:3d}: S(10 m) {pct(vals[h])} | rows at their own height "

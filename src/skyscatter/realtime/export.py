@@ -167,16 +167,16 @@ def irradiance_lerp(e0, e1, w, below):
 
 def scattering_r_index(r, rho, big_h):
     """Index position of r on the depth axis of the 3D scattering textures: the rows sit at rho_i = H i / (n - 1)
-    (x_r = rho / H), and within the cell between rows i and i + 1, if row i lies below 1 km, the position is linear in
-    r (the altitude), not in rho (the radiance is smooth in the altitude, and in rho a lookup at 10 m lies 0.40 of the way to the 62.5 m row
-    instead of 0.16); r - r_i is formed as (rho^2 - rho_i^2) / (r + r_i), without cancellation."""
+    (x_r = rho / H), and within the cell between rows i and i + 1, if row i lies above the ground and below 200 m,
+    the position is linear in r (the altitude), not in rho; r - r_i is formed as (rho^2 - rho_i^2) / (r + r_i),
+    without cancellation."""
     n = SCATTERING_N_R - 1
     x = clamp(rho / big_h, 0.0, 1.0) * n
     i = min(math.floor(x), n - 1)
     rho0, rho1 = big_h * i / n, big_h * (i + 1) / n
     r0 = math.sqrt(rho0 * rho0 + BOTTOM_RADIUS * BOTTOM_RADIUS)
-    if rho0 * rho0 >= 1000.0 * (r0 + BOTTOM_RADIUS):
-        return x  # cells from 1 km up: linear in rho (the aerosol's convexity in the altitude outweighs)
+    if i == 0 or rho0 * rho0 >= 200.0 * (r0 + BOTTOM_RADIUS):
+        return x  # the first cell and those from 200 m up: linear in rho (measured better there)
     r1 = math.sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS)
     w = (rho * rho - rho0 * rho0) * (r1 + r0) / ((rho1 * rho1 - rho0 * rho0) * (max(r, BOTTOM_RADIUS) + r0))
     return i + clamp(w, 0.0, 1.0)

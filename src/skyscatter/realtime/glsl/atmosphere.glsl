@@ -113,17 +113,17 @@ vec4 IrradianceUvs(float r, float mu_s) {
 }
 
 // Index position of r on the depth axis of the scattering textures: the rows sit at rho_i = H i / (n - 1)
-// (x_r = rho / H), and within the cell between rows i and i + 1, if row i lies below 1 km, the position is linear in r
-// (the altitude), not in rho ([Bruneton2008] Sec. 4 interpolates in rho; the radiance is smooth in the altitude, and in rho a lookup at 10 m
-// lies 0.40 of the way to the 62.5 m row instead of 0.16). r - r_i as (rho^2 - rho_i^2) / (r + r_i): no cancellation
-// of two radii in float (skyscatter.precomputed.geometry.scattering_r_index).
+// (x_r = rho / H, [Bruneton2008] Sec. 4), and within the cell between rows i and i + 1, if row i lies above the
+// ground and below 200 m, the position is linear in r (the altitude), not in rho (measured better there against the
+// integral); r - r_i as (rho^2 - rho_i^2) / (r + r_i): no cancellation of two radii in float
+// (skyscatter.precomputed.geometry.scattering_r_index).
 float ScatteringRIndex(float r, float rho, float H) {
   float n = float(SCATTERING_N_R - 1);
   float i = min(floor(clamp(rho / H, 0.0, 1.0) * n), n - 1.0);
   float rho0 = H * i / n;
   float rho1 = H * (i + 1.0) / n;
   float r0 = sqrt(rho0 * rho0 + BOTTOM_RADIUS * BOTTOM_RADIUS);
-  if (rho0 * rho0 >= 1000.0 * (r0 + BOTTOM_RADIUS)) return clamp(rho / H, 0.0, 1.0) * n;  // row i from 1 km up
+  if (i == 0.0 || rho0 * rho0 >= 200.0 * (r0 + BOTTOM_RADIUS)) return clamp(rho / H, 0.0, 1.0) * n;
   float r1 = sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS);
   float w = (rho - rho0) * (rho + rho0) * (r1 + r0) / ((rho1 - rho0) * (rho1 + rho0) * (max(r, BOTTOM_RADIUS) + r0));
   return i + clamp(w, 0.0, 1.0);
