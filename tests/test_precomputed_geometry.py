@@ -210,3 +210,26 @@ def test_irradiance_read_is_geometric_below_the_horizon_and_linear_above():
         for p in (float(j), j + 1.0):  # the texels themselves
             irradiance_read(table, 0.0, p, True, out)
             np.testing.assert_allclose(out, table[0, int(p)], rtol=1e-6)
+
+
+def test_scattering_radius_index_is_linear_in_the_altitude_within_a_cell():
+    """Between two rows of the 4D tables (rows at rho_i = H i / (n_r - 1), Bruneton & Neyret 2008, Sec. 4) the
+    index position of a ray that misses the ground is linear in the altitude, i + (h - h_i) / (h_(i+1) - h_i), in the
+    cells that start above the ground and below 200 m (the rows' altitudes computed here from their rho), rho / H
+    (n_r - 1) elsewhere; a ray that meets the ground keeps rho / H (n_r - 1). 1e-9."""
+    n_r, n_mu = 32, 128
+    heights = [math.sqrt((H * i / (n_r - 1)) ** 2 + BOTTOM**2) - BOTTOM for i in range(n_r)]
+    assert 62.0 < heights[1] < 63.0  # the first row above the ground (default 32 rows, 60 km thick)
+    for h in (0.0, 1.0, 10.0, 30.0, 62.0, 63.0, 150.0, 250.0, 400.0, 2000.0, 35_000.0, 59_999.0, 60_000.0):
+        r = BOTTOM + h
+        i = min(int(np.searchsorted(heights, h, side="right")) - 1, n_r - 2)
+        expected = i + (h - heights[i]) / (heights[i + 1] - heights[i])
+        if i == 0 or heights[i] >= g.ALTITUDE_LINEAR_BELOW:  # the first cell and those from 200 m up: in rho
+            expected = math.sqrt(r * r - BOTTOM**2) / H * (n_r - 1)
+        p_r, _ = g.scattering_r_mu_coord(r, 0.5, False, BOTTOM, TOP, n_r, n_mu)
+        assert abs(p_r - expected) < 1e-9, (h, p_r, expected)
+        if h > 0.0:
+            p_g, _ = g.scattering_r_mu_coord(r, -1.0, True, BOTTOM, TOP, n_r, n_mu)
+            assert abs(p_g - math.sqrt(r * r - BOTTOM**2) / H * (n_r - 1)) < 1e-9
+    # 150 m: 0.464 of the way from the 62.7 m row to the 251 m one (0.546 in rho)
+    assert abs(g.scattering_r_mu_coord(BOTTOM + 150.0, 0.5, False, BOTTOM, TOP, n_r, n_mu)[0] - 1.4638) < 1e-3

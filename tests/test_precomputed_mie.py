@@ -58,10 +58,11 @@ def test_single_scattering_is_exact_to_the_phase_table(mie_params, sizes, rtol):
 
 @pytest.mark.xfail(strict=True, reason=(
     "open (docs/aerosols.md, 'Tabulated phase in the solvers'): 5 deg / 180 deg / 15 km from 10 m, 450 nm, "
-    "in-scatter +1.00 % (bound 1 %). Not the phase table nor the TMS correction (one order: nothing scaled; "
-    "both ends go through the sky's own lookup): S(camera) is +0.86 % at 10 m (+0.15 / +0.16 % on the texel "
-    "rows at 0 and 63 m); the integral is linear in the height there, the lookup linear in rho ~ sqrt(h), "
-    "which weights the 63 m row 0.40 instead of 0.16"
+    "in-scatter +1.00 % (bound 1 %): S(camera) +0.86 % at 10 m where the rows at 0 and 62.7 m are +0.15 / +0.16 %. "
+    "Those rows read at the query's own mu and weighted linearly in the height (0.159; the lookup's rho weight is "
+    "0.399) give +0.15 %; the altitude weight alone, at the fixed mu coordinate of the lookup, gives +0.57 % (test "
+    "passes) but worsens the default air near the horizon at low sun (10 m: 0.86 -> 1.43 %), so the first cell keeps "
+    "rho: reading each row at its own mu coordinate is the fix (benchmarks/r_interpolation_root_cause.py)"
 ))
 def test_aerial_perspective_reads_the_phase_table(mie_params):
     p, wl = mie_params, np.array([450.0, 650.0])

@@ -49,7 +49,11 @@ _MAPPINGS = {
                           "d_max = rho + H (only rays that miss the ground)",
     "irradiance.x_r": "(r - bottom_radius) / (top_radius - bottom_radius)",
     "irradiance.x_mu_s": "(mu_s + 1) / 2",
-    "scattering.x_r": "rho / H",
+    "scattering.x_r": "rho / H at the rows (row i at x_r = i / (n_r - 1)); within a cell of rows, for rays "
+                      "that miss the ground, if row i lies above the ground and below 200 m altitude, the index "
+                      "position is linear in r: "
+                      "i + (r - r_i) / (r_(i+1) - r_i); "
+                      "for rays that meet it rho / H",
     "scattering.x_mu": "rays that meet the ground: index (1 - (d - d_min) / (d_max - d_min)) * (n_mu / 2 - 1), "
                        "d = distance to the ground, "
                        "d_min = r - bottom_radius, d_max = rho; other rays: index n_mu / 2 + x * (n_mu / 2 - 1), "

@@ -369,16 +369,61 @@ def _sky_mu_x(r: float, mu: float, bottom: float, top: float) -> float:
     return sky_mu_unit(r, mu, top, rho, big_h, theta_h)
 
 
+#: Altitude [m] below which a cell of rows of the 4D scattering tables above the first starts if the radius weight
+#: within it is linear in the altitude (:func:`scattering_r_index`): the cell from 62.7 m of the default 32 rows.
+ALTITUDE_LINEAR_BELOW = 200.0
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def scattering_r_index(r: float, rho: float, bottom: float, big_h: float, n_r: int) -> float:
+    """Index position of radius ``r`` [m] (``rho = sqrt(r^2 - R_g^2)`` [m], ``big_h = sqrt(R_t^2 - R_g^2)`` [m])
+    on the ``n_r`` rows of the 4D scattering tables: the rows sit at ``rho_i = H i / (n_r - 1)`` (``x_r = rho / H``,
+    Bruneton & Neyret 2008, Sec. 4). Within the cells whose lower row is above the ground and below
+    :data:`ALTITUDE_LINEAR_BELOW` (the second cell of the default 32 rows, 62.7-251 m) the position is linear in
+    ``r`` (the altitude), ``i + (r - r_i) / (r_(i+1) - r_i)``; elsewhere linear in ``rho``.
+
+    The radiance is smooth in the altitude, and the altitude a quadratic function of ``rho`` (``h ~ rho^2 / (2
+    R_g)``): interpolated linearly in ``rho`` a lookup adds ``~(h_1 / 4) dS/dh`` at the middle of a cell (``h_1`` =
+    62.7 m, the first row above the ground). But the lookup holds the ``mu`` coordinate fixed across the two rows,
+    and that coordinate scales with the horizon's zenith angle, which moves with ``rho``: the radiance read at a
+    fixed coordinate is partly linear in ``rho``. Measured against the independent integral, the sky's rays
+    (benchmarks/r_interpolation_near_ground.py, docs/aerosols.md): in the second cell the altitude weight is better
+    for every air and sun tried (worst error at 150 m 0.62-2.04 % -> 0.27-0.94 %); in the cell touching the
+    ground it is better for the continental aerosol (10 m: 0.86 -> 0.57 %) but worse for the default air with the
+    sun at 75 deg (0.86 -> 1.43 %, 2 deg up); higher up the cells are thicker and the radiance's convexity in the
+    altitude outweighs (the continental aerosol at 2 km, sun at 30 deg: 0.58 -> 1.27 %). ``r - r_i`` is formed as
+    ``(rho^2 - rho_i^2) / (r + r_i)``, without cancellation. Texel rows map to their integer positions exactly."""
+    x = clamp(rho / big_h, 0.0, 1.0) * (n_r - 1)
+    i = min(int(x), n_r - 2)
+    rho0 = big_h * i / (n_r - 1)
+    rho1 = big_h * (i + 1) / (n_r - 1)
+    r0 = math.sqrt(rho0 * rho0 + bottom * bottom)
+    if i == 0 or rho0 * rho0 >= ALTITUDE_LINEAR_BELOW * (r0 + bottom):
+        return x
+    r1 = math.sqrt(rho1 * rho1 + bottom * bottom)
+    rr = max(r, bottom)
+    w = (rho * rho - rho0 * rho0) * (r1 + r0) / ((rho1 * rho1 - rho0 * rho0) * (rr + r0))
+    return i + clamp(w, 0.0, 1.0)
+
+
 @helper(fastmath=CONTRACT_ARCP)
 def scattering_r_mu_coord(r: float, mu: float, hits_ground: bool, bottom: float, top: float,
                           n_r: int, n_mu: int) -> tuple[float, float]:
-    """Index positions (p_r, p_mu) of a view ray in the 4D scattering tables."""
+    """Index positions (p_r, p_mu) of a view ray in the 4D scattering tables.
+
+    ``p_r``: for rays that miss the ground :func:`scattering_r_index` (linear in the altitude within each cell of
+    rows); for rays that meet it ``rho / H (n_r - 1)`` (linear in ``rho``): the lookup holds the ``mu`` coordinate
+    fixed across the two rows, and in the ground half that coordinate fixes the ray's length to the ground as
+    ``d_min + x (rho - d_min)``, nearly linear in ``rho``, which the optically thin inscatter follows (the weight
+    linear in the altitude took the single scattering 3 deg down from 10 m from +13 % to -55 % against the
+    independent integral; benchmarks/r_interpolation_near_ground.py)."""
     rho, big_h, theta_h = horizon_constants(r, bottom, top)
-    p_r = clamp(rho / big_h, 0.0, 1.0) * (n_r - 1)
     half = n_mu // 2
     if hits_ground:
+        p_r = clamp(rho / big_h, 0.0, 1.0) * (n_r - 1)
         p_mu = ground_mu_unit(r, mu, bottom, rho) * (half - 1)
     else:
+        p_r = scattering_r_index(r, rho, bottom, big_h, n_r)
         p_mu = half + sky_mu_unit(r, mu, top, rho, big_h, theta_h) * (half - 1)
     return p_r, p_mu
 

@@ -300,13 +300,16 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
         return out
     mu_s = max(mu_s, mu_s_min)
-    i_r, w_r, i_s, w_s = r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_s)
+    i_r, w_r, i_s, w_s, w_g = r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_s)
+    half = n_mu // 2
     for j, table in enumerate((single_rayleigh, single_mie, multiple)):
         acc = np.zeros((n_mu, n_nu, table.shape[-1]))
-        for a, wa in ((0, 1.0 - w_r), (1, w_r)):
-            for c, wc in ((0, 1.0 - w_s), (1, w_s)):
-                if wa * wc > 0.0:
-                    acc += (wa * wc) * table[i_r + a, :, i_s + c, :, :]
+        # the ground half of the mu axis with its own radius weight (.geometry.scattering_r_mu_coord)
+        for rows, w in ((slice(0, half), w_g), (slice(half, n_mu), w_r)):
+            for a, wa in ((0, 1.0 - w), (1, w)):
+                for c, wc in ((0, 1.0 - w_s), (1, w_s)):
+                    if wa * wc > 0.0:
+                        acc[rows] += (wa * wc) * table[i_r + a, rows, i_s + c, :, :]
         out[:, :, :n_c, j] = acc @ proj.T
         out[:, :, n_c, j] = acc[:, :, acc.shape[-1] // 2]
     return out

@@ -240,12 +240,15 @@ def mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_mu_s, n_nu):
 
 @helper
 def r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_mu_s):
-    """Interpolation cell (i_r, w_r, i_mu_s, w_mu_s) of an observer radius and sun zenith cosine in the 4D
-    tables (the axes that stay fixed for one observer)."""
+    """Interpolation cell (i_r, w_r, i_mu_s, w_mu_s, w_r_ground) of an observer radius and sun zenith cosine in the
+    4D tables (the axes that stay fixed for one observer); ``w_r`` is the radius weight of the rays that miss the
+    ground, ``w_r_ground`` that of the rays that meet it, in the same cell (:func:`.geometry.scattering_r_mu_coord`)."""
     p_r, _ = scattering_r_mu_coord(r, 1.0, False, bottom, top, n_r, 4)
     i_r, w_r = lerp_index(p_r, 0, n_r - 1)
+    p_g, _ = scattering_r_mu_coord(r, -1.0, True, bottom, top, n_r, 4)
+    _, w_g = lerp_index(p_g, 0, n_r - 1)
     i_s, w_s = lerp_index(scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_mu_s), 0, n_mu_s - 1)
-    return i_r, w_r, i_s, w_s
+    return i_r, w_r, i_s, w_s, w_g
 
 
 @helper

@@ -78,7 +78,11 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: integral of a sun below the horizon reading the scattering tables log-linearly along the sun zenith
 #: (:func:`.sampling.scattering_lookup_log_mu_s`), so the irradiance and multiple-scattering tables of sun zeniths
 #: below the horizon changed.
-FORMAT_VERSION = 14
+#: 15: the same layout; the scattering tables read, for rays that miss the ground, with a radius weight linear in the
+#: altitude in the cells of rows that start above the ground and below 200 m (:func:`.geometry.scattering_r_index`;
+#: before: linear in rho), in the orders' ray integrals and scattering density as in the rendering lookups, so the
+#: multiple-scattering tables of format 14 hold other values.
+FORMAT_VERSION = 15
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).

@@ -165,8 +165,25 @@ def irradiance_lerp(e0, e1, w, below):
     k = log_lerp_weight(e0[3], e1[3], w) if below else w
     return [a + k * (b - a) for a, b in zip(e0[:3], e1[:3])]
 
+def scattering_r_index(r, rho, big_h):
+    """Index position of r on the depth axis of the 3D scattering textures: the rows sit at rho_i = H i / (n - 1)
+    (x_r = rho / H), and within the cell between rows i and i + 1, if row i lies above the ground and below 200 m,
+    the position is linear in r (the altitude), not in rho; r - r_i is formed as (rho^2 - rho_i^2) / (r + r_i),
+    without cancellation."""
+    n = SCATTERING_N_R - 1
+    x = clamp(rho / big_h, 0.0, 1.0) * n
+    i = min(math.floor(x), n - 1)
+    rho0, rho1 = big_h * i / n, big_h * (i + 1) / n
+    r0 = math.sqrt(rho0 * rho0 + BOTTOM_RADIUS * BOTTOM_RADIUS)
+    if i == 0 or rho0 * rho0 >= 200.0 * (r0 + BOTTOM_RADIUS):
+        return x  # the first cell and those from 200 m up: linear in rho (measured better there)
+    r1 = math.sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS)
+    w = (rho * rho - rho0 * rho0) * (r1 + r0) / ((rho1 * rho1 - rho0 * rho0) * (max(r, BOTTOM_RADIUS) + r0))
+    return i + clamp(w, 0.0, 1.0)
+
 def scattering_mu_r_coords(r, mu, hits_ground):
-    """(v, w) in the 3D scattering textures: the mu coordinate (height) and the r coordinate (depth)."""
+    """(v, w) in the 3D scattering textures: the mu coordinate (height) and the r coordinate (depth:
+    scattering_r_index for rays that miss the ground, rho / H for rays that meet it)."""
     big_h = math.sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS))
     rho = safe_sqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS))
     half = SCATTERING_N_MU // 2
@@ -181,8 +198,9 @@ def scattering_mu_r_coords(r, mu, hits_ground):
         x_d = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
         x_a = math.acos(clamp(mu, -1.0, 1.0)) / math.acos(clamp(-rho / r, -1.0, 1.0))
         p_mu = half + 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0)) * (half - 1)
-    return (tex_coord(p_mu, SCATTERING_N_MU),
-            tex_coord(clamp(rho / big_h, 0.0, 1.0) * (SCATTERING_N_R - 1), SCATTERING_N_R))
+    # rays that meet the ground: linear in rho (their mu coordinate fixes a length to the ground nearly linear in rho)
+    p_r = clamp(rho / big_h, 0.0, 1.0) * (SCATTERING_N_R - 1) if hits_ground else scattering_r_index(r, rho, big_h)
+    return tex_coord(p_mu, SCATTERING_N_MU), tex_coord(p_r, SCATTERING_N_R)
 
 def mu_s_distance_unit(mu_s):
     big_h = math.sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS))

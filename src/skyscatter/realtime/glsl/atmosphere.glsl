@@ -112,7 +112,26 @@ vec4 IrradianceUvs(float r, float mu_s) {
               2.0 * j < float(IRRADIANCE_N_MU_S - 1) ? 1.0 : 0.0);
 }
 
-// Scattering textures, (v, w) = (mu, r) coordinates. r: x_r = rho / H. mu is split at the horizon ([Bruneton2008]
+// Index position of r on the depth axis of the scattering textures: the rows sit at rho_i = H i / (n - 1)
+// (x_r = rho / H, [Bruneton2008] Sec. 4), and within the cell between rows i and i + 1, if row i lies above the
+// ground and below 200 m, the position is linear in r (the altitude), not in rho (measured better there against the
+// integral); r - r_i as (rho^2 - rho_i^2) / (r + r_i): no cancellation of two radii in float
+// (skyscatter.precomputed.geometry.scattering_r_index).
+float ScatteringRIndex(float r, float rho, float H) {
+  float n = float(SCATTERING_N_R - 1);
+  float i = min(floor(clamp(rho / H, 0.0, 1.0) * n), n - 1.0);
+  float rho0 = H * i / n;
+  float rho1 = H * (i + 1.0) / n;
+  float r0 = sqrt(rho0 * rho0 + BOTTOM_RADIUS * BOTTOM_RADIUS);
+  if (i == 0.0 || rho0 * rho0 >= 200.0 * (r0 + BOTTOM_RADIUS)) return clamp(rho / H, 0.0, 1.0) * n;
+  float r1 = sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS);
+  float w = (rho - rho0) * (rho + rho0) * (r1 + r0) / ((rho1 - rho0) * (rho1 + rho0) * (max(r, BOTTOM_RADIUS) + r0));
+  return i + clamp(w, 0.0, 1.0);
+}
+
+// Scattering textures, (v, w) = (mu, r) coordinates. r: rows at x_r = rho / H; between them ScatteringRIndex for rays
+// that miss the ground, linear in rho for rays that meet it (their mu coordinate fixes a length to the ground nearly
+// linear in rho). mu is split at the horizon ([Bruneton2008]
 // Fig. 4): rays that meet the ground fill index positions 0 .. n/2 - 1 (grazing to straight down) with
 // 1 - (d - d_min) / (d_max - d_min), d the distance to the ground, d_min = r - R_g, d_max = rho; the other rays fill
 // n/2 .. n - 1 (zenith to horizon) with the mean of (d - d_min) / (d_max - d_min) (d to the top, d_min = R_t - r,
@@ -137,7 +156,8 @@ vec2 ScatteringMuRCoords(float r, float mu, bool hits_ground) {
     p_mu = half_n + 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0)) * (half_n - 1.0);
   }
   return vec2(TexCoord(p_mu, SCATTERING_N_MU),
-              TexCoord(clamp(rho / H, 0.0, 1.0) * float(SCATTERING_N_R - 1), SCATTERING_N_R));
+              TexCoord(hits_ground ? clamp(rho / H, 0.0, 1.0) * float(SCATTERING_N_R - 1)
+                                   : ScatteringRIndex(r, rho, H), SCATTERING_N_R));
 }
 
 // a(mu_s) = (d - d_min) / (d_max - d_min), d the distance from the ground to the top along mu_s, d_min = R_t - R_g,
