@@ -139,7 +139,7 @@ _LN2_LO = 1.90821492927058770002e-10
 _LOG2E = 1.4426950408889634
 
 
-@helper
+@inline
 def exp_lanes(z, n, bits, scale):
     """``exp(z[:n])`` in place, ``z <= 0`` (below -700 taken as -700), in loops without calls that LLVM vectorizes
     (numba has no vector exp without Intel's SVML: each ``math.exp`` is a call to libm; the march's octaves needed
@@ -268,6 +268,9 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
     ez = np.empty(n_octaves + 1)
     ebits = np.empty(n_octaves + 1, dtype=np.int64)
     escale = ebits.view(np.float64)
+    el = np.empty(nwl)  # the same for an octave's exponentials per wavelength where the polynomial is not used
+    lbits = np.empty(nwl, dtype=np.int64)
+    lscale = lbits.view(np.float64)
     for ray in range(start, stop):
         dx = dirs[ray, 0]
         dy = dirs[ray, 1]
@@ -481,7 +484,10 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
                                                + wt[2, o, wl] * (cb * x2 * x) + wt[3, o, wl] * (cb * x2 * x2))
                     else:
                         for wl in range(nwl):
-                            direct[wl] += po * w[o, wl] * math.exp(-x * k[wl])
+                            el[wl] = -x * k[wl]
+                        exp_lanes(el, nwl, lbits, lscale)
+                        for wl in range(nwl):
+                            direct[wl] += po * w[o, wl] * el[wl]
                 # the step's transmittance exp(-x k_l), x = sigma h: the same expansion about kbar
                 x = r * h
                 base = ez[n_octaves]
