@@ -133,7 +133,7 @@ def _field_coords(px, py, pz, x0, y0, inv_dx, inv_dy, inv_dz, rbase, nx, ny, nz,
     return fx, fy, fz, r, (0.0 <= fx < nx and 0.0 <= fy < ny)
 
 
-#: exp's argument reduction: ln 2 split in a part exact in 32 bits and the rest (Cody and Waite 1980, Ch. 6)
+#: exp's argument reduction: ln 2 split in a part exact in 32 bits and the rest ([Cody1980] Ch. 6)
 _LN2_HI = 0.693147180369123816490
 _LN2_LO = 1.90821492927058770002e-10
 _LOG2E = 1.4426950408889634
@@ -141,13 +141,12 @@ _LOG2E = 1.4426950408889634
 
 @inline
 def exp_lanes(z, n, bits, scale):
-    """``exp(z[:n])`` in place, ``z <= 0`` (below -700 taken as -700), in loops without calls that LLVM vectorizes
-    (numba has no vector exp without Intel's SVML: each ``math.exp`` is a call to libm; the march's octaves needed
-    eight per sample). ``bits`` (int64) and ``scale`` (float64) are two views of one buffer of >= ``n``. Cody and
-    Waite's reduction (W. J. Cody and W. Waite, Software Manual for the Elementary Functions, 1980, Ch. 6)
-    ``z = k ln 2 + r``, ``|r| <= ln 2 / 2``, ``exp(r)`` by its Taylor polynomial of degree 13 (remainder
-    ``(ln 2 / 2)^14 / 14! = 4e-18``), times ``2^k`` built in the exponent's bits: within a few units in the last
-    place of libm's ``exp`` (tests/test_broken_cloud.py)."""
+    """``exp(z[:n])`` in place for ``z`` (>= n,) [-] <= 0 (below -700 taken as -700), ``n`` the count, in loops
+    without calls that LLVM vectorizes (numba has no vector exp without Intel's SVML: each ``math.exp`` is a call to
+    libm; the march's octaves needed eight per sample). ``bits`` (int64) and ``scale`` (float64) are two views of one
+    buffer of >= ``n``. The reduction of [Cody1980] Ch. 6, ``z = k ln 2 + r``, ``|r| <= ln 2 / 2``, ``exp(r)`` by
+    its Taylor polynomial of degree 13 (remainder ``(ln 2 / 2)^14 / 14! = 4e-18``), times ``2^k`` built in the
+    exponent's bits: within 2 units in the last place of libm's ``exp`` (tests/test_broken_cloud.py)."""
     for i in range(n):
         zi = max(z[i], -700.0)
         kf = math.floor(zi * _LOG2E + 0.5)
