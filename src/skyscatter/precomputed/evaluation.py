@@ -379,7 +379,7 @@ class TableLookups:
         stored = self.stored
         tables = [stored[name] for name in ("single_rayleigh", "single_mie", "multiple")]
         n_r, n_s = tables[0].shape[0], tables[0].shape[2]
-        i_r, w_r, _, _ = lookup.r_mu_s_cell(rc, max(mu_s_min, 0.0), bottom, top, mu_s_min, n_r, n_s)
+        i_r, w_r, _, _, w_g = lookup.r_mu_s_cell(rc, max(mu_s_min, 0.0), bottom, top, mu_s_min, n_r, n_s)
 
         def layer(table: Any, i: int) -> NDArray[np.float32]:
             i = min(i, n_r - 1)
@@ -387,7 +387,7 @@ class TableLookups:
             return np.ascontiguousarray(a, dtype=np.float32)
 
         lower = [layer(t, i_r) for t in tables]
-        upper = [layer(t, i_r + 1) if w_r > 0.0 else lo for t, lo in zip(tables, lower, strict=True)]
+        upper = [layer(t, i_r + 1) if max(w_r, w_g) > 0.0 else lo for t, lo in zip(tables, lower, strict=True)]
         dirs = np.ascontiguousarray(d)
         out = np.empty((s.shape[0], dirs.shape[0], n_l))
         bad = np.zeros((s.shape[0], dirs.shape[0]), dtype=np.bool_)

@@ -571,21 +571,24 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
 
 
 @helper
-def _slice_layers(l0, l1, w_r, i_s, w_s, projection, identity, j, acc, out):
+def _slice_layers(l0, l1, w_r, w_g, i_s, w_s, projection, identity, j, acc, out):
     """Table ``j`` (0 single Rayleigh, 1 single Mie, 2 multiple) of :func:`observer_slices` into ``out`` (n_mu,
     n_nu, C + 1, 4) from the table's two radius layers ``l0``, ``l1`` (n_mu, n_mu_s, n_nu, n_wavelengths) float32
     around the observer: the same sums in the same order as :func:`observer_slices` (each corner's weight rounded
     to float32 and multiplied in float32, as numpy does there, then summed in float64), so that the slices agree
-    to the bit for an ``identity`` projection and to rounding for another. ``acc``: a buffer (n_wavelengths,)."""
+    to the bit for an ``identity`` projection and to rounding for another; the ground half of the mu axis with its
+    own radius weight ``w_g`` (:func:`.sampling.r_mu_s_cell`). ``acc``: a buffer (n_wavelengths,)."""
     n_mu, _, n_nu, n_l = l0.shape
     n_c = projection.shape[0]
     mid = n_l // 2
+    half = n_mu // 2
     for i in range(n_mu):
+        w_row = w_g if i < half else w_r
         for q in range(n_nu):
             for k in range(n_l):
                 acc[k] = 0.0
             for a in range(2):
-                wa = w_r if a else 1.0 - w_r
+                wa = w_row if a else 1.0 - w_row
                 layer = l1 if a else l0
                 for c in range(2):
                     wc = w_s if c else 1.0 - w_s
@@ -627,10 +630,10 @@ def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0,
         m = mu_s[h]
         if m >= mu_s_min - MU_S_LIMIT_TOLERANCE:
             m = max(m, mu_s_min)
-            _, w_r, i_s, w_s = r_mu_s_cell(r_slices, m, bottom, top, mu_s_min, n_r, n_s)
-            _slice_layers(ray0, ray1, w_r, i_s, w_s, projection, identity, 0, acc, slices)
-            _slice_layers(mie0, mie1, w_r, i_s, w_s, projection, identity, 1, acc, slices)
-            _slice_layers(mult0, mult1, w_r, i_s, w_s, projection, identity, 2, acc, slices)
+            _, w_r, i_s, w_s, w_g = r_mu_s_cell(r_slices, m, bottom, top, mu_s_min, n_r, n_s)
+            _slice_layers(ray0, ray1, w_r, w_g, i_s, w_s, projection, identity, 0, acc, slices)
+            _slice_layers(mie0, mie1, w_r, w_g, i_s, w_s, projection, identity, 1, acc, slices)
+            _slice_layers(mult0, mult1, w_r, w_g, i_s, w_s, projection, identity, 2, acc, slices)
         observer_kernel(position, suns[h], slices, transmittance, irradiance, albedo, solar, projection, bottom, top,
                         mu_s_min, g, mie_kind, profiles, counts, alpha, include_ground, dirs, out[h], bad[h], 0,
                         n_rays)
