@@ -87,12 +87,7 @@ def test_subset_equals_separate_computation():
         np.testing.assert_allclose(both.tables[name][..., [1, 2, 3]], table, rtol=1e-6, atol=0)
 
 
-@pytest.mark.parametrize("elevation", [10.0, 2.0, pytest.param(-2.0, marks=pytest.mark.xfail(strict=True, reason=(
-    "open since table formats 14-15 (2026-12-03 CI): luminance 2.44 % off (bound 2 %), delta-xy 0.0017. Cause not "
-    "located; suspected: the rendering lookups read the irradiance table below the horizon log-linearly with the "
-    "middle wavelength's weight for all wavelengths (560 nm of the 16, 580 nm of the 41), so the two wavelength "
-    "sets weight the ground term differently"))),
-    -4.0, -6.0])
+@pytest.mark.parametrize("elevation", [10.0, 2.0, -2.0, -4.0, -6.0])
 def test_default_colour_matches_41_wavelengths(reference, elevation):
     """Issue 11 bounds: delta-xy <= 0.005 and luminance within 2 %, sky and ground directions."""
     dxy, dlum = _errors(reference, _subset(reference, DEFAULT_TABLE_WAVELENGTHS), elevation)

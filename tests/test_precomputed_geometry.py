@@ -190,7 +190,8 @@ def test_irradiance_read_is_geometric_below_the_horizon_and_linear_above():
     texels (mu_s = -1 .. 1, cells 2/7 wide) and 2 radii, 3 wavelengths: at the centre of a cell that starts below
     the horizon (first texel at mu_s < 0) it is the geometric mean of the two texels, exactly (the weight of
     :func:`geometry.log_lerp_weight` meets ``a^(1 - w) b^w`` at the centre); in a cell above, the linear mean.
-    Each wavelength its own weight with ``per_wavelength``; else the middle wavelength's weight for all."""
+    Each wavelength its own weight with empty ``weights``; else the weight of the weighted sums (the luminance in
+    the lookups) for all."""
     from skyscatter.precomputed.sampling import irradiance_read
 
     mu = np.linspace(-1.0, 1.0, 8)
@@ -199,16 +200,18 @@ def test_irradiance_read_is_geometric_below_the_horizon_and_linear_above():
     table[0] = np.exp(rates * mu[:, None])
     table[1] = 2.0 * table[0]
     out = np.empty(3)
+    own = np.empty(0)
+    lum = np.array([0.2, 1.0, 0.5])
     for j, below in ((2, True), (3, True), (4, False), (5, False)):  # texel 3 at -1/7, texel 4 at +1/7
         assert g.irradiance_log_cell(j, 8) == below
         a, b = table[0, j].astype(np.float64), table[0, j + 1].astype(np.float64)
-        irradiance_read(table, 0.0, j + 0.5, True, out)
+        irradiance_read(table, 0.0, j + 0.5, own, out)
         np.testing.assert_allclose(out, np.sqrt(a * b) if below else 0.5 * (a + b), rtol=1e-6)
-        irradiance_read(table, 0.5, j + 0.5, False, out)  # linear in r: 1.5 times the first radius
-        k = g.log_lerp_weight(a[1], b[1], 0.5) if below else 0.5
+        irradiance_read(table, 0.5, j + 0.5, lum, out)  # linear in r: 1.5 times the first radius
+        k = g.log_lerp_weight(lum @ a, lum @ b, 0.5) if below else 0.5
         np.testing.assert_allclose(out, 1.5 * (a + k * (b - a)), rtol=1e-6)
         for p in (float(j), j + 1.0):  # the texels themselves
-            irradiance_read(table, 0.0, p, True, out)
+            irradiance_read(table, 0.0, p, own, out)
             np.testing.assert_allclose(out, table[0, int(p)], rtol=1e-6)
 
 

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..atmosphere.phase import aerosol_phase_kind
 from ..conventions import as_directions
 from ..errors import InvalidDirectionError, InvalidParameterError
+from ..spectral import spectrum_to_xyz
 from ..sun.disc import solar_disc_solid_angle
 from .conversion import SPECTRAL_MODE_MIN_WAVELENGTHS, ColourConversion, xyz_matrix
 from .parallel import parallel_for
@@ -91,6 +92,19 @@ class TableLookups:
         if self._xyz_matrix is None:
             self._xyz_matrix = xyz_matrix(self.wavelengths, self.parameters)
         return self._xyz_matrix
+
+    @property
+    def irradiance_weights(self) -> NDArray[np.float64]:
+        """Luminance weights (n_wavelengths,) of the table wavelengths: ``Y = sum_k w_k E_k`` [lx] for a spectral
+        irradiance ``E`` [W m^-2 nm^-1] sampled there (the CIE 1931 ``ybar`` times 683 lm/W and the trapezoid
+        step of :func:`skyscatter.spectral.spectrum_to_xyz`; [CIE2004]). The rendering lookups' weight along the sun
+        zenith of the irradiance table below the horizon is that of the luminance of its two texel columns
+        (:func:`.sampling.irradiance_read`), so that it does not depend on which wavelengths the table holds."""
+        w = getattr(self, "_irradiance_weights", None)
+        if w is None:
+            w = np.ascontiguousarray(spectrum_to_xyz(np.eye(self.wavelengths.size), self.wavelengths)[:, 1])
+            self._irradiance_weights = w
+        return w
 
     @property
     def colour(self) -> ColourConversion:
@@ -224,7 +238,7 @@ class TableLookups:
         tr = np.ones((n, self.wavelengths.size))
         parallel_for(lookup.sky_kernel, n, pos, dirs, sun, sh, self.tables["transmittance"],
                      self.tables["single_rayleigh"], self.tables["single_mie"], self.tables["multiple"],
-                     self.tables["irradiance"], self._albedo, self._solar, bottom, top,
+                     self.tables["irradiance"], self._albedo, self._solar, self.irradiance_weights, bottom, top,
                      mu_s_min, self._mie_g, self._mie_kind, *self._aerosol_phase[2:], *self._profiles,
                      self.parameters.sun_angular_radius, include_ground, rad, tr,
                      grain=2048)
@@ -319,7 +333,7 @@ class TableLookups:
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
         parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, stored["transmittance"],
-                     stored["irradiance"], self._albedo, self._solar, projection,
+                     stored["irradiance"], self._albedo, self._solar, self.irradiance_weights, projection,
                      bottom, top, mu_s_min, self._mie_g, self._mie_kind, *self._profiles,
                      self.parameters.sun_angular_radius,
                      bool(include_ground), dirs, out, bad, grain=2048)
@@ -393,7 +407,8 @@ class TableLookups:
         bad = np.zeros((s.shape[0], dirs.shape[0]), dtype=np.bool_)
         projection = np.eye(n_l)
         parallel_for(lookup.observer_suns_kernel, s.shape[0], pos, rc, n_r, s, mu_s, *lower, *upper,
-                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar, projection, True,
+                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar, self.irradiance_weights,
+                     projection, True,
                      bottom, top, mu_s_min, self._mie_g, self._mie_kind, *self._profiles,
                      self.parameters.sun_angular_radius, bool(include_ground), dirs, out, bad,
                      grain=max(1, 4096 // max(dirs.shape[0], 1)))
@@ -554,6 +569,6 @@ class TableLookups:
         e_sun = np.zeros((pts.shape[0], self.wavelengths.size))
         e_sky = np.zeros((pts.shape[0], self.wavelengths.size))
         parallel_for(lookup.irradiance_kernel, pts.shape[0], pts, nrm, sun, self.stored["transmittance"],
-                     self.stored["irradiance"], self._solar, bottom, top, self.parameters.sun_angular_radius, e_sun,
-                     e_sky, grain=4096)
+                     self.stored["irradiance"], self._solar, self.irradiance_weights, bottom, top,
+                     self.parameters.sun_angular_radius, e_sun, e_sky, grain=4096)
         return e_sun.reshape(*shape, -1), e_sky.reshape(*shape, -1)

@@ -428,6 +428,7 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     norm_r = np.empty(n_v)
     buf = np.empty(n_l)
     e_buf = np.empty(n_l)
+    own_weights = np.empty(0)  # irradiance_lookup: each wavelength its own weight along the sun zenith
     t_buf = np.empty(n_l)
     tmp = np.empty(n_l)
     # Moments of the quadrature weights (normalisation of the Rayleigh phase on the grid).
@@ -499,7 +500,7 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                 if hits:
                     d_g = distance_to_bottom(r, wz, bottom)
                     mu_s_g = clamp((d_g * wx * sx + (r + d_g * wz) * mu_s) / bottom, -1.0, 1.0)
-                    irradiance_lookup(ground_irradiance, bottom, mu_s_g, bottom, top, True, e_buf)
+                    irradiance_lookup(ground_irradiance, bottom, mu_s_g, bottom, top, own_weights, e_buf)
                     transmittance_segment(transmittance, r, wz, d_g, True, bottom, top, t_buf, tmp)
                     for k in range(n_l):
                         buf[k] += t_buf[k] * albedo[k] * inv_pi * e_buf[k]

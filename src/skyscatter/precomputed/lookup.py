@@ -169,29 +169,31 @@ def _ground_coords(px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top, alpha
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _ground_from_coords(transmittance, irradiance, albedo, solar, pa_r, pa_mu, pb_r, pb_mu, pe_r, pe_mu, ps_r, ps_mu,
-                        cf, t, tmp, e_sky, e_sun, out):
+def _ground_from_coords(transmittance, irradiance, albedo, solar, lum, pa_r, pa_mu, pb_r, pb_mu, pe_r, pe_mu, ps_r,
+                        ps_mu, cf, t, tmp, e_sky, e_sun, out):
     """The ground's radiance (Eqs. 10, 14) seen through the atmosphere (Eq. 16) from the coordinates of
-    :func:`_ground_coords`, into ``out``; leaves the transmittance to the ground in ``t``."""
+    :func:`_ground_coords`, into ``out``; leaves the transmittance to the ground in ``t``. ``lum``: the luminance
+    weights of the wavelengths, from which the sky irradiance's weight along the sun zenith is computed
+    (:func:`.sampling.irradiance_read`)."""
     bilinear_read(transmittance, pa_r, pa_mu, t)
     bilinear_read(transmittance, pb_r, pb_mu, tmp)
     transmittance_ratio(t, tmp)
-    irradiance_read(irradiance, pe_r, pe_mu, False, e_sky)
+    irradiance_read(irradiance, pe_r, pe_mu, lum, e_sky)
     bilinear_read(transmittance, ps_r, ps_mu, e_sun)
     for k in range(out.shape[0]):
         out[k] = t[k] * albedo[k] / PI * (solar[k] * e_sun[k] * cf + e_sky[k])
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top,
-                     alpha, t, tmp, e_sky, e_sun, out):
+def _ground_radiance(transmittance, irradiance, albedo, solar, lum, px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom,
+                     top, alpha, t, tmp, e_sky, e_sun, out):
     """Radiance of the Lambertian ground lit by the sun and the sky (Eqs. 10, 14) where the ray from (px, py, pz)
     [m] along (vx, vy, vz) meets it, seen through the atmosphere (Eq. 16), into ``out``; leaves the transmittance
     to the ground in ``t``."""
     c = _ground_coords(px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top, alpha, transmittance.shape[0],
                        transmittance.shape[1], irradiance.shape[0], irradiance.shape[1])
-    _ground_from_coords(transmittance, irradiance, albedo, solar, c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7],
-                        c[8], t, tmp, e_sky, e_sun, out)
+    _ground_from_coords(transmittance, irradiance, albedo, solar, lum, c[0], c[1], c[2], c[3], c[4], c[5], c[6],
+                        c[7], c[8], t, tmp, e_sky, e_sun, out)
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -206,7 +208,7 @@ def _ground_coords_block(m, gv, gmu, px, py, pz, sx, sy, sz, r, bottom, top, alp
 
 
 @kernel
-def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, bottom, top,
+def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, lum, bottom, top,
                mu_s_min, g, mie_kind, phase_mu, phase_values, profiles, counts, alpha, include_ground, rad_out, tr_out,
                start, stop):
     """Radiance [W m^-2 sr^-1 nm^-1] and transmittance along rays ``start..stop``; see the module docstring.
@@ -214,7 +216,8 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
     Writes ``rad_out`` and ``tr_out`` (n_rays, n_wavelengths), which the caller initialises to 0 and 1
     (the values of rays that miss the atmosphere). A tabulated aerosol phase (``mie_kind``
     :data:`.sampling.TABLE_PHASE`) is read per wavelength from ``phase_mu``, ``phase_values``; ``profiles``,
-    ``counts``: the density profiles of :func:`.compute.density_profiles` (the Earth's shadow, :func:`_inscatter`).
+    ``counts``: the density profiles of :func:`.compute.density_profiles` (the Earth's shadow, :func:`_inscatter`);
+    ``lum``: the luminance weights of the wavelengths (the ground term's sky irradiance, :func:`_ground_from_coords`).
     """
     n_l = transmittance.shape[2]
     p_m_spec = np.empty(n_l if mie_kind == TABLE_PHASE else 0)
@@ -261,8 +264,8 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
         for k in range(n_l):
             rad_out[q, k] = c[k]
         if hits and include_ground:
-            _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, rc, mu,
-                             bottom, top, alpha, t, tmp, e_sky, e_sun, ground)
+            _ground_radiance(transmittance, irradiance, albedo, solar, lum, px, py, pz, vx, vy, vz, sx, sy, sz, rc,
+                             mu, bottom, top, alpha, t, tmp, e_sky, e_sun, ground)
             for k in range(n_l):
                 tr_out[q, k] = t[k]
                 rad_out[q, k] += ground[k]
@@ -474,7 +477,7 @@ def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, out):
 
 
 @kernel
-def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, solar, projection, bottom, top,
+def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, solar, lum, projection, bottom, top,
                     mu_s_min, g, mie_kind, profiles, counts, alpha, include_ground, dirs, out, bad, start, stop):
     """:func:`sky_kernel`'s radiance (no shadows) for rays ``start..stop`` from one ``position`` inside the
     atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C)).
@@ -488,7 +491,8 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     a test once per call, those of the single scattering then with the shadow factors of
     :func:`_observer_shadow_weights`), table reads, then for the rays that meet the ground the coordinates of the
     ground term (vectorised) and its spectrum, projected. ``mu_s_min``: the tables' sun limit; ``profiles``,
-    ``counts``: the density profiles of :func:`.compute.density_profiles`.
+    ``counts``: the density profiles of :func:`.compute.density_profiles`; ``lum``: the luminance weights of the
+    wavelengths (the ground term's sky irradiance, :func:`.sampling.irradiance_read`).
     """
     n_l = transmittance.shape[2]
     n_c = out.shape[1]  # slices: n_c channels and the sums over wavelengths
@@ -560,8 +564,9 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
         _ground_coords_block(n_ground, g_v, g_mu, px, py, pz, sx, sy, sz, rc, bottom, top, alpha, n_tr, n_tmu, n_er,
                              n_emu, g_c)
         for j in range(n_ground):
-            _ground_from_coords(transmittance, irradiance, albedo, solar, g_c[0, j], g_c[1, j], g_c[2, j], g_c[3, j],
-                                g_c[4, j], g_c[5, j], g_c[6, j], g_c[7, j], g_c[8, j], t, tmp, e_sky, e_sun, ground)
+            _ground_from_coords(transmittance, irradiance, albedo, solar, lum, g_c[0, j], g_c[1, j], g_c[2, j],
+                                g_c[3, j], g_c[4, j], g_c[5, j], g_c[6, j], g_c[7, j], g_c[8, j], t, tmp, e_sky, e_sun,
+                                ground)
             q = b0 + g_idx[j]
             for ch in range(n_c):
                 acc = 0.0
@@ -611,8 +616,8 @@ def _slice_layers(l0, l1, w_r, w_g, i_s, w_s, projection, identity, j, acc, out)
 
 @kernel
 def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0, ray1, mie1, mult1, transmittance,
-                         irradiance, albedo, solar, projection, identity, bottom, top, mu_s_min, g, mie_kind, profiles,
-                         counts, alpha, include_ground, dirs, out, bad, start, stop):
+                         irradiance, albedo, solar, lum, projection, identity, bottom, top, mu_s_min, g, mie_kind,
+                         profiles, counts, alpha, include_ground, dirs, out, bad, start, stop):
     """:func:`observer_kernel` for suns ``start..stop`` of ``suns`` (n, 3) (unit vectors; ``mu_s`` their zenith
     cosines at the observer, as :func:`observer_slices` takes them) seen from one ``position``: per sun the slices
     of :func:`observer_slices` (at the radius ``r_slices`` [m], clamped to the atmosphere, of tables with ``n_r``
@@ -634,8 +639,8 @@ def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0,
             _slice_layers(ray0, ray1, w_r, w_g, i_s, w_s, projection, identity, 0, acc, slices)
             _slice_layers(mie0, mie1, w_r, w_g, i_s, w_s, projection, identity, 1, acc, slices)
             _slice_layers(mult0, mult1, w_r, w_g, i_s, w_s, projection, identity, 2, acc, slices)
-        observer_kernel(position, suns[h], slices, transmittance, irradiance, albedo, solar, projection, bottom, top,
-                        mu_s_min, g, mie_kind, profiles, counts, alpha, include_ground, dirs, out[h], bad[h], 0,
+        observer_kernel(position, suns[h], slices, transmittance, irradiance, albedo, solar, lum, projection, bottom,
+                        top, mu_s_min, g, mie_kind, profiles, counts, alpha, include_ground, dirs, out[h], bad[h], 0,
                         n_rays)
 
 
@@ -720,12 +725,13 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
 
 
 @kernel
-def irradiance_kernel(points, normals, suns, transmittance, irradiance, solar, bottom, top, alpha, sun_out, sky_out,
-                      start, stop):
+def irradiance_kernel(points, normals, suns, transmittance, irradiance, solar, lum, bottom, top, alpha, sun_out,
+                      sky_out, start, stop):
     """Sun and sky irradiance [W m^-2 nm^-1] on surfaces at ``points`` with unit ``normals``.
 
     Sun: ``E_sun T_sun max(n.s, 0)`` with the planet's occlusion of the disc; sky: the table's horizontal
-    irradiance times ``(1 + n.up) / 2`` (Eq. 14). Writes ``sun_out`` and ``sky_out`` (n, n_wavelengths).
+    irradiance times ``(1 + n.up) / 2`` (Eq. 14), read with the weight along the sun zenith of the luminance
+    weights ``lum`` (:func:`.sampling.irradiance_read`). Writes ``sun_out`` and ``sky_out`` (n, n_wavelengths).
     """
     n_l = transmittance.shape[2]
     t = np.empty(n_l)
@@ -740,7 +746,7 @@ def irradiance_kernel(points, normals, suns, transmittance, irradiance, solar, b
         mu_s = clamp(ux * sx + uy * sy + uz * sz, -1.0, 1.0)
         transmittance_to_sun(transmittance, rc, mu_s, bottom, top, alpha, t)
         cos_n = max(nx * sx + ny * sy + nz * sz, 0.0)
-        irradiance_lookup(irradiance, rc, mu_s, bottom, top, False, e)
+        irradiance_lookup(irradiance, rc, mu_s, bottom, top, lum, e)
         occl = 0.5 * (1.0 + nx * ux + ny * uy + nz * uz)
         for k in range(n_l):
             sun_out[q, k] = solar[k] * t[k] * cos_n

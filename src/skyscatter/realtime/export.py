@@ -27,11 +27,12 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
 * ``optical_depth`` 2D, same layout: RGB the optical depth to the top averaged over each channel's band, A over the
   luminance's; for the transmittance between two points where a ratio of sunlight transmittances is ill-conditioned.
 * ``irradiance`` 2D, width n_mu_s x height n_r: RGB sky irradiance on a horizontal surface [HDR scale], A the
-  table's own value at its middle wavelength (manifest version 4; W m^-2 nm^-1, not on the HDR scale). The library
-  reads it linearly along mu_s except in the cells that start below the horizon, where the twilight irradiance falls
-  nearly exponentially with the sun's depression: there the weight is log_lerp_weight of that wavelength's values
-  in the two texel columns (each linear in r; :func:`skyscatter.precomputed.sampling.irradiance_read`), applied to
-  every wavelength (``irradiance_uvs`` and ``irradiance_lerp`` of the mappings).
+  illuminance of the table's spectrum (manifest version 5; lx, the CIE 1931 ``ybar`` integral of the table's
+  samples, not on the HDR scale). The library reads it linearly along mu_s except in the cells that start below the
+  horizon, where the twilight irradiance falls nearly exponentially with the sun's depression: there the weight is
+  log_lerp_weight of the illuminances of the two texel columns (each linear in r;
+  :func:`skyscatter.precomputed.sampling.irradiance_read`), applied to every wavelength (``irradiance_uvs`` and
+  ``irradiance_lerp`` of the mappings).
 * ``rayleigh``, ``mie``, ``multiple`` 3D, width n_nu * n_mu_s (x = i_nu * n_mu_s + i_mu_s), height n_mu, depth n_r:
   RGB single Rayleigh and single Mie scattering without their phase functions, multiple scattering with it; A the
   table's own value at its middle wavelength (index n_wavelengths // 2, the manifest's
@@ -82,8 +83,10 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: alpha holds each table's middle wavelength (was Y), from which the azimuth weight is computed. 3: the constants
 #: hold the Rayleigh and aerosol density profiles, and the single scattering's azimuth weight follows the Earth's
 #: shadow (shadow_factors of the mappings). 4: the irradiance texture's alpha holds its middle wavelength (was Y),
-#: from which the weight along mu_s below the horizon is computed (irradiance_uvs, irradiance_lerp).
-MANIFEST_VERSION = 4
+#: from which the weight along mu_s below the horizon is computed (irradiance_uvs, irradiance_lerp). 5: the irradiance
+#: texture's alpha holds the illuminance [lx] of its spectrum (the library's weight along mu_s: the same for any set
+#: of table wavelengths).
+MANIFEST_VERSION = 5
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -160,8 +163,8 @@ def irradiance_uvs(r, mu_s):
 
 def irradiance_lerp(e0, e1, w, below):
     """RGB of the irradiance texture between the reads e0, e1 (RGBA) of its two mu_s columns: where the cell starts
-    below the horizon the weight is log_lerp_weight of their alpha (the table's middle wavelength), else w; applied
-    to every channel."""
+    below the horizon the weight is log_lerp_weight of their alpha (the illuminance of the table's spectrum), else w;
+    applied to every channel."""
     k = log_lerp_weight(e0[3], e1[3], w) if below else w
     return [a + k * (b - a) for a, b in zip(e0[:3], e1[:3])]
 
@@ -421,9 +424,10 @@ def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]
     w /= w.sum(axis=1, keepdims=True)
     out = {"transmittance": _sun_weighted(t["transmittance"], solar, m).astype(np.float32),
            "optical_depth": (tau @ w.T).astype(np.float32),
-           # A: the middle wavelength, from which the lookups' weight along mu_s is computed (sampling.irradiance_read)
+           # A: the luminance, from which the lookups' weight along mu_s is computed (sampling.irradiance_read)
            "irradiance": np.concatenate([t["irradiance"].astype(np.float64) @ m.T,
-                                         t["irradiance"][..., atm.wavelengths.size // 2, None]], axis=-1)}
+                                         (t["irradiance"].astype(np.float64) @ atm.irradiance_weights)[..., None]],
+                                        axis=-1)}
     m4 = np.vstack([m, np.zeros(m.shape[1])]).astype(np.float32)  # R, G, B rows; A is filled below
     for name, key in (("rayleigh", "single_rayleigh"), ("mie", "single_mie"), ("multiple", "multiple")):
         # einsum, not matmul: a (1M, 16) x (16, 4) product is 4x quicker without BLAS's threads
@@ -503,10 +507,10 @@ def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
                          "(M E_sun) per channel [1]; A: the same for luminance",
         "optical_depth": "RGB: optical depth from (r, mu) to the top averaged over each channel's band, sum_l w_c(l) "
                          "tau(l), w_c = max(M_c, 0) E_sun normalised [1]; A: the same for luminance",
-        "irradiance": "RGB: sky irradiance on a horizontal surface at (r, mu_s) [W m^-2, HDR scale]; A: its "
-                      "spectral value at azimuth_weight_wavelength_nm (its middle wavelength) [W m^-2 nm^-1; not "
-                      "folded, not on the HDR scale], for the weight along mu_s in the cells that start below the "
-                      "horizon: irradiance_lerp of the mappings",
+        "irradiance": "RGB: sky irradiance on a horizontal surface at (r, mu_s) [W m^-2, HDR scale]; A: the "
+                      "illuminance of its spectrum (the CIE 1931 ybar integral of the table's samples) [lx; not on "
+                      "the HDR scale], for the weight along mu_s in the cells that start below the horizon: "
+                      "irradiance_lerp of the mappings",
         "rayleigh": "RGB: single Rayleigh scattering S_R[L0] without its phase function [W m^-2, HDR scale; times "
                     "P_R [sr^-1] gives radiance]; A: " + _ALPHA,
         "mie": "RGB: single Mie scattering S_M[L0] without its phase function [W m^-2, HDR scale]; A: " + _ALPHA,

@@ -28,7 +28,7 @@
 
 uniform highp sampler2D transmittance_texture;   // RGB: sunlight-weighted transmittance to the top; A: luminance's
 uniform highp sampler2D optical_depth_texture;   // RGB: optical depth to the top averaged over each channel; A: Y's
-uniform highp sampler2D irradiance_texture;      // RGB: sky irradiance on a horizontal surface; A: middle wavelength
+uniform highp sampler2D irradiance_texture;      // RGB: sky irradiance on a horizontal surface; A: illuminance
 // The scattering textures' A: each table's spectral value at its middle wavelength (not folded), for the azimuth
 // weight (LogLerpWeight).
 uniform highp sampler3D rayleigh_texture;        // RGB: single Rayleigh scattering S_R[L0] without phase; A: see above
@@ -206,8 +206,8 @@ float LogLerpWeight(float a, float b, float w) {
 vec3 AzimuthLerp(vec4 s0, vec4 s1, float w) { return mix(s0.rgb, s1.rgb, LogLerpWeight(s0.a, s1.a, w)); }
 
 // RGB of the irradiance texture between the reads e0, e1 of its two mu_s columns (IrradianceUvs): where the cell
-// starts below the horizon the weight is LogLerpWeight of their alpha (the table's middle wavelength: the twilight
-// sky irradiance falls nearly exponentially with the sun's depression; skyscatter.precomputed.sampling.
+// starts below the horizon the weight is LogLerpWeight of their alpha (the illuminance of the table's spectrum: the
+// twilight sky irradiance falls nearly exponentially with the sun's depression; skyscatter.precomputed.sampling.
 // irradiance_read), else w; applied to every channel.
 vec3 IrradianceLerp(vec4 e0, vec4 e1, float w, bool below) {
   return mix(e0.rgb, e1.rgb, below ? LogLerpWeight(e0.a, e1.a, w) : w);
