@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..atmosphere.phase import aerosol_phase_kind
 from ..conventions import as_directions
 from ..errors import InvalidDirectionError, InvalidParameterError
-from ..spectral import spectrum_to_xyz
+from ..spectral import cie_cmfs, spectrum_to_xyz
 from ..sun.disc import solar_disc_solid_angle
 from .conversion import SPECTRAL_MODE_MIN_WAVELENGTHS, ColourConversion, xyz_matrix
 from .parallel import parallel_for
@@ -99,10 +99,19 @@ class TableLookups:
         irradiance ``E`` [W m^-2 nm^-1] sampled there (the CIE 1931 ``ybar`` times 683 lm/W and the trapezoid
         step of :func:`skyscatter.spectral.spectrum_to_xyz`; [CIE2004]). The rendering lookups' weight along the sun
         zenith of the irradiance table below the horizon is that of the luminance of its two texel columns
-        (:func:`.sampling.irradiance_read`), so that it does not depend on which wavelengths the table holds."""
+        (:func:`.sampling.irradiance_read`), so that it does not depend on which wavelengths the table holds. One
+        wavelength: ``ybar`` alone (any positive weight reads it with its own weight); tables whose wavelengths all
+        lie outside ``ybar``'s support (no luminance): equal weights, the weight of the spectra's sums."""
         w = getattr(self, "_irradiance_weights", None)
         if w is None:
-            w = np.ascontiguousarray(spectrum_to_xyz(np.eye(self.wavelengths.size), self.wavelengths)[:, 1])
+            wl = self.wavelengths
+            if wl.size >= 2 and np.all(np.diff(wl) > 0.0):
+                w = spectrum_to_xyz(np.eye(wl.size), wl)[:, 1]
+            else:
+                w = cie_cmfs(wl)[:, 1]
+            if not np.any(w > 0.0):
+                w = np.ones(wl.size)
+            w = np.ascontiguousarray(np.maximum(w, 0.0), dtype=np.float64)
             self._irradiance_weights = w
         return w
 
