@@ -37,6 +37,18 @@ from .geometry import (
 )
 
 PI = math.pi
+#: Largest shadow factor of the rendering lookups' single scattering read from the Earth's shadow
+#: (:func:`shadow_ratios_fast`, :func:`.lookup._inscatter`; the GLSL library's ``SHADOW_RATIO_MAX``): a texel whose ray
+#: leaves the shadow in thinner air than the query's is scaled up by the density ratio, at most this much. 1 (the
+#: precomputation's second-order density, :func:`shadow_nu_weights`) only takes light away, so between two texels
+#: whose rays leave the shadow below and above the query's the value falls short: 45 deg from a sun 6 deg below the
+#: horizon, 2 and 5 deg up, Rayleigh, 400 and 560 nm, -10 % of the independent integral of
+#: ``tests/precomputed_reference.py`` on its own texel values where the uncapped ratio gives -1 to -2 % (aerosol
+#: -28 to -40 % against -1 to +4 %). Bounded because the tables' shadow is the sun disc's, soft, and their
+#: penumbra times an unbounded ratio was 10^5 to 10^13 times too bright (measured); 2 against the stored Monte Carlo
+#: (docs/accuracy.md, "Low sun"): Earth defaults 11 -> 7 of 75 directions outside, the hazy skies unchanged.
+SHADOW_RATIO_MAX = 2.0
+_LOG_SHADOW_RATIO_MAX = math.log(SHADOW_RATIO_MAX)
 
 
 #: The phase functions of :mod:`skyscatter.atmosphere.phase` as numba scalars: Rayleigh (Bruneton & Neyret
@@ -386,7 +398,7 @@ def shadow_nu_weights(r, mu, mu_s, nu, i_n, w_n, n_nu, bottom, top, profile, n_l
     interpolation exactly. Used by the second order's scattering density (:func:`scattering_lookup_shadow`) and by
     the rendering lookups for points in the shadow (:func:`.lookup._inscatter`, :func:`lookup4_cell_weighted`)."""
     h_q, h_0, h_1 = shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_nu, bottom, top)
-    a, b = shadow_ratios(h_q, h_0, h_1, profile, n_layers)
+    a, b = shadow_ratios(h_q, h_0, h_1, profile, n_layers, 1.0)
     return (1.0 - w_n) * a, w_n * b
 
 
@@ -413,18 +425,19 @@ def shadow_exit_altitudes_cos(r, mu, mu_s, nu, cos_0, cos_1, bottom, top):
 
 
 @helper
-def shadow_ratios(h_q, h_0, h_1, profile, n_layers):
+def shadow_ratios(h_q, h_0, h_1, profile, n_layers, cap):
     """Shadow factors ``(a, b)`` of the two nu texels of a single-scattering table (:func:`shadow_nu_weights`): the
     density of the constituent (``profile``, ``n_layers`` layers) at the query's shadow exit ``h_q`` [m] over its
-    density at each texel's exit ``h_0``, ``h_1`` [m] (:func:`shadow_exit_altitudes`), each at most 1."""
+    density at each texel's exit ``h_0``, ``h_1`` [m] (:func:`shadow_exit_altitudes`), each at most ``cap`` (1 in
+    the precomputation, :data:`SHADOW_RATIO_MAX` in the rendering lookups)."""
     fq = density_at(profile, n_layers, h_q)
     f0 = density_at(profile, n_layers, h_0)
     f1 = density_at(profile, n_layers, h_1)
-    # never above 1: the rule only takes light away from a texel whose ray leaves the shadow lower (denser air)
-    # than the query's, so it stays between 0 and the linear interpolation; the tables' shadow is soft (the
-    # sun's disc), the exit altitude a point sun's, and a ratio above 1 would multiply their penumbra
-    a = fq / f0 if f0 > fq else 1.0
-    b = fq / f1 if f1 > fq else 1.0
+    # bounded: the tables' shadow is soft (the sun's disc), the exit altitude a point sun's, and an unbounded ratio
+    # would multiply their penumbra; with cap 1 the rule only takes light away from a texel whose ray leaves the
+    # shadow lower (denser air) than the query's
+    a = fq / f0 if f0 * cap > fq else cap
+    b = fq / f1 if f1 * cap > fq else cap
     return a, b
 
 
@@ -432,15 +445,14 @@ def shadow_ratios(h_q, h_0, h_1, profile, n_layers):
 def shadow_ratios_fast(h_q, h_0, h_1, profile, n_layers):
     """:func:`shadow_ratios` for the rendering lookups: for a one-layer profile ``exp_term exp(exp_scale h)``
     (``exp_term > 0``, no linear or constant term: the Rayleigh and aerosol layers of Bruneton & Neyret 2008,
-    Eqs. 1 and 3) each ratio is ``exp(exp_scale (h_q - h_i))``, one ``exp`` per texel and none where the ratio is at
-    least 1 (the texel's ray leaves the shadow in thinner air than the query's); otherwise :func:`shadow_ratios`. The
-    same values to rounding; the precomputation keeps :func:`shadow_ratios` (its tables unchanged bit for bit)."""
+    Eqs. 1 and 3) each ratio is ``exp(exp_scale (h_q - h_i))``, at most :data:`SHADOW_RATIO_MAX`, one ``exp`` per
+    texel; otherwise :func:`shadow_ratios` with that cap. The same values to rounding."""
     if n_layers == 1 and profile[0, 1] > 0.0 and profile[0, 3] == 0.0 and profile[0, 4] == 0.0:
         sc = profile[0, 2]
         x0 = sc * (h_q - h_0)
         x1 = sc * (h_q - h_1)
-        return (math.exp(x0) if x0 < 0.0 else 1.0), (math.exp(x1) if x1 < 0.0 else 1.0)
-    return shadow_ratios(h_q, h_0, h_1, profile, n_layers)
+        return math.exp(min(x0, _LOG_SHADOW_RATIO_MAX)), math.exp(min(x1, _LOG_SHADOW_RATIO_MAX))
+    return shadow_ratios(h_q, h_0, h_1, profile, n_layers, SHADOW_RATIO_MAX)
 
 
 @helper

@@ -320,9 +320,9 @@ def scattering_nu_param(i_n, mu, mu_s):
 def shadow_factors(r, mu, mu_s, nu, constituent):
     """Shadow factors (a, b) of the two nu slices of a lookup (those of scattering_uvw) for the single scattering of
     constituent "rayleigh" or "mie": (1, 1) where the point is lit, else the constituent's density where the query's
-    ray leaves the Earth's shadow over that where each slice's ray leaves it, each at most 1 (mu_s at least
-    MU_S_MIN, as in scattering_uvw). A ray that starts in the shadow scatters sunlight only beyond its exit, nearly
-    in proportion to the density there."""
+    ray leaves the Earth's shadow over that where each slice's ray leaves it, each at most SHADOW_RATIO_MAX (mu_s at
+    least MU_S_MIN, as in scattering_uvw). A ray that starts in the shadow scatters sunlight only beyond its exit,
+    nearly in proportion to the density there."""
     mu_s = max(mu_s, MU_S_MIN)
     if not in_earth_shadow(r, mu_s):
         return (1.0, 1.0)
@@ -333,7 +333,8 @@ def shadow_factors(r, mu, mu_s, nu, constituent):
     fq = density_at(profile, layers, shadow_exit_altitude(r, mu, mu_s, nu))
     f0 = density_at(profile, layers, shadow_exit_altitude(r, mu, mu_s, scattering_nu_param(i_n, mu, mu_s)))
     f1 = density_at(profile, layers, shadow_exit_altitude(r, mu, mu_s, scattering_nu_param(i_n + 1, mu, mu_s)))
-    return (fq / f0 if f0 > fq else 1.0, fq / f1 if f1 > fq else 1.0)
+    return (fq / f0 if f0 * SHADOW_RATIO_MAX > fq else SHADOW_RATIO_MAX,
+            fq / f1 if f1 * SHADOW_RATIO_MAX > fq else SHADOW_RATIO_MAX)
 
 def segment_transmittance(t_x, t_y, tau_x, tau_y):
     """Transmittance between x and y per channel from the two texture reads at each end (x nearer, both towards the
@@ -443,6 +444,7 @@ def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
     from ..atmosphere.phase import aerosol_phase_kind
     from ..precomputed.compute import density_profiles
     from ..precomputed.geometry import LOG_LERP_FLOOR
+    from ..precomputed.sampling import SHADOW_RATIO_MAX
     from ..sun.disc import solar_disc_solid_angle
 
     p = atm.parameters
@@ -463,7 +465,7 @@ def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
         "TRANSMITTANCE_N_R": atm.sizes.transmittance_r, "TRANSMITTANCE_N_MU": atm.sizes.transmittance_mu,
         "IRRADIANCE_N_R": atm.sizes.irradiance_r, "IRRADIANCE_N_MU_S": atm.sizes.irradiance_mu_s,
         "SCATTERING_N_R": n_r, "SCATTERING_N_MU": n_mu, "SCATTERING_N_MU_S": n_s, "SCATTERING_N_NU": n_n,
-        "LOG_LERP_FLOOR": float(LOG_LERP_FLOOR),
+        "LOG_LERP_FLOOR": float(LOG_LERP_FLOOR), "SHADOW_RATIO_MAX": float(SHADOW_RATIO_MAX),
         "DENSITY_MAX_LAYERS": n_layers,
         "RAYLEIGH_DENSITY_LAYERS": int(counts[0]), "MIE_DENSITY_LAYERS": int(counts[1]),
         "RAYLEIGH_DENSITY": [float(v) for v in profiles[0, :n_layers].ravel()],

@@ -17,6 +17,7 @@
 //   const int TRANSMITTANCE_N_R, TRANSMITTANCE_N_MU, IRRADIANCE_N_R, IRRADIANCE_N_MU_S,
 //             SCATTERING_N_R, SCATTERING_N_MU, SCATTERING_N_MU_S, SCATTERING_N_NU   texel counts
 //   const float LOG_LERP_FLOOR                               floor of the smaller value's ratio in LogLerpWeight
+//   const float SHADOW_RATIO_MAX                             largest shadow factor in ShadowFactors
 //   const int DENSITY_MAX_LAYERS; const int RAYLEIGH_DENSITY_LAYERS, MIE_DENSITY_LAYERS   layers of the profiles
 //   const float RAYLEIGH_DENSITY[5 * DENSITY_MAX_LAYERS], MIE_DENSITY[...]   relative density profiles of air and
 //             aerosol, per layer (width [m], exp_term, exp_scale [1/m], linear_term [1/m], constant_term)
@@ -263,14 +264,15 @@ float DensityAt(float p[5 * DENSITY_MAX_LAYERS], int layers, float h) {
 }
 
 // Shadow factors (a, b) of the two nu texels of a single-scattering texture (skyscatter.precomputed.sampling.
-// shadow_ratios): the density at the query's shadow exit h.x over the density at each texel's exit h.y, h.z, each at
-// most 1. A ray that starts in the Earth's shadow scatters sunlight only beyond its exit, nearly in proportion to the
-// density there.
+// shadow_ratios_fast): the density at the query's shadow exit h.x over the density at each texel's exit h.y, h.z, each
+// at most SHADOW_RATIO_MAX. A ray that starts in the Earth's shadow scatters sunlight only beyond its exit, nearly in
+// proportion to the density there.
 vec2 ShadowFactors(vec3 h, float p[5 * DENSITY_MAX_LAYERS], int layers) {
   float fq = DensityAt(p, layers, h.x);
   float f0 = DensityAt(p, layers, h.y);
   float f1 = DensityAt(p, layers, h.z);
-  return vec2(f0 > fq ? fq / f0 : 1.0, f1 > fq ? fq / f1 : 1.0);
+  return vec2(f0 * SHADOW_RATIO_MAX > fq ? fq / f0 : SHADOW_RATIO_MAX,
+              f1 * SHADOW_RATIO_MAX > fq ? fq / f1 : SHADOW_RATIO_MAX);
 }
 
 // nu of texel index i_n for view and sun zenith cosines mu, mu_s: mu mu_s + sqrt((1 - mu^2)(1 - mu_s^2)) cos(phi),
