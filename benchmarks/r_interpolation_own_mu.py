@@ -7,7 +7,8 @@ tests/test_precomputed_mie.py and of the default air (Cornette-Shanks), sun at 3
 elevation 2, 3, 5, 7, 10, 15, 20, 30 deg and azimuth 0-180 deg (40 rays), from 0, 10, 30, 62 and 150 m; the sky's
 radiance without the ground against the brute-force integral of tests/precomputed_reference.py. Both rendering
 paths: the general 4D kernel (one position per ray) and the observer slices (one position). Prints the worst and
-median |error| [%] per air, sun, height and path, and writes them as JSON to $OUT if set.
+median |error| [%] per air, sun, height and path, and writes them as JSON to $OUT if set (other elevations [deg]:
+ELEVATIONS="0.1 0.5 1", heights [m]: HEIGHTS="10 30").
 Run: PYTHONPATH=src:tests python benchmarks/r_interpolation_own_mu.py
 """
 
@@ -28,11 +29,12 @@ from skyscatter.precomputed import PrecomputedAtmosphere  # noqa: E402
 
 WL = np.array([450.0, 650.0])
 HEIGHTS = tuple(float(h) for h in os.environ.get("HEIGHTS", "0 10 30 62 150").split())
+ELEVATIONS = tuple(float(e) for e in os.environ.get("ELEVATIONS", "2 3 5 7 10 15 20 30").split())
 
 
 def directions():
     out = []
-    for el in (2.0, 3.0, 5.0, 7.0, 10.0, 15.0, 20.0, 30.0):
+    for el in ELEVATIONS:
         for az in (0.0, 45.0, 90.0, 135.0, 180.0):
             e, a = math.radians(el), math.radians(az)
             out.append((math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)))

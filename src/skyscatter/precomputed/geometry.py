@@ -70,7 +70,6 @@ __all__ = [
     "scattering_r_mu_rows",
     "scattering_row_mu_coord",
     "shadow_exit_altitude",
-    "sky_mu_param",
     "transmittance_coord",
     "transmittance_params",
 ]
@@ -557,27 +556,20 @@ def scattering_r_mu_params(i_r: int, i_mu: int, bottom: float, top: float, n_r: 
             return r, -1.0, True
         mu = -(rho * rho + d * d) / (2.0 * r * d)
         return r, clamp(mu, -1.0, 1.0), True
-    return r, sky_mu_param(r, (i_mu - half) / (half - 1), bottom, top), False
-
-
-@helper(fastmath=CONTRACT_ARCP)
-def sky_mu_param(r: float, x: float, bottom: float, top: float) -> float:
-    """View zenith cosine of the ray from radius ``r`` [m] that misses the ground with unit coordinate ``x`` of the
-    sky half of the ``mu`` axis (:func:`sky_mu_unit`; 0 the zenith, 1 the horizon); its inverse, by bisection in
-    the zenith angle."""
-    rho = math.sqrt(max(r * r - bottom * bottom, 0.0))
+    theta_h = acos_table(-rho / r)
+    x = (i_mu - half) / (half - 1)
     if x <= 0.0:
-        return 1.0
+        return r, 1.0, False
     if x >= 1.0:
-        return clamp(-rho / r, -1.0, 1.0)  # the horizon itself (cos of acos_table is 2e-8 off)
-    lo, hi = 0.0, acos_table(-rho / r)
+        return r, clamp(-rho / r, -1.0, 1.0), False  # the horizon itself (cos of acos_table is 2e-8 off)
+    lo, hi = 0.0, theta_h
     for _ in range(60):
         mid = 0.5 * (lo + hi)
         if _sky_mu_x(r, math.cos(mid), bottom, top) < x:
             lo = mid
         else:
             hi = mid
-    return clamp(math.cos(0.5 * (lo + hi)), -1.0, 1.0)
+    return r, clamp(math.cos(0.5 * (lo + hi)), -1.0, 1.0), False
 
 
 @helper(fastmath=CONTRACT_ARCP)

@@ -28,6 +28,7 @@ import numpy as np
 from ..jit import CONTRACT_ARCP, helper, inline, kernel
 from .geometry import (
     MU_S_LIMIT_TOLERANCE,
+    acos_table,
     bilinear_weights,
     clamp,
     distance_to_bottom,
@@ -43,7 +44,6 @@ from .geometry import (
     scattering_nu_azimuth,
     scattering_nu_coord,
     scattering_r_mu_coord,
-    scattering_row_mu_coord,
     sky_mu_unit,
     transmittance_coord,
 )
@@ -399,6 +399,12 @@ def _observer_row_cells(dirs, px, py, pz, r, bottom, top, n_r, n_mu, n_nu, cell,
     rays that meet the ground."""
     half = n_mu // 2
     inv_r = 1.0 / r
+    # the rows' constants of the mu mapping (.geometry.scattering_row_mu_coord), out of the loop: it runs on SIMD lanes
+    big_h = math.sqrt(top * top - bottom * bottom)
+    rho1 = big_h / (n_r - 1)
+    r1 = math.sqrt(rho1 * rho1 + bottom * bottom)
+    th0 = acos_table(0.0)
+    th1 = acos_table(-rho1 / r1)
     for k in range(cell.shape[0]):
         vx = dirs[3 * k]
         vy = dirs[3 * k + 1]
@@ -407,8 +413,8 @@ def _observer_row_cells(dirs, px, py, pz, r, bottom, top, n_r, n_mu, n_nu, cell,
         inv = 1.0 / math.sqrt(n2) if n2 > 0.0 and n2 < math.inf else 0.0
         mu = clamp((px * vx + py * vy + pz * vz) * (inv * inv_r), -1.0, 1.0)
         i_n = cell[k] % n_nu
-        i0, w0 = lerp_index(scattering_row_mu_coord(0, mu, bottom, top, n_r, n_mu), half, n_mu - 1)
-        i1, w1 = lerp_index(scattering_row_mu_coord(1, mu, bottom, top, n_r, n_mu), half, n_mu - 1)
+        i0, w0 = lerp_index(half + sky_mu_unit(bottom, mu, top, 0.0, big_h, th0) * (half - 1), half, n_mu - 1)
+        i1, w1 = lerp_index(half + sky_mu_unit(r1, mu, top, rho1, big_h, th1) * (half - 1), half, n_mu - 1)
         cell[k] = i0 * n_nu + i_n
         w_mu[k] = w0
         cell1[k] = i1 * n_nu + i_n
