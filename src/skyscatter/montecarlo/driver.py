@@ -71,14 +71,6 @@ SHADOW_TABLE_MU = 0.005
 SPLIT_FACTOR = 2
 #: Optical depths [-] of the shadow ray that bound the classes of :data:`SPLIT_FACTOR`.
 SPLIT_DEPTHS = (4.0,)
-#: Next-event estimates of cloudy media without a cloud field by the track-length estimator (``kernels`` module
-#: docstring): at a point of each free path uniform in the hero's optical depth, weighted by that optical depth,
-#: instead of at the collision that ends it.
-TRACK_NEE = False
-#: Exponential transform of the free paths in the cloud layers of a medium without a cloud field: a free path
-#: starting in them at the cosine ``mu`` to the local vertical is drawn with every extinction scaled by
-#: ``1 - STRETCH mu`` (longer upwards, towards the sunlit top), its density in every wavelength's weight. 0: off.
-STRETCH = 0.0
 
 
 @dataclass(frozen=True)
@@ -161,8 +153,6 @@ class Medium:
     ddis_gate: float = 0.0
     sgeo: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(3))
     stab: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros((4, 1)))
-    track_nee: bool = False
-    stretch: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(3))
 
     @property
     def cloud_paths(self) -> bool:
@@ -366,8 +356,7 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
         atmosphere.sun_angular_radius, field, field_exact, np.ascontiguousarray(fs, dtype=float),
         np.ascontiguousarray(fss, dtype=float), DDIS_PROBABILITY if cloudy else 0.0, ddis_lobe, peak_lobe, pval,
         pcdf, pa, NEE_ROULETTE_DEPTH if cloudy else math.inf, _split_table() if cloudy else np.ones(1),
-        dval, dcdf, math.exp(-DDIS_DEPTH), sgeo, stab, bool(TRACK_NEE and cloudy and clouds is None),
-        _stretch(atmosphere, clouds) if cloudy else np.zeros(3),
+        dval, dcdf, math.exp(-DDIS_DEPTH), sgeo, stab,
     )
 
 
@@ -414,18 +403,6 @@ def _without_peak_table(tmu: NDArray[np.float64], tval: NDArray[np.float64], pva
                           np.cumsum(0.5 * (rest[:, 1:] + rest[:, :-1]) * np.diff(tmu)[None, :], axis=1)], axis=1)
     total = cdf[:, -1:].copy()
     return np.ascontiguousarray(rest / (2.0 * math.pi * total)), np.ascontiguousarray(cdf / total)
-
-
-def _stretch(atmosphere: AtmosphereParameters, clouds: Any) -> NDArray[np.float64]:
-    """The kernels' ``stretch``: :data:`STRETCH` and the radii [m] of the lowest cloud base and the highest cloud
-    top of the cloud layers (zeros: off; not with a cloud field)."""
-    layers = [c for c in atmosphere.particles if hasattr(c, "base") and hasattr(c, "top")]
-    if not STRETCH > 0.0 or clouds is not None or not layers:
-        return np.zeros(3)
-    if not STRETCH < 1.0:
-        raise InvalidParameterError(f"STRETCH must be in [0, 1); got {STRETCH!r}")
-    rb = atmosphere.bottom_radius
-    return np.array([float(STRETCH), rb + min(c.base for c in layers), rb + max(c.top for c in layers)])
 
 
 def _split_table() -> NDArray[np.float64]:
@@ -519,8 +496,7 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
                         m.lobe, m.lobe_g,
                         m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe,
                         f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa,
-                        m.nee_roulette, m.split, m.dval, m.dcdf, m.ddis_gate, m.track_nee,
-                        m.stretch, _CLOUDY if m.cloud_paths else None,
+                        m.nee_roulette, m.split, m.dval, m.dcdf, m.ddis_gate, _CLOUDY if m.cloud_paths else None,
                         seed, group, batch0, n_batches, batch_size, sums, sumsq, verts)
     return sums, sumsq, verts
 

@@ -946,7 +946,7 @@ def _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy
 def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, coef,
                 scat, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
                 fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, nee_roulette, split, dval, dcdf, ddis_gate,
-                track_nee, stretch, cloudy, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
+                cloudy, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
     """Trace ``n_batches`` batches of ``batch_size`` paths for each entry of a block; one wavelength group.
 
     Parameters (all SI; arrays float64 unless stated)
@@ -1057,8 +1057,7 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
             n_active += 1
     _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, coef,
                  lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
-                 fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, track_nee,
-                 stretch, seed, group, batch0,
+                 fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, seed, group, batch0,
                  n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp, dens,
                  kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate, rec,
                  cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3, chain,
@@ -1068,8 +1067,7 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
 @helper
 def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, coef,
                  lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
-                 fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, track_nee,
-                 stretch, seed, group, batch0,
+                 fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, seed, group, batch0,
                  n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp, dens,
                  kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate, rec,
                  cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3, chain,
@@ -1084,8 +1082,6 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
     use_ddis = clouds_on and use_ddis
     peak = clouds_on and peak
     split_on = clouds_on and split_on
-    track_on = clouds_on and not field and track_nee
-    stretch_on = clouds_on and not field and stretch[0] > 0.0
     sx, sy, sz = sun[0], sun[1], sun[2]
     for j in range(ndir):
         ax, ay, az = dirs[j, 0], dirs[j, 1], dirs[j, 2]
@@ -1135,10 +1131,6 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                             ta, tb = field_box_hit(px, py, pz, dx, dy, dz, t_end, fvf)
                             forced = ta >= tb
                         rho_f = 0.0
-                        sfac = 1.0  # the exponential transform's factor of this free path (1: none)
-                        track = False  # this free path's next-event estimate made along it (track-length)
-                        live_u = False
-                        tsun_u = 0.0
                         if forced:
                             _, _, npc = _march(px, py, pz, dx, dy, dz, t_end, np.inf, kh, rb, edges, layers, nlay, tot,
                                                tmp, rec, True)
@@ -1153,12 +1145,6 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                         else:
                             u = next_uniform(st)
                             target = -math.log1p(-u)
-                            if stretch_on:
-                                # exponential transform (module docstring): the extinction scaled by 1 - a mu
-                                r_s = math.sqrt(px * px + py * py + pz * pz)
-                                if stretch[1] <= r_s <= stretch[2]:
-                                    sfac = 1.0 - stretch[0] * (px * dx + py * dy + pz * dz) / r_s
-                                    target /= sfac
                             if field:
                                 t, reached, rho_f = _free_path(px, py, pz, dx, dy, dz, t_end, target, kh, hero, field,
                                                                rb, edges, layers, nlay, cols, tmp, rec, fs, fsmax, fvf,
@@ -1169,39 +1155,6 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                                        nlay, cols, tmp, rec, True)
                                 if not reached:
                                     t = t_end
-                            if track_on:
-                                # the next-event estimate of this free path by the track-length estimator (module
-                                # docstring): at a point uniform in the hero's optical depth over [0, t], times it
-                                track = True
-                                tseg = target if reached else _dot(kh, cols)
-                                tu = next_uniform(st) * tseg
-                                su, _, _ = _march(px, py, pz, dx, dy, dz, t, tu, kh, rb, edges, layers, nlay, tot, tmp,
-                                                  rec, True)
-                                ux, uy, uz = px + su * dx, py + su * dy, pz + su * dz
-                                _medium_at(ux, uy, uz, 0.0, rb, layers, nlay, coef_t, scat_t, fs, fss, dens, sc, stt,
-                                           sst)
-                                _optical_depths(coef_t, tot, tau)
-                                for i in range(n):
-                                    tr = math.exp(-tau[i])
-                                    f0[i] = f[i] * tr
-                                    p0[i] = p[i] * stt[i] * tr
-                                _normalise(f0, p0, n)
-                                if sst[hero] > 0.0 and tseg > 0.0:
-                                    wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
-                                    te, blocked = _exit_distance(ux, uy, uz, wx, wy, wz, rb, rt)
-                                    if not blocked:
-                                        live_u = _sun_transmittance(ux, uy, uz, wx, wy, wz, te, field, rr_depth, kmin,
-                                            coef_t, rb, edges, layers, nlay, sgeo, stab, fs, fsmax, fsmin, fvf, fvi,
-                                            frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf, trs)
-                                    if live_u:
-                                        mw = wx * dx + wy * dy + wz * dz
-                                        _phase_sums(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2,
-                                                    False)
-                                        if peak and not first:
-                                            _without_peak(mw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
-                                        for i in range(n):
-                                            contrib[i] += ws * tseg * f0[i] * val[i] * esun[i] * trs[i]
-                                        tsun_u = trs[hero]
                             if reached:
                                 collided = True
                             elif not ground:
@@ -1214,8 +1167,6 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                             for i in range(n):
                                 tr = math.exp(-tau[i])
                                 pdf = stt[i] * tr
-                                if sfac != 1.0:
-                                    pdf = sfac * stt[i] * math.exp(-sfac * tau[i])
                                 if forced:
                                     ttot = -math.expm1(-tau2[i])
                                     pdf = pdf / ttot if ttot > 0.0 else 0.0
@@ -1224,16 +1175,11 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                             _normalise(f, p, n)
                             if sst[hero] <= 0.0:
                                 break  # absorbed for the hero: no continuation can be sampled
-                            # next-event estimation to the sun (made along the free path instead with ``track``)
+                            # next-event estimation to the sun
+                            wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
+                            te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
                             tsun = 0.0
-                            blocked = False
-                            if not track:
-                                wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
-                                te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
-                            if track:
-                                live = live_u
-                                tsun = tsun_u
-                            elif blocked:
+                            if blocked:
                                 live = False
                             elif clouds_on:
                                 live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb,
@@ -1246,7 +1192,7 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                 live = not opaque
                                 if live:
                                     _transmittances(coef_t, tot, tau, trs)
-                            if live and not track:
+                            if live:
                                 mw = wx * dx + wy * dy + wz * dz
                                 _phase_sums(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, False)
                                 if peak and not first:
@@ -1330,7 +1276,7 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                             for i in range(n):
                                 tr = math.exp(-tau[i])
                                 f[i] *= tr
-                                p[i] *= tr if sfac == 1.0 else math.exp(-sfac * tau[i])
+                                p[i] *= tr
                             _normalise(f, p, n)
                             wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
                             cs = wx * nx + wy * ny + wz * nz
