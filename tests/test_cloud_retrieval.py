@@ -127,3 +127,41 @@ def test_thin_cloud_high_sun_is_ambiguous(setup):
     assert list(r.retrieved) == [False, True]
     assert "two solutions" in r.reason[0]
     assert r.optical_depth[1] > 0.77
+
+
+def test_cloud_table_is_built_once_when_two_need_it_at_once(tmp_path, monkeypatch):
+    """Two builders asking for the same missing cloud table at once (parallel test workers, Dask's workers on many
+    sites): one builds and stores it, the other waits for its lock and loads the file. The build is a stub here (the
+    locking is the point, not the DISORT solves); threads hold separate lock descriptions, as processes do."""
+    import threading
+    import time
+
+    import skyscatter.fit.weather as weather
+    from skyscatter.atmosphere import AtmosphereParameters
+
+    monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(tmp_path))
+    built = []
+
+    class StubTable:
+        def __init__(self, atmosphere, optical_depth_nodes, zenith_nodes):
+            built.append(threading.get_ident())
+            time.sleep(0.5)  # the other builder asks meanwhile
+            self.atmosphere = atmosphere
+            self.optical_depths = np.asarray(optical_depth_nodes, dtype=float)
+            self.zeniths = np.asarray(zenith_nodes, dtype=float)
+            for name in ("wavelengths", "diffuse", "slant", "field_theta", "field_phi", "field", "peak"):
+                setattr(self, name, np.arange(3.0))
+
+    monkeypatch.setattr(weather, "CloudTable", StubTable)
+    air = AtmosphereParameters()
+    got = []
+    threads = [threading.Thread(target=lambda: got.append(weather._cached_cloud_table(air, (1.0, 2.0), (0.1, 0.2))))
+               for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(built) == 1 and len(got) == 2
+    assert sum(hasattr(t, "build_seconds") for t in got) == 1  # the waiter's table is the loaded file's
+    for t in got:
+        np.testing.assert_array_equal(t.peak, np.arange(3.0))

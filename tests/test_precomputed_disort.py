@@ -31,7 +31,7 @@ import pytest
 
 from disort_reference import TABLE_SIZES as SIZES
 from disort_reference import disort_radiance, sphericity_allowance
-from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
+from skyscatter.precomputed import AtmosphereParameters, cached_atmosphere
 
 disortpp = pytest.importorskip("disortpp")
 
@@ -46,12 +46,13 @@ def _params(aod: float, albedo: float) -> AtmosphereParameters:
 
 @pytest.fixture(scope="session")
 def disort_tables():
-    """Tables for every (optical depth, albedo) pair, computed once per session (550 nm only)."""
+    """Tables for every (optical depth, albedo) pair, computed once per session (550 nm only): through the
+    session's table cache, so that parallel workers running tests of this module share one build."""
     out = {}
     for aod in (0.05, 0.2, 0.5):
         for albedo in (0.1, 0.8):
-            out[aod, albedo] = PrecomputedAtmosphere.compute(_params(aod, albedo), orders=6, wavelengths=[550.0],
-                                                             sizes=SIZES, progress=False)
+            out[aod, albedo] = cached_atmosphere(_params(aod, albedo), orders=6, wavelengths=[550.0], sizes=SIZES,
+                                                 progress=False)
     return out
 
 

@@ -218,8 +218,9 @@ def test_irradiance_read_is_geometric_below_the_horizon_and_linear_above():
 def test_scattering_radius_index_is_linear_in_the_altitude_within_a_cell():
     """Between two rows of the 4D tables (rows at rho_i = H i / (n_r - 1), Bruneton & Neyret 2008, Sec. 4) the
     index position of a ray that misses the ground is linear in the altitude, i + (h - h_i) / (h_(i+1) - h_i), in the
-    cells that start above the ground and below 200 m (the rows' altitudes computed here from their rho), rho / H
-    (n_r - 1) elsewhere; a ray that meets the ground keeps rho / H (n_r - 1). 1e-9."""
+    cells that start below 200 m (the rows' altitudes computed here from their rho; since table format 16 the cell
+    touching the ground too), rho / H (n_r - 1) elsewhere; a ray that meets the ground keeps rho / H (n_r - 1).
+    1e-9."""
     n_r, n_mu = 32, 128
     heights = [math.sqrt((H * i / (n_r - 1)) ** 2 + BOTTOM**2) - BOTTOM for i in range(n_r)]
     assert 62.0 < heights[1] < 63.0  # the first row above the ground (default 32 rows, 60 km thick)
@@ -227,7 +228,7 @@ def test_scattering_radius_index_is_linear_in_the_altitude_within_a_cell():
         r = BOTTOM + h
         i = min(int(np.searchsorted(heights, h, side="right")) - 1, n_r - 2)
         expected = i + (h - heights[i]) / (heights[i + 1] - heights[i])
-        if i == 0 or heights[i] >= g.ALTITUDE_LINEAR_BELOW:  # the first cell and those from 200 m up: in rho
+        if heights[i] >= g.ALTITUDE_LINEAR_BELOW:  # the cells from 200 m up: in rho
             expected = math.sqrt(r * r - BOTTOM**2) / H * (n_r - 1)
         p_r, _ = g.scattering_r_mu_coord(r, 0.5, False, BOTTOM, TOP, n_r, n_mu)
         assert abs(p_r - expected) < 1e-9, (h, p_r, expected)

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
+from skyscatter.precomputed import AtmosphereParameters, cached_atmosphere
 
 DATA = Path(__file__).parent / "data" / "low_sun_montecarlo.json"
 WAVELENGTHS = [400.0, 560.0, 700.0]
@@ -36,8 +36,9 @@ def reference():
 
 @pytest.fixture(scope="module")
 def tables():
-    """Default-size tables at the three compared wavelengths, per atmosphere, computed once per module."""
-    return {name: PrecomputedAtmosphere.compute(make(), wavelengths=WAVELENGTHS, progress=False)
+    """Default-size tables at the three compared wavelengths, per atmosphere, computed once per session: through
+    the session's table cache, so that parallel workers running tests of this module share one build."""
+    return {name: cached_atmosphere(make(), wavelengths=WAVELENGTHS, progress=False)
             for name, make in ATMOSPHERES.items()}
 
 

@@ -56,15 +56,13 @@ def test_single_scattering_is_exact_to_the_phase_table(mie_params, sizes, rtol):
     np.testing.assert_allclose(atm.sky_xyz([0.0, 0.0, r], d, sun), atm.to_xyz(atm.sky_radiance([0.0, 0.0, r], d, sun)))
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "open (docs/aerosols.md, 'Tabulated phase in the solvers'): 5 deg / 180 deg / 15 km from 10 m, 450 nm, "
-    "in-scatter +1.00 % (bound 1 %): S(camera) +0.86 % at 10 m where the rows at 0 and 62.7 m are +0.15 / +0.16 %. "
-    "Those rows read at the query's own mu and weighted linearly in the height (0.159; the lookup's rho weight is "
-    "0.399) give +0.15 %; the altitude weight alone, at the fixed mu coordinate of the lookup, gives +0.57 % (test "
-    "passes) but worsens the default air near the horizon at low sun (10 m: 0.86 -> 1.43 %), so the first cell keeps "
-    "rho: reading each row at its own mu coordinate is the fix (benchmarks/r_interpolation_root_cause.py)"
-))
 def test_aerial_perspective_reads_the_phase_table(mie_params):
+    """The aerial perspective from a camera 10 m up (the cell of table rows touching the ground, 0-62.7 m) over
+    5-30 km paths, single scattering of the phase table: its inscatter against the independent integral of
+    tests/precomputed_reference.py as S(camera) - T S(point) within the issue's 0.5 % (measured 0.38 % worst, 5 km
+    10 deg up towards the sun, 650 nm; until table format 16, which reads each row of that cell at its own mu
+    coordinate with the altitude weight, 1.00 % 5 deg up away from the sun: a strict expected failure of the 1 %
+    bound then), its transmittance within 0.5 % (measured 0.2 %)."""
     p, wl = mie_params, np.array([450.0, 650.0])
     atm = PrecomputedAtmosphere.compute(p, orders=1, wavelengths=wl, progress=False)
     ts = math.radians(30.0)
@@ -81,7 +79,7 @@ def test_aerial_perspective_reads_the_phase_table(mie_params):
         tr = np.exp(-optical_depth(np.array([r0]), np.array([float(cam @ d) / r0]), np.array([dist]), p, wl))[0]
         t, inscatter = atm.aerial_perspective(cam, pt, sun)
         np.testing.assert_allclose(t, tr, rtol=5e-3)
-        np.testing.assert_allclose(inscatter, ss0 - tr * ss1, rtol=1e-2)
+        np.testing.assert_allclose(inscatter, ss0 - tr * ss1, rtol=5e-3)
 
 
 @pytest.fixture(scope="module")

@@ -556,9 +556,9 @@ def test_multiple_scattering_kernel_against_a_float64_reference():
                 q[i + 1, k] += cb * t_view[i + 1, k]
         expected = np.zeros((n_s, n_n, wl.size))
         for i, (r_i, mu_i) in enumerate(pts):
-            jr, wr, jm, wm = sampling.r_mu_cell(r_i, mu_i, hits, bottom, top, n_r, n_mu)
+            jr, wr, jm, wm, jm1, wm1 = sampling.r_mu_cell(r_i, mu_i, hits, bottom, top, n_r, n_mu)
             sl = beta[i] * ((1 - wr) * ((1 - wm) * d64[jr, jm] + wm * d64[jr, jm + 1])
-                            + wr * ((1 - wm) * d64[jr + 1, jm] + wm * d64[jr + 1, jm + 1]))  # (n_s, n_n, n_l)
+                            + wr * ((1 - wm1) * d64[jr + 1, jm1] + wm1 * d64[jr + 1, jm1 + 1]))  # (n_s, n_n, n_l)
             for i_s in range(n_s):
                 for i_n in range(n_n):
                     nu = geometry.scattering_nu_param(i_n, mu, mu_s_tab[i_s], n_n)

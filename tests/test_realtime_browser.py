@@ -345,9 +345,14 @@ def _emulate_aerial(ns, tex, cam, point, sun):
             return np.zeros(3)
         mu_s = max(mu_s, ns["MU_S_MIN"])
         uvw0, uvw1, w = ns["scattering_uvw"](r, mu, mu_s, nu, hits)
-        parts = [ns["single_scattering_lerp"](_sample(tex[n], uvw0), _sample(tex[n], uvw1), r, mu, mu_s, nu, w, n)
+        cell = ns["scattering_ground_cell"](r, mu, hits)
+
+        def read(n, uvw):
+            return ns["scattering_texture"](lambda q: _sample(tex[n], q), uvw, cell)
+
+        parts = [ns["single_scattering_lerp"](read(n, uvw0), read(n, uvw1), r, mu, mu_s, nu, w, n)
                  for n in ("rayleigh", "mie")]
-        parts.append(ns["azimuth_lerp"](_sample(tex["multiple"], uvw0), _sample(tex["multiple"], uvw1), w))
+        parts.append(ns["azimuth_lerp"](read("multiple", uvw0), read("multiple", uvw1), w))
         return np.array(ns["inscattered_radiance"](*parts, nu))
 
     def to_point(r, mu, mu_s, nu, d, hits):

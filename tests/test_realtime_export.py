@@ -40,9 +40,14 @@ def _gpu_sky(ns, tex, r, mu, mu_s, nu):
         return np.zeros(3)
     hits = ns["ray_hits_ground"](r, mu)
     uvw0, uvw1, w = ns["scattering_uvw"](r, mu, mu_s, nu, hits)
-    parts = [ns["single_scattering_lerp"](_sample(tex[n], uvw0), _sample(tex[n], uvw1), r, mu, mu_s, nu, w, n)
+    cell = ns["scattering_ground_cell"](r, mu, hits)
+
+    def read(n, uvw):
+        return ns["scattering_texture"](lambda q: _sample(tex[n], q), uvw, cell)
+
+    parts = [ns["single_scattering_lerp"](read(n, uvw0), read(n, uvw1), r, mu, mu_s, nu, w, n)
              for n in ("rayleigh", "mie")]
-    parts.append(ns["azimuth_lerp"](_sample(tex["multiple"], uvw0), _sample(tex["multiple"], uvw1), w))
+    parts.append(ns["azimuth_lerp"](read("multiple", uvw0), read("multiple", uvw1), w))
     return np.array(ns["inscattered_radiance"](*parts, nu))
 
 
@@ -54,7 +59,7 @@ def test_manifest_mappings_and_textures_give_the_spectral_lookup(atm, luts):
     m = fold_matrix(atm)
     worst = 0.0
     shadowed = 0
-    for alt in (0.0, 1500.0, 12e3, 45e3):
+    for alt in (0.0, 20.0, 1500.0, 12e3, 45e3):  # 20 m: the cell touching the ground (rows read at their own mu)
         pos = np.array([0.0, 0.0, p.bottom_radius + alt])
         # three random suns and two in twilight (-3 and -6 deg: the observer in the Earth's shadow below 12 km)
         for zenith in (*rng.uniform(0.0, 1.75, 3), np.radians(93.0), np.radians(96.0)):
@@ -151,7 +156,7 @@ def test_half_and_exr_match_float32(luts):
 
 def test_manifest_states_version_units_scale_and_code(luts):
     manifest = json.loads((luts / MANIFEST_NAME).read_text())
-    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 5
+    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 6
     assert manifest["hdr_scale"]["cd_m2_per_unit_Y"] == 683.0
     assert manifest["mappings"]["glsl"] == glsl_mappings() and manifest["mappings"]["glsl"] in glsl_library()
     for name in ("transmittance_uv", "irradiance_uv", "irradiance_uvs", "irradiance_lerp", "scattering_uvw"):
@@ -222,7 +227,7 @@ def test_server_serves_the_viewer_and_only_the_exports_files(luts, tmp_path):
         assert b"GetSkyRadianceToPoint" in get("/glsl/atmosphere.glsl")
         for path in ("/", "/viewer/viewer.js", "/viewer/style.css"):  # nothing loaded from the network
             assert b"http://" not in get(path) and b"https://" not in get(path) and b"//cdn" not in get(path)
-        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 5
+        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 6
         assert len(get("/luts/rayleigh.rgba32f")) == (luts / "rayleigh.rgba32f").stat().st_size
         for path in ("/luts/secret.txt", "/luts/../secret.txt", "/etc/passwd", "/viewer/../export.py"):
             with pytest.raises(urllib.error.HTTPError, match="404"):

@@ -91,7 +91,16 @@ def test_a_store_locked_by_a_live_process_is_refused(tmp_path):
     assert _entries(tmp_path) == ["a.zarr"]
 
 
-def test_two_runs_started_together_on_a_new_store(tmp_path):
+@pytest.fixture
+def compiled_kernels(tmp_path_factory):
+    """The command's Monte Carlo kernels compiled into numba's on-disk cache before the two processes start, by
+    running the same command in this process (free when the tests before it compiled them): on a fresh
+    installation each process would otherwise compile them itself, about 50 s of CPU each, which is not what the
+    race test is about (the processes still create, lock and write one new store together)."""
+    assert main(["reference", str(tmp_path_factory.mktemp("warm") / "warm.zarr"), *CLI_JOB, "--samples", "1"]) == 0
+
+
+def test_two_runs_started_together_on_a_new_store(tmp_path, compiled_kernels):
     """The race of issue 18: one run writes the store, the other stops with one line; nothing else is left."""
     cmd = [sys.executable, "-m", "skyscatter", "reference", "race.zarr", *CLI_JOB, "--samples", "64"]
     env = {**os.environ, "SKYSCATTER_NUM_THREADS": "1"}

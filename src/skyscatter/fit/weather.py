@@ -74,11 +74,13 @@ the closure path: Petters et al. (2003, JGR 108(D9), 4288), Leahy et al. (2007, 
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import hashlib
 import math
 import os
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -737,23 +739,56 @@ def _save_cloud_table(table: CloudTable) -> None:
 def _cached_cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike,
                         zenith_nodes: ArrayLike) -> CloudTable:
     """A :class:`CloudTable` from the disk cache of the precomputed tables (its 108 DISORT solves cost about a
-    minute, and Dask's worker processes would each redo them), else built and stored."""
+    minute, and Dask's worker processes would each redo them), else built and stored. Processes that need the same
+    missing table at once build it once: the builder holds an exclusive lock (``.NAME.lock`` beside the file,
+    :func:`fcntl.flock`, released when its process ends, however it ends), the others wait, then load its file."""
     text, path = _cloud_table_key(atmosphere, optical_depth_nodes, zenith_nodes)
-    if path.exists():
-        try:
-            with np.load(path) as z:
-                if str(z["key"]) == text:
-                    table = CloudTable.__new__(CloudTable)
-                    table.atmosphere = atmosphere
-                    for name in _CLOUD_TABLE_ARRAYS:
-                        setattr(table, name, np.array(z[name]))
-                    table.build_seconds = 0.0
-                    return table
-        except (OSError, KeyError, ValueError):
-            pass  # a damaged file: rebuilt below
-    table = CloudTable(atmosphere, optical_depth_nodes, zenith_nodes)
-    _save_cloud_table(table)
+    table = _load_cloud_table(atmosphere, text, path)
+    if table is not None:
+        return table
+    with _cloud_table_lock(path):
+        table = _load_cloud_table(atmosphere, text, path)  # built by another process while we waited
+        if table is None:
+            table = CloudTable(atmosphere, optical_depth_nodes, zenith_nodes)
+            _save_cloud_table(table)
     return table
+
+
+def _load_cloud_table(atmosphere: AtmosphereParameters, text: str, path: Path) -> CloudTable | None:
+    """The cloud table stored at ``path`` under the key ``text``, or None (missing, another key, or damaged)."""
+    if not path.exists():
+        return None
+    try:
+        with np.load(path) as z:
+            if str(z["key"]) != text:
+                return None
+            table = CloudTable.__new__(CloudTable)
+            table.atmosphere = atmosphere
+            for name in _CLOUD_TABLE_ARRAYS:
+                setattr(table, name, np.array(z[name]))
+    except (OSError, KeyError, ValueError):
+        return None  # a damaged file: rebuilt
+    table.build_seconds = 0.0
+    return table
+
+
+@contextlib.contextmanager
+def _cloud_table_lock(path: Path) -> Iterator[None]:
+    """Hold the exclusive build lock of the cloud table at ``path`` (no lock where the cache folder cannot be
+    written: the table is then built, and :func:`_save_cloud_table` warns that it is not cached)."""
+    import fcntl
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(path.with_name(f".{path.name}.lock"), os.O_RDWR | os.O_CREAT, 0o666)
+    except OSError:
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
 
 
 @dataclass(frozen=True)

@@ -341,8 +341,9 @@ class TableLookups:
         out = np.empty((dirs.shape[0], projection.shape[0]))
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
-        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, stored["transmittance"],
-                     stored["irradiance"], self._albedo, self._solar, self.irradiance_weights, projection,
+        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, stored["single_rayleigh"].shape[0],
+                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar, self.irradiance_weights,
+                     projection,
                      bottom, top, mu_s_min, self._mie_g, self._mie_kind, *self._profiles,
                      self.parameters.sun_angular_radius,
                      bool(include_ground), dirs, out, bad, grain=2048)

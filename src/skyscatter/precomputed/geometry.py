@@ -67,6 +67,8 @@ __all__ = [
     "scattering_nu_coord",
     "scattering_nu_param",
     "scattering_params",
+    "scattering_r_mu_rows",
+    "scattering_row_mu_coord",
     "shadow_exit_altitude",
     "transmittance_coord",
     "transmittance_params",
@@ -369,8 +371,9 @@ def _sky_mu_x(r: float, mu: float, bottom: float, top: float) -> float:
     return sky_mu_unit(r, mu, top, rho, big_h, theta_h)
 
 
-#: Altitude [m] below which a cell of rows of the 4D scattering tables above the first starts if the radius weight
-#: within it is linear in the altitude (:func:`scattering_r_index`): the cell from 62.7 m of the default 32 rows.
+#: Altitude [m] below which a cell of rows of the 4D scattering tables starts if the radius weight within it is
+#: linear in the altitude (:func:`scattering_r_index`): the cell touching the ground and the one from 62.7 m of the
+#: default 32 rows.
 ALTITUDE_LINEAR_BELOW = 200.0
 
 
@@ -378,27 +381,28 @@ ALTITUDE_LINEAR_BELOW = 200.0
 def scattering_r_index(r: float, rho: float, bottom: float, big_h: float, n_r: int) -> float:
     """Index position of radius ``r`` [m] (``rho = sqrt(r^2 - R_g^2)`` [m], ``big_h = sqrt(R_t^2 - R_g^2)`` [m])
     on the ``n_r`` rows of the 4D scattering tables: the rows sit at ``rho_i = H i / (n_r - 1)`` (``x_r = rho / H``,
-    Bruneton & Neyret 2008, Sec. 4). Within the cells whose lower row is above the ground and below
-    :data:`ALTITUDE_LINEAR_BELOW` (the second cell of the default 32 rows, 62.7-251 m) the position is linear in
-    ``r`` (the altitude), ``i + (r - r_i) / (r_(i+1) - r_i)``; elsewhere linear in ``rho``.
+    Bruneton & Neyret 2008, Sec. 4). Within the cells whose lower row is below :data:`ALTITUDE_LINEAR_BELOW` (the
+    first two cells of the default 32 rows, 0-62.7 m and 62.7-251 m) the position is linear in ``r`` (the
+    altitude), ``i + (r - r_i) / (r_(i+1) - r_i)``; elsewhere linear in ``rho``.
 
     The radiance is smooth in the altitude, and the altitude a quadratic function of ``rho`` (``h ~ rho^2 / (2
     R_g)``): interpolated linearly in ``rho`` a lookup adds ``~(h_1 / 4) dS/dh`` at the middle of a cell (``h_1`` =
-    62.7 m, the first row above the ground). But the lookup holds the ``mu`` coordinate fixed across the two rows,
-    and that coordinate scales with the horizon's zenith angle, which moves with ``rho``: the radiance read at a
-    fixed coordinate is partly linear in ``rho``. Measured against the independent integral, the sky's rays
-    (benchmarks/r_interpolation_near_ground.py, docs/aerosols.md): in the second cell the altitude weight is better
-    for every air and sun tried (worst error at 150 m 0.62-2.04 % -> 0.27-0.94 %); in the cell touching the
-    ground it is better for the continental aerosol (10 m: 0.86 -> 0.57 %) but worse for the default air with the
-    sun at 75 deg (0.86 -> 1.43 %, 2 deg up); higher up the cells are thicker and the radiance's convexity in the
-    altitude outweighs (the continental aerosol at 2 km, sun at 30 deg: 0.58 -> 1.27 %). ``r - r_i`` is formed as
+    62.7 m, the first row above the ground; at 10 m the upper row weighs 0.399 in ``rho``, 0.159 in the altitude).
+    In the cell touching the ground the rows are read each at its own ``mu`` coordinate
+    (:func:`scattering_r_mu_rows`): the coordinate scales with the horizon's zenith angle (90 deg at the ground,
+    90.25 deg at 62.7 m), and read at one shared coordinate the two rows are two directions, whose difference the
+    ``rho`` weight had partly offset (the altitude weight at the shared coordinate: the default air with the sun at
+    75 deg, 2 deg up from 10 m, 0.86 -> 1.43 %). In the second cell the shared coordinate stays (measured better
+    there for every air and sun tried: worst error at 150 m 0.62-2.04 % -> 0.27-0.94 %); higher up the cells are
+    thicker and the radiance's convexity in the altitude outweighs (the continental aerosol at 2 km, sun at 30 deg:
+    0.58 -> 1.27 %; benchmarks/r_interpolation_near_ground.py, docs/aerosols.md). ``r - r_i`` is formed as
     ``(rho^2 - rho_i^2) / (r + r_i)``, without cancellation. Texel rows map to their integer positions exactly."""
     x = clamp(rho / big_h, 0.0, 1.0) * (n_r - 1)
     i = min(int(x), n_r - 2)
     rho0 = big_h * i / (n_r - 1)
     rho1 = big_h * (i + 1) / (n_r - 1)
     r0 = math.sqrt(rho0 * rho0 + bottom * bottom)
-    if i == 0 or rho0 * rho0 >= ALTITUDE_LINEAR_BELOW * (r0 + bottom):
+    if rho0 * rho0 >= ALTITUDE_LINEAR_BELOW * (r0 + bottom):
         return x
     r1 = math.sqrt(rho1 * rho1 + bottom * bottom)
     rr = max(r, bottom)
@@ -407,16 +411,31 @@ def scattering_r_index(r: float, rho: float, bottom: float, big_h: float, n_r: i
 
 
 @helper(fastmath=CONTRACT_ARCP)
+def scattering_row_mu_coord(i_r: int, mu: float, bottom: float, top: float, n_r: int, n_mu: int) -> float:
+    """Index position on the ``mu`` axis of row ``i_r`` of the 4D scattering tables of a ray with zenith cosine
+    ``mu`` that misses the ground: the sky half's mapping (:func:`sky_mu_unit`) with the row's own radius
+    ``r_i = sqrt(rho_i^2 + R_g^2)``, ``rho_i = H i_r / (n_r - 1)`` (a direction below that row's horizon maps to
+    its horizon)."""
+    big_h = math.sqrt(top * top - bottom * bottom)
+    rho = big_h * i_r / (n_r - 1)
+    r = math.sqrt(rho * rho + bottom * bottom)
+    half = n_mu // 2
+    return half + sky_mu_unit(r, mu, top, rho, big_h, acos_table(-rho / r)) * (half - 1)
+
+
+@helper(fastmath=CONTRACT_ARCP)
 def scattering_r_mu_coord(r: float, mu: float, hits_ground: bool, bottom: float, top: float,
                           n_r: int, n_mu: int) -> tuple[float, float]:
     """Index positions (p_r, p_mu) of a view ray in the 4D scattering tables.
 
-    ``p_r``: for rays that miss the ground :func:`scattering_r_index` (linear in the altitude within each cell of
-    rows); for rays that meet it ``rho / H (n_r - 1)`` (linear in ``rho``): the lookup holds the ``mu`` coordinate
-    fixed across the two rows, and in the ground half that coordinate fixes the ray's length to the ground as
+    ``p_r``: for rays that miss the ground :func:`scattering_r_index` (linear in the altitude within the cells
+    below :data:`ALTITUDE_LINEAR_BELOW`); for rays that meet it ``rho / H (n_r - 1)`` (linear in ``rho``): the
+    lookup holds the ``mu`` coordinate fixed across the two rows, and in the ground half that coordinate fixes the
+    ray's length to the ground as
     ``d_min + x (rho - d_min)``, nearly linear in ``rho``, which the optically thin inscatter follows (the weight
     linear in the altitude took the single scattering 3 deg down from 10 m from +13 % to -55 % against the
-    independent integral; benchmarks/r_interpolation_near_ground.py)."""
+    independent integral; benchmarks/r_interpolation_near_ground.py). ``p_mu``: the query's own position; the
+    lookups read the rows of the cell touching the ground at positions of their own (:func:`scattering_r_mu_rows`)."""
     rho, big_h, theta_h = horizon_constants(r, bottom, top)
     half = n_mu // 2
     if hits_ground:
@@ -426,6 +445,29 @@ def scattering_r_mu_coord(r: float, mu: float, hits_ground: bool, bottom: float,
         p_r = scattering_r_index(r, rho, bottom, big_h, n_r)
         p_mu = half + sky_mu_unit(r, mu, top, rho, big_h, theta_h) * (half - 1)
     return p_r, p_mu
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def scattering_r_mu_rows(r: float, mu: float, hits_ground: bool, bottom: float, top: float,
+                         n_r: int, n_mu: int) -> tuple[float, float, float]:
+    """Index positions ``(p_r, p_mu0, p_mu1)`` of a view ray in the 4D scattering tables: ``p_r`` that of
+    :func:`scattering_r_mu_coord`, ``p_mu0`` and ``p_mu1`` the ``mu`` positions at which the lower and the upper
+    row of its radius cell are read.
+
+    For a ray that misses the ground from within the cell touching the ground (below the first row above it,
+    62.7 m of the default 32 rows) each row is read at its own coordinate (:func:`scattering_row_mu_coord`): the
+    query's direction, not the query's coordinate, and the two reads combined linearly in the altitude
+    (:func:`scattering_r_index`). Measured against the independent single-scattering integral: 5 deg up from 10 m,
+    the continental aerosol at 450 nm, the rows at 0 and 62.7 m read in the query's direction are within +0.15 and
+    +0.16 %, and combined with the altitude weight 0.159 within +0.15 % where the shared coordinate with the ``rho``
+    weight 0.399 gave +0.86 % (benchmarks/r_interpolation_root_cause.py). Elsewhere both are the query's own
+    ``mu`` position (Bruneton & Neyret 2008, Sec. 4: one coordinate across the rows, as the GPU's trilinear read
+    holds it)."""
+    p_r, p_mu = scattering_r_mu_coord(r, mu, hits_ground, bottom, top, n_r, n_mu)
+    if hits_ground or p_r >= 1.0 or n_r < 2:
+        return p_r, p_mu, p_mu
+    return (p_r, scattering_row_mu_coord(0, mu, bottom, top, n_r, n_mu),
+            scattering_row_mu_coord(1, mu, bottom, top, n_r, n_mu))
 
 
 @helper(fastmath=CONTRACT_ARCP)

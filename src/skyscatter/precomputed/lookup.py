@@ -28,6 +28,7 @@ import numpy as np
 from ..jit import CONTRACT_ARCP, helper, inline, kernel
 from .geometry import (
     MU_S_LIMIT_TOLERANCE,
+    acos_table,
     bilinear_weights,
     clamp,
     distance_to_bottom,
@@ -42,6 +43,7 @@ from .geometry import (
     ray_hits_ground,
     scattering_nu_azimuth,
     scattering_nu_coord,
+    scattering_r_mu_coord,
     sky_mu_unit,
     transmittance_coord,
 )
@@ -115,25 +117,26 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r
         return
     mu_s = max(mu_s, mu_s_min)
     n_r, n_mu, n_s, n_n, _ = ray.shape
-    i_r, w_r, i_mu, w_mu = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
+    i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
     if in_earth_shadow(r, mu_s, bottom):
         h_q, h_0, h_1 = shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_n, bottom, top)
         a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[0], counts[0])
-        lookup4_cell_weighted(ray, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, (1.0 - w_n) * a, w_n * b, p_r, out)
+        lookup4_cell_weighted(ray, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * a, w_n * b, p_r, out)
         a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[1], counts[1])
         if p_m_spec.shape[0]:
-            lookup4_cell_weighted_spectral(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, (1.0 - w_n) * a, w_n * b,
-                                           p_m_spec, out)
+            lookup4_cell_weighted_spectral(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * a,
+                                           w_n * b, p_m_spec, out)
         else:
-            lookup4_cell_weighted(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, (1.0 - w_n) * a, w_n * b, p_m, out)
+            lookup4_cell_weighted(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * a, w_n * b, p_m,
+                                  out)
     else:
-        lookup4_cell(ray, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_r, out)
+        lookup4_cell(ray, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, p_r, out)
         if p_m_spec.shape[0]:
-            lookup4_cell_spectral(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_m_spec, out)
+            lookup4_cell_spectral(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, p_m_spec, out)
         else:
-            lookup4_cell(mie, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, p_m, out)
-    lookup4_cell(mult, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, 1.0, out)
+            lookup4_cell(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, p_m, out)
+    lookup4_cell(mult, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, 1.0, out)
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -280,13 +283,25 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
                 tr_out[q, k] = t[k]
 
 
+@helper(fastmath=CONTRACT_ARCP)
+def observer_two_rows(r, bottom, top, n_r):
+    """True if an observer at radius ``r`` [m] lies strictly within the cell of the 4D tables' ``n_r`` rows that
+    touches the ground (below the first row above it): its rays that miss the ground read each row at its own ``mu``
+    coordinate (:func:`.geometry.scattering_r_mu_rows`), so the observer slices hold the two rows' shares apart."""
+    p_r, _ = scattering_r_mu_coord(r, 1.0, False, bottom, top, n_r, 4)
+    return 0.0 < p_r < 1.0
+
+
 def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, projection):
     """The 4D inscattering tables at one observer radius ``r`` [m] and sun zenith cosine ``mu_s``: an array
-    (n_mu, n_nu, C, 4) holding, for each channel, single Rayleigh, single Mie and multiple scattering over the
+    (2, n_mu, n_nu, C + 1, 4) holding, for each channel, single Rayleigh, single Mie and multiple scattering over the
     view axes (and a zero, so that each texel's three values are one aligned 32-byte load), each
     ``table @ projection.T`` (``projection`` (C, n_wavelengths): the identity for spectra, the XYZ matrix for
     colour); channel C (the last of C + 1) holds each table at its middle wavelength, from which the azimuth weight
-    of the lookup is computed (:func:`.sampling.nu_weight`).
+    of the lookup is computed (:func:`.sampling.nu_weight`). ``[0]`` holds the slices and ``[1]`` zeros, except
+    for an observer within the cell touching the ground (:func:`observer_two_rows`): there ``[0]`` and ``[1]`` hold
+    the shares of the lower and the upper row, which the lookup reads each at its own ``mu`` coordinate (the ground
+    half of the ``mu`` axis at the same coordinate in both).
 
     The lookup is linear in ``r``, ``mu`` and ``mu_s``, so fixing the ``r`` and ``mu_s`` weights once and
     interpolating the slice in (``mu``, ``nu``) gives the same values as the 4D lookup; its weight along ``nu`` is
@@ -299,22 +314,28 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     n_r, n_mu, n_s, n_nu, _ = single_rayleigh.shape
     proj = np.asarray(projection, dtype=np.float64)
     n_c = proj.shape[0]
-    out = np.zeros((n_mu, n_nu, n_c + 1, 4))
+    out = np.zeros((2, n_mu, n_nu, n_c + 1, 4))
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
         return out
     mu_s = max(mu_s, mu_s_min)
     i_r, w_r, i_s, w_s, w_g = r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_s)
     half = n_mu // 2
+    # within the cell touching the ground each row's share apart (out[0], out[1]), read at its own mu coordinate
+    parts = (0, 1) if observer_two_rows(r, bottom, top, n_r) else (None,)
     for j, table in enumerate((single_rayleigh, single_mie, multiple)):
-        acc = np.zeros((n_mu, n_nu, table.shape[-1]))
-        # the ground half of the mu axis with its own radius weight (.geometry.scattering_r_mu_coord)
-        for rows, w in ((slice(0, half), w_g), (slice(half, n_mu), w_r)):
-            for a, wa in ((0, 1.0 - w), (1, w)):
-                for c, wc in ((0, 1.0 - w_s), (1, w_s)):
-                    if wa * wc > 0.0:
-                        acc[rows] += (wa * wc) * table[i_r + a, rows, i_s + c, :, :]
-        out[:, :, :n_c, j] = acc @ proj.T
-        out[:, :, n_c, j] = acc[:, :, acc.shape[-1] // 2]
+        for part in parts:
+            acc = np.zeros((n_mu, n_nu, table.shape[-1]))
+            # the ground half of the mu axis with its own radius weight (.geometry.scattering_r_mu_coord)
+            for rows, w in ((slice(0, half), w_g), (slice(half, n_mu), w_r)):
+                for a, wa in ((0, 1.0 - w), (1, w)):
+                    if part is not None and a != part:
+                        continue
+                    for c, wc in ((0, 1.0 - w_s), (1, w_s)):
+                        if wa * wc > 0.0:
+                            acc[rows] += (wa * wc) * table[i_r + a, rows, i_s + c, :, :]
+            k = 0 if part is None else part
+            out[k, :, :, :n_c, j] = acc @ proj.T
+            out[k, :, :, n_c, j] = acc[:, :, acc.shape[-1] // 2]
     return out
 
 
@@ -373,20 +394,61 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _observer_nu_weights(slices, n_nu, n_c, cell, w_mu, w_nu, w_tab, ends):
+def _observer_row_cells(dirs, px, py, pz, r, bottom, top, n_r, n_mu, n_nu, cell, w_mu, cell1, w_mu1):
+    """For an observer within the cell touching the ground (:func:`observer_two_rows`): the ``mu`` cells of a block
+    of rays (flat x, y, z triples ``dirs``; cells of :func:`_observer_coords`, whose azimuth index is kept) at which
+    the lower row (into ``cell``, ``w_mu``) and the upper row (``cell1``, ``w_mu1``) hold each ray's direction
+    (:func:`.geometry.scattering_row_mu_coord`, as :func:`.sampling.r_mu_cell`). The caller replaces both for the
+    rays that meet the ground."""
+    half = n_mu // 2
+    inv_r = 1.0 / r
+    # the rows' constants of the mu mapping (.geometry.scattering_row_mu_coord), out of the loop: it runs on SIMD lanes
+    big_h = math.sqrt(top * top - bottom * bottom)
+    rho1 = big_h / (n_r - 1)
+    r1 = math.sqrt(rho1 * rho1 + bottom * bottom)
+    th0 = acos_table(0.0)
+    th1 = acos_table(-rho1 / r1)
+    for k in range(cell.shape[0]):
+        vx = dirs[3 * k]
+        vy = dirs[3 * k + 1]
+        vz = dirs[3 * k + 2]
+        n2 = vx * vx + vy * vy + vz * vz
+        inv = 1.0 / math.sqrt(n2) if n2 > 0.0 and n2 < math.inf else 0.0
+        mu = clamp((px * vx + py * vy + pz * vz) * (inv * inv_r), -1.0, 1.0)
+        i_n = cell[k] % n_nu
+        i0, w0 = lerp_index(half + sky_mu_unit(bottom, mu, top, 0.0, big_h, th0) * (half - 1), half, n_mu - 1)
+        i1, w1 = lerp_index(half + sky_mu_unit(r1, mu, top, rho1, big_h, th1) * (half - 1), half, n_mu - 1)
+        cell[k] = i0 * n_nu + i_n
+        w_mu[k] = w0
+        cell1[k] = i1 * n_nu + i_n
+        w_mu1[k] = w1
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _observer_nu_weights(slices, slices1, two_rows, n_nu, n_c, cell, w_mu, cell1, w_mu1, w_nu, w_tab, ends):
     """The azimuth weights (:func:`.sampling.nu_weight`) of the three tables of the observer slices (n_mu * n_nu,
     n_c + 1, 4) for a block of rays into ``w_tab`` (3, >= m), from the middle wavelength in channel ``n_c``. Two
     passes: the ends of each table's cell (linear along mu at the two nu texels) gathered into ``ends`` (2, 3, >= m,
     float32), then :func:`.geometry.log_lerp_weight` over those contiguous values in float32, which runs on SIMD
-    lanes (a loop that gathers and divides at once stays scalar; measured)."""
+    lanes (a loop that gathers and divides at once stays scalar; measured). With ``two_rows`` the ends are the sums
+    of the two rows' shares (``slices``, ``slices1``), each at its own cell (``cell``, ``w_mu`` and ``cell1``,
+    ``w_mu1``: :func:`_observer_row_cells`), as :func:`.sampling.nu_weight` sums them."""
     m = cell.shape[0]
     for k in range(m):
         a = cell[k]
         b = a + n_nu
         wm = w_mu[k]
         for t in range(3):
-            ends[0, t, k] = (1.0 - wm) * slices[a, n_c, t] + wm * slices[b, n_c, t]
-            ends[1, t, k] = (1.0 - wm) * slices[a + 1, n_c, t] + wm * slices[b + 1, n_c, t]
+            e0 = (1.0 - wm) * slices[a, n_c, t] + wm * slices[b, n_c, t]
+            e1 = (1.0 - wm) * slices[a + 1, n_c, t] + wm * slices[b + 1, n_c, t]
+            if two_rows:
+                a1 = cell1[k]
+                b1 = a1 + n_nu
+                wm1 = w_mu1[k]
+                e0 += (1.0 - wm1) * slices1[a1, n_c, t] + wm1 * slices1[b1, n_c, t]
+                e1 += (1.0 - wm1) * slices1[a1 + 1, n_c, t] + wm1 * slices1[b1 + 1, n_c, t]
+            ends[0, t, k] = e0
+            ends[1, t, k] = e1
     for t in range(3):
         e0 = ends[0, t]
         e1 = ends[1, t]
@@ -477,10 +539,11 @@ def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, out):
 
 
 @kernel
-def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, solar, lum, projection, bottom, top,
+def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albedo, solar, lum, projection, bottom, top,
                     mu_s_min, g, mie_kind, profiles, counts, alpha, include_ground, dirs, out, bad, start, stop):
     """:func:`sky_kernel`'s radiance (no shadows) for rays ``start..stop`` from one ``position`` inside the
-    atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C)).
+    atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C)); ``slices`` of
+    :func:`observer_slices` from 4D tables of ``n_r`` radii.
 
     Inscattering from :func:`observer_slices` (in ``mu`` and ``nu``: the same values as the 4D lookup); the
     ground term, a product of spectra (transmittance times irradiance), is formed per wavelength
@@ -496,17 +559,21 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     """
     n_l = transmittance.shape[2]
     n_c = out.shape[1]  # slices: n_c channels and the sums over wavelengths
-    n_mu, n_nu = slices.shape[0], slices.shape[1]
+    n_mu, n_nu = slices.shape[1], slices.shape[2]
     half = n_mu // 2
-    flat = slices.reshape(n_mu * n_nu, slices.shape[2], 4)
+    flat = slices[0].reshape(n_mu * n_nu, slices.shape[3], 4)
+    flat1 = slices[1].reshape(n_mu * n_nu, slices.shape[3], 4)
     t = np.empty(n_l)
     tmp = np.empty(n_l)
     e_sky = np.empty(n_l)
     e_sun = np.empty(n_l)
     ground = np.empty(n_l)
     cell = np.empty(OBSERVER_BLOCK, dtype=np.int64)
+    cell1 = np.empty(OBSERVER_BLOCK, dtype=np.int64)
     kind = np.empty(OBSERVER_BLOCK, dtype=np.int64)
     w_mu = np.empty(OBSERVER_BLOCK)
+    w_mu1 = np.empty(OBSERVER_BLOCK)
+    upper = np.empty((OBSERVER_BLOCK, n_c))
     w_nu = np.empty(OBSERVER_BLOCK)
     w_tab = np.empty((3, OBSERVER_BLOCK))
     ends = np.empty((2, 3, OBSERVER_BLOCK), dtype=np.float32)
@@ -524,6 +591,7 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
     rc = clamp(r, bottom, top)
     mu_s = clamp((px * sx + py * sy + pz * sz) / r, -1.0, 1.0)
     rho, big_h, theta_h = horizon_constants(rc, bottom, top)
+    two_rows = observer_two_rows(rc, bottom, top, n_r)
     mu_s_t = max(mu_s, mu_s_min)  # the sun of the slices (observer_slices)
     shadowed = in_earth_shadow(rc, mu_s_t, bottom)
     cos_phi = np.empty(n_nu)
@@ -537,6 +605,9 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
         special = _observer_coords(block, _unit_block(block), px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho,
                                    big_h, theta_h, g, mie_kind, n_mu, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m],
                                    p_m[:m], kind[:m])
+        if two_rows:
+            _observer_row_cells(block, px, py, pz, r, bottom, top, n_r, n_mu, n_nu, cell[:m], w_mu[:m], cell1[:m],
+                                w_mu1[:m])
         n_ground = 0
         for k in range(m if special else 0):
             if kind[k] == 2:
@@ -546,6 +617,8 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
                 mu = clamp((px * vx + py * vy + pz * vz) * inv / r, -1.0, 1.0)
                 i_mu, w_mu[k] = lerp_index(ground_mu_unit(rc, mu, bottom, rho) * (half - 1), 0, half - 1)
                 cell[k] = i_mu * n_nu + cell[k] % n_nu
+                cell1[k] = cell[k]  # both rows at the query's coordinate (sampling.r_mu_cell)
+                w_mu1[k] = w_mu[k]
                 g_idx[n_ground] = k
                 g_v[0, n_ground] = vx * inv
                 g_v[1, n_ground] = vy * inv
@@ -554,11 +627,17 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
                 n_ground += 1
             elif kind[k] == 0:
                 bad[b0 + k] = True
-        _observer_nu_weights(flat, n_nu, n_c, cell[:m], w_mu[:m], w_nu[:m], w_tab, ends)
+        _observer_nu_weights(flat, flat1, two_rows, n_nu, n_c, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m], w_nu[:m],
+                             w_tab, ends)
         if shadowed:
             _observer_shadow_weights(block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, cos_phi, profiles,
                                      counts, cell[:m], w_nu[:m], w_tab, p_r[:m], p_m[:m])
         _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_tab, p_r[:m], p_m[:m], out[b0:b1])
+        if two_rows:
+            _observer_gather(flat1, n_nu, cell1[:m], w_mu1[:m], w_tab, p_r[:m], p_m[:m], upper[:m])
+            for k in range(m):
+                for ch in range(n_c):
+                    out[b0 + k, ch] += upper[k, ch]
         if n_ground == 0 or not include_ground:
             continue
         _ground_coords_block(n_ground, g_v, g_mu, px, py, pz, sx, sy, sz, rc, bottom, top, alpha, n_tr, n_tmu, n_er,
@@ -576,42 +655,46 @@ def observer_kernel(position, sun, slices, transmittance, irradiance, albedo, so
 
 
 @helper
-def _slice_layers(l0, l1, w_r, w_g, i_s, w_s, projection, identity, j, acc, out):
-    """Table ``j`` (0 single Rayleigh, 1 single Mie, 2 multiple) of :func:`observer_slices` into ``out`` (n_mu,
+def _slice_layers(l0, l1, w_r, w_g, i_s, w_s, projection, identity, two_rows, j, acc, out):
+    """Table ``j`` (0 single Rayleigh, 1 single Mie, 2 multiple) of :func:`observer_slices` into ``out`` (2, n_mu,
     n_nu, C + 1, 4) from the table's two radius layers ``l0``, ``l1`` (n_mu, n_mu_s, n_nu, n_wavelengths) float32
     around the observer: the same sums in the same order as :func:`observer_slices` (each corner's weight rounded
     to float32 and multiplied in float32, as numpy does there, then summed in float64), so that the slices agree
     to the bit for an ``identity`` projection and to rounding for another; the ground half of the mu axis with its
-    own radius weight ``w_g`` (:func:`.sampling.r_mu_s_cell`). ``acc``: a buffer (n_wavelengths,)."""
+    own radius weight ``w_g`` (:func:`.sampling.r_mu_s_cell`); with ``two_rows`` (:func:`observer_two_rows`) the
+    rows' shares apart in ``out[0]`` and ``out[1]``. ``acc``: a buffer (n_wavelengths,)."""
     n_mu, _, n_nu, n_l = l0.shape
     n_c = projection.shape[0]
     mid = n_l // 2
     half = n_mu // 2
-    for i in range(n_mu):
-        w_row = w_g if i < half else w_r
-        for q in range(n_nu):
-            for k in range(n_l):
-                acc[k] = 0.0
-            for a in range(2):
-                wa = w_row if a else 1.0 - w_row
-                layer = l1 if a else l0
-                for c in range(2):
-                    wc = w_s if c else 1.0 - w_s
-                    w = wa * wc
-                    if w > 0.0:
-                        wf = np.float32(w)
+    for part in range(2 if two_rows else 1):
+        for i in range(n_mu):
+            w_row = w_g if i < half else w_r
+            for q in range(n_nu):
+                for k in range(n_l):
+                    acc[k] = 0.0
+                for a in range(2):
+                    if two_rows and a != part:
+                        continue
+                    wa = w_row if a else 1.0 - w_row
+                    layer = l1 if a else l0
+                    for c in range(2):
+                        wc = w_s if c else 1.0 - w_s
+                        w = wa * wc
+                        if w > 0.0:
+                            wf = np.float32(w)
+                            for k in range(n_l):
+                                acc[k] += np.float64(wf * layer[i, i_s + c, q, k])
+                if identity:
+                    for k in range(n_c):
+                        out[part, i, q, k, j] = acc[k]
+                else:
+                    for ch in range(n_c):
+                        v = 0.0
                         for k in range(n_l):
-                            acc[k] += np.float64(wf * layer[i, i_s + c, q, k])
-            if identity:
-                for k in range(n_c):
-                    out[i, q, k, j] = acc[k]
-            else:
-                for ch in range(n_c):
-                    v = 0.0
-                    for k in range(n_l):
-                        v += projection[ch, k] * acc[k]
-                    out[i, q, ch, j] = v
-            out[i, q, n_c, j] = acc[mid]
+                            v += projection[ch, k] * acc[k]
+                        out[part, i, q, ch, j] = v
+                out[part, i, q, n_c, j] = acc[mid]
 
 
 @kernel
@@ -627,19 +710,21 @@ def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0,
     hours) runs here, in parallel chunks, instead of one Python call and one slice per sun."""
     n_mu, n_s, n_nu, _ = ray0.shape
     n_c = projection.shape[0]
-    slices = np.zeros((n_mu, n_nu, n_c + 1, 4))
+    slices = np.zeros((2, n_mu, n_nu, n_c + 1, 4))
     acc = np.empty(ray0.shape[3])
     n_rays = dirs.shape[0]
+    two_rows = observer_two_rows(r_slices, bottom, top, n_r)
     for h in range(start, stop):
         slices[:] = 0.0
         m = mu_s[h]
         if m >= mu_s_min - MU_S_LIMIT_TOLERANCE:
             m = max(m, mu_s_min)
             _, w_r, i_s, w_s, w_g = r_mu_s_cell(r_slices, m, bottom, top, mu_s_min, n_r, n_s)
-            _slice_layers(ray0, ray1, w_r, w_g, i_s, w_s, projection, identity, 0, acc, slices)
-            _slice_layers(mie0, mie1, w_r, w_g, i_s, w_s, projection, identity, 1, acc, slices)
-            _slice_layers(mult0, mult1, w_r, w_g, i_s, w_s, projection, identity, 2, acc, slices)
-        observer_kernel(position, suns[h], slices, transmittance, irradiance, albedo, solar, lum, projection, bottom,
+            _slice_layers(ray0, ray1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 0, acc, slices)
+            _slice_layers(mie0, mie1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 1, acc, slices)
+            _slice_layers(mult0, mult1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 2, acc, slices)
+        observer_kernel(position, suns[h], slices, n_r, transmittance, irradiance, albedo, solar, lum, projection,
+                        bottom,
                         top, mu_s_min, g, mie_kind, profiles, counts, alpha, include_ground, dirs, out[h], bad[h], 0,
                         n_rays)
 

@@ -32,6 +32,7 @@ from .geometry import (
     scattering_nu_coord,
     scattering_nu_param,
     scattering_r_mu_coord,
+    scattering_r_mu_rows,
     shadow_exit_altitude,
     transmittance_coord,
 )
@@ -237,15 +238,19 @@ def irradiance_lookup(table, r, mu_s, bottom, top, weights, out):
 
 @helper
 def r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu):
-    """Interpolation cell (i_r, w_r, i_mu, w_mu) of a view ray in the 4D tables (mu stays in its half)."""
-    p_r, p_mu = scattering_r_mu_coord(r, mu, hits_ground, bottom, top, n_r, n_mu)
+    """Interpolation cell ``(i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1)`` of a view ray in the 4D tables: the radius
+    cell and the ``mu`` cells at which its lower and upper rows are read (:func:`.geometry.scattering_r_mu_rows`:
+    each at its own coordinate in the cell touching the ground, the query's elsewhere; mu stays in its half)."""
+    p_r, p_mu0, p_mu1 = scattering_r_mu_rows(r, mu, hits_ground, bottom, top, n_r, n_mu)
     i_r, w_r = lerp_index(p_r, 0, n_r - 1)
     half = n_mu // 2
     if hits_ground:
-        i_mu, w_mu = lerp_index(p_mu, 0, half - 1)
+        i_mu0, w_mu0 = lerp_index(p_mu0, 0, half - 1)
+        i_mu1, w_mu1 = lerp_index(p_mu1, 0, half - 1)
     else:
-        i_mu, w_mu = lerp_index(p_mu, half, n_mu - 1)
-    return i_r, w_r, i_mu, w_mu
+        i_mu0, w_mu0 = lerp_index(p_mu0, half, n_mu - 1)
+        i_mu1, w_mu1 = lerp_index(p_mu1, half, n_mu - 1)
+    return i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1
 
 
 @helper
@@ -272,11 +277,12 @@ def r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_mu_s):
 
 
 @helper
-def nu_weight(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n):
+def nu_weight(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n):
     """The weight of texel ``i_n + 1`` along the azimuth (nu) axis of a cell of a 4D table (..., n_wavelengths):
     :func:`.geometry.log_lerp_weight` of the table's middle wavelength (index ``n_wavelengths // 2``: 560 nm of the
     default 16 and of 400, 560, 700 nm) in the two columns at ``i_n`` and ``i_n + 1``, each interpolated linearly in
-    r, mu and mu_s; ``w_n`` the linear weight. One wavelength, not all: the weight then reads 16 texel values instead of
+    r, mu and mu_s (the rows ``i_r``, ``i_r + 1`` at their mu cells ``i_mu0``, ``i_mu1``: :func:`r_mu_cell`);
+    ``w_n`` the linear weight. One wavelength, not all: the weight then reads 16 texel values instead of
     16 per wavelength, and a table's radiance at a wavelength depends on its other wavelengths only through the
     middle one's."""
     k = table.shape[4] // 2
@@ -284,6 +290,8 @@ def nu_weight(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n):
     s1 = 0.0
     for a in range(2):
         wa = w_r if a else 1.0 - w_r
+        i_mu = i_mu1 if a else i_mu0
+        w_mu = w_mu1 if a else w_mu0
         for b in range(2):
             wb = wa * (w_mu if b else 1.0 - w_mu)
             for c in range(2):
@@ -294,15 +302,18 @@ def nu_weight(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n):
 
 
 @helper
-def lookup4_cell(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scale, out):
+def lookup4_cell(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n, scale, out):
     """``out += scale * table(cell)``: interpolation of a 4D table (..., n_wavelengths), linear in r, mu and mu_s
+    (the rows ``i_r``, ``i_r + 1`` at their mu cells ``i_mu0``, ``w_mu0`` and ``i_mu1``, ``w_mu1``: :func:`r_mu_cell`)
     and log-linear along nu (:func:`nu_weight`; ``w_n`` the linear weight)."""
     n_l = table.shape[4]
-    w_n = nu_weight(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n)
+    w_n = nu_weight(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n)
     for a in range(2):
         wa = w_r if a else 1.0 - w_r
         if wa == 0.0:
             continue
+        i_mu = i_mu1 if a else i_mu0
+        w_mu = w_mu1 if a else w_mu0
         for b in range(2):
             wb = wa * (w_mu if b else 1.0 - w_mu)
             if wb == 0.0:
@@ -321,15 +332,17 @@ def lookup4_cell(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scale, out):
 
 
 @helper
-def lookup4_cell_spectral(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n, scales, out):
+def lookup4_cell_spectral(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n, scales, out):
     """``out[k] += scales[k] * table(cell)[k]``: :func:`lookup4_cell` with a scale per wavelength (a tabulated
     aerosol phase)."""
     n_l = table.shape[4]
-    w_n = nu_weight(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, w_n)
+    w_n = nu_weight(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n)
     for a in range(2):
         wa = w_r if a else 1.0 - w_r
         if wa == 0.0:
             continue
+        i_mu = i_mu1 if a else i_mu0
+        w_mu = w_mu1 if a else w_mu0
         for b in range(2):
             wb = wa * (w_mu if b else 1.0 - w_mu)
             if wb == 0.0:
@@ -358,18 +371,20 @@ def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min
     Carlo, optical depth 0.5 over albedo 0.8: mean -1.15 -> -2.03 %, measured); there it had taken the low-sun
     directions outside the target from 68 to 48 of 225 (hazy, near the sun: docs/accuracy.md, "Low sun")."""
     n_r, n_mu, n_s, n_n, n_l = table.shape
-    i_r, w_r, i_mu, w_mu = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
+    i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
-    _lookup4_weighted(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, (1.0 - w_n) * scale, w_n * scale, out)
+    _lookup4_weighted(table, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * scale, w_n * scale, out)
 
 
 @helper
-def _lookup4_weighted(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, n0, n1, out):
-    """``out += table(cell)``, linear in r, mu and mu_s, with the weights ``n0``, ``n1`` of the nu texels ``i_n``,
-    ``i_n + 1``."""
+def _lookup4_weighted(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, n0, n1, out):
+    """``out += table(cell)``, linear in r, mu and mu_s (each row at its own mu cell, :func:`r_mu_cell`), with the
+    weights ``n0``, ``n1`` of the nu texels ``i_n``, ``i_n + 1``."""
     n_l = table.shape[4]
     for a in range(2):
         wa = w_r if a else 1.0 - w_r
+        i_mu = i_mu1 if a else i_mu0
+        w_mu = w_mu1 if a else w_mu0
         for b in range(2):
             wb = wa * (w_mu if b else 1.0 - w_mu)
             for c in range(2):
@@ -456,20 +471,22 @@ def shadow_ratios_fast(h_q, h_0, h_1, profile, n_layers):
 
 
 @helper
-def lookup4_cell_weighted(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, n0, n1, scale, out):
+def lookup4_cell_weighted(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, n0, n1, scale, out):
     """``out += scale * table(cell)``, linear in r, mu and mu_s, with the weights ``n0``, ``n1`` of the nu texels
     ``i_n``, ``i_n + 1`` (:func:`shadow_nu_weights` in the rendering lookups for a ray that starts in the Earth's
     shadow)."""
-    _lookup4_weighted(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, n0 * scale, n1 * scale, out)
+    _lookup4_weighted(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, n0 * scale, n1 * scale, out)
 
 
 @helper
-def lookup4_cell_weighted_spectral(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, n0, n1, scales, out):
+def lookup4_cell_weighted_spectral(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, n0, n1, scales, out):
     """``out[k] += scales[k] * table(cell)[k]``: :func:`lookup4_cell_weighted` with a scale per wavelength (a
     tabulated aerosol phase)."""
     n_l = table.shape[4]
     for a in range(2):
         wa = w_r if a else 1.0 - w_r
+        i_mu = i_mu1 if a else i_mu0
+        w_mu = w_mu1 if a else w_mu0
         for b in range(2):
             wb = wa * (w_mu if b else 1.0 - w_mu)
             for c in range(2):
@@ -487,10 +504,10 @@ def scattering_lookup_shadow(table, r, mu, mu_s, nu, hits_ground, bottom, top, m
     :func:`shadow_nu_weights` (the constituent's density ``profile``): the incident single scattering of the
     second order's scattering density at twilight."""
     n_r, n_mu, n_s, n_n, n_l = table.shape
-    i_r, w_r, i_mu, w_mu = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
+    i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
     n0, n1 = shadow_nu_weights(r, mu, mu_s, nu, i_n, w_n, n_n, bottom, top, profile, n_layers)
-    _lookup4_weighted(table, i_r, w_r, i_mu, w_mu, i_s, w_s, i_n, n0 * scale, n1 * scale, out)
+    _lookup4_weighted(table, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, n0 * scale, n1 * scale, out)
 
 
 @helper

@@ -82,7 +82,12 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: altitude in the cells of rows that start above the ground and below 200 m (:func:`.geometry.scattering_r_index`;
 #: before: linear in rho), in the orders' ray integrals and scattering density as in the rendering lookups, so the
 #: multiple-scattering tables of format 14 hold other values.
-FORMAT_VERSION = 15
+#: 16: the same layout; in the cell of rows touching the ground (below the first row above it, 62.7 m of the default
+#: 32 rows) the scattering tables are read, for rays that miss the ground, with a radius weight linear in the altitude
+#: and each row at its own ``mu`` coordinate (:func:`.geometry.scattering_r_mu_rows`; before: linear in rho, one
+#: shared coordinate), in the orders' ray integrals and scattering density as in the rendering lookups, so the
+#: multiple-scattering tables of format 15 hold other values.
+FORMAT_VERSION = 16
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).

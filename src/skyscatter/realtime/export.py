@@ -83,10 +83,12 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: alpha holds each table's middle wavelength (was Y), from which the azimuth weight is computed. 3: the constants
 #: hold the Rayleigh and aerosol density profiles, and the single scattering's azimuth weight follows the Earth's
 #: shadow (shadow_factors of the mappings). 4: the irradiance texture's alpha holds its middle wavelength (was Y),
-#: from which the weight along mu_s below the horizon is computed (irradiance_uvs, irradiance_lerp). 5: the irradiance
-#: texture's alpha holds the illuminance [lx] of its spectrum (the library's weight along mu_s: the same for any set
-#: of table wavelengths).
-MANIFEST_VERSION = 5
+#: from which the weight along mu_s below the horizon is computed (irradiance_uvs, irradiance_lerp). 5: within the
+#: cell of rows touching the ground the scattering textures' rows are read each at its own mu coordinate and mixed
+#: linearly in the altitude (scattering_ground_cell, scattering_texture; skyscatter table format 16). 6: the
+#: irradiance texture's alpha holds the illuminance [lx] of its spectrum (the library's weight along mu_s: the same
+#: for any set of table wavelengths); the constant SHADOW_RATIO_MAX (shadow_factors).
+MANIFEST_VERSION = 6
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -170,23 +172,35 @@ def irradiance_lerp(e0, e1, w, below):
 
 def scattering_r_index(r, rho, big_h):
     """Index position of r on the depth axis of the 3D scattering textures: the rows sit at rho_i = H i / (n - 1)
-    (x_r = rho / H), and within the cell between rows i and i + 1, if row i lies above the ground and below 200 m,
-    the position is linear in r (the altitude), not in rho; r - r_i is formed as (rho^2 - rho_i^2) / (r + r_i),
-    without cancellation."""
+    (x_r = rho / H), and within the cell between rows i and i + 1, if row i lies below 200 m (the cell touching the
+    ground and the next), the position is linear in r (the altitude), not in rho; r - r_i is formed as
+    (rho^2 - rho_i^2) / (r + r_i), without cancellation."""
     n = SCATTERING_N_R - 1
     x = clamp(rho / big_h, 0.0, 1.0) * n
     i = min(math.floor(x), n - 1)
     rho0, rho1 = big_h * i / n, big_h * (i + 1) / n
     r0 = math.sqrt(rho0 * rho0 + BOTTOM_RADIUS * BOTTOM_RADIUS)
-    if i == 0 or rho0 * rho0 >= 200.0 * (r0 + BOTTOM_RADIUS):
-        return x  # the first cell and those from 200 m up: linear in rho (measured better there)
+    if rho0 * rho0 >= 200.0 * (r0 + BOTTOM_RADIUS):
+        return x  # the cells from 200 m up: linear in rho (measured better there)
     r1 = math.sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS)
     w = (rho * rho - rho0 * rho0) * (r1 + r0) / ((rho1 * rho1 - rho0 * rho0) * (max(r, BOTTOM_RADIUS) + r0))
     return i + clamp(w, 0.0, 1.0)
 
+def scattering_sky_mu_index(r, rho, big_h, mu):
+    """Index position on the mu axis (n/2 .. n - 1, zenith to horizon) of a ray from r [m] (rho = sqrt(r^2 - R_g^2))
+    that misses the ground: the mean of (d - d_min) / (d_max - d_min) (d to the top, d_min = R_t - r,
+    d_max = rho + H) and theta / theta_h (zenith angle over the horizon's)."""
+    half = SCATTERING_N_MU // 2
+    d = distance_to_top(r, mu)
+    d_min, d_max = TOP_RADIUS - r, rho + big_h
+    x_d = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
+    x_a = math.acos(clamp(mu, -1.0, 1.0)) / math.acos(clamp(-rho / r, -1.0, 1.0))
+    return half + 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0)) * (half - 1)
+
 def scattering_mu_r_coords(r, mu, hits_ground):
     """(v, w) in the 3D scattering textures: the mu coordinate (height) and the r coordinate (depth:
-    scattering_r_index for rays that miss the ground, rho / H for rays that meet it)."""
+    scattering_r_index for rays that miss the ground, rho / H for rays that meet it). Within the cell touching the
+    ground a ray that misses the ground is read from each row at its own mu coordinate (scattering_ground_cell)."""
     big_h = math.sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS))
     rho = safe_sqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS))
     half = SCATTERING_N_MU // 2
@@ -196,14 +210,37 @@ def scattering_mu_r_coords(r, mu, hits_ground):
         x = (d - d_min) / (rho - d_min) if rho > d_min else 0.0
         p_mu = (1.0 - clamp(x, 0.0, 1.0)) * (half - 1)
     else:
-        d = distance_to_top(r, mu)
-        d_min, d_max = TOP_RADIUS - r, rho + big_h
-        x_d = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
-        x_a = math.acos(clamp(mu, -1.0, 1.0)) / math.acos(clamp(-rho / r, -1.0, 1.0))
-        p_mu = half + 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0)) * (half - 1)
+        p_mu = scattering_sky_mu_index(r, rho, big_h, mu)
     # rays that meet the ground: linear in rho (their mu coordinate fixes a length to the ground nearly linear in rho)
     p_r = clamp(rho / big_h, 0.0, 1.0) * (SCATTERING_N_R - 1) if hits_ground else scattering_r_index(r, rho, big_h)
     return tex_coord(p_mu, SCATTERING_N_MU), tex_coord(p_r, SCATTERING_N_R)
+
+def scattering_ground_cell(r, mu, hits_ground):
+    """Within the cell of rows touching the ground (below the first row above it), for a ray that misses the ground:
+    (v0, v1, w), the mu coordinates at which rows 0 and 1 hold the ray's direction (scattering_sky_mu_index with
+    each row's own radius) and the altitude weight of row 1 (scattering_r_index); None elsewhere. A lookup reads
+    the two rows there and mixes them with w (scattering_texture)."""
+    if hits_ground:
+        return None
+    big_h = math.sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS))
+    rho = safe_sqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS))
+    p_r = scattering_r_index(r, rho, big_h)
+    if p_r >= 1.0:
+        return None
+    rho1 = big_h / (SCATTERING_N_R - 1)
+    r1 = math.sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS)
+    return (tex_coord(scattering_sky_mu_index(BOTTOM_RADIUS, 0.0, big_h, mu), SCATTERING_N_MU),
+            tex_coord(scattering_sky_mu_index(r1, rho1, big_h, mu), SCATTERING_N_MU), p_r)
+
+def scattering_texture(sample, uvw, cell):
+    """A scattering texture's RGBA at uvw (of scattering_uvw) read with sample(uvw) (the GPU's trilinear read), or,
+    within the cell touching the ground (cell of scattering_ground_cell, not None), its rows 0 and 1 each at their
+    own v, mixed with the altitude weight."""
+    if cell is None:
+        return list(sample(uvw))
+    a = sample((uvw[0], cell[0], tex_coord(0.0, SCATTERING_N_R)))
+    b = sample((uvw[0], cell[1], tex_coord(1.0, SCATTERING_N_R)))
+    return [x + cell[2] * (y - x) for x, y in zip(a, b)]
 
 def mu_s_distance_unit(mu_s):
     big_h = math.sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS))
@@ -229,7 +266,8 @@ def scattering_nu_index(mu, mu_s, nu):
 def scattering_uvw(r, mu, mu_s, nu, hits_ground):
     """The two texture coordinates (u, v, w) of the nu slices around nu and the fraction w of the cell between
     them: a lookup is azimuth_lerp(texture(uvw0), texture(uvw1), w), each read trilinear (the single scattering:
-    single_scattering_lerp)."""
+    single_scattering_lerp), or within the cell touching the ground with scattering_texture(texture, uvw,
+    scattering_ground_cell(r, mu, hits_ground))."""
     v, w = scattering_mu_r_coords(r, mu, hits_ground)
     p_s = scattering_mu_s_index(max(mu_s, MU_S_MIN))
     p_n = clamp(scattering_nu_index(mu, mu_s, nu), 0.0, SCATTERING_N_NU - 1)

@@ -114,9 +114,9 @@ vec4 IrradianceUvs(float r, float mu_s) {
 }
 
 // Index position of r on the depth axis of the scattering textures: the rows sit at rho_i = H i / (n - 1)
-// (x_r = rho / H, [Bruneton2008] Sec. 4), and within the cell between rows i and i + 1, if row i lies above the
-// ground and below 200 m, the position is linear in r (the altitude), not in rho (measured better there against the
-// integral); r - r_i as (rho^2 - rho_i^2) / (r + r_i): no cancellation of two radii in float
+// (x_r = rho / H, [Bruneton2008] Sec. 4), and within the cell between rows i and i + 1, if row i lies below 200 m
+// (the cell touching the ground and the next), the position is linear in r (the altitude), not in rho (measured
+// better there against the integral); r - r_i as (rho^2 - rho_i^2) / (r + r_i): no cancellation of two radii in float
 // (skyscatter.precomputed.geometry.scattering_r_index).
 float ScatteringRIndex(float r, float rho, float H) {
   float n = float(SCATTERING_N_R - 1);
@@ -124,10 +124,23 @@ float ScatteringRIndex(float r, float rho, float H) {
   float rho0 = H * i / n;
   float rho1 = H * (i + 1.0) / n;
   float r0 = sqrt(rho0 * rho0 + BOTTOM_RADIUS * BOTTOM_RADIUS);
-  if (i == 0.0 || rho0 * rho0 >= 200.0 * (r0 + BOTTOM_RADIUS)) return clamp(rho / H, 0.0, 1.0) * n;
+  if (rho0 * rho0 >= 200.0 * (r0 + BOTTOM_RADIUS)) return clamp(rho / H, 0.0, 1.0) * n;
   float r1 = sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS);
   float w = (rho - rho0) * (rho + rho0) * (r1 + r0) / ((rho1 - rho0) * (rho1 + rho0) * (max(r, BOTTOM_RADIUS) + r0));
   return i + clamp(w, 0.0, 1.0);
+}
+
+// Index position on the mu axis of a ray that misses the ground from radius r (rho = sqrt(r^2 - R_g^2)): the mean
+// of (d - d_min) / (d_max - d_min) (d to the top, d_min = R_t - r, d_max = rho + H) and theta / theta_h (zenith angle
+// over the horizon's, theta_h = Acos(-rho / r)), on n/2 .. n - 1 (zenith to horizon).
+float ScatteringSkyMuIndex(float r, float rho, float H, float mu) {
+  float half_n = float(SCATTERING_N_MU / 2);
+  float d = DistanceToTop(r, mu);
+  float d_min = TOP_RADIUS - r;
+  float d_max = rho + H;
+  float x_d = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
+  float x_a = Acos(clamp(mu, -1.0, 1.0)) / Acos(clamp(-rho / r, -1.0, 1.0));
+  return half_n + 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0)) * (half_n - 1.0);
 }
 
 // Scattering textures, (v, w) = (mu, r) coordinates. r: rows at x_r = rho / H; between them ScatteringRIndex for rays
@@ -135,9 +148,9 @@ float ScatteringRIndex(float r, float rho, float H) {
 // linear in rho). mu is split at the horizon ([Bruneton2008]
 // Fig. 4): rays that meet the ground fill index positions 0 .. n/2 - 1 (grazing to straight down) with
 // 1 - (d - d_min) / (d_max - d_min), d the distance to the ground, d_min = r - R_g, d_max = rho; the other rays fill
-// n/2 .. n - 1 (zenith to horizon) with the mean of (d - d_min) / (d_max - d_min) (d to the top, d_min = R_t - r,
-// d_max = rho + H) and theta / theta_h (zenith angle over the horizon's, theta_h = Acos(-rho / r)). Linear filtering
-// never mixes the halves: their positions stay within [0, n/2 - 1] and [n/2, n - 1].
+// n/2 .. n - 1 (ScatteringSkyMuIndex). Linear filtering never mixes the halves: their positions stay within
+// [0, n/2 - 1] and [n/2, n - 1]. Within the cell touching the ground a ray that misses the ground is read from each
+// row at its own mu coordinate instead (ScatteringGroundCell).
 vec2 ScatteringMuRCoords(float r, float mu, bool hits_ground) {
   float H = sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS));
   float rho = SafeSqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS));
@@ -149,16 +162,29 @@ vec2 ScatteringMuRCoords(float r, float mu, bool hits_ground) {
     float x = rho > d_min ? (d - d_min) / (rho - d_min) : 0.0;
     p_mu = (1.0 - clamp(x, 0.0, 1.0)) * (half_n - 1.0);
   } else {
-    float d = DistanceToTop(r, mu);
-    float d_min = TOP_RADIUS - r;
-    float d_max = rho + H;
-    float x_d = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
-    float x_a = Acos(clamp(mu, -1.0, 1.0)) / Acos(clamp(-rho / r, -1.0, 1.0));
-    p_mu = half_n + 0.5 * (clamp(x_d, 0.0, 1.0) + clamp(x_a, 0.0, 1.0)) * (half_n - 1.0);
+    p_mu = ScatteringSkyMuIndex(r, rho, H, mu);
   }
   return vec2(TexCoord(p_mu, SCATTERING_N_MU),
               TexCoord(hits_ground ? clamp(rho / H, 0.0, 1.0) * float(SCATTERING_N_R - 1)
                                    : ScatteringRIndex(r, rho, H), SCATTERING_N_R));
+}
+
+// The cell of rows touching the ground (below the first row above it, 62.7 m of the default 32 rows), for a ray that
+// misses the ground: (v0, v1, w, 1.0), v0 and v1 the mu coordinates at which rows 0 and 1 hold the ray's direction
+// (ScatteringSkyMuIndex with each row's own radius), w the altitude weight of row 1 (ScatteringRIndex); the two rows
+// read there and mixed with w (ScatteringTexture), as skyscatter's lookups since table format 16 (skyscatter.
+// precomputed.geometry.scattering_r_mu_rows: the shared coordinate reads the two rows in two directions, as the
+// horizon's zenith angle moves from 90 deg at the ground to 90.25 deg at 62.7 m). vec4(0.0) elsewhere.
+vec4 ScatteringGroundCell(float r, float mu, bool hits_ground) {
+  if (hits_ground) return vec4(0.0);
+  float H = sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS));
+  float rho = SafeSqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS));
+  float p_r = ScatteringRIndex(r, rho, H);
+  if (p_r >= 1.0) return vec4(0.0);
+  float rho1 = H / float(SCATTERING_N_R - 1);
+  float r1 = sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS);
+  return vec4(TexCoord(ScatteringSkyMuIndex(BOTTOM_RADIUS, 0.0, H, mu), SCATTERING_N_MU),
+              TexCoord(ScatteringSkyMuIndex(r1, rho1, H, mu), SCATTERING_N_MU), p_r, 1.0);
 }
 
 // a(mu_s) = (d - d_min) / (d_max - d_min), d the distance from the ground to the top along mu_s, d_min = R_t - R_g,
@@ -323,6 +349,14 @@ vec4 Texture2D(highp sampler2D t, vec2 uv) { return texture(t, uv); }
 vec4 Texture3D(highp sampler3D t, vec3 uvw) { return texture(t, uvw); }
 #endif
 
+// A scattering texture at uvw (ScatteringMuRCoords' v, w), or, within the cell touching the ground (cell of
+// ScatteringGroundCell), its rows 0 and 1 each at their own v, mixed with the altitude weight: two reads.
+vec4 ScatteringTexture(highp sampler3D t, vec3 uvw, vec4 cell) {
+  if (cell.w == 0.0) return Texture3D(t, uvw);
+  return mix(Texture3D(t, vec3(uvw.x, cell.x, TexCoord(0.0, SCATTERING_N_R))),
+             Texture3D(t, vec3(uvw.x, cell.y, TexCoord(1.0, SCATTERING_N_R))), cell.z);
+}
+
 // Phase functions [sr^-1]: Rayleigh [Bruneton2008] Eq. 2; Cornette-Shanks Eq. 4; Henyey-Greenstein.
 // Sky irradiance on a horizontal surface at radius r [m] with sun zenith cosine mu_s: the irradiance texture's two
 // mu_s columns around mu_s (IrradianceUvs), interpolated by IrradianceLerp.
@@ -394,8 +428,9 @@ vec3 GetTransmittanceToSun(float r, float mu_s) {
   return f <= 0.0 ? vec3(0.0) : GetTransmittanceToTop(r, mu_s) * f;
 }
 
-// The three scattering textures at (r, mu, mu_s, nu): trilinear by the texture unit in (mu_s, mu, r) and by hand
-// along nu (the nu slices lie side by side along x: x = i_nu * n_mu_s + i_mu_s, [Bruneton2008] Sec. 6), log-linear
+// The three scattering textures at (r, mu, mu_s, nu): trilinear by the texture unit in (mu_s, mu, r) (within the
+// cell touching the ground two bilinear reads, one per row: ScatteringTexture) and by hand along nu (the nu slices
+// lie side by side along x: x = i_nu * n_mu_s + i_mu_s, [Bruneton2008] Sec. 6), log-linear
 // there with each texture's own weight (AzimuthLerp), as skyscatter's lookups since table format 12, except the
 // single-scattering textures where the point is in the Earth's shadow: linear with the shadow factors of their
 // constituent's density (ShadowLerp, ShadowFactors), as skyscatter's lookups (skyscatter.precomputed.lookup). Returns single
@@ -414,16 +449,19 @@ vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, ou
   float n_x = float(SCATTERING_N_NU * SCATTERING_N_MU_S);
   vec3 uvw0 = vec3((i_n * float(SCATTERING_N_MU_S) + p_s + 0.5) / n_x, vw.x, vw.y);
   vec3 uvw1 = vec3(uvw0.x + float(SCATTERING_N_MU_S) / n_x, vw.x, vw.y);
-  multiple = AzimuthLerp(Texture3D(multiple_texture, uvw0), Texture3D(multiple_texture, uvw1), w_n);
+  vec4 g = ScatteringGroundCell(r, mu, hits_ground);
+  multiple = AzimuthLerp(ScatteringTexture(multiple_texture, uvw0, g), ScatteringTexture(multiple_texture, uvw1, g),
+                         w_n);
   if (InEarthShadow(r, mu_s)) {
     vec3 h = ShadowExitAltitudes(r, mu, mu_s, nu, i_n);
-    mie = ShadowLerp(Texture3D(mie_texture, uvw0), Texture3D(mie_texture, uvw1), w_n,
+    mie = ShadowLerp(ScatteringTexture(mie_texture, uvw0, g), ScatteringTexture(mie_texture, uvw1, g), w_n,
                      ShadowFactors(h, MIE_DENSITY, MIE_DENSITY_LAYERS));
-    return ShadowLerp(Texture3D(rayleigh_texture, uvw0), Texture3D(rayleigh_texture, uvw1), w_n,
-                      ShadowFactors(h, RAYLEIGH_DENSITY, RAYLEIGH_DENSITY_LAYERS));
+    return ShadowLerp(ScatteringTexture(rayleigh_texture, uvw0, g), ScatteringTexture(rayleigh_texture, uvw1, g),
+                      w_n, ShadowFactors(h, RAYLEIGH_DENSITY, RAYLEIGH_DENSITY_LAYERS));
   }
-  mie = AzimuthLerp(Texture3D(mie_texture, uvw0), Texture3D(mie_texture, uvw1), w_n);
-  return AzimuthLerp(Texture3D(rayleigh_texture, uvw0), Texture3D(rayleigh_texture, uvw1), w_n);
+  mie = AzimuthLerp(ScatteringTexture(mie_texture, uvw0, g), ScatteringTexture(mie_texture, uvw1, g), w_n);
+  return AzimuthLerp(ScatteringTexture(rayleigh_texture, uvw0, g), ScatteringTexture(rayleigh_texture, uvw1, g),
+                     w_n);
 }
 
 // Inscattered radiance S[L](x, v, s) = S_R[L0] P_R(nu) + S_M[L0] P_M(nu) + S[L*] ([Bruneton2008] Eqs. 7-8 with the
