@@ -927,7 +927,7 @@ def test_low_sun_spectrl2_diffuse_below_the_physical_minimum(options):
        at low sun;
     2. SPECTRL2 (pvlib, Bird & Riordan 1986) gives a diffuse transmittance DHI / (E0 cos z) at least 10 % below
        the Monte Carlo through SPECTRL2's own aerosol (its albedo 0.945 exp(-0.095 ln^2(l / 400 nm)), asymmetry
-       0.65 as a Cornette-Shanks g of 0.585; here 23 % below, 22-25 % over suns 3-6 deg), and below the Monte Carlo
+       0.65 as a Cornette-Shanks g of 0.585; here 23 % below, 17-25 % over suns 3-6 deg), and below the Monte Carlo
        at the bounds too (here 13 % below): its low-sun diffuse is below radiative transfer through its own atmosphere
        and below any aerosol within the bounds, so no retrieval within them can close it."""
     from skyscatter.fit.weather import default_family

@@ -1520,7 +1520,7 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
                 # the bounds gives at the beam's optical depth (the tables' value there is within -2.2 to +0.6 % of
                 # the Monte Carlo at suns 3-6 deg up, docs/sky_matrices.md), so a record below it is not a clear sky
                 # of a physical aerosol: on SPECTRL2 records (Bird & Riordan 1986) its low suns, whose diffuse
-                # approximations fall 15-30 % below radiative transfer through SPECTRL2's own aerosol there
+                # approximations fall 10-30 % below radiative transfer through SPECTRL2's own aerosol there
                 first = verts[0] + p[too_dark, None] * (verts[1] - verts[0])
                 deficit = 100.0 * (1.0 - dhi[good[too_dark]] / d_v[too_dark, 0])
                 bounds = (f"albedo {verts[0, 0]:g}, phase g {verts[0, 1]:g}" if verts.shape[1] > 1 else
