@@ -1516,21 +1516,29 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
                 status[good[clear]] = CLEAR
                 status[good[too_dark]] = CLEAR_OPEN
                 # what the record would need: the path's first leg extrapolated (the phase's g at the smallest
-                # albedo; without a g axis the albedo). On a clear-sky record from another model (SPECTRL2, Bird
-                # & Riordan 1986) these are its low suns, whose diffuse is below ours for the beam's aerosol
+                # albedo; without a g axis the albedo). The path's end is the least diffuse light any aerosol within
+                # the bounds gives at the beam's optical depth (the tables' value there is within -2.2 to +0.6 % of
+                # the Monte Carlo at suns 3-6 deg up, docs/sky_matrices.md), so a record below it is not a clear sky
+                # of a physical aerosol: on SPECTRL2 records (Bird & Riordan 1986) its low suns, whose diffuse
+                # approximations fall 10-30 % below radiative transfer through SPECTRL2's own aerosol there
                 first = verts[0] + p[too_dark, None] * (verts[1] - verts[0])
+                deficit = 100.0 * (1.0 - dhi[good[too_dark]] / d_v[too_dark, 0])
+                bounds = (f"albedo {verts[0, 0]:g}, phase g {verts[0, 1]:g}" if verts.shape[1] > 1 else
+                          f"albedo {verts[0, 0]:g}")
+                common = [f"the record's DHI is {q:.1f} % below the physical minimum (the clear sky of the beam's "
+                          f"aerosol optical depth with the most absorbing, least forward-scattering aerosol within "
+                          f"bounds: {bounds}; sun {90 - math.degrees(z):.1f} deg up): no aerosol within bounds "
+                          "reproduces it"
+                          for q, z in zip(deficit, zen[good[too_dark]], strict=True)]
                 if verts.shape[1] > 1:
                     reason[good[too_dark]] = [
-                        f"DHI below the clear sky with aerosol albedo {verts[0, 0]:g} and phase g {verts[0, 1]:g} "
-                        f"(sun {90 - math.degrees(z):.1f} deg up; the phase line at albedo {verts[0, 0]:g} through "
-                        f"the grid's g nodes reaches the record's DHI at g {x:.2f}, below the published range): "
-                        "clamped, DHI not closed" for x, z in zip(first[:, 1], zen[good[too_dark]], strict=True)]
+                        f"{c} (the phase line at albedo {verts[0, 0]:g} through the grid's g nodes reaches the "
+                        f"record's DHI at g {x:.2f}, below the published range); clamped, DHI not closed"
+                        for c, x in zip(common, first[:, 1], strict=True)]
                 else:
                     reason[good[too_dark]] = [
-                        f"DHI below the clear sky with aerosol albedo {verts[0, 0]:g} (sun {90 - math.degrees(z):.1f} "
-                        f"deg up; the albedo line through the grid's nodes reaches the record's DHI at {x:.2f}, "
-                        "outside the grid): albedo clamped, DHI not closed"
-                        for x, z in zip(first[:, 0], zen[good[too_dark]], strict=True)]
+                        f"{c} (the albedo line through the grid's nodes reaches the record's DHI at {x:.2f}, outside "
+                        "the grid); albedo clamped, DHI not closed" for c, x in zip(common, first[:, 0], strict=True)]
                 reason[good[too_bright]] = "DHI above the clear sky with aerosol albedo 1: treated as cloudy"
                 dhi_model[good] = _path_dhi(d_v, pc)
                 # d DHI / d albedo along the albedo leg (the last vertices, at the largest g)
