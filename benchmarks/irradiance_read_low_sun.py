@@ -6,9 +6,10 @@ table is the first order's sky light, whose texels below the horizon come from t
 coarse table is every 8th texel of the fine one exactly); the default 64-texel table is that subsample. The read
 of the coarse table (``sampling.irradiance_read``: one weight for all wavelengths from the columns' illuminance, and
 each wavelength its own) at every fine texel between ``--lo`` and ``--hi`` deg of sun elevation is compared with the
-fine texel there, per wavelength; the ground row (r = bottom) and a row at 10 km (radius texel 1 of 16 is 4 km: the
-rows are read at their texels, so only the mu_s interpolation is measured). Also prints the numpy candidates
-(geometric, log-quadratic per wavelength, log-quadratic of the illuminance) for comparison.
+fine texel there, per wavelength, on the ground row (read at its texel, so only the mu_s interpolation is measured).
+The fine texels are not a perfect reference: each is log-quadratic between the scattering tables' three nearest
+sun-zenith texels, and where that node set changes (about -5.2, -3.6, -1.8 deg) ``ln E`` steps by up to 0.1 at
+400 nm; the hemisphere integral of ``benchmarks/second_order_low_sun.py --irradiance`` is the independent one.
 
 ``python benchmarks/irradiance_read_low_sun.py [--atm turbidity3] [--lo -7 --hi 2] [--save fine.npz]``
 """
@@ -55,7 +56,6 @@ def main() -> None:
         if args.save:
             np.savez(args.save, fine=fine, lum=lum, wl=wl)
     coarse = np.ascontiguousarray(fine[:, ::FINE])
-    n_m = coarse.shape[1]
     own = np.empty(0)
     out = np.empty(fine.shape[2])
     print(f"# {fine.shape[2]} wavelengths {wl[0]:g}-{wl[-1]:g} nm; read / fine texel - 1 [%]: worst wavelength "
