@@ -185,34 +185,47 @@ def test_log_lerp_weight_follows_the_geometric_interpolation(rng):
         assert math.isclose(g.log_lerp_weight(7.0, 7.0, t), t, rel_tol=1e-15)
 
 
-def test_irradiance_read_is_geometric_below_the_horizon_and_linear_above():
+def test_irradiance_read_is_log_quadratic_below_the_horizon_and_linear_above():
     """The irradiance table's read along mu_s (:func:`sampling.irradiance_read`) on a synthetic table of 8 mu_s
-    texels (mu_s = -1 .. 1, cells 2/7 wide) and 2 radii, 3 wavelengths: at the centre of a cell that starts below
-    the horizon (first texel at mu_s < 0) it is the geometric mean of the two texels, exactly (the weight of
-    :func:`geometry.log_lerp_weight` meets ``a^(1 - w) b^w`` at the centre); in a cell above, the linear mean.
-    Each wavelength its own weight with empty ``weights``; else the weight of the weighted sums (the luminance in
-    the lookups) for all."""
+    texels (mu_s = -1 .. 1, cells 2/7 wide) and 2 radii, 3 wavelengths whose logarithm is quadratic in mu_s (a fall
+    that steepens towards the lowest sun, as the twilight sky irradiance's): in a cell that starts below the horizon
+    (first texel at mu_s < 0) each wavelength's read (empty ``weights``) is the table's function itself, exactly (the
+    three-point Lagrange formula in ``ln E`` is exact for a quadratic, [Abramowitz1964] Eq. 25.2.11); in a cell above,
+    the linear interpolation. With weights (the luminance in the lookups) one weight, that of the quadratic in the
+    logarithm of the weighted sums at the three nearest texels (fitted here with numpy.polyfit), serves every
+    wavelength on the cell's two texels."""
     from skyscatter.precomputed.sampling import irradiance_read
 
     mu = np.linspace(-1.0, 1.0, 8)
-    rates = np.array([4.0, 10.0, 20.0])  # e-folds per unit mu_s: a fall of 3.1, 17 and 300 times across a cell
-    table = np.empty((2, 8, 3), dtype=np.float32)
-    table[0] = np.exp(rates * mu[:, None])
+    rates = np.array([4.0, 10.0, 20.0])  # e-folds per unit mu_s at the horizon: 3.1, 17 and 300 times across a cell
+    curv = np.array([2.0, 5.0, 8.0])  # the fall steepens below the horizon
+    table = np.empty((2, 8, 3), dtype=np.float64)
+    table[0] = np.exp(rates * mu[:, None] - curv * mu[:, None] ** 2)
     table[1] = 2.0 * table[0]
     out = np.empty(3)
     own = np.empty(0)
     lum = np.array([0.2, 1.0, 0.5])
-    for j, below in ((2, True), (3, True), (4, False), (5, False)):  # texel 3 at -1/7, texel 4 at +1/7
+    for j, below in ((0, True), (2, True), (3, True), (4, False), (5, False)):  # texel 3 at -1/7, texel 4 at +1/7
         assert g.irradiance_log_cell(j, 8) == below
-        a, b = table[0, j].astype(np.float64), table[0, j + 1].astype(np.float64)
-        irradiance_read(table, 0.0, j + 0.5, own, out)
-        np.testing.assert_allclose(out, np.sqrt(a * b) if below else 0.5 * (a + b), rtol=1e-6)
-        irradiance_read(table, 0.5, j + 0.5, lum, out)  # linear in r: 1.5 times the first radius
-        k = g.log_lerp_weight(lum @ a, lum @ b, 0.5) if below else 0.5
-        np.testing.assert_allclose(out, 1.5 * (a + k * (b - a)), rtol=1e-6)
+        a, b = table[0, j], table[0, j + 1]
+        for w in (0.2, 0.5, 0.7):
+            p = j + w
+            m = -1.0 + 2.0 * p / 7.0
+            irradiance_read(table, 0.0, p, own, out)
+            want = np.exp(rates * m - curv * m * m) if below else a + w * (b - a)
+            np.testing.assert_allclose(out, want, rtol=1e-9)
+            irradiance_read(table, 0.5, p, lum, out)  # linear in r: 1.5 times the first radius
+            if below:
+                j0 = min(max(j - 1 if w < 0.5 else j, 0), 5)
+                y = table[0, j0:j0 + 3] @ lum
+                ln_y = np.polyval(np.polyfit(np.arange(j0, j0 + 3.0), np.log(y), 2), p)
+                k = (np.exp(ln_y) - lum @ a) / (lum @ b - lum @ a)
+            else:
+                k = w
+            np.testing.assert_allclose(out, 1.5 * (a + k * (b - a)), rtol=1e-9)
         for p in (float(j), j + 1.0):  # the texels themselves
             irradiance_read(table, 0.0, p, own, out)
-            np.testing.assert_allclose(out, table[0, int(p)], rtol=1e-6)
+            np.testing.assert_allclose(out, table[0, int(p)], rtol=1e-9)
 
 
 def test_scattering_radius_index_is_linear_in_the_altitude_within_a_cell():

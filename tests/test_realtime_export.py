@@ -129,11 +129,12 @@ def test_transmittance_and_irradiance_textures(atm, luts):
             sun = direction_from_angles(np.radians(90 - el), 0.3)
             point = np.array([0.0, 0.0, r])
             _, e_sky = atm.ground_irradiance(point, [0.0, 0.0, 1.0], sun)
-            uv0, uv1, w, below = ns["irradiance_uvs"](r, sun[2])
-            # the SMALL table's 8 texels: +-4 deg lie in the cell across the horizon (-8.2..+8.2 deg), read log-linearly
+            uv0, uv1, uv2, t, below = ns["irradiance_uvs"](r, sun[2])
+            # the SMALL table's 8 texels: +-4 deg lie in the cell across the horizon (-8.2..+8.2 deg), read
+            # log-quadratically over three columns
             assert below == (abs(el) < 8.0)
             tex = data.textures["irradiance"]
-            got = ns["irradiance_lerp"](_sample(tex, uv0), _sample(tex, uv1), w, below)
+            got = ns["irradiance_lerp"](_sample(tex, uv0), _sample(tex, uv1), _sample(tex, uv2), t, below)
             np.testing.assert_allclose(got, m @ e_sky, rtol=2e-6, atol=1e-9)
 
 
@@ -156,7 +157,7 @@ def test_half_and_exr_match_float32(luts):
 
 def test_manifest_states_version_units_scale_and_code(luts):
     manifest = json.loads((luts / MANIFEST_NAME).read_text())
-    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 6
+    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 7
     assert manifest["hdr_scale"]["cd_m2_per_unit_Y"] == 683.0
     assert manifest["mappings"]["glsl"] == glsl_mappings() and manifest["mappings"]["glsl"] in glsl_library()
     for name in ("transmittance_uv", "irradiance_uv", "irradiance_uvs", "irradiance_lerp", "scattering_uvw"):
@@ -227,7 +228,7 @@ def test_server_serves_the_viewer_and_only_the_exports_files(luts, tmp_path):
         assert b"GetSkyRadianceToPoint" in get("/glsl/atmosphere.glsl")
         for path in ("/", "/viewer/viewer.js", "/viewer/style.css"):  # nothing loaded from the network
             assert b"http://" not in get(path) and b"https://" not in get(path) and b"//cdn" not in get(path)
-        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 6
+        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 7
         assert len(get("/luts/rayleigh.rgba32f")) == (luts / "rayleigh.rgba32f").stat().st_size
         for path in ("/luts/secret.txt", "/luts/../secret.txt", "/etc/passwd", "/viewer/../export.py"):
             with pytest.raises(urllib.error.HTTPError, match="404"):

@@ -25,8 +25,10 @@ from .geometry import (
     clamp,
     irradiance_coord,
     irradiance_log_cell,
+    irradiance_log_nodes,
     lerp_index,
     log_lerp_weight,
+    log_quadratic_weight,
     point_along_ray,
     scattering_mu_s_coord,
     scattering_nu_coord,
@@ -189,41 +191,55 @@ def transmittance_to_sun(table, r, mu_s, bottom, top, alpha, out):
 @helper
 def irradiance_read(table, p_r, p_m, weights, out):
     """Read of an irradiance table (n_r, n_mu_s, n_wavelengths) at index positions (p_r, p_m): linear in r, and
-    along the sun zenith linear, or log-linear in the cells that start below the horizon
-    (:func:`.geometry.irradiance_log_cell`: the weight :func:`.geometry.log_lerp_weight` of the two columns, each
-    interpolated linearly in r). With ``weights`` empty each wavelength has its own weight (the precomputation's
-    ground term: the tables then do not depend on how the wavelengths are chunked). Otherwise ``weights``
-    (n_wavelengths,) >= 0 are the luminance weights of the table's wavelengths (``ybar`` times the quadrature
-    step: :attr:`.evaluation.TableLookups.irradiance_weights`) and one weight, that of the two columns'
-    luminances ``sum_k weights[k] E_k``, serves every wavelength: the rendering lookups, whose read stays linear in
-    the table values for given coordinates, so that a colour texture whose alpha holds that luminance reads the same
+    along the sun zenith linear, or in the cells that start below the horizon (:func:`.geometry.irradiance_log_cell`)
+    quadratic in the logarithm over the three nearest texel columns (:func:`.geometry.irradiance_log_nodes`, each
+    column interpolated linearly in r): the weight :func:`.geometry.log_quadratic_weight` (three-point Lagrange in
+    ``ln E``, [Abramowitz1964] Eq. 25.2.11, kept between the cell's two columns) of the cell's two columns. With
+    ``weights`` empty each wavelength has its own weight (the precomputation's ground term: the tables then do not
+    depend on how the wavelengths are chunked). Otherwise ``weights`` (n_wavelengths,) >= 0 are the luminance weights
+    of the table's wavelengths (``ybar`` times the quadrature step: :attr:`.evaluation.TableLookups.
+    irradiance_weights`) and one weight, that of the three columns' luminances ``sum_k weights[k] E_k``, serves
+    every wavelength: the rendering lookups, whose read stays linear in the table values for given coordinates (a
+    combination of the cell's two columns), so that a colour texture whose alpha holds that luminance reads the same
     colour (:mod:`skyscatter.realtime.export`). The luminance, not one table wavelength: the weight then does not
-    depend on which wavelengths the table holds (the middle one, 560 nm of the default 16 against 580 nm of 380-780
-    nm every 10 nm, put the ground seen at sun -2 deg 2.4 % apart on the same small tables; with the luminance
-    0.4 %, the spread of the two samplings' luminance itself: docs/bruneton.md)."""
+    depend on which wavelengths the table holds (docs/bruneton.md).
+
+    Below the horizon the twilight sky irradiance falls faster the lower the sun: the geometric read of two columns
+    (format 14) was 4-11 % low between the default 64 texels at -2 to -5.5 deg (turbidity 3, 560 nm, against a table
+    8 times finer and the hemisphere integral of ``benchmarks/second_order_low_sun.py``); docs/accuracy.md, "Low
+    sun", gives the figures of this read."""
     n0, n1, n_l = table.shape
     i, w0 = lerp_index(p_r, 0, n0 - 1)
     j, w1 = lerp_index(p_m, 0, n1 - 1)
-    if not irradiance_log_cell(j, n1):
+    if not irradiance_log_cell(j, n1) or n1 < 3:
         bilinear_read(table, p_r, p_m, out)
         return
     v0 = 1.0 - w0
-    t00, t01, t10, t11 = table[i, j], table[i, j + 1], table[i + 1, j], table[i + 1, j + 1]
+    j0, t = irradiance_log_nodes(p_m, n1)
+    c = j0 if t < 0.0 else j0 + 1  # the cell's first column
+    t00, t01, t02 = table[i, j0], table[i, j0 + 1], table[i, j0 + 2]
+    t10, t11, t12 = table[i + 1, j0], table[i + 1, j0 + 1], table[i + 1, j0 + 2]
     if weights.shape[0] == 0:
         for k in range(n_l):
-            a = v0 * t00[k] + w0 * t10[k]
-            b = v0 * t01[k] + w0 * t11[k]
-            out[k] = a + log_lerp_weight(a, b, w1) * (b - a)
+            e0 = v0 * t00[k] + w0 * t10[k]
+            e1 = v0 * t01[k] + w0 * t11[k]
+            e2 = v0 * t02[k] + w0 * t12[k]
+            a, b = (e0, e1) if c == j0 else (e1, e2)
+            out[k] = a + log_quadratic_weight(e0, e1, e2, t) * (b - a)
         return
-    ya = 0.0
-    yb = 0.0
+    y0 = 0.0
+    y1 = 0.0
+    y2 = 0.0
     for k in range(n_l):
-        ya += weights[k] * (v0 * t00[k] + w0 * t10[k])
-        yb += weights[k] * (v0 * t01[k] + w0 * t11[k])
-    g = log_lerp_weight(ya, yb, w1)
+        y0 += weights[k] * (v0 * t00[k] + w0 * t10[k])
+        y1 += weights[k] * (v0 * t01[k] + w0 * t11[k])
+        y2 += weights[k] * (v0 * t02[k] + w0 * t12[k])
+    g = log_quadratic_weight(y0, y1, y2, t)
+    ta, tb = table[i, c], table[i, c + 1]
+    tc, td = table[i + 1, c], table[i + 1, c + 1]
     for k in range(n_l):
-        a = v0 * t00[k] + w0 * t10[k]
-        b = v0 * t01[k] + w0 * t11[k]
+        a = v0 * ta[k] + w0 * tc[k]
+        b = v0 * tb[k] + w0 * td[k]
         out[k] = a + g * (b - a)
 
 

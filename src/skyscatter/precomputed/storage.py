@@ -87,7 +87,11 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: and each row at its own ``mu`` coordinate (:func:`.geometry.scattering_r_mu_rows`; before: linear in rho, one
 #: shared coordinate), in the orders' ray integrals and scattering density as in the rendering lookups, so the
 #: multiple-scattering tables of format 15 hold other values.
-FORMAT_VERSION = 16
+#: 17: the same layout; the irradiance table read quadratically in the logarithm over its three nearest sun-zenith
+#: texels in the cells that start below the horizon (:func:`.geometry.log_quadratic_weight`; before: log-linear over
+#: two) in the ground term of the orders' scattering density as in the rendering lookups, so the multiple-scattering
+#: tables (and the irradiance tables of the orders after the second) of format 16 hold other values.
+FORMAT_VERSION = 17
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).

@@ -29,10 +29,10 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
 * ``irradiance`` 2D, width n_mu_s x height n_r: RGB sky irradiance on a horizontal surface [HDR scale], A the
   illuminance of the table's spectrum (manifest version 5; lx, the CIE 1931 ``ybar`` integral of the table's
   samples, not on the HDR scale). The library reads it linearly along mu_s except in the cells that start below the
-  horizon, where the twilight irradiance falls nearly exponentially with the sun's depression: there the weight is
-  log_lerp_weight of the illuminances of the two texel columns (each linear in r;
-  :func:`skyscatter.precomputed.sampling.irradiance_read`), applied to every wavelength (``irradiance_uvs`` and
-  ``irradiance_lerp`` of the mappings).
+  horizon, where the twilight irradiance falls faster the lower the sun: there the weight of the cell's two texel
+  columns is log_quadratic_weight (three-point Lagrange in the logarithm, manifest version 7) of the illuminances of
+  the three nearest columns (each linear in r; :func:`skyscatter.precomputed.sampling.irradiance_read`), applied to
+  every wavelength (``irradiance_uvs``, ``irradiance_lerp`` and ``log_quadratic_weight`` of the mappings).
 * ``rayleigh``, ``mie``, ``multiple`` 3D, width n_nu * n_mu_s (x = i_nu * n_mu_s + i_mu_s), height n_mu, depth n_r:
   RGB single Rayleigh and single Mie scattering without their phase functions, multiple scattering with it; A the
   table's own value at its middle wavelength (index n_wavelengths // 2, the manifest's
@@ -87,8 +87,10 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: cell of rows touching the ground the scattering textures' rows are read each at its own mu coordinate and mixed
 #: linearly in the altitude (scattering_ground_cell, scattering_texture; skyscatter table format 16). 6: the
 #: irradiance texture's alpha holds the illuminance [lx] of its spectrum (the library's weight along mu_s: the same
-#: for any set of table wavelengths); the constant SHADOW_RATIO_MAX (shadow_factors).
-MANIFEST_VERSION = 6
+#: for any set of table wavelengths); the constant SHADOW_RATIO_MAX (shadow_factors). 7: below the horizon the
+#: irradiance texture is read quadratically in the logarithm over three mu_s columns (irradiance_uvs returns three
+#: columns and the position t, irradiance_lerp takes three reads; log_quadratic_weight).
+MANIFEST_VERSION = 7
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -153,22 +155,40 @@ def irradiance_uv(r, mu_s):
             tex_coord(x_r * (IRRADIANCE_N_R - 1), IRRADIANCE_N_R))
 
 def irradiance_uvs(r, mu_s):
-    """The texture coordinates (u, v) of the two mu_s texel columns around mu_s in the irradiance texture (each read
-    linear in r), the fraction w of the cell between them and whether the cell starts below the horizon (its first
-    column at mu_s < 0): a lookup is irradiance_lerp(texture(uv0), texture(uv1), w, below)."""
+    """The texture coordinates (u, v) of three consecutive mu_s texel columns of the irradiance texture for a read at
+    mu_s (each read linear in r; the third may lie past the last column, where its weight is 0), the position t in
+    [-1, 1] relative to the middle one (the read's cell is the first two for t < 0, else the last two) and whether
+    the cell starts below the horizon (its first column at mu_s < 0; then the three are the nearest texels, the cell
+    and the texel next to its nearer end): a lookup is irradiance_lerp(texture(uv0), texture(uv1), texture(uv2), t,
+    below)."""
     x_r = clamp((r - BOTTOM_RADIUS) / (TOP_RADIUS - BOTTOM_RADIUS), 0.0, 1.0)
     p = clamp(0.5 * (mu_s + 1.0), 0.0, 1.0) * (IRRADIANCE_N_MU_S - 1)
     j = min(math.floor(p), IRRADIANCE_N_MU_S - 2)
+    below = 2 * j < IRRADIANCE_N_MU_S - 1
+    j0 = min(max(j - 1 if p - j < 0.5 else j, 0), IRRADIANCE_N_MU_S - 3) if below else j
     v = tex_coord(x_r * (IRRADIANCE_N_R - 1), IRRADIANCE_N_R)
-    return (tex_coord(j, IRRADIANCE_N_MU_S), v), (tex_coord(j + 1, IRRADIANCE_N_MU_S), v), p - j, \
-        2 * j < IRRADIANCE_N_MU_S - 1
+    return (tex_coord(j0, IRRADIANCE_N_MU_S), v), (tex_coord(j0 + 1, IRRADIANCE_N_MU_S), v), \
+        (tex_coord(j0 + 2, IRRADIANCE_N_MU_S), v), p - (j0 + 1), below
 
-def irradiance_lerp(e0, e1, w, below):
-    """RGB of the irradiance texture between the reads e0, e1 (RGBA) of its two mu_s columns: where the cell starts
-    below the horizon the weight is log_lerp_weight of their alpha (the illuminance of the table's spectrum), else w;
-    applied to every channel."""
-    k = log_lerp_weight(e0[3], e1[3], w) if below else w
-    return [a + k * (b - a) for a, b in zip(e0[:3], e1[:3])]
+def log_quadratic_weight(y0, y1, y2, t):
+    """Weight of the upper end of the cell around t (y0, y1 for t < 0, else y1, y2) for lo + weight (hi - lo) that
+    follows ln y quadratic through three values at consecutive texels (t in [-1, 1] relative to the middle one): the
+    three-point Lagrange formula in the logarithm, kept between the cell's two values; log_lerp_weight of the cell
+    where a value is not positive, the fraction of the cell where its two values are equal."""
+    lo, hi, w = (y0, y1, t + 1.0) if t < 0.0 else (y1, y2, t)
+    if not (y0 > 0.0 and y1 > 0.0 and y2 > 0.0):
+        return log_lerp_weight(lo, hi, w)
+    y = math.exp(0.5 * t * (t - 1.0) * math.log(y0) + (1.0 - t * t) * math.log(y1)
+                 + 0.5 * t * (t + 1.0) * math.log(y2))
+    return w if hi == lo else clamp((y - lo) / (hi - lo), 0.0, 1.0)
+
+def irradiance_lerp(e0, e1, e2, t, below):
+    """RGB of the irradiance texture from the reads e0, e1, e2 (RGBA) of its three mu_s columns at t: where the cell
+    starts below the horizon the weight is log_quadratic_weight of their alpha (the illuminance of the table's
+    spectrum), else linear in the cell; applied to every channel of the cell's two columns."""
+    a, b = (e0, e1) if t < 0.0 else (e1, e2)
+    k = log_quadratic_weight(e0[3], e1[3], e2[3], t) if below else (t + 1.0 if t < 0.0 else t)
+    return [x + k * (y - x) for x, y in zip(a[:3], b[:3])]
 
 def scattering_r_index(r, rho, big_h):
     """Index position of r on the depth axis of the 3D scattering textures: the rows sit at rho_i = H i / (n - 1)

@@ -102,15 +102,20 @@ vec2 IrradianceUv(float r, float mu_s) {
               TexCoord(x_r * float(IRRADIANCE_N_R - 1), IRRADIANCE_N_R));
 }
 
-// The two mu_s texel columns of the irradiance texture around mu_s: (u0, v, w, below), the columns at u0 and
-// u0 + 1 / IRRADIANCE_N_MU_S (each read linear in r), w the fraction of the cell between them, below 1.0 if the cell
-// starts below the horizon (its first column at mu_s < 0), else 0.0 (irradiance_uvs of the Python mappings).
+// The mu_s texel columns of the irradiance texture for a read at mu_s: (u0, v, t, below), three consecutive columns
+// at u0, u0 + 1 / IRRADIANCE_N_MU_S and u0 + 2 / IRRADIANCE_N_MU_S (each read linear in r; the third may lie past the
+// texture's last column, where its weight is 0), t the position in [-1, 1] relative to the middle one (the read's
+// cell is the first two for t < 0, else the last two), below 1.0 if the cell starts below the horizon (its first
+// column at mu_s < 0), else 0.0. Below the horizon the three are the nearest texels (the cell and the texel next to
+// its nearer end), elsewhere the cell's two and the next (irradiance_uvs of the Python mappings).
 vec4 IrradianceUvs(float r, float mu_s) {
   float x_r = clamp((r - BOTTOM_RADIUS) / (TOP_RADIUS - BOTTOM_RADIUS), 0.0, 1.0);
   float p = clamp(0.5 * (mu_s + 1.0), 0.0, 1.0) * float(IRRADIANCE_N_MU_S - 1);
   float j = min(floor(p), float(IRRADIANCE_N_MU_S - 2));
-  return vec4(TexCoord(j, IRRADIANCE_N_MU_S), TexCoord(x_r * float(IRRADIANCE_N_R - 1), IRRADIANCE_N_R), p - j,
-              2.0 * j < float(IRRADIANCE_N_MU_S - 1) ? 1.0 : 0.0);
+  bool below = 2.0 * j < float(IRRADIANCE_N_MU_S - 1);
+  float j0 = below ? clamp(p - j < 0.5 ? j - 1.0 : j, 0.0, float(IRRADIANCE_N_MU_S - 3)) : j;
+  return vec4(TexCoord(j0, IRRADIANCE_N_MU_S), TexCoord(x_r * float(IRRADIANCE_N_R - 1), IRRADIANCE_N_R),
+              p - (j0 + 1.0), below ? 1.0 : 0.0);
 }
 
 // Index position of r on the depth axis of the scattering textures: the rows sit at rho_i = H i / (n - 1)
@@ -232,12 +237,27 @@ float LogLerpWeight(float a, float b, float w) {
 // sampling.nu_weight does), applied to every channel.
 vec3 AzimuthLerp(vec4 s0, vec4 s1, float w) { return mix(s0.rgb, s1.rgb, LogLerpWeight(s0.a, s1.a, w)); }
 
-// RGB of the irradiance texture between the reads e0, e1 of its two mu_s columns (IrradianceUvs): where the cell
-// starts below the horizon the weight is LogLerpWeight of their alpha (the illuminance of the table's spectrum: the
-// twilight sky irradiance falls nearly exponentially with the sun's depression; skyscatter.precomputed.sampling.
-// irradiance_read), else w; applied to every channel.
-vec3 IrradianceLerp(vec4 e0, vec4 e1, float w, bool below) {
-  return mix(e0.rgb, e1.rgb, below ? LogLerpWeight(e0.a, e1.a, w) : w);
+// Weight of the upper end of the cell around t (y0, y1 for t < 0, else y1, y2) for lo + weight (hi - lo) following
+// ln y quadratic through three values at consecutive texels (t in [-1, 1] relative to the middle one): the
+// three-point Lagrange formula in the logarithm [Abramowitz1964] Eq. 25.2.11, kept between the cell's two values;
+// LogLerpWeight of the cell where a value is not positive, the fraction of the cell where its two values are equal
+// (skyscatter.precomputed.geometry.log_quadratic_weight).
+float LogQuadraticWeight(float y0, float y1, float y2, float t) {
+  float lo = t < 0.0 ? y0 : y1;
+  float hi = t < 0.0 ? y1 : y2;
+  float w = t < 0.0 ? t + 1.0 : t;
+  if (!(y0 > 0.0 && y1 > 0.0 && y2 > 0.0)) return LogLerpWeight(lo, hi, w);
+  float y = exp(0.5 * t * (t - 1.0) * log(y0) + (1.0 - t * t) * log(y1) + 0.5 * t * (t + 1.0) * log(y2));
+  return hi == lo ? w : clamp((y - lo) / (hi - lo), 0.0, 1.0);
+}
+
+// RGB of the irradiance texture from the reads e0, e1, e2 of its three mu_s columns (IrradianceUvs) at t: where the
+// cell starts below the horizon the weight is LogQuadraticWeight of their alpha (the illuminance of the table's
+// spectrum: the twilight sky irradiance falls faster the lower the sun; skyscatter.precomputed.sampling.
+// irradiance_read), else linear in the cell; applied to every channel of the cell's two columns.
+vec3 IrradianceLerp(vec4 e0, vec4 e1, vec4 e2, float t, bool below) {
+  float g = below ? LogQuadraticWeight(e0.a, e1.a, e2.a, t) : (t < 0.0 ? t + 1.0 : t);
+  return t < 0.0 ? mix(e0.rgb, e1.rgb, g) : mix(e1.rgb, e2.rgb, g);
 }
 
 // RGB of a single-scattering texture between the reads s0, s1 of its two nu slices where the point is in the Earth's
@@ -358,13 +378,17 @@ vec4 ScatteringTexture(highp sampler3D t, vec3 uvw, vec4 cell) {
 }
 
 // Phase functions [sr^-1]: Rayleigh [Bruneton2008] Eq. 2; Cornette-Shanks Eq. 4; Henyey-Greenstein.
-// Sky irradiance on a horizontal surface at radius r [m] with sun zenith cosine mu_s: the irradiance texture's two
-// mu_s columns around mu_s (IrradianceUvs), interpolated by IrradianceLerp.
+// Sky irradiance on a horizontal surface at radius r [m] with sun zenith cosine mu_s: the irradiance texture's mu_s
+// columns for mu_s (IrradianceUvs; the third read only below the horizon), interpolated by IrradianceLerp.
 vec3 GetHorizontalSkyIrradiance(float r, float mu_s) {
   vec4 c = IrradianceUvs(r, mu_s);
+  float du = 1.0 / float(IRRADIANCE_N_MU_S);
+  bool below = c.w > 0.5;
   vec4 e0 = Texture2D(irradiance_texture, c.xy);
-  vec4 e1 = Texture2D(irradiance_texture, vec2(c.x + 1.0 / float(IRRADIANCE_N_MU_S), c.y));
-  return IrradianceLerp(e0, e1, c.z, c.w > 0.5);
+  vec4 e1 = Texture2D(irradiance_texture, vec2(c.x + du, c.y));
+  if (!below) return mix(e0.rgb, e1.rgb, clamp(c.z + 1.0, 0.0, 1.0));
+  vec4 e2 = Texture2D(irradiance_texture, vec2(c.x + 2.0 * du, c.y));
+  return IrradianceLerp(e0, e1, e2, c.z, true);
 }
 
 float RayleighPhase(float nu) { return 3.0 / (16.0 * PI) * (1.0 + nu * nu); }

@@ -1,0 +1,88 @@
+"""The irradiance table's read along the sun zenith below the horizon against a table 8x finer (docs/accuracy.md,
+"Low sun").
+
+One precomputation with ``irradiance_mu_s = 8 x 63 + 1`` (505) sun-zenith texels (``orders=2``: the irradiance
+table is the first order's sky light, whose texels below the horizon come from the scattering tables alone, so the
+coarse table is every 8th texel of the fine one exactly); the default 64-texel table is that subsample. The read
+of the coarse table (``sampling.irradiance_read``: one weight for all wavelengths from the columns' illuminance, and
+each wavelength its own) at every fine texel between ``--lo`` and ``--hi`` deg of sun elevation is compared with the
+fine texel there, per wavelength, on the ground row (read at its texel, so only the mu_s interpolation is measured).
+The fine texels are not a perfect reference: each is log-quadratic between the scattering tables' three nearest
+sun-zenith texels, and where that node set changes (about -5.2, -3.6, -1.8 deg) ``ln E`` steps by up to 0.1 at
+400 nm; the hemisphere integral of ``benchmarks/second_order_low_sun.py --irradiance`` is the independent one.
+
+``python benchmarks/irradiance_read_low_sun.py [--atm turbidity3] [--lo -7 --hi 2] [--save fine.npz]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+
+from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
+from skyscatter.precomputed.sampling import irradiance_read
+
+ATMOSPHERES = {
+    "earth": lambda **k: AtmosphereParameters(**k),
+    "turbidity3": lambda **k: AtmosphereParameters.from_turbidity(3.0, **k),
+    "aod05": lambda **k: AtmosphereParameters.from_aerosol_optical_depth(0.5, **k),
+}
+FINE = 8
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--atm", default="turbidity3", choices=sorted(ATMOSPHERES))
+    ap.add_argument("--lo", type=float, default=-7.0)
+    ap.add_argument("--hi", type=float, default=2.0)
+    ap.add_argument("--load", default="", help="npz of a previous --save (skips the precomputation)")
+    ap.add_argument("--save", default="")
+    args = ap.parse_args()
+    if args.load:
+        z = np.load(args.load)
+        fine, lum, wl = z["fine"], z["lum"], z["wl"]
+    else:
+        params = ATMOSPHERES[args.atm]()
+        t0 = time.process_time()
+        atm = PrecomputedAtmosphere.compute(params, orders=2, sizes={"irradiance_mu_s": FINE * 63 + 1},
+                                            progress=False)
+        print(f"# {args.atm}: tables {time.process_time() - t0:.0f} CPU-s")
+        fine = np.asarray(atm.tables["irradiance"], dtype=np.float64)
+        lum = np.asarray(atm.irradiance_weights, dtype=np.float64)
+        wl = np.asarray(atm.wavelengths)
+        if args.save:
+            np.savez(args.save, fine=fine, lum=lum, wl=wl)
+    coarse = np.ascontiguousarray(fine[:, ::FINE])
+    own = np.empty(0)
+    out = np.empty(fine.shape[2])
+    print(f"# {fine.shape[2]} wavelengths {wl[0]:g}-{wl[-1]:g} nm; read / fine texel - 1 [%]: worst wavelength "
+          "(illuminance weight | own weights), and the illuminance")
+    print("| sun [deg] | frac | row | illum. weight: min / max over wl | own: min / max | illuminance |")
+    print("|---|---|---|---|---|---|")
+    worst = {"lum": 0.0, "own": 0.0}
+    for jf in range(fine.shape[1]):
+        mu_s = 2.0 * jf / (fine.shape[1] - 1) - 1.0
+        el = math.degrees(math.asin(mu_s))
+        if not args.lo <= el <= args.hi:
+            continue
+        p = jf / FINE
+        for row in (0,):
+            truth = fine[row, jf]
+            irradiance_read(coarse, float(row), p, lum, out)
+            e_l = out / truth - 1.0
+            y = (lum @ out) / (lum @ truth) - 1.0
+            irradiance_read(coarse, float(row), p, own, out)
+            e_o = out / truth - 1.0
+            worst["lum"] = max(worst["lum"], np.abs(e_l).max())
+            worst["own"] = max(worst["own"], np.abs(e_o).max())
+            print(f"| {el:+.2f} | {p - math.floor(p):.3f} | {row} | {100 * e_l.min():+.2f} / {100 * e_l.max():+.2f} "
+                  f"| {100 * e_o.min():+.2f} / {100 * e_o.max():+.2f} | {100 * y:+.2f} |")
+    print(f"# worst |error| {args.lo:g}..{args.hi:g} deg: illuminance weight {100 * worst['lum']:.2f} %, "
+          f"own weights {100 * worst['own']:.2f} %")
+
+
+if __name__ == "__main__":
+    main()
