@@ -250,3 +250,29 @@ def test_scattering_radius_index_is_linear_in_the_altitude_within_a_cell():
             assert abs(p_g - math.sqrt(r * r - BOTTOM**2) / H * (n_r - 1)) < 1e-9
     # 150 m: 0.464 of the way from the 62.7 m row to the 251 m one (0.546 in rho)
     assert abs(g.scattering_r_mu_coord(BOTTOM + 150.0, 0.5, False, BOTTOM, TOP, n_r, n_mu)[0] - 1.4638) < 1e-3
+
+
+@pytest.mark.parametrize(("n_r", "apart"), [(32, True), (16, True), (8, False), (1, False)])
+def test_ground_cell_rows_apart_only_in_thin_cells(n_r, apart):
+    """The ground cell's rows are read apart (own mu coordinate, altitude weight) only if the first row above the
+    ground lies below 300 m: 62.7 m (32 rows), 268 m (16 rows); not 1230 m (8 rows: the coarse tables, whose
+    diffuse horizontal irradiance against DISORT went from +0.85 % to +4.6 % under the rule, docs/aerosols.md).
+    The row altitudes here from the rows' definition, rho_i = H i / (n - 1) (Bruneton & Neyret 2008, Sec. 4)."""
+    from skyscatter.precomputed.geometry import ALTITUDE_LINEAR_CELL_TOP, ground_cell_rows_apart
+
+    bottom, top = 6_360_000.0, 6_420_000.0
+    if n_r > 1:
+        rho1 = math.sqrt(top**2 - bottom**2) / (n_r - 1)
+        assert (math.hypot(rho1, bottom) - bottom < ALTITUDE_LINEAR_CELL_TOP) == apart
+    assert ground_cell_rows_apart(bottom, top, n_r) == apart
+    # and the radius index follows: linear in the altitude at mid-height of the cell only where the rows are apart
+    from skyscatter.precomputed.geometry import scattering_r_index
+
+    if n_r > 1:
+        big_h = math.sqrt(top**2 - bottom**2)
+        rho1 = big_h / (n_r - 1)
+        h1 = math.hypot(rho1, bottom) - bottom
+        r = bottom + 0.5 * h1
+        rho = math.sqrt(r * r - bottom * bottom)
+        expected = 0.5 if apart else rho / rho1
+        assert scattering_r_index(r, rho, bottom, big_h, n_r) == pytest.approx(expected, rel=1e-9)

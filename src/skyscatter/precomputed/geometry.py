@@ -70,6 +70,7 @@ __all__ = [
     "scattering_nu_param",
     "scattering_params",
     "scattering_r_mu_rows",
+    "ground_cell_rows_apart",
     "scattering_row_mu_coord",
     "shadow_exit_altitude",
     "transmittance_coord",
@@ -418,14 +419,33 @@ def _sky_mu_x(r: float, mu: float, bottom: float, top: float) -> float:
 #: linear in the altitude (:func:`scattering_r_index`): the cell touching the ground and the one from 62.7 m of the
 #: default 32 rows.
 ALTITUDE_LINEAR_BELOW = 200.0
+#: Altitude [m] that the upper row of such a cell must lie below as well: a cell thicker than that (the first cell
+#: of tables with few rows: 0-1230 m with 8 rows) keeps the ``rho`` weight and one shared ``mu`` coordinate, as the
+#: radiance's curvature in the altitude over a cell comparable to the aerosol's scale height (1.2 km) outweighs
+#: (8-row tables, AOD 0.5, g 0.8, albedo 1, sun 30 deg, 550 nm: the tables' diffuse horizontal irradiance against
+#: DISORT +0.85 % with the ``rho`` weight, +4.6 % with the altitude weight and rows apart; 32 rows: -0.46 % either way).
+ALTITUDE_LINEAR_CELL_TOP = 300.0
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def ground_cell_rows_apart(bottom: float, top: float, n_r: int) -> bool:
+    """True if the cell of the ``n_r`` rows touching the ground (radii ``bottom`` to the first row above it [m]) is
+    thin enough (first row below :data:`ALTITUDE_LINEAR_CELL_TOP`) for its rows to be read each at its own ``mu``
+    coordinate and weighted linearly in the altitude (:func:`scattering_r_mu_rows`)."""
+    if n_r < 2:
+        return False
+    rho1 = math.sqrt(top * top - bottom * bottom) / (n_r - 1)
+    r1 = math.sqrt(rho1 * rho1 + bottom * bottom)
+    return rho1 * rho1 < ALTITUDE_LINEAR_CELL_TOP * (r1 + bottom)
 
 
 @helper(fastmath=CONTRACT_ARCP)
 def scattering_r_index(r: float, rho: float, bottom: float, big_h: float, n_r: int) -> float:
     """Index position of radius ``r`` [m] (``rho = sqrt(r^2 - R_g^2)`` [m], ``big_h = sqrt(R_t^2 - R_g^2)`` [m])
     on the ``n_r`` rows of the 4D scattering tables: the rows sit at ``rho_i = H i / (n_r - 1)`` (``x_r = rho / H``,
-    Bruneton & Neyret 2008, Sec. 4). Within the cells whose lower row is below :data:`ALTITUDE_LINEAR_BELOW` (the
-    first two cells of the default 32 rows, 0-62.7 m and 62.7-251 m) the position is linear in ``r`` (the
+    Bruneton & Neyret 2008, Sec. 4). Within the cells whose lower row is below :data:`ALTITUDE_LINEAR_BELOW` and
+    upper row below :data:`ALTITUDE_LINEAR_CELL_TOP` (the first two cells of the default 32 rows, 0-62.7 m and
+    62.7-251 m; the first of 16 rows, 0-268 m; none of 8 rows) the position is linear in ``r`` (the
     altitude), ``i + (r - r_i) / (r_(i+1) - r_i)``; elsewhere linear in ``rho``.
 
     The radiance is smooth in the altitude, and the altitude a quadratic function of ``rho`` (``h ~ rho^2 / (2
@@ -448,6 +468,8 @@ def scattering_r_index(r: float, rho: float, bottom: float, big_h: float, n_r: i
     if rho0 * rho0 >= ALTITUDE_LINEAR_BELOW * (r0 + bottom):
         return x
     r1 = math.sqrt(rho1 * rho1 + bottom * bottom)
+    if rho1 * rho1 >= ALTITUDE_LINEAR_CELL_TOP * (r1 + bottom):
+        return x  # a thick cell (few rows): linear in rho
     rr = max(r, bottom)
     w = (rho * rho - rho0 * rho0) * (r1 + r0) / ((rho1 * rho1 - rho0 * rho0) * (rr + r0))
     return i + clamp(w, 0.0, 1.0)
@@ -507,7 +529,7 @@ def scattering_r_mu_rows(r: float, mu: float, hits_ground: bool, bottom: float, 
     ``mu`` position (Bruneton & Neyret 2008, Sec. 4: one coordinate across the rows, as the GPU's trilinear read
     holds it)."""
     p_r, p_mu = scattering_r_mu_coord(r, mu, hits_ground, bottom, top, n_r, n_mu)
-    if hits_ground or p_r >= 1.0 or n_r < 2:
+    if hits_ground or p_r >= 1.0 or not ground_cell_rows_apart(bottom, top, n_r):
         return p_r, p_mu, p_mu
     return (p_r, scattering_row_mu_coord(0, mu, bottom, top, n_r, n_mu),
             scattering_row_mu_coord(1, mu, bottom, top, n_r, n_mu))

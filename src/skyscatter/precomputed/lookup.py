@@ -33,6 +33,7 @@ from .geometry import (
     clamp,
     distance_to_bottom,
     distance_to_boundary,
+    ground_cell_rows_apart,
     ground_mu_unit,
     horizon_constants,
     in_earth_shadow,
@@ -289,7 +290,7 @@ def observer_two_rows(r, bottom, top, n_r):
     touches the ground (below the first row above it): its rays that miss the ground read each row at its own ``mu``
     coordinate (:func:`.geometry.scattering_r_mu_rows`), so the observer slices hold the two rows' shares apart."""
     p_r, _ = scattering_r_mu_coord(r, 1.0, False, bottom, top, n_r, 4)
-    return 0.0 < p_r < 1.0
+    return 0.0 < p_r < 1.0 and ground_cell_rows_apart(bottom, top, n_r)
 
 
 def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, projection):

@@ -91,7 +91,10 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABL
 #: texels in the cells that start below the horizon (:func:`.geometry.log_quadratic_weight`; before: log-linear over
 #: two) in the ground term of the orders' scattering density as in the rendering lookups, so the multiple-scattering
 #: tables (and the irradiance tables of the orders after the second) of format 16 hold other values.
-FORMAT_VERSION = 17
+#: 18: the same layout; the rule of format 16 (rows apart, altitude weight) only where the cell touching the ground
+#: ends below 300 m (:data:`.geometry.ALTITUDE_LINEAR_CELL_TOP`: 32 and 16 rows; tables of 8 rows keep the ``rho``
+#: weight and a shared coordinate again), so tables with few rows of format 17 hold other values.
+FORMAT_VERSION = 18
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).

@@ -89,8 +89,9 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: irradiance texture's alpha holds the illuminance [lx] of its spectrum (the library's weight along mu_s: the same
 #: for any set of table wavelengths); the constant SHADOW_RATIO_MAX (shadow_factors). 7: below the horizon the
 #: irradiance texture is read quadratically in the logarithm over three mu_s columns (irradiance_uvs returns three
-#: columns and the position t, irradiance_lerp takes three reads; log_quadratic_weight).
-MANIFEST_VERSION = 7
+#: columns and the position t, irradiance_lerp takes three reads; log_quadratic_weight). 8: the altitude weight and
+#: the rows apart of version 5 only where the cell touching the ground ends below 300 m (skyscatter table format 18).
+MANIFEST_VERSION = 8
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -203,6 +204,8 @@ def scattering_r_index(r, rho, big_h):
     if rho0 * rho0 >= 200.0 * (r0 + BOTTOM_RADIUS):
         return x  # the cells from 200 m up: linear in rho (measured better there)
     r1 = math.sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS)
+    if rho1 * rho1 >= 300.0 * (r1 + BOTTOM_RADIUS):
+        return x  # a cell reaching above 300 m (tables with few rows): linear in rho
     w = (rho * rho - rho0 * rho0) * (r1 + r0) / ((rho1 * rho1 - rho0 * rho0) * (max(r, BOTTOM_RADIUS) + r0))
     return i + clamp(w, 0.0, 1.0)
 
@@ -245,10 +248,10 @@ def scattering_ground_cell(r, mu, hits_ground):
     big_h = math.sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS))
     rho = safe_sqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS))
     p_r = scattering_r_index(r, rho, big_h)
-    if p_r >= 1.0:
-        return None
     rho1 = big_h / (SCATTERING_N_R - 1)
     r1 = math.sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS)
+    if p_r >= 1.0 or rho1 * rho1 >= 300.0 * (r1 + BOTTOM_RADIUS):
+        return None  # above the cell, or a cell reaching above 300 m (few rows): one shared coordinate
     return (tex_coord(scattering_sky_mu_index(BOTTOM_RADIUS, 0.0, big_h, mu), SCATTERING_N_MU),
             tex_coord(scattering_sky_mu_index(r1, rho1, big_h, mu), SCATTERING_N_MU), p_r)
 

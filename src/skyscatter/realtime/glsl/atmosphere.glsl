@@ -131,6 +131,8 @@ float ScatteringRIndex(float r, float rho, float H) {
   float r0 = sqrt(rho0 * rho0 + BOTTOM_RADIUS * BOTTOM_RADIUS);
   if (rho0 * rho0 >= 200.0 * (r0 + BOTTOM_RADIUS)) return clamp(rho / H, 0.0, 1.0) * n;
   float r1 = sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS);
+  // a cell reaching above 300 m (tables with few rows): linear in rho
+  if (rho1 * rho1 >= 300.0 * (r1 + BOTTOM_RADIUS)) return clamp(rho / H, 0.0, 1.0) * n;
   float w = (rho - rho0) * (rho + rho0) * (r1 + r0) / ((rho1 - rho0) * (rho1 + rho0) * (max(r, BOTTOM_RADIUS) + r0));
   return i + clamp(w, 0.0, 1.0);
 }
@@ -185,9 +187,10 @@ vec4 ScatteringGroundCell(float r, float mu, bool hits_ground) {
   float H = sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS));
   float rho = SafeSqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS));
   float p_r = ScatteringRIndex(r, rho, H);
-  if (p_r >= 1.0) return vec4(0.0);
   float rho1 = H / float(SCATTERING_N_R - 1);
   float r1 = sqrt(rho1 * rho1 + BOTTOM_RADIUS * BOTTOM_RADIUS);
+  // above the cell, or a cell reaching above 300 m (tables with few rows): one shared coordinate
+  if (p_r >= 1.0 || rho1 * rho1 >= 300.0 * (r1 + BOTTOM_RADIUS)) return vec4(0.0);
   return vec4(TexCoord(ScatteringSkyMuIndex(BOTTOM_RADIUS, 0.0, H, mu), SCATTERING_N_MU),
               TexCoord(ScatteringSkyMuIndex(r1, rho1, H, mu), SCATTERING_N_MU), p_r, 1.0);
 }
