@@ -24,8 +24,8 @@ from pathlib import Path
 
 from .errors import OutputError
 
-__all__ = ["atomic_path", "atomic_paths", "check_output_path", "ensure_output_folder", "remove_stale_temporaries",
-           "write_failure"]
+__all__ = ["atomic_path", "atomic_paths", "build_lock", "check_output_path", "ensure_output_folder",
+           "remove_stale_temporaries", "write_failure"]
 
 # .<target name>.<pid>.<token>.<tmp|old><suffix>
 _TEMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.(?P<token>[0-9a-f]{12})\.(?P<kind>tmp|old)(?P<suffix>\.[^.]*)?$")
@@ -331,3 +331,24 @@ def ensure_numba_cache(package_dir: str | os.PathLike[str]) -> str | None:
         f"{fallback} (set NUMBA_CACHE_DIR to choose)", NumbaCacheWarning, "skyscatter", 0,
     )
     return fallback
+
+
+@contextlib.contextmanager
+def build_lock(path: Path) -> Iterator[None]:
+    """Hold the exclusive lock of the cached file ``path`` (``.NAME.lock`` beside it, :func:`fcntl.flock`) while it
+    is looked up again and built: another process building it is waited for. The lock goes with its file
+    descriptor, so the kernel releases it when the process ends, however it ends (no stale locks). Where the folder
+    cannot be written there is no lock (the caller builds the file and warns that it is not cached)."""
+    import fcntl
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(path.with_name(f".{path.name}.lock"), os.O_RDWR | os.O_CREAT, 0o666)
+    except OSError:
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # releases the lock

@@ -74,13 +74,11 @@ the closure path: Petters et al. (2003, JGR 108(D9), 4288), Leahy et al. (2007, 
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import hashlib
 import math
 import os
 import warnings
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -99,6 +97,7 @@ from ..atmosphere.medium import AtmosphereParameters
 from ..conventions import direction_from_angles
 from ..epw import EPWData, EPWLocation, read_epw
 from ..errors import FileFormatError, InvalidParameterError
+from ..fileio import build_lock
 from ..precomputed.family import AXIS_SETTERS, FAMILY_WAVELENGTHS, GridAxis, TableFamily, register_axis
 
 __all__ = [
@@ -746,7 +745,7 @@ def _cached_cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: A
     table = _load_cloud_table(atmosphere, text, path)
     if table is not None:
         return table
-    with _cloud_table_lock(path):
+    with build_lock(path):
         table = _load_cloud_table(atmosphere, text, path)  # built by another process while we waited
         if table is None:
             table = CloudTable(atmosphere, optical_depth_nodes, zenith_nodes)
@@ -770,25 +769,6 @@ def _load_cloud_table(atmosphere: AtmosphereParameters, text: str, path: Path) -
         return None  # a damaged file: rebuilt
     table.build_seconds = 0.0
     return table
-
-
-@contextlib.contextmanager
-def _cloud_table_lock(path: Path) -> Iterator[None]:
-    """Hold the exclusive build lock of the cloud table at ``path`` (no lock where the cache folder cannot be
-    written: the table is then built, and :func:`_save_cloud_table` warns that it is not cached)."""
-    import fcntl
-
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd = os.open(path.with_name(f".{path.name}.lock"), os.O_RDWR | os.O_CREAT, 0o666)
-    except OSError:
-        yield
-        return
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
-        yield
-    finally:
-        os.close(fd)  # releases the lock
 
 
 @dataclass(frozen=True)

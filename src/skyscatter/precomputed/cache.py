@@ -14,11 +14,9 @@ when its process ends, even killed) and the others wait for it, then load its fi
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
 import os
 import warnings
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..deprecation import renamed_keywords
 from ..errors import FileFormatError, InvalidParameterError, OutputError
-from ..fileio import ensure_output_folder
+from ..fileio import build_lock, ensure_output_folder
 from .parameters import AtmosphereParameters
 from .sizes import DEFAULT_ORDERS, TableSizes, table_wavelengths
 from .storage import cache_key
@@ -115,7 +113,7 @@ def load_or_compute(atmosphere: AtmosphereParameters | None = None, *, orders: i
     atm, seen = (None, None) if force else _load(path, key)
     computed = atm is None
     if computed:
-        with _build_lock(path):  # one process builds; the others wait here, then load its file
+        with build_lock(path):  # one process builds; the others wait here, then load its file
             if not force and _identity(path) not in (None, seen):  # written by another process while we waited
                 atm, _ = _load(path, key)
             computed = atm is None
@@ -172,27 +170,6 @@ def _load(path: Path, key: str) -> tuple[PrecomputedAtmosphere | None, tuple[int
     except (FileFormatError, OSError) as exc:
         warnings.warn(f"rebuilding cached atmosphere tables: {exc}", CacheRebuildWarning, stacklevel=4)
         return None, seen
-
-
-@contextlib.contextmanager
-def _build_lock(path: Path) -> Iterator[None]:
-    """Hold the exclusive lock of the tables at ``path`` (``.NAME.lock`` beside it, :func:`fcntl.flock`) while
-    they are looked up again and built: another process building them is waited for. The lock goes with its
-    file descriptor, so the kernel releases it when the process ends, however it ends (no stale locks). Where
-    the cache folder cannot be written there is no lock (the tables are built, and a warning says they are not
-    cached)."""
-    lock = path.with_name(f".{path.name}.lock")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
-    except OSError:
-        yield
-        return
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
-        yield
-    finally:
-        os.close(fd)  # releases the lock
 
 
 @renamed_keywords(wavelengths="tables")
