@@ -148,3 +148,49 @@ def test_multiple_scattering_against_the_monte_carlo(mie_params, mie_tables):
                           scheduler="synchronous")
         rel = np.abs(ours / mc.radiance[:, 0] - 1)
         assert np.all(rel < 0.03 + 3 * mc.relative_stderr[:, 0]), (side, rel, mc.relative_stderr[:, 0])
+
+
+def test_saved_tables_carry_the_phase_table(mie_params, tmp_path, monkeypatch):
+    """A table file of a Mie aerosol stores the lookups' phase table: loading it and evaluating does not compute
+    the aerosol's phase again (miepython's import and the Mie sums cost 4-8 s of CPU per process), and the sky is
+    bit for bit the one of the tables that were saved. A damaged phase table is refused; a file written without
+    it (before it was stored) still loads and computes it."""
+    import zipfile
+
+    from skyscatter.errors import FileFormatError
+    from skyscatter.precomputed import storage
+
+    atm = PrecomputedAtmosphere.compute(mie_params, orders=1, wavelengths=[450.0, 650.0], sizes=SMALL_SIZES,
+                                        progress=False)
+    r = atm.parameters.bottom_radius
+    d = np.array([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8], [-0.8, 0.0, 0.6], [0.0, 0.99, 0.141]])
+    sun = np.array([0.5, 0.0, math.sqrt(0.75)])
+    expected = atm.sky_radiance([0.0, 0.0, r], d, sun)
+    path = atm.save(tmp_path / "mie.npz")
+    with zipfile.ZipFile(path) as zf:
+        assert {f"{n}.npy" for n in storage.PHASE_NAMES} <= set(zf.namelist())
+
+    def no_phase(*args, **kwargs):
+        raise AssertionError("the phase table was computed again")
+
+    with monkeypatch.context() as mp:
+        mp.setattr(AtmosphereParameters, "aerosol_phase_table", no_phase)
+        loaded = PrecomputedAtmosphere.load(path)
+        np.testing.assert_array_equal(loaded.sky_radiance([0.0, 0.0, r], d, sun), expected)
+
+    damaged = tmp_path / "damaged.npz"
+    with zipfile.ZipFile(path) as src, zipfile.ZipFile(damaged, "w", zipfile.ZIP_STORED) as dst:
+        for info in src.infolist():
+            data = src.read(info)
+            if info.filename == "aerosol_phase_values.npy":
+                data = data[:-8] + np.float64(1.0).tobytes()
+            dst.writestr(info, data)
+    with pytest.raises(FileFormatError, match="checksum mismatch in table 'aerosol_phase_values'"):
+        PrecomputedAtmosphere.load(damaged)
+
+    older = tmp_path / "older.npz"
+    with zipfile.ZipFile(path) as src, zipfile.ZipFile(older, "w", zipfile.ZIP_STORED) as dst:
+        for info in src.infolist():
+            if info.filename[:-4] not in storage.PHASE_NAMES:
+                dst.writestr(info, src.read(info))
+    np.testing.assert_array_equal(PrecomputedAtmosphere.load(older).sky_radiance([0.0, 0.0, r], d, sun), expected)

@@ -9,7 +9,8 @@ the timings of the computation), and the arrays of :data:`STORED_NAMES`:
 * ``transmittance`` and ``irradiance`` as float32, wavelength last (as :mod:`.tables` describes them);
 * each 4D scattering table as :class:`HalfTable` stores it: ``<name>`` float16, wavelength first
   (n_wavelengths, n_r, n_mu, n_mu_s, n_nu), and ``<name>_scale`` float32 (n_wavelengths, n_r, n_mu_s), a power of
-  two per wavelength, radius and sun zenith.
+  two per wavelength, radius and sun zenith;
+* with a tabulated aerosol phase (a Mie aerosol), the lookups' phase table (:data:`PHASE_NAMES`, float64).
 
 Half precision halves the file and what a process maps (193 to 97 MiB for the default tables). Its rounding is
 at most 2^-11 = 0.049 % of a value: each (wavelength, r, mu_s) slice is scaled by a power of two (exact) so that
@@ -50,8 +51,8 @@ from .sizes import TableSizes
 if TYPE_CHECKING:
     from .tables import PrecomputedAtmosphere
 
-__all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABLE_NAMES", "HalfTable", "cache_key",
-           "checksum", "read_tables", "write_tables"]
+__all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "PHASE_NAMES", "STORED_NAMES", "TABLE_NAMES", "HalfTable",
+           "cache_key", "checksum", "read_tables", "write_tables"]
 
 #: Version of the table layout and algorithm; part of the cache key and checked by :func:`read_tables`.
 #: 6: half-precision, wavelength-first scattering tables with power-of-two scales; 64-byte aligned arrays.
@@ -103,6 +104,11 @@ TABLE_NAMES = ("transmittance", "irradiance", "single_rayleigh", "single_mie", "
 HALF_TABLES = ("single_rayleigh", "single_mie", "multiple")
 #: The arrays of a table file, in file order.
 STORED_NAMES = ("transmittance", "irradiance", *(f"{n}{s}" for n in HALF_TABLES for s in ("", "_scale")))
+#: Arrays stored only with a tabulated aerosol phase (a Mie aerosol): the lookups' phase table at the tables'
+#: wavelengths (:attr:`.evaluation.TableLookups._aerosol_phase`), so that a process that loads the tables does not
+#: import the Mie library and recompute it (4-8 s of CPU, most of it miepython's import). Files without them
+#: (written before) still load: the lookups then compute the table as before.
+PHASE_NAMES = ("aerosol_phase_mu", "aerosol_phase_values")
 
 #: Largest value of a slice after scaling: 2^13 (module docstring), so that rounding to float16 never moves it
 #: past a power of two and encoding decoded values again gives the same scales and values.
@@ -332,10 +338,21 @@ def _write_member(zf: zipfile.ZipFile, fh: IO[bytes], name: str, arr: NDArray[An
             out.write(memoryview(values).cast("B"))
 
 
+def _phase_arrays(atm: PrecomputedAtmosphere) -> dict[str, NDArray[Any]]:
+    """The :data:`PHASE_NAMES` arrays of ``atm`` (empty for an analytic aerosol phase)."""
+    from .sampling import TABLE_PHASE
+
+    kind, _, mu, values = atm._aerosol_phase
+    if kind != TABLE_PHASE:
+        return {}
+    return {"aerosol_phase_mu": np.ascontiguousarray(mu, dtype=np.float64),
+            "aerosol_phase_values": np.ascontiguousarray(values, dtype=np.float64)}
+
+
 def write_tables(atm: PrecomputedAtmosphere, path: str | os.PathLike[str]) -> Path:
     """Write the tables and their description to an .npz file, atomically; returns the path."""
     target = Path(path)
-    arrays = _stored_arrays(atm.stored)
+    arrays = {**_stored_arrays(atm.stored), **_phase_arrays(atm)}
     meta = json.dumps(_metadata(atm, _checksums(arrays)), sort_keys=True)
     with atomic_path(target) as tmp, open(tmp, "wb") as fh, zipfile.ZipFile(fh, "w", zipfile.ZIP_STORED) as zf:
         for name, arr in arrays.items():
@@ -362,7 +379,7 @@ def _member_arrays(p: Path) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
             meta = json.loads(str(np.lib.format.read_array(f, allow_pickle=False)[()]))
         if not isinstance(meta, dict) or meta.get("format_version") != FORMAT_VERSION:
             return meta, arrays  # read_tables says what the file is
-        for name in STORED_NAMES:
+        for name in (*STORED_NAMES, *(n for n in PHASE_NAMES if n in names)):
             info = names[name]
             fh.seek(info.header_offset)
             local = fh.read(30)
@@ -424,8 +441,11 @@ def read_tables(cls: type[PrecomputedAtmosphere], path: str | os.PathLike[str], 
             tables[name] = HalfTable(arrays[name], arrays[f"{name}_scale"])
     except FileFormatError as exc:
         raise FileFormatError(f"{p}: {exc}") from None
+    phase = {name: np.array(arrays[name]) for name in PHASE_NAMES if name in arrays}
+    if phase and len(phase) != len(PHASE_NAMES):
+        raise FileFormatError(f"{p}: not a readable skyscatter table file (one of {', '.join(PHASE_NAMES)} missing)")
     expected = meta.get("checksums", {})
-    for name, value in _checksums(_stored_arrays(tables)).items():
+    for name, value in _checksums({**_stored_arrays(tables), **phase}).items():
         if value != expected.get(name):
             raise FileFormatError(f"{p}: checksum mismatch in table {name!r} (file damaged)")
     try:
@@ -438,5 +458,19 @@ def read_tables(cls: type[PrecomputedAtmosphere], path: str | os.PathLike[str], 
         raise FileFormatError(f"{p}: the stored key does not match the stored parameters")
     if expected_key is not None and meta.get("key") != expected_key:
         raise FileFormatError(f"{p}: tables were computed for other parameters, sizes or library version")
+    if phase:
+        _set_phase(atm, phase, p)
     return atm
+
+
+def _set_phase(atm: PrecomputedAtmosphere, phase: dict[str, NDArray[Any]], p: Path) -> None:
+    """Give ``atm``'s lookups the stored aerosol phase table (:data:`PHASE_NAMES`) after checking that it fits."""
+    from .sampling import TABLE_PHASE
+
+    mu, values = phase["aerosol_phase_mu"], phase["aerosol_phase_values"]
+    if (atm.parameters.aerosol_component.analytic_phase is not None or mu.ndim != 1 or mu.size < 2
+            or values.shape != (len(atm.wavelengths), mu.size) or not np.all(np.diff(mu) > 0)
+            or not np.all(np.isfinite(values))):
+        raise FileFormatError(f"{p}: inconsistent stored aerosol phase table")
+    atm._aerosol_phase_cache = (TABLE_PHASE, 0.0, mu, values)
 
