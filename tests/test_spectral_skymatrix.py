@@ -852,6 +852,13 @@ def test_cli_spectral_takes_the_air_options(tmp_path):
     assert np.all(ratio > (900 / 550) ** -1.3 / s900) and np.all(ratio < (600 / 550) ** -1.3 / s600), ratio
     ssa = float(air.aerosol.single_scattering_albedo_at([550.0])[0])
     np.testing.assert_allclose(m["single_scattering_albedo"].values[clear], ssa, rtol=1e-12)
+    # the file's broadband AOD (700 nm) is brought to 550 nm with each aerosol's own spectrum: maritime-clean's Mie
+    # extinction ratio (its particles' extinction_at, not the retrieval's log-log shape), the default's Angstrom law
+    e550, e700 = air.aerosol.extinction_at([550.0, 700.0])
+    broadband = m["aerosol_optical_depth_file"].values[clear] * (e700 / e550)
+    assert np.all(np.isfinite(broadband)) and np.all(broadband > 0)
+    np.testing.assert_allclose(broadband, d["aerosol_optical_depth_file"].values[clear] * (700 / 550) ** -1.3,
+                               rtol=1e-9)
     wl = d["wavelength"].values
     blue, red = int(np.argmin(np.abs(wl - 390))), int(np.argmin(np.abs(wl - 670)))
 

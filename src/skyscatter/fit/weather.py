@@ -370,8 +370,14 @@ class BroadbandClearSky:
         ozone[inside] = per_du.ozone_absorption_at(wl[inside]) * base.ozone_density.column(thick)
         self.tau_ozone_per_du = ozone  # [DU^-1] inside the medium's data; Bird & Riordan's form outside
         self.ozone_inside = inside
-        self.aerosol_shape = (wl / 550.0) ** -self.alpha if base.aerosol is None else \
-            particle_aerosol_shape(base.aerosol, wl)
+        self.aerosol_shape = self.aerosol_shape_at(wl)
+
+    def aerosol_shape_at(self, wavelengths: ArrayLike) -> NDArray[np.float64]:
+        """The aerosol's optical depth at ``wavelengths`` [nm] relative to 550 nm [-]: Angstrom's power law of
+        ``angstrom_alpha`` ([Angstrom1929]), or a particle aerosol's own (:func:`particle_aerosol_shape`)."""
+        wl = np.asarray(wavelengths, dtype=float)
+        return (wl / 550.0) ** -self.alpha if self.base.aerosol is None else \
+            particle_aerosol_shape(self.base.aerosol, wl)
 
     def gas_transmittance(self, zenith: ArrayLike, precipitable_water: ArrayLike,
                           pressure: ArrayLike) -> NDArray[np.float64]:
@@ -1446,11 +1452,13 @@ def retrieve_hourly_atmosphere(record: EPWData | str | os.PathLike[str], options
         ok = np.isfinite(file_ozone)
         ozone[ok] = file_ozone[ok]
         o3_src[ok] = "file"
+    model = BroadbandClearSky(fam.base, o.angstrom_alpha)
+    # the file's broadband AOD (at BROADBAND_AOD_WAVELENGTH) to 550 nm with the medium's own spectral shape: the
+    # Angstrom law of the analytic aerosol, a particle aerosol's Mie extinction (e.g. --aerosol desert)
     aod_file = (np.full(n, np.nan) if rec.aerosol_optical_depth is None else
-                rec.aerosol_optical_depth * (BROADBAND_AOD_WAVELENGTH / 550.0) ** float(o.angstrom_alpha))
+                rec.aerosol_optical_depth / float(model.aerosol_shape_at([BROADBAND_AOD_WAVELENGTH])[0]))
 
     # ---- clear hours: AOD from DNI, albedo from DHI
-    model = BroadbandClearSky(fam.base, o.angstrom_alpha)
     # the aerosol albedo where no axis retrieves it: the base's (a particle aerosol's from its Mie optics, 550 nm)
     base_ssa = (fam.base.mie_single_scattering_albedo if fam.base.aerosol is None else
                 float(fam.base.aerosol_component.single_scattering_albedo_at([550.0])[0]))
