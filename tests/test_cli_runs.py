@@ -160,6 +160,25 @@ def _zarr(name, cells):
     return check
 
 
+def _reference_air(name, aerosol_type, air_file):
+    """The store's job holds the air the options asked for: an OPAC type's Mie aerosol with the cells' optical
+    depths, or the air of a JSON file with its Angstrom exponent."""
+    def check(folder: Path, out: str) -> None:
+        import xarray as xr
+
+        from skyscatter.atmosphere import AtmosphereParameters
+
+        ds = xr.open_zarr(folder / name, consolidated=False)
+        air = AtmosphereParameters.from_dict(json.loads(ds.attrs["job"])["atmosphere"])
+        if aerosol_type is not None:
+            expected = AtmosphereParameters.from_options(aerosol_type=aerosol_type).aerosol
+            assert air.aerosol == expected and "tabulated" in ds.attrs["mie_phase_function"]
+        else:
+            fitted = AtmosphereParameters.load_json(folder / air_file)
+            assert air.aerosol is None and air.mie_angstrom_alpha == fitted.mie_angstrom_alpha != 1.3
+    return check
+
+
 def _tables(name):
     def check(folder: Path, out: str) -> None:
         from skyscatter.precomputed import PrecomputedAtmosphere
@@ -472,6 +491,14 @@ RUNS = {
     "reference-cloud": (["reference", "c.zarr", "--sun-elevation", "30", "--wavelengths", "500", "--directions", "2",
                          "--samples", "4", "--cloud-optical-depth", "10", "--cloud-base", "700", "--cloud-top", "1200",
                          "--cloud-effective-radius", "8"], _zarr("c.zarr", 1)),
+    "reference-aerosol-type": (["reference", "t.zarr", "--sun-elevation", "30", "--aerosol", "maritime-clean", "--aod",
+                                "0.05,0.3", "--wavelengths", "450,650", "--directions", "2", "--samples", "4"],
+                               _all(_zarr("t.zarr", 2), _reference_air("t.zarr", "maritime-clean", None))),
+    "reference-atmosphere-file": (["fit-atmosphere", "aod.csv", "--free", "aerosol_optical_depth,angstrom_alpha",
+                                   "--out", "air.json", "&&", "reference", "f.zarr", "--sun-elevation", "30",
+                                   "--atmosphere", "air.json", "--aod", "0.1", "--wavelengths", "500", "--directions",
+                                   "2", "--samples", "4"],
+                                  _all(_zarr("f.zarr", 1), _reference_air("f.zarr", None, "air.json"))),
     # fit-hosek-wilkie (the tables at tiny sizes)
     "fit": (["fit-hosek-wilkie", "--out", "t.npz", "--turbidity", "4", "--ground-albedo", "0.3", "--elevations",
              "6", "--fit-wavelengths", "550"], _dataset("t.npz", 1)),

@@ -107,3 +107,34 @@ def test_cli_reference(tmp_path, capsys):
     assert main(["reference", str(tmp_path / "b.zarr"), "--wavelengths", "100", "--no-progress"]) == 2
     assert main(["reference", str(tmp_path / "b.zarr"), "--ground-albedo", "x"]) == 2
     assert main(["reference", str(tmp_path / "b.zarr"), "--turbidity", "2", "--aod", "0.1"]) == 2
+
+
+def test_an_aerosol_type_keeps_its_mie_optics_per_cell(tmp_path, capsys):
+    """With a particle aerosol (an OPAC type) each cell is that aerosol at the cell's optical depth at 550 nm: its
+    spectral shape (maritime-clean's Mie extinction, Angstrom exponent about 0.1, not the analytic aerosol's 1.3)
+    and its single-scattering albedo kept. Turbidities are refused (they define an Angstrom aerosol), as are the
+    command's --turbidity and --phase beside --aerosol (one line, exit 2)."""
+    from skyscatter.montecarlo.dataset import make_job
+
+    air = AtmosphereParameters.with_aerosol_type("maritime-clean", 0.1)
+    job = make_job(sun_elevations=[0.5], albedos=[0.2, 0.4], wavelengths=[450.0], directions=[[0.0, 0.0, 1.0]],
+                   aerosol_optical_depths=[0.05, 0.3], atmosphere=air)
+    for k, tau in enumerate((0.05, 0.3)):
+        cell = job.cell_atmosphere(k, 1)
+        assert cell.ground_albedo_at([550.0])[0] == 0.4 and cell.aerosol is not None
+        t450, t550 = cell.aerosol_component.optical_depth([450.0, 550.0], cell.thickness)
+        assert t550 == pytest.approx(tau, rel=1e-9)
+        # the type's own spectrum: its extinction ratio from the Mie optics of the preset at its default depth
+        e450, e550 = air.aerosol.extinction_at([450.0, 550.0])
+        assert t450 / t550 == pytest.approx(e450 / e550, rel=1e-9) and t450 / t550 < (450 / 550) ** -0.5
+        np.testing.assert_allclose(cell.aerosol.single_scattering_albedo_at([450.0, 550.0]),
+                                   air.aerosol.single_scattering_albedo_at([450.0, 550.0]), rtol=1e-12)
+    with pytest.raises(InvalidParameterError, match="not turbidities"):
+        make_job(sun_elevations=[0.5], albedos=[0.2], wavelengths=[450.0], directions=[[0.0, 0.0, 1.0]],
+                 turbidities=[2.0], atmosphere=air)
+    base = ["reference", str(tmp_path / "x.zarr"), "--aerosol", "maritime-clean", "--no-progress"]
+    for extra in (["--turbidity", "3"], ["--phase", "henyey-greenstein"]):
+        assert main([*base, *extra]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--aerosol" in err[0]
+    assert not (tmp_path / "x.zarr").exists()

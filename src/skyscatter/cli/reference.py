@@ -9,7 +9,8 @@ import time
 
 from ..atmosphere.options import atmosphere_option
 from ..atmosphere.phase import AEROSOL_PHASE_FUNCTIONS
-from .atmosphere_options import add_deprecated_option
+from ..errors import InvalidParameterError
+from .atmosphere_options import add_atmosphere_options, add_deprecated_option, atmosphere_from_args
 from .common import HELP_FORMATTER, float_in, float_list, output_path
 
 
@@ -78,8 +79,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="random seed, 0 to 2^63 - 1 (results depend only on it and the job)")
     p.add_argument("--altitude", type=float_in(0.0, 1e8), default=0.0, metavar="M",
                    help="observer altitude above the ground [m], 0 to 1e8")
-    p.add_argument("--phase", choices=AEROSOL_PHASE_FUNCTIONS, default="cornette-shanks",
-                   help="aerosol phase function (asymmetry g = 0.8)")
+    p.add_argument("--phase", choices=AEROSOL_PHASE_FUNCTIONS, default=None,
+                   help="aerosol phase function (asymmetry g = 0.8; default cornette-shanks); not with --aerosol")
+    air = p.add_argument_group("air", "the medium every cell starts from (default: the Earth defaults); --aod sets "
+                               "an aerosol type's optical depth per cell (its Mie phase and spectrum kept)")
+    add_atmosphere_options(air, ("aerosol_type", "atmosphere_file"))
     cloud = p.add_argument_group("cloud layer", "a horizontally uniform water cloud in every cell (Mie droplets, "
                                  "modified-gamma sizes of effective variance 0.1)")
     cloud.add_argument("--cloud-optical-depth", type=float_in(0.0, 1000.0), default=0.0, metavar="TAU",
@@ -98,7 +102,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..atmosphere import AtmosphereParameters
     from ..montecarlo.dataset import equal_area_directions, reference
 
     bar = None
@@ -115,8 +118,22 @@ def run(args: argparse.Namespace) -> int:
         bar.n = done
         bar.refresh()
 
-    turbidity = args.turbidity if args.turbidity is not None or args.aod is not None else [2.5]
-    atmosphere = AtmosphereParameters(mie_phase_function=args.phase)
+    aerosol_type, air_file = getattr(args, "aerosol_type", None), getattr(args, "atmosphere_file", None)
+    if aerosol_type is not None and args.phase is not None:
+        raise InvalidParameterError("--phase is the analytic aerosol's; an aerosol type (--aerosol) has its Mie phase")
+    if aerosol_type is not None and args.turbidity is not None:
+        raise InvalidParameterError("an aerosol type (--aerosol) takes --aod (its optical depths at 550 nm), not "
+                                    "--turbidity")
+    atmosphere = atmosphere_from_args(args)
+    if atmosphere.aerosol is not None:  # a type (or a file's particle aerosol): its own optical depth by default
+        turbidity = None
+        aod = args.aod if args.aod is not None else [atmosphere.aerosol_component.optical_depth(
+            [550.0], atmosphere.thickness)[0]]
+    else:
+        turbidity = args.turbidity if args.turbidity is not None or args.aod is not None else [2.5]
+        aod = args.aod
+        if args.phase is not None or air_file is None:
+            atmosphere = atmosphere.replace(mie_phase_function=args.phase or "cornette-shanks")
     if args.cloud_optical_depth > 0:
         from ..atmosphere.clouds import CloudLayer
 
@@ -126,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     try:
         ds = reference(args.output, sun_elevations=[math.radians(e) for e in args.sun_elevation],
-                       turbidities=turbidity, aerosol_optical_depths=args.aod, albedos=args.albedo,
+                       turbidities=turbidity, aerosol_optical_depths=aod, albedos=args.albedo,
                        wavelengths=args.wavelengths, directions=equal_area_directions(args.directions),
                        atmosphere=atmosphere, samples=args.samples,
                        seed=args.seed, altitude=args.altitude, scheduler=args.scheduler, progress=progress)

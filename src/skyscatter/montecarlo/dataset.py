@@ -32,6 +32,7 @@ removed.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import json
 import math
@@ -114,6 +115,9 @@ class ReferenceJob:
     def cell_atmosphere(self, k: int, m: int) -> AtmosphereParameters:
         """Medium of aerosol index ``k`` and albedo index ``m``."""
         a = float(self.aerosol[k])
+        if self.atmosphere.aerosol is not None:  # a particle aerosol (e.g. an OPAC type): its own column scaled
+            aerosol = dataclasses.replace(self.atmosphere.aerosol, optical_depth_550=a)
+            return self.atmosphere.replace(aerosol=aerosol, ground_albedo=float(self.albedos[m]))
         if self.aerosol_kind == "turbidity":
             options = dict(turbidity=a)
         else:  # vertical aerosol optical depth at 550 nm with the base Angstrom exponent
@@ -172,6 +176,11 @@ def make_job(*, sun_elevations: ArrayLike, albedos: ArrayLike, wavelengths: Arra
         kind, aer = "aerosol_optical_depth", _axis("aerosol optical depths", aerosol_optical_depths, 0.0, 10.0, "")
     if not isinstance(atm, AtmosphereParameters):
         raise InvalidParameterError(f"atmosphere must be AtmosphereParameters; got {type(atm).__name__}")
+    if atm.aerosol is not None and (kind != "aerosol_optical_depth"
+                                    or not hasattr(atm.aerosol, "optical_depth_550")):
+        raise InvalidParameterError("an atmosphere with a particle aerosol (an aerosol type) takes aerosol optical "
+                                    "depths at 550 nm, not turbidities" if kind == "turbidity" else
+                                    f"the aerosol {type(atm.aerosol).__name__} has no optical depth to set per cell")
     wl = check_wavelengths(wavelengths)
     samples = whole_number("samples (paths per direction)", samples, 1, MAX_SAMPLES)
     seed = whole_number("seed", seed, 0, 2**63 - 1)
@@ -352,7 +361,8 @@ def _template(job: ReferenceJob):
             "job": json.dumps(job.description(), sort_keys=True),
             "samples": job.samples,
             "seed": job.seed,
-            "mie_phase_function": job.atmosphere.mie_phase_function,
+            "mie_phase_function": (job.atmosphere.mie_phase_function if job.atmosphere.aerosol is None
+                                   else "tabulated (the particle aerosol's Mie phase)"),
             "altitude_m": job.altitude,
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "conventions": "ENU frame (x east, y north, z up); azimuth from north towards east",
@@ -464,10 +474,12 @@ def reference(store: str | os.PathLike[str], *, sun_elevations: ArrayLike, albed
         View directions (ENU); e.g. :func:`equal_area_directions`.
     turbidities, aerosol_optical_depths : array_like
         Exactly one: Linke-style turbidity (Preetham 1999 Angstrom beta, alpha 1.3) or vertical aerosol optical
-        depth at 550 nm (with the base atmosphere's Angstrom alpha).
+        depth at 550 nm (with the base atmosphere's Angstrom alpha; with a particle aerosol, its own spectrum).
     atmosphere : AtmosphereParameters, optional
         Base medium (Earth defaults); aerosol and albedo are replaced per cell. Its ``mie_phase_function`` and
-        ``mie_phase_g`` give the aerosol phase function of every cell.
+        ``mie_phase_g`` give the aerosol phase function of every cell; a particle aerosol (``atmosphere.aerosol``,
+        e.g. :meth:`~skyscatter.atmosphere.AtmosphereParameters.with_aerosol_type`) is kept, Mie phase and
+        spectrum, with its optical depth at 550 nm set per cell (aerosol optical depths only).
     samples, seed, altitude, group_size, scheduler
         As :func:`~skyscatter.montecarlo.sky_radiance`.
     progress : callable(done, total), optional
