@@ -43,7 +43,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -116,7 +116,7 @@ class ReferenceJob:
         """Medium of aerosol index ``k`` and albedo index ``m``."""
         a = float(self.aerosol[k])
         if self.atmosphere.aerosol is not None:  # a particle aerosol (e.g. an OPAC type): its own column scaled
-            aerosol = dataclasses.replace(self.atmosphere.aerosol, optical_depth_550=a)
+            aerosol = dataclasses.replace(cast(Any, self.atmosphere.aerosol), optical_depth_550=a)
             return self.atmosphere.replace(aerosol=aerosol, ground_albedo=float(self.albedos[m]))
         if self.aerosol_kind == "turbidity":
             options = dict(turbidity=a)
