@@ -164,6 +164,10 @@ def test_diffuse_ozone_counted_once(options):
     np.testing.assert_allclose(dhi[300.0], dhi[0.0], rtol=0.0075)
 
 
+#: Angstrom exponent of the SPECTRL2 comparison (both models; pvlib's default is 1.14).
+SPECTRL2_ALPHA = 1.3
+
+
 def spectrl2_air(aod550: float):
     """Our medium (the retrieval's base: physical Rayleigh, ozone 300 DU, ground albedo 0.2) with SPECTRL2's own
     aerosol (Bird & Riordan 1986): vertical optical depth ``aod550 (lambda / 550 nm)^-1.3`` (Eq. 2-7, Angstrom's
@@ -186,9 +190,6 @@ def spectrl2_air(aod550: float):
         TabulatedSpectrum(tuple(wl), tuple(albedo), "SPECTRL2 aerosol albedo"),
         PhaseTable.henyey_greenstein(0.65, [300.0, 1300.0]))
     return base.replace(aerosol=aerosol)
-
-
-SPECTRL2_ALPHA = 1.3
 
 
 @pytest.fixture(scope="module")
