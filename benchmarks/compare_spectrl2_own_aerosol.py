@@ -14,12 +14,20 @@ the sky of the retrieval's fixed aerosol (Cornette-Shanks g 0.8, the albedo givi
 
     PYTHONPATH=src python benchmarks/compare_spectrl2_own_aerosol.py [coarse|default] [hg|cs|old] [paths]
     PYTHONPATH=src python benchmarks/compare_spectrl2_own_aerosol.py --phase-effect
+    PYTHONPATH=src python benchmarks/compare_spectrl2_own_aerosol.py --retrieval
+
+``--retrieval``: the retrieval (coarse tables, AOD nodes 0, 0.2, 0.5) on the SPECTRL2 clear day of
+tests/weather_synth.py (20 June, no light below 3 deg) with the default base (Cornette-Shanks g 0.8) and with a base
+of Cornette-Shanks g 0.585 (SPECTRL2's mean cosine 0.65): the retrieved albedo, g and DHI closure per clear hour.
 """
 
 import importlib
 import json
 import sys
+import tempfile
+import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pvlib
@@ -139,9 +147,44 @@ def phase_effect(aod: float = 0.2) -> None:
                       f"{r[m].min():.3f}-{r[m].max():.3f} ({m.sum()} directions)")
 
 
+def retrieval() -> None:
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from skyscatter.fit.weather import CLEAR, CLEAR_OPEN, retrieve_hourly_atmosphere
+    from skyscatter.sun.position import sun_position_unix
+    from weather_synth import SITE, write_epw
+
+    def dark(rows):  # no light below 3 deg (no cloud table needed), as the tests' clear_day
+        for r in rows:
+            t = (np.datetime64(f"{r[0]}-{int(r[1]):02d}-{int(r[2]):02d}T00:00").astype("datetime64[s]")
+                 .astype(np.int64) + (int(r[3]) - 0.5) * 3600.0 - SITE["timezone"] * 3600.0)
+            z = float(sun_position_unix(np.radians(SITE["latitude"]), np.radians(SITE["longitude"]), np.array([t]),
+                                        apparent=False).zenith[0])
+            if np.degrees(z) > 87.0:
+                r[13] = r[14] = r[15] = "0"
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = write_epw(Path(tmp) / "june.epw", days=((6, 20, "clear"),), tweak=dark)
+        for g in (0.8, 0.585):
+            o = RetrievalOptions(aerosol_optical_depth_nodes=(0.0, 0.2, 0.5), tables="coarse",
+                                 base=BASE.replace(mie_phase_g=g))
+            t0 = time.process_time()
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                h = retrieve_hourly_atmosphere(path, o)
+            c = np.flatnonzero(h.status == CLEAR)
+            print(f"base g {g}: {c.size} clear hours closed of {np.sum(np.isin(h.status, [CLEAR, CLEAR_OPEN]))} "
+                  f"({time.process_time() - t0:.0f} CPU-s)")
+            for i in c:
+                print(f"  sun {90 - np.degrees(h.sun_zenith[i]):5.1f} deg: AOD {h.aerosol_optical_depth[i]:.3f}, "
+                      f"albedo {h.single_scattering_albedo[i]:.3f}, g {h.aerosol_phase_g[i]:.3f}, "
+                      f"DHI closure {h.dhi_closure[i]:.1e}")
+
+
 if __name__ == "__main__":
     if "--phase-effect" in sys.argv:
         phase_effect()
+    elif "--retrieval" in sys.argv:
+        retrieval()
     else:
         args = sys.argv[1:]
         compare(args[0] if args else "coarse", args[1] if len(args) > 1 else "hg",
