@@ -164,45 +164,145 @@ def test_diffuse_ozone_counted_once(options):
     np.testing.assert_allclose(dhi[300.0], dhi[0.0], rtol=0.0075)
 
 
-def test_clear_sky_model_against_spectrl2():
-    """Ground spectrum of a clear hour within 3 % of SPECTRL2 over 400-700 nm (same AOD, alpha, water, ozone):
-    global horizontal transmittance (each model over its own extraterrestrial spectrum), RMS over SPECTRL2's
-    wavelengths in 400-700 nm. Measured: RMS 0.9 % at zenith 30 deg, AOD 0.1 (max 3.1 % at 400 nm)."""
-    import importlib
+#: Angstrom exponent of the SPECTRL2 comparison (both models; pvlib's default is 1.14).
+SPECTRL2_ALPHA = 1.3
+
+
+def spectrl2_air(aod550: float):
+    """Our medium (the retrieval's base: physical Rayleigh, ozone 300 DU, ground albedo 0.2) with SPECTRL2's own
+    aerosol (Bird & Riordan 1986): vertical optical depth ``aod550 (lambda / 550 nm)^-1.3`` (Eq. 2-7, Angstrom's
+    law) over the base's aerosol profile, single-scattering albedo ``0.945 exp(-0.095 ln^2(lambda / 400 nm))``
+    (Eq. 3-16) and the asymmetry factor 0.65 of Eqs. 3-11 to 3-14 as a Henyey-Greenstein phase (its mean cosine
+    is its g; SPECTRL2's forward-scattering fraction Fs is that of this phase within 0.9 % at sun zeniths 0-78 deg),
+    given as a tabulated particle component."""
+    from skyscatter.atmosphere.particles import TabulatedParticles
+    from skyscatter.atmosphere.phase_table import PhaseTable
+    from skyscatter.atmosphere.spectra import AngstromSpectrum, TabulatedSpectrum
+    from skyscatter.fit.weather import RetrievalOptions
+
+    base = RetrievalOptions(angstrom_alpha=SPECTRL2_ALPHA).base_atmosphere()
+    wl = np.arange(300.0, 1301.0, 10.0)
+    albedo = 0.945 * np.exp(-0.095 * np.log(wl / 400.0) ** 2)
+    column = base.mie_density.column(base.thickness)
+    aerosol = TabulatedParticles(
+        "SPECTRL2 aerosol", base.mie_density,
+        AngstromSpectrum(aod550 * 0.55**SPECTRL2_ALPHA, SPECTRL2_ALPHA, column, "SPECTRL2 aerosol extinction"),
+        TabulatedSpectrum(tuple(wl), tuple(albedo), "SPECTRL2 aerosol albedo"),
+        PhaseTable.henyey_greenstein(0.65, [300.0, 1300.0]))
+    return base.replace(aerosol=aerosol)
+
+
+@pytest.fixture(scope="module")
+def spectrl2_tables():
+    """Coarse tables (the module's preset) of :func:`spectrl2_air` at the test cases' optical depths (about 1 CPU-s
+    each once compiled)."""
     import warnings
 
-    from skyscatter.conventions import direction_from_angles
-    from skyscatter.fit.weather import BroadbandClearSky, RetrievalOptions, default_family
+    from skyscatter.fit.weather import TABLE_PRESETS
+    from skyscatter.precomputed.cache import cached_atmosphere
 
-    fam = default_family(RetrievalOptions(aerosol_optical_depth_nodes=AOD_NODES, tables="coarse"))
-    model = BroadbandClearSky(fam.base, 1.3)
-    zdeg, tau, ssa = 30.0, 0.1, 0.9  # phase g 0.8: the base's
-    z = np.radians([zdeg])
-    one = np.ones(1)
-    direct = model.direct_normal_spectral(z, [tau], 1.4 * one, 101325 * one, 300 * one, one, weighted=False)[0]
-    ground = np.array([0.0, 0.0, fam.base.bottom_radius])
-    sun = direction_from_angles(z, np.zeros(1))
+    p = TABLE_PRESETS["coarse"]
+    out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        esky = fam.interpolate([[tau, ssa, 0.8]],
-                               lambda atm, sub: atm.ground_irradiance(ground, [0, 0, 1.0], sun[sub])[1])
-    e0t = fam.base.solar_irradiance_at(fam.wavelengths)
-    wl = model.wavelengths
-    tg = model.gas_transmittance(z, 1.4 * one, 101325 * one)[0]
-    ours = direct * np.cos(z[0]) + np.interp(wl, fam.wavelengths, esky[0] / e0t) * model.e0 * tg
-    am = pvlib.atmosphere.get_relative_airmass(zdeg, model="kasten1966")
-    s = pvlib.spectrum.spectrl2(apparent_zenith=zdeg, aoi=zdeg, surface_tilt=0, ground_albedo=0.2,
-                                surface_pressure=101325, relative_airmass=am, precipitable_water=1.4, ozone=0.3,
-                                aerosol_turbidity_500nm=tau * (500 / 550) ** -1.3, dayofyear=80)
+        for aod in (0.1, 0.2, 0.3):
+            atm = spectrl2_air(aod)
+            out[aod] = atm, cached_atmosphere(atm, orders=p["orders"], wavelengths=p["wavelengths"], sizes=p["sizes"],
+                                              progress=False)
+    return out
+
+
+def clear_ground_spectra(atm, tables, zenith_deg: float, aod550: float):
+    """Horizontal direct, diffuse and global transmittances (irradiance over the extraterrestrial normal
+    irradiance, each model over its own, mean Sun-Earth distance) of our clear sky and of pvlib's SPECTRL2 at
+    SPECTRL2's wavelengths in 400-700 nm: ``(wavelengths [nm], ours, theirs, diffuse_gas)``, the two as dicts of
+    arrays; ours: the broadband model's direct beam and the tables' radiance over the hemisphere
+    (``horizontal_sky_irradiance``, what the matrix closes on) times the water and mixed-gas transmittance along
+    the sun's path (``diffuse_gas``); water 1.4 cm, ozone 300 DU, sea level, ground albedo 0.2, day 80."""
+    import importlib
+
+    from skyscatter.fit.weather import BroadbandClearSky
+
+    model = BroadbandClearSky(atm, SPECTRL2_ALPHA)
+    z = np.radians([zenith_deg])
+    one = np.ones(1)
+    direct = model.direct_normal_spectral(z, [aod550], 1.4 * one, 101325 * one, 300 * one, one,
+                                          weighted=False)[0] / model.e0
+    gas = model.gas_transmittance(z, 1.4 * one, 101325 * one)[0]
+    wlt = np.asarray(tables.wavelengths)
+    sky = tables.horizontal_sky_irradiance(z)[0] / atm.solar_irradiance_at(wlt)
+    s = pvlib.spectrum.spectrl2(apparent_zenith=zenith_deg, aoi=zenith_deg, surface_tilt=0, ground_albedo=0.2,
+                                surface_pressure=101325,
+                                relative_airmass=pvlib.atmosphere.get_relative_airmass(zenith_deg, model="kasten1966"),
+                                precipitable_water=1.4, ozone=0.3, dayofyear=80, alpha=SPECTRL2_ALPHA,
+                                aerosol_turbidity_500nm=aod550 * (500 / 550) ** -SPECTRL2_ALPHA)
     etr = importlib.import_module("pvlib.spectrum.spectrl2")._SPECTRL2_COEFFS["spectral_irradiance_et"]
-    es = pvlib.irradiance.get_extra_radiation(80, method="spencer", solar_constant=1.0)
-    w2 = s["wavelength"]
-    sel = (w2 >= 400) & (w2 <= 700)
-    theirs = s["poa_global"][sel, 0] / (etr[sel] * es)
-    mine = np.interp(w2[sel], wl, ours / model.e0)
-    rel = mine / theirs - 1.0
-    assert np.sqrt(np.mean(rel**2)) < 0.03
-    assert abs(np.mean(rel)) < 0.02
+    e0 = etr * pvlib.irradiance.get_extra_radiation(80, method="spencer", solar_constant=1.0)
+    w = s["wavelength"]
+    sel = (w >= 400) & (w <= 700)
+    w = w[sel]
+    cz = np.cos(z[0])
+    theirs = {"direct": s["dni"][sel, 0] / e0[sel] * cz, "diffuse": s["dhi"][sel, 0] / e0[sel]}
+    gas_w = np.interp(w, model.wavelengths, gas)
+    ours = {"direct": np.interp(w, model.wavelengths, direct) * cz, "diffuse": np.interp(w, wlt, sky) * gas_w}
+    for d in (theirs, ours):
+        d["global"] = d["direct"] + d["diffuse"]
+    return w, ours, theirs, gas_w
+
+
+def _rel(a, b):
+    """Mean, RMS and largest |.| of a / b - 1 [-]."""
+    r = np.asarray(a) / np.asarray(b) - 1.0
+    return float(np.mean(r)), float(np.sqrt(np.mean(r**2))), float(np.max(np.abs(r)))
+
+
+SPECTRL2_60_MISS = (
+    "SPECTRL2 (pvlib, Bird & Riordan 1986) at zenith 60 deg, AOD 0.2, through its own aerosol: our global "
+    "horizontal spectrum measured +2.5 % mean, RMS 3.3 %, max +8.6 % (400 nm) above it; direct within 0.4 % RMS, "
+    "diffuse +6.0 % mean (+15 % at 400 nm). The Monte Carlo through the same air (test below) sides with us: ours "
+    "within 0.8 % RMS of it, SPECTRL2 3.6 % RMS below it (its diffuse 15 % below at 400 nm, 2.5 % at 550 nm: "
+    "the empirical blue factor Cs = ((lambda + 550) / 1000)^1.8 below 450 nm, Eq. 3-17, and the plane-parallel "
+    "Eqs. 3-5/3-6 at slant sun)")
+
+
+@pytest.mark.parametrize("zenith_deg, aod550", [
+    (30.0, 0.1), (20.0, 0.3),
+    pytest.param(60.0, 0.2, marks=pytest.mark.xfail(strict=True, reason=SPECTRL2_60_MISS))])
+def test_clear_sky_model_against_spectrl2(spectrl2_tables, zenith_deg, aod550):
+    """Issue 24's check: the ground spectrum of a clear hour within 3 % of SPECTRL2 (pvlib, Bird & Riordan 1986)
+    over 400-700 nm for the same aerosol and water: our medium with SPECTRL2's own aerosol (:func:`spectrl2_air`:
+    its Angstrom optical depth, albedo spectrum and asymmetry 0.65), water 1.4 cm, ozone 300 DU, at SPECTRL2's
+    wavelengths: global horizontal transmittance RMS < 3 % and mean within 2 %, direct RMS < 1 % (source
+    SPECTRL2; coarse tables). Measured 2026-12-03: zenith 30 deg AOD 0.1 mean +1.2 %, RMS 1.6 %, max 4.3 % (400
+    nm); zenith 20 deg AOD 0.3 +1.0 %, 1.8 %, 5.7 % (400 nm); direct RMS 0.2 %. Zenith 60 deg misses (xfail:
+    SPECTRL2's diffuse, by the Monte Carlo of the next test)."""
+    atm, tables = spectrl2_tables[aod550]
+    _, ours, theirs, _ = clear_ground_spectra(atm, tables, zenith_deg, aod550)
+    assert _rel(ours["direct"], theirs["direct"])[1] < 0.01
+    mean, rms, _ = _rel(ours["global"], theirs["global"])
+    assert rms < 0.03, (mean, rms)
+    assert abs(mean) < 0.02, (mean, rms)
+
+
+def test_clear_sky_model_against_monte_carlo_where_spectrl2_misses(spectrl2_tables):
+    """Which of us is right at zenith 60 deg, AOD 0.2 (the xfail above): the spherical Monte Carlo
+    (``montecarlo.ground_irradiance``, an independent solver) through the same air (:func:`spectrl2_air`), its
+    diffuse times the same gas transmittance, plus the same direct beam (the Monte Carlo's direct equals the
+    tables' medium's to 1e-3 outside gas bands): our global spectrum within 1.5 % RMS of it over SPECTRL2's
+    400-700 nm wavelengths (measured 0.8 %, the tables' diffuse -2.6 % at 400 nm to +4.8 % at 593 nm, the coarse
+    tables' 100 nm steps across ozone's Chappuis band; the default tables 0.2 %), and SPECTRL2 more than twice as
+    far (measured RMS 3.6 %; its diffuse -15 % at 400 nm to -0.5 % at 668 nm). 16384 paths, standard error of the
+    diffuse about 1 %."""
+    from skyscatter.montecarlo.domain import ground_irradiance
+
+    atm, tables = spectrl2_tables[0.2]
+    w, ours, theirs, gas = clear_ground_spectra(atm, tables, 60.0, 0.2)
+    mc = ground_irradiance(atm, w, sun_zenith=np.radians(60.0), samples=16384, seed=7)
+    mc_global = ours["direct"] + np.asarray(mc.diffuse)[0] / atm.solar_irradiance_at(w) * gas
+    _, rms_ours, _ = _rel(ours["global"], mc_global)
+    _, rms_spectrl2, _ = _rel(theirs["global"], mc_global)
+    assert rms_ours < 0.015, rms_ours
+    assert rms_spectrl2 > 2 * rms_ours, (rms_spectrl2, rms_ours)
 
 
 def test_horizontal_sky_irradiance_against_disort(options):
