@@ -64,9 +64,11 @@ VIEWS = {
 
 
 #: (RMS, worst) that the design reaches per view where it is not float32 rounding (1e-4, 1e-4): measured 4.2e-4,
-#: 1.3e-3 (10 km), 3.4e-4, 6.5e-4 (orbit), 1.4e-4, 1.9e-3 (fisheye), 5.5e-4, 1.2e-2 (equirect).
+#: 1.3e-3 (10 km), 3.4e-4, 6.5e-4 (orbit), 1.4e-4, 1.9e-3 (fisheye), 5.5e-4, 1.2e-2 (equirect); the ground with the
+#: sun below the horizon 2.3e-4, 3.5e-4 (manifest 9: the sky irradiance read along mu_s with a weight per colour
+#: channel, the lookups' with a weight per wavelength, so it no longer folds exactly).
 TIGHT = {"10km-sun30": (2e-3, 5e-3), "orbit-sun30": (2e-3, 5e-3), "fisheye-sun30": (1e-3, 5e-3),
-         "equirect-sun4": (2e-3, 2e-2)}
+         "equirect-sun4": (2e-3, 2e-2), "ground-sun-4": (1e-3, 1e-3)}
 
 
 @pytest.fixture(scope="module")
