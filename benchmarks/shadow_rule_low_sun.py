@@ -130,7 +130,9 @@ def main() -> None:
                         e[k] = ((1 - w) * f0 * val[0][k] + w * f1 * val[2][k]) / val[1][k] - 1.0
                     cells.append(e)
                 m = [lit_march(RB, mu, mu_s, n) for n in nus]
-                cells.append(((1 - w) * val[0] * m[1] / m[0] + w * val[2] * m[1] / m[2]) / val[1] - 1.0)
+                # a texel whose ray never leaves the shadow holds 0 and keeps it
+                f = [np.divide(m[1], m[i], out=np.zeros(WL.size), where=m[i] > 0.0) for i in (0, 2)]
+                cells.append(((1 - w) * val[0] * f[0] + w * val[2] * f[1]) / val[1] - 1.0)
                 print(f"| {sun:+.0f} | {elev:.0f}/{az:.0f} | "
                       + " | ".join("/".join(f"{100 * x:+.0f}" for x in c) for c in cells) + " |", flush=True)
 
