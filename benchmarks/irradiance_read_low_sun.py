@@ -6,7 +6,9 @@ table is the first order's sky light, whose texels below the horizon come from t
 coarse table is every 8th texel of the fine one exactly); the default 64-texel table is that subsample. The read
 of the coarse table (``sampling.irradiance_read``: one weight for all wavelengths from the columns' illuminance, and
 each wavelength its own) at every fine texel between ``--lo`` and ``--hi`` deg of sun elevation is compared with the
-fine texel there, per wavelength, on the ground row (read at its texel, so only the mu_s interpolation is measured).
+fine texel there, per wavelength, on the ground row (read at its texel, so only the mu_s interpolation is measured);
+and in linear sRGB (``realtime.export.fold_matrix``): the three reads folded into colour, and the read of the colour
+table itself with a weight per channel (the GLSL library's ``IrradianceLerp``), against the folded fine texel.
 The fine texels are not a perfect reference: each is log-quadratic between the scattering tables' three nearest
 sun-zenith texels, and where that node set changes (about -5.2, -3.6, -1.8 deg) ``ln E`` steps by up to 0.1 at
 400 nm; the hemisphere integral of ``benchmarks/second_order_low_sun.py --irradiance`` is the independent one.
@@ -24,6 +26,7 @@ import numpy as np
 
 from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
 from skyscatter.precomputed.sampling import irradiance_read
+from skyscatter.realtime.export import fold_matrix
 
 ATMOSPHERES = {
     "earth": lambda **k: AtmosphereParameters(**k),
@@ -43,7 +46,7 @@ def main() -> None:
     args = ap.parse_args()
     if args.load:
         z = np.load(args.load)
-        fine, lum, wl = z["fine"], z["lum"], z["wl"]
+        fine, lum, wl, fold = z["fine"], z["lum"], z["wl"], z["fold"]
     else:
         params = ATMOSPHERES[args.atm]()
         t0 = time.process_time()
@@ -53,16 +56,20 @@ def main() -> None:
         fine = np.asarray(atm.tables["irradiance"], dtype=np.float64)
         lum = np.asarray(atm.irradiance_weights, dtype=np.float64)
         wl = np.asarray(atm.wavelengths)
+        fold = fold_matrix(atm)
         if args.save:
-            np.savez(args.save, fine=fine, lum=lum, wl=wl)
+            np.savez(args.save, fine=fine, lum=lum, wl=wl, fold=fold)
     coarse = np.ascontiguousarray(fine[:, ::FINE])
+    coarse_rgb = np.ascontiguousarray(coarse @ fold.T)
+    rgb = np.empty(3)
     own = np.empty(0)
     out = np.empty(fine.shape[2])
     print(f"# {fine.shape[2]} wavelengths {wl[0]:g}-{wl[-1]:g} nm; read / fine texel - 1 [%]: worst wavelength "
           "(illuminance weight | own weights), and the illuminance")
-    print("| sun [deg] | frac | row | illum. weight: min / max over wl | own: min / max | illuminance |")
-    print("|---|---|---|---|---|---|")
-    worst = {"lum": 0.0, "own": 0.0}
+    print("| sun [deg] | frac | row | illum. weight: min / max over wl | own: min / max | illuminance | "
+          "RGB min / max: illum. weight | own | per channel |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    worst = {"lum": 0.0, "own": 0.0, "rgb_lum": 0.0, "rgb_own": 0.0, "rgb_channel": 0.0}
     for jf in range(fine.shape[1]):
         mu_s = 2.0 * jf / (fine.shape[1] - 1) - 1.0
         el = math.degrees(math.asin(mu_s))
@@ -71,17 +78,24 @@ def main() -> None:
         p = jf / FINE
         for row in (0,):
             truth = fine[row, jf]
+            t_rgb = fold @ truth
             irradiance_read(coarse, float(row), p, lum, out)
             e_l = out / truth - 1.0
             y = (lum @ out) / (lum @ truth) - 1.0
+            c_l = fold @ out / t_rgb - 1.0
             irradiance_read(coarse, float(row), p, own, out)
             e_o = out / truth - 1.0
-            worst["lum"] = max(worst["lum"], np.abs(e_l).max())
-            worst["own"] = max(worst["own"], np.abs(e_o).max())
-            print(f"| {el:+.2f} | {p - math.floor(p):.3f} | {row} | {100 * e_l.min():+.2f} / {100 * e_l.max():+.2f} "
-                  f"| {100 * e_o.min():+.2f} / {100 * e_o.max():+.2f} | {100 * y:+.2f} |")
+            c_o = fold @ out / t_rgb - 1.0
+            irradiance_read(coarse_rgb, float(row), p, own, rgb)
+            c_c = rgb / t_rgb - 1.0
+            for key, e in (("lum", e_l), ("own", e_o), ("rgb_lum", c_l), ("rgb_own", c_o), ("rgb_channel", c_c)):
+                worst[key] = max(worst[key], np.abs(e).max())
+            cols = " | ".join(f"{100 * e.min():+.2f} / {100 * e.max():+.2f}" for e in (e_l, e_o))
+            rgbs = " | ".join(f"{100 * e.min():+.2f} / {100 * e.max():+.2f}" for e in (c_l, c_o, c_c))
+            print(f"| {el:+.2f} | {p - math.floor(p):.3f} | {row} | {cols} | {100 * y:+.2f} | {rgbs} |")
     print(f"# worst |error| {args.lo:g}..{args.hi:g} deg: illuminance weight {100 * worst['lum']:.2f} %, "
-          f"own weights {100 * worst['own']:.2f} %")
+          f"own weights {100 * worst['own']:.2f} %; RGB: illuminance weight {100 * worst['rgb_lum']:.2f} %, "
+          f"own weights {100 * worst['rgb_own']:.2f} %, weight per channel {100 * worst['rgb_channel']:.2f} %")
 
 
 if __name__ == "__main__":

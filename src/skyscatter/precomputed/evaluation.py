@@ -30,6 +30,15 @@ from .parameters import AtmosphereParameters
 
 __all__ = ["TableLookups"]
 
+#: The rendering lookups' read of the irradiance table along the sun zenith below the horizon: no luminance weights,
+#: so each wavelength its own log-quadratic weight (:func:`.sampling.irradiance_read`), as in the precomputation's
+#: ground term. One weight for all wavelengths (that of the columns' illuminance, formats 15-18) was +10.3 % at
+#: 400 nm and -7.2 % at 700 nm with the sun 6 deg below the horizon against the hemisphere integral of the
+#: independent single scattering (turbidity 3, 16 wavelengths; each wavelength's own weight: -1.4 / -1.2 %), since
+#: the blue and red ends of the twilight sky irradiance fall at other rates than the illuminance
+#: (docs/accuracy.md, "Low sun").
+_OWN_WEIGHTS = np.empty(0)
+
 
 def _kernels() -> ModuleType:
     """The numba kernels of :mod:`.lookup`, imported on the first lookup: importing the package stays free of
@@ -97,11 +106,11 @@ class TableLookups:
     def irradiance_weights(self) -> NDArray[np.float64]:
         """Luminance weights (n_wavelengths,) of the table wavelengths: ``Y = sum_k w_k E_k`` [lx] for a spectral
         irradiance ``E`` [W m^-2 nm^-1] sampled there (the CIE 1931 ``ybar`` times 683 lm/W and the trapezoid
-        step of :func:`skyscatter.spectral.spectrum_to_xyz`; [CIE2004]). The rendering lookups' weight along the sun
-        zenith of the irradiance table below the horizon is that of the luminance of its two texel columns
-        (:func:`.sampling.irradiance_read`), so that it does not depend on which wavelengths the table holds. One
-        wavelength: ``ybar`` alone (any positive weight reads it with its own weight); tables whose wavelengths all
-        lie outside ``ybar``'s support (no luminance): equal weights, the weight of the spectra's sums."""
+        step of :func:`skyscatter.spectral.spectrum_to_xyz`; [CIE2004]): the illuminance of the irradiance table's
+        spectra, which the realtime export stores beside their RGB (:mod:`skyscatter.realtime.export`) and with which
+        :func:`.sampling.irradiance_read` can read all wavelengths with one weight (the rendering lookups read each
+        wavelength with its own: ``_OWN_WEIGHTS``). One wavelength: ``ybar`` alone; tables whose wavelengths all lie
+        outside ``ybar``'s support (no luminance): equal weights, the spectra's sums."""
         w = getattr(self, "_irradiance_weights", None)
         if w is None:
             wl = self.wavelengths
@@ -247,7 +256,7 @@ class TableLookups:
         tr = np.ones((n, self.wavelengths.size))
         parallel_for(lookup.sky_kernel, n, pos, dirs, sun, sh, self.tables["transmittance"],
                      self.tables["single_rayleigh"], self.tables["single_mie"], self.tables["multiple"],
-                     self.tables["irradiance"], self._albedo, self._solar, self.irradiance_weights, bottom, top,
+                     self.tables["irradiance"], self._albedo, self._solar, _OWN_WEIGHTS, bottom, top,
                      mu_s_min, self._mie_g, self._mie_kind, *self._aerosol_phase[2:], *self._profiles,
                      self.parameters.sun_angular_radius, include_ground, rad, tr,
                      grain=2048)
@@ -342,7 +351,7 @@ class TableLookups:
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
         parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, stored["single_rayleigh"].shape[0],
-                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar, self.irradiance_weights,
+                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar, _OWN_WEIGHTS,
                      projection,
                      bottom, top, mu_s_min, self._mie_g, self._mie_kind, *self._profiles,
                      self.parameters.sun_angular_radius,
@@ -417,7 +426,7 @@ class TableLookups:
         bad = np.zeros((s.shape[0], dirs.shape[0]), dtype=np.bool_)
         projection = np.eye(n_l)
         parallel_for(lookup.observer_suns_kernel, s.shape[0], pos, rc, n_r, s, mu_s, *lower, *upper,
-                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar, self.irradiance_weights,
+                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar, _OWN_WEIGHTS,
                      projection, True,
                      bottom, top, mu_s_min, self._mie_g, self._mie_kind, *self._profiles,
                      self.parameters.sun_angular_radius, bool(include_ground), dirs, out, bad,
@@ -579,6 +588,6 @@ class TableLookups:
         e_sun = np.zeros((pts.shape[0], self.wavelengths.size))
         e_sky = np.zeros((pts.shape[0], self.wavelengths.size))
         parallel_for(lookup.irradiance_kernel, pts.shape[0], pts, nrm, sun, self.stored["transmittance"],
-                     self.stored["irradiance"], self._solar, self.irradiance_weights, bottom, top,
+                     self.stored["irradiance"], self._solar, _OWN_WEIGHTS, bottom, top,
                      self.parameters.sun_angular_radius, e_sun, e_sky, grain=4096)
         return e_sun.reshape(*shape, -1), e_sky.reshape(*shape, -1)

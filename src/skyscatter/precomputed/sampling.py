@@ -195,14 +195,14 @@ def irradiance_read(table, p_r, p_m, weights, out):
     quadratic in the logarithm over the three nearest texel columns (:func:`.geometry.irradiance_log_nodes`, each
     column interpolated linearly in r): the weight :func:`.geometry.log_quadratic_weight` (three-point Lagrange in
     ``ln E``, [Abramowitz1964] Eq. 25.2.11, kept between the cell's two columns) of the cell's two columns. With
-    ``weights`` empty each wavelength has its own weight (the precomputation's ground term: the tables then do not
-    depend on how the wavelengths are chunked). Otherwise ``weights`` (n_wavelengths,) >= 0 are the luminance weights
-    of the table's wavelengths (``ybar`` times the quadrature step: :attr:`.evaluation.TableLookups.
-    irradiance_weights`) and one weight, that of the three columns' luminances ``sum_k weights[k] E_k``, serves
-    every wavelength: the rendering lookups, whose read stays linear in the table values for given coordinates (a
-    combination of the cell's two columns), so that a colour texture whose alpha holds that luminance reads the same
-    colour (:mod:`skyscatter.realtime.export`). The luminance, not one table wavelength: the weight then does not
-    depend on which wavelengths the table holds (docs/bruneton.md).
+    ``weights`` empty each wavelength has its own weight: the precomputation's ground term (the tables then do not
+    depend on how the wavelengths are chunked) and the rendering lookups (:mod:`.evaluation`). Otherwise ``weights``
+    (n_wavelengths,) >= 0 are the luminance weights of the table's wavelengths (``ybar`` times the quadrature step:
+    :attr:`.evaluation.TableLookups.irradiance_weights`) and one weight, that of the three columns' luminances
+    ``sum_k weights[k] E_k``, serves every wavelength (the rendering lookups' read in formats 15-18, kept for
+    comparison: ``benchmarks/irradiance_read_low_sun.py``). With the sun 6 deg below the horizon that one weight was
+    +10.3 % at 400 nm and -7.2 % at 700 nm, each wavelength's own -1.4 / -1.2 % (turbidity 3, 16 wavelengths,
+    against the hemisphere integral of ``benchmarks/second_order_low_sun.py``; docs/accuracy.md, "Low sun").
 
     Below the horizon the twilight sky irradiance falls faster the lower the sun: the geometric read of two columns
     (format 14) was 4-11 % low between the default 64 texels at -2 to -5.5 deg (turbidity 3, 560 nm, against a table

@@ -28,11 +28,12 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
   luminance's; for the transmittance between two points where a ratio of sunlight transmittances is ill-conditioned.
 * ``irradiance`` 2D, width n_mu_s x height n_r: RGB sky irradiance on a horizontal surface [HDR scale], A the
   illuminance of the table's spectrum (manifest version 5; lx, the CIE 1931 ``ybar`` integral of the table's
-  samples, not on the HDR scale). The library reads it linearly along mu_s except in the cells that start below the
-  horizon, where the twilight irradiance falls faster the lower the sun: there the weight of the cell's two texel
-  columns is log_quadratic_weight (three-point Lagrange in the logarithm, manifest version 7) of the illuminances of
-  the three nearest columns (each linear in r; :func:`skyscatter.precomputed.sampling.irradiance_read`), applied to
-  every wavelength (``irradiance_uvs``, ``irradiance_lerp`` and ``log_quadratic_weight`` of the mappings).
+  samples, not on the HDR scale; the library does not read it since manifest version 9). The library reads it
+  linearly along mu_s except in the cells that start below the horizon, where the twilight irradiance falls faster
+  the lower the sun: there each channel of the cell's two texel columns has its own weight, log_quadratic_weight
+  (three-point Lagrange in the logarithm, manifest version 7) of that channel in the three nearest columns (each
+  linear in r; manifest version 9, as :func:`skyscatter.precomputed.sampling.irradiance_read` reads each wavelength;
+  ``irradiance_uvs``, ``irradiance_lerp`` and ``log_quadratic_weight`` of the mappings).
 * ``rayleigh``, ``mie``, ``multiple`` 3D, width n_nu * n_mu_s (x = i_nu * n_mu_s + i_mu_s), height n_mu, depth n_r:
   RGB single Rayleigh and single Mie scattering without their phase functions, multiple scattering with it; A the
   table's own value at its middle wavelength (index n_wavelengths // 2, the manifest's
@@ -91,7 +92,9 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: irradiance texture is read quadratically in the logarithm over three mu_s columns (irradiance_uvs returns three
 #: columns and the position t, irradiance_lerp takes three reads; log_quadratic_weight). 8: the altitude weight and
 #: the rows apart of version 5 only where the cell touching the ground ends below 300 m (skyscatter table format 18).
-MANIFEST_VERSION = 8
+#: 9: below the horizon each channel of the irradiance texture has its own weight along mu_s (irradiance_lerp; the
+#: lookups read each wavelength with its own), the alpha is no longer read.
+MANIFEST_VERSION = 9
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -185,11 +188,13 @@ def log_quadratic_weight(y0, y1, y2, t):
 
 def irradiance_lerp(e0, e1, e2, t, below):
     """RGB of the irradiance texture from the reads e0, e1, e2 (RGBA) of its three mu_s columns at t: where the cell
-    starts below the horizon the weight is log_quadratic_weight of their alpha (the illuminance of the table's
-    spectrum), else linear in the cell; applied to every channel of the cell's two columns."""
+    starts below the horizon each channel of the cell's two columns with its own weight, log_quadratic_weight of that
+    channel's three values (the twilight blue and red fall at other rates), else linear in the cell."""
     a, b = (e0, e1) if t < 0.0 else (e1, e2)
-    k = log_quadratic_weight(e0[3], e1[3], e2[3], t) if below else (t + 1.0 if t < 0.0 else t)
-    return [x + k * (y - x) for x, y in zip(a[:3], b[:3])]
+    if not below:
+        k = t + 1.0 if t < 0.0 else t
+        return [x + k * (y - x) for x, y in zip(a[:3], b[:3])]
+    return [x + log_quadratic_weight(e0[c], e1[c], e2[c], t) * (y - x) for c, (x, y) in enumerate(zip(a[:3], b[:3]))]
 
 def scattering_r_index(r, rho, big_h):
     """Index position of r on the depth axis of the 3D scattering textures: the rows sit at rho_i = H i / (n - 1)
@@ -486,7 +491,7 @@ def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]
     w /= w.sum(axis=1, keepdims=True)
     out = {"transmittance": _sun_weighted(t["transmittance"], solar, m).astype(np.float32),
            "optical_depth": (tau @ w.T).astype(np.float32),
-           # A: the luminance, from which the lookups' weight along mu_s is computed (sampling.irradiance_read)
+           # A: the illuminance of the spectrum (informative: the library weighs each channel by its own values)
            "irradiance": np.concatenate([t["irradiance"].astype(np.float64) @ m.T,
                                          (t["irradiance"].astype(np.float64) @ atm.irradiance_weights)[..., None]],
                                         axis=-1)}
@@ -572,8 +577,8 @@ def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
                          "tau(l), w_c = max(M_c, 0) E_sun normalised [1]; A: the same for luminance",
         "irradiance": "RGB: sky irradiance on a horizontal surface at (r, mu_s) [W m^-2, HDR scale]; A: the "
                       "illuminance of its spectrum (the CIE 1931 ybar integral of the table's samples) [lx; not on "
-                      "the HDR scale], for the weight along mu_s in the cells that start below the horizon: "
-                      "irradiance_lerp of the mappings",
+                      "the HDR scale] (not read by the library: irradiance_lerp of the mappings weighs each channel "
+                      "by its own values)",
         "rayleigh": "RGB: single Rayleigh scattering S_R[L0] without its phase function [W m^-2, HDR scale; times "
                     "P_R [sr^-1] gives radiance]; A: " + _ALPHA,
         "mie": "RGB: single Mie scattering S_M[L0] without its phase function [W m^-2, HDR scale]; A: " + _ALPHA,

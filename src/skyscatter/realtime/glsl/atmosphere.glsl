@@ -255,12 +255,15 @@ float LogQuadraticWeight(float y0, float y1, float y2, float t) {
 }
 
 // RGB of the irradiance texture from the reads e0, e1, e2 of its three mu_s columns (IrradianceUvs) at t: where the
-// cell starts below the horizon the weight is LogQuadraticWeight of their alpha (the illuminance of the table's
-// spectrum: the twilight sky irradiance falls faster the lower the sun; skyscatter.precomputed.sampling.
-// irradiance_read), else linear in the cell; applied to every channel of the cell's two columns.
+// cell starts below the horizon each channel of the cell's two columns with its own weight, LogQuadraticWeight of
+// that channel's three values (the twilight sky irradiance falls faster the lower the sun, and its blue and red at
+// other rates; skyscatter.precomputed.sampling.irradiance_read), else linear in the cell.
 vec3 IrradianceLerp(vec4 e0, vec4 e1, vec4 e2, float t, bool below) {
-  float g = below ? LogQuadraticWeight(e0.a, e1.a, e2.a, t) : (t < 0.0 ? t + 1.0 : t);
-  return t < 0.0 ? mix(e0.rgb, e1.rgb, g) : mix(e1.rgb, e2.rgb, g);
+  vec3 a = t < 0.0 ? e0.rgb : e1.rgb;
+  vec3 b = t < 0.0 ? e1.rgb : e2.rgb;
+  if (!below) return mix(a, b, t < 0.0 ? t + 1.0 : t);
+  return mix(a, b, vec3(LogQuadraticWeight(e0.r, e1.r, e2.r, t), LogQuadraticWeight(e0.g, e1.g, e2.g, t),
+                        LogQuadraticWeight(e0.b, e1.b, e2.b, t)));
 }
 
 // RGB of a single-scattering texture between the reads s0, s1 of its two nu slices where the point is in the Earth's
