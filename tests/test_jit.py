@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import os
 from pathlib import Path
 
 import numpy as np
@@ -58,3 +59,42 @@ def test_helper_keeps_nan_checks_with_its_fastmath_set():
         return x if np.isfinite(x) else 0.0
 
     assert finite_or_zero(np.nan) == 0.0 and finite_or_zero(np.inf) == 0.0 and finite_or_zero(2.0) == 2.0
+
+
+def test_a_second_process_loads_the_first_ones_compilation(tmp_path):
+    """The compile lock (skyscatter.jit module docstring): while one process compiles a function, another that
+    needs it waits and then loads the machine code from numba's cache instead of compiling it again. Here this
+    process holds the lock; the child, started first, is still waiting 2 s later (a compilation of this function
+    takes well under a second), and after this process has compiled the function and released the lock the child
+    reports a cache hit and no compilation of its own."""
+    import importlib
+    import subprocess
+    import sys
+    import time
+
+    (tmp_path / "lockdemo.py").write_text(
+        "from skyscatter import jit\n\n\n@jit.kernel\ndef twice(x):\n    return 2.0 * x\n")
+    child = (
+        "import sys\nimport lockdemo\nprint('ready', flush=True)\nassert lockdemo.twice(1.5) == 3.0\n"
+        "print(sum(lockdemo.twice.stats.cache_misses.values()), sum(lockdemo.twice.stats.cache_hits.values()))\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), str(SRC.parent)]))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    sys.path.insert(0, str(tmp_path))
+    try:
+        lockdemo = importlib.import_module("lockdemo")
+        path = jit._compile_lock_path(lockdemo.twice)
+        assert path is not None
+        with jit._compile_lock(path):
+            proc = subprocess.Popen([sys.executable, "-c", child], env=env, cwd=tmp_path, stdout=subprocess.PIPE,
+                                    text=True)
+            assert proc.stdout.readline().strip() == "ready"
+            time.sleep(2.0)
+            assert proc.poll() is None  # waiting for the lock
+            assert lockdemo.twice(1.5) == 3.0  # compiles here (the lock is this process's: re-entered)
+            assert sum(lockdemo.twice.stats.cache_misses.values()) == 1
+        out, _ = proc.communicate(timeout=120)
+    finally:
+        sys.path.remove(str(tmp_path))
+        sys.modules.pop("lockdemo", None)
+    assert proc.returncode == 0
+    assert out.split() == ["0", "1"]  # no compilation, one load from the cache

@@ -37,14 +37,30 @@ below; a set is chosen per function where it was measured to pay, and never incl
   sums over quadrature directions are its cost.
 
 The effect of both sets on speed and results is measured in docs/architecture.md ("numba kernels").
+
+Compilation is serialised between processes per function: a process that compiles a function (a signature not yet
+in numba's cache) holds an exclusive ``flock`` on ``.MODULE.NAME-LINE.numba.lock`` in the function's numba cache
+folder (:func:`skyscatter.fileio.build_lock`) from its cache look-up to its cache write. Another process that needs
+the same function at the same time waits and then loads the first one's machine code from the cache instead of
+compiling it again: the processes of a parallel test run (pytest-xdist workers) or of a cluster started on a fresh
+installation compile each function once (compiling a precomputation's kernels costs a minute of CPU). The lock is
+taken inside numba's own (per-process, re-entrant) compiler lock, and a process that already holds a function's
+lock (numba compiles callees while compiling their caller) does not take it again. Functions call each other
+without cycles, so processes that hold some locks and wait for others cannot wait for each other in a circle.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import contextlib
+from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any, TypeVar
 
 import numba
+from numba.core import sigutils
+from numba.core.compiler_lock import global_compiler_lock
+
+from .fileio import build_lock
 
 __all__ = ["CONTRACT_ARCP", "CONTRACT_REASSOC", "helper", "inline", "kernel", "parallel_kernel"]
 
@@ -66,9 +82,66 @@ def _fastmath(flags: frozenset[str] | None) -> bool | set[str]:
     return set(flags)
 
 
-def _decorator(fastmath: frozenset[str] | None, **options: Any) -> Callable[[F], F]:
-    dispatcher: Callable[[F], F] = numba.njit(**_COMMON, fastmath=_fastmath(fastmath), **options)
+#: Compile-lock files this process holds (under numba's compiler lock), and how many times (module docstring).
+_held: dict[Path, int] = {}
+
+
+@contextlib.contextmanager
+def _compile_lock(path: Path) -> Iterator[None]:
+    """Hold the inter-process compile lock of one function (``build_lock`` of ``path``); re-entrant per process."""
+    if path in _held:
+        _held[path] += 1
+        try:
+            yield
+        finally:
+            _held[path] -= 1
+        return
+    with build_lock(path):
+        _held[path] = 1
+        try:
+            yield
+        finally:
+            del _held[path]
+
+
+def _compile_lock_path(dispatcher: Any) -> Path | None:
+    """The file whose ``build_lock`` is the compile lock of a compiled function (module docstring): in the
+    function's numba cache folder, named after its module, name and first line as numba names its cache files;
+    None without a numba on-disk cache (``NUMBA_DISABLE_JIT``, or a numba without ``cache_path``)."""
+    cache_path = getattr(getattr(dispatcher, "_cache", None), "cache_path", None)
+    py_func = getattr(dispatcher, "py_func", None)
+    if not isinstance(cache_path, str) or py_func is None:
+        return None
+    return Path(cache_path) / f"{py_func.__module__}.{py_func.__qualname__}-{py_func.__code__.co_firstlineno}.numba"
+
+
+def _lock_compilation(dispatcher: Any) -> Any:
+    """Make ``dispatcher.compile`` hold the function's inter-process compile lock (module docstring) when the
+    signature is not compiled in this process yet (numba calls ``compile`` for a call with new argument types and
+    when it types a caller); without a numba on-disk cache the dispatcher is returned unchanged."""
+    path = _compile_lock_path(dispatcher)
+    if path is None:
+        return dispatcher
+    compile_unlocked = dispatcher.compile
+
+    def compile(sig: Any) -> Any:
+        args, _ = sigutils.normalize_signature(sig)
+        if tuple(args) in dispatcher.overloads:  # compiled or loaded in this process already
+            return compile_unlocked(sig)
+        with global_compiler_lock, _compile_lock(path):  # numba's lock first: one thread of this process waits
+            return compile_unlocked(sig)
+
+    dispatcher.compile = compile
     return dispatcher
+
+
+def _decorator(fastmath: frozenset[str] | None, **options: Any) -> Callable[[F], F]:
+    njit = numba.njit(**_COMMON, fastmath=_fastmath(fastmath), **options)
+
+    def deco(func: F) -> F:
+        locked: F = _lock_compilation(njit(func))
+        return locked
+    return deco
 
 
 def kernel(func: F | None = None, *, fastmath: frozenset[str] | None = None) -> Any:

@@ -230,8 +230,11 @@ class TableLookups:
             ) from None
 
         def flat(a: NDArray[np.float64], last: int | None) -> NDArray[np.float64]:
+            # always C-contiguous and writable (a read-only view is copied): numba compiles a kernel once per
+            # argument type, and read-only is another type, so an input that needed no broadcasting (a read-only
+            # view of it) compiled the lookup kernels a second time (about 10 s of CPU each, per process)
             full = np.broadcast_to(a, (*shape, last) if last else shape)
-            return np.ascontiguousarray(full.reshape(-1, last) if last else full.reshape(-1))
+            return np.require(full.reshape(-1, last) if last else full.reshape(-1), requirements=["C", "W"])
 
         sh = flat(np.asarray(extra, dtype=float), None) if extra is not None else None
         return shape, flat(pos, 3), flat(dirs, 3), flat(sun, 3), sh
