@@ -600,7 +600,6 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         towards the lowest (where the path to the top lengthens fastest) and interpolated linearly in its
         logarithm, rather than once per ray (a map's whole upper half): 2.2 CPU-s less per 2048 x 1024 map, the
         map within 6.2e-7 relative of the per-ray lookup (docs/clouds.md, Speed)."""
-        tab = self._tables
         r_eye = float(np.sqrt(eye @ eye))
         mu = d @ (eye / r_eye)
         lo, hi = float(mu.min()), float(mu.max())
