@@ -600,7 +600,6 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         towards the lowest (where the path to the top lengthens fastest) and interpolated linearly in its
         logarithm, rather than once per ray (a map's whole upper half): 2.2 CPU-s less per 2048 x 1024 map, the
         map within 6.2e-7 relative of the per-ray lookup (docs/clouds.md, Speed)."""
-        tab = self._tables
         r_eye = float(np.sqrt(eye @ eye))
         mu = d @ (eye / r_eye)
         lo, hi = float(mu.min()), float(mu.max())
@@ -613,7 +612,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         dn = nodes[:, None] * up[None, :] + np.sqrt(np.maximum(1.0 - nodes * nodes, 0.0))[:, None] * side[None, :]
         b = dn @ eye
         t_top = -b + np.sqrt(np.maximum(b * b - (eye @ eye - r_top * r_top), 0.0))
-        t_nodes, _ = tab.aerial_perspective(eye, eye + t_top[:, None] * dn, self._sun_planet)
+        t_nodes = self._air_transmittance(eye, eye + t_top[:, None] * dn)
         if hi <= lo:
             return np.repeat(t_nodes[:1], mu.size, axis=0)
         # the node below each cosine: invert the square law, then step back where rounding put it one too far
@@ -623,6 +622,17 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         w = np.clip((mu - nodes[k]) / np.maximum(nodes[k + 1] - nodes[k], 1e-300), 0.0, 1.0)[:, None]
         log_t = np.log(np.maximum(t_nodes, 1e-300))  # nearly linear in the path length: interpolated in log
         return np.exp(log_t[k] * (1.0 - w) + log_t[k + 1] * w)
+
+    def _air_transmittance(self, eye: NDArray[np.float64], points: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The clear air's transmittance (n, n_table_wavelengths) [-] from ``eye`` (3,) to ``points`` (n, 3) [m,
+        planet-centred]: the transmittance of :meth:`~skyscatter.precomputed.evaluation.TableLookups.
+        aerial_perspective` ([Bruneton2008] Eq. 16) without its inscattered light, bit for bit. The whole ray is
+        given as shadowed (Eq. 17's shadow length beyond any ray's length), so the lookup skips the inscatter
+        integral, which the march never uses: it was most of the lookups' cost (the transmittance is two reads of
+        a 2D table, the inscatter two of the 4D scattering tables)."""
+        pts = np.asarray(points, dtype=float).reshape(-1, 3)
+        t, _ = self._tables.aerial_perspective(eye, pts, self._sun_planet, shadow_length=np.full(pts.shape[0], 1e30))
+        return t
 
     def _composite(self, d: NDArray[np.float64], hit_only: bool = False, eye: NDArray[np.float64] | None = None,
                    amb_up: NDArray[np.float64] | None = None, top_down: NDArray[np.float64] | None = None):
@@ -676,7 +686,20 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
             air = gain - loss
         shafted = np.zeros(d.shape[0], dtype=bool) if air is None else np.any(air != 0.0, axis=1)
         changed |= shafted
-        idx = np.flatnonzero(hit | ground | changed)
+        # the ground points in the field's shadow, found first: the rest of the ground a ray meets is the clear
+        # sky's own unless something else changed the ray (its lookup here would be thrown away: the clear sky's
+        # is taken for the unchanged rays)
+        shade = None
+        g_rows = np.flatnonzero(ground)
+        if g_rows.size:
+            gpts = eye + t_ground[g_rows, None] * d[g_rows]
+            gpts *= (bottom / np.linalg.norm(gpts, axis=-1))[:, None]
+            tau = self._ground_optical_depth(gpts)
+            shadowed = tau > 0.0
+            if np.any(shadowed):
+                shade = (g_rows[shadowed], gpts[shadowed], tau[shadowed])
+                changed[shade[0]] = True
+        idx = np.flatnonzero(hit | changed)
         if idx.size == 0:
             return out, changed
         dd = d[idx]
@@ -689,23 +712,16 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         if np.any(h):
             ih = idx[h]  # the rays' own rows (indexing twice, rad[idx][h], copied every ray's row first)
             pts = eye + depth[ih, None] * d[ih]
-            t_air, _ = tab.aerial_perspective(eye, pts, sun)
+            t_air = self._air_transmittance(eye, pts)
             behind = tab.sky_radiance(pts, d[ih], sun)
             value[h] += t_air * (rad[ih] - (1.0 - tr[ih]) * behind)
-        gsel = ground[idx]
-        if np.any(gsel):
-            gpts = eye + t_ground[idx][gsel, None] * dd[gsel]
-            gpts *= (bottom / np.linalg.norm(gpts, axis=-1))[:, None]
-            tau = self._ground_optical_depth(gpts)
+        if shade is not None:
+            s_rows, gpts, tau = shade
             lit = 1.0 - np.exp(-np.multiply.outer(tau, self._light["k"]))
-            shadowed = tau > 0.0
-            if np.any(shadowed):
-                e_sun, _ = tab.ground_irradiance(gpts[shadowed], gpts[shadowed] / bottom, sun)
-                t_air, _ = tab.aerial_perspective(eye, gpts[shadowed], sun)
-                rows = np.flatnonzero(gsel)[shadowed]
-                value[rows] -= (t_air * tr[idx[rows]] * self._light["ground_albedo"] / math.pi * e_sun
-                                * lit[shadowed])
-                changed[idx[rows]] = True
+            e_sun, _ = tab.ground_irradiance(gpts, gpts / bottom, sun)
+            t_air = self._air_transmittance(eye, gpts)
+            value[np.searchsorted(idx, s_rows)] -= (t_air * tr[s_rows] * self._light["ground_albedo"] / math.pi
+                                                    * e_sun * lit)
         out[idx] = np.maximum(value, 0.0)
         return out, changed
 
@@ -796,7 +812,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         part_gain = np.zeros((rows.size, nwl))
         far = t0[rows] > 0.0
         if np.any(far):
-            part[far] = tab.aerial_perspective(eye, eye + t0[rows][far, None] * dr[far], sun)[0]
+            part[far] = self._air_transmittance(eye, eye + t0[rows][far, None] * dr[far])
         sa = self._shaft_air
         v = self._volumes
         mu = _MU_NODES

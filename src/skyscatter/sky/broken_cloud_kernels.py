@@ -257,6 +257,7 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
             cj *= -dk[wl] / (jj + 1)
             tj[jj, wl] = cj
     direct = np.empty(nwl)
+    g_oct = np.empty(nwl)  # an octave's asymmetry per wavelength (the phase's set-up at a ray's first cloud sample)
     # the octaves' extinction factors a^i (the same products as the octave loop's running one) and a buffer for
     # their exponentials and the step's, computed together per sample (:func:`exp_lanes`)
     a_pow = np.empty(n_octaves)
@@ -419,11 +420,15 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
                     for wl in range(nwl):
                         p0 = ph_val[wl, lo] * (1.0 - f) + ph_val[wl, hi] * f
                         w[0, wl] = solar[wl] * p0 * trunc[0, wl]
-                        scale = 1.0
-                        gi = trunc[1, wl]
-                        for o in range(1, n_octaves):
-                            scale *= b
-                            gi *= c
+                        g_oct[wl] = trunc[1, wl]
+                    # octave by octave, every wavelength in one loop (square roots and divisions in SIMD lanes; the
+                    # wavelengths innermost, each octave's asymmetry the running product of the loop before)
+                    scale = 1.0
+                    for o in range(1, n_octaves):
+                        scale *= b
+                        for wl in range(nwl):
+                            gi = g_oct[wl] * c
+                            g_oct[wl] = gi
                             q = 1.0 + gi * gi - 2.0 * gi * mu
                             hg = (1.0 - gi * gi) / (four_pi * q * math.sqrt(q))  # q**1.5 by a square root, not a pow
                             w[o, wl] = solar[wl] * scale * hg
@@ -619,6 +624,11 @@ def shaft_loss(origin, dirs, seg, t0, sun, gf, tau_ground, tau_sun, h_step, beta
     be1 = np.empty(n_l)
     dk = np.empty(n_l)
     p_aer = np.empty(n_l)
+    # the air's transmittance over a step or between nodes at every wavelength, by :func:`exp_lanes` (one vectorised
+    # loop instead of a libm call per wavelength)
+    ez = np.empty(n_l)
+    ebits = np.empty(n_l, dtype=np.int64)
+    escale = ebits.view(np.float64)
     m_ph = ph_mu.shape[0]
     # per group: the shadow's moments sum c_j rho dt and sum c_j rho s dt (j = 0..3; Rayleigh then particles), and
     # over the field sum rho dt, sum rho s dt (Rayleigh, particles); s the distance from the group's first node
@@ -740,7 +750,10 @@ def shaft_loss(origin, dirs, seg, t0, sun, gf, tau_ground, tau_sun, h_step, beta
                 pm = (1.0 - a_h) * rho_m[i_h] + a_h * rho_m[i_h + 1]
                 be_max = 0.0
                 for w in range(n_l):
-                    f = math.exp(-0.5 * be0[w] * dt)
+                    ez[w] = -0.5 * be0[w] * dt
+                exp_lanes(ez, n_l, ebits, escale)
+                for w in range(n_l):
+                    f = ez[w]
                     for j in range(4):
                         a0[j, w] *= f
                     t_view[w] *= f
@@ -806,7 +819,10 @@ def shaft_loss(origin, dirs, seg, t0, sun, gf, tau_ground, tau_sun, h_step, beta
             be_max = 0.0
             inv_s = 1.0 / s
             for w in range(n_l):
-                f = math.exp(-0.5 * (be0[w] + be1[w]) * s)
+                ez[w] = -0.5 * (be0[w] + be1[w]) * s
+            exp_lanes(ez, n_l, ebits, escale)
+            for w in range(n_l):
+                f = ez[w]
                 t_view[w] *= f
                 for j in range(4):
                     a1[j, w] *= f
