@@ -339,25 +339,6 @@ def test_half_precision_storage_within_its_rounding_bound_and_idempotent():
         HalfTable.encode(-table)
 
 
-def test_compiled_half_encoding_equals_numpys_cast():
-    """The precomputation encodes its 4D tables with a compiled float32 -> float16 conversion
-    (``kernels.encode_half_kernel``; numpy's cast raised a floating-point flag in libm for every subnormal half);
-    it must give the bits of numpy's IEEE 754 round-to-nearest-even cast (the reference, [IEEE754-2019] Sec. 4.3.1)
-    for every scaled value a table can hold, [0, 2^13]: float32 bit patterns on a stride, every tie (the 13 bits
-    below the half mantissa 0x1000) and its neighbours below, normal and subnormal halves alike."""
-    from skyscatter.precomputed import kernels
-
-    ties = np.arange(0, 0x46000000 >> 13, dtype=np.uint32) << 13
-    bits = np.concatenate([np.arange(0, 0x46000001, 4099, dtype=np.uint32), ties | 0x1000, ties | 0x0FFF,
-                           ties | 0x1001, np.array([0x46000000], dtype=np.uint32)])
-    values = bits.view(np.float32)
-    values = values[: values.size // 16 * 16].reshape(-1, 1, 1, 1, 16)  # (n_r, n_mu, n_s, n_nu, n_wavelengths)
-    out = np.empty((16, values.shape[0], 1, 1, 1), dtype=np.float16)
-    kernels.encode_half_kernel(values, np.ones((values.shape[0], 1, 16), dtype=np.float32),
-                               np.empty(16, dtype=np.float32), out.view(np.uint16), 0, values.shape[0])
-    np.testing.assert_array_equal(out.view(np.uint16), np.moveaxis(values, -1, 0).astype(np.float16).view(np.uint16))
-
-
 def test_half_precision_storage_of_a_vanishing_slice_decodes_finite():
     """A slice whose largest value is below 2^-113 (measured: texels in the planet's shadow under aerosol optical
     depth 1.5) got a float32 scale of 0 and decoded as inf * 0 = NaN; the scale now stays a normal float32 and such

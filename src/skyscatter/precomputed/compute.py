@@ -63,7 +63,7 @@ from .parallel import parallel_for
 from .parameters import SOLAR_BAND_WIDTH, AtmosphereParameters
 from .sampling import TABLE_PHASE
 from .sizes import DEFAULT_ORDERS, TableSizes, table_wavelengths
-from .storage import HALF_TABLES, HalfTable, half_scale
+from .storage import HALF_TABLES, HalfTable, encode_half
 
 __all__ = ["MAX_ORDER_RATIO", "Bookkeeping", "Medium", "Order", "add_geometric_tail", "compute_tables",
            "density_profiles", "direct_irradiance", "indirect_irradiance", "multiple_scattering",
@@ -514,15 +514,10 @@ class SpillTables:
         ``first..first + chunk - 1`` (the half-precision scales are per radius: a block of whole radii is final)."""
         fd = self._files[name].fileno()
         row_bytes = self._per_wavelength // self._shape[1]
-        t = np.ascontiguousarray(table, dtype=np.float32)
-        scale = half_scale(t)
-        # the bits of storage.encode_half's values, compiled (numpy's cast was most of the encoding's time)
-        values = np.empty((t.shape[-1], *t.shape[:-1]), dtype=np.float16)  # (chunk, len(rows), ...): a few MiB
-        quotient = np.empty(math.prod(t.shape[2:]), dtype=np.float32)
-        kernels.encode_half_kernel(t, scale, quotient, values.view(np.uint16), 0, t.shape[0])
+        values, scale = encode_half(table)  # (chunk, len(rows), ...): a block is a few MiB
         for k in range(table.shape[-1]):
             _pwrite_all(fd, values[k], (first + k) * self._per_wavelength + rows.start * row_bytes)
-        self._scales[name][first: first + table.shape[-1], rows.start: rows.stop] = np.moveaxis(scale, -1, 0)
+        self._scales[name][first: first + table.shape[-1], rows.start: rows.stop] = scale
 
     def tables(self) -> dict[str, HalfTable]:
         """The finished tables."""

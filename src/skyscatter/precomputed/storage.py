@@ -51,7 +51,7 @@ if TYPE_CHECKING:
     from .tables import PrecomputedAtmosphere
 
 __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "STORED_NAMES", "TABLE_NAMES", "HalfTable", "cache_key",
-           "checksum", "encode_half", "half_scale", "read_tables", "write_tables"]
+           "checksum", "read_tables", "write_tables"]
 
 #: Version of the table layout and algorithm; part of the cache key and checked by :func:`read_tables`.
 #: 6: half-precision, wavelength-first scattering tables with power-of-two scales; 64-byte aligned arrays.
@@ -221,17 +221,6 @@ def encode_half(table: NDArray[np.floating]) -> tuple[NDArray[np.float16], NDArr
     """``(values, scale)`` of :class:`HalfTable` for a table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths) >= 0: per
     (wavelength, r, mu_s) the power of two that brings the largest value into (2^12, 2^13] (module docstring)."""
     t = np.asarray(table, dtype=np.float32)
-    scale = half_scale(t)
-    values = np.empty((t.shape[-1], *t.shape[:-1]), dtype=np.float16)
-    for i in range(t.shape[0]):  # one radius at a time: no float32 copy of the whole table
-        values[:, i] = np.moveaxis(t[i] / scale[i][None, :, None, :], -1, 0)
-    return values, np.ascontiguousarray(np.moveaxis(scale, -1, 0))  # scale (n_wl, n_r, n_s)
-
-
-def half_scale(t: NDArray[np.float32]) -> NDArray[np.float32]:
-    """The scales of :func:`encode_half` in the table's own layout, (n_r, n_mu_s, n_wavelengths) float32: the values
-    in half precision are ``t / scale`` rounded (to nearest, ties to even); a table with a negative or non-finite
-    value is refused."""
     # Reductions and division in the table's own layout, one radius at a time: over the moved (wavelength-first)
     # view numpy strides across every value and the encoding took 0.6 s of CPU in a default precomputation; the
     # same arithmetic this way 0.15 s, with the same bits (the max over mu then over nu is the max over both).
@@ -244,7 +233,12 @@ def half_scale(t: NDArray[np.float32]) -> NDArray[np.float32]:
     # shadow under a thick haze) would otherwise get a scale of 0 and decode as inf * 0 = NaN; its values then keep
     # fewer bits, which at that level is nothing
     exponent = np.maximum(ceil_log2 - _SCALED_MAX_EXPONENT, _MIN_SCALE_EXPONENT)
-    return np.where(peak > 0, np.ldexp(np.float32(1.0), exponent), 1.0).astype(np.float32)
+    scale = np.where(peak > 0, np.ldexp(np.float32(1.0), exponent), 1.0).astype(np.float32)
+    values = np.empty((t.shape[-1], *t.shape[:-1]), dtype=np.float16)
+    for i in range(t.shape[0]):  # one radius at a time: no float32 copy of the whole table
+        values[:, i] = np.moveaxis(t[i] / scale[i][None, :, None, :], -1, 0)
+    scale = np.ascontiguousarray(np.moveaxis(scale, -1, 0))  # (n_wl, n_r, n_s)
+    return values, scale
 
 
 def checksum(arr: NDArray[Any] | HalfTable) -> str:
