@@ -58,6 +58,7 @@ from .sampling import (
     density_at,
     exp_segment_weights,
     irradiance_lookup,
+    lookup4_cell_weighted,
     phase_table_values,
     r_mu_cell,
     ray_transmittance,
@@ -563,18 +564,31 @@ def _hemisphere_irradiance(s_a, s_b, first, phase_trunc, forward, r, mu_s, botto
     directions ``om`` (solid angles ``dom``) at radius ``r`` [m] and sun zenith cosine ``mu_s``, the first order's
     forward delta included."""
     n_l = acc.shape[0]
+    n_r, n_mu, n_s, n_n, _ = s_a.shape
     n_u = phase_trunc.shape[1]
     half_u = 0.5 * (n_u - 1)
     sx = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
     acc[:] = 0.0
+    # The reads of :func:`.sampling.scattering_lookup`, with the geometry that does not change between directions
+    # computed once: the sun zenith cell for the whole hemisphere, the (r, mu) cell per zenith row of the quadrature
+    # (its directions are stored row by row). Recomputing both per direction was most of this kernel's time (the
+    # same values: the same helpers on the same arguments).
+    i_s, w_s = lerp_index(scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_s), 0, n_s - 1)
+    wz_row = math.nan
+    i_r, w_r, i_m0, w_m0, i_m1, w_m1 = 0, 0.0, 0, 0.0, 0, 0.0
     for w in range(om.shape[0]):
         wz = om[w, 2]
+        if wz != wz_row:
+            i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, wz, False, bottom, top, n_r, n_mu)
+            wz_row = wz
         nu_w = clamp(om[w, 0] * sx + wz * mu_s, -1.0, 1.0)
+        i_n, w_n = lerp_index(scattering_nu_coord(wz, mu_s, nu_w, n_n), 0, n_n - 1)
         scale = wz * dom[w]
         if first:
-            scattering_lookup(s_a, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min, scale * rayleigh_phase(nu_w), acc)
+            lookup4_cell_weighted(s_a, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, 1.0 - w_n, w_n,
+                                  scale * rayleigh_phase(nu_w), acc)
             tmp[:] = 0.0
-            scattering_lookup(s_b, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min, scale, tmp)
+            lookup4_cell_weighted(s_b, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, 1.0 - w_n, w_n, scale, tmp)
             x = (nu_w + 1.0) * half_u
             i = min(int(x), n_u - 2)
             t = x - i
@@ -582,7 +596,7 @@ def _hemisphere_irradiance(s_a, s_b, first, phase_trunc, forward, r, mu_s, botto
                 p = (1.0 - t) * phase_trunc[k, i] + t * phase_trunc[k, i + 1]
                 acc[k] += (1.0 - forward[k]) * p * tmp[k]
         else:
-            scattering_lookup(s_a, r, wz, mu_s, nu_w, False, bottom, top, mu_s_min, scale, acc)
+            lookup4_cell_weighted(s_a, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, 1.0 - w_n, w_n, scale, acc)
     if first and mu_s > 0.0:
         # the forward delta: the single-scattered aerosol light along the sun's own direction
         tmp[:] = 0.0
@@ -635,6 +649,10 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_trunc, forwar
     acc = np.zeros(n_l)
     sums = np.zeros((3, n_l))
     tmp = np.empty(n_l)
+    # the hemisphere sums at the scattering tables' sun zenith texels, per radius: neighbouring texels below the
+    # horizon share two or three of their three (computed once: the same values)
+    at_texel = np.empty((n_r, n_s, n_l))
+    have = np.zeros((n_r, n_s), dtype=np.bool_)
     for idx in range(start, stop):
         i_r = idx // n_mu_s
         i_s = idx % n_mu_s
@@ -650,10 +668,13 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_trunc, forwar
             j, w_s = lerp_index(scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_s), 0, n_s - 1)
             j0 = min(max(j - 1 if w_s < 0.5 else j, 0), n_s - 3)
             for q in range(3):
-                mu_q = scattering_mu_s_param(j0 + q, bottom, top, mu_s_min, n_s)
-                _hemisphere_irradiance(s_a, s_b, first, phase_trunc, forward, r, mu_q, bottom, top, mu_s_min, om,
-                                       dom, acc, tmp)
-                sums[q, :] = acc
+                if not have[i_r, j0 + q]:
+                    mu_q = scattering_mu_s_param(j0 + q, bottom, top, mu_s_min, n_s)
+                    _hemisphere_irradiance(s_a, s_b, first, phase_trunc, forward, r, mu_q, bottom, top, mu_s_min,
+                                           om, dom, acc, tmp)
+                    at_texel[i_r, j0 + q, :] = acc
+                    have[i_r, j0 + q] = True
+                sums[q, :] = at_texel[i_r, j0 + q, :]
             a0 = math.asin(scattering_mu_s_param(j0, bottom, top, mu_s_min, n_s))
             a1 = math.asin(scattering_mu_s_param(j0 + 1, bottom, top, mu_s_min, n_s))
             a2 = math.asin(scattering_mu_s_param(j0 + 2, bottom, top, mu_s_min, n_s))
