@@ -10,12 +10,12 @@ explicitly) at 64 streams, Rayleigh air + the water cloud 1000-1500 m (r_e 10 um
 That DISORT setup agrees with the Monte Carlo within 2 % + 3 standard errors on 192 views (docs/clouds.md).
 
 The model is evaluated in the same plane-parallel setup (a planet of 1000 Earth radii) with the whole column in
-DISORT (``illumination="column"``): within 5 % for optical depths 5-60 at every sun (measured up to 2.1 %);
-under optical depth 1 it misses by up to 7 % at 650 nm (the Mie phase function's ripple between the model's
-25 nm solve wavelengths: at the solve wavelengths themselves 0.6 %), kept as a strict xfail. The default
+DISORT (``illumination="column"``): within 5 % for optical depths 1-60 at every sun (measured up to 0.8 %, since
+the droplets' Mie optics resolve the size integral: until 2026-12-03 their 24 nodes per e aliased the phase
+function's ripple with size into a ripple with wavelength, up to 7 % at 650 nm under optical depth 1). The default
 coupling with the precomputed clear sky (``illumination="tables"``) in the same limit: within 5 % under optical
-depths 15-60 with the sun 10-60 deg high (measured up to 4.7 %); under thin clouds at a low sun it misses
-(optical depth 1 and 5, sun 10 deg: 27 and 10 %), a strict xfail.
+depths 15-60 with the sun 30-60 deg high (measured up to 1.0 %); with the sun 10 deg high it misses (optical
+depths 15-60: -5.6 to -6.1 % at 450 nm; 1 and 5: 27 and 10 %), strict xfails.
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ def _relative(tau: float, sun: float, illumination: str = "column") -> np.ndarra
 
 
 def test_reference_is_converged_in_streams():
-    """The reference at 32 and at 64 streams: within 1.5 % 25 deg or more from the sun (measured: 1.2 %, under
+    """The reference at 32 and at 64 streams: within 1.5 % 25 deg or more from the sun (measured: 0.8 %, under
     optical depth 1 and a sun 60 deg high; 0.01 % from optical depth 15 on). Without the TMS correction they
     differed by up to 6 % under optical depth 1, which is why it is added."""
     assert len(CASES) == 20
@@ -80,19 +80,29 @@ def test_radiance_within_5_percent_of_disort(tau, sun):
     assert np.max(np.abs(rel)) < 0.05, np.max(np.abs(rel))
 
 
-@pytest.mark.xfail(strict=True, reason="optical depth 1: up to 7 % at 650 nm, the Mie phase function's ripple "
-                                       "between the model's 25 nm solve wavelengths (docs/clouds.md)")
 @pytest.mark.parametrize("sun", [60.0, 10.0])
 def test_thin_cloud_radiance_within_5_percent_of_disort(sun):
+    """Optical depth 1 (mostly single scattering, so it follows the droplets' phase function): measured 0.8 % (sun
+    60 deg) and 0.5 % (sun 10 deg); 6.7 and 6.5 % while the droplets' size quadrature aliased the phase function."""
     rel = _relative(1.0, sun)
     assert np.max(np.abs(rel)) < 0.05, np.max(np.abs(rel))
 
 
 @pytest.mark.parametrize("tau", [15.0, 30.0, 60.0])
-@pytest.mark.parametrize("sun", [60.0, 30.0, 10.0])
+@pytest.mark.parametrize("sun", [60.0, 30.0])
 def test_default_coupling_within_5_percent_of_disort(tau, sun):
-    """The default illumination (the column from the cloud top down, lit by the precomputed clear sky)."""
+    """The default illumination (the column from the cloud top down, lit by the precomputed clear sky): measured up
+    to 1.0 %."""
     rel = _relative(tau, sun, "tables")
+    assert np.max(np.abs(rel)) < 0.05, np.max(np.abs(rel))
+
+
+@pytest.mark.xfail(strict=True, reason="sun 10 deg: -5.6 to -6.1 % at 450 nm (every view low, worst 45 deg high "
+                                       "towards the sun; 550 nm -2.1 to -2.6 %); passed (-3.6 to -4.7 %) only while "
+                                       "the droplets' aliased phase function biased the comparison (docs/clouds.md)")
+@pytest.mark.parametrize("tau", [15.0, 30.0, 60.0])
+def test_default_coupling_thick_cloud_sun_10(tau):
+    rel = _relative(tau, 10.0, "tables")
     assert np.max(np.abs(rel)) < 0.05, np.max(np.abs(rel))
 
 

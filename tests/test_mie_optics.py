@@ -146,6 +146,17 @@ def test_water_droplets():
     np.testing.assert_allclose(n, [1.349 + 1.6e-8j, 1.333 + 1.96e-9j, 1.327 + 2.89e-6j])  # Hale & Querry (1973)
 
 
+def test_water_droplets_size_quadrature_resolves_the_phase_ripple():
+    """The droplets' phase function at 20-60 deg from a quadrature fine enough in size parameter: the default
+    (a step of 0.5 in x at r_e) within 2 % of one four times finer (measured 0.9 % at 650 nm, r_e 10 um, v_eff 0.1),
+    where the former 24 nodes per e (a step of 4 in x) were 13 % off: the aliased ripple that put a 7 % error
+    into the cloudy sky's radiance at 650 nm (docs/clouds.md, "Radiance under clouds")."""
+    cos = np.cos(np.radians(np.arange(20.0, 60.1, 1.0)))
+    fine = water_droplets(10e-6, 0.1, [650.0], nodes_per_e=4 * 2 * 97)
+    rel = np.ravel(water_droplets(10e-6, 0.1, [650.0]).phase.evaluate(cos)) / np.ravel(fine.phase.evaluate(cos)) - 1
+    assert np.max(np.abs(rel)) < 0.02, np.max(np.abs(rel))
+
+
 def test_presets_in_the_atmosphere():
     p = AtmosphereParameters.with_aerosol_type("maritime-clean", 0.12, relative_humidity=80.0)
     assert abs(p.aerosol_component.optical_depth([550.0], p.thickness)[0] - 0.12) < 1e-9

@@ -214,16 +214,54 @@ def _mie_optics_compute(distribution: SizeDistribution, refractive_index: Refrac
     return out
 
 
+#: Radius nodes per unit of ``ln r`` per unit of the droplets' effective size parameter ``x_e = 2 pi r_e /
+#: lambda`` (:func:`water_droplets`): a step of 0.5 in the size parameter at ``r_e``.
+DROPLET_NODES_PER_SIZE_PARAMETER = 2.0
+
+
 def water_droplets(effective_radius: float, effective_variance: float, wavelengths: ArrayLike,
-                   angles: ArrayLike | None = None, nodes_per_e: float = NODES_PER_E) -> MieOptics:
+                   angles: ArrayLike | None = None, nodes_per_e: float | None = None) -> MieOptics:
     """Mie optics of liquid-water cloud droplets with a gamma size distribution.
 
     ``effective_radius`` [m] and ``effective_variance`` [-] as in
     :meth:`.size_distributions.ModifiedGammaMode.from_effective` (e.g. 10e-6 and 0.1), refractive index of
     liquid water (:func:`.refractive_index.water_refractive_index`, Hale & Querry 1973, 250-1200 nm).
     ``angles`` default :func:`.phase_table.phase_angle_grid` (which resolves the diffraction peak).
+
+    ``nodes_per_e`` [nodes per unit of ``ln r``]: by default, per wavelength,
+    :data:`DROPLET_NODES_PER_SIZE_PARAMETER` times the effective size parameter ``x_e = 2 pi r_e / lambda`` (at
+    least :data:`.size_distributions.NODES_PER_E`), so that neighbouring radii differ by 0.5 in size parameter at
+    ``r_e``. A single sphere's phase function at a fixed angle oscillates with ``x`` over a few units (the
+    interference of its reflected and refracted rays); a distribution of effective variance 0.1 averages that out,
+    but a coarser size quadrature aliases it into a spurious ripple in wavelength. Measured, r_e 10 um, v_eff
+    0.1, phase at 55 deg, 620-680 nm every 5 nm: 24 nodes per e (a step of 4 in ``x`` at 650 nm) 0.0279-0.0346
+    sr^-1 (+-11 %), 96 nodes +-2 %, 192 nodes 0.0311-0.0315 (+-0.6 %); 20-60 deg at 650 nm against 4x finer: 0.9 %
+    (24 nodes: 13 %). Cost, 18 wavelengths 380-780 nm, CPU: r_e 5 / 10 / 20 um 1.4 / 3.9 / 11.4 s (24 nodes per e:
+    0.3 / 0.5 / 0.8 s); cached per process (:func:`mie_optics`, one entry per wavelength).
     """
     from .refractive_index import water_refractive_index
 
     mode = ModifiedGammaMode.from_effective(effective_radius, effective_variance)
-    return mie_optics(mode, water_refractive_index(), wavelengths, angles, nodes_per_e)
+    index = water_refractive_index()
+    if nodes_per_e is not None:
+        return mie_optics(mode, index, wavelengths, angles, nodes_per_e)
+    from ..spectral import as_wavelengths
+
+    wl = np.asarray(as_wavelengths(wavelengths), dtype=float)
+    parts = [mie_optics(mode, index, [lam], angles,
+                        max(float(NODES_PER_E),
+                            math.ceil(DROPLET_NODES_PER_SIZE_PARAMETER * 2e9 * math.pi * effective_radius / lam)))
+             for lam in wl]
+    if len(parts) == 1:
+        return parts[0]
+
+    def cat(name: str) -> NDArray[np.float64]:
+        a = np.concatenate([getattr(o, name) for o in parts])
+        a.setflags(write=False)
+        return a
+
+    first = parts[0].phase
+    table = PhaseTable(wl, first.angles, np.concatenate([np.atleast_2d(o.phase.values) for o in parts]),
+                       normalise=False)
+    return MieOptics(wl, cat("extinction_cross_section"), cat("scattering_cross_section"), cat("asymmetry_mie"),
+                     cat("angular_closure"), table)
