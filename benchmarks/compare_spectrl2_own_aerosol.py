@@ -21,7 +21,6 @@ tests/weather_synth.py (20 June, no light below 3 deg) with the default base (Co
 of Cornette-Shanks g 0.585 (SPECTRL2's mean cosine 0.65): the retrieved albedo, g and DHI closure per clear hour.
 """
 
-import importlib
 import json
 import sys
 import tempfile
@@ -30,31 +29,26 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-import pvlib
 
-from skyscatter.atmosphere.particles import TabulatedParticles
 from skyscatter.atmosphere.phase_table import PhaseTable
-from skyscatter.atmosphere.spectra import AngstromSpectrum, TabulatedSpectrum
-from skyscatter.fit.weather import TABLE_PRESETS, BroadbandClearSky, RetrievalOptions
+from skyscatter.fit.weather import TABLE_PRESETS, RetrievalOptions
 from skyscatter.montecarlo.domain import ground_irradiance
 from skyscatter.precomputed.cache import cached_atmosphere
 
-ALPHA = 1.3
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from spectrl2_clear import SPECTRL2_ALPHA as ALPHA  # noqa: E402  (shared with the test)
+from spectrl2_clear import clear_ground_spectra, spectrl2_air  # noqa: E402
+
 CASES = ((30.0, 0.1), (20.0, 0.3), (60.0, 0.2))
 BASE = RetrievalOptions(angstrom_alpha=ALPHA).base_atmosphere()
 
 
 def medium(aod550: float, phase: str = "hg"):
-    """Our medium with SPECTRL2's aerosol (module docstring); ``phase`` "hg", "cs" or "old"."""
+    """Our medium with SPECTRL2's aerosol (module docstring; tests/spectrl2_clear.py); ``phase`` "hg", "cs" (a
+    Cornette-Shanks of the same mean cosine) or "old" (the analytic aerosol the comparison used before)."""
     if phase == "old":
         return BASE.replace(mie_angstrom_beta=aod550 * 0.55**ALPHA, mie_single_scattering_albedo=0.9, mie_phase_g=0.8)
-    wl = np.arange(300.0, 1301.0, 10.0)
-    albedo = 0.945 * np.exp(-0.095 * np.log(wl / 400.0) ** 2)
-    table = (PhaseTable.henyey_greenstein(0.65, [300.0, 1300.0]) if phase == "hg"
-             else PhaseTable.cornette_shanks(0.585, [300.0, 1300.0]))
-    ext = AngstromSpectrum(aod550 * 0.55**ALPHA, ALPHA, BASE.mie_density.column(BASE.thickness))
-    return BASE.replace(aerosol=TabulatedParticles("SPECTRL2 aerosol", BASE.mie_density, ext,
-                                                   TabulatedSpectrum(tuple(wl), tuple(albedo)), table))
+    return spectrl2_air(aod550, None if phase == "hg" else PhaseTable.cornette_shanks(0.585, [300.0, 1300.0]))
 
 
 def tables(atm, preset: str):
@@ -73,33 +67,11 @@ def stats(a, b, wl):
 
 
 def compare(preset: str, phase: str, paths: int) -> dict:
-    etr = importlib.import_module("pvlib.spectrum.spectrl2")._SPECTRL2_COEFFS["spectral_irradiance_et"]
-    e0 = etr * pvlib.irradiance.get_extra_radiation(80, method="spencer", solar_constant=1.0)
     out = {}
     for zdeg, aod in CASES:
         atm = medium(aod, phase)
-        tab = tables(atm, preset)
-        model = BroadbandClearSky(atm, ALPHA)
-        z, one = np.radians([zdeg]), np.ones(1)
-        direct = model.direct_normal_spectral(z, [aod], 1.4 * one, 101325 * one, 300 * one, one,
-                                              weighted=False)[0] / model.e0
-        gas = model.gas_transmittance(z, 1.4 * one, 101325 * one)[0]
-        wlt = np.asarray(tab.wavelengths)
-        sky = tab.horizontal_sky_irradiance(z)[0] / atm.solar_irradiance_at(wlt)
-        s = pvlib.spectrum.spectrl2(apparent_zenith=zdeg, aoi=zdeg, surface_tilt=0, ground_albedo=0.2,
-                                    surface_pressure=101325,
-                                    relative_airmass=pvlib.atmosphere.get_relative_airmass(zdeg, model="kasten1966"),
-                                    precipitable_water=1.4, ozone=0.3, dayofyear=80, alpha=ALPHA,
-                                    aerosol_turbidity_500nm=aod * (500 / 550) ** -ALPHA)
-        w = s["wavelength"]
-        sel = (w >= 400) & (w <= 700)
-        w = w[sel]
-        cz = np.cos(z[0])
-        gas_w = np.interp(w, model.wavelengths, gas)
-        th = {"direct": s["dni"][sel, 0] / e0[sel] * cz, "diffuse": s["dhi"][sel, 0] / e0[sel]}
-        me = {"direct": np.interp(w, model.wavelengths, direct) * cz, "diffuse": np.interp(w, wlt, sky) * gas_w}
-        for d in (th, me):
-            d["global"] = d["direct"] + d["diffuse"]
+        z = np.radians([zdeg])
+        w, me, th, gas_w = clear_ground_spectra(atm, tables(atm, preset), zdeg, aod)
         row = {k: stats(me[k], th[k], w) for k in ("global", "direct", "diffuse")}
         if paths:
             mc = ground_irradiance(atm, w, sun_zenith=float(z[0]), samples=paths, seed=7)
