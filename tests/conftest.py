@@ -55,6 +55,20 @@ def pytest_collection_modifyitems(config, items):
     items[:] = ordered
 
 
+def pytest_configure(config):
+    """Rewrite the asserts of the suite's own modules only. pytest also rewrites every module of each installed
+    distribution that has a pytest plugin (``pytest11`` entry point): here zarr (``zarr.testing``) and hypothesis,
+    about 150 modules that the suite imports but whose asserts are not its checks. Rewriting them cost each
+    worker about 10 CPU-s per run (an AST pass and a compile per module: no rewritten bytecode is kept between
+    fresh runs). The test modules and conftest.py are rewritten as before (pytest finds them by name, not by this
+    list), so every check of the suite reports as before; a plugin module imported already (xdist, benchmark) was
+    rewritten at start-up and stays so. Reaches into pytest's hook (``_must_rewrite``, pytest 7-9); if that is
+    gone, nothing changes but the cost."""
+    marked = getattr(getattr(config.pluginmanager, "rewrite_hook", None), "_must_rewrite", None)
+    if isinstance(marked, set):
+        marked.clear()
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)

@@ -6,7 +6,11 @@ folder (so output folders such as ``renders`` do not exist beforehand), with ``w
 tests/data (a two-day EPW). Commands with image-size options run with the sizes below appended (argparse
 keeps the last value), which changes only the pixel count (or the Monte Carlo sample count), not the command:
 the README gives the run time of the full size. Commands that need the Bruneton tables at their default size
-(built once per session into the test cache, about a minute) are marked slow.
+(built once per session into the test cache, about a minute) are marked slow. For the same reason
+``skymatrix --spectral`` runs with a cloud table of 3 x 3 nodes instead of 12 x 9 (the node counts only, as
+tests/test_cli_runs.py does; the table of this file's aerosol node, 108 DISORT solves, was about 60 CPU-s of this
+test and no other test shares it): the command and its code path are unchanged; the full table's accuracy is
+tested in tests/test_spectral_skymatrix.py and tests/test_cloud_retrieval.py.
 
 The README's first install is ``pip install .``: pyproject.toml's dependencies without extras. While a command
 runs, every installed package outside that install (the extras and the test tools, e.g. pvlib, pyradiance,
@@ -17,6 +21,7 @@ the test runner itself needs (pytest and its plugins) stay, and the README says 
 from __future__ import annotations
 
 import importlib.metadata
+import math
 import re
 import shlex
 import shutil
@@ -31,6 +36,9 @@ from packaging.utils import canonicalize_name
 from skyscatter.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
+#: Cloud table nodes of ``skymatrix --spectral`` here (module docstring): optical depths [-], sun zeniths [rad].
+SMALL_CLOUD_TAU = (0.5, 5.5, 60.0)
+SMALL_CLOUD_ZENITH = tuple(math.radians(z) for z in (0.0, 62.0, 87.0))
 SMALL = {"demo": ["--width", "32", "--height", "18"], "sky": ["--width", "64"], "reference": ["--samples", "16"],
          "view": ["--check", "--port", "0"]}  # view: serve, fetch everything over HTTP and exit (no browser)
 
@@ -108,6 +116,15 @@ def test_readme_command_runs(command, tmp_path, monkeypatch, capsys, first_insta
     if args[0] == "COMMAND":
         args[0] = "sky"
     shutil.copy(ROOT / "tests" / "data" / "weather.epw", tmp_path / "weather.epw")
+    if "--spectral" in args:  # a small cloud table (module docstring)
+        import skyscatter.fit.weather as weather
+
+        real_cloud_table = weather.cloud_table
+
+        def small_cloud_table(atmosphere, optical_depth_nodes=SMALL_CLOUD_TAU, zenith_nodes=SMALL_CLOUD_ZENITH):
+            return real_cloud_table(atmosphere, optical_depth_nodes, zenith_nodes)
+
+        monkeypatch.setattr(weather, "cloud_table", small_cloud_table)
     monkeypatch.chdir(tmp_path)
     code = main(args + SMALL.get(args[0], []))
     out, err = capsys.readouterr()

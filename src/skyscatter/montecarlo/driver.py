@@ -491,14 +491,25 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
     sumsq = np.zeros_like(sums)
     verts = np.zeros((n, n_batches))
     f = m.field
-    kernels.trace_block(origins, jitter, dirs, mode, dir_index, sun, math.cos(m.sun_angular_radius),
-                        m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.sgeo, m.stab, m.coef, m.scat,
-                        m.lobe, m.lobe_g,
-                        m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe,
-                        f.ye, f.re, m.fs, m.fss, m.ddis, m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa,
-                        m.nee_roulette, m.split, m.dval, m.dcdf, m.ddis_gate, _CLOUDY if m.cloud_paths else None,
-                        seed, group, batch0, n_batches, batch_size, sums, sumsq, verts)
+    inputs = [_readonly(a) for a in (
+        origins, jitter, dirs, mode, dir_index, sun, math.cos(m.sun_angular_radius), m.bottom_radius, m.top_radius,
+        m.edges, m.layers, m.nlay, m.sgeo, m.stab, m.coef, m.scat, m.lobe, m.lobe_g, m.lobe_tab, m.tmu, m.tval,
+        m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe, f.ye, f.re, m.fs, m.fss, m.ddis,
+        m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa, m.nee_roulette, m.split, m.dval, m.dcdf, m.ddis_gate,
+        _CLOUDY if m.cloud_paths else None)]
+    kernels.trace_block(*inputs, seed, group, batch0, n_batches, batch_size, sums, sumsq, verts)
     return sums, sumsq, verts
+
+
+def _readonly(value: Any) -> Any:
+    """A read-only view of an input array of the kernel (other values unchanged). Numba compiles a kernel per
+    argument type, and read-only is part of an array's type: the media's arrays are read-only or not depending on
+    where they came from (a frozen phase table, a cached field), which compiled up to three copies of the largest
+    kernels (about 13 CPU-s each); viewed read-only they share one."""
+    if isinstance(value, np.ndarray) and value.flags.writeable:
+        value = value.view()
+        value.flags.writeable = False
+    return value
 
 
 @dataclass(frozen=True)
