@@ -52,6 +52,7 @@ from ..validation import whole_number
 from .driver import (
     DEFAULT_GROUP_SIZE,
     _check_clouds,
+    _readonly,
     _sun_vector,
     check_wavelengths,
     direct_transmittance,
@@ -151,10 +152,10 @@ def _flux_task(medium, sun, dom, levels, group, wl_index, batch0, n_batches, bat
     absorbed = np.zeros((npix, wl_index.size, 2))
     verts = np.zeros(1)
     f = m.field
-    kernels.flux_block(sun, m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.scat, m.lobe, m.lobe_g,
-                       m.lobe_tab, m.tmu, m.tval, m.tcdf, m.albedo, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe, f.ye,
-                       f.re, m.fs, m.fss, dom, levels, seed, group, batch0, n_batches, batch_size, up, down, absorbed,
-                       verts)
+    inputs = [_readonly(a) for a in (  # one compile whatever the arrays' origin (driver._readonly)
+        sun, m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef, m.scat, m.lobe, m.lobe_g, m.lobe_tab,
+        m.tmu, m.tval, m.tcdf, m.albedo, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe, f.ye, f.re, m.fs, m.fss, dom, levels)]
+    kernels.flux_block(*inputs, seed, group, batch0, n_batches, batch_size, up, down, absorbed, verts)
     return up, down, absorbed, verts
 
 
