@@ -86,7 +86,8 @@ def write_entry(path: Path, kind: str, key: str, arrays: Mapping[str, NDArray[An
             "checksums": {name: array_checksum(np.asarray(arr)) for name, arr in arrays.items()}}
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-        np.savez(fh, metadata=np.array(json.dumps(meta, sort_keys=True)), **arrays)
+        stored: dict[str, Any] = {"metadata": np.array(json.dumps(meta, sort_keys=True)), **arrays}
+        np.savez(fh, **stored)
 
 
 def cached_arrays(kind: str, key: str, build: Callable[[], Mapping[str, NDArray[Any]]]

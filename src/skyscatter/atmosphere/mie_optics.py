@@ -318,4 +318,5 @@ def _stored_droplets(effective_radius: float, effective_variance: float, wavelen
     for arr in a.values():
         arr.setflags(write=False)
     table = PhaseTable(a["wavelengths"], a["phase_angles"], a["phase_values"], normalise=False)
-    return MieOptics(a["wavelengths"], *(a[name] for name in _DROPLET_ARRAYS), table)
+    return MieOptics(a["wavelengths"], a["extinction_cross_section"], a["scattering_cross_section"],
+                     a["asymmetry_mie"], a["angular_closure"], table)

@@ -354,7 +354,7 @@ def _air_from_below(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, al
             cfg.bc.surface_albedo = 0.0
             res = disortpp.DisortSolver().solve(cfg)
             out[i, k] = float(res.flux_up[0])
-            if radiance is not None:
+            if radiance is not None and user is not None:
                 radiance[sort, k] = [res.intensities(j, 0, 0) for j in range(user.size)]
     return out if user is None else (out, radiance)
 
