@@ -22,6 +22,8 @@ the Mie code behind OPAC [Hess1998], through its published component optics.
 Results are cached in memory per (distribution, refractive index, wavelengths, angles, nodes) for the life of
 the process (:func:`mie_optics` is an ``lru_cache`` of 256 entries), so that a mixture, a retrieval or a
 precomputation asks Mie theory once per configuration.
+Cloud droplets (:func:`water_droplets`) are also cached on disk, one entry per wavelength
+(:mod:`skyscatter.diskcache`), so that a new process need not compute them again (seconds at 18 wavelengths).
 """
 
 from __future__ import annotations
