@@ -355,7 +355,7 @@ def _air_from_below(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, al
             res = disortpp.DisortSolver().solve(cfg)
             out[i, k] = float(res.flux_up[0])
             if radiance is not None and user is not None:
-                radiance[sort, k] = [res.intensities(j, 0, 0) for j in range(user.size)]
+                radiance[sort, k] = np.asarray(res.intensity)[0, :, 0]  # [level][user mu][azimuth]
     return out if user is None else (out, radiance)
 
 
@@ -581,14 +581,14 @@ class CloudySky(SunSkyMixin, SkyModel):
             cfg.bc.surface_albedo = float(albedo[k])
             res = disortpp.DisortSolver().solve(cfg)
             lu = 1 if fed else 0
-            vals = np.array([[res.intensities(j, lu, i) for i in range(phi.size)] for j in range(theta.size)])
+            vals = np.asarray(res.intensity)[lu]  # (n_theta, n_phi): [level][user mu][azimuth] in one copy
             rad[order, :, k] = vals
             down[k] = res.flux_down[lu]
             up[k] = res.flux_up[lu]
             if fed:
                 top_up[k] = res.flux_up[0]
                 mean = np.empty(theta.size)
-                mean[order] = [res.intensities_azimuth_avg(j, 0) for j in range(theta.size)]
+                mean[order] = np.asarray(res.intensity_azimuth_avg)[0]
                 top_rising[:, k] = mean[rising]
         if fed:
             # the cloud's light that the air above sends back down (:meth:`_interreflection`), with the angular
@@ -724,11 +724,11 @@ class CloudySky(SunSkyMixin, SkyModel):
                 cfg.bc.direct_beam_phi = 0.0
                 cfg.bc.surface_albedo = float(albedo[k])
                 res = disortpp.DisortSolver().solve(cfg)
-                vals = np.array([[res.intensities(j, 1, a) for a in range(az.size)] for j in range(theta.size)])
+                vals = np.asarray(res.intensity)[1]
                 g[i, order, :, q] = vals @ inv.T
                 fluxes[i, :, q] = (res.flux_down[1] + res.flux_direct_beam[1], res.flux_up[1], res.flux_up[0])
                 mean = np.empty(theta.size)
-                mean[order] = [res.intensities_azimuth_avg(j, 0) for j in range(theta.size)]
+                mean[order] = np.asarray(res.intensity_azimuth_avg)[0]
                 top_mean[i, :, q] = mean[rising]
         lo = np.clip(np.searchsorted(solved, np.arange(wl.size), side="right") - 1, 0, max(solved.size - 2, 0))
         hi = np.minimum(lo + 1, solved.size - 1)
