@@ -217,14 +217,18 @@ def test_views_from_inside_and_above_the_layer():
     assert above.luminance(down)[0] > 3 * above.luminance(up)[0]
     assert below.luminance(up)[0] > 3 * below.luminance(down)[0]
     # just below and just above the cloud top (the column lit by the tables, then the whole column in DISORT):
-    # the same cloud within 3 % looking down; looking up, the clear sky of the spherical tables (over the ground's
-    # albedo, with the cloud's light sent back by the air given the sky's angular shape) against the
-    # plane-parallel air over the cloud: measured -6 % at 45 deg and +15 % at 80 deg elevation (docs/clouds.md)
+    # the same cloud within 3 % looking down
     d = _dirs([(-45.0, 30.0), (-80.0, 150.0), (45.0, 100.0), (80.0, 10.0)])
     inside = _sky(15.0, 40.0, altitude=1499.0).luminance(d)
     outside = _sky(15.0, 40.0, altitude=1501.0).luminance(d)
     np.testing.assert_allclose(inside[:2], outside[:2], rtol=0.03)
-    np.testing.assert_allclose(inside[2:], outside[2:], rtol=0.2)
+    # looking up from just below the top: the clear sky of the spherical tables (with the cloud's light sent back
+    # by the air in the air's own angular shape) against the whole column in DISORT at the same place (its
+    # plane-parallel air over the cloud): measured 4.4 / 4.0 % at 45 / 80 deg elevation (in the plane-parallel
+    # limit 1.2 / 1.4 %). Until 2026-12-03 this compared 1499 m with 1501 m within 20 % (measured -6 / +15 %),
+    # where the metre of cloud above the inside observer brightens the view 30 deg from the sun by itself.
+    column = _sky(15.0, 40.0, altitude=1499.0, illumination="column").luminance(d)
+    np.testing.assert_allclose(inside[2:], column[2:], rtol=0.05)
 
 
 def test_xyz_agrees_with_the_spectrum_and_dict_round_trip():

@@ -97,7 +97,6 @@ from ..atmosphere.medium import AtmosphereParameters
 from ..conventions import direction_from_angles
 from ..epw import EPWData, EPWLocation, read_epw
 from ..errors import FileFormatError, InvalidParameterError
-from ..fileio import build_lock
 from ..precomputed.family import AXIS_SETTERS, FAMILY_WAVELENGTHS, GridAxis, TableFamily, register_axis
 
 __all__ = [
@@ -707,36 +706,33 @@ def cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike
     return _CLOUD_TABLES[key]
 
 
-#: Version of the cloud table's stored layout and contents (part of its disk cache key).
-_CLOUD_TABLE_VERSION = 2
+#: Version of the cloud table's stored layout and contents (part of its disk cache key). 3: a verified entry of
+#: :mod:`skyscatter.diskcache` (checksums).
+_CLOUD_TABLE_VERSION = 3
 _CLOUD_TABLE_ARRAYS = ("optical_depths", "zeniths", "wavelengths", "diffuse", "slant", "field_theta", "field_phi",
                        "field", "peak")
 
 
 def _cloud_table_key(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike,
-                     zenith_nodes: ArrayLike) -> tuple[str, Path]:
-    """The disk cache key text of a cloud table and its file (``cloudtable-<sha256>.npz`` in the cache folder)."""
-    import hashlib
-
+                     zenith_nodes: ArrayLike) -> str:
+    """The disk cache key text of a cloud table (its entry ``cloudtable-<sha256>.npz`` in the cache folder)."""
     from .. import __version__
-    from ..precomputed.cache import cache_dir
 
     tau = np.asarray(optical_depth_nodes, dtype=float)
     zen = np.asarray(zenith_nodes, dtype=float)
-    text = "|".join([atmosphere.canonical_json(), repr(tau.tolist()), repr(zen.tolist()), str(_CLOUD_TABLE_VERSION),
+    return "|".join([atmosphere.canonical_json(), repr(tau.tolist()), repr(zen.tolist()), str(_CLOUD_TABLE_VERSION),
                      __version__])
-    return text, cache_dir() / f"cloudtable-{hashlib.sha256(text.encode()).hexdigest()[:24]}.npz"
 
 
 def _save_cloud_table(table: CloudTable) -> None:
-    """Store ``table`` in the disk cache (atomically; an unwritable cache only costs a rebuild elsewhere)."""
-    from ..fileio import atomic_path
+    """Store ``table`` in the disk cache (atomically, verified when read; an unwritable cache only costs a rebuild
+    elsewhere)."""
+    from ..diskcache import cache_entry_path, write_entry
 
-    text, path = _cloud_table_key(table.atmosphere, table.optical_depths, table.zeniths)
+    text = _cloud_table_key(table.atmosphere, table.optical_depths, table.zeniths)
+    path = cache_entry_path("cloudtable", text)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-            np.savez(fh, key=np.array(text), **{name: getattr(table, name) for name in _CLOUD_TABLE_ARRAYS})
+        write_entry(path, "cloudtable", text, {name: getattr(table, name) for name in _CLOUD_TABLE_ARRAYS})
     except Exception as exc:  # noqa: BLE001 - the cache is an optimisation: any failure to store it is a warning
         _warn(f"the cloud table could not be cached in {path.parent} ({exc}); it is rebuilt in every process")
 
@@ -744,35 +740,24 @@ def _save_cloud_table(table: CloudTable) -> None:
 def _cached_cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike,
                         zenith_nodes: ArrayLike) -> CloudTable:
     """A :class:`CloudTable` from the disk cache of the precomputed tables (its 108 DISORT solves cost about a
-    minute, and Dask's worker processes would each redo them), else built and stored. Processes that need the same
-    missing table at once build it once: the builder holds an exclusive lock (``.NAME.lock`` beside the file,
-    :func:`fcntl.flock`, released when its process ends, however it ends), the others wait, then load its file."""
-    text, path = _cloud_table_key(atmosphere, optical_depth_nodes, zenith_nodes)
-    table = _load_cloud_table(atmosphere, text, path)
-    if table is not None:
-        return table
-    with build_lock(path):
-        table = _load_cloud_table(atmosphere, text, path)  # built by another process while we waited
-        if table is None:
-            table = CloudTable(atmosphere, optical_depth_nodes, zenith_nodes)
-            _save_cloud_table(table)
-    return table
+    minute, and Dask's worker processes would each redo them), else built and stored
+    (:func:`skyscatter.diskcache.cached_arrays`: verified when read, written atomically, built once by processes
+    that need it at once)."""
+    from ..diskcache import cached_arrays
 
+    built: list[CloudTable] = []
 
-def _load_cloud_table(atmosphere: AtmosphereParameters, text: str, path: Path) -> CloudTable | None:
-    """The cloud table stored at ``path`` under the key ``text``, or None (missing, another key, or damaged)."""
-    if not path.exists():
-        return None
-    try:
-        with np.load(path) as z:
-            if str(z["key"]) != text:
-                return None
-            table = CloudTable.__new__(CloudTable)
-            table.atmosphere = atmosphere
-            for name in _CLOUD_TABLE_ARRAYS:
-                setattr(table, name, np.array(z[name]))
-    except (OSError, KeyError, ValueError):
-        return None  # a damaged file: rebuilt
+    def build() -> dict[str, NDArray[np.float64]]:
+        built.append(CloudTable(atmosphere, optical_depth_nodes, zenith_nodes))
+        return {name: getattr(built[0], name) for name in _CLOUD_TABLE_ARRAYS}
+
+    arrays = cached_arrays("cloudtable", _cloud_table_key(atmosphere, optical_depth_nodes, zenith_nodes), build)
+    if built:
+        return built[0]
+    table = CloudTable.__new__(CloudTable)
+    table.atmosphere = atmosphere
+    for name in _CLOUD_TABLE_ARRAYS:
+        setattr(table, name, arrays[name])
     table.build_seconds = 0.0
     return table
 

@@ -14,7 +14,6 @@ when its process ends, even killed) and the others wait for it, then load its fi
 
 from __future__ import annotations
 
-import os
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -23,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..deprecation import renamed_keywords
+from ..diskcache import CacheRebuildWarning, cache_dir
 from ..errors import FileFormatError, InvalidParameterError, OutputError
 from ..fileio import build_lock, ensure_output_folder
 from .parameters import AtmosphereParameters
@@ -38,16 +38,6 @@ _MEMORY: dict[str, PrecomputedAtmosphere] = {}
 
 class TableBuildWarning(UserWarning):
     """Emitted when tables must be computed (once per atmosphere): the call then takes tens of seconds."""
-
-
-class CacheRebuildWarning(UserWarning):
-    """A cached table file was unreadable, damaged or for other parameters and is being recomputed."""
-
-
-def cache_dir() -> Path:
-    """The cache folder: ``$SKYSCATTER_CACHE_DIR`` if set, else ``~/.cache/skyscatter``."""
-    env = os.environ.get("SKYSCATTER_CACHE_DIR")
-    return Path(env).expanduser() if env else Path.home() / ".cache" / "skyscatter"
 
 
 def check_cache_dir() -> Path:

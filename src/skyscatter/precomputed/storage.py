@@ -43,6 +43,7 @@ from typing import IO, TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..diskcache import array_checksum
 from ..errors import FileFormatError, InvalidParameterError
 from ..fileio import atomic_path
 from .parameters import AtmosphereParameters
@@ -255,9 +256,7 @@ def checksum(arr: NDArray[Any] | HalfTable) -> str:
         for block in arr.blocks():
             h.update(block)
         return h.hexdigest()
-    h.update(f"{arr.dtype.str}{arr.shape}".encode())
-    h.update(np.ascontiguousarray(arr).tobytes())
-    return h.hexdigest()
+    return array_checksum(arr)
 
 
 def cache_key(atmosphere: AtmosphereParameters, orders: int, wavelengths: NDArray[np.float64],
