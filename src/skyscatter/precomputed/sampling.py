@@ -94,7 +94,7 @@ LOBE_WAVELENGTH = 550.0
 def lobe_weight(atmosphere: AtmosphereParameters) -> float:
     """Weight ``a`` [-] of the lobe :func:`multiple_lobe` by which the multiple-scattering tables are
     divided: :data:`MULTIPLE_LOBE_WEIGHT` times the aerosol's share of the column's scattering optical
-    depth at :data:`LOBE_WAVELENGTH` (``tau_M,s / (tau_M,s + tau_R)``: 0.05 for the Earth defaults, 0.63 for
+    depth at :data:`LOBE_WAVELENGTH` (``tau_M,s / (tau_M,s + tau_R)``: 0.04 for the Earth defaults, 0.63 for
     turbidity 3, 0.81 for an aerosol optical depth of 0.5), the columns integrated by the trapezoidal rule on 2001
     heights. The multiply scattered light's forward lobe is the aerosol's; a Rayleigh sky has none."""
     h = np.linspace(0.0, atmosphere.thickness, 2001)
