@@ -4,8 +4,9 @@
 One precomputation with ``irradiance_mu_s = 8 x 63 + 1`` (505) sun-zenith texels (``orders=2``: the irradiance
 table is the first order's sky light, whose texels below the horizon come from the scattering tables alone, so the
 coarse table is every 8th texel of the fine one exactly); the default 64-texel table is that subsample. The read
-of the coarse table (``sampling.irradiance_read``: one weight for all wavelengths from the columns' illuminance, and
-each wavelength its own) at every fine texel between ``--lo`` and ``--hi`` deg of sun elevation is compared with the
+of the coarse table (``sampling.irradiance_read``: each wavelength its own weight; and, for comparison, one weight
+for all wavelengths from the columns' illuminance, the lookups' read in table formats 15-18, here as
+``one_weight_read``) at every fine texel between ``--lo`` and ``--hi`` deg of sun elevation is compared with the
 fine texel there, per wavelength, on the ground row (read at its texel, so only the mu_s interpolation is measured);
 and in linear sRGB (``realtime.export.fold_matrix``): the three reads folded into colour, and the read of the colour
 table itself with a weight per channel (the GLSL library's ``IrradianceLerp``), against the folded fine texel.
@@ -25,8 +26,10 @@ import time
 import numpy as np
 
 from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere
+from skyscatter.precomputed.geometry import irradiance_log_cell, irradiance_log_nodes, log_quadratic_weight
 from skyscatter.precomputed.sampling import irradiance_read
 from skyscatter.realtime.export import fold_matrix
+from skyscatter.spectral import spectrum_to_xyz
 
 ATMOSPHERES = {
     "earth": lambda **k: AtmosphereParameters(**k),
@@ -34,6 +37,27 @@ ATMOSPHERES = {
     "aod05": lambda **k: AtmosphereParameters.from_aerosol_optical_depth(0.5, **k),
 }
 FINE = 8
+
+
+def one_weight_read(table: np.ndarray, p_r: float, p_m: float, weights: np.ndarray, out: np.ndarray) -> None:
+    """The read of ``sampling.irradiance_read`` with one weight along mu_s for every wavelength, that of the three
+    columns' weighted sums ``sum_k weights[k] E_k`` (the rendering lookups' read in table formats 15-18, with the
+    luminance weights), at index positions (p_r, p_m) of a table (n_r, n_mu_s, n_wavelengths)."""
+    n0, n1, _ = table.shape
+    i = min(int(p_r), n0 - 2)
+    w0 = p_r - i
+    j = min(int(p_m), n1 - 2)
+    if not irradiance_log_cell(j, n1):
+        w1 = p_m - j
+        row = (1.0 - w0) * table[i] + w0 * table[i + 1]
+        out[:] = (1.0 - w1) * row[j] + w1 * row[j + 1]
+        return
+    j0, t = irradiance_log_nodes(p_m, n1)
+    c = j0 if t < 0.0 else j0 + 1
+    row = (1.0 - w0) * table[i] + w0 * table[i + 1]
+    y = row[j0:j0 + 3] @ weights
+    g = log_quadratic_weight(y[0], y[1], y[2], t)
+    out[:] = row[c] + g * (row[c + 1] - row[c])
 
 
 def main() -> None:
@@ -54,7 +78,8 @@ def main() -> None:
                                             progress=False)
         print(f"# {args.atm}: tables {time.process_time() - t0:.0f} CPU-s")
         fine = np.asarray(atm.tables["irradiance"], dtype=np.float64)
-        lum = np.asarray(atm.irradiance_weights, dtype=np.float64)
+        # the luminance weights of the wavelengths (ybar times the trapezoid step: the illuminance of a spectrum)
+        lum = np.maximum(spectrum_to_xyz(np.eye(atm.wavelengths.size), atm.wavelengths)[:, 1], 0.0)
         wl = np.asarray(atm.wavelengths)
         fold = fold_matrix(atm)
         if args.save:
@@ -62,7 +87,6 @@ def main() -> None:
     coarse = np.ascontiguousarray(fine[:, ::FINE])
     coarse_rgb = np.ascontiguousarray(coarse @ fold.T)
     rgb = np.empty(3)
-    own = np.empty(0)
     out = np.empty(fine.shape[2])
     print(f"# {fine.shape[2]} wavelengths {wl[0]:g}-{wl[-1]:g} nm; read / fine texel - 1 [%]: worst wavelength "
           "(illuminance weight | own weights), and the illuminance")
@@ -79,14 +103,14 @@ def main() -> None:
         for row in (0,):
             truth = fine[row, jf]
             t_rgb = fold @ truth
-            irradiance_read(coarse, float(row), p, lum, out)
+            one_weight_read(coarse, float(row), p, lum, out)
             e_l = out / truth - 1.0
             y = (lum @ out) / (lum @ truth) - 1.0
             c_l = fold @ out / t_rgb - 1.0
-            irradiance_read(coarse, float(row), p, own, out)
+            irradiance_read(coarse, float(row), p, out)
             e_o = out / truth - 1.0
             c_o = fold @ out / t_rgb - 1.0
-            irradiance_read(coarse_rgb, float(row), p, own, rgb)
+            irradiance_read(coarse_rgb, float(row), p, rgb)
             c_c = rgb / t_rgb - 1.0
             for key, e in (("lum", e_l), ("own", e_o), ("rgb_lum", c_l), ("rgb_own", c_o), ("rgb_channel", c_c)):
                 worst[key] = max(worst[key], np.abs(e).max())

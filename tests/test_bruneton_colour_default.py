@@ -96,7 +96,7 @@ def test_default_colour_matches_41_wavelengths(reference, elevation):
 
 def test_irradiance_weight_below_the_horizon_for_any_wavelength_set():
     """The lookups read the irradiance table along the sun zenith below the horizon with each wavelength's own
-    weight (the precomputation's read, ``irradiance_lookup`` with no weights), so a wavelength's sky irradiance does
+    weight (the precomputation's read, ``irradiance_lookup``), so a wavelength's sky irradiance does
     not depend on the other wavelengths of the table: each column of a 2-wavelength table (780, 820 nm: ``ybar`` 1e-5
     to 1e-7 of its peak, where a luminance weight would be ill-defined) read alone gives the same values, and the
     read lies between the cell's two texels."""
@@ -110,12 +110,12 @@ def test_irradiance_weight_below_the_horizon_for_any_wavelength_set():
         _, sky = atm.ground_irradiance([0.0, 0.0, p.bottom_radius], [0.0, 0.0, 1.0], sun)
         table = np.asarray(atm.tables["irradiance"], dtype=np.float64)
         own = np.empty(len(wl))
-        irradiance_lookup(table, p.bottom_radius, math.cos(zen), p.bottom_radius, p.top_radius, np.empty(0), own)
+        irradiance_lookup(table, p.bottom_radius, math.cos(zen), p.bottom_radius, p.top_radius, own)
         np.testing.assert_allclose(sky, own, rtol=1e-12)
         for k in range(len(wl)):
             alone = np.empty(1)
             irradiance_lookup(np.ascontiguousarray(table[..., k:k + 1]), p.bottom_radius, math.cos(zen),
-                              p.bottom_radius, p.top_radius, np.empty(0), alone)
+                              p.bottom_radius, p.top_radius, alone)
             assert alone[0] == pytest.approx(sky[k], rel=1e-12)
         lo, hi = table[0, 1], table[0, 2]  # texels -19.5 and +19.5 deg (mu_s -1/3, +1/3)
         assert np.all(sky > lo) and np.all(sky < hi), (sky, lo, hi)

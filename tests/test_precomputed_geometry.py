@@ -189,11 +189,9 @@ def test_irradiance_read_is_log_quadratic_below_the_horizon_and_linear_above():
     """The irradiance table's read along mu_s (:func:`sampling.irradiance_read`) on a synthetic table of 8 mu_s
     texels (mu_s = -1 .. 1, cells 2/7 wide) and 2 radii, 3 wavelengths whose logarithm is quadratic in mu_s (a fall
     that steepens towards the lowest sun, as the twilight sky irradiance's): in a cell that starts below the horizon
-    (first texel at mu_s < 0) each wavelength's read (empty ``weights``) is the table's function itself, exactly (the
-    three-point Lagrange formula in ``ln E`` is exact for a quadratic, [Abramowitz1964] Eq. 25.2.11); in a cell above,
-    the linear interpolation. With weights (the luminance in the lookups) one weight, that of the quadratic in the
-    logarithm of the weighted sums at the three nearest texels (fitted here with numpy.polyfit), serves every
-    wavelength on the cell's two texels."""
+    (first texel at mu_s < 0) each wavelength's read is the table's function itself, exactly (the three-point
+    Lagrange formula in ``ln E`` is exact for a quadratic, [Abramowitz1964] Eq. 25.2.11); in a cell above, the linear
+    interpolation; linear in r (the second radius holds twice the first)."""
     from skyscatter.precomputed.sampling import irradiance_read
 
     mu = np.linspace(-1.0, 1.0, 8)
@@ -203,28 +201,19 @@ def test_irradiance_read_is_log_quadratic_below_the_horizon_and_linear_above():
     table[0] = np.exp(rates * mu[:, None] - curv * mu[:, None] ** 2)
     table[1] = 2.0 * table[0]
     out = np.empty(3)
-    own = np.empty(0)
-    lum = np.array([0.2, 1.0, 0.5])
     for j, below in ((0, True), (2, True), (3, True), (4, False), (5, False)):  # texel 3 at -1/7, texel 4 at +1/7
         assert g.irradiance_log_cell(j, 8) == below
         a, b = table[0, j], table[0, j + 1]
         for w in (0.2, 0.5, 0.7):
             p = j + w
             m = -1.0 + 2.0 * p / 7.0
-            irradiance_read(table, 0.0, p, own, out)
+            irradiance_read(table, 0.0, p, out)
             want = np.exp(rates * m - curv * m * m) if below else a + w * (b - a)
             np.testing.assert_allclose(out, want, rtol=1e-9)
-            irradiance_read(table, 0.5, p, lum, out)  # linear in r: 1.5 times the first radius
-            if below:
-                j0 = min(max(j - 1 if w < 0.5 else j, 0), 5)
-                y = table[0, j0:j0 + 3] @ lum
-                ln_y = np.polyval(np.polyfit(np.arange(j0, j0 + 3.0), np.log(y), 2), p)
-                k = (np.exp(ln_y) - lum @ a) / (lum @ b - lum @ a)
-            else:
-                k = w
-            np.testing.assert_allclose(out, 1.5 * (a + k * (b - a)), rtol=1e-9)
+            irradiance_read(table, 0.5, p, out)  # linear in r: 1.5 times the first radius
+            np.testing.assert_allclose(out, 1.5 * want, rtol=1e-9)
         for p in (float(j), j + 1.0):  # the texels themselves
-            irradiance_read(table, 0.0, p, own, out)
+            irradiance_read(table, 0.0, p, out)
             np.testing.assert_allclose(out, table[0, int(p)], rtol=1e-9)
 
 
@@ -276,3 +265,29 @@ def test_ground_cell_rows_apart_only_in_thin_cells(n_r, apart):
         rho = math.sqrt(r * r - bottom * bottom)
         expected = 0.5 if apart else rho / rho1
         assert scattering_r_index(r, rho, bottom, big_h, n_r) == pytest.approx(expected, rel=1e-9)
+
+
+def test_multiple_lobe_is_normalised_and_weighted_by_the_aerosol_share():
+    """The lobe the multiple-scattering tables are divided by (:func:`sampling.multiple_lobe`): ``1 - a + a 4 pi
+    HG(nu; g)`` with the Henyey-Greenstein phase of :func:`skyscatter.atmosphere.phase.henyey_greenstein` (another
+    implementation; [HenyeyGreenstein1941]), so its mean over the sphere is 1 (the integral of a phase function over
+    the sphere, here by the trapezoidal rule on 200001 cosines, to 1e-6), the same in numba and numpy; its weight
+    ``a`` (:func:`sampling.lobe_weight`) is 0 without aerosol (no lobe: the tables as before) and below
+    ``MULTIPLE_LOBE_WEIGHT`` with it, larger for the hazier sky."""
+    from skyscatter.atmosphere.phase import henyey_greenstein
+    from skyscatter.precomputed import AtmosphereParameters
+    from skyscatter.precomputed import sampling as s
+
+    nu = np.linspace(-1.0, 1.0, 200001)
+    for a in (0.0, 0.3, 0.9):
+        f = s.multiple_lobe_array(nu, a)
+        want = 1.0 - a + a * 4.0 * math.pi * henyey_greenstein(nu, s.MULTIPLE_LOBE_G)
+        np.testing.assert_allclose(f, want, rtol=1e-12)
+        assert abs(0.5 * np.trapezoid(f, nu) - 1.0) < 1e-6
+        for x in (-1.0, 0.0, 0.7, 1.0):
+            assert math.isclose(s.multiple_lobe(x, a), float(s.multiple_lobe_array(np.array([x]), a)[0]),
+                                rel_tol=1e-12)
+    assert s.lobe_weight(AtmosphereParameters(mie_angstrom_beta=0.0)) == 0.0
+    earth = s.lobe_weight(AtmosphereParameters())
+    hazy = s.lobe_weight(AtmosphereParameters.from_aerosol_optical_depth(0.5))
+    assert 0.0 < earth < hazy < s.MULTIPLE_LOBE_WEIGHT

@@ -134,7 +134,7 @@ def _density_of(field, params, sizes, first=False, n_theta=16):
     out = np.zeros_like(field)
     parallel_for(kernels.scattering_density_kernel, sizes.scattering_r, t, field, field, first, e, np.zeros(1),
                  params.rayleigh_scattering_at(wl), params.mie_scattering_at(wl), params.mie_phase_g,
-                 aerosol_phase_kind(params.mie_phase_function), np.array([-1.0, 1.0]), np.zeros((1, 2)),
+                 aerosol_phase_kind(params.mie_phase_function), 0.0, np.array([-1.0, 1.0]), np.zeros((1, 2)),
                  np.zeros((1, 2)), prof, counts, params.bottom_radius,
                  params.top_radius, params.mu_s_min, n_theta, out, 0)
     return out
@@ -142,7 +142,8 @@ def _density_of(field, params, sizes, first=False, n_theta=16):
 
 def test_scattering_density_of_uniform_field():
     """J (Eq. 7) of a uniform radiance L0 is beta_s(r) L0 (energy conservation, 1e-5): the kernel's density per
-    unit scattering coefficient equals L0 at every radius.
+    unit scattering coefficient equals L0 at every radius (the kernel without the lobe of
+    :func:`.sampling.multiple_lobe`, weight 0: the field and the density as they are).
 
     The former check with a field linear in nu (which the old nu axis, (1 + nu) / 2 with clamped texels,
     represented exactly) no longer applies: the nu axis is now the view-sun azimuth, and the ground half of the mu
@@ -401,9 +402,12 @@ def test_export_layout(tmp_path):
     i_r, i_mu, i_s, i_n = 3, 20, 5, 2
     mult = np.fromfile(tmp_path / "luts" / "multiple_scattering.raw", dtype="<f4").reshape(scat.shape)
     ray = np.fromfile(tmp_path / "luts" / "single_rayleigh_scattering.raw", dtype="<f4").reshape(scat.shape)
-    assert mult[i_r, i_mu, i_n * n_s + i_s, 0] == atm.tables["multiple"][i_r, i_mu, i_s, i_n, 2]
     nu = np.zeros(atm.sizes.scattering_shape)
     parallel_for(kernels.texel_nu_kernel, n_r * n_mu, R, EARTH.top_radius, EARTH.mu_s_min, nu)
+    # the export holds the multiple scattering whole: the table's times the lobe it is stored divided by
+    lobe = sampling.multiple_lobe(nu[i_r, i_mu, i_s, i_n], sampling.lobe_weight(EARTH))
+    assert math.isclose(mult[i_r, i_mu, i_n * n_s + i_s, 0], atm.tables["multiple"][i_r, i_mu, i_s, i_n, 2] * lobe,
+                        rel_tol=1e-6)
     p_r = sampling.rayleigh_phase(nu[i_r, i_mu, i_s, i_n])
     k = (i_r, i_mu, i_n * n_s + i_s, 0)
     assert math.isclose(scat[k], ray[k] + mult[k] / p_r, rel_tol=1e-6)

@@ -275,7 +275,7 @@ def test_library_sky_and_irradiance_functions_match_the_python_lookups(viewer, a
         r = float(np.linalg.norm(cams[i]))
         up = cams[i] / r
         rgb_sky = np.empty(3)
-        irradiance_lookup(folded, r, float(up @ suns[i]), p.bottom_radius, p.top_radius, np.empty(0), rgb_sky)
+        irradiance_lookup(folded, r, float(up @ suns[i]), p.bottom_radius, p.top_radius, rgb_sky)
         rgb_sky *= 0.5 * (1.0 + float(up @ normals[i]))
         if suns[i] @ up > 0.0:
             np.testing.assert_allclose(rgb_sky, m @ e_sky[i], rtol=1e-9, atol=0)  # linear above the horizon

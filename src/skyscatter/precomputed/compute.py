@@ -61,7 +61,7 @@ from ..validation import whole_number
 from . import conversion, kernels
 from .parallel import parallel_for
 from .parameters import SOLAR_BAND_WIDTH, AtmosphereParameters
-from .sampling import TABLE_PHASE
+from .sampling import TABLE_PHASE, lobe_weight
 from .sizes import DEFAULT_ORDERS, TableSizes, table_wavelengths
 from .storage import HALF_TABLES, HalfTable, encode_half
 
@@ -139,6 +139,7 @@ class Medium:
     ozone_absorption: F64
     ground_albedo: F64
     solar_irradiance: F64
+    lobe: float = 0.0
 
     @classmethod
     def of(cls, atmosphere: AtmosphereParameters, wavelengths: F64, sizes: TableSizes | None = None) -> Medium:
@@ -150,7 +151,8 @@ class Medium:
                    g, kind, *phase, profiles, counts,
                    atmosphere.rayleigh_scattering_at(wavelengths), atmosphere.mie_extinction_at(wavelengths),
                    atmosphere.mie_scattering_at(wavelengths), atmosphere.ozone_absorption_at(wavelengths),
-                   atmosphere.ground_albedo_at(wavelengths), atmosphere.solar_irradiance_at(wavelengths))
+                   atmosphere.ground_albedo_at(wavelengths), atmosphere.solar_irradiance_at(wavelengths),
+                   lobe_weight(atmosphere))
 
     @property
     def extinction(self) -> F64:
@@ -185,7 +187,7 @@ class Medium:
                       np.ascontiguousarray(self.phase_trunc[ch]), np.ascontiguousarray(self.forward[ch]),
                       self.profiles, self.counts, self.rayleigh_scattering[ch],
                       self.mie_extinction[ch], self.mie_scattering[ch], self.ozone_absorption[ch],
-                      self.ground_albedo[ch], self.solar_irradiance[ch])
+                      self.ground_albedo[ch], self.solar_irradiance[ch], self.lobe)
 
 
 def aerosol_phase_arrays(atmosphere: AtmosphereParameters, wavelengths: F64,
@@ -278,7 +280,7 @@ def scattering_density(medium: Medium, sizes: TableSizes, transmittance: F32, pr
     out = np.zeros((len(rows), *sizes.scattering_shape[1:], transmittance.shape[-1]), dtype=np.float32)
     args = (kernels.scattering_density_kernel, rows.stop, transmittance, previous.rayleigh,
             previous.mie, previous.single, previous.irradiance, medium.ground_albedo,
-            medium.rayleigh_scattering, medium.mie_scattering, medium.mie_phase_g, medium.mie_kind,
+            medium.rayleigh_scattering, medium.mie_scattering, medium.mie_phase_g, medium.mie_kind, medium.lobe,
             medium.phase_mu, medium.phase_full, medium.phase_trunc, medium.profiles, medium.counts, medium.bottom,
             medium.top, medium.mu_s_min, sizes.density_sphere_samples, out, rows.start)
     # The kernel runs on all cores (parallel_for); OpenBLAS's own threads on top of it only spin: one BLAS thread
@@ -298,7 +300,7 @@ def indirect_irradiance(medium: Medium, sizes: TableSizes, previous: Order) -> F
     n_wavelengths) float32."""
     out = np.zeros((*sizes.irradiance_shape, previous.rayleigh.shape[-1]), dtype=np.float32)
     parallel_for(kernels.indirect_irradiance_kernel, sizes.irradiance_r * sizes.irradiance_mu_s, previous.rayleigh,
-                 previous.mie, previous.single, medium.mie_phase_g, medium.mie_kind,
+                 previous.mie, previous.single, medium.mie_phase_g, medium.mie_kind, medium.lobe,
                  medium.phase_trunc, medium.forward, medium.bottom, medium.top,
                  medium.mu_s_min, sizes.irradiance_sphere_samples, out, grain=16)
     return out

@@ -22,7 +22,6 @@ from numpy.typing import ArrayLike, NDArray
 from ..atmosphere.phase import aerosol_phase_kind
 from ..conventions import as_directions
 from ..errors import InvalidDirectionError, InvalidParameterError
-from ..spectral import cie_cmfs, spectrum_to_xyz
 from ..sun.disc import solar_disc_solid_angle
 from .conversion import SPECTRAL_MODE_MIN_WAVELENGTHS, ColourConversion, xyz_matrix
 from .parallel import parallel_for
@@ -30,14 +29,6 @@ from .parameters import AtmosphereParameters
 
 __all__ = ["TableLookups"]
 
-#: The rendering lookups' read of the irradiance table along the sun zenith below the horizon: no luminance weights,
-#: so each wavelength its own log-quadratic weight (:func:`.sampling.irradiance_read`), as in the precomputation's
-#: ground term. One weight for all wavelengths (that of the columns' illuminance, formats 15-18) was +10.3 % at
-#: 400 nm and -7.2 % at 700 nm with the sun 6 deg below the horizon against the hemisphere integral of the
-#: independent single scattering (turbidity 3, 16 wavelengths; each wavelength's own weight: -1.4 / -1.2 %), since
-#: the blue and red ends of the twilight sky irradiance fall at other rates than the illuminance
-#: (docs/accuracy.md, "Low sun").
-_OWN_WEIGHTS = np.empty(0)
 
 
 def _kernels() -> ModuleType:
@@ -103,28 +94,6 @@ class TableLookups:
         return self._xyz_matrix
 
     @property
-    def irradiance_weights(self) -> NDArray[np.float64]:
-        """Luminance weights (n_wavelengths,) of the table wavelengths: ``Y = sum_k w_k E_k`` [lx] for a spectral
-        irradiance ``E`` [W m^-2 nm^-1] sampled there (the CIE 1931 ``ybar`` times 683 lm/W and the trapezoid
-        step of :func:`skyscatter.spectral.spectrum_to_xyz`; [CIE2004]): the illuminance of the irradiance table's
-        spectra, which the realtime export stores beside their RGB (:mod:`skyscatter.realtime.export`) and with which
-        :func:`.sampling.irradiance_read` can read all wavelengths with one weight (the rendering lookups read each
-        wavelength with its own: ``_OWN_WEIGHTS``). One wavelength: ``ybar`` alone; tables whose wavelengths all lie
-        outside ``ybar``'s support (no luminance): equal weights, the spectra's sums."""
-        w = getattr(self, "_irradiance_weights", None)
-        if w is None:
-            wl = self.wavelengths
-            if wl.size >= 2 and np.all(np.diff(wl) > 0.0):
-                w = spectrum_to_xyz(np.eye(wl.size), wl)[:, 1]
-            else:
-                w = cie_cmfs(wl)[:, 1]
-            if not np.any(w > 0.0):
-                w = np.ones(wl.size)
-            w = np.ascontiguousarray(np.maximum(w, 0.0), dtype=np.float64)
-            self._irradiance_weights = w
-        return w
-
-    @property
     def colour(self) -> ColourConversion:
         """The :class:`.conversion.ColourConversion` of these tables (built once)."""
         if self._colour is None:
@@ -155,6 +124,17 @@ class TableLookups:
     @property
     def _mie_g(self) -> float:
         return self._aerosol_phase[1]
+
+    @property
+    def _lobe(self) -> float:
+        """Weight of the lobe by which the multiple-scattering table is stored divided
+        (:func:`.sampling.multiple_lobe`, :func:`.sampling.lobe_weight`), computed once."""
+        cached = getattr(self, "_lobe_cache", None)
+        if cached is None:
+            from .sampling import lobe_weight  # with the kernels' module, loaded on first lookup
+
+            cached = self._lobe_cache = lobe_weight(self.parameters)
+        return cached
 
     @property
     def _aerosol_phase(self) -> tuple[int, float, NDArray[np.float64], NDArray[np.float64]]:
@@ -259,8 +239,8 @@ class TableLookups:
         tr = np.ones((n, self.wavelengths.size))
         parallel_for(lookup.sky_kernel, n, pos, dirs, sun, sh, self.tables["transmittance"],
                      self.tables["single_rayleigh"], self.tables["single_mie"], self.tables["multiple"],
-                     self.tables["irradiance"], self._albedo, self._solar, _OWN_WEIGHTS, bottom, top,
-                     mu_s_min, self._mie_g, self._mie_kind, *self._aerosol_phase[2:], *self._profiles,
+                     self.tables["irradiance"], self._albedo, self._solar, bottom, top,
+                     mu_s_min, self._mie_g, self._mie_kind, self._lobe, *self._aerosol_phase[2:], *self._profiles,
                      self.parameters.sun_angular_radius, include_ground, rad, tr,
                      grain=2048)
         return rad, tr
@@ -354,9 +334,9 @@ class TableLookups:
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
         parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, stored["single_rayleigh"].shape[0],
-                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar, _OWN_WEIGHTS,
+                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar,
                      projection,
-                     bottom, top, mu_s_min, self._mie_g, self._mie_kind, *self._profiles,
+                     bottom, top, mu_s_min, self._mie_g, self._mie_kind, self._lobe, *self._profiles,
                      self.parameters.sun_angular_radius,
                      bool(include_ground), dirs, out, bad, grain=2048)
         if bad.any():
@@ -429,9 +409,9 @@ class TableLookups:
         bad = np.zeros((s.shape[0], dirs.shape[0]), dtype=np.bool_)
         projection = np.eye(n_l)
         parallel_for(lookup.observer_suns_kernel, s.shape[0], pos, rc, n_r, s, mu_s, *lower, *upper,
-                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar, _OWN_WEIGHTS,
+                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar,
                      projection, True,
-                     bottom, top, mu_s_min, self._mie_g, self._mie_kind, *self._profiles,
+                     bottom, top, mu_s_min, self._mie_g, self._mie_kind, self._lobe, *self._profiles,
                      self.parameters.sun_angular_radius, bool(include_ground), dirs, out, bad,
                      grain=max(1, 4096 // max(dirs.shape[0], 1)))
         if bad.any():
@@ -508,7 +488,7 @@ class TableLookups:
         tab = self.tables
         parallel_for(lookup.aerial_kernel, n, cam, pts, sun, sh, tab["transmittance"], tab["single_rayleigh"],
                      tab["single_mie"], tab["multiple"], bottom, top, mu_s_min, self._mie_g,
-                     self._mie_kind, *self._aerosol_phase[2:], *self._profiles, t, s, grain=2048)
+                     self._mie_kind, self._lobe, *self._aerosol_phase[2:], *self._profiles, t, s, grain=2048)
         return t.reshape(*shape, -1), s.reshape(*shape, -1)
 
     def sun_transmittance(self, positions: ArrayLike, sun_direction: ArrayLike) -> NDArray[np.float64]:
@@ -591,6 +571,6 @@ class TableLookups:
         e_sun = np.zeros((pts.shape[0], self.wavelengths.size))
         e_sky = np.zeros((pts.shape[0], self.wavelengths.size))
         parallel_for(lookup.irradiance_kernel, pts.shape[0], pts, nrm, sun, self.stored["transmittance"],
-                     self.stored["irradiance"], self._solar, _OWN_WEIGHTS, bottom, top,
+                     self.stored["irradiance"], self._solar, bottom, top,
                      self.parameters.sun_angular_radius, e_sun, e_sky, grain=4096)
         return e_sun.reshape(*shape, -1), e_sky.reshape(*shape, -1)

@@ -125,18 +125,21 @@ def _export(atm: PrecomputedAtmosphere, order: np.ndarray, tmp: dict[str, Path])
         width=sizes.irradiance_mu_s, height=sizes.irradiance_r, axes=["r", "mu_s", "channel"])
     from .kernels import texel_nu_kernel
     from .parallel import parallel_for
+    from .sampling import lobe_weight, multiple_lobe_array
 
     nu = np.zeros(sizes.scattering_shape)
     p = atm.parameters
     parallel_for(texel_nu_kernel, n_r * n_mu, p.bottom_radius, p.top_radius, p.mu_s_min, nu)
     phase_r = rayleigh_phase(np.clip(nu, -1.0, 1.0))[..., None]
-    combined = t["single_rayleigh"] + t["multiple"] / phase_r
+    # the table holds the multiple scattering divided by its lobe (.sampling.multiple_lobe); the paper's holds it whole
+    multiple = t["multiple"] * multiple_lobe_array(np.clip(nu, -1.0, 1.0), lobe_weight(p))[..., None]
+    combined = t["single_rayleigh"] + multiple / phase_r
     scat = packed(combined)
     mie = packed(t["single_mie"])
     write("scattering", scat)
     write("single_mie_scattering", mie)
     write("single_rayleigh_scattering", packed(t["single_rayleigh"]))
-    write("multiple_scattering", packed(t["multiple"]))
+    write("multiple_scattering", packed(multiple))
     for name in ("scattering", "single_mie_scattering", "single_rayleigh_scattering", "multiple_scattering"):
         files[name].update(width=n_n * n_s, height=n_mu, depth=n_r, axes=["r", "mu", "nu * n_mu_s + mu_s", "channel"])
     if order.size == 3:

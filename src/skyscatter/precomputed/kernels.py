@@ -59,6 +59,7 @@ from .sampling import (
     exp_segment_weights,
     irradiance_lookup,
     lookup4_cell_weighted,
+    multiple_lobe,
     phase_table_values,
     r_mu_cell,
     ray_transmittance,
@@ -352,8 +353,8 @@ def sphere_quadrature(n_theta, hemisphere):
 
 @kernel(fastmath=CONTRACT_REASSOC)
 def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance, albedo, beta_r, beta_m, g, mie_kind,
-                              phase_mu, phase_full, phase_trunc, profiles, counts, bottom, top, mu_s_min, n_theta, out,
-                              first_r, start, stop):
+                              lobe, phase_mu, phase_full, phase_trunc, profiles, counts, bottom, top, mu_s_min, n_theta,
+                              out, first_r, start, stop):
     """Scattering density J (Eq. 7) of one order per unit total scattering coefficient, ``J / (beta_R rho_R(r) +
     beta_M rho_M(r))`` at each texel's radius, into ``out`` (n_rows, n_mu, n_mu_s, n_nu, n_wl) float32 (radius
     indices ``first_r`` to ``first_r + n_rows - 1``: a block of rows), for radius indices ``start..stop``: the
@@ -369,7 +370,8 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     within 0.6 % there and made the multiple-scattering kernel 13 % slower.
 
     The incident radiance is the previous order: ``s_a P_R + s_b P_M`` (single Rayleigh and Mie tables)
-    when ``first``, else the table ``s_a`` (multiple scattering, phase included); plus, for directions that
+    when ``first``, else the table ``s_a`` (multiple scattering, phase included, stored divided by
+    :func:`.sampling.multiple_lobe` of weight ``lobe``: read as ``s_a F(nu)``); plus, for directions that
     meet the ground, the ground's reflection of ``ground_irradiance`` (Eqs. 6 and 10, Lambertian ``albedo``).
     The sphere is sampled with ``n_theta x 2 n_theta`` midpoint directions in a frame whose x axis points to
     the sun's azimuth; for each view direction the phase-function weights are normalised to integrate to one
@@ -429,7 +431,6 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     norm_r = np.empty(n_v)
     buf = np.empty(n_l)
     e_buf = np.empty(n_l)
-    own_weights = np.empty(0)  # irradiance_lookup: each wavelength its own weight along the sun zenith
     t_buf = np.empty(n_l)
     tmp = np.empty(n_l)
     # Moments of the quadrature weights (normalisation of the Rayleigh phase on the grid).
@@ -497,11 +498,12 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                         scattering_lookup_shadow(s_b, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min,
                                                  aerosol_phase(nu_w, g, mie_kind), profiles[1], counts[1], buf)
                 else:
-                    scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min, 1.0, buf)
+                    scattering_lookup(s_a, r, wz, mu_s, nu_w, hits, bottom, top, mu_s_min,
+                                      multiple_lobe(nu_w, lobe), buf)
                 if hits:
                     d_g = distance_to_bottom(r, wz, bottom)
                     mu_s_g = clamp((d_g * wx * sx + (r + d_g * wz) * mu_s) / bottom, -1.0, 1.0)
-                    irradiance_lookup(ground_irradiance, bottom, mu_s_g, bottom, top, own_weights, e_buf)
+                    irradiance_lookup(ground_irradiance, bottom, mu_s_g, bottom, top, e_buf)
                     transmittance_segment(transmittance, r, wz, d_g, True, bottom, top, t_buf, tmp)
                     for k in range(n_l):
                         buf[k] += t_buf[k] * albedo[k] * inv_pi * e_buf[k]
@@ -544,22 +546,25 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
             f_r[k] = beta_r[k] * rho_r / b_tot if b_tot > 0.0 else 0.0
             f_m[k] = beta_m[k] * rho_m / b_tot if b_tot > 0.0 else 0.0
         for i_s in range(n_s):
+            sx_s = math.sqrt(max(1.0 - mu_s_tab[i_s] * mu_s_tab[i_s], 0.0))
             for i_mu in range(n_mu):
                 for i_n in range(n_n):
                     v = i_mu * n_n + i_n
                     vx, vy, vz = view[v, 0], view[v, 1], view[v, 2]
+                    # stored divided by the lobe at the texel's own view-sun cosine (the sun at azimuth 0)
+                    inv_lobe = 1.0 / multiple_lobe(clamp(vx * sx_s + vz * mu_s_tab[i_s], -1.0, 1.0), lobe)
                     for k in range(n_l):
                         acc_r = m0[i_s, k] + _quadratic_form(m2[i_s, k], vx, vy, vz)
                         if table:
                             acc_m = mie_t[k, i_s, v] / norm_t[k, v]
                         else:
                             acc_m = mie[i_s * n_l + k, v] / norm_m[v]
-                        out[i_r - first_r, i_mu, i_s, i_n, k] = f_r[k] * acc_r / norm_r[v] + f_m[k] * acc_m
+                        out[i_r - first_r, i_mu, i_s, i_n, k] = (f_r[k] * acc_r / norm_r[v] + f_m[k] * acc_m) * inv_lobe
 
 
 @helper
-def _hemisphere_irradiance(s_a, s_b, first, phase_trunc, forward, r, mu_s, bottom, top, mu_s_min, om, dom, acc,
-                           tmp):
+def _hemisphere_irradiance(s_a, s_b, first, lobe, phase_trunc, forward, r, mu_s, bottom, top, mu_s_min, om, dom,
+                           acc, tmp):
     """``acc = E[L](r, mu_s)``: the sum of :func:`indirect_irradiance_kernel` over the upper hemisphere's
     directions ``om`` (solid angles ``dom``) at radius ``r`` [m] and sun zenith cosine ``mu_s``, the first order's
     forward delta included."""
@@ -596,7 +601,9 @@ def _hemisphere_irradiance(s_a, s_b, first, phase_trunc, forward, r, mu_s, botto
                 p = (1.0 - t) * phase_trunc[k, i] + t * phase_trunc[k, i + 1]
                 acc[k] += (1.0 - forward[k]) * p * tmp[k]
         else:
-            lookup4_cell_weighted(s_a, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, 1.0 - w_n, w_n, scale, acc)
+            # the multiple scattering is stored divided by its lobe (.sampling.multiple_lobe)
+            lookup4_cell_weighted(s_a, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, 1.0 - w_n, w_n,
+                                  scale * multiple_lobe(nu_w, lobe), acc)
     if first and mu_s > 0.0:
         # the forward delta: the single-scattered aerosol light along the sun's own direction
         tmp[:] = 0.0
@@ -606,13 +613,14 @@ def _hemisphere_irradiance(s_a, s_b, first, phase_trunc, forward, r, mu_s, botto
 
 
 @kernel
-def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_trunc, forward, bottom, top, mu_s_min, n_theta,
+def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, lobe, phase_trunc, forward, bottom, top, mu_s_min, n_theta,
                                out, start, stop):
     """Irradiance on a horizontal surface from one order of sky radiance (Eq. 15) into ``out`` (n_r, n_mu_s,
     n_wl).
 
-    Radiance is ``s_a P_R + s_b P_M`` when ``first`` (single scattering) else ``s_a``; upper hemisphere
-    sampled with ``n_theta x 2 n_theta`` directions (:func:`sphere_quadrature`).
+    Radiance is ``s_a P_R + s_b P_M`` when ``first`` (single scattering) else ``s_a`` times
+    :func:`.sampling.multiple_lobe` of weight ``lobe`` (the multiple scattering is stored divided by it); upper
+    hemisphere sampled with ``n_theta x 2 n_theta`` directions (:func:`sphere_quadrature`).
 
     The aerosol phase, tabulated or analytic (``phase_trunc``, ``forward`` as in
     :func:`scattering_density_kernel`; an analytic phase's from its formula tabulated, :func:`.compute.
@@ -660,7 +668,7 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_trunc, forwar
         if mu_s < mu_s_min:
             continue
         if mu_s >= 0.0 or n_s < 3:
-            _hemisphere_irradiance(s_a, s_b, first, phase_trunc, forward, r, mu_s, bottom, top, mu_s_min, om, dom,
+            _hemisphere_irradiance(s_a, s_b, first, lobe, phase_trunc, forward, r, mu_s, bottom, top, mu_s_min, om, dom,
                                    acc, tmp)
         else:
             # below the horizon: the sums at the scattering tables' three sun zenith texels nearest mu_s (where their
@@ -670,7 +678,7 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, phase_trunc, forwar
             for q in range(3):
                 if not have[i_r, j0 + q]:
                     mu_q = scattering_mu_s_param(j0 + q, bottom, top, mu_s_min, n_s)
-                    _hemisphere_irradiance(s_a, s_b, first, phase_trunc, forward, r, mu_q, bottom, top, mu_s_min,
+                    _hemisphere_irradiance(s_a, s_b, first, lobe, phase_trunc, forward, r, mu_q, bottom, top, mu_s_min,
                                            om, dom, acc, tmp)
                     at_texel[i_r, j0 + q, :] = acc
                     have[i_r, j0 + q] = True

@@ -59,6 +59,7 @@ from .sampling import (
     lookup4_cell_weighted,
     lookup4_cell_weighted_spectral,
     mu_s_nu_cell,
+    multiple_lobe,
     phase_table_values,
     r_mu_cell,
     r_mu_s_cell,
@@ -95,11 +96,12 @@ def _enter_atmosphere(px, py, pz, vx, vy, vz, top):
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, profiles, counts,
-               out):
+def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec, profiles,
+               counts, out):
     """Inscattered radiance ``S_R P_R + S_M P_M + S_multiple`` from the tables at a point, into ``out``
     (``p_r``, ``p_m``: phase functions at ``nu``; ``p_m_spec``, if not empty, the aerosol phase per wavelength,
-    used instead of ``p_m``); zero below the sun-zenith limit.
+    used instead of ``p_m``; ``lobe``: the weight of :func:`.sampling.multiple_lobe`, by which the multiple
+    scattering is stored divided and which it is multiplied by here at ``nu``); zero below the sun-zenith limit.
 
     Along the azimuth (nu) the tables are interpolated log-linearly (:func:`.sampling.lookup4_cell`), except the
     single-scattering tables where the point lies in the Earth's shadow (:func:`.geometry.in_earth_shadow`, one
@@ -137,7 +139,7 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r
             lookup4_cell_spectral(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, p_m_spec, out)
         else:
             lookup4_cell(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, p_m, out)
-    lookup4_cell(mult, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, 1.0, out)
+    lookup4_cell(mult, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, multiple_lobe(nu, lobe), out)
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -173,31 +175,30 @@ def _ground_coords(px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top, alpha
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _ground_from_coords(transmittance, irradiance, albedo, solar, lum, pa_r, pa_mu, pb_r, pb_mu, pe_r, pe_mu, ps_r,
-                        ps_mu, cf, t, tmp, e_sky, e_sun, out):
+def _ground_from_coords(transmittance, irradiance, albedo, solar, pa_r, pa_mu, pb_r, pb_mu, pe_r, pe_mu, ps_r, ps_mu,
+                        cf, t, tmp, e_sky, e_sun, out):
     """The ground's radiance (Eqs. 10, 14) seen through the atmosphere (Eq. 16) from the coordinates of
-    :func:`_ground_coords`, into ``out``; leaves the transmittance to the ground in ``t``. ``lum``: the luminance
-    weights of the wavelengths, from which the sky irradiance's weight along the sun zenith is computed
-    (:func:`.sampling.irradiance_read`)."""
+    :func:`_ground_coords`, into ``out``; leaves the transmittance to the ground in ``t``; the sky irradiance read
+    with each wavelength's own weight along the sun zenith (:func:`.sampling.irradiance_read`)."""
     bilinear_read(transmittance, pa_r, pa_mu, t)
     bilinear_read(transmittance, pb_r, pb_mu, tmp)
     transmittance_ratio(t, tmp)
-    irradiance_read(irradiance, pe_r, pe_mu, lum, e_sky)
+    irradiance_read(irradiance, pe_r, pe_mu, e_sky)
     bilinear_read(transmittance, ps_r, ps_mu, e_sun)
     for k in range(out.shape[0]):
         out[k] = t[k] * albedo[k] / PI * (solar[k] * e_sun[k] * cf + e_sky[k])
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _ground_radiance(transmittance, irradiance, albedo, solar, lum, px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom,
-                     top, alpha, t, tmp, e_sky, e_sun, out):
+def _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top,
+                     alpha, t, tmp, e_sky, e_sun, out):
     """Radiance of the Lambertian ground lit by the sun and the sky (Eqs. 10, 14) where the ray from (px, py, pz)
     [m] along (vx, vy, vz) meets it, seen through the atmosphere (Eq. 16), into ``out``; leaves the transmittance
     to the ground in ``t``."""
     c = _ground_coords(px, py, pz, vx, vy, vz, sx, sy, sz, r, mu, bottom, top, alpha, transmittance.shape[0],
                        transmittance.shape[1], irradiance.shape[0], irradiance.shape[1])
-    _ground_from_coords(transmittance, irradiance, albedo, solar, lum, c[0], c[1], c[2], c[3], c[4], c[5], c[6],
-                        c[7], c[8], t, tmp, e_sky, e_sun, out)
+    _ground_from_coords(transmittance, irradiance, albedo, solar, c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7],
+                        c[8], t, tmp, e_sky, e_sun, out)
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -212,16 +213,16 @@ def _ground_coords_block(m, gv, gmu, px, py, pz, sx, sy, sz, r, bottom, top, alp
 
 
 @kernel
-def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, lum, bottom, top,
-               mu_s_min, g, mie_kind, phase_mu, phase_values, profiles, counts, alpha, include_ground, rad_out, tr_out,
-               start, stop):
+def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, bottom, top,
+               mu_s_min, g, mie_kind, lobe, phase_mu, phase_values, profiles, counts, alpha, include_ground, rad_out,
+               tr_out, start, stop):
     """Radiance [W m^-2 sr^-1 nm^-1] and transmittance along rays ``start..stop``; see the module docstring.
 
     Writes ``rad_out`` and ``tr_out`` (n_rays, n_wavelengths), which the caller initialises to 0 and 1
-    (the values of rays that miss the atmosphere). A tabulated aerosol phase (``mie_kind``
+    (the values of rays that miss the atmosphere). ``lobe``: the weight of :func:`.sampling.multiple_lobe`. A
+    tabulated aerosol phase (``mie_kind``
     :data:`.sampling.TABLE_PHASE`) is read per wavelength from ``phase_mu``, ``phase_values``; ``profiles``,
     ``counts``: the density profiles of :func:`.compute.density_profiles` (the Earth's shadow, :func:`_inscatter`);
-    ``lum``: the luminance weights of the wavelengths (the ground term's sky irradiance, :func:`_ground_from_coords`).
     """
     n_l = transmittance.shape[2]
     p_m_spec = np.empty(n_l if mie_kind == TABLE_PHASE else 0)
@@ -257,18 +258,18 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
                 for k in range(n_l):
                     c[k] = 0.0
             else:
-                _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec,
-                           profiles, counts, c)
+                _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m,
+                           p_m_spec, profiles, counts, c)
             transmittance_segment(transmittance, rc, mu, l_sh, hits, bottom, top, t, tmp)
             for k in range(n_l):
                 c[k] *= t[k]
         else:
-            _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, profiles,
-                       counts, c)
+            _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec,
+                       profiles, counts, c)
         for k in range(n_l):
             rad_out[q, k] = c[k]
         if hits and include_ground:
-            _ground_radiance(transmittance, irradiance, albedo, solar, lum, px, py, pz, vx, vy, vz, sx, sy, sz, rc,
+            _ground_radiance(transmittance, irradiance, albedo, solar, px, py, pz, vx, vy, vz, sx, sy, sz, rc,
                              mu, bottom, top, alpha, t, tmp, e_sky, e_sun, ground)
             for k in range(n_l):
                 tr_out[q, k] = t[k]
@@ -357,9 +358,10 @@ def _unit_block(dirs):
 
 @helper(fastmath=CONTRACT_ARCP)
 def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho, big_h, theta_h, g,
-                     mie_kind, n_mu, n_nu, cell, w_mu, w_nu, p_r, p_m, kind):
+                     mie_kind, lobe, n_mu, n_nu, cell, w_mu, w_nu, p_r, p_m, p_l, kind):
     """Table cells, weights and phase factors of a block of rays from one observer (the first pass of
-    :func:`observer_kernel`); ``unit``: the block's directions are unit vectors (:func:`_unit_block`), so the
+    :func:`observer_kernel`; ``p_l`` the multiple scattering's :func:`.sampling.multiple_lobe` of weight
+    ``lobe``); ``unit``: the block's directions are unit vectors (:func:`_unit_block`), so the
     normalisation (a square root and a division per ray) is skipped. No branch that the compiler cannot turn into
     a select, no libm call: the loop runs on SIMD lanes. Every ray gets the sky half's ``mu`` cell; ``kind``
     marks the rays that meet the ground (2), whose cell the caller replaces, and bad directions (0: zero,
@@ -389,6 +391,7 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
         w_nu[k] = wn
         p_r[k] = rayleigh_phase(nu)
         p_m[k] = aerosol_phase(nu, g, mie_kind)
+        p_l[k] = multiple_lobe(nu, lobe)
         kind[k] = (2 if hits else 1) if ok else 0
         special += 0 if ok and not hits else 1
     return special
@@ -495,7 +498,7 @@ def _observer_shadow_weights(dirs, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, 
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, out):
+def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, p_l, out):
     """Interpolation of the observer slices (:func:`observer_slices` as (n_mu * n_nu, C + 1, 4)) for a block of
     rays from :func:`_observer_coords`, linear along mu and along nu with the weights ``w_tab`` (3, >= m) of
     :func:`_observer_nu_weights`, phase factors applied: ``out`` (m, C).
@@ -515,8 +518,8 @@ def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, out):
             v += p_m[k] * (w00 * slices[a, 0, 1] + w01 * slices[a + 1, 0, 1] + w10 * slices[b, 0, 1]
                            + w11 * slices[b + 1, 0, 1])
             w00, w01, w10, w11 = bilinear_weights(wm, w_tab[2, k])
-            out[k, 0] = v + (w00 * slices[a, 0, 2] + w01 * slices[a + 1, 0, 2] + w10 * slices[b, 0, 2]
-                             + w11 * slices[b + 1, 0, 2])
+            out[k, 0] = v + p_l[k] * (w00 * slices[a, 0, 2] + w01 * slices[a + 1, 0, 2] + w10 * slices[b, 0, 2]
+                                      + w11 * slices[b + 1, 0, 2])
         return
     for k in range(cell.shape[0]):
         wm = w_mu[k]
@@ -530,6 +533,8 @@ def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, out):
         pm = p_m[k]
         m00, m01, m10, m11 = pm * m00, pm * m01, pm * m10, pm * m11
         u00, u01, u10, u11 = bilinear_weights(wm, w_tab[2, k])
+        pl = p_l[k]
+        u00, u01, u10, u11 = pl * u00, pl * u01, pl * u10, pl * u11
         for c in range(n_c):
             out[k, c] = (r00 * slices[a, c, 0] + r01 * slices[a + 1, c, 0] + r10 * slices[b, c, 0]
                          + r11 * slices[b + 1, c, 0]
@@ -540,8 +545,8 @@ def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, out):
 
 
 @kernel
-def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albedo, solar, lum, projection, bottom, top,
-                    mu_s_min, g, mie_kind, profiles, counts, alpha, include_ground, dirs, out, bad, start, stop):
+def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albedo, solar, projection, bottom, top,
+                    mu_s_min, g, mie_kind, lobe, profiles, counts, alpha, include_ground, dirs, out, bad, start, stop):
     """:func:`sky_kernel`'s radiance (no shadows) for rays ``start..stop`` from one ``position`` inside the
     atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C)); ``slices`` of
     :func:`observer_slices` from 4D tables of ``n_r`` radii.
@@ -555,8 +560,7 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
     a test once per call, those of the single scattering then with the shadow factors of
     :func:`_observer_shadow_weights`), table reads, then for the rays that meet the ground the coordinates of the
     ground term (vectorised) and its spectrum, projected. ``mu_s_min``: the tables' sun limit; ``profiles``,
-    ``counts``: the density profiles of :func:`.compute.density_profiles`; ``lum``: the luminance weights of the
-    wavelengths (the ground term's sky irradiance, :func:`.sampling.irradiance_read`).
+    ``counts``: the density profiles of :func:`.compute.density_profiles`.
     """
     n_l = transmittance.shape[2]
     n_c = out.shape[1]  # slices: n_c channels and the sums over wavelengths
@@ -580,6 +584,7 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
     ends = np.empty((2, 3, OBSERVER_BLOCK), dtype=np.float32)
     p_r = np.empty(OBSERVER_BLOCK)
     p_m = np.empty(OBSERVER_BLOCK)
+    p_l = np.empty(OBSERVER_BLOCK)
     g_idx = np.empty(OBSERVER_BLOCK, dtype=np.int64)
     g_v = np.empty((3, OBSERVER_BLOCK))
     g_mu = np.empty(OBSERVER_BLOCK)
@@ -604,8 +609,8 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
         m = b1 - b0
         block = flat_dirs[3 * b0:3 * b1]
         special = _observer_coords(block, _unit_block(block), px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho,
-                                   big_h, theta_h, g, mie_kind, n_mu, n_nu, cell[:m], w_mu[:m], w_nu[:m], p_r[:m],
-                                   p_m[:m], kind[:m])
+                                   big_h, theta_h, g, mie_kind, lobe, n_mu, n_nu, cell[:m], w_mu[:m], w_nu[:m],
+                                   p_r[:m], p_m[:m], p_l[:m], kind[:m])
         if two_rows:
             _observer_row_cells(block, px, py, pz, r, bottom, top, n_r, n_mu, n_nu, cell[:m], w_mu[:m], cell1[:m],
                                 w_mu1[:m])
@@ -633,9 +638,9 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
         if shadowed:
             _observer_shadow_weights(block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, cos_phi, profiles,
                                      counts, cell[:m], w_nu[:m], w_tab, p_r[:m], p_m[:m])
-        _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_tab, p_r[:m], p_m[:m], out[b0:b1])
+        _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_tab, p_r[:m], p_m[:m], p_l[:m], out[b0:b1])
         if two_rows:
-            _observer_gather(flat1, n_nu, cell1[:m], w_mu1[:m], w_tab, p_r[:m], p_m[:m], upper[:m])
+            _observer_gather(flat1, n_nu, cell1[:m], w_mu1[:m], w_tab, p_r[:m], p_m[:m], p_l[:m], upper[:m])
             for k in range(m):
                 for ch in range(n_c):
                     out[b0 + k, ch] += upper[k, ch]
@@ -644,7 +649,7 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
         _ground_coords_block(n_ground, g_v, g_mu, px, py, pz, sx, sy, sz, rc, bottom, top, alpha, n_tr, n_tmu, n_er,
                              n_emu, g_c)
         for j in range(n_ground):
-            _ground_from_coords(transmittance, irradiance, albedo, solar, lum, g_c[0, j], g_c[1, j], g_c[2, j],
+            _ground_from_coords(transmittance, irradiance, albedo, solar, g_c[0, j], g_c[1, j], g_c[2, j],
                                 g_c[3, j], g_c[4, j], g_c[5, j], g_c[6, j], g_c[7, j], g_c[8, j], t, tmp, e_sky, e_sun,
                                 ground)
             q = b0 + g_idx[j]
@@ -700,8 +705,8 @@ def _slice_layers(l0, l1, w_r, w_g, i_s, w_s, projection, identity, two_rows, j,
 
 @kernel
 def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0, ray1, mie1, mult1, transmittance,
-                         irradiance, albedo, solar, lum, projection, identity, bottom, top, mu_s_min, g, mie_kind,
-                         profiles, counts, alpha, include_ground, dirs, out, bad, start, stop):
+                         irradiance, albedo, solar, projection, identity, bottom, top, mu_s_min, g, mie_kind,
+                         lobe, profiles, counts, alpha, include_ground, dirs, out, bad, start, stop):
     """:func:`observer_kernel` for suns ``start..stop`` of ``suns`` (n, 3) (unit vectors; ``mu_s`` their zenith
     cosines at the observer, as :func:`observer_slices` takes them) seen from one ``position``: per sun the slices
     of :func:`observer_slices` (at the radius ``r_slices`` [m], clamped to the atmosphere, of tables with ``n_r``
@@ -724,21 +729,21 @@ def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0,
             _slice_layers(ray0, ray1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 0, acc, slices)
             _slice_layers(mie0, mie1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 1, acc, slices)
             _slice_layers(mult0, mult1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 2, acc, slices)
-        observer_kernel(position, suns[h], slices, n_r, transmittance, irradiance, albedo, solar, lum, projection,
-                        bottom,
-                        top, mu_s_min, g, mie_kind, profiles, counts, alpha, include_ground, dirs, out[h], bad[h], 0,
-                        n_rays)
+        observer_kernel(position, suns[h], slices, n_r, transmittance, irradiance, albedo, solar, projection,
+                        bottom, top, mu_s_min, g, mie_kind, lobe, profiles, counts, alpha, include_ground, dirs, out[h],
+                        bad[h], 0, n_rays)
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, p_r, p_m,
-                        p_m_spec, profiles, counts, c, t, c2, tmp):
+def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, lobe, p_r,
+                        p_m, p_m_spec, profiles, counts, c, t, c2, tmp):
     """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``."""
-    _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, profiles, counts, c)
+    _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec, profiles,
+               counts, c)
     r_p, mu_p = point_along_ray(r, mu, d, bottom, top)
     mu_s_p = clamp((r * mu_s + d * nu) / r_p, -1.0, 1.0)
-    _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, p_r, p_m, p_m_spec, profiles,
-               counts, c2)
+    _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec,
+               profiles, counts, c2)
     transmittance_segment(transmittance, r, mu, d, hits, bottom, top, t, tmp)
     for k in range(c.shape[0]):
         c[k] = max(c[k] - t[k] * c2[k], 0.0)
@@ -746,7 +751,7 @@ def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits,
 
 @kernel
 def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, g, mie_kind,
-                  phase_mu, phase_values, profiles, counts, tr_out, in_out, start, stop):
+                  lobe, phase_mu, phase_values, profiles, counts, tr_out, in_out, start, stop):
     """Transmittance and inscattered radiance between cameras and points (Eqs. 16-17), rays ``start..stop``.
 
     Writes ``tr_out`` (initialised to 1) and ``in_out`` (initialised to 0), each (n_rays, n_wavelengths).
@@ -797,27 +802,27 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
             mu_lo = mu_h - HORIZON_EPSILON
             mu_hi = mu_h + HORIZON_EPSILON
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_lo, mu_s, nu, d_lit, True, bottom, top,
-                                mu_s_min, p_r, p_m, p_m_spec, profiles, counts, lo_c, t, c2, tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, lo_c, t, c2, tmp)
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_hi, mu_s, nu, d_lit, False, bottom, top,
-                                mu_s_min, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
             a = (mu - mu_lo) / (mu_hi - mu_lo)
             for k in range(n_l):
                 c[k] = (1.0 - a) * lo_c[k] + a * c[k]
         else:
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu, mu_s, nu, d_lit, hits, bottom, top,
-                                mu_s_min, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
         for k in range(n_l):
             in_out[q, k] = c[k]
 
 
 @kernel
-def irradiance_kernel(points, normals, suns, transmittance, irradiance, solar, lum, bottom, top, alpha, sun_out,
+def irradiance_kernel(points, normals, suns, transmittance, irradiance, solar, bottom, top, alpha, sun_out,
                       sky_out, start, stop):
     """Sun and sky irradiance [W m^-2 nm^-1] on surfaces at ``points`` with unit ``normals``.
 
     Sun: ``E_sun T_sun max(n.s, 0)`` with the planet's occlusion of the disc; sky: the table's horizontal
-    irradiance times ``(1 + n.up) / 2`` (Eq. 14), read with the weight along the sun zenith of the luminance
-    weights ``lum`` (:func:`.sampling.irradiance_read`). Writes ``sun_out`` and ``sky_out`` (n, n_wavelengths).
+    irradiance times ``(1 + n.up) / 2`` (Eq. 14), each wavelength read with its own weight along the sun zenith
+    (:func:`.sampling.irradiance_read`). Writes ``sun_out`` and ``sky_out`` (n, n_wavelengths).
     """
     n_l = transmittance.shape[2]
     t = np.empty(n_l)
@@ -832,7 +837,7 @@ def irradiance_kernel(points, normals, suns, transmittance, irradiance, solar, l
         mu_s = clamp(ux * sx + uy * sy + uz * sz, -1.0, 1.0)
         transmittance_to_sun(transmittance, rc, mu_s, bottom, top, alpha, t)
         cos_n = max(nx * sx + ny * sy + nz * sz, 0.0)
-        irradiance_lookup(irradiance, rc, mu_s, bottom, top, lum, e)
+        irradiance_lookup(irradiance, rc, mu_s, bottom, top, e)
         occl = 0.5 * (1.0 + nx * ux + ny * uy + nz * uz)
         for k in range(n_l):
             sun_out[q, k] = solar[k] * t[k] * cos_n

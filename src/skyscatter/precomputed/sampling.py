@@ -10,6 +10,9 @@ Reference: [Bruneton2008].
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
+
+import numpy as np
 
 from ..atmosphere.phase import (
     AEROSOL_PHASE_FUNCTIONS,
@@ -39,6 +42,9 @@ from .geometry import (
     transmittance_coord,
 )
 
+if TYPE_CHECKING:
+    from .parameters import AtmosphereParameters
+
 PI = math.pi
 #: Largest shadow factor of the rendering lookups' single scattering read from the Earth's shadow
 #: (:func:`shadow_ratios_fast`, :func:`.lookup._inscatter`; the GLSL library's ``SHADOW_RATIO_MAX``): a texel whose ray
@@ -62,6 +68,75 @@ aerosol_phase = aerosol_phase_scalar
 #: ``mie_kind`` of a tabulated, wavelength-dependent aerosol phase function (after the analytic kinds): the kernels
 #: then read it per wavelength with ``phase_table_values`` (:mod:`skyscatter.atmosphere.phase_table`).
 TABLE_PHASE = len(AEROSOL_PHASE_FUNCTIONS)
+
+#: Asymmetry parameter of the lobe :func:`multiple_lobe` that the multiple-scattering tables are divided by: the
+#: Henyey-Greenstein lobe of about the third scattering order of the default aerosol (Legendre moments of a
+#: Henyey-Greenstein phase are ``g^l`` and multiply under the convolution of successive orders, so order ``n`` of a
+#: ``g`` = 0.8 lobe is about ``HG(0.8^n)``: 0.64, 0.51, 0.41), and 0.5 was the best of 0.4-0.7 on the tables below.
+MULTIPLE_LOBE_G = 0.5
+#: The lobe's weight per unit aerosol share of the column's scattering optical depth (:func:`lobe_weight`). Measured
+#: on a 15-texel table's azimuth texels (560 nm, ground, view 1-20 deg, sun -1 to +12 deg): every second texel read
+#: from its neighbours, median of ``read / texel - 1`` [%] at 12.9 / 38.6 / 64.3 / 90 deg from the sun, linear
+#: (the precomputation's sphere integrals) and log-linear (the lookups): optical depth 0.5 without the lobe
+#: -6.3 / +9.9 / +6.5 / +3.7 and -9.9 / +2.8 / +3.7 / +3.2, with it (0.4) -3.1 / +1.8 / +2.0 / +2.2 and -3.7 / +0.5 /
+#: +1.3 / +2.1; turbidity 3 -6.3 / +14.3 / +6.5 / +3.4 and -12.1 / +5.4 / +4.2 / +3.1 -> -4.8 / +5.4 / +2.8 / +2.3
+#: and -6.8 / +3.1 / +2.2 / +2.3. 0.6 follows 560 nm a little closer but over-corrects at 400 nm, where air's share
+#: is larger than at 550 nm: against the low-sun Monte Carlo (docs/accuracy.md, "Low sun") the hazy directions
+#: towards a sun at +10 and +3 deg came out 4-6 points brighter at 400 nm (0.4: 2-4).
+MULTIPLE_LOBE_WEIGHT = 0.4
+
+
+#: Wavelength [nm] of :func:`lobe_weight`'s optical depths: one for all wavelengths, so that the tables do not
+#: depend on which wavelengths are computed together.
+LOBE_WAVELENGTH = 550.0
+
+
+def lobe_weight(atmosphere: AtmosphereParameters) -> float:
+    """Weight ``a`` [-] of the lobe :func:`multiple_lobe` by which the multiple-scattering tables are
+    divided: :data:`MULTIPLE_LOBE_WEIGHT` times the aerosol's share of the column's scattering optical
+    depth at :data:`LOBE_WAVELENGTH` (``tau_M,s / (tau_M,s + tau_R)``: 0.04 for the Earth defaults, 0.63 for
+    turbidity 3, 0.81 for an aerosol optical depth of 0.5), the columns integrated by the trapezoidal rule on 2001
+    heights. The multiply scattered light's forward lobe is the aerosol's; a Rayleigh sky has none."""
+    h = np.linspace(0.0, atmosphere.thickness, 2001)
+    ray, aer = atmosphere.scattering_coefficients(h, [LOBE_WAVELENGTH])
+    tau_r = float(np.trapezoid(ray[:, 0], h))
+    tau_m = float(np.trapezoid(aer[:, 0], h))
+    total = tau_r + tau_m
+    return MULTIPLE_LOBE_WEIGHT * tau_m / total if total > 0.0 else 0.0
+
+
+@helper
+def multiple_lobe(nu, lobe):
+    """The shape ``F(nu) = 1 - a + a HG(nu; g)`` by which the multiple-scattering tables (and the orders'
+    scattering densities) are divided as they are stored, so that every read between their view-sun azimuth texels
+    interpolates ``S / F`` and multiplies by ``F`` at the read's own ``nu``: ``HG`` the Henyey-Greenstein phase
+    ([HenyeyGreenstein1941]) times 4 pi (mean 1 over the sphere), ``g`` :data:`MULTIPLE_LOBE_G`, ``a`` = ``lobe``
+    (0 <= a < 1: :func:`lobe_weight`, 0 for a sky without aerosol, where the tables are as before).
+
+    Why: a hazy sky's multiply scattered light has the aerosol's forward lobe along the view-sun azimuth, convex in
+    its logarithm 20-100 deg from the sun and concave next to it, which 8 azimuth texels 25.7 deg apart do not
+    follow; read log-linearly between texels it came out 6-8 % too bright in the second order at 45-90 deg, and the
+    precomputation's own reads between texels carried that into orders 3 and up (docs/accuracy.md, "Low sun").
+    The same memory holds the ratio, whose logarithm is nearly linear between texels (the paper divides the single
+    scattering by its phase functions for the same reason, [Bruneton2008] Sec. 4, "Angular precision").
+
+    Parameters
+    ----------
+    nu : float
+        Cosine of the view-sun angle [-].
+    lobe : float
+        Weight ``a`` of the lobe [-].
+    """
+    g = MULTIPLE_LOBE_G
+    d = 1.0 + g * g - 2.0 * g * nu
+    return 1.0 - lobe + lobe * (1.0 - g * g) / (d * math.sqrt(d))
+
+
+def multiple_lobe_array(nu: np.ndarray, lobe: float) -> np.ndarray:
+    """:func:`multiple_lobe` of an array of view-sun cosines ``nu`` [-] (``lobe`` [-] the weight), in numpy."""
+    g = MULTIPLE_LOBE_G
+    d = 1.0 + g * g - 2.0 * g * np.asarray(nu, dtype=float)
+    return 1.0 - lobe + lobe * (1.0 - g * g) / (d * np.sqrt(d))
 
 
 @helper
@@ -189,20 +264,17 @@ def transmittance_to_sun(table, r, mu_s, bottom, top, alpha, out):
 
 
 @helper
-def irradiance_read(table, p_r, p_m, weights, out):
+def irradiance_read(table, p_r, p_m, out):
     """Read of an irradiance table (n_r, n_mu_s, n_wavelengths) at index positions (p_r, p_m): linear in r, and
     along the sun zenith linear, or in the cells that start below the horizon (:func:`.geometry.irradiance_log_cell`)
     quadratic in the logarithm over the three nearest texel columns (:func:`.geometry.irradiance_log_nodes`, each
     column interpolated linearly in r): the weight :func:`.geometry.log_quadratic_weight` (three-point Lagrange in
-    ``ln E``, [Abramowitz1964] Eq. 25.2.11, kept between the cell's two columns) of the cell's two columns. With
-    ``weights`` empty each wavelength has its own weight: the precomputation's ground term (the tables then do not
-    depend on how the wavelengths are chunked) and the rendering lookups (:mod:`.evaluation`). Otherwise ``weights``
-    (n_wavelengths,) >= 0 are the luminance weights of the table's wavelengths (``ybar`` times the quadrature step:
-    :attr:`.evaluation.TableLookups.irradiance_weights`) and one weight, that of the three columns' luminances
-    ``sum_k weights[k] E_k``, serves every wavelength (the rendering lookups' read in formats 15-18, kept for
-    comparison: ``benchmarks/irradiance_read_low_sun.py``). With the sun 6 deg below the horizon that one weight was
-    +10.3 % at 400 nm and -7.2 % at 700 nm, each wavelength's own -1.4 / -1.2 % (turbidity 3, 16 wavelengths,
-    against the hemisphere integral of ``benchmarks/second_order_low_sun.py``; docs/accuracy.md, "Low sun").
+    ``ln E``, [Abramowitz1964] Eq. 25.2.11, kept between the cell's two columns) of the cell's two columns, each
+    wavelength its own (the tables then do not depend on how the wavelengths are chunked). One weight for all
+    wavelengths, that of the three columns' illuminance (the rendering lookups' read in formats 15-18, dropped with
+    realtime manifest version 10), was +10.3 % at 400 nm and -7.2 % at 700 nm with the sun 6 deg below the horizon,
+    each wavelength's own -1.4 / -1.2 % (turbidity 3, 16 wavelengths, against the hemisphere integral of
+    ``benchmarks/second_order_low_sun.py``; docs/accuracy.md, "Low sun").
 
     Below the horizon the twilight sky irradiance falls faster the lower the sun: the geometric read of two columns
     (format 14) was 4-11 % low between the default 64 texels at -2 to -5.5 deg (turbidity 3, 560 nm, against a table
@@ -219,37 +291,21 @@ def irradiance_read(table, p_r, p_m, weights, out):
     c = j0 if t < 0.0 else j0 + 1  # the cell's first column
     t00, t01, t02 = table[i, j0], table[i, j0 + 1], table[i, j0 + 2]
     t10, t11, t12 = table[i + 1, j0], table[i + 1, j0 + 1], table[i + 1, j0 + 2]
-    if weights.shape[0] == 0:
-        for k in range(n_l):
-            e0 = v0 * t00[k] + w0 * t10[k]
-            e1 = v0 * t01[k] + w0 * t11[k]
-            e2 = v0 * t02[k] + w0 * t12[k]
-            a, b = (e0, e1) if c == j0 else (e1, e2)
-            out[k] = a + log_quadratic_weight(e0, e1, e2, t) * (b - a)
-        return
-    y0 = 0.0
-    y1 = 0.0
-    y2 = 0.0
     for k in range(n_l):
-        y0 += weights[k] * (v0 * t00[k] + w0 * t10[k])
-        y1 += weights[k] * (v0 * t01[k] + w0 * t11[k])
-        y2 += weights[k] * (v0 * t02[k] + w0 * t12[k])
-    g = log_quadratic_weight(y0, y1, y2, t)
-    ta, tb = table[i, c], table[i, c + 1]
-    tc, td = table[i + 1, c], table[i + 1, c + 1]
-    for k in range(n_l):
-        a = v0 * ta[k] + w0 * tc[k]
-        b = v0 * tb[k] + w0 * td[k]
-        out[k] = a + g * (b - a)
+        e0 = v0 * t00[k] + w0 * t10[k]
+        e1 = v0 * t01[k] + w0 * t11[k]
+        e2 = v0 * t02[k] + w0 * t12[k]
+        a, b = (e0, e1) if c == j0 else (e1, e2)
+        out[k] = a + log_quadratic_weight(e0, e1, e2, t) * (b - a)
 
 
 @helper
-def irradiance_lookup(table, r, mu_s, bottom, top, weights, out):
+def irradiance_lookup(table, r, mu_s, bottom, top, out):
     """Read of an irradiance table (n_r, n_mu_s, n_wavelengths) at radius ``r`` [m] and sun zenith cosine ``mu_s``
-    (:func:`irradiance_read`; ``weights`` empty: each wavelength its own weight along mu_s)."""
+    (:func:`irradiance_read`)."""
     n_r, n_m, _ = table.shape
     p_r, p_m = irradiance_coord(r, mu_s, bottom, top, n_r, n_m)
-    irradiance_read(table, p_r, p_m, weights, out)
+    irradiance_read(table, p_r, p_m, out)
 
 
 @helper

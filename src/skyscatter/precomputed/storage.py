@@ -96,7 +96,10 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "PHASE_NAMES", "STORE
 #: 18: the same layout; the rule of format 16 (rows apart, altitude weight) only where the cell touching the ground
 #: ends below 300 m (:data:`.geometry.ALTITUDE_LINEAR_CELL_TOP`: 32 and 16 rows; tables of 8 rows keep the ``rho``
 #: weight and a shared coordinate again), so tables with few rows of format 17 hold other values.
-FORMAT_VERSION = 18
+#: 19: the same layout; the multiple-scattering table (and the orders' scattering densities) hold their values
+#: divided by the lobe :func:`.sampling.multiple_lobe` at each texel's view-sun cosine, so that every read between
+#: the azimuth texels follows the aerosol's forward lobe; the lookups multiply by it at the read's own ``nu``.
+FORMAT_VERSION = 19
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).

@@ -26,16 +26,19 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
 * ``transmittance`` 2D, width n_mu x height n_r: RGB sunlight transmittance to the top, A the same for luminance.
 * ``optical_depth`` 2D, same layout: RGB the optical depth to the top averaged over each channel's band, A over the
   luminance's; for the transmittance between two points where a ratio of sunlight transmittances is ill-conditioned.
-* ``irradiance`` 2D, width n_mu_s x height n_r: RGB sky irradiance on a horizontal surface [HDR scale], A the
-  illuminance of the table's spectrum (manifest version 5; lx, the CIE 1931 ``ybar`` integral of the table's
-  samples, not on the HDR scale; the library does not read it since manifest version 9). The library reads it
+* ``irradiance`` 2D, width n_mu_s x height n_r: RGB sky irradiance on a horizontal surface [HDR scale], A 0
+  (manifest version 10; versions 6-9 held the illuminance of the table's spectrum, unread since version 9). The
+  library reads it
   linearly along mu_s except in the cells that start below the horizon, where the twilight irradiance falls faster
   the lower the sun: there each channel of the cell's two texel columns has its own weight, log_quadratic_weight
   (three-point Lagrange in the logarithm, manifest version 7) of that channel in the three nearest columns (each
   linear in r; manifest version 9, as :func:`skyscatter.precomputed.sampling.irradiance_read` reads each wavelength;
   ``irradiance_uvs``, ``irradiance_lerp`` and ``log_quadratic_weight`` of the mappings).
 * ``rayleigh``, ``mie``, ``multiple`` 3D, width n_nu * n_mu_s (x = i_nu * n_mu_s + i_mu_s), height n_mu, depth n_r:
-  RGB single Rayleigh and single Mie scattering without their phase functions, multiple scattering with it; A the
+  RGB single Rayleigh and single Mie scattering without their phase functions, multiple scattering with it and
+  divided by the lobe ``multiple_lobe(nu)`` of the mappings at each texel's own nu (manifest version 10, table
+  format 19: :func:`skyscatter.precomputed.sampling.multiple_lobe`; ``inscattered_radiance`` multiplies by it at
+  the lookup's nu, so the interpolation between nu slices follows the aerosol's forward lobe); A the
   table's own value at its middle wavelength (index n_wavelengths // 2, the manifest's
   ``azimuth_weight_wavelength_nm``; spectral, W m^-2 nm^-1 or W m^-2 sr^-1 nm^-1, not on the HDR scale). The
   library's lookups (table format 12) interpolate between the two nu slices of a lookup with the weight
@@ -93,8 +96,11 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: columns and the position t, irradiance_lerp takes three reads; log_quadratic_weight). 8: the altitude weight and
 #: the rows apart of version 5 only where the cell touching the ground ends below 300 m (skyscatter table format 18).
 #: 9: below the horizon each channel of the irradiance texture has its own weight along mu_s (irradiance_lerp; the
-#: lookups read each wavelength with its own), the alpha is no longer read.
-MANIFEST_VERSION = 9
+#: lookups read each wavelength with its own), the alpha is no longer read. 10: the multiple-scattering texture holds
+#: the multiple scattering divided by the lobe MultipleLobe(nu) (constants MULTIPLE_LOBE, MULTIPLE_LOBE_G; multiple_lobe
+#: and inscattered_radiance of the mappings; skyscatter table format 19); the irradiance texture's alpha is 0 (was the
+#: illuminance, unread since version 9).
+MANIFEST_VERSION = 10
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -422,9 +428,17 @@ def mie_phase(nu):
         return (1.0 - g * g) / (4.0 * math.pi * den * math.sqrt(den))
     return 3.0 * (1.0 - g * g) * (1.0 + nu * nu) / (8.0 * math.pi * (2.0 + g * g) * den * math.sqrt(den))
 
+def multiple_lobe(nu):
+    """The lobe by which the multiple-scattering texture is divided: 1 - a + a (1 - g^2) / (1 + g^2 - 2 g nu)^1.5,
+    a = MULTIPLE_LOBE, g = MULTIPLE_LOBE_G."""
+    g = MULTIPLE_LOBE_G
+    d = 1.0 + g * g - 2.0 * g * nu
+    return 1.0 - MULTIPLE_LOBE + MULTIPLE_LOBE * (1.0 - g * g) / (d * math.sqrt(d))
+
 def inscattered_radiance(rayleigh, mie, multiple, nu):
-    """Radiance [HDR scale] from the three scattering lookups: S_R P_R + S_M P_M + S_multiple."""
-    return [a * rayleigh_phase(nu) + b * mie_phase(nu) + c for a, b, c in zip(rayleigh, mie, multiple)]
+    """Radiance [HDR scale] from the three scattering lookups: S_R P_R + S_M P_M + S_multiple F(nu)."""
+    f = multiple_lobe(nu)
+    return [a * rayleigh_phase(nu) + b * mie_phase(nu) + c * f for a, b, c in zip(rayleigh, mie, multiple)]
 '''
 
 
@@ -491,10 +505,9 @@ def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]
     w /= w.sum(axis=1, keepdims=True)
     out = {"transmittance": _sun_weighted(t["transmittance"], solar, m).astype(np.float32),
            "optical_depth": (tau @ w.T).astype(np.float32),
-           # A: the illuminance of the spectrum (informative: the library weighs each channel by its own values)
+           # A: 0 (the library weighs each channel by its own values)
            "irradiance": np.concatenate([t["irradiance"].astype(np.float64) @ m.T,
-                                         (t["irradiance"].astype(np.float64) @ atm.irradiance_weights)[..., None]],
-                                        axis=-1)}
+                                         np.zeros((*t["irradiance"].shape[:-1], 1))], axis=-1)}
     m4 = np.vstack([m, np.zeros(m.shape[1])]).astype(np.float32)  # R, G, B rows; A is filled below
     for name, key in (("rayleigh", "single_rayleigh"), ("mie", "single_mie"), ("multiple", "multiple")):
         # einsum, not matmul: a (1M, 16) x (16, 4) product is 4x quicker without BLAS's threads
@@ -510,7 +523,7 @@ def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
     from ..atmosphere.phase import aerosol_phase_kind
     from ..precomputed.compute import density_profiles
     from ..precomputed.geometry import LOG_LERP_FLOOR
-    from ..precomputed.sampling import SHADOW_RATIO_MAX
+    from ..precomputed.sampling import MULTIPLE_LOBE_G, SHADOW_RATIO_MAX, lobe_weight
     from ..sun.disc import solar_disc_solid_angle
 
     p = atm.parameters
@@ -526,6 +539,7 @@ def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
         "SUN_ANGULAR_RADIUS": float(p.sun_angular_radius),
         "SUN_SOLID_ANGLE": solar_disc_solid_angle(p.sun_angular_radius),
         "MIE_G": float(phase.g), "MIE_PHASE_KIND": aerosol_phase_kind(phase.kind),
+        "MULTIPLE_LOBE": float(lobe_weight(p)), "MULTIPLE_LOBE_G": float(MULTIPLE_LOBE_G),
         "SOLAR_IRRADIANCE": [float(v) for v in m @ solar],
         "GROUND_ALBEDO": [float(v) for v in (m @ (albedo * solar)) / (m @ solar)],
         "TRANSMITTANCE_N_R": atm.sizes.transmittance_r, "TRANSMITTANCE_N_MU": atm.sizes.transmittance_mu,
@@ -575,15 +589,14 @@ def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
                          "(M E_sun) per channel [1]; A: the same for luminance",
         "optical_depth": "RGB: optical depth from (r, mu) to the top averaged over each channel's band, sum_l w_c(l) "
                          "tau(l), w_c = max(M_c, 0) E_sun normalised [1]; A: the same for luminance",
-        "irradiance": "RGB: sky irradiance on a horizontal surface at (r, mu_s) [W m^-2, HDR scale]; A: the "
-                      "illuminance of its spectrum (the CIE 1931 ybar integral of the table's samples) [lx; not on "
-                      "the HDR scale] (not read by the library: irradiance_lerp of the mappings weighs each channel "
-                      "by its own values)",
+        "irradiance": "RGB: sky irradiance on a horizontal surface at (r, mu_s) [W m^-2, HDR scale]; A: 0 "
+                      "(irradiance_lerp of the mappings weighs each channel by its own values)",
         "rayleigh": "RGB: single Rayleigh scattering S_R[L0] without its phase function [W m^-2, HDR scale; times "
                     "P_R [sr^-1] gives radiance]; A: " + _ALPHA,
         "mie": "RGB: single Mie scattering S_M[L0] without its phase function [W m^-2, HDR scale]; A: " + _ALPHA,
-        "multiple": "RGB: multiple scattering S[L*], orders >= 2, phase included [W m^-2 sr^-1, HDR scale]; A: "
-                    + _ALPHA,
+        "multiple": "RGB: multiple scattering S[L*], orders >= 2, phase included, divided by multiple_lobe(nu) of "
+                    "the mappings at the texel's nu [W m^-2 sr^-1, HDR scale; times multiple_lobe(nu) gives "
+                    "radiance]; A: " + _ALPHA,
     }[name]
     entry: dict[str, Any] = {"meaning": meaning, "channels": 4}
     if len(shape) == 3:

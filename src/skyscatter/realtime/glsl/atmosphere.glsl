@@ -12,6 +12,7 @@
 //   const float SUN_ANGULAR_RADIUS                    [rad]
 //   const float SUN_SOLID_ANGLE                       [sr]   2 pi (1 - cos SUN_ANGULAR_RADIUS)
 //   const float MIE_G; const int MIE_PHASE_KIND              asymmetry; 0 Cornette-Shanks, 1 Henyey-Greenstein
+//   const float MULTIPLE_LOBE, MULTIPLE_LOBE_G               weight and asymmetry of MultipleLobe
 //   const vec3 SOLAR_IRRADIANCE                              sun at the top of the atmosphere, linear sRGB, HDR scale
 //   const vec3 GROUND_ALBEDO                                 Lambertian ground, linear sRGB (sunlight-weighted)
 //   const int TRANSMITTANCE_N_R, TRANSMITTANCE_N_MU, IRRADIANCE_N_R, IRRADIANCE_N_MU_S,
@@ -29,12 +30,12 @@
 
 uniform highp sampler2D transmittance_texture;   // RGB: sunlight-weighted transmittance to the top; A: luminance's
 uniform highp sampler2D optical_depth_texture;   // RGB: optical depth to the top averaged over each channel; A: Y's
-uniform highp sampler2D irradiance_texture;      // RGB: sky irradiance on a horizontal surface; A: illuminance
+uniform highp sampler2D irradiance_texture;      // RGB: sky irradiance on a horizontal surface; A: 0
 // The scattering textures' A: each table's spectral value at its middle wavelength (not folded), for the azimuth
 // weight (LogLerpWeight).
 uniform highp sampler3D rayleigh_texture;        // RGB: single Rayleigh scattering S_R[L0] without phase; A: see above
 uniform highp sampler3D mie_texture;             // RGB: single Mie scattering S_M[L0] without phase; A: see above
-uniform highp sampler3D multiple_texture;        // RGB: multiple scattering S[L*] (orders >= 2, phase included); A: idem
+uniform highp sampler3D multiple_texture;        // RGB: multiple scattering S[L*] (orders >= 2, phase included) divided by MultipleLobe; A: idem
 
 const float PI = 3.14159265358979;
 //: sun zenith cosines this close below MU_S_MIN count as at the limit (as skyscatter.precomputed.geometry)
@@ -404,6 +405,14 @@ float MiePhase(float nu) {
   if (MIE_PHASE_KIND == 1) return (1.0 - g * g) / (4.0 * PI * den * sqrt(den));
   return 3.0 * (1.0 - g * g) * (1.0 + nu * nu) / (8.0 * PI * (2.0 + g * g) * den * sqrt(den));
 }
+// The lobe the multiple-scattering texture is divided by (skyscatter.precomputed.sampling.multiple_lobe): its
+// values between the nu slices are read as S / F and multiplied by F at the read's own nu. F = 1 - a + a HG(nu; g)
+// ([HenyeyGreenstein1941], times 4 pi), a = MULTIPLE_LOBE, g = MULTIPLE_LOBE_G.
+float MultipleLobe(float nu) {
+  float g = MULTIPLE_LOBE_G;
+  float d = 1.0 + g * g - 2.0 * g * nu;
+  return 1.0 - MULTIPLE_LOBE + MULTIPLE_LOBE * (1.0 - g * g) / (d * sqrt(d));
+}
 
 // Transmittance T(x, top) along (r, mu) to the top of the atmosphere, ignoring the ground ([Bruneton2008] Eq. 5,
 // tabulated). RGB: the transmittance of sunlight, (M (E_sun T)) / (M E_sun) per channel, M the spectrum -> linear
@@ -499,7 +508,7 @@ vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, ou
 vec3 GetInscatter(float r, float mu, float mu_s, float nu, bool hits_ground) {
   vec3 mie, multiple;
   vec3 rayleigh = GetScattering(r, mu, mu_s, nu, hits_ground, mie, multiple);
-  return rayleigh * RayleighPhase(nu) + mie * MiePhase(nu) + multiple;
+  return rayleigh * RayleighPhase(nu) + mie * MiePhase(nu) + multiple * MultipleLobe(nu);
 }
 
 // Moves a camera outside the atmosphere to where its ray enters it; false if the ray misses the atmosphere.
