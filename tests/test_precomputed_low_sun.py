@@ -90,11 +90,11 @@ def test_reference_records_how_it_was_made(reference):
 OUTSIDE = {
     ("earth", 0.0): "2 of 15 directions outside; worst 2/180 deg: +9.5±0.4 %",
     ("earth", -3.0): "1 of 15 directions outside; worst 5/180 deg: -7.7±1.3 %",
-    ("earth", -6.0): "2 of 15 directions outside; worst 5/90 deg: +17.2±7.4 %",
+    ("earth", -6.0): "2 of 15 directions outside; worst 5/90 deg: +16.9±7.4 %",
     ("turbidity3", 10.0): "1 of 15 directions outside; worst 2/90 deg: +5.6±0.9 %",
     ("turbidity3", 3.0): "3 of 15 directions outside; worst 2/45 deg: +8.4±1.0 %",
     ("turbidity3", 0.0): "7 of 15 directions outside; worst 2/0 deg: +19.2±1.6 %",
-    ("turbidity3", -6.0): "3 of 15 directions outside; worst 15/90 deg: +10.7±3.1 %",
+    ("turbidity3", -6.0): "2 of 15 directions outside; worst 15/90 deg: +10.7±3.1 %",
     ("aod05", 10.0): "7 of 15 directions outside; worst 5/90 deg: +8.7±1.2 %",
     ("aod05", 3.0): "7 of 15 directions outside; worst 5/45 deg: +11.4±1.3 %",
     ("aod05", 0.0): "8 of 15 directions outside; worst 5/90 deg: +10.6±1.4 %",
@@ -122,9 +122,9 @@ def test_single_scattering_seen_from_the_earths_shadow(tables):
     """The rendering lookups' single scattering (the tables with the multiple scattering zeroed) from the ground,
     Earth defaults, the sun 6 deg below the horizon, views 5 / 90, 15 / 90 and 15 / 45 deg (elevation / azimuth from
     the sun), against the independent integral of ``tests/precomputed_reference.py`` (point sun, its own optical
-    depths along the view and sun paths) times the solar irradiance, scattering coefficients and phase functions: at
-    560 and 700 nm within 5 % (measured +3.5 / +1.2, +1.9 / +0.6, +1.0 / +0.5 %), at 400 nm within 15 % (measured
-    +12.6, +5.8, +1.5 %). The density at the exit from the geometric shadow, one factor for all wavelengths (the
+    depths along the view and sun paths) times the solar irradiance, scattering coefficients and phase functions:
+    within 5 % (measured +1.7 / +4.1 / +0.5, +1.2 / +1.8 / +0.5, +1.1 / +0.9 / +0.5 % at 400 / 560 / 700 nm). The
+    density at the exit from the geometric shadow, one factor for all wavelengths (the
     rule before ``sampling.shadow_march_weights``), gave +88 / +18 / -7 % at 5 / 90 deg and +48 / +21 / +13 % at
     15 / 90 deg (400 / 560 / 700 nm; docs/accuracy.md, "Low sun")."""
     import sys
@@ -156,8 +156,7 @@ def test_single_scattering_seen_from_the_earths_shadow(tables):
         want = medium.solar_irradiance * (medium.rayleigh_scattering * rayleigh_phase_scalar(nu) * i_r
                                           + medium.mie_scattering * p_m * i_m)
         err = got[i] / want - 1.0
-        assert abs(err[0]) < 0.15, (views[i], err)
-        assert np.all(np.abs(err[1:]) < 0.05), (views[i], err)
+        assert np.all(np.abs(err) < 0.05), (views[i], err)
 
 
 def test_sphere_quadrature_is_double_gauss():

@@ -549,14 +549,14 @@ def shadow_march_weights(transmittance, r, mu, mu_s, nu, mu_s_0, mu_s_1, i_n, n_
     starts in the Earth's shadow (the query's r [m], mu, mu_s, nu; the cell's sun zenith texels ``mu_s_0``,
     ``mu_s_1`` with weight ``w_s`` of the second, its azimuth texels ``i_n``, ``i_n + 1`` of ``n_nu`` with linear
     weight ``w_n``). Each corner's value is divided by that corner ray's :func:`shadow_march` (its own mu_s and the
-    texel's nu at that mu_s: :func:`.geometry.scattering_nu_param`; the query's r and mu), the quotients are
-    interpolated bilinearly and multiplied by the query's march: ``M_q sum_c w_c S_c / M_c``, the weights of the
-    corners whose ray leaves the shadow renormalised to 1 (a corner whose ray never leaves it holds 0 and has no
-    quotient). Into ``buf`` (:data:`SHADOW_MARCH_ROWS`, n_wavelengths): rows 10-13 the Rayleigh table's weights of the
+    texel's nu at that mu_s: :func:`.geometry.scattering_nu_param`; the query's r and mu), and the bilinear
+    interpolation of the corners is scaled by the query's march over the same interpolation of the corners' marches:
+    ``min(M_q / sum_c w_c M_c, SHADOW_RATIO_MAX) sum_c w_c S_c`` (exact where ``S / M`` is the same at the corners).
+    Into ``buf`` (:data:`SHADOW_MARCH_ROWS`, n_wavelengths): rows 10-13 the Rayleigh table's weights of the
     corners (mu_s texel, nu texel) (0, 0), (0, 1), (1, 0), (1, 1), rows 14-17 the aerosol table's; the other rows
     scratch.
 
-    The quotient ``S / M`` (the view transmittance and the tables' constants) varies slowly across a cell where the
+    The ratio ``S / M`` (the view transmittance and the tables' constants) varies slowly across a cell where the
     single scattering itself falls by orders of magnitude. The rule replaces, in the rendering lookups, the density
     at the exit from the geometric shadow (:func:`shadow_ratios_fast`, one factor for all wavelengths): that rule was
     +102 / +10 / -25 % at 400 / 560 / 700 nm (2 deg up, 90 deg from a sun 6 deg below the horizon, Earth defaults)
@@ -565,7 +565,10 @@ def shadow_march_weights(transmittance, r, mu, mu_s, nu, mu_s_0, mu_s_1, i_n, n_
     exit the sunlight has grazed the ground, and its transmittance, not the density, sets where along the ray the
     light comes from, per wavelength. The sun zenith corners each with their own march: with the query's sun at both
     (the texels' quotients then not of their own geometry) a corner that barely leaves the shadow gave values 3 to
-    600 times too large (measured against the low-sun Monte Carlo)."""
+    600 times too large (measured against the low-sun Monte Carlo); the interpolated quotients ``S_c / M_c`` (the
+    corners whose ray never leaves the shadow left out, the others' weights renormalised) jumped 70-180 times
+    between view elevations 0.01 deg apart where a corner's march starts (measured, small tables), so the ratio of
+    the interpolations, bounded as the density rule is."""
     n_l = buf.shape[1]
     if not shadow_exit_distance(r, mu, mu_s, nu, bottom) < distance_to_boundary(r, mu, hits_ground, bottom, top):
         # the query's ray never leaves the shadow: no single scattering, no corner to march
@@ -587,19 +590,21 @@ def shadow_march_weights(transmittance, r, mu, mu_s, nu, mu_s_0, mu_s_1, i_n, n_
             shadow_march(transmittance, r, mu, ms, scattering_nu_param(i_n + e, mu, ms, n_nu), hits_ground, bottom,
                          top, alpha, profiles, counts, buf[row], buf[row + 1], buf[18])
     for k in range(n_l):
-        sum_r = 0.0
-        sum_m = 0.0
+        den_r = 0.0
+        den_m = 0.0
         for ce in range(4):
             wce = (w_s if ce >= 2 else 1.0 - w_s) * (w_n if ce % 2 else 1.0 - w_n)
-            m_r = buf[2 + 2 * ce, k]
-            m_m = buf[3 + 2 * ce, k]
-            buf[10 + ce, k] = wce * buf[0, k] / m_r if m_r > 0.0 else 0.0
-            buf[14 + ce, k] = wce * buf[1, k] / m_m if m_m > 0.0 else 0.0
-            sum_r += wce if m_r > 0.0 else 0.0
-            sum_m += wce if m_m > 0.0 else 0.0
+            den_r += wce * buf[2 + 2 * ce, k]
+            den_m += wce * buf[3 + 2 * ce, k]
+        # the interpolated table times the query's march over the interpolated marches, at most SHADOW_RATIO_MAX:
+        # continuous where a corner's ray starts or stops leaving the shadow, and bounded where a corner's table value
+        # (read at other r and mu) and its march disagree
+        f_r = min(buf[0, k] / den_r, SHADOW_RATIO_MAX) if den_r > 0.0 else 0.0
+        f_m = min(buf[1, k] / den_m, SHADOW_RATIO_MAX) if den_m > 0.0 else 0.0
         for ce in range(4):
-            buf[10 + ce, k] = buf[10 + ce, k] / sum_r if sum_r > 0.0 else 0.0
-            buf[14 + ce, k] = buf[14 + ce, k] / sum_m if sum_m > 0.0 else 0.0
+            wce = (w_s if ce >= 2 else 1.0 - w_s) * (w_n if ce % 2 else 1.0 - w_n)
+            buf[10 + ce, k] = wce * f_r
+            buf[14 + ce, k] = wce * f_m
 
 
 @helper
