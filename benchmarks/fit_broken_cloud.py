@@ -98,8 +98,11 @@ def main() -> None:
                     help="the parameters fitted (the others held at --x0)")
     ap.add_argument("--truncation-streams", type=int, default=broken_cloud.TRUNCATION_STREAMS,
                     help="the march's delta-M truncation (skyscatter.sky.broken_cloud.TRUNCATION_STREAMS; 0: off)")
+    ap.add_argument("--octave-phase", choices=("convolved", "henyey-greenstein"), default=broken_cloud.OCTAVE_PHASE,
+                    help="the octaves' phase functions (skyscatter.sky.broken_cloud.OCTAVE_PHASE)")
     args = ap.parse_args()
     broken_cloud.TRUNCATION_STREAMS = args.truncation_streams
+    broken_cloud.OCTAVE_PHASE = args.octave_phase
     free = [NAMES.index(n) for n in args.free]
     start = np.array(args.x0, dtype=float)
 
@@ -210,6 +213,7 @@ def main() -> None:
            "irradiance_diffuse_ratio": irr, "cost": float(fit.cost), "nfev": int(fit.nfev),
            "seconds": round(secs, 1), "cpu_seconds": round(cpu, 1), "load_average": os.getloadavg()[0],
            "free": args.free, "truncation_streams": broken_cloud.TRUNCATION_STREAMS,
+           "octave_phase": broken_cloud.OCTAVE_PHASE,
            "monte_carlo": {k: meta[k] for k in meta},
            "wavelengths_nm": wl.tolist(), "before_fit_with": list(FITTED_OCTAVES), "before": before, "after": after}
     args.out.write_text(json.dumps(out, indent=1) + "\n")
