@@ -41,6 +41,12 @@ benchmarks/fit_broken_cloud_delta_m.json (``--fit-cover 0.3 0.6 0.9 --free a b c
 "The forward peak kept near the sun"). The joint fit of ``a, b, c, e`` against every guard of the tests at once
 (minimax over the guards' margins): ``benchmarks/fit_broken_cloud_joint.py``.
 ``--free`` names the parameters fitted (the others held at ``--x0``).
+With the octaves' phases the droplets' phase convolved (2026-12-03, ``--octave-phase convolved``, the default:
+``skyscatter.sky.broken_cloud.OCTAVE_PHASE``): benchmarks/fit_broken_cloud_convolved.json (``--fit-cover 0.3 0.6
+0.9 --free a b c --x0 0.3245 0.693 0.6334 0 0.5 --max-nfev 10``) and, from its result,
+benchmarks/fit_broken_cloud_convolved_irradiance.json (``--fit-cover 0.3 0.6 0.9 --irradiance --free a b c --x0
+0.4414 0.7139 0.6803 0 0.5 --max-nfev 6``), neither adopted (docs/clouds.md, "The octaves' phases");
+``--octave-phase henyey-greenstein`` for the lobes of the fits above.
 
 Usage: ``python benchmarks/fit_broken_cloud.py [--fit-cover 0.6 ...] [--irradiance] [--above] [--free a b c]
 [--out FILE]``.

@@ -117,7 +117,9 @@ __all__ = ["BrokenCloudSky", "FITTED_OCTAVES", "MU_REFERENCE", "OCTAVES", "OCTAV
 OCTAVES = 8
 #: ``(a, b, c, d, e)``: the octaves' extinction, scattering and eccentricity factors, the ambient light's
 #: extinction factor and the exponent of the octaves' entering-energy factors (:func:`entry_factors`), fitted by least
-#: squares to Monte Carlo radiances and irradiances (``benchmarks/fit_broken_cloud.py``; docs/clouds.md).
+#: squares to Monte Carlo radiances and irradiances (``benchmarks/fit_broken_cloud.py``; docs/clouds.md) with the
+#: Henyey-Greenstein lobes, and kept with the convolved phases (:data:`OCTAVE_PHASE`: ``c`` keeps its meaning, the
+#: octaves' asymmetry; their refit, benchmarks/fit_broken_cloud_convolved_irradiance.json, was not adopted).
 FITTED_OCTAVES = (0.3245, 0.693, 0.6334, 0.0, 0.5)
 #: Sun cosine at which :func:`entry_factors` are 1: cos 55 deg, the sun of the Monte Carlo fisheye
 #: (tests/data/broken_cloud_montecarlo.npz).
