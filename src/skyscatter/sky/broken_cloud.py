@@ -201,16 +201,20 @@ def octave_phases(table: Any, c: float, n_octaves: int, streams: int = 0,
         f = chi[:, streams][:, None]
         chi = np.where(np.arange(chi.shape[1])[None, :] < streams, (chi - f) / (1.0 - f), 0.0)
     g = chi[:, 1]
-    for i in range(1, n_octaves):
-        gi = g * c**i
-        if kind == "henyey-greenstein" or c == 0.0:
-            q = 1.0 + gi[:, None] ** 2 - 2.0 * gi[:, None] * mu[None, :]
-            out[i] = (1.0 - gi[:, None] ** 2) / (4.0 * math.pi * q * np.sqrt(q))
-            continue
-        n = 1.0 + i * math.log(c) / np.log(g)
-        moments = np.sign(chi) * np.abs(chi) ** n[:, None]
-        series = PhaseTable.from_legendre_moments(moments, table.wavelengths, table.angles, clip_negative=True)
-        out[i] = series.numba_arrays().values
+    if kind == "henyey-greenstein" or c == 0.0:
+        for i in range(1, n_octaves):
+            gi = (g * c**i)[:, None]
+            q = 1.0 + gi**2 - 2.0 * gi * mu[None, :]
+            out[i] = (1.0 - gi**2) / (4.0 * math.pi * q * np.sqrt(q))
+        return out
+    n = 1.0 + np.arange(1, n_octaves)[:, None] * (math.log(c) / np.log(g))[None, :]  # (n_octaves - 1, n_wl)
+    moments = np.sign(chi)[None] * np.abs(chi)[None] ** n[:, :, None]
+    # every octave and wavelength one row of a single series (one Legendre table for all); the row labels stand in
+    # for wavelengths, which the series does not use
+    rows = moments.reshape(-1, chi.shape[1])
+    series = PhaseTable.from_legendre_moments(rows, np.arange(1.0, rows.shape[0] + 1.0), table.angles,
+                                              clip_negative=True)
+    out[1:] = series.numba_arrays().values.reshape(n_octaves - 1, nwl, mu.size)
     return out
 
 
