@@ -41,6 +41,12 @@ benchmarks/fit_broken_cloud_delta_m.json (``--fit-cover 0.3 0.6 0.9 --free a b c
 "The forward peak kept near the sun"). The joint fit of ``a, b, c, e`` against every guard of the tests at once
 (minimax over the guards' margins): ``benchmarks/fit_broken_cloud_joint.py``.
 ``--free`` names the parameters fitted (the others held at ``--x0``).
+With the octaves' phases the droplets' phase convolved (2026-12-03, ``--octave-phase convolved``, the default:
+``skyscatter.sky.broken_cloud.OCTAVE_PHASE``): benchmarks/fit_broken_cloud_convolved.json (``--fit-cover 0.3 0.6
+0.9 --free a b c --x0 0.3245 0.693 0.6334 0 0.5 --max-nfev 10``) and, from its result,
+benchmarks/fit_broken_cloud_convolved_irradiance.json (``--fit-cover 0.3 0.6 0.9 --irradiance --free a b c --x0
+0.4414 0.7139 0.6803 0 0.5 --max-nfev 6``), neither adopted (docs/clouds.md, "The octaves' phases");
+``--octave-phase henyey-greenstein`` for the lobes of the fits above.
 
 Usage: ``python benchmarks/fit_broken_cloud.py [--fit-cover 0.6 ...] [--irradiance] [--above] [--free a b c]
 [--out FILE]``.
@@ -98,8 +104,11 @@ def main() -> None:
                     help="the parameters fitted (the others held at --x0)")
     ap.add_argument("--truncation-streams", type=int, default=broken_cloud.TRUNCATION_STREAMS,
                     help="the march's delta-M truncation (skyscatter.sky.broken_cloud.TRUNCATION_STREAMS; 0: off)")
+    ap.add_argument("--octave-phase", choices=("convolved", "henyey-greenstein"), default=broken_cloud.OCTAVE_PHASE,
+                    help="the octaves' phase functions (skyscatter.sky.broken_cloud.OCTAVE_PHASE)")
     args = ap.parse_args()
     broken_cloud.TRUNCATION_STREAMS = args.truncation_streams
+    broken_cloud.OCTAVE_PHASE = args.octave_phase
     free = [NAMES.index(n) for n in args.free]
     start = np.array(args.x0, dtype=float)
 
@@ -210,6 +219,7 @@ def main() -> None:
            "irradiance_diffuse_ratio": irr, "cost": float(fit.cost), "nfev": int(fit.nfev),
            "seconds": round(secs, 1), "cpu_seconds": round(cpu, 1), "load_average": os.getloadavg()[0],
            "free": args.free, "truncation_streams": broken_cloud.TRUNCATION_STREAMS,
+           "octave_phase": broken_cloud.OCTAVE_PHASE,
            "monte_carlo": {k: meta[k] for k in meta},
            "wavelengths_nm": wl.tolist(), "before_fit_with": list(FITTED_OCTAVES), "before": before, "after": after}
     args.out.write_text(json.dumps(out, indent=1) + "\n")

@@ -162,8 +162,9 @@ GLOBAL_TOLERANCE = 0.05
 #: under thick cloud with a high sun still falls short. The ground-cloud coupling lifted cover 0.9 sun 60 from
 #: 0.866 / 0.863 / 0.865 to 0.904 / 0.920 / 0.930 (with the shafts on), the cloud-top-air coupling (the air above
 #: sending back the clouds' extra upward light, ``_ground_up["top_down"]``) to 0.934 / 0.935 / 0.939 and cover 0.9
-#: sun 30 (now passing) from 0.937 / 0.961 / 0.977 to 0.981 / 0.985 / 0.991.
-MISSED = {"cover 0.9 sun 60": "0.934 / 0.935 / 0.939"}
+#: sun 30 (now passing) from 0.937 / 0.961 / 0.977 to 0.981 / 0.985 / 0.991; the convolved octave phases
+#: (2026-12-03, ``octave_phases``) cover 0.9 sun 60 to 0.948 / 0.948 / 0.952 (650 nm within the target).
+MISSED = {"cover 0.9 sun 60": "0.948 / 0.948 / 0.952"}
 
 
 @pytest.mark.parametrize("key", [pytest.param(k, marks=pytest.mark.xfail(

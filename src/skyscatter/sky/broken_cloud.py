@@ -16,7 +16,10 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   ``N`` = 8. Octave 0 is single scattering exactly: the droplets' tabulated Mie phase function
   (:func:`skyscatter.atmosphere.mie_optics.water_droplets`, diffraction peak kept) and ``tau_sun`` the field's
   optical depth from the point to the sun; octaves ``i >= 1`` (multiple scattering) scatter ``b^i`` as much,
-  see an extinction ``a^i`` as large and a Henyey-Greenstein phase of asymmetry ``c^i g``, and are weighted by
+  see an extinction ``a^i`` as large and a phase of asymmetry ``c^i g``: since 2026-12-03 the droplets' phase
+  convolved with itself ``1 + i ln(c) / ln(g)`` times (:func:`octave_phases`, [GoudsmitSaunderson1940]; the
+  light scattered a few times keeps the droplets' narrow core near the sun), before it [Wrenninge2013]'s
+  Henyey-Greenstein lobe of that asymmetry (:data:`OCTAVE_PHASE`), and are weighted by
   ``(1 - exp(-tau_c))^i`` with ``tau_c`` the vertical optical depth of the point's column (thin wisps do not
   multiply-scatter: without it a layer of optical depth 1 came out 2-3x the DISORT layer's radiance).
   Octaves ``i >= 1`` are further scaled by the energy the sun puts into the cloud (:func:`entry_factors`):
@@ -107,14 +110,16 @@ from ..spectral import DEFAULT_WAVELENGTHS, as_wavelengths
 from . import registry
 from .base import SkyModel, SunSkyMixin, check_sun_angles
 
-__all__ = ["BrokenCloudSky", "FITTED_OCTAVES", "MU_REFERENCE", "OCTAVES", "TRUNCATION_STREAMS", "delta_m_octaves",
-           "entry_factors"]
+__all__ = ["BrokenCloudSky", "FITTED_OCTAVES", "MU_REFERENCE", "OCTAVES", "OCTAVE_PHASE", "TRUNCATION_STREAMS",
+           "delta_m_octaves", "entry_factors", "octave_phases"]
 
 #: Octaves of the multiple-scattering approximation ([Wrenninge2013]).
 OCTAVES = 8
 #: ``(a, b, c, d, e)``: the octaves' extinction, scattering and eccentricity factors, the ambient light's
 #: extinction factor and the exponent of the octaves' entering-energy factors (:func:`entry_factors`), fitted by least
-#: squares to Monte Carlo radiances and irradiances (``benchmarks/fit_broken_cloud.py``; docs/clouds.md).
+#: squares to Monte Carlo radiances and irradiances (``benchmarks/fit_broken_cloud.py``; docs/clouds.md) with the
+#: Henyey-Greenstein lobes, and kept with the convolved phases (:data:`OCTAVE_PHASE`: ``c`` keeps its meaning, the
+#: octaves' asymmetry; their refit, benchmarks/fit_broken_cloud_convolved_irradiance.json, was not adopted).
 FITTED_OCTAVES = (0.3245, 0.693, 0.6334, 0.0, 0.5)
 #: Sun cosine at which :func:`entry_factors` are 1: cos 55 deg, the sun of the Monte Carlo fisheye
 #: (tests/data/broken_cloud_montecarlo.npz).
@@ -145,6 +150,72 @@ def entry_factors(mu0: float, exponent: float) -> tuple[float, float]:
 #: every accuracy guard (``benchmarks/fit_broken_cloud_joint.py``) found no octaves that pass them all, so it is
 #: not switched on.
 TRUNCATION_STREAMS = 0
+
+
+#: The octaves' phase functions (:func:`octave_phases`): "convolved" (shipped), the droplets' phase convolved with
+#: itself; "henyey-greenstein", the lobes of [Wrenninge2013] (before 2026-12-03).
+OCTAVE_PHASE = "convolved"
+#: Legendre moments of the convolved phases: the droplets' (10 um) vanish beyond l = 800 at 400 nm (below 1e-5),
+#: and octave i's are their powers (i >= 1: exponent > 1), smaller still.
+OCTAVE_MOMENTS = 1024
+
+
+def octave_phases(table: Any, c: float, n_octaves: int, streams: int = 0,
+                  kind: str = "convolved") -> NDArray[np.float64]:
+    """The octaves' phase functions [sr^-1] (n_octaves, n_wl, m) on the ascending cosines of ``table``'s
+    :meth:`~skyscatter.atmosphere.phase_table.PhaseTable.numba_arrays` (``m`` of them): octave 0 the droplets'
+    tabulated phase itself (single scattering), octave ``i >= 1`` a phase of asymmetry ``g_i = c^i g*``
+    ([Wrenninge2013]: ``g*`` the droplets' asymmetry, that of the delta-M truncated phase when ``streams`` > 0,
+    :func:`delta_m_octaves`).
+
+    ``kind`` "henyey-greenstein": [Wrenninge2013]'s Henyey-Greenstein lobe of asymmetry ``g_i``. "convolved": the
+    droplets' phase convolved with itself ``n_i = 1 + i ln(c) / ln(g*)`` times, so that its asymmetry is the same
+    ``g_i``: the directions of light scattered ``n`` times from one incident direction (each scattering independent
+    of the path) have the Legendre moments ``chi_l^n`` (the addition theorem of the spherical harmonics,
+    [GoudsmitSaunderson1940] Eq. 5), here with a real exponent. A Henyey-Greenstein phase (moments ``g^l``) is
+    its own family under it (``g^(n l)``: the octaves of [Wrenninge2013] with ``c = g^(n_1 - 1)``); the droplets'
+    phase is not: it keeps its narrow core (``chi_10 = 0.48`` against ``g^10 = 0.24``), so that the light
+    scattered a few times stays nearer the sun than in the lobe of the same asymmetry (docs/clouds.md). The
+    series (:data:`OCTAVE_MOMENTS` terms) is tabulated by
+    :meth:`~skyscatter.atmosphere.phase_table.PhaseTable.from_legendre_moments` (negative ripples set to 0,
+    renormalised).
+
+    ``table`` the droplets' :class:`~skyscatter.atmosphere.phase_table.PhaseTable`; ``c`` [-] in [0, 1] (0: the
+    octaves ``i >= 1`` isotropic); ``n_octaves`` [-] >= 1; ``streams`` [-]: the delta-M truncation's ``N`` (0:
+    none)."""
+    from ..atmosphere.phase_table import PhaseTable
+
+    if kind not in ("convolved", "henyey-greenstein"):
+        raise InvalidParameterError(f"octave phase must be 'convolved' or 'henyey-greenstein'; got {kind!r}")
+    if not 0.0 <= c <= 1.0:
+        raise InvalidParameterError(f"the octaves' eccentricity factor c must be in [0, 1]; got {c!r}")
+    arr = table.numba_arrays()
+    mu = arr.mu
+    nwl = arr.values.shape[0]
+    out = np.empty((n_octaves, nwl, mu.size))
+    out[0] = arr.values
+    if n_octaves == 1:
+        return out
+    chi = table.legendre_moments(OCTAVE_MOMENTS)
+    if streams > 0:
+        f = chi[:, streams][:, None]
+        chi = np.where(np.arange(chi.shape[1])[None, :] < streams, (chi - f) / (1.0 - f), 0.0)
+    g = chi[:, 1]
+    if kind == "henyey-greenstein" or c == 0.0:
+        for i in range(1, n_octaves):
+            gi = (g * c**i)[:, None]
+            q = 1.0 + gi**2 - 2.0 * gi * mu[None, :]
+            out[i] = (1.0 - gi**2) / (4.0 * math.pi * q * np.sqrt(q))
+        return out
+    n = 1.0 + np.arange(1, n_octaves)[:, None] * (math.log(c) / np.log(g))[None, :]  # (n_octaves - 1, n_wl)
+    moments = np.sign(chi)[None] * np.abs(chi)[None] ** n[:, :, None]
+    # every octave and wavelength one row of a single series (one Legendre table for all); the row labels stand in
+    # for wavelengths, which the series does not use
+    rows = moments.reshape(-1, chi.shape[1])
+    series = PhaseTable.from_legendre_moments(rows, np.arange(1.0, rows.shape[0] + 1.0), table.angles,
+                                              clip_negative=True)
+    out[1:] = series.numba_arrays().values.reshape(n_octaves - 1, nwl, mu.size)
+    return out
 
 
 def delta_m_octaves(k: NDArray[np.float64], albedo: NDArray[np.float64], moments: NDArray[np.float64],
@@ -582,12 +653,27 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         origin = np.ascontiguousarray(self.clear.position if origin is None else origin, dtype=float)
         mu = _MU_NODES
         parallel_for(march_rays, n, origin, d, self._sun_planet, v["gf"], v["vol"], v["occupied"], _BLOCK,
-                     li["k_march"], li["ph_mu"], li["ph_val"], li["g"], li["trunc"], li["solar"], float(mu[0]),
+                     li["k_march"], li["ph_mu"], self._octave_phases(c), li["g"], li["solar"], float(mu[0]),
                      float(mu[1] - mu[0]), li["src_sun"], self._ambient(top_down),
                      self._ground_up["amb_up"] if amb_up is None else amb_up, mp,
                      OCTAVES,
                      (interpolation or self.interpolation) == "linear", THIN_AWARE, rad, tr, depth, hit, grain=256)
         return rad, tr, depth, hit
+
+    def _octave_phases(self, c: float) -> NDArray[np.float64]:
+        """:func:`octave_phases` of the droplets for the eccentricity factor ``c`` [-] with :data:`OCTAVE_PHASE`,
+        octave 0 times its delta-M factor (:func:`delta_m_octaves`; 1 without the truncation), (OCTAVES, n_wl, m):
+        computed once per ``c`` (fits change it)."""
+        key = (float(c), OCTAVE_PHASE, TRUNCATION_STREAMS)
+        cache = self.__dict__.setdefault("_octave_cache", {})
+        if key not in cache:
+            cache.clear()
+            li = self._light
+            table = self.field.particles.phase_table(li["wl"])
+            ph = octave_phases(table, float(c), OCTAVES, TRUNCATION_STREAMS, OCTAVE_PHASE)
+            ph[0] *= li["trunc"][0][:, None]
+            cache[key] = np.ascontiguousarray(ph)
+        return cache[key]
 
     def _air_to_top(self, eye: NDArray[np.float64], d: NDArray[np.float64], r_top: float,
                     n_nodes: int = 2049) -> NDArray[np.float64]:

@@ -172,7 +172,7 @@ def exp_lanes(z, n, bits, scale):
 
 
 @kernel(fastmath=CONTRACT_ARCP)
-def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g, trunc, solar, mu0, dmu, src_sun,
+def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g, solar, mu0, dmu, src_sun,
                src_amb, amb_up, mp, n_octaves, linear, thin_aware, radiance, transmittance, depth, hit, start, stop):
     """March view rays ``dirs[start:stop]`` (of (n, 3)) from ``origin`` (3,) through the field (module docstring of
     :mod:`.broken_cloud`; called through :func:`skyscatter.precomputed.parallel.parallel_for`, no allocation per
@@ -190,16 +190,17 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
     for open ones), so that the interpolation needs no modulo and no clamping in x and y; float32 (relative
     rounding 6e-8, far below the march's own error). ``occupied`` (nx, ny, nz): 1 where the voxel's block of
     ``bsize`` voxels holds cloud (empty blocks are crossed in one step). ``k`` (n_wl,) extinction relative to the
-    reference wavelength (the march's: delta-M scaled, :func:`.broken_cloud.delta_m_octaves`); ``ph_mu`` (m,),
-    ``ph_val`` (n_wl, m) the droplets' phase table; ``g`` its asymmetry; ``trunc`` (2, n_wl): octave 0's factor
-    ``1 / (1 - omega f)`` (the full phase on the scaled optical depth) and the octaves' asymmetry ``g*`` of the
-    truncated phase (:func:`.broken_cloud.delta_m_octaves`);
+    reference wavelength (the march's: delta-M scaled, :func:`.broken_cloud.delta_m_octaves`); ``ph_mu`` (m,)
+    ascending cosines of the scattering angle and ``oct_val`` (n_octaves, n_wl, m) [sr^-1] each octave's phase
+    function there (:func:`.broken_cloud.octave_phases`; octave 0 the droplets' tabulated phase times its delta-M
+    factor ``1 / (1 - omega f)``, :func:`.broken_cloud.delta_m_octaves`); ``g`` the droplets' asymmetry;
     ``solar`` the extraterrestrial irradiance [W m^-2 nm^-1]; ``src_sun`` (nz, n_mu, n_wl) the single-scattering
     albedo times the clear air's transmittance to the sun, ``src_amb`` (nz, n_mu, n_wl) the albedo times the clear
     air's diffuse irradiance on a horizontal plane / (2 pi) [W m^-2 nm^-1 sr^-1] at each voxel layer, for the sun
     cosines ``mu0 + i dmu``; ``amb_up`` (n_wl,) the albedo times the ground's upward irradiance / (2 pi). ``mp``:
-    a, b, c, d (octaves and ambient extinction), the step as a fraction of the voxel along the axis the ray crosses
-    fastest [-], the level-of-detail factor (step >= lod * distance), the ray start distance and the factors of the
+    a, b, c, d (octaves and ambient extinction; ``c`` unused here: ``oct_val`` holds it), the step as a fraction
+    of the voxel along the axis the ray crosses fastest [-], the level-of-detail factor (step >= lod * distance),
+    the ray start distance and the factors of the
     octaves ``i >= 1`` for the energy entering the clouds through their tops and through their sides
     (:func:`.broken_cloud.entry_factors`), blended per sample by the share of the sun's path that runs through
     the cloud above the point, ``min(tau_sun mu_s / tau_top, 1)``. ``linear``: the
@@ -215,7 +216,6 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
     m = ph_mu.shape[0]
     a = mp[M_A]
     b = mp[M_B]
-    c = mp[M_C]
     dd = mp[M_D]
     step_fraction = mp[M_STEP]
     lod = mp[M_LOD]
@@ -228,7 +228,6 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
     inv_dy = 1.0 / gf[G_DY]
     inv_dz = 1.0 / gf[G_DZ]
     rbase = gf[G_RBASE]
-    four_pi = 4.0 * math.pi
     periodic = gf[G_PERIODIC] != 0.0
     kbar = 0.0
     gbar = 0.0
@@ -257,7 +256,6 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
             cj *= -dk[wl] / (jj + 1)
             tj[jj, wl] = cj
     direct = np.empty(nwl)
-    g_oct = np.empty(nwl)  # an octave's asymmetry per wavelength (the phase's set-up at a ray's first cloud sample)
     # the octaves' extinction factors a^i (the same products as the octave loop's running one) and a buffer for
     # their exponentials and the step's, computed together per sample (:func:`exp_lanes`)
     a_pow = np.empty(n_octaves)
@@ -417,21 +415,12 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, ph_val, g,
                             hi = mid
                     f = (mu - ph_mu[lo]) / (ph_mu[hi] - ph_mu[lo]) if ph_mu[hi] > ph_mu[lo] else 0.0
                     f = min(max(f, 0.0), 1.0)
-                    for wl in range(nwl):
-                        p0 = ph_val[wl, lo] * (1.0 - f) + ph_val[wl, hi] * f
-                        w[0, wl] = solar[wl] * p0 * trunc[0, wl]
-                        g_oct[wl] = trunc[1, wl]
-                    # octave by octave, every wavelength in one loop (square roots and divisions in SIMD lanes; the
-                    # wavelengths innermost, each octave's asymmetry the running product of the loop before)
+                    # every octave's tabulated phase at the same node pair, octave i scattering b^i as much
                     scale = 1.0
-                    for o in range(1, n_octaves):
-                        scale *= b
+                    for o in range(n_octaves):
                         for wl in range(nwl):
-                            gi = g_oct[wl] * c
-                            g_oct[wl] = gi
-                            q = 1.0 + gi * gi - 2.0 * gi * mu
-                            hg = (1.0 - gi * gi) / (four_pi * q * math.sqrt(q))  # q**1.5 by a square root, not a pow
-                            w[o, wl] = solar[wl] * scale * hg
+                            w[o, wl] = solar[wl] * scale * (oct_val[o, wl, lo] * (1.0 - f) + oct_val[o, wl, hi] * f)
+                        scale *= b
                     for o in range(n_octaves):
                         for jj in range(4):
                             for wl in range(nwl):
