@@ -253,25 +253,6 @@ def shadow_exit_altitude(r: float, mu: float, mu_s: float, nu: float, bottom: fl
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def shadow_exit_distance(r: float, mu: float, mu_s: float, nu: float, bottom: float) -> float:
-    """Distance [m] along the ray from radius ``r`` [m] (view zenith cosine ``mu``, sun zenith cosine ``mu_s``,
-    view-sun cosine ``nu``) to where it leaves the Earth's geometric shadow: the point of
-    :func:`shadow_exit_altitude` (the same half cylinder and plane), 0 if the start is lit, ``inf`` if the ray
-    never leaves it."""
-    c = r * r * (1.0 - mu_s * mu_s) - bottom * bottom
-    if mu_s >= 0.0 or c >= 0.0:
-        return 0.0
-    a = 1.0 - nu * nu
-    b = r * (mu - mu_s * nu)
-    t = math.inf
-    if a > 1e-12:
-        t = (-b + math.sqrt(max(b * b - a * c, 0.0))) / a
-    if nu > 0.0:
-        t = min(t, -r * mu_s / nu)
-    return max(t, 0.0)
-
-
-@helper(fastmath=CONTRACT_ARCP)
 def bilinear_weights(w0: float, w1: float) -> tuple[float, float, float, float]:
     """Weights of the four corners (00, 01, 10, 11) of a cell for fractional positions ``w0``, ``w1`` along its
     two axes (the weights that :func:`lerp_index` returns)."""

@@ -49,23 +49,23 @@ from .geometry import (
     transmittance_coord,
 )
 from .sampling import (
-    SHADOW_MARCH_ROWS,
     TABLE_PHASE,
     aerosol_phase,
     bilinear_read,
     irradiance_lookup,
     irradiance_read,
     lookup4_cell,
-    lookup4_cell_corner_weights,
     lookup4_cell_spectral,
+    lookup4_cell_weighted,
+    lookup4_cell_weighted_spectral,
     mu_s_nu_cell,
     multiple_lobe,
     phase_table_values,
     r_mu_cell,
     r_mu_s_cell,
     rayleigh_phase,
+    shadow_exit_altitudes,
     shadow_exit_altitudes_cos,
-    shadow_march_weights,
     shadow_ratios_fast,
     transmittance_ratio,
     transmittance_segment,
@@ -96,8 +96,8 @@ def _enter_atmosphere(px, py, pz, vx, vy, vz, top):
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _inscatter(transmittance, ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, mu_s_nodes, alpha, lobe,
-               p_r, p_m, p_m_spec, profiles, counts, buf, out):
+def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec, profiles,
+               counts, out):
     """Inscattered radiance ``S_R P_R + S_M P_M + S_multiple`` from the tables at a point, into ``out``
     (``p_r``, ``p_m``: phase functions at ``nu``; ``p_m_spec``, if not empty, the aerosol phase per wavelength,
     used instead of ``p_m``; ``lobe``: the weight of :func:`.sampling.multiple_lobe`, by which the multiple
@@ -105,14 +105,15 @@ def _inscatter(transmittance, ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top
 
     Along the azimuth (nu) the tables are interpolated log-linearly (:func:`.sampling.lookup4_cell`), except the
     single-scattering tables where the point lies in the Earth's shadow (:func:`.geometry.in_earth_shadow`, one
-    test): there each azimuth texel's value is rescaled per wavelength by the sunlight that the query's ray meets
-    beyond its exit from the shadow over the texel ray's (:func:`.sampling.shadow_march_weights`: the Rayleigh and
-    aerosol densities ``profiles[0]``, ``profiles[1]`` of :func:`.compute.density_profiles`, ``counts`` their layers,
-    times the ``transmittance`` table's to the sun, the sun disc of angular radius ``alpha`` [rad]; each sun zenith
-    texel with its own march, ``mu_s_nodes`` the tables' sun zenith cosines) and interpolated linearly.
-    ``buf`` (:data:`.sampling.SHADOW_MARCH_ROWS`, n_wavelengths): scratch. Measured on the single scattering against
-    the independent integral of ``tests/precomputed_reference.py`` and on the sky against the low-sun Monte Carlo
-    (docs/accuracy.md, "Low sun")."""
+    test): there with the weights of :func:`.sampling.shadow_nu_weights` (the rule of the second order's scattering
+    density; the Rayleigh and aerosol density profiles ``profiles[0]``, ``profiles[1]`` of
+    :func:`.compute.density_profiles`, ``counts`` their layers): each texel's light rescaled from the density where
+    its ray leaves the shadow to the density where the query's ray leaves it (at most 1), interpolated linearly.
+    Measured on the single scattering against the independent integral of ``tests/precomputed_reference.py``
+    (docs/accuracy.md, "Low sun"). The log-linear weight of the rescaled values is not used: where a texel's ray
+    leaves the shadow higher than the query's its factor is capped at 1 and the rescaled values still differ by 10
+    to 100 times, and the geometric interpolation of such a pair falls far below the light of the nearer texel
+    (Earth, sun -6 deg, 2 deg / 90 deg, 560 nm: -77 %, against +10 % linear; measured)."""
     for k in range(out.shape[0]):
         out[k] = 0.0
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
@@ -122,16 +123,16 @@ def _inscatter(transmittance, ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top
     i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
     if in_earth_shadow(r, mu_s, bottom):
-        shadow_march_weights(transmittance, r, mu, mu_s, nu, mu_s_nodes[i_s], mu_s_nodes[i_s + 1], i_n, n_n, w_s, w_n,
-                             hits, bottom, top, alpha, profiles, counts, buf)
-        spec = p_m_spec.shape[0] > 0
-        for k in range(out.shape[0]):
-            pm = p_m_spec[k] if spec else p_m
-            for ce in range(4):
-                buf[10 + ce, k] *= p_r
-                buf[14 + ce, k] *= pm
-        lookup4_cell_corner_weights(ray, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, i_n, buf[10:14], out)
-        lookup4_cell_corner_weights(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, i_n, buf[14:18], out)
+        h_q, h_0, h_1 = shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_n, bottom, top)
+        a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[0], counts[0])
+        lookup4_cell_weighted(ray, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * a, w_n * b, p_r, out)
+        a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[1], counts[1])
+        if p_m_spec.shape[0]:
+            lookup4_cell_weighted_spectral(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * a,
+                                           w_n * b, p_m_spec, out)
+        else:
+            lookup4_cell_weighted(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * a, w_n * b, p_m,
+                                  out)
     else:
         lookup4_cell(ray, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, p_r, out)
         if p_m_spec.shape[0]:
@@ -213,16 +214,15 @@ def _ground_coords_block(m, gv, gmu, px, py, pz, sx, sy, sz, r, bottom, top, alp
 
 @kernel
 def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, bottom, top,
-               mu_s_min, mu_s_nodes, g, mie_kind, lobe, phase_mu, phase_values, profiles, counts, alpha, include_ground,
-               rad_out, tr_out, start, stop):
+               mu_s_min, g, mie_kind, lobe, phase_mu, phase_values, profiles, counts, alpha, include_ground, rad_out,
+               tr_out, start, stop):
     """Radiance [W m^-2 sr^-1 nm^-1] and transmittance along rays ``start..stop``; see the module docstring.
 
     Writes ``rad_out`` and ``tr_out`` (n_rays, n_wavelengths), which the caller initialises to 0 and 1
     (the values of rays that miss the atmosphere). ``lobe``: the weight of :func:`.sampling.multiple_lobe`. A
     tabulated aerosol phase (``mie_kind``
     :data:`.sampling.TABLE_PHASE`) is read per wavelength from ``phase_mu``, ``phase_values``; ``profiles``,
-    ``counts``: the density profiles of :func:`.compute.density_profiles` and ``mu_s_nodes`` the tables' sun zenith
-    cosines (the Earth's shadow, :func:`_inscatter`);
+    ``counts``: the density profiles of :func:`.compute.density_profiles` (the Earth's shadow, :func:`_inscatter`);
     """
     n_l = transmittance.shape[2]
     p_m_spec = np.empty(n_l if mie_kind == TABLE_PHASE else 0)
@@ -232,7 +232,6 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
     e_sky = np.empty(n_l)
     e_sun = np.empty(n_l)
     ground = np.empty(n_l)
-    buf = np.empty((SHADOW_MARCH_ROWS, n_l))
     for q in range(start, stop):
         vx, vy, vz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
         sx, sy, sz = suns[q, 0], suns[q, 1], suns[q, 2]
@@ -259,14 +258,14 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
                 for k in range(n_l):
                     c[k] = 0.0
             else:
-                _inscatter(transmittance, ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min,
-                           mu_s_nodes, alpha, lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c)
+                _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m,
+                           p_m_spec, profiles, counts, c)
             transmittance_segment(transmittance, rc, mu, l_sh, hits, bottom, top, t, tmp)
             for k in range(n_l):
                 c[k] *= t[k]
         else:
-            _inscatter(transmittance, ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, mu_s_nodes, alpha,
-                       lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c)
+            _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec,
+                       profiles, counts, c)
         for k in range(n_l):
             rad_out[q, k] = c[k]
         if hits and include_ground:
@@ -736,34 +735,30 @@ def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0,
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, mu_s_nodes,
-                        alpha, lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c, t, c2, tmp):
-    """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``
-    (:func:`_inscatter`: ``mu_s_nodes`` the tables' sun zenith cosines, ``alpha`` the sun's angular radius [rad],
-    ``lobe`` the weight of :func:`.sampling.multiple_lobe`, ``buf`` scratch)."""
-    _inscatter(transmittance, ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, mu_s_nodes, alpha, lobe,
-               p_r, p_m, p_m_spec, profiles, counts, buf, c)
+def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, lobe, p_r,
+                        p_m, p_m_spec, profiles, counts, c, t, c2, tmp):
+    """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``."""
+    _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec, profiles,
+               counts, c)
     r_p, mu_p = point_along_ray(r, mu, d, bottom, top)
     mu_s_p = clamp((r * mu_s + d * nu) / r_p, -1.0, 1.0)
-    _inscatter(transmittance, ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, mu_s_nodes, alpha,
-               lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c2)
+    _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec,
+               profiles, counts, c2)
     transmittance_segment(transmittance, r, mu, d, hits, bottom, top, t, tmp)
     for k in range(c.shape[0]):
         c[k] = max(c[k] - t[k] * c2[k], 0.0)
 
 
 @kernel
-def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, mu_s_nodes, g,
-                  mie_kind, lobe, phase_mu, phase_values, profiles, counts, alpha, tr_out, in_out, start, stop):
+def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, g, mie_kind,
+                  lobe, phase_mu, phase_values, profiles, counts, tr_out, in_out, start, stop):
     """Transmittance and inscattered radiance between cameras and points (Eqs. 16-17), rays ``start..stop``.
 
     Writes ``tr_out`` (initialised to 1) and ``in_out`` (initialised to 0), each (n_rays, n_wavelengths).
     ``shadow`` is the shadowed length [m] of each ray, moved to the point's end as in Eq. 17; ``profiles``,
-    ``counts``: the density profiles of :func:`.compute.density_profiles`, ``mu_s_nodes`` the tables' sun zenith
-    cosines and ``alpha`` the sun's angular radius [rad] (the Earth's shadow, :func:`_inscatter`).
+    ``counts``: the density profiles of :func:`.compute.density_profiles` (the Earth's shadow, :func:`_inscatter`).
     """
     n_l = transmittance.shape[2]
-    buf = np.empty((SHADOW_MARCH_ROWS, n_l))
     c = np.empty(n_l)
     t = np.empty(n_l)
     c2 = np.empty(n_l)
@@ -807,18 +802,15 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
             mu_lo = mu_h - HORIZON_EPSILON
             mu_hi = mu_h + HORIZON_EPSILON
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_lo, mu_s, nu, d_lit, True, bottom, top,
-                                mu_s_min, mu_s_nodes, alpha, lobe, p_r, p_m, p_m_spec, profiles, counts, buf, lo_c, t,
-                                c2, tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, lo_c, t, c2, tmp)
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_hi, mu_s, nu, d_lit, False, bottom, top,
-                                mu_s_min, mu_s_nodes, alpha, lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c, t, c2,
-                                tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
             a = (mu - mu_lo) / (mu_hi - mu_lo)
             for k in range(n_l):
                 c[k] = (1.0 - a) * lo_c[k] + a * c[k]
         else:
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu, mu_s, nu, d_lit, hits, bottom, top,
-                                mu_s_min, mu_s_nodes, alpha, lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c, t, c2,
-                                tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
         for k in range(n_l):
             in_out[q, k] = c[k]
 

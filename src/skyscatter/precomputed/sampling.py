@@ -26,7 +26,6 @@ from .geometry import (
     acos_table,
     bilinear_weights,
     clamp,
-    distance_to_boundary,
     irradiance_coord,
     irradiance_log_cell,
     irradiance_log_nodes,
@@ -40,7 +39,6 @@ from .geometry import (
     scattering_r_mu_coord,
     scattering_r_mu_rows,
     shadow_exit_altitude,
-    shadow_exit_distance,
     transmittance_coord,
 )
 
@@ -542,148 +540,6 @@ def shadow_ratios_fast(h_q, h_0, h_1, profile, n_layers):
         x1 = sc * (h_q - h_1)
         return math.exp(min(x0, _LOG_SHADOW_RATIO_MAX)), math.exp(min(x1, _LOG_SHADOW_RATIO_MAX))
     return shadow_ratios(h_q, h_0, h_1, profile, n_layers, SHADOW_RATIO_MAX)
-
-
-#: Gauss-Legendre nodes and weights on [-1, 1] of 4 points ([Abramowitz1964] Table 25.4) and the ends of the pieces
-#: of :func:`shadow_march`, fractions of the lit part of the ray growing geometrically from the shadow's exit.
-_MARCH_X = (-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526)
-_MARCH_W = (0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538)
-_MARCH_EDGES = (0.0, 1e-3, 1e-2, 1e-1, 1.0)
-
-
-@helper
-def shadow_march(transmittance, r, mu, mu_s, nu, hits_ground, bottom, top, alpha, profiles, counts, out_r, out_m,
-                 tmp):
-    """The sunlit densities along the ray from radius ``r`` [m] (view zenith cosine ``mu``, sun zenith cosine
-    ``mu_s``, view-sun cosine ``nu``) beyond its exit from the Earth's shadow, per wavelength:
-    ``out_r[k] = integral rho_R(y) T_sun(y)_k dy`` and ``out_m[k]`` the same with the aerosol density [m], from the
-    exit (:func:`.geometry.shadow_exit_distance`) to the ray's end (the ground if ``hits_ground``, else the top).
-    ``rho``: the Rayleigh and aerosol profiles ``profiles[0]``, ``profiles[1]`` (``counts`` layers) of
-    :func:`.compute.density_profiles` (Bruneton & Neyret 2008, Eqs. 1 and 3); ``T_sun``: the transmittance table's
-    to the sun times the visible fraction of its disc of angular radius ``alpha`` [rad]
-    (:func:`transmittance_to_sun`, as the single-scattering tables have it). Quadrature: 4 Gauss-Legendre pieces
-    of 4 nodes each ([Abramowitz1964] Eq. 25.4.29), the pieces' ends at 0, 10^-3, 10^-2, 10^-1 and 1 of the lit
-    length (the light comes mostly from just beyond the exit, where the density is highest). 0 where the ray never
-    leaves the shadow. This is the single-scattering integral (Bruneton & Neyret 2008, Eq. 6) without the view
-    transmittance, nearly common to the rays of one azimuth cell (the same r and mu: they differ only beyond the
-    exit, above 10-20 km, where little air is left); ``tmp`` (n_wavelengths,) scratch."""
-    n_l = out_r.shape[0]
-    for k in range(n_l):
-        out_r[k] = 0.0
-        out_m[k] = 0.0
-    t0 = shadow_exit_distance(r, mu, mu_s, nu, bottom)
-    t1 = distance_to_boundary(r, mu, hits_ground, bottom, top)
-    if not t0 < t1:
-        return
-    span = t1 - t0
-    for p in range(len(_MARCH_EDGES) - 1):
-        a = t0 + span * _MARCH_EDGES[p]
-        b = t0 + span * _MARCH_EDGES[p + 1]
-        half = 0.5 * (b - a)
-        mid = 0.5 * (a + b)
-        for j in range(len(_MARCH_X)):
-            t = mid + half * _MARCH_X[j]
-            ry = math.sqrt(max(t * t + 2.0 * r * mu * t + r * r, 0.0))
-            ms = clamp((r * mu_s + t * nu) / ry, -1.0, 1.0)
-            transmittance_to_sun(transmittance, clamp(ry, bottom, top), ms, bottom, top, alpha, tmp)
-            h = ry - bottom
-            wr = half * _MARCH_W[j] * density_at(profiles[0], counts[0], h)
-            wm = half * _MARCH_W[j] * density_at(profiles[1], counts[1], h)
-            for k in range(n_l):
-                out_r[k] += wr * tmp[k]
-                out_m[k] += wm * tmp[k]
-
-
-#: Rows of the scratch buffer of :func:`shadow_march_weights` (n_wavelengths each).
-SHADOW_MARCH_ROWS = 19
-
-
-@helper
-def shadow_march_weights(transmittance, r, mu, mu_s, nu, mu_s_0, mu_s_1, i_n, n_nu, w_s, w_n, hits_ground, bottom, top,
-                         alpha, profiles, counts, buf):
-    """Per-wavelength weights of the four (mu_s, nu) corners of a cell of the single-scattering tables for a ray that
-    starts in the Earth's shadow (the query's r [m], mu, mu_s, nu; the cell's sun zenith texels ``mu_s_0``,
-    ``mu_s_1`` with weight ``w_s`` of the second, its azimuth texels ``i_n``, ``i_n + 1`` of ``n_nu`` with linear
-    weight ``w_n``). Each corner's value is divided by that corner ray's :func:`shadow_march` (its own mu_s and the
-    texel's nu at that mu_s: :func:`.geometry.scattering_nu_param`; the query's r and mu), and the bilinear
-    interpolation of the corners is scaled by the query's march over the same interpolation of the corners' marches:
-    ``min(M_q / sum_c w_c M_c, SHADOW_RATIO_MAX) sum_c w_c S_c`` (exact where ``S / M`` is the same at the corners).
-    Into ``buf`` (:data:`SHADOW_MARCH_ROWS`, n_wavelengths): rows 10-13 the Rayleigh table's weights of the
-    corners (mu_s texel, nu texel) (0, 0), (0, 1), (1, 0), (1, 1), rows 14-17 the aerosol table's; the other rows
-    scratch.
-
-    The ratio ``S / M`` (the view transmittance and the tables' constants) varies slowly across a cell where the
-    single scattering itself falls by orders of magnitude. The rule replaces, in the rendering lookups, the density
-    at the exit from the geometric shadow (:func:`shadow_ratios_fast`, one factor for all wavelengths): that rule was
-    +102 / +10 / -25 % at 400 / 560 / 700 nm (2 deg up, 90 deg from a sun 6 deg below the horizon, Earth defaults)
-    on the independent integrals of ``tests/precomputed_reference.py`` as texel values, the march within 4 % in every
-    cell measured at -6 and -3 deg (``benchmarks/shadow_rule_low_sun.py``; docs/accuracy.md, "Low sun"): beyond the
-    exit the sunlight has grazed the ground, and its transmittance, not the density, sets where along the ray the
-    light comes from, per wavelength. The sun zenith corners each with their own march: with the query's sun at both
-    (the texels' quotients then not of their own geometry) a corner that barely leaves the shadow gave values 3 to
-    600 times too large (measured against the low-sun Monte Carlo); the interpolated quotients ``S_c / M_c`` (the
-    corners whose ray never leaves the shadow left out, the others' weights renormalised) jumped 70-180 times
-    between view elevations 0.01 deg apart where a corner's march starts (measured, small tables), so the ratio of
-    the interpolations, bounded as the density rule is."""
-    n_l = buf.shape[1]
-    if not shadow_exit_distance(r, mu, mu_s, nu, bottom) < distance_to_boundary(r, mu, hits_ground, bottom, top):
-        # the query's ray never leaves the shadow: no single scattering, no corner to march
-        for k in range(n_l):
-            for row in range(10, 18):
-                buf[row, k] = 0.0
-        return
-    shadow_march(transmittance, r, mu, mu_s, nu, hits_ground, bottom, top, alpha, profiles, counts, buf[0], buf[1],
-                 buf[18])
-    for c in range(2):
-        ms = mu_s_1 if c else mu_s_0
-        for e in range(2):
-            row = 2 + 2 * (2 * c + e)
-            if (w_s if c else 1.0 - w_s) * (w_n if e else 1.0 - w_n) == 0.0:
-                for k in range(n_l):  # a corner of weight 0 (the query on a texel): no march
-                    buf[row, k] = 0.0
-                    buf[row + 1, k] = 0.0
-                continue
-            shadow_march(transmittance, r, mu, ms, scattering_nu_param(i_n + e, mu, ms, n_nu), hits_ground, bottom,
-                         top, alpha, profiles, counts, buf[row], buf[row + 1], buf[18])
-    for k in range(n_l):
-        den_r = 0.0
-        den_m = 0.0
-        for ce in range(4):
-            wce = (w_s if ce >= 2 else 1.0 - w_s) * (w_n if ce % 2 else 1.0 - w_n)
-            den_r += wce * buf[2 + 2 * ce, k]
-            den_m += wce * buf[3 + 2 * ce, k]
-        # the interpolated table times the query's march over the interpolated marches, at most SHADOW_RATIO_MAX:
-        # continuous where a corner's ray starts or stops leaving the shadow, and bounded where a corner's table value
-        # (read at other r and mu) and its march disagree
-        f_r = min(buf[0, k] / den_r, SHADOW_RATIO_MAX) if den_r > 0.0 else 0.0
-        f_m = min(buf[1, k] / den_m, SHADOW_RATIO_MAX) if den_m > 0.0 else 0.0
-        for ce in range(4):
-            wce = (w_s if ce >= 2 else 1.0 - w_s) * (w_n if ce % 2 else 1.0 - w_n)
-            buf[10 + ce, k] = wce * f_r
-            buf[14 + ce, k] = wce * f_m
-
-
-@helper
-def lookup4_cell_corner_weights(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, i_n, wt, out):
-    """``out[k] += table(cell)[k]``, linear in r and mu (each row at its own mu cell, :func:`r_mu_cell`), with the
-    per-wavelength weights ``wt[2 c + e, k]`` of the (mu_s, nu) corners ``(i_s + c, i_n + e)``
-    (:func:`shadow_march_weights` times the phase)."""
-    n_l = table.shape[4]
-    for a in range(2):
-        wa = w_r if a else 1.0 - w_r
-        i_mu = i_mu1 if a else i_mu0
-        w_mu = w_mu1 if a else w_mu0
-        for b in range(2):
-            wb = wa * (w_mu if b else 1.0 - w_mu)
-            if wb == 0.0:
-                continue
-            for c in range(2):
-                t0 = table[i_r + a, i_mu + b, i_s + c, i_n]
-                t1 = table[i_r + a, i_mu + b, i_s + c, i_n + 1]
-                u0 = wt[2 * c]
-                u1 = wt[2 * c + 1]
-                for k in range(n_l):
-                    out[k] += wb * (u0[k] * t0[k] + u1[k] * t1[k])
 
 
 @helper
