@@ -119,6 +119,14 @@ def mie_optics(distribution: SizeDistribution, refractive_index: RefractiveIndex
     nodes_per_e : float
         Radius nodes per unit of ``ln r`` (default 24).
     """
+    return _mie_optics_cached(*_checked(distribution, refractive_index, wavelengths, angles, nodes_per_e))
+
+
+def _checked(distribution: SizeDistribution, refractive_index: RefractiveIndex, wavelengths: ArrayLike,
+             angles: ArrayLike | None, nodes_per_e: float
+             ) -> tuple[SizeDistribution, RefractiveIndex, tuple[float, ...], tuple[float, ...] | None, float]:
+    """The arguments of :func:`mie_optics` checked and made hashable (wavelengths [nm] and angles [rad] as tuples,
+    ``nodes_per_e`` as a float), the refractive index's range checked before any work."""
     if not isinstance(distribution, SizeDistribution):
         raise InvalidParameterError("distribution must be a SizeDistribution (LogNormalMode, ModifiedGammaMode)")
     if not isinstance(refractive_index, RefractiveIndex):
@@ -130,8 +138,8 @@ def mie_optics(distribution: SizeDistribution, refractive_index: RefractiveIndex
     nodes = float(nodes_per_e)
     if not (math.isfinite(nodes) and nodes >= 2):
         raise InvalidParameterError(f"nodes_per_e must be >= 2; got {nodes_per_e!r}")
-    refractive_index(np.asarray(wl))  # range check before any work
-    return _mie_optics_cached(distribution, refractive_index, wl, th, nodes)
+    refractive_index(np.asarray(wl))
+    return distribution, refractive_index, wl, th, nodes
 
 
 #: Sizes per block of the amplitude products (each block is summed to the largest order it needs).
@@ -361,16 +369,7 @@ def stored_mie_optics(distribution: SizeDistribution, refractive_index: Refracti
     wavelengths [nm] (their SHA-256), the phase table's angles, the radius nodes, the miepython and skyscatter
     versions and :data:`MIE_CACHE_VERSION`.
     """
-    if not isinstance(distribution, SizeDistribution):
-        raise InvalidParameterError("distribution must be a SizeDistribution (LogNormalMode, ModifiedGammaMode)")
-    if not isinstance(refractive_index, RefractiveIndex):
-        raise InvalidParameterError("refractive_index must be a RefractiveIndex")
-    from ..spectral import as_wavelengths
-
-    wl = tuple(float(w) for w in as_wavelengths(wavelengths))
-    th = None if angles is None else tuple(float(a) for a in np.asarray(angles, dtype=float))
-    refractive_index(np.asarray(wl))  # range check before any work
-    return _stored_mie_optics(distribution, refractive_index, wl, th, float(nodes_per_e))
+    return _stored_mie_optics(*_checked(distribution, refractive_index, wavelengths, angles, nodes_per_e))
 
 
 @lru_cache(maxsize=256)
