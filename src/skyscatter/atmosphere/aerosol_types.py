@@ -51,7 +51,8 @@ continental-average, optical depth 0.2; docs/aerosols.md).
 
 The optics of a mixture (Hess et al. 1998, Eqs. 1-2, external mixture): extinction ``sum_i N_i C_e,i``,
 scattering ``sum_i N_i C_s,i`` and phase function ``sum_i N_i C_s,i p_i / sum_i N_i C_s,i``, each component's
-``C`` and ``p`` from :func:`.mie_optics.mie_optics`.
+``C`` and ``p`` from :func:`.mie_optics.mie_optics`, cached on disk per component, humidity and set of wavelengths
+(:func:`.mie_optics.stored_mie_optics`), so that only the first process that needs them computes them.
 """
 
 from __future__ import annotations
@@ -327,14 +328,14 @@ class OpacAerosol(ParticleComponent):
 
     def component_optics(self, wavelengths: ArrayLike):
         """``[(code, number density [m^-3] at relative density 1, MieOptics)]`` after the optical-depth scaling."""
-        from .mie_optics import mie_optics
+        from .mie_optics import stored_mie_optics
 
         wl = np.asarray(wavelengths, dtype=float)
         scale = self._scale()
         out = []
         for code, number in self.components:
             mode, index = opac_component(code, self.relative_humidity)
-            out.append((code, number * 1e6 * scale, mie_optics(mode, index, wl, nodes_per_e=self.nodes_per_e)))
+            out.append((code, number * 1e6 * scale, stored_mie_optics(mode, index, wl, nodes_per_e=self.nodes_per_e)))
         return out
 
     def _scale(self) -> float:
@@ -356,12 +357,12 @@ class OpacAerosol(ParticleComponent):
 
     def phase_table(self, wavelengths: ArrayLike, angles: ArrayLike | None = None) -> PhaseTable:
         from ..spectral import as_wavelengths
-        from .mie_optics import mie_optics
+        from .mie_optics import stored_mie_optics
 
         # the components' own number densities: the phase does not depend on the optical-depth scaling, which
         # may be 0 (an aerosol-free node of a table family)
         wl = as_wavelengths(wavelengths)
-        optics = [(n, mie_optics(mode, index, wl, nodes_per_e=self.nodes_per_e))
+        optics = [(n, stored_mie_optics(mode, index, wl, nodes_per_e=self.nodes_per_e))
                   for code, n in self.components if n > 0
                   for mode, index in [opac_component(code, self.relative_humidity)]]
         table = PhaseTable.mixture([o.phase for _, o in optics],
@@ -386,10 +387,10 @@ class OpacAerosol(ParticleComponent):
 
 def _extinction_550(code: str, relative_humidity: float, nodes_per_e: float) -> float:
     """Extinction cross-section [m^2] of one particle of an OPAC component at 550 nm."""
-    from .mie_optics import mie_optics
+    from .mie_optics import stored_mie_optics
 
     mode, index = opac_component(code, relative_humidity)
-    return float(mie_optics(mode, index, [550.0], nodes_per_e=nodes_per_e).extinction_cross_section[0])
+    return float(stored_mie_optics(mode, index, [550.0], nodes_per_e=nodes_per_e).extinction_cross_section[0])
 
 
 def _optical_depth_scale(aerosol: OpacAerosol) -> float:

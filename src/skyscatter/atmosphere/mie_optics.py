@@ -23,7 +23,9 @@ Results are cached in memory per (distribution, refractive index, wavelengths, a
 the process (:func:`mie_optics` is an ``lru_cache`` of 256 entries), so that a mixture, a retrieval or a
 precomputation asks Mie theory once per configuration.
 Cloud droplets (:func:`water_droplets`) are also cached on disk, one entry per wavelength
-(:mod:`skyscatter.diskcache`), so that a new process need not compute them again (seconds at 18 wavelengths).
+(:mod:`skyscatter.diskcache`), so that a new process need not compute them again (seconds at 18 wavelengths), and
+so are the OPAC aerosol components (:func:`stored_mie_optics`, one entry per component, humidity and set of
+wavelengths: seconds to tens of seconds of CPU per type).
 """
 
 from __future__ import annotations
@@ -41,7 +43,8 @@ from .phase_table import PhaseTable, phase_angle_grid
 from .refractive_index import RefractiveIndex
 from .size_distributions import NODES_PER_E, ModifiedGammaMode, SizeDistribution
 
-__all__ = ["MieOptics", "mie_optics", "sphere_efficiencies", "water_droplets"]
+__all__ = ["MIE_CACHE_VERSION", "MieOptics", "mie_optics", "sphere_efficiencies", "stored_mie_optics",
+           "water_droplets"]
 
 
 def _miepython():
@@ -116,6 +119,14 @@ def mie_optics(distribution: SizeDistribution, refractive_index: RefractiveIndex
     nodes_per_e : float
         Radius nodes per unit of ``ln r`` (default 24).
     """
+    return _mie_optics_cached(*_checked(distribution, refractive_index, wavelengths, angles, nodes_per_e))
+
+
+def _checked(distribution: SizeDistribution, refractive_index: RefractiveIndex, wavelengths: ArrayLike,
+             angles: ArrayLike | None, nodes_per_e: float
+             ) -> tuple[SizeDistribution, RefractiveIndex, tuple[float, ...], tuple[float, ...] | None, float]:
+    """The arguments of :func:`mie_optics` checked and made hashable (wavelengths [nm] and angles [rad] as tuples,
+    ``nodes_per_e`` as a float), the refractive index's range checked before any work."""
     if not isinstance(distribution, SizeDistribution):
         raise InvalidParameterError("distribution must be a SizeDistribution (LogNormalMode, ModifiedGammaMode)")
     if not isinstance(refractive_index, RefractiveIndex):
@@ -127,8 +138,8 @@ def mie_optics(distribution: SizeDistribution, refractive_index: RefractiveIndex
     nodes = float(nodes_per_e)
     if not (math.isfinite(nodes) and nodes >= 2):
         raise InvalidParameterError(f"nodes_per_e must be >= 2; got {nodes_per_e!r}")
-    refractive_index(np.asarray(wl))  # range check before any work
-    return _mie_optics_cached(distribution, refractive_index, wl, th, nodes)
+    refractive_index(np.asarray(wl))
+    return distribution, refractive_index, wl, th, nodes
 
 
 #: Sizes per block of the amplitude products (each block is summed to the largest order it needs).
@@ -284,7 +295,34 @@ def _miepython_version() -> str:
 
 #: Version of the droplets' optics stored in the disk cache (part of their key).
 DROPLET_CACHE_VERSION = 1
-_DROPLET_ARRAYS = ("extinction_cross_section", "scattering_cross_section", "asymmetry_mie", "angular_closure")
+_OPTICS_ARRAYS = ("extinction_cross_section", "scattering_cross_section", "asymmetry_mie", "angular_closure")
+
+
+def _optics_arrays(o: MieOptics) -> dict[str, NDArray[np.float64]]:
+    """The arrays of ``o`` as stored in a disk-cache entry (:func:`_optics_from_arrays` reads them back)."""
+    return {**{name: getattr(o, name) for name in _OPTICS_ARRAYS}, "wavelengths": o.wavelengths,
+            "phase_angles": o.phase.angles, "phase_values": np.atleast_2d(o.phase.values)}
+
+
+def _optics_from_arrays(a: dict[str, NDArray[np.float64]]) -> MieOptics:
+    """The :class:`MieOptics` of a disk-cache entry: the stored phase values as they are (they were normalised
+    when computed), so that the result is bit-identical to the computed one."""
+    for arr in a.values():
+        arr.setflags(write=False)
+    table = PhaseTable(a["wavelengths"], a["phase_angles"], a["phase_values"], normalise=False)
+    return MieOptics(a["wavelengths"], a["extinction_cross_section"], a["scattering_cross_section"],
+                     a["asymmetry_mie"], a["angular_closure"], table)
+
+
+def _common_key(angles: tuple[float, ...] | None, nodes_per_e: float, version: int) -> dict[str, object]:
+    """The parts of a disk-cache key that every Mie entry has: the phase table's angles [rad] (their SHA-256), the
+    radius nodes per unit of ``ln r``, the miepython and skyscatter versions and the entry kind's version."""
+    from .. import __version__
+    from ..diskcache import array_checksum
+
+    grid = phase_angle_grid() if angles is None else np.asarray(angles, dtype=float)
+    return {"angles": array_checksum(grid), "nodes_per_e": repr(nodes_per_e), "miepython": _miepython_version(),
+            "skyscatter": __version__, "version": version}
 
 
 @lru_cache(maxsize=512)
@@ -298,27 +336,52 @@ def _stored_droplets(effective_radius: float, effective_variance: float, wavelen
     versions and :data:`DROPLET_CACHE_VERSION`."""
     import json
 
-    from .. import __version__
-    from ..diskcache import array_checksum, cached_arrays
+    from ..diskcache import cached_arrays
     from .refractive_index import water_refractive_index
 
     mode = ModifiedGammaMode.from_effective(effective_radius, effective_variance)
     index = water_refractive_index()
-    grid = phase_angle_grid() if angles is None else np.asarray(angles, dtype=float)
     m = complex(np.asarray(index(np.array([wavelength])))[0])
-    key = json.dumps({"effective_radius": repr(effective_radius), "effective_variance": repr(effective_variance),
-                      "wavelength": repr(wavelength), "angles": array_checksum(grid), "nodes_per_e": repr(nodes_per_e),
-                      "refractive_index": [repr(m.real), repr(m.imag)], "miepython": _miepython_version(),
-                      "skyscatter": __version__, "version": DROPLET_CACHE_VERSION}, sort_keys=True)
+    key = json.dumps({**_common_key(angles, nodes_per_e, DROPLET_CACHE_VERSION),
+                      "effective_radius": repr(effective_radius), "effective_variance": repr(effective_variance),
+                      "wavelength": repr(wavelength), "refractive_index": [repr(m.real), repr(m.imag)]},
+                     sort_keys=True)
+    return _optics_from_arrays(cached_arrays(
+        "droplets", key, lambda: _optics_arrays(mie_optics(mode, index, [wavelength], angles, nodes_per_e))))
 
-    def build() -> dict[str, NDArray[np.float64]]:
-        o = mie_optics(mode, index, [wavelength], angles, nodes_per_e)
-        return {**{name: getattr(o, name) for name in _DROPLET_ARRAYS}, "wavelengths": o.wavelengths,
-                "phase_angles": o.phase.angles, "phase_values": np.atleast_2d(o.phase.values)}
 
-    a = cached_arrays("droplets", key, build)
-    for arr in a.values():
-        arr.setflags(write=False)
-    table = PhaseTable(a["wavelengths"], a["phase_angles"], a["phase_values"], normalise=False)
-    return MieOptics(a["wavelengths"], a["extinction_cross_section"], a["scattering_cross_section"],
-                     a["asymmetry_mie"], a["angular_closure"], table)
+#: Version of the aerosol components' Mie optics stored in the disk cache (:func:`stored_mie_optics`, part of their
+#: key): raise it when :func:`mie_optics` computes something else for the same inputs.
+MIE_CACHE_VERSION = 1
+
+
+def stored_mie_optics(distribution: SizeDistribution, refractive_index: RefractiveIndex, wavelengths: ArrayLike,
+                      angles: ArrayLike | None = None, nodes_per_e: float = NODES_PER_E) -> MieOptics:
+    """:func:`mie_optics` (same parameters and units), also cached on disk: from memory, from the disk cache
+    (:func:`skyscatter.diskcache.cached_arrays`: verified when read, written atomically, built once by processes
+    that need it at once), or computed and stored, one entry (``mie-*.npz``) per call's set of wavelengths.
+    Bit-identical to :func:`mie_optics` (its arrays stored as they are). Used for the OPAC aerosol components
+    (:mod:`.aerosol_types`), whose optics cost seconds to tens of seconds of CPU per process at the default
+    wavelengths (docs/aerosols.md).
+
+    The key: the distribution's parameters (:meth:`~.size_distributions.SizeDistribution.to_dict`), the refractive
+    index's name (the OPAC component and humidity) and the SHA-256 of its table (wavelengths, ``n``, ``k``), the
+    wavelengths [nm] (their SHA-256), the phase table's angles, the radius nodes, the miepython and skyscatter
+    versions and :data:`MIE_CACHE_VERSION`.
+    """
+    return _stored_mie_optics(*_checked(distribution, refractive_index, wavelengths, angles, nodes_per_e))
+
+
+@lru_cache(maxsize=256)
+def _stored_mie_optics(distribution: SizeDistribution, refractive_index: RefractiveIndex, wl: tuple[float, ...],
+                       angles: tuple[float, ...] | None, nodes_per_e: float) -> MieOptics:
+    import json
+
+    from ..diskcache import array_checksum, cached_arrays
+
+    index_table = np.array([refractive_index.wavelengths, refractive_index.n, refractive_index.k], dtype=float)
+    key = json.dumps({**_common_key(angles, nodes_per_e, MIE_CACHE_VERSION), "distribution": distribution.to_dict(),
+                      "refractive_index": [refractive_index.name, array_checksum(index_table)],
+                      "wavelengths": array_checksum(np.array(wl, dtype=float))}, sort_keys=True)
+    return _optics_from_arrays(cached_arrays(
+        "mie", key, lambda: _optics_arrays(mie_optics(distribution, refractive_index, wl, angles, nodes_per_e))))
