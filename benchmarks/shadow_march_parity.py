@@ -10,8 +10,13 @@ scattering zeroed) against the spectral lookup's single scattering folded with `
 direction, over the largest channel of the whole sky there (the measure of
 ``tests/test_realtime_export.py::test_manifest_mappings_and_textures_give_the_spectral_lookup``, bound 2e-5).
 
-``python benchmarks/shadow_march_parity.py [--default]``: the manifest test's small tables (orders 2), or the
-default cached ones.
+``--bands 480,590``: instead of the RGB fold, the per-wavelength lookups with the transmittance averaged over
+wavelength bands (split at the given wavelengths [nm], weighted by the sun's spectrum as the export folds the
+transmittance texture), i.e. a factor per band (what a band-split export could give a shader), against the
+per-wavelength rule, both folded.
+
+``python benchmarks/shadow_march_parity.py [--default] [--bands 480,590]``: the manifest test's small tables
+(orders 2), or the default cached ones.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ SMALL = dict(transmittance_mu=32, transmittance_r=8, irradiance_mu_s=8, irradian
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--default", action="store_true", help="the default cached tables")
+    ap.add_argument("--bands", default="", help="band edges [nm], e.g. 480,590: a factor per band instead of RGB")
     args = ap.parse_args()
     atm = cached_atmosphere() if args.default else PrecomputedAtmosphere.compute(orders=2, sizes=SMALL,
                                                                                  progress=False)
@@ -41,9 +47,19 @@ def main() -> int:
     for k in ("single_rayleigh", "single_mie", "multiple", "irradiance"):
         rgb[k] = (t[k].astype(np.float64) @ m.T).astype(np.float32)
     rgb["multiple"][:] = 0.0
-    folded = PrecomputedAtmosphere(atm.parameters, np.array([450.0, 550.0, 650.0]), atm.sizes, atm.orders,
-                                   {k: np.maximum(v, 0.0) for k, v in rgb.items()})
-    folded._decoded = dict(rgb)  # the folded values as they are (a few negative: the half storage refuses them)
+    if args.bands:
+        band = np.searchsorted(np.array([float(v) for v in args.bands.split(",")]), atm.wavelengths)
+        tr = t["transmittance"].astype(np.float64)
+        for b in np.unique(band):
+            k = band == b
+            tr[..., k] = ((tr[..., k] * solar[k]).sum(-1) / solar[k].sum())[..., None]
+        folded = PrecomputedAtmosphere(atm.parameters, atm.wavelengths, atm.sizes, atm.orders,
+                                       {**t, "transmittance": tr.astype(np.float32),
+                                        "multiple": np.zeros_like(t["multiple"])})
+    else:
+        folded = PrecomputedAtmosphere(atm.parameters, np.array([450.0, 550.0, 650.0]), atm.sizes, atm.orders,
+                                       {k: np.maximum(v, 0.0) for k, v in rgb.items()})
+        folded._decoded = dict(rgb)  # the folded values as they are (a few negative: the half storage refuses them)
     single = PrecomputedAtmosphere(atm.parameters, atm.wavelengths, atm.sizes, atm.orders,
                                    {**t, "multiple": np.zeros_like(t["multiple"])})
     rng = np.random.default_rng(7)
@@ -57,6 +73,7 @@ def main() -> int:
             full = atm.sky_radiance(many, dirs, sun, include_ground=False) @ m.T
             a = single.sky_radiance(many, dirs, sun, include_ground=False) @ m.T
             b = folded.sky_radiance(many, dirs, sun, include_ground=False)
+            b = b @ m.T if args.bands else b
             e = np.abs(a - b).max(1) / np.maximum(np.abs(full).max(1), 1e-6)
             print(f"altitude {alt:6.0f} m, sun {90.0 - zenith:+.0f} deg: per channel against per wavelength, over the "
                   f"sky's largest channel: median {np.median(e):.2e}, 95th percentile {np.percentile(e, 95):.2e}, "
