@@ -51,8 +51,8 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
   over the same for the cell's corners (``shadow_march_factors`` of the mappings, a march on the transmittance
   texture; the lookups do it per wavelength, :func:`skyscatter.precomputed.sampling.shadow_march_factors`, which a
   per-channel factor of folded colours does not reproduce exactly; ``single_scattering_lerp``, with the density
-  profiles ``RAYLEIGH_DENSITY``, ``MIE_DENSITY`` of the constants). The luminance (Y) that A held in manifest version 1 is the RGB's dot product
-  with ``hdr_scale.luminance_from_rgb``.
+  profiles ``RAYLEIGH_DENSITY``, ``MIE_DENSITY`` of the constants). The luminance (Y) that A held in manifest
+  version 1 is the RGB's dot product with ``hdr_scale.luminance_from_rgb``.
 
 in ``.rgba32f`` (float32), ``.rgba16f`` (IEEE half) and ``.exr`` (OpenEXR, float32 R, G, B, A; a 3D texture's
 depth slices stacked vertically) form, with ``skyscatter_realtime.json``: the version, sizes, constants, units, the
