@@ -363,8 +363,7 @@ def _emulate_aerial(ns, tex, cam, point, sun):
         def read(n, uvw):
             return ns["scattering_texture"](lambda q: _sample(tex[n], q), uvw, cell)
 
-        parts = [ns["single_scattering_lerp"](read(n, uvw0), read(n, uvw1), r, mu, mu_s, nu, w, n, hits,
-                                              lambda q: _sample(tex["transmittance"], q))
+        parts = [ns["single_scattering_lerp"](read(n, uvw0), read(n, uvw1), r, mu, mu_s, nu, w, n)
                  for n in ("rayleigh", "mie")]
         parts.append(ns["azimuth_lerp"](read("multiple", uvw0), read("multiple", uvw1), w))
         return np.array(ns["inscattered_radiance"](*parts, nu))

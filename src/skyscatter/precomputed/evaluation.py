@@ -165,19 +165,6 @@ class TableLookups:
             self._profiles_cache = cached
         return cached
 
-    @property
-    def _mu_s_nodes(self) -> NDArray[np.float64]:
-        """The sun zenith cosines of the scattering tables' texels (:func:`.kernels.mu_s_texels`; the Earth's shadow in
-        the single scattering: :func:`.lookup._inscatter`), computed once."""
-        cached = getattr(self, "_mu_s_nodes_cache", None)
-        if cached is None:
-            from .kernels import mu_s_texels
-
-            bottom, top, mu_s_min = self._geometry()
-            cached = mu_s_texels(bottom, top, mu_s_min, int(self.tables["single_rayleigh"].shape[2]))
-            self._mu_s_nodes_cache = cached
-        return cached
-
     def _geometry(self) -> tuple[float, float, float]:
         p = self.parameters
         return p.bottom_radius, p.top_radius, p.mu_s_min
@@ -253,8 +240,7 @@ class TableLookups:
         parallel_for(lookup.sky_kernel, n, pos, dirs, sun, sh, self.tables["transmittance"],
                      self.tables["single_rayleigh"], self.tables["single_mie"], self.tables["multiple"],
                      self.tables["irradiance"], self._albedo, self._solar, bottom, top,
-                     mu_s_min, self._mu_s_nodes, self._mie_g, self._mie_kind, self._lobe, *self._aerosol_phase[2:],
-                     *self._profiles,
+                     mu_s_min, self._mie_g, self._mie_kind, self._lobe, *self._aerosol_phase[2:], *self._profiles,
                      self.parameters.sun_angular_radius, include_ground, rad, tr,
                      grain=2048)
         return rad, tr
@@ -309,43 +295,6 @@ class TableLookups:
         return self.resample(self.sky_radiance(positions, directions, sun_direction, include_ground=include_ground),
                              wl)
 
-    def _in_shadow(self, r: float, mu_s: float) -> bool:
-        """True if an observer at radius ``r`` [m] with the sun at zenith cosine ``mu_s`` is in the Earth's shadow at
-        the tables' sun (``mu_s`` at least their limit, as the slices take it): its single scattering is read per
-        wavelength (:func:`.lookup._inscatter`, :func:`.sampling.shadow_march_factors`), which the slices projected
-        to colour channels cannot hold: :meth:`_shadow_slices` gives the observer's fast path what it needs."""
-        bottom, top, mu_s_min = self._geometry()
-        m = max(mu_s, mu_s_min)
-        rc = min(max(r, bottom), top)
-        return m < 0.0 and rc * rc * (1.0 - m * m) < bottom * bottom
-
-    def _shadow_slices(self, rc: float, mu_s: float, slices: NDArray[np.float64], projection: NDArray[np.float64]
-                       ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """For an observer at radius ``rc`` [m] (in the atmosphere) under a sun at zenith cosine ``mu_s``: where it
-        is in the Earth's shadow (:meth:`_in_shadow`), the spectral slices (:func:`.lookup.observer_slices` with the
-        identity projection) and the marches at their texels (:func:`.lookup.observer_shadow_marches`) from which
-        :func:`.lookup.observer_kernel` reads the single scattering per wavelength (``slices`` themselves where
-        their ``projection`` is the identity); else ``slices`` and an empty array (not read)."""
-        lookup = _kernels()
-        n_l = self.wavelengths.size
-        if not self._in_shadow(rc, mu_s):
-            return slices, np.empty((0, 2, n_l))
-        bottom, top, mu_s_min = self._geometry()
-        stored = self.stored
-        ray = stored["single_rayleigh"]
-        eye = np.eye(n_l)
-        spec = slices if np.array_equal(projection, eye) else lookup.observer_slices(
-            ray, stored["single_mie"], stored["multiple"], rc, mu_s, bottom, top, mu_s_min, eye)
-        n_r, n_mu, n_s, n_nu = ray.shape[:4]
-        m = max(mu_s, mu_s_min)
-        _, _, i_s, w_s, _ = lookup.r_mu_s_cell(rc, m, bottom, top, mu_s_min, n_r, n_s)
-        nodes = self._mu_s_nodes
-        marches = np.empty((n_mu * n_nu, 2, n_l))
-        parallel_for(lookup.observer_shadow_marches, n_mu, stored["transmittance"], rc, float(nodes[i_s]),
-                     float(nodes[min(i_s + 1, n_s - 1)]), w_s, n_mu, n_nu, bottom, top,
-                     self.parameters.sun_angular_radius, *self._profiles, marches, grain=8)
-        return spec, marches
-
     def _observer(self, positions, directions, sun_direction, include_ground, projection):
         """The observer fast path of :meth:`sky_xyz`, :meth:`sky_luminance` and :meth:`sky_radiance` (radiance
         projected with ``projection`` (C, n_wavelengths)), or None where it does not apply."""
@@ -369,26 +318,24 @@ class TableLookups:
             # a tabulated aerosol phase depends on wavelength: the slices projected to colour channels before the
             # phase is applied do not hold; the general kernel applies it per wavelength
             return None
-        s = sun / np.linalg.norm(sun)
-        mu_s = float(np.clip(pos @ s / r, -1.0, 1.0))
         lookup = _kernels()
 
         shape = d.shape[:-1]
         dirs = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float64)
+        s = sun / np.linalg.norm(sun)
+        mu_s = float(np.clip(pos @ s / r, -1.0, 1.0))
         projection = np.ascontiguousarray(projection, dtype=np.float64)
         # the slices at the observer's radius and sun, decoded from the stored tables (a memory-mapped file is
         # read there only: the first sky from a cached file does not wait for all of it)
         stored = self.stored
-        rc = min(max(r, bottom), top)
         slices = lookup.observer_slices(stored["single_rayleigh"], stored["single_mie"], stored["multiple"],
-                                        rc, mu_s, bottom, top, mu_s_min, projection)
-        spec, marches = self._shadow_slices(rc, mu_s, slices, projection)
+                                        min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, projection)
         out = np.empty((dirs.shape[0], projection.shape[0]))
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
-        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, spec, marches,
-                     stored["single_rayleigh"].shape[0], stored["transmittance"], stored["irradiance"], self._albedo,
-                     self._solar, projection,
+        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, stored["single_rayleigh"].shape[0],
+                     stored["transmittance"], stored["irradiance"], self._albedo, self._solar,
+                     projection,
                      bottom, top, mu_s_min, self._mie_g, self._mie_kind, self._lobe, *self._profiles,
                      self.parameters.sun_angular_radius,
                      bool(include_ground), dirs, out, bad, grain=2048)
@@ -406,9 +353,7 @@ class TableLookups:
         formed there from the two decoded radius layers of the tables, instead of one Python call, slice and
         kernel launch per sun (a year of hours: several thousand). Where the fast path does not apply (an
         observer outside the atmosphere, a tabulated aerosol phase, bad directions), each sun goes through
-        :meth:`sky_radiance`; so does each sun that puts the observer in the Earth's shadow (twilight: the single
-        scattering read per wavelength from spectral slices and marches of its own, :meth:`_in_shadow`,
-        :meth:`_shadow_slices`).
+        :meth:`sky_radiance`.
 
         Parameters
         ----------
@@ -446,10 +391,6 @@ class TableLookups:
         lookup = _kernels()
         s = np.ascontiguousarray(suns / norms[:, None])
         mu_s = np.clip(s @ pos / r, -1.0, 1.0)
-        # suns that put the observer in the Earth's shadow go through sky_radiance (_observer with _shadow_slices)
-        shadowed = np.array([self._in_shadow(r, float(m)) for m in mu_s], dtype=bool)
-        if shadowed.all():
-            return one_by_one()
         rc = min(max(r, bottom), top)
         stored = self.stored
         tables = [stored[name] for name in ("single_rayleigh", "single_mie", "multiple")]
@@ -464,24 +405,17 @@ class TableLookups:
         lower = [layer(t, i_r) for t in tables]
         upper = [layer(t, i_r + 1) if max(w_r, w_g) > 0.0 else lo for t, lo in zip(tables, lower, strict=True)]
         dirs = np.ascontiguousarray(d)
-        lit = ~shadowed
-        s_lit = np.ascontiguousarray(s[lit])
-        out_lit = np.empty((s_lit.shape[0], dirs.shape[0], n_l))
-        bad = np.zeros((s_lit.shape[0], dirs.shape[0]), dtype=np.bool_)
+        out = np.empty((s.shape[0], dirs.shape[0], n_l))
+        bad = np.zeros((s.shape[0], dirs.shape[0]), dtype=np.bool_)
         projection = np.eye(n_l)
-        parallel_for(lookup.observer_suns_kernel, s_lit.shape[0], pos, rc, n_r, s_lit, np.ascontiguousarray(mu_s[lit]),
-                     *lower, *upper,
+        parallel_for(lookup.observer_suns_kernel, s.shape[0], pos, rc, n_r, s, mu_s, *lower, *upper,
                      stored["transmittance"], stored["irradiance"], self._albedo, self._solar,
                      projection, True,
                      bottom, top, mu_s_min, self._mie_g, self._mie_kind, self._lobe, *self._profiles,
-                     self.parameters.sun_angular_radius, bool(include_ground), dirs, out_lit, bad,
+                     self.parameters.sun_angular_radius, bool(include_ground), dirs, out, bad,
                      grain=max(1, 4096 // max(dirs.shape[0], 1)))
         if bad.any():
             return one_by_one()
-        out = np.empty((s.shape[0], dirs.shape[0], n_l))
-        out[lit] = out_lit
-        for k in np.flatnonzero(shadowed):
-            out[k] = self.sky_radiance(pos, d, suns[k], include_ground=include_ground)
         return out
 
     def sky_radiance(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike, *,
@@ -553,9 +487,8 @@ class TableLookups:
         s = np.zeros((n, self.wavelengths.size))
         tab = self.tables
         parallel_for(lookup.aerial_kernel, n, cam, pts, sun, sh, tab["transmittance"], tab["single_rayleigh"],
-                     tab["single_mie"], tab["multiple"], bottom, top, mu_s_min, self._mu_s_nodes, self._mie_g,
-                     self._mie_kind, self._lobe, *self._aerosol_phase[2:], *self._profiles,
-                     self.parameters.sun_angular_radius, t, s, grain=2048)
+                     tab["single_mie"], tab["multiple"], bottom, top, mu_s_min, self._mie_g,
+                     self._mie_kind, self._lobe, *self._aerosol_phase[2:], *self._profiles, t, s, grain=2048)
         return t.reshape(*shape, -1), s.reshape(*shape, -1)
 
     def sun_transmittance(self, positions: ArrayLike, sun_direction: ArrayLike) -> NDArray[np.float64]:

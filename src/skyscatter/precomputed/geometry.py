@@ -73,8 +73,6 @@ __all__ = [
     "ground_cell_rows_apart",
     "scattering_row_mu_coord",
     "shadow_exit_altitude",
-    "shadow_exit_distance",
-    "scattering_mu_texel",
     "transmittance_coord",
     "transmittance_params",
 ]
@@ -252,25 +250,6 @@ def shadow_exit_altitude(r: float, mu: float, mu_s: float, nu: float, bottom: fl
     if t == math.inf:
         return top - bottom
     return clamp(math.sqrt(max(t * t + 2.0 * r * mu * t + r * r, 0.0)) - bottom, 0.0, top - bottom)
-
-
-@helper(fastmath=CONTRACT_ARCP)
-def shadow_exit_distance(r: float, mu: float, mu_s: float, nu: float, bottom: float) -> float:
-    """Distance [m] along the ray from radius ``r`` [m] (view zenith cosine ``mu``, sun zenith cosine ``mu_s``,
-    view-sun cosine ``nu``) to where it leaves the Earth's geometric shadow: the point of
-    :func:`shadow_exit_altitude` (the same half cylinder and plane), 0 if the start is lit, ``inf`` if the ray
-    never leaves it."""
-    c = r * r * (1.0 - mu_s * mu_s) - bottom * bottom
-    if mu_s >= 0.0 or c >= 0.0:
-        return 0.0
-    a = 1.0 - nu * nu
-    b = r * (mu - mu_s * nu)
-    t = math.inf
-    if a > 1e-12:
-        t = (-b + math.sqrt(max(b * b - a * c, 0.0))) / a
-    if nu > 0.0:
-        t = min(t, -r * mu_s / nu)
-    return max(t, 0.0)
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -622,37 +601,6 @@ def scattering_nu_param(i_nu: int, mu: float, mu_s: float, n_nu: int) -> float:
     :func:`scattering_nu_coord`."""
     s = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
     return clamp(mu * mu_s + s * math.cos(scattering_nu_azimuth(i_nu, n_nu)), -1.0, 1.0)
-
-
-@helper(fastmath=CONTRACT_ARCP)
-def scattering_mu_texel(r: float, i_mu: int, bottom: float, top: float, n_mu: int) -> tuple[float, bool]:
-    """``(mu, hits_ground)`` of the ray from radius ``r`` [m] whose ``mu`` position in the 4D scattering tables
-    (the query's own mapping, :func:`scattering_r_mu_coord`) is texel ``i_mu`` of ``n_mu``: the inverse of
-    :func:`ground_mu_unit` in closed form in the ground half, of :func:`sky_mu_unit` by bisection in the zenith angle
-    (40 halvings of the horizon's zenith angle: 2e-12 rad) in the sky half. The directions at which the Earth's
-    shadow rule of the lookups marches the corners of a cell (:func:`.sampling.shadow_march_corners`)."""
-    rho, big_h, theta_h = horizon_constants(r, bottom, top)
-    half = n_mu // 2
-    if i_mu < half:
-        x = 1.0 - i_mu / (half - 1)
-        d_min = r - bottom
-        d = d_min + x * (rho - d_min)
-        if d <= 0.0:
-            return -1.0, True
-        return clamp(-(rho * rho + d * d) / (2.0 * r * d), -1.0, 1.0), True
-    x = (i_mu - half) / (half - 1)
-    if x <= 0.0:
-        return 1.0, False
-    if x >= 1.0:
-        return clamp(-rho / r, -1.0, 1.0), False
-    lo, hi = 0.0, theta_h
-    for _ in range(40):
-        mid = 0.5 * (lo + hi)
-        if sky_mu_unit(r, math.cos(mid), top, rho, big_h, theta_h) < x:
-            lo = mid
-        else:
-            hi = mid
-    return clamp(math.cos(0.5 * (lo + hi)), -1.0, 1.0), False
 
 
 @helper(fastmath=CONTRACT_ARCP)

@@ -42,16 +42,13 @@ from .geometry import (
     log_lerp_weight,
     point_along_ray,
     ray_hits_ground,
-    scattering_mu_texel,
+    scattering_nu_azimuth,
     scattering_nu_coord,
-    scattering_nu_param,
     scattering_r_mu_coord,
-    shadow_exit_distance,
     sky_mu_unit,
     transmittance_coord,
 )
 from .sampling import (
-    SHADOW_MARCH_ROWS,
     TABLE_PHASE,
     aerosol_phase,
     bilinear_read,
@@ -67,9 +64,9 @@ from .sampling import (
     r_mu_cell,
     r_mu_s_cell,
     rayleigh_phase,
-    shadow_march,
-    shadow_march_factor,
-    shadow_march_factors,
+    shadow_exit_altitudes,
+    shadow_exit_altitudes_cos,
+    shadow_ratios_fast,
     transmittance_ratio,
     transmittance_segment,
     transmittance_to_sun,
@@ -99,8 +96,8 @@ def _enter_atmosphere(px, py, pz, vx, vy, vz, top):
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _inscatter(transmittance, ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, mu_s_nodes, alpha, lobe,
-               p_r, p_m, p_m_spec, profiles, counts, buf, out):
+def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec, profiles,
+               counts, out):
     """Inscattered radiance ``S_R P_R + S_M P_M + S_multiple`` from the tables at a point, into ``out``
     (``p_r``, ``p_m``: phase functions at ``nu``; ``p_m_spec``, if not empty, the aerosol phase per wavelength,
     used instead of ``p_m``; ``lobe``: the weight of :func:`.sampling.multiple_lobe`, by which the multiple
@@ -108,14 +105,15 @@ def _inscatter(transmittance, ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top
 
     Along the azimuth (nu) the tables are interpolated log-linearly (:func:`.sampling.lookup4_cell`), except the
     single-scattering tables where the point lies in the Earth's shadow (:func:`.geometry.in_earth_shadow`, one
-    test): there the cell is interpolated linearly in every coordinate and multiplied per wavelength by the factor
-    of :func:`.sampling.shadow_march_factors` (the sunlight that the query's ray meets beyond its exit from the
-    shadow over the same for the cell's corners: the Rayleigh and aerosol densities ``profiles[0]``, ``profiles[1]``
-    of :func:`.compute.density_profiles`, ``counts`` their layers, times the ``transmittance`` table's to the sun, the
-    sun disc of angular radius ``alpha`` [rad]; ``mu_s_nodes`` the tables' sun zenith cosines).
-    ``buf`` (:data:`.sampling.SHADOW_MARCH_ROWS`, n_wavelengths): scratch. Measured on the single scattering against
-    the independent integral of ``tests/precomputed_reference.py`` and on the sky against the low-sun Monte Carlo
-    (docs/accuracy.md, "Low sun")."""
+    test): there with the weights of :func:`.sampling.shadow_nu_weights` (the rule of the second order's scattering
+    density; the Rayleigh and aerosol density profiles ``profiles[0]``, ``profiles[1]`` of
+    :func:`.compute.density_profiles`, ``counts`` their layers): each texel's light rescaled from the density where
+    its ray leaves the shadow to the density where the query's ray leaves it (at most 1), interpolated linearly.
+    Measured on the single scattering against the independent integral of ``tests/precomputed_reference.py``
+    (docs/accuracy.md, "Low sun"). The log-linear weight of the rescaled values is not used: where a texel's ray
+    leaves the shadow higher than the query's its factor is capped at 1 and the rescaled values still differ by 10
+    to 100 times, and the geometric interpolation of such a pair falls far below the light of the nearer texel
+    (Earth, sun -6 deg, 2 deg / 90 deg, 560 nm: -77 %, against +10 % linear; measured)."""
     for k in range(out.shape[0]):
         out[k] = 0.0
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
@@ -125,22 +123,16 @@ def _inscatter(transmittance, ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top
     i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
     if in_earth_shadow(r, mu_s, bottom):
-        shadow_march_factors(transmittance, r, mu, mu_s, nu, hits, mu_s_nodes[i_s], mu_s_nodes[i_s + 1], w_s, i_n, w_n,
-                             n_n, n_r, n_mu, bottom, top, alpha, profiles, counts, buf)
-        lin = buf[7]
-        for k in range(out.shape[0]):
-            lin[k] = 0.0
-        lookup4_cell_weighted(ray, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, 1.0 - w_n, w_n, p_r, lin)
-        for k in range(out.shape[0]):
-            out[k] += buf[0, k] * lin[k]
-            lin[k] = 0.0
+        h_q, h_0, h_1 = shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_n, bottom, top)
+        a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[0], counts[0])
+        lookup4_cell_weighted(ray, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * a, w_n * b, p_r, out)
+        a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[1], counts[1])
         if p_m_spec.shape[0]:
-            lookup4_cell_weighted_spectral(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, 1.0 - w_n, w_n,
-                                           p_m_spec, lin)
+            lookup4_cell_weighted_spectral(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * a,
+                                           w_n * b, p_m_spec, out)
         else:
-            lookup4_cell_weighted(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, 1.0 - w_n, w_n, p_m, lin)
-        for k in range(out.shape[0]):
-            out[k] += buf[1, k] * lin[k]
+            lookup4_cell_weighted(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * a, w_n * b, p_m,
+                                  out)
     else:
         lookup4_cell(ray, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, p_r, out)
         if p_m_spec.shape[0]:
@@ -222,16 +214,15 @@ def _ground_coords_block(m, gv, gmu, px, py, pz, sx, sy, sz, r, bottom, top, alp
 
 @kernel
 def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, bottom, top,
-               mu_s_min, mu_s_nodes, g, mie_kind, lobe, phase_mu, phase_values, profiles, counts, alpha, include_ground,
-               rad_out, tr_out, start, stop):
+               mu_s_min, g, mie_kind, lobe, phase_mu, phase_values, profiles, counts, alpha, include_ground, rad_out,
+               tr_out, start, stop):
     """Radiance [W m^-2 sr^-1 nm^-1] and transmittance along rays ``start..stop``; see the module docstring.
 
     Writes ``rad_out`` and ``tr_out`` (n_rays, n_wavelengths), which the caller initialises to 0 and 1
     (the values of rays that miss the atmosphere). ``lobe``: the weight of :func:`.sampling.multiple_lobe`. A
     tabulated aerosol phase (``mie_kind``
     :data:`.sampling.TABLE_PHASE`) is read per wavelength from ``phase_mu``, ``phase_values``; ``profiles``,
-    ``counts``: the density profiles of :func:`.compute.density_profiles` and ``mu_s_nodes`` the tables' sun zenith
-    cosines (the Earth's shadow, :func:`_inscatter`);
+    ``counts``: the density profiles of :func:`.compute.density_profiles` (the Earth's shadow, :func:`_inscatter`);
     """
     n_l = transmittance.shape[2]
     p_m_spec = np.empty(n_l if mie_kind == TABLE_PHASE else 0)
@@ -241,7 +232,6 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
     e_sky = np.empty(n_l)
     e_sun = np.empty(n_l)
     ground = np.empty(n_l)
-    buf = np.empty((SHADOW_MARCH_ROWS, n_l))
     for q in range(start, stop):
         vx, vy, vz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
         sx, sy, sz = suns[q, 0], suns[q, 1], suns[q, 2]
@@ -268,14 +258,14 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
                 for k in range(n_l):
                     c[k] = 0.0
             else:
-                _inscatter(transmittance, ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min,
-                           mu_s_nodes, alpha, lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c)
+                _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m,
+                           p_m_spec, profiles, counts, c)
             transmittance_segment(transmittance, rc, mu, l_sh, hits, bottom, top, t, tmp)
             for k in range(n_l):
                 c[k] *= t[k]
         else:
-            _inscatter(transmittance, ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, mu_s_nodes, alpha,
-                       lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c)
+            _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec,
+                       profiles, counts, c)
         for k in range(n_l):
             rad_out[q, k] = c[k]
         if hits and include_ground:
@@ -471,112 +461,40 @@ def _observer_nu_weights(slices, slices1, two_rows, n_nu, n_c, cell, w_mu, cell1
             wt[k] = log_lerp_weight(e0[k], e1[k], np.float32(w_nu[k]))
 
 
-@kernel
-def observer_shadow_marches(transmittance, r, mu_s_0, mu_s_1, w_s, n_mu, n_nu, bottom, top, alpha, profiles, counts,
-                            out, start, stop):
-    """For an observer at radius ``r`` [m] in the Earth's shadow, the marches of :func:`.sampling.shadow_march` at
-    the texels of its slices, the sun zenith texels ``mu_s_0``, ``mu_s_1`` summed with their weights (``w_s`` the
-    second's): ``out[i_mu * n_nu + i_nu, t, k]`` (t 0 Rayleigh, 1 aerosol) for mu texels ``start..stop`` of ``n_mu``
-    (:func:`.geometry.scattering_mu_texel` at ``r``) and every nu texel of ``n_nu``. The corners of
-    :func:`.sampling.shadow_march_corners` do not depend on the view direction for one observer and one sun: computed
-    here once, each ray of :func:`observer_kernel` then marches only its own ray (:func:`_observer_shadow_single`).
-    ``alpha``: the sun's angular radius [rad]; ``profiles``, ``counts``: :func:`.compute.density_profiles`."""
-    n_l = out.shape[2]
-    tmp_r = np.empty(n_l)
-    tmp_m = np.empty(n_l)
-    tmp = np.empty(n_l)
-    for j in range(start, stop):
-        mu_j, hits_j = scattering_mu_texel(r, j, bottom, top, n_mu)
-        for i in range(n_nu):
-            row = out[j * n_nu + i]
-            for k in range(n_l):
-                row[0, k] = 0.0
-                row[1, k] = 0.0
-            for c in range(2):
-                wc = w_s if c else 1.0 - w_s
-                if wc == 0.0:
-                    continue
-                ms = mu_s_1 if c else mu_s_0
-                shadow_march(transmittance, r, mu_j, ms, scattering_nu_param(i, mu_j, ms, n_nu), hits_j, bottom, top,
-                             alpha, profiles, counts, tmp_r, tmp_m, tmp)
-                for k in range(n_l):
-                    row[0, k] += wc * tmp_r[k]
-                    row[1, k] += wc * tmp_m[k]
-
-
 @helper(fastmath=CONTRACT_ARCP)
-def _observer_shadow_single(dirs, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, n_r, n_mu, n_nu, transmittance,
-                            alpha, profiles, counts, marches, spec, spec1, two_rows, projection, identity, cell, w_mu,
-                            cell1, w_mu1, w_nu, kind, p_r, p_m, buf, out):
-    """For an observer in the Earth's shadow (:func:`.geometry.in_earth_shadow`), the single scattering of a block
-    of rays (flat x, y, z triples ``dirs``; cells, linear azimuth weights and kinds of :func:`_observer_coords`, the
-    ground rays' and the rows' cells set) by the rule of :func:`_inscatter`: the spectral slices ``spec`` (and
-    ``spec1``, the upper row's share, with ``two_rows``; :func:`observer_slices` with the identity projection)
-    interpolated linearly, times the factors of :func:`.sampling.shadow_march_factors` per wavelength (the query's
-    march over ``marches`` of :func:`observer_shadow_marches` interpolated with the cell's weights), with the phase
-    factors ``p_r``, ``p_m``, projected with ``projection`` (``identity``: the identity matrix, not multiplied)
-    into ``out`` (m, C); ``p_r`` and ``p_m`` are then set to
-    0, so that the gather of the projected slices (:func:`_observer_gather`) gives only the multiple scattering.
-    ``r``: the observer's radius, ``rc`` the same clamped to the atmosphere; ``mu_s`` the sun zenith cosine of the
-    slices (at least the tables' limit). ``buf`` (:data:`.sampling.SHADOW_MARCH_ROWS`, n_wavelengths):
-    scratch."""
+def _observer_shadow_weights(dirs, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, cos_phi, profiles, counts,
+                             cell, w_nu, w_tab, p_r, p_m):
+    """For an observer in the Earth's shadow (:func:`.geometry.in_earth_shadow`), the azimuth weights of the two
+    single-scattering tables of a block of rays (flat x, y, z triples ``dirs``; cells and linear weights of
+    :func:`_observer_coords`) by the rule of :func:`_inscatter` (:func:`.sampling.shadow_nu_weights`): the texels'
+    weights ``(1 - w) a`` and ``w b`` are written as their sum, folded into the phase factors ``p_r``, ``p_m``, and
+    the share of the second, in ``w_tab[0]``, ``w_tab[1]``, so that the gather (:func:`_observer_gather`) is that of
+    the lit sky. ``r``: the observer's radius, ``rc`` the same clamped to the atmosphere; ``mu_s`` the sun zenith
+    cosine of the slices (at least the tables' limit); ``cos_phi`` the cosines of the texels' azimuths
+    (:func:`.geometry.scattering_nu_azimuth`)."""
     inv_r = 1.0 / r
-    half = n_mu // 2
-    n_l = buf.shape[1]
-    n_c = out.shape[1]
+    n_nu = cos_phi.shape[0]
     for k in range(cell.shape[0]):
-        for ch in range(n_c):
-            out[k, ch] = 0.0
-        if kind[k] == 0:
-            continue
         vx = dirs[3 * k]
         vy = dirs[3 * k + 1]
         vz = dirs[3 * k + 2]
-        inv = 1.0 / math.sqrt(vx * vx + vy * vy + vz * vz)
+        n2 = vx * vx + vy * vy + vz * vz
+        inv = 1.0 / math.sqrt(n2) if n2 > 0.0 and n2 < math.inf else 0.0
         mu = clamp((px * vx + py * vy + pz * vz) * (inv * inv_r), -1.0, 1.0)
         nu = clamp((vx * sx + vy * sy + vz * sz) * inv, -1.0, 1.0)
-        hits = kind[k] == 2
-        pr = p_r[k]
-        pm = p_m[k]
-        p_r[k] = 0.0
-        p_m[k] = 0.0
-        if not shadow_exit_distance(rc, mu, mu_s, nu, bottom) < distance_to_boundary(rc, mu, hits, bottom, top):
-            continue  # the ray never leaves the shadow: no single scattering
-        shadow_march(transmittance, rc, mu, mu_s, nu, hits, bottom, top, alpha, profiles, counts, buf[0], buf[1],
-                     buf[6])
-        _, p_q = scattering_r_mu_coord(rc, mu, hits, bottom, top, n_r, n_mu)
-        i_q, w_q = lerp_index(p_q, 0, half - 1) if hits else lerp_index(p_q, half, n_mu - 1)
         i_n = cell[k] % n_nu
-        w_n = w_nu[k]
-        c00 = i_q * n_nu + i_n
-        c10 = c00 + n_nu
-        m00, m01, m10, m11 = bilinear_weights(w_q, w_n)
-        a = cell[k]
-        b = a + n_nu
-        s00, s01, s10, s11 = bilinear_weights(w_mu[k], w_n)
-        a1 = cell1[k]
-        b1 = a1 + n_nu
-        u00, u01, u10, u11 = bilinear_weights(w_mu1[k], w_n)
+        h_q, h_0, h_1 = shadow_exit_altitudes_cos(rc, mu, mu_s, nu, cos_phi[i_n], cos_phi[i_n + 1], bottom, top)
+        w = w_nu[k]
         for t in range(2):
-            ph = pm if t else pr
-            for q in range(n_l):
-                den = (m00 * marches[c00, t, q] + m01 * marches[c00 + 1, t, q] + m10 * marches[c10, t, q]
-                       + m11 * marches[c10 + 1, t, q])
-                lin = (s00 * spec[a, q, t] + s01 * spec[a + 1, q, t] + s10 * spec[b, q, t]
-                       + s11 * spec[b + 1, q, t])
-                if two_rows:
-                    lin += (u00 * spec1[a1, q, t] + u01 * spec1[a1 + 1, q, t] + u10 * spec1[b1, q, t]
-                            + u11 * spec1[b1 + 1, q, t])
-                buf[2 + t, q] = ph * shadow_march_factor(buf[t, q], den) * lin
-        if identity:
-            for q in range(n_l):
-                out[k, q] = buf[2, q] + buf[3, q]
-        else:
-            for ch in range(n_c):
-                acc = 0.0
-                for q in range(n_l):
-                    acc += projection[ch, q] * (buf[2, q] + buf[3, q])
-                out[k, ch] = acc
+            a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[t], counts[t])
+            n0 = (1.0 - w) * a
+            n1 = w * b
+            total = n0 + n1
+            w_tab[t, k] = n1 / total if total > 0.0 else w
+            if t == 0:
+                p_r[k] *= total
+            else:
+                p_m[k] *= total
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -627,9 +545,8 @@ def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, p_l, out):
 
 
 @kernel
-def observer_kernel(position, sun, slices, spec, marches, n_r, transmittance, irradiance, albedo, solar, projection,
-                    bottom, top, mu_s_min, g, mie_kind, lobe, profiles, counts, alpha, include_ground, dirs, out, bad,
-                    start, stop):
+def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albedo, solar, projection, bottom, top,
+                    mu_s_min, g, mie_kind, lobe, profiles, counts, alpha, include_ground, dirs, out, bad, start, stop):
     """:func:`sky_kernel`'s radiance (no shadows) for rays ``start..stop`` from one ``position`` inside the
     atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C)); ``slices`` of
     :func:`observer_slices` from 4D tables of ``n_r`` radii.
@@ -639,13 +556,11 @@ def observer_kernel(position, sun, slices, spec, marches, n_r, transmittance, ir
     and then projected with ``projection`` (C, n_wavelengths). ``dirs`` need not be unit vectors; a zero,
     infinite or NaN one sets ``bad[q]`` (the caller raises). Rays go in blocks of :data:`OBSERVER_BLOCK` in
     passes: coordinates (vectorised), the ground half's ``mu`` cell for rays that meet the ground (only in blocks
-    that have such rays or bad directions), the azimuth weights (vectorised), for an observer in the Earth's shadow
-    (a test once per call) the single scattering per wavelength from ``spec`` (:func:`observer_slices` with the
-    identity projection) and ``marches`` (:func:`observer_shadow_marches`) by :func:`_observer_shadow_single`, table
-    reads, then for the rays that meet the ground the coordinates of the ground term (vectorised) and its spectrum,
-    projected. ``mu_s_min``: the tables' sun limit; ``profiles``, ``counts``: the density profiles of
-    :func:`.compute.density_profiles`. ``spec`` and ``marches`` are read only for an observer in the shadow (the
-    caller passes them then; empty arrays otherwise).
+    that have such rays or bad directions), the azimuth weights (vectorised; for an observer in the Earth's shadow,
+    a test once per call, those of the single scattering then with the shadow factors of
+    :func:`_observer_shadow_weights`), table reads, then for the rays that meet the ground the coordinates of the
+    ground term (vectorised) and its spectrum, projected. ``mu_s_min``: the tables' sun limit; ``profiles``,
+    ``counts``: the density profiles of :func:`.compute.density_profiles`.
     """
     n_l = transmittance.shape[2]
     n_c = out.shape[1]  # slices: n_c channels and the sums over wavelengths
@@ -684,17 +599,10 @@ def observer_kernel(position, sun, slices, spec, marches, n_r, transmittance, ir
     rho, big_h, theta_h = horizon_constants(rc, bottom, top)
     two_rows = observer_two_rows(rc, bottom, top, n_r)
     mu_s_t = max(mu_s, mu_s_min)  # the sun of the slices (observer_slices)
-    # the single scattering per wavelength (_observer_shadow_single) where the observer is in the Earth's shadow
-    shadowed = in_earth_shadow(rc, mu_s_t, bottom) and marches.shape[0] > 0
-    n_sh = n_l if shadowed else 0
-    spec0 = spec[0].reshape(n_mu * n_nu, spec.shape[3], 4) if shadowed else flat
-    spec1 = spec[1].reshape(n_mu * n_nu, spec.shape[3], 4) if shadowed else flat1
-    sh_buf = np.empty((SHADOW_MARCH_ROWS, n_sh))
-    sh_out = np.empty((OBSERVER_BLOCK, n_c))
-    identity = n_c == n_l
-    for ch in range(n_c if identity else 0):
-        for q in range(n_l):
-            identity = identity and projection[ch, q] == (1.0 if ch == q else 0.0)
+    shadowed = in_earth_shadow(rc, mu_s_t, bottom)
+    cos_phi = np.empty(n_nu)
+    for i in range(n_nu):
+        cos_phi[i] = math.cos(scattering_nu_azimuth(i, n_nu))
     flat_dirs = dirs.reshape(-1)
     for b0 in range(start, stop, OBSERVER_BLOCK):
         b1 = min(b0 + OBSERVER_BLOCK, stop)
@@ -728,15 +636,9 @@ def observer_kernel(position, sun, slices, spec, marches, n_r, transmittance, ir
         _observer_nu_weights(flat, flat1, two_rows, n_nu, n_c, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m], w_nu[:m],
                              w_tab, ends)
         if shadowed:
-            _observer_shadow_single(block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, n_r, n_mu, n_nu,
-                                    transmittance, alpha, profiles, counts, marches, spec0, spec1, two_rows,
-                                    projection, identity, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m], w_nu[:m], kind[:m],
-                                    p_r[:m], p_m[:m], sh_buf, sh_out[:m])
+            _observer_shadow_weights(block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, cos_phi, profiles,
+                                     counts, cell[:m], w_nu[:m], w_tab, p_r[:m], p_m[:m])
         _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_tab, p_r[:m], p_m[:m], p_l[:m], out[b0:b1])
-        if shadowed:
-            for k in range(m):
-                for ch in range(n_c):
-                    out[b0 + k, ch] += sh_out[k, ch]
         if two_rows:
             _observer_gather(flat1, n_nu, cell1[:m], w_mu1[:m], w_tab, p_r[:m], p_m[:m], p_l[:m], upper[:m])
             for k in range(m):
@@ -817,7 +719,6 @@ def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0,
     slices = np.zeros((2, n_mu, n_nu, n_c + 1, 4))
     acc = np.empty(ray0.shape[3])
     n_rays = dirs.shape[0]
-    no_marches = np.empty((0, 2, ray0.shape[3]))
     two_rows = observer_two_rows(r_slices, bottom, top, n_r)
     for h in range(start, stop):
         slices[:] = 0.0
@@ -828,42 +729,36 @@ def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0,
             _slice_layers(ray0, ray1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 0, acc, slices)
             _slice_layers(mie0, mie1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 1, acc, slices)
             _slice_layers(mult0, mult1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 2, acc, slices)
-        # no suns that put the observer in the Earth's shadow here (the caller sends those to observer_kernel with
-        # the spectral slices and marches its single scattering needs)
-        observer_kernel(position, suns[h], slices, slices, no_marches, n_r, transmittance, irradiance, albedo, solar,
-                        projection, bottom, top, mu_s_min, g, mie_kind, lobe, profiles, counts, alpha, include_ground,
-                        dirs, out[h], bad[h], 0, n_rays)
+        observer_kernel(position, suns[h], slices, n_r, transmittance, irradiance, albedo, solar, projection,
+                        bottom, top, mu_s_min, g, mie_kind, lobe, profiles, counts, alpha, include_ground, dirs, out[h],
+                        bad[h], 0, n_rays)
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, mu_s_nodes,
-                        alpha, lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c, t, c2, tmp):
-    """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``
-    (:func:`_inscatter`: ``mu_s_nodes`` the tables' sun zenith cosines, ``alpha`` the sun's angular radius [rad],
-    ``lobe`` the weight of :func:`.sampling.multiple_lobe`, ``buf`` scratch)."""
-    _inscatter(transmittance, ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, mu_s_nodes, alpha, lobe,
-               p_r, p_m, p_m_spec, profiles, counts, buf, c)
+def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, lobe, p_r,
+                        p_m, p_m_spec, profiles, counts, c, t, c2, tmp):
+    """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``."""
+    _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec, profiles,
+               counts, c)
     r_p, mu_p = point_along_ray(r, mu, d, bottom, top)
     mu_s_p = clamp((r * mu_s + d * nu) / r_p, -1.0, 1.0)
-    _inscatter(transmittance, ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, mu_s_nodes, alpha,
-               lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c2)
+    _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec,
+               profiles, counts, c2)
     transmittance_segment(transmittance, r, mu, d, hits, bottom, top, t, tmp)
     for k in range(c.shape[0]):
         c[k] = max(c[k] - t[k] * c2[k], 0.0)
 
 
 @kernel
-def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, mu_s_nodes, g,
-                  mie_kind, lobe, phase_mu, phase_values, profiles, counts, alpha, tr_out, in_out, start, stop):
+def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, g, mie_kind,
+                  lobe, phase_mu, phase_values, profiles, counts, tr_out, in_out, start, stop):
     """Transmittance and inscattered radiance between cameras and points (Eqs. 16-17), rays ``start..stop``.
 
     Writes ``tr_out`` (initialised to 1) and ``in_out`` (initialised to 0), each (n_rays, n_wavelengths).
     ``shadow`` is the shadowed length [m] of each ray, moved to the point's end as in Eq. 17; ``profiles``,
-    ``counts``: the density profiles of :func:`.compute.density_profiles`, ``mu_s_nodes`` the tables' sun zenith
-    cosines and ``alpha`` the sun's angular radius [rad] (the Earth's shadow, :func:`_inscatter`).
+    ``counts``: the density profiles of :func:`.compute.density_profiles` (the Earth's shadow, :func:`_inscatter`).
     """
     n_l = transmittance.shape[2]
-    buf = np.empty((SHADOW_MARCH_ROWS, n_l))
     c = np.empty(n_l)
     t = np.empty(n_l)
     c2 = np.empty(n_l)
@@ -907,18 +802,15 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
             mu_lo = mu_h - HORIZON_EPSILON
             mu_hi = mu_h + HORIZON_EPSILON
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_lo, mu_s, nu, d_lit, True, bottom, top,
-                                mu_s_min, mu_s_nodes, alpha, lobe, p_r, p_m, p_m_spec, profiles, counts, buf, lo_c, t,
-                                c2, tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, lo_c, t, c2, tmp)
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_hi, mu_s, nu, d_lit, False, bottom, top,
-                                mu_s_min, mu_s_nodes, alpha, lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c, t, c2,
-                                tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
             a = (mu - mu_lo) / (mu_hi - mu_lo)
             for k in range(n_l):
                 c[k] = (1.0 - a) * lo_c[k] + a * c[k]
         else:
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu, mu_s, nu, d_lit, hits, bottom, top,
-                                mu_s_min, mu_s_nodes, alpha, lobe, p_r, p_m, p_m_spec, profiles, counts, buf, c, t, c2,
-                                tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
         for k in range(n_l):
             in_out[q, k] = c[k]
 

@@ -26,8 +26,6 @@ from .geometry import (
     acos_table,
     bilinear_weights,
     clamp,
-    distance_to_boundary,
-    distance_to_top,
     irradiance_coord,
     irradiance_log_cell,
     irradiance_log_nodes,
@@ -36,13 +34,11 @@ from .geometry import (
     log_quadratic_weight,
     point_along_ray,
     scattering_mu_s_coord,
-    scattering_mu_texel,
     scattering_nu_coord,
     scattering_nu_param,
     scattering_r_mu_coord,
     scattering_r_mu_rows,
     shadow_exit_altitude,
-    shadow_exit_distance,
     transmittance_coord,
 )
 
@@ -59,9 +55,7 @@ PI = math.pi
 #: ``tests/precomputed_reference.py`` on its own texel values where the uncapped ratio gives -1 to -2 % (aerosol
 #: -28 to -40 % against -1 to +4 %). Bounded because the tables' shadow is the sun disc's, soft, and their
 #: penumbra times an unbounded ratio was 10^5 to 10^13 times too bright (measured); 2 against the stored Monte Carlo
-#: (docs/accuracy.md, "Low sun"): Earth defaults 11 -> 7 of 75 directions outside, the hazy skies unchanged. The
-#: rendering lookups now bound the march's factor with it (:func:`shadow_march_factor`); :func:`shadow_ratios_fast`
-#: is the GLSL library's rule, kept for comparison.
+#: (docs/accuracy.md, "Low sun"): Earth defaults 11 -> 7 of 75 directions outside, the hazy skies unchanged.
 SHADOW_RATIO_MAX = 2.0
 _LOG_SHADOW_RATIO_MAX = math.log(SHADOW_RATIO_MAX)
 
@@ -546,162 +540,6 @@ def shadow_ratios_fast(h_q, h_0, h_1, profile, n_layers):
         x1 = sc * (h_q - h_1)
         return math.exp(min(x0, _LOG_SHADOW_RATIO_MAX)), math.exp(min(x1, _LOG_SHADOW_RATIO_MAX))
     return shadow_ratios(h_q, h_0, h_1, profile, n_layers, SHADOW_RATIO_MAX)
-
-
-#: Gauss-Legendre nodes and weights on [-1, 1] of 4 points ([Abramowitz1964] Table 25.4) and the ends of the pieces
-#: of :func:`shadow_march`, fractions of the lit part of the ray growing geometrically from the shadow's exit.
-_MARCH_X = (-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526)
-_MARCH_W = (0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538)
-_MARCH_EDGES = (0.0, 1e-3, 1e-2, 1e-1, 1.0)
-
-
-@helper
-def shadow_march(transmittance, r, mu, mu_s, nu, hits_ground, bottom, top, alpha, profiles, counts, out_r, out_m,
-                 tmp):
-    """The sunlit densities along the ray from radius ``r`` [m] (view zenith cosine ``mu``, sun zenith cosine
-    ``mu_s``, view-sun cosine ``nu``) beyond its exit from the Earth's shadow, per wavelength:
-    ``out_r[k] = integral rho_R(y) T_sun(y)_k dy`` and ``out_m[k]`` the same with the aerosol density [m], from the
-    exit (:func:`.geometry.shadow_exit_distance`) to the ray's end (the ground if ``hits_ground``, else the top).
-    ``rho``: the Rayleigh and aerosol profiles ``profiles[0]``, ``profiles[1]`` (``counts`` layers) of
-    :func:`.compute.density_profiles` (Bruneton & Neyret 2008, Eqs. 1 and 3); ``T_sun``: the transmittance table's
-    to the sun times the visible fraction of its disc of angular radius ``alpha`` [rad]
-    (:func:`transmittance_to_sun`, as the single-scattering tables have it). Quadrature: 4 Gauss-Legendre pieces
-    of 4 nodes each ([Abramowitz1964] Eq. 25.4.29), the pieces' ends at 0, 10^-3, 10^-2, 10^-1 and 1 of the lit
-    length (the light comes mostly from just beyond the exit, where the density is highest). 0 where the ray never
-    leaves the shadow. This is the single-scattering integral (Bruneton & Neyret 2008, Eq. 6) without the view
-    transmittance, nearly common to the rays of one azimuth cell (the same r and mu: they differ only beyond the
-    exit, above 10-20 km, where little air is left); ``tmp`` (n_wavelengths,) scratch."""
-    n_l = out_r.shape[0]
-    for k in range(n_l):
-        out_r[k] = 0.0
-        out_m[k] = 0.0
-    t0 = shadow_exit_distance(r, mu, mu_s, nu, bottom)
-    t1 = distance_to_boundary(r, mu, hits_ground, bottom, top)
-    if not t0 < t1:
-        return
-    span = t1 - t0
-    n_tr, n_tmu = transmittance.shape[0], transmittance.shape[1]
-    big_h = math.sqrt(top * top - bottom * bottom)
-    for p in range(len(_MARCH_EDGES) - 1):
-        a = t0 + span * _MARCH_EDGES[p]
-        b = t0 + span * _MARCH_EDGES[p + 1]
-        half = 0.5 * (b - a)
-        mid = 0.5 * (a + b)
-        for j in range(len(_MARCH_X)):
-            t = mid + half * _MARCH_X[j]
-            ry = clamp(math.sqrt(max(t * t + 2.0 * r * mu * t + r * r, 0.0)), bottom, top)
-            ms = clamp((r * mu_s + t * nu) / ry, -1.0, 1.0)
-            # transmittance_to_sun inlined (it runs 16 times per lookup): the disc's visible fraction of
-            # sun_visible_fraction with the horizon's cosine -rho / r (one square root shared with the table's
-            # coordinates, transmittance_coord) and no arc cosine where the whole disc is up
-            rho = math.sqrt(max(ry * ry - bottom * bottom, 0.0))
-            hd = (ms + rho / ry) / (max(bottom / ry, 1e-6) * alpha)
-            if hd <= -1.0:
-                continue
-            f = 1.0 if hd >= 1.0 else 0.5 + (hd * math.sqrt(1.0 - hd * hd) + (0.5 * PI - acos_table(hd))) / PI
-            d = distance_to_top(ry, ms, top)
-            d_min = top - ry
-            d_max = rho + big_h
-            x_mu = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
-            bilinear_read(transmittance, clamp(rho / big_h, 0.0, 1.0) * (n_tr - 1), clamp(x_mu, 0.0, 1.0) * (n_tmu - 1),
-                          tmp)
-            h = ry - bottom
-            wr = half * _MARCH_W[j] * f * density_at(profiles[0], counts[0], h)
-            wm = half * _MARCH_W[j] * f * density_at(profiles[1], counts[1], h)
-            for k in range(n_l):
-                out_r[k] += wr * tmp[k]
-                out_m[k] += wm * tmp[k]
-
-
-#: Rows of the scratch buffer of :func:`shadow_march_factors` (n_wavelengths each).
-SHADOW_MARCH_ROWS = 8
-
-
-@helper
-def shadow_march_corners(transmittance, r, i_q, w_q, mu_s_0, mu_s_1, w_s, i_n, w_n, n_nu, n_mu, bottom, top, alpha,
-                         profiles, counts, den_r, den_m, tmp_r, tmp_m, tmp):
-    """The marches of :func:`shadow_march` at the (mu, mu_s, nu) corners of a cell of the single-scattering tables,
-    interpolated as the table is: ``den_r[k] = sum_c w_c M_R(c)[k]``, ``den_m`` the same for the aerosol [m]. Each
-    corner ray starts at the query's radius ``r`` [m] with the direction of mu texel ``i_q`` or ``i_q + 1`` at that
-    radius (:func:`.geometry.scattering_mu_texel`; ``w_q`` the weight of the second), the sun at the cell's sun
-    zenith texels ``mu_s_0``, ``mu_s_1`` (``w_s``) and the azimuth of nu texel ``i_n`` or ``i_n + 1`` of ``n_nu``
-    (``w_n``; :func:`.geometry.scattering_nu_param` at the corner's mu and mu_s). Corners of weight 0 are not
-    marched. ``tmp_r``, ``tmp_m``, ``tmp`` (n_wavelengths,): scratch."""
-    n_l = den_r.shape[0]
-    for k in range(n_l):
-        den_r[k] = 0.0
-        den_m[k] = 0.0
-    for b in range(2):
-        wb = w_q if b else 1.0 - w_q
-        if wb == 0.0:
-            continue
-        mu_b, hits_b = scattering_mu_texel(r, i_q + b, bottom, top, n_mu)
-        for c in range(2):
-            wc = wb * (w_s if c else 1.0 - w_s)
-            if wc == 0.0:
-                continue
-            ms = mu_s_1 if c else mu_s_0
-            for e in range(2):
-                we = wc * (w_n if e else 1.0 - w_n)
-                if we == 0.0:
-                    continue
-                shadow_march(transmittance, r, mu_b, ms, scattering_nu_param(i_n + e, mu_b, ms, n_nu), hits_b,
-                             bottom, top, alpha, profiles, counts, tmp_r, tmp_m, tmp)
-                for k in range(n_l):
-                    den_r[k] += we * tmp_r[k]
-                    den_m[k] += we * tmp_m[k]
-
-
-@helper
-def shadow_march_factor(m_q, den):
-    """Shadow factor of the single scattering at one wavelength: the query's march ``m_q`` over the cell's
-    interpolated marches ``den`` [m] (:func:`shadow_march_corners`), at most :data:`SHADOW_RATIO_MAX`; 0 where no
-    corner ray leaves the shadow."""
-    return min(m_q / den, SHADOW_RATIO_MAX) if den > 0.0 else 0.0
-
-
-@helper
-def shadow_march_factors(transmittance, r, mu, mu_s, nu, hits_ground, mu_s_0, mu_s_1, w_s, i_n, w_n, n_nu, n_r,
-                         n_mu, bottom, top, alpha, profiles, counts, buf):
-    """Per-wavelength factors of the single scattering read from a point in the Earth's shadow (radius ``r`` [m],
-    view zenith cosine ``mu``, sun zenith cosine ``mu_s``, view-sun cosine ``nu``): ``buf[0, k]`` for the Rayleigh
-    table and ``buf[1, k]`` for the aerosol one, by which the table's interpolation, linear in every coordinate, is
-    multiplied: ``F = min(M(q) / sum_c w_c M(c), SHADOW_RATIO_MAX)``, ``M = integral rho(y) T_sun(y) dy`` from the
-    ray's exit from the geometric shadow to its end (:func:`shadow_march`; the query's ray ``M(q)``, the cell's
-    (mu, mu_s, nu) corners ``M(c)`` with the table's weights, :func:`shadow_march_corners`; the cell's sun zenith
-    texels ``mu_s_0``, ``mu_s_1`` with weight ``w_s``, its azimuth texels ``i_n``, ``i_n + 1`` of ``n_nu`` with the
-    linear weight ``w_n``; ``n_r``, ``n_mu`` the tables' radius and view zenith sizes). 0 where the query's ray never
-    leaves the shadow. ``buf`` (:data:`SHADOW_MARCH_ROWS`, n_wavelengths): rows 2-6 scratch.
-
-    A ray that starts in the shadow scatters sunlight only beyond its exit, where the sunlight has grazed the ground:
-    the singly scattered light follows the sunlit density ``rho T_sun`` along the ray, not the density at the exit
-    (the rule before, one factor for all wavelengths: +102 / +10 / -25 % at 400 / 560 / 700 nm 2 deg up at 90 deg
-    from a sun 6 deg below the horizon, Earth defaults, on the independent integrals of
-    ``tests/precomputed_reference.py`` as texel values; the march within 4 % in every cell measured,
-    ``benchmarks/shadow_rule_low_sun.py``; docs/accuracy.md, "Low sun"). The table divided by the march (the view
-    transmittance and constants) varies slowly across a cell where the single scattering falls by orders of
-    magnitude; the corners' marches at the texels' own mu, mu_s and nu (the query's radius), so that the rule holds
-    at every texel and depends on the view direction only through the query's march and the cell's weights (the
-    corners of an observer's rays are computed once per observer: :func:`.lookup.observer_shadow_marches`). The
-    ratio of the interpolations, not the interpolation of the ratios: those jumped 70-180 times between view
-    elevations 0.01 deg apart where a corner's march starts (measured); bounded as the density rule was (the tables'
-    shadow is the sun disc's, soft)."""
-    n_l = buf.shape[1]
-    if not shadow_exit_distance(r, mu, mu_s, nu, bottom) < distance_to_boundary(r, mu, hits_ground, bottom, top):
-        for k in range(n_l):  # the query's ray never leaves the shadow: no single scattering
-            buf[0, k] = 0.0
-            buf[1, k] = 0.0
-        return
-    shadow_march(transmittance, r, mu, mu_s, nu, hits_ground, bottom, top, alpha, profiles, counts, buf[0], buf[1],
-                 buf[6])
-    _, p_mu = scattering_r_mu_coord(r, mu, hits_ground, bottom, top, n_r, n_mu)
-    half = n_mu // 2
-    i_q, w_q = lerp_index(p_mu, 0, half - 1) if hits_ground else lerp_index(p_mu, half, n_mu - 1)
-    shadow_march_corners(transmittance, r, i_q, w_q, mu_s_0, mu_s_1, w_s, i_n, w_n, n_nu, n_mu, bottom, top, alpha,
-                         profiles, counts, buf[2], buf[3], buf[4], buf[5], buf[6])
-    for k in range(n_l):
-        buf[0, k] = shadow_march_factor(buf[0, k], buf[2, k])
-        buf[1, k] = shadow_march_factor(buf[1, k], buf[3, k])
 
 
 @helper

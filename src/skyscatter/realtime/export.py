@@ -46,13 +46,12 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
   interpolated linearly in (mu_s, mu, r) (:func:`skyscatter.precomputed.sampling.nu_weight`), and apply it to every
   wavelength: the texture unit's trilinear read of A gives those two values, so a shader computes the same weight
   and applies it to RGB (``log_lerp_weight`` and ``azimuth_lerp`` of the mappings). Except for the single scattering
-  where the point is in the Earth's shadow (manifest version 3; version 11): there the library interpolates the two
-  slices linearly and multiplies each colour channel by the sunlight its ray meets beyond its exit from the shadow
-  over the same for the cell's corners (``shadow_march_factors`` of the mappings, a march on the transmittance
-  texture; the lookups do it per wavelength, :func:`skyscatter.precomputed.sampling.shadow_march_factors`, which a
-  per-channel factor of folded colours does not reproduce exactly; ``single_scattering_lerp``, with the density
-  profiles ``RAYLEIGH_DENSITY``, ``MIE_DENSITY`` of the constants). The luminance (Y) that A held in manifest
-  version 1 is the RGB's dot product with ``hdr_scale.luminance_from_rgb``.
+  where the point is in the Earth's shadow (manifest version 3): there the library interpolates the two slices
+  linearly, each times the density of its constituent where the query's ray leaves the shadow over that where the
+  slice's ray leaves it, at most 1 (:func:`skyscatter.precomputed.sampling.shadow_nu_weights`;
+  ``single_scattering_lerp``, ``shadow_factors`` of the mappings, with the density profiles ``RAYLEIGH_DENSITY``,
+  ``MIE_DENSITY`` of the constants). The luminance (Y) that A held in manifest version 1 is the RGB's dot product
+  with ``hdr_scale.luminance_from_rgb``.
 
 in ``.rgba32f`` (float32), ``.rgba16f`` (IEEE half) and ``.exr`` (OpenEXR, float32 R, G, B, A; a 3D texture's
 depth slices stacked vertically) form, with ``skyscatter_realtime.json``: the version, sizes, constants, units, the
@@ -100,11 +99,8 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: lookups read each wavelength with its own), the alpha is no longer read. 10: the multiple-scattering texture holds
 #: the multiple scattering divided by the lobe MultipleLobe(nu) (constants MULTIPLE_LOBE, MULTIPLE_LOBE_G; multiple_lobe
 #: and inscattered_radiance of the mappings; skyscatter table format 19); the irradiance texture's alpha is 0 (was the
-#: illuminance, unread since version 9). 11: the single scattering where the point is in the Earth's shadow is read
-#: linearly and scaled per colour channel by a march of the sunlight beyond the ray's exit from the shadow
-#: (single_scattering_lerp takes the ray's hits_ground and the transmittance texture's sampler; shadow_march,
-#: shadow_march_factors of the mappings; GLSL ShadowMarch, ShadowMarchFactors).
-MANIFEST_VERSION = 11
+#: illuminance, unread since version 9).
+MANIFEST_VERSION = 10
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -338,155 +334,12 @@ def shadow_lerp(s0, s1, w, f):
     (shadow_factors)."""
     return [(1.0 - w) * f[0] * a + w * f[1] * b for a, b in zip(s0[:3], s1[:3])]
 
-def single_scattering_lerp(s0, s1, r, mu, mu_s, nu, w, constituent, hits_ground, transmittance):
-    """A single-scattering lookup ("rayleigh" or "mie") between its two nu slices: where the point is in the Earth's
-    shadow linear, times shadow_march_factors per channel (transmittance: the transmittance texture's sampler,
-    uv -> RGBA), else azimuth_lerp (the multiple scattering is always azimuth_lerp)."""
+def single_scattering_lerp(s0, s1, r, mu, mu_s, nu, w, constituent):
+    """A single-scattering lookup ("rayleigh" or "mie") between its two nu slices: shadow_lerp where the point is in
+    the Earth's shadow, else azimuth_lerp (the multiple scattering is always azimuth_lerp)."""
     if in_earth_shadow(r, max(mu_s, MU_S_MIN)):
-        f = shadow_march_factors(transmittance, r, mu, mu_s, nu, hits_ground)[0 if constituent == "rayleigh" else 1]
-        return [k * x for k, x in zip(f, shadow_lerp(s0, s1, w, (1.0, 1.0)))]
+        return shadow_lerp(s0, s1, w, shadow_factors(r, mu, mu_s, nu, constituent))
     return azimuth_lerp(s0, s1, w)
-
-MARCH_X = (-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526)
-MARCH_W = (0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538)
-MARCH_EDGES = (0.0, 1e-3, 1e-2, 1e-1, 1.0)
-
-def sun_visible_fraction(r, mu_s):
-    """Fraction of the sun's disc above the planet's horizon seen from r: 1/2 + (h sqrt(1 - h^2) + asin h) / pi."""
-    sin_h = BOTTOM_RADIUS / r
-    cos_h = -safe_sqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS)) / r
-    h = clamp((mu_s - cos_h) / (max(sin_h, 1e-6) * SUN_ANGULAR_RADIUS), -1.0, 1.0)
-    return 0.5 + (h * safe_sqrt(1.0 - h * h) + math.asin(h)) / math.pi
-
-def shadow_exit_distance(r, mu, mu_s, nu):
-    """Distance [m] along the ray to its exit from the Earth's shadow (0 if it starts lit, 1e30 if it never leaves)."""
-    c = shadow_cylinder_c(r, mu_s)
-    if mu_s >= 0.0 or c >= 0.0:
-        return 0.0
-    a = (1.0 - nu) * (1.0 + nu)
-    b = r * (mu - mu_s * nu)
-    q = safe_sqrt(b * b - a * c)
-    t = 1e30
-    if b > 0.0:
-        t = -c / (b + q)
-    elif a > 1e-12:
-        t = (q - b) / a
-    if nu > 0.0:
-        t = min(t, -r * mu_s / nu)
-    return max(t, 0.0)
-
-def shadow_march(transmittance, r, mu, mu_s, nu, hits_ground):
-    """The sunlit densities beyond the ray's exit from the Earth's shadow per channel, (air, aerosol) [m]: integral
-    rho(y) T_sun(y) dy to the ray's end on 16 Gauss-Legendre nodes of 4 pieces growing from the exit (T_sun: the
-    transmittance texture times sun_visible_fraction)."""
-    m_r, m_m = [0.0] * 3, [0.0] * 3
-    t0 = shadow_exit_distance(r, mu, mu_s, nu)
-    t1 = distance_to_bottom(r, mu) if hits_ground else distance_to_top(r, mu)
-    if not t0 < t1:
-        return m_r, m_m
-    span = t1 - t0
-    for p in range(4):
-        a, b = t0 + span * MARCH_EDGES[p], t0 + span * MARCH_EDGES[p + 1]
-        hw, mid = 0.5 * (b - a), 0.5 * (a + b)
-        for j in range(4):
-            t = mid + hw * MARCH_X[j]
-            ry = clamp(safe_sqrt(t * t + 2.0 * r * mu * t + r * r), BOTTOM_RADIUS, TOP_RADIUS)
-            ms = clamp((r * mu_s + t * nu) / ry, -1.0, 1.0)
-            f = sun_visible_fraction(ry, ms)
-            if f <= 0.0:
-                continue
-            tr = transmittance(transmittance_uv(ry, ms))
-            h = ry - BOTTOM_RADIUS
-            wr = hw * MARCH_W[j] * f * density_at(RAYLEIGH_DENSITY, RAYLEIGH_DENSITY_LAYERS, h)
-            wm = hw * MARCH_W[j] * f * density_at(MIE_DENSITY, MIE_DENSITY_LAYERS, h)
-            for k in range(3):
-                m_r[k] += wr * tr[k]
-                m_m[k] += wm * tr[k]
-    return m_r, m_m
-
-def scattering_mu_texel(r, i_mu):
-    """(mu, hits_ground) of the ray from r at texel i_mu of the mu axis (the query's own mapping)."""
-    big_h = math.sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS))
-    rho = safe_sqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS))
-    half = SCATTERING_N_MU // 2
-    if i_mu < half:
-        x = 1.0 - i_mu / (half - 1)
-        d_min = r - BOTTOM_RADIUS
-        d = d_min + x * (rho - d_min)
-        return (-1.0 if d <= 0.0 else clamp(-(rho * rho + d * d) / (2.0 * r * d), -1.0, 1.0)), True
-    if i_mu <= half:
-        return 1.0, False
-    if i_mu >= SCATTERING_N_MU - 1:
-        return clamp(-rho / r, -1.0, 1.0), False
-    lo, hi = 0.0, math.acos(clamp(-rho / r, -1.0, 1.0))
-    for _ in range(40):
-        mid = 0.5 * (lo + hi)
-        if scattering_sky_mu_index(r, rho, big_h, math.cos(mid)) < i_mu:
-            lo = mid
-        else:
-            hi = mid
-    return clamp(math.cos(0.5 * (lo + hi)), -1.0, 1.0), False
-
-def scattering_mu_s_texel(i_s):
-    """mu_s of texel i_s of the mu_s axis (scattering_mu_s_index inverted by bisection)."""
-    lo, hi = MU_S_MIN, 1.0
-    for _ in range(40):
-        mid = 0.5 * (lo + hi)
-        if scattering_mu_s_index(mid) < i_s:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
-
-def shadow_march_factors(transmittance, r, mu, mu_s, nu, hits_ground):
-    """Per-channel factors (air, aerosol) of the single scattering read from a point in the Earth's shadow: the
-    query's shadow_march over the marches of the cell's 8 (mu, mu_s, nu) texel corners at the query's r,
-    interpolated with the cell's weights, at most SHADOW_RATIO_MAX (mu_s at least MU_S_MIN)."""
-    mu_s = max(mu_s, MU_S_MIN)
-    q_r, q_m = shadow_march(transmittance, r, mu, mu_s, nu, hits_ground)
-    if max(q_r) <= 0.0 and max(q_m) <= 0.0:
-        return [0.0] * 3, [0.0] * 3
-    big_h = math.sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS))
-    rho = safe_sqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS))
-    half = SCATTERING_N_MU // 2
-    if hits_ground:
-        d = distance_to_bottom(r, mu)
-        d_min = r - BOTTOM_RADIUS
-        x = (d - d_min) / (rho - d_min) if rho > d_min else 0.0
-        p_mu, lo_mu, hi_mu = (1.0 - clamp(x, 0.0, 1.0)) * (half - 1), 0, half - 1
-    else:
-        p_mu, lo_mu, hi_mu = scattering_sky_mu_index(r, rho, big_h, mu), half, SCATTERING_N_MU - 1
-    p_mu = clamp(p_mu, lo_mu, hi_mu)
-    i_q = min(math.floor(p_mu), hi_mu - 1)
-    w_q = p_mu - i_q
-    p_s = clamp(scattering_mu_s_index(mu_s), 0.0, SCATTERING_N_MU_S - 1)
-    i_s = min(math.floor(p_s), SCATTERING_N_MU_S - 2)
-    w_s = p_s - i_s
-    p_n = clamp(scattering_nu_index(mu, mu_s, nu), 0.0, SCATTERING_N_NU - 1)
-    i_n = min(math.floor(p_n), SCATTERING_N_NU - 2)
-    w_n = p_n - i_n
-    den_r, den_m = [0.0] * 3, [0.0] * 3
-    for b in range(2):
-        wb = w_q if b else 1.0 - w_q
-        if wb == 0.0:
-            continue
-        mu_b, hits_b = scattering_mu_texel(r, i_q + b)
-        for c in range(2):
-            wc = wb * (w_s if c else 1.0 - w_s)
-            if wc == 0.0:
-                continue
-            ms = scattering_mu_s_texel(i_s + c)
-            for e in range(2):
-                we = wc * (w_n if e else 1.0 - w_n)
-                if we == 0.0:
-                    continue
-                c_r, c_m = shadow_march(transmittance, r, mu_b, ms, scattering_nu_param(i_n + e, mu_b, ms), hits_b)
-                for k in range(3):
-                    den_r[k] += we * c_r[k]
-                    den_m[k] += we * c_m[k]
-    f_r = [min(q / d, SHADOW_RATIO_MAX) if d > 0.0 else 0.0 for q, d in zip(q_r, den_r)]
-    f_m = [min(q / d, SHADOW_RATIO_MAX) if d > 0.0 else 0.0 for q, d in zip(q_m, den_m)]
-    return f_r, f_m
 
 def shadow_cylinder_c(r, mu_s):
     """r^2 (1 - mu_s^2) - R_g^2 [m^2], negative inside the Earth's shadow cylinder (written without cancellation)."""

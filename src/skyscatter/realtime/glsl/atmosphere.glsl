@@ -467,152 +467,6 @@ vec3 GetTransmittanceToSun(float r, float mu_s) {
   return f <= 0.0 ? vec3(0.0) : GetTransmittanceToTop(r, mu_s) * f;
 }
 
-// Gauss-Legendre nodes and weights of 4 points on [-1, 1] ([Abramowitz1964] Table 25.4) and the ends of ShadowMarch's
-// pieces, fractions of the lit part of the ray growing geometrically from the shadow's exit
-// (skyscatter.precomputed.sampling.shadow_march).
-const float MARCH_X[4] = float[4](-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526);
-const float MARCH_W[4] = float[4](0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538);
-const float MARCH_EDGES[5] = float[5](0.0, 1e-3, 1e-2, 1e-1, 1.0);
-
-// Distance [m] along the ray (r, mu) with view-sun cosine nu to its exit from the Earth's shadow (0 if it starts lit,
-// 1e30 if it never leaves): the point of ShadowExitAltitude (skyscatter.precomputed.geometry.shadow_exit_distance).
-float ShadowExitDistance(float r, float mu, float mu_s, float nu) {
-  float c = ShadowCylinderC(r, mu_s);
-  if (mu_s >= 0.0 || c >= 0.0) return 0.0;
-  float a = (1.0 - nu) * (1.0 + nu);
-  float b = r * (mu - mu_s * nu);
-  float q = SafeSqrt(b * b - a * c);
-  float t = 1e30;
-  if (b > 0.0) t = -c / (b + q);
-  else if (a > 1e-12) t = (q - b) / a;
-  if (nu > 0.0) t = min(t, -r * mu_s / nu);
-  return max(t, 0.0);
-}
-
-// The sunlit densities along the ray beyond its exit from the Earth's shadow, per colour channel: integral
-// rho(y) T_sun(y) dy [m] for air (m_r) and aerosol (m_m), from the exit to the ray's end, 16 Gauss-Legendre nodes on 4
-// pieces (skyscatter.precomputed.sampling.shadow_march; [Bruneton2008] Eq. 6 without the view transmittance).
-void ShadowMarch(float r, float mu, float mu_s, float nu, bool hits_ground, out vec3 m_r, out vec3 m_m) {
-  m_r = vec3(0.0);
-  m_m = vec3(0.0);
-  float t0 = ShadowExitDistance(r, mu, mu_s, nu);
-  float t1 = hits_ground ? DistanceToBottom(r, mu) : DistanceToTop(r, mu);
-  if (!(t0 < t1)) return;
-  float span = t1 - t0;
-  for (int p = 0; p < 4; ++p) {
-    float a = t0 + span * MARCH_EDGES[p];
-    float b = t0 + span * MARCH_EDGES[p + 1];
-    float hw = 0.5 * (b - a);
-    float mid = 0.5 * (a + b);
-    for (int j = 0; j < 4; ++j) {
-      float t = mid + hw * MARCH_X[j];
-      float ry = clamp(SafeSqrt(t * t + 2.0 * r * mu * t + r * r), BOTTOM_RADIUS, TOP_RADIUS);
-      float ms = clamp((r * mu_s + t * nu) / ry, -1.0, 1.0);
-      vec3 tr = GetTransmittanceToSun(ry, ms);
-      float h = ry - BOTTOM_RADIUS;
-      m_r += hw * MARCH_W[j] * DensityAt(RAYLEIGH_DENSITY, RAYLEIGH_DENSITY_LAYERS, h) * tr;
-      m_m += hw * MARCH_W[j] * DensityAt(MIE_DENSITY, MIE_DENSITY_LAYERS, h) * tr;
-    }
-  }
-}
-
-// mu of the ray from r whose position on the scattering textures' mu axis (the query's own mapping) is texel i_mu,
-// and whether it meets the ground (skyscatter.precomputed.geometry.scattering_mu_texel): closed form in the ground
-// half, bisection in the zenith angle in the sky half.
-float ScatteringMuTexel(float r, float i_mu, out bool hits) {
-  float big_h = sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS));
-  float rho = SafeSqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS));
-  float half_n = float(SCATTERING_N_MU / 2);
-  if (i_mu < half_n) {
-    hits = true;
-    float x = 1.0 - i_mu / (half_n - 1.0);
-    float d_min = r - BOTTOM_RADIUS;
-    float d = d_min + x * (rho - d_min);
-    return d <= 0.0 ? -1.0 : clamp(-(rho * rho + d * d) / (2.0 * r * d), -1.0, 1.0);
-  }
-  hits = false;
-  if (i_mu <= half_n) return 1.0;
-  if (i_mu >= float(SCATTERING_N_MU - 1)) return clamp(-rho / r, -1.0, 1.0);
-  float lo = 0.0;
-  float hi = Acos(clamp(-rho / r, -1.0, 1.0));
-  for (int k = 0; k < 40; ++k) {
-    float mid = 0.5 * (lo + hi);
-    if (ScatteringSkyMuIndex(r, rho, big_h, cos(mid)) < i_mu) lo = mid; else hi = mid;
-  }
-  return clamp(cos(0.5 * (lo + hi)), -1.0, 1.0);
-}
-
-// mu_s of texel i_s on the scattering textures' mu_s axis (the inverse of ScatteringMuSIndex, by bisection;
-// skyscatter.precomputed.geometry.scattering_mu_s_param).
-float ScatteringMuSTexel(float i_s) {
-  float lo = MU_S_MIN;
-  float hi = 1.0;
-  for (int k = 0; k < 40; ++k) {
-    float mid = 0.5 * (lo + hi);
-    if (ScatteringMuSIndex(mid) < i_s) lo = mid; else hi = mid;
-  }
-  return 0.5 * (lo + hi);
-}
-
-// Per-channel factors of the single scattering read from a point in the Earth's shadow (Rayleigh in m_r, aerosol in
-// m_m): the query's ShadowMarch over the marches of the cell's 8 (mu, mu_s, nu) texel corners at the query's r,
-// interpolated with the cell's weights, at most SHADOW_RATIO_MAX (skyscatter.precomputed.sampling.
-// shadow_march_factors, which forms them per wavelength: a per-channel factor of folded colours does not equal the
-// folded per-wavelength one; docs/accuracy.md, "Low sun"). p_s, i_n, w_n: the lookup's mu_s position and nu cell.
-void ShadowMarchFactors(float r, float mu, float mu_s, float nu, bool hits_ground, float p_s, float i_n, float w_n,
-                        out vec3 f_r, out vec3 f_m) {
-  vec3 q_r, q_m;
-  ShadowMarch(r, mu, mu_s, nu, hits_ground, q_r, q_m);
-  f_r = vec3(0.0);
-  f_m = vec3(0.0);
-  if (max(max(q_r.r, q_r.g), q_r.b) <= 0.0 && max(max(q_m.r, q_m.g), q_m.b) <= 0.0) return;
-  float big_h = sqrt((TOP_RADIUS - BOTTOM_RADIUS) * (TOP_RADIUS + BOTTOM_RADIUS));
-  float rho = SafeSqrt((r - BOTTOM_RADIUS) * (r + BOTTOM_RADIUS));
-  float half_n = float(SCATTERING_N_MU / 2);
-  float p_mu;
-  if (hits_ground) {
-    float d = DistanceToBottom(r, mu);
-    float d_min = r - BOTTOM_RADIUS;
-    float x = rho > d_min ? (d - d_min) / (rho - d_min) : 0.0;
-    p_mu = (1.0 - clamp(x, 0.0, 1.0)) * (half_n - 1.0);
-  } else {
-    p_mu = ScatteringSkyMuIndex(r, rho, big_h, mu);
-  }
-  float lo_mu = hits_ground ? 0.0 : half_n;
-  float hi_mu = hits_ground ? half_n - 1.0 : float(SCATTERING_N_MU - 1);
-  p_mu = clamp(p_mu, lo_mu, hi_mu);
-  float i_q = min(floor(p_mu), hi_mu - 1.0);
-  float w_q = p_mu - i_q;
-  float ps = clamp(p_s, 0.0, float(SCATTERING_N_MU_S - 1));
-  float i_s = min(floor(ps), float(SCATTERING_N_MU_S - 2));
-  float w_s = ps - i_s;
-  vec3 den_r = vec3(0.0);
-  vec3 den_m = vec3(0.0);
-  for (int b = 0; b < 2; ++b) {
-    float wb = b == 1 ? w_q : 1.0 - w_q;
-    if (wb == 0.0) continue;
-    bool hits_b;
-    float mu_b = ScatteringMuTexel(r, i_q + float(b), hits_b);
-    for (int c = 0; c < 2; ++c) {
-      float wc = wb * (c == 1 ? w_s : 1.0 - w_s);
-      if (wc == 0.0) continue;
-      float ms = ScatteringMuSTexel(i_s + float(c));
-      for (int e = 0; e < 2; ++e) {
-        float we = wc * (e == 1 ? w_n : 1.0 - w_n);
-        if (we == 0.0) continue;
-        vec3 c_r, c_m;
-        ShadowMarch(r, mu_b, ms, ScatteringNuParam(i_n + float(e), mu_b, ms), hits_b, c_r, c_m);
-        den_r += we * c_r;
-        den_m += we * c_m;
-      }
-    }
-  }
-  for (int k = 0; k < 3; ++k) {
-    f_r[k] = den_r[k] > 0.0 ? min(q_r[k] / den_r[k], SHADOW_RATIO_MAX) : 0.0;
-    f_m[k] = den_m[k] > 0.0 ? min(q_m[k] / den_m[k], SHADOW_RATIO_MAX) : 0.0;
-  }
-}
-
 // The three scattering textures at (r, mu, mu_s, nu): trilinear by the texture unit in (mu_s, mu, r) (within the
 // cell touching the ground two bilinear reads, one per row: ScatteringTexture) and by hand along nu (the nu slices
 // lie side by side along x: x = i_nu * n_mu_s + i_mu_s, [Bruneton2008] Sec. 6), log-linear
@@ -638,12 +492,11 @@ vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, ou
   multiple = AzimuthLerp(ScatteringTexture(multiple_texture, uvw0, g), ScatteringTexture(multiple_texture, uvw1, g),
                          w_n);
   if (InEarthShadow(r, mu_s)) {
-    vec3 f_r, f_m;
-    ShadowMarchFactors(r, mu, mu_s, nu, hits_ground, p_s, i_n, w_n, f_r, f_m);
-    mie = f_m * ShadowLerp(ScatteringTexture(mie_texture, uvw0, g), ScatteringTexture(mie_texture, uvw1, g), w_n,
-                           vec2(1.0));
-    return f_r * ShadowLerp(ScatteringTexture(rayleigh_texture, uvw0, g), ScatteringTexture(rayleigh_texture, uvw1, g),
-                            w_n, vec2(1.0));
+    vec3 h = ShadowExitAltitudes(r, mu, mu_s, nu, i_n);
+    mie = ShadowLerp(ScatteringTexture(mie_texture, uvw0, g), ScatteringTexture(mie_texture, uvw1, g), w_n,
+                     ShadowFactors(h, MIE_DENSITY, MIE_DENSITY_LAYERS));
+    return ShadowLerp(ScatteringTexture(rayleigh_texture, uvw0, g), ScatteringTexture(rayleigh_texture, uvw1, g),
+                      w_n, ShadowFactors(h, RAYLEIGH_DENSITY, RAYLEIGH_DENSITY_LAYERS));
   }
   mie = AzimuthLerp(ScatteringTexture(mie_texture, uvw0, g), ScatteringTexture(mie_texture, uvw1, g), w_n);
   return AzimuthLerp(ScatteringTexture(rayleigh_texture, uvw0, g), ScatteringTexture(rayleigh_texture, uvw1, g),
