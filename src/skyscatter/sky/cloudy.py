@@ -237,9 +237,21 @@ def _exact_phase(atmosphere: AtmosphereParameters, wl: NDArray[np.float64], edge
     return total / np.maximum(sca_sum, 1e-300).reshape(sca_sum.shape + (1,) * c.ndim)
 
 
+def _legendre_polynomials(x: NDArray[np.float64], count: int) -> NDArray[np.float64]:
+    """Legendre polynomials ``P_l(x)``, l < ``count`` (>= 2), (count, ...) of cosines ``x`` [-] (Bonnet's
+    recurrence, [Abramowitz1964] Eq. 8.5.3: ``(n + 1) P_(n+1) = (2n + 1) x P_n - n P_(n-1)``)."""
+    leg = np.empty((count,) + x.shape)
+    leg[0] = 1.0
+    leg[1] = x
+    for n in range(1, count - 1):
+        leg[n + 1] = ((2 * n + 1) * x * leg[n] - n * leg[n - 1]) / (n + 1)
+    return leg
+
+
 def _single_scatter_correction(tau: NDArray[np.float64], ssa: NDArray[np.float64], moments: NDArray[np.float64],
                                phase: NDArray[np.float64], cos_scat: NDArray[np.float64], mu_view: NDArray[np.float64],
-                               mu_beam: float, streams: int) -> NDArray[np.float64]:
+                               mu_beam: float, streams: int, legendre: NDArray[np.float64] | None = None
+                               ) -> NDArray[np.float64]:
     """The TMS correction of [NakajimaTanaka1988] (Eqs. 14-15) to DISORT's delta-M radiance of downward light at
     the bottom of the layers ``tau``, ``ssa``, ``moments`` (n,) (n,) (n, m + 1) (one wavelength, from the top
     down), per unit beam flux [sr^-1], at scattering cosines ``cos_scat`` (n_v, n_a) of views whose light travels
@@ -249,13 +261,11 @@ def _single_scatter_correction(tau: NDArray[np.float64], ssa: NDArray[np.float64
     (``tau' = (1 - omega f) tau``, ``omega' = (1 - f) omega / (1 - omega f)``, ``f`` the moment of order
     ``streams``, as DISORT scales; [Wiscombe1977]). disortpp 1.2.1's own flag for it acts only with
     ``intensity_corr_buras`` (docs/clouds.md): without it a thin cloud's radiance away from the sun carries
-    delta-M's single-scattering error (-15..+10 % at 16 streams under optical depth 1)."""
+    delta-M's single-scattering error (-15..+10 % at 16 streams under optical depth 1). ``legendre``:
+    :func:`_legendre_polynomials` of ``cos_scat`` and ``streams``, if the caller has them (they do not depend on
+    the wavelength)."""
     f = moments[:, streams]
-    leg = np.empty((streams,) + cos_scat.shape)  # Legendre polynomials P_l(cos_scat), l < streams
-    leg[0] = 1.0
-    leg[1] = cos_scat
-    for n in range(1, streams - 1):
-        leg[n + 1] = ((2 * n + 1) * cos_scat * leg[n] - n * leg[n - 1]) / (n + 1)
+    leg = _legendre_polynomials(cos_scat, streams) if legendre is None else legendre
     ell = np.arange(streams)
     chi_star = (moments[:, :streams] - f[:, None]) / (1.0 - f[:, None])
     truncated = np.tensordot(chi_star * (2 * ell + 1), leg, axes=(1, 0)) / (4.0 * math.pi)  # (n, n_v, n_a)
@@ -658,9 +668,10 @@ class CloudySky(SunSkyMixin, SkyModel):
             fade = np.clip((gamma - TMS_FADE_DEG[0]) / (TMS_FADE_DEG[1] - TMS_FADE_DEG[0]), 0.0, 1.0)
             phase = _exact_phase(atm, wl, edges[:level + 1], cos_scat)  # (level, n_wl, n_up, n_phi)
             mu_view = np.cos(theta[up_rows])
+            leg = _legendre_polynomials(cos_scat, self.streams)  # the same at every wavelength
             for k in range(wl.size):
                 corr = _single_scatter_correction(tau[:level, k], ssa[:level, k], moments[:level, k], phase[:, k],
-                                                  cos_scat, mu_view, float(mu_eff[k]), self.streams)
+                                                  cos_scat, mu_view, float(mu_eff[k]), self.streams, leg)
                 rad[up_rows, :, k] += beam_flux[k] * fade * corr
         rad = np.maximum(rad, 0.0)
         smooth = rad  # without the forward peak's lobe (a table on a coarser grid puts that light back itself)
