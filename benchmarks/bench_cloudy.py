@@ -55,8 +55,8 @@ def main() -> None:
             solve_wall.append(w1 - w0)
             map_cpu.append(c2 - c1)
             map_wall.append(w2 - w1)
-        total_cpu = [x + y for x, y in zip(solve_cpu, map_cpu)]
-        total_wall = [x + y for x, y in zip(solve_wall, map_wall)]
+        total_cpu = [x + y for x, y in zip(solve_cpu, map_cpu, strict=True)]
+        total_wall = [x + y for x, y in zip(solve_wall, map_wall, strict=True)]
         print(_stats("solve per sky (17 wavelengths, 16 streams, about 105 x 45 directions)", solve_cpu, solve_wall))
         print(_stats(f"2048 x 1024 environment map {img.shape} from the solved sky", map_cpu, map_wall))
         print(_stats("solve + map (target <= 1 s)", total_cpu, total_wall))

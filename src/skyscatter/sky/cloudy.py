@@ -1007,8 +1007,8 @@ class CloudySky(SunSkyMixin, SkyModel):
         if key not in cache:
             other = object.__new__(type(self))
             other.__dict__.update({k: v for k, v in self.__dict__.items()
-                                   if k not in ("_field", "_xyz_grid", "_direct", "_column", "_top_fields", "_air_chords",
-                                                "_limb_sky")})
+                                   if k not in ("_field", "_xyz_grid", "_direct", "_column", "_top_fields",
+                                                "_air_chords", "_limb_sky")})
             other.altitude = self._cloud_top
             other.illumination = "column"
             other.sun_zenith = float(sun_zenith)
