@@ -323,7 +323,8 @@ def air_plane_albedo(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, a
     """Plane albedo from below (n_mu, n_wl) [-] of the air above ``altitude`` [m]: the fraction of a parallel
     upward beam's flux at ``altitude`` travelling at the cosines ``cosines`` (n_mu,) (> 0) with the vertical that the
     air above sends back down through it; as :func:`air_spherical_albedo` (DISORT on the reversed stack,
-    [Stamnes1988]) with a beam in place of isotropic light. Its mean over the cosines weighted by ``2 mu`` is the
+    [Stamnes1988]) for a beam in place of isotropic light, every cosine from one solve per wavelength in DISORT's
+    albedo mode (:func:`_air_from_below`). Its mean over the cosines weighted by ``2 mu`` is the
     spherical albedo ([Liou2002] Sec. 6.2); grazing light is sent back more than Lambertian light (its long path)."""
     return _air_from_below(atmosphere, wavelengths, altitude, np.atleast_1d(np.asarray(cosines, dtype=float)),
                            streams)
