@@ -42,6 +42,7 @@ import hashlib
 import json
 import math
 import os
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -534,7 +535,11 @@ MAX_LAYER_OPTICAL_DEPTH = 1000.0
 EFFECTIVE_RADIUS_RANGE = (1e-6, 50e-6)
 
 
+@lru_cache(maxsize=16)
 def _droplet_optics(effective_radius: float, effective_variance: float, wavelengths: tuple[float, ...]):
+    """The droplets' Mie optics at ``wavelengths`` [nm] (:func:`.mie_optics.water_droplets`), kept per process:
+    the per-wavelength optics are cached there already, but joining them into one table took 2 ms a call, and a
+    cloudy sky's solve asks for the same layer's optics seven times. Their arrays are read-only."""
     from .mie_optics import water_droplets
 
     return water_droplets(effective_radius, effective_variance, np.array(wavelengths))

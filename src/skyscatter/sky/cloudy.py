@@ -49,7 +49,7 @@ after six.
 from __future__ import annotations
 
 import math
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import Any
 
 import numpy as np
@@ -97,11 +97,30 @@ COUPLING_TABLE_SIZES = {"scattering_r": 16, "scattering_mu": 64, "scattering_nu"
 MAX_ALTITUDE = 1.0e8
 
 
+@lru_cache(maxsize=4)
+def _gauss_legendre(n: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Gauss-Legendre nodes and weights on [-1, 1] (``numpy.polynomial.legendre.leggauss``, kept: computing the 48
+    of :func:`_profile_integral` took 2.5 ms, some 13 times a sky's solve)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    x.setflags(write=False)
+    w.setflags(write=False)
+    return x, w
+
+
+@lru_cache(maxsize=1)
+def _blas_controller() -> Any:
+    """threadpoolctl's controller, made once (each ``threadpool_limits`` call looks for the loaded libraries
+    again: 0.5 ms)."""
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
+
+
 def _profile_integral(profile: Any, lo: NDArray[np.float64], hi: NDArray[np.float64], n: int = 48
                       ) -> NDArray[np.float64]:
     """Integral [m] of a density profile over each altitude interval [lo, hi] (Gauss-Legendre, n nodes; the
     intervals never straddle a cloud's base or top, so the integrands are smooth)."""
-    x, w = np.polynomial.legendre.leggauss(n)
+    x, w = _gauss_legendre(n)
     z = 0.5 * (lo + hi)[:, None] + 0.5 * (hi - lo)[:, None] * x[None, :]
     return (profile(z) * w[None, :]).sum(axis=1) * 0.5 * (hi - lo)
 
@@ -218,9 +237,21 @@ def _exact_phase(atmosphere: AtmosphereParameters, wl: NDArray[np.float64], edge
     return total / np.maximum(sca_sum, 1e-300).reshape(sca_sum.shape + (1,) * c.ndim)
 
 
+def _legendre_polynomials(x: NDArray[np.float64], count: int) -> NDArray[np.float64]:
+    """Legendre polynomials ``P_l(x)``, l < ``count`` (>= 2), (count, ...) of cosines ``x`` [-] (Bonnet's
+    recurrence, [Abramowitz1964] Eq. 8.5.3: ``(n + 1) P_(n+1) = (2n + 1) x P_n - n P_(n-1)``)."""
+    leg = np.empty((count,) + x.shape)
+    leg[0] = 1.0
+    leg[1] = x
+    for n in range(1, count - 1):
+        leg[n + 1] = ((2 * n + 1) * x * leg[n] - n * leg[n - 1]) / (n + 1)
+    return leg
+
+
 def _single_scatter_correction(tau: NDArray[np.float64], ssa: NDArray[np.float64], moments: NDArray[np.float64],
                                phase: NDArray[np.float64], cos_scat: NDArray[np.float64], mu_view: NDArray[np.float64],
-                               mu_beam: float, streams: int) -> NDArray[np.float64]:
+                               mu_beam: float, streams: int, legendre: NDArray[np.float64] | None = None
+                               ) -> NDArray[np.float64]:
     """The TMS correction of [NakajimaTanaka1988] (Eqs. 14-15) to DISORT's delta-M radiance of downward light at
     the bottom of the layers ``tau``, ``ssa``, ``moments`` (n,) (n,) (n, m + 1) (one wavelength, from the top
     down), per unit beam flux [sr^-1], at scattering cosines ``cos_scat`` (n_v, n_a) of views whose light travels
@@ -230,13 +261,11 @@ def _single_scatter_correction(tau: NDArray[np.float64], ssa: NDArray[np.float64
     (``tau' = (1 - omega f) tau``, ``omega' = (1 - f) omega / (1 - omega f)``, ``f`` the moment of order
     ``streams``, as DISORT scales; [Wiscombe1977]). disortpp 1.2.1's own flag for it acts only with
     ``intensity_corr_buras`` (docs/clouds.md): without it a thin cloud's radiance away from the sun carries
-    delta-M's single-scattering error (-15..+10 % at 16 streams under optical depth 1)."""
+    delta-M's single-scattering error (-15..+10 % at 16 streams under optical depth 1). ``legendre``:
+    :func:`_legendre_polynomials` of ``cos_scat`` and ``streams``, if the caller has them (they do not depend on
+    the wavelength)."""
     f = moments[:, streams]
-    leg = np.empty((streams,) + cos_scat.shape)  # Legendre polynomials P_l(cos_scat), l < streams
-    leg[0] = 1.0
-    leg[1] = cos_scat
-    for n in range(1, streams - 1):
-        leg[n + 1] = ((2 * n + 1) * cos_scat * leg[n] - n * leg[n - 1]) / (n + 1)
+    leg = _legendre_polynomials(cos_scat, streams) if legendre is None else legendre
     ell = np.arange(streams)
     chi_star = (moments[:, :streams] - f[:, None]) / (1.0 - f[:, None])
     truncated = np.tensordot(chi_star * (2 * ell + 1), leg, axes=(1, 0)) / (4.0 * math.pi)  # (n, n_v, n_a)
@@ -294,7 +323,8 @@ def air_plane_albedo(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, a
     """Plane albedo from below (n_mu, n_wl) [-] of the air above ``altitude`` [m]: the fraction of a parallel
     upward beam's flux at ``altitude`` travelling at the cosines ``cosines`` (n_mu,) (> 0) with the vertical that the
     air above sends back down through it; as :func:`air_spherical_albedo` (DISORT on the reversed stack,
-    [Stamnes1988]) with a beam in place of isotropic light. Its mean over the cosines weighted by ``2 mu`` is the
+    [Stamnes1988]) for a beam in place of isotropic light, every cosine from one solve per wavelength in DISORT's
+    albedo mode (:func:`_air_from_below`). Its mean over the cosines weighted by ``2 mu`` is the
     spherical albedo ([Liou2002] Sec. 6.2); grazing light is sent back more than Lambertian light (its long path)."""
     return _air_from_below(atmosphere, wavelengths, altitude, np.atleast_1d(np.asarray(cosines, dtype=float)),
                            streams)
@@ -311,52 +341,83 @@ def air_return_radiance(atmosphere: AtmosphereParameters, wavelengths: ArrayLike
 
 
 def _air_from_below(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, altitude: float,
-                    cosines: NDArray[np.float64] | None, streams: int, user: NDArray[np.float64] | None = None
-                    ) -> Any:
+                    cosines: NDArray[np.float64] | None, streams: int, user: NDArray[np.float64] | None = None,
+                    column: tuple[NDArray[np.float64], ...] | None = None) -> Any:
     """The reflectance (n_mu, n_wl) of the reversed air stack above ``altitude`` [m] for beams at ``cosines``
     (isotropic light if None: one row) (:func:`air_spherical_albedo`, :func:`air_plane_albedo`); with ``user``
-    cosines (isotropic light only), also the reflected radiance there (n_user, n_wl) (:func:`air_return_radiance`)."""
+    cosines (isotropic light only), also the reflected radiance there (n_user, n_wl) (:func:`air_return_radiance`).
+    ``column``: :func:`cloud_column` of the air without its particles' cloud layers at ``wavelengths`` and
+    ``altitude``, if the caller has it.
+
+    The plane albedo for all ``cosines`` is one DISORT solve per wavelength in its special mode for the albedo
+    of the whole medium against the incident angle (``ibcnd = 1``, [Stamnes1988]: the albedo at the user angles
+    from the solution for isotropic light by reciprocity), not one beam per cosine and wavelength: the same
+    discrete-ordinate solution (within 3e-10 of the beams' reflected fluxes at 16 streams), at the cost of
+    one solve."""
     import disortpp
 
     wl = np.atleast_1d(np.asarray(wavelengths, dtype=float))
-    edges, tau, ssa, moments = cloud_column(atmosphere.replace(particles=()), wl, observer_altitude=altitude)
+    if column is None:
+        column = cloud_column(atmosphere.replace(particles=()), wl, observer_altitude=altitude)
+    edges, tau, ssa, moments = column
     above = np.flatnonzero(edges[1:] >= altitude - 1e-6)  # layers whose lower edge is at or above ``altitude``
-    beams = [None] if cosines is None else [float(m) for m in cosines]
-    out = np.zeros((len(beams), wl.size))
+    out = np.zeros((1 if cosines is None else cosines.size, wl.size))
     radiance = None if user is None else np.zeros((user.size, wl.size))
     if above.size == 0:
         return out if user is None else (out, radiance)
     rev = above[::-1]  # the layer next to ``altitude`` first
-    if user is not None:
-        sort = np.argsort(user)
+    angles = user if cosines is None else cosines
+    sort = None if angles is None else np.argsort(angles)
     for k in range(wl.size):
-        for i, mu in enumerate(beams):
-            cfg = disortpp.DisortConfig(int(rev.size), streams, streams)
+        cfg = disortpp.DisortConfig(int(rev.size), streams, streams)
+        cfg.flags.use_lambertian_surface = True
+        if cosines is not None:
+            cfg.flags.ibcnd = disortpp.BoundaryConditionType.Special  # albedo against the incident angle
+        else:
             cfg.flags.comp_only_fluxes = user is None
-            cfg.flags.use_lambertian_surface = True
-            if user is not None:
-                cfg.flags.use_user_mu = True
-                cfg.flags.use_user_tau = True
-                cfg.num_user_tau = 1
-                cfg.num_user_mu = int(user.size)
-                cfg.num_phi = 1
-            cfg.allocate()
-            if user is not None:
-                cfg.tau_user = [0.0]
-                cfg.mu_user = [float(v) for v in user[sort]]
-                cfg.phi_user = [0.0]
-            cfg.delta_tau = [float(t) for t in tau[rev, k]]
-            cfg.single_scat_albedo = [float(w) for w in ssa[rev, k]]
-            cfg.phase_function_moments = moments[rev, k, : streams + 1].tolist()
-            cfg.bc.direct_beam_flux = 0.0 if mu is None else 1.0 / mu  # a flux of 1 on the horizontal
-            cfg.bc.direct_beam_mu = 0.5 if mu is None else mu
-            cfg.bc.isotropic_flux_top = 1.0 / math.pi if mu is None else 0.0  # radiance 1 / pi: a flux of 1
-            cfg.bc.surface_albedo = 0.0
-            res = disortpp.DisortSolver().solve(cfg)
-            out[i, k] = float(res.flux_up[0])
-            if radiance is not None and user is not None:
-                radiance[sort, k] = np.asarray(res.intensity)[0, :, 0]  # [level][user mu][azimuth]
+        if angles is not None:
+            cfg.flags.use_user_mu = True
+            cfg.num_user_mu = int(angles.size)
+            cfg.num_phi = 1
+        if user is not None:
+            cfg.flags.use_user_tau = True
+            cfg.num_user_tau = 1
+        cfg.allocate()
+        if angles is not None and sort is not None:
+            cfg.mu_user = [float(v) for v in angles[sort]]
+            cfg.phi_user = [0.0]
+        if user is not None:
+            cfg.tau_user = [0.0]
+        cfg.delta_tau = [float(t) for t in tau[rev, k]]
+        cfg.single_scat_albedo = [float(w) for w in ssa[rev, k]]
+        cfg.phase_function_moments = moments[rev, k, : streams + 1].tolist()
+        if cosines is None:
+            cfg.bc.direct_beam_flux = 0.0
+            cfg.bc.direct_beam_mu = 0.5
+            cfg.bc.isotropic_flux_top = 1.0 / math.pi  # radiance 1 / pi: a flux of 1
+        cfg.bc.surface_albedo = 0.0
+        res = disortpp.DisortSolver().solve(cfg)
+        if cosines is not None and sort is not None:
+            out[sort, k] = np.asarray(res.albedo_medium)[: cosines.size]  # the albedo at the user cosines
+            continue
+        out[0, k] = float(res.flux_up[0])
+        if radiance is not None and sort is not None:
+            radiance[sort, k] = np.asarray(res.intensity)[0, :, 0]  # [level][user mu][azimuth]
     return out if user is None else (out, radiance)
+
+
+@lru_cache(maxsize=1)
+def _hemisphere_quadrature() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Midpoint quadrature of the upper hemisphere, 0.5 deg x 0.5 deg: unit directions (64800, 3) and their
+    weights ``cos(theta) dOmega`` [sr] (the irradiance's; made once)."""
+    n_t, n_p = 180, 360
+    t = (np.arange(n_t) + 0.5) * (0.5 * math.pi / n_t)
+    p = (np.arange(n_p) + 0.5) * (2.0 * math.pi / n_p)
+    tt, pp = np.meshgrid(t, p, indexing="ij")
+    dirs = np.stack([np.sin(tt) * np.sin(pp), np.sin(tt) * np.cos(pp), np.cos(tt)], axis=-1).reshape(-1, 3)
+    weight = (np.cos(tt) * np.sin(tt)).reshape(-1) * (0.5 * math.pi / n_t) * (2.0 * math.pi / n_p)
+    weight.setflags(write=False)  # (``dirs`` stays writable: numba compiles read-only arrays separately)
+    return dirs, weight
 
 
 def _restore_forward_peak(rad: NDArray[np.float64], theta: NDArray[np.float64], phi: NDArray[np.float64],
@@ -381,12 +442,7 @@ def _restore_forward_peak(rad: NDArray[np.float64], theta: NDArray[np.float64], 
     hides entirely. Returns the restored grid and the lobe's flux (n_wl,) (the same units as ``down``)."""
     from .cloudy_kernels import grid_lookup
 
-    n_t, n_p = 180, 360  # midpoint quadrature of the upper hemisphere (0.5 deg x 0.5 deg)
-    t = (np.arange(n_t) + 0.5) * (0.5 * math.pi / n_t)
-    p = (np.arange(n_p) + 0.5) * (2.0 * math.pi / n_p)
-    tt, pp = np.meshgrid(t, p, indexing="ij")
-    dirs = np.stack([np.sin(tt) * np.sin(pp), np.sin(tt) * np.cos(pp), np.cos(tt)], axis=-1).reshape(-1, 3)
-    weight = (np.cos(tt) * np.sin(tt)).reshape(-1) * (0.5 * math.pi / n_t) * (2.0 * math.pi / n_p)
+    dirs, weight = _hemisphere_quadrature()
     gt, gp = np.meshgrid(theta, phi, indexing="ij")
     cos_gamma = np.cos(gt) * math.cos(sun_zenith) + np.sin(gt) * math.sin(sun_zenith) * np.cos(gp)
     lobe = np.exp(-(np.arccos(np.clip(cos_gamma, -1.0, 1.0)) / width) ** 2)
@@ -496,14 +552,12 @@ class CloudySky(SunSkyMixin, SkyModel):
         """The DISORT solution: radiance per unit solar irradiance on the (zenith, relative azimuth) grid
         (n_theta, n_phi, n_wl) [sr^-1], the direct transmittance to the sun (n_wl,), the diffuse down and up
         fluxes per unit solar irradiance (n_wl,) at the observer."""
-        from threadpoolctl import threadpool_limits
-
         # The products here are small (the TMS correction's Legendre sums: (36 x 16) by (16 x 2610) per
         # wavelength): one BLAS thread runs them at full speed, where OpenBLAS's two threads on the busy 2-core
         # machine took 15 ms per product instead of 0.1 ms (three solves of tests/test_cloudy_radiance.py, 16
         # streams: 1.33 instead of 0.70 CPU-s, load 4.6).
         # The products are the same (OpenBLAS splits the output among its threads, not the sums).
-        with threadpool_limits(1, user_api="blas"):
+        with _blas_controller().limit(limits=1, user_api="blas"):
             return self._solve()
 
     def _solve(self) -> dict[str, NDArray[np.float64]]:
@@ -514,7 +568,7 @@ class CloudySky(SunSkyMixin, SkyModel):
         wl = GRID_WAVELENGTHS
         top = atm.thickness
         obs = min(self.altitude, top)
-        edges, tau, ssa, moments = cloud_column(atm, wl, obs)
+        edges, tau, ssa, moments = self._column
         mu0 = math.cos(self.sun_zenith)
         beam = mu0 > math.sin(MIN_BEAM_ELEVATION)
         ref = max((c.top for c in atm.particles if hasattr(c, "top")), default=0.0)
@@ -615,9 +669,10 @@ class CloudySky(SunSkyMixin, SkyModel):
             fade = np.clip((gamma - TMS_FADE_DEG[0]) / (TMS_FADE_DEG[1] - TMS_FADE_DEG[0]), 0.0, 1.0)
             phase = _exact_phase(atm, wl, edges[:level + 1], cos_scat)  # (level, n_wl, n_up, n_phi)
             mu_view = np.cos(theta[up_rows])
+            leg = _legendre_polynomials(cos_scat, self.streams)  # the same at every wavelength
             for k in range(wl.size):
                 corr = _single_scatter_correction(tau[:level, k], ssa[:level, k], moments[:level, k], phase[:, k],
-                                                  cos_scat, mu_view, float(mu_eff[k]), self.streams)
+                                                  cos_scat, mu_view, float(mu_eff[k]), self.streams, leg)
                 rad[up_rows, :, k] += beam_flux[k] * fade * corr
         rad = np.maximum(rad, 0.0)
         smooth = rad  # without the forward peak's lobe (a table on a coarser grid puts that light back itself)
@@ -632,6 +687,12 @@ class CloudySky(SunSkyMixin, SkyModel):
                 "phi": np.radians(phi), "diffuse_down": down, "diffuse_up": up}
 
     @cached_property
+    def _column(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """:func:`cloud_column` of the sky's medium at :data:`GRID_WAVELENGTHS` with the observer's altitude (capped
+        at the atmosphere's top) among its edges: made once for the solve and the sun's transmittance."""
+        return cloud_column(self.atmosphere, GRID_WAVELENGTHS, min(self.altitude, self.atmosphere.thickness))
+
+    @cached_property
     def _direct(self) -> NDArray[np.float64]:
         """The sun's direct transmittance to the observer at :data:`GRID_WAVELENGTHS` (n_wl,): ``exp(-tau)``
         along its chord through the column's spherical shells (no DISORT solve: the sun alone is cheap)."""
@@ -640,7 +701,7 @@ class CloudySky(SunSkyMixin, SkyModel):
         if mu0 <= math.sin(MIN_BEAM_ELEVATION):
             return np.zeros(GRID_WAVELENGTHS.size)
         obs = min(self.altitude, atm.thickness)
-        edges, tau, _, _ = cloud_column(atm, GRID_WAVELENGTHS, obs)
+        edges, tau, _, _ = self._column
         return np.exp(-slant_optical_depth(edges, tau, atm.bottom_radius, obs, mu0))
 
     def _sky_light(self, wl: NDArray[np.float64], ref: float, theta: NDArray[np.float64], phi: NDArray[np.float64],
@@ -778,7 +839,9 @@ class CloudySky(SunSkyMixin, SkyModel):
         is nearly diffuse (the spherical albedo ``s``, :func:`air_spherical_albedo`). Then
         ``F = D0 (1 + r R / (1 - r s))`` (``D0 / (1 - r s)`` where ``R = s``) and ``extra = F - down``."""
         cos = np.concatenate([nodes, views])
-        s_row, ret = _air_from_below(self.atmosphere, wl, ref, None, self.streams, cos)
+        # the clear air's layers once, for both solves (their values per wavelength do not depend on the others)
+        column = cloud_column(self.atmosphere.replace(particles=()), wl, observer_altitude=ref)
+        s_row, ret = _air_from_below(self.atmosphere, wl, ref, None, self.streams, cos, column)
         s = s_row[0]
         shape = np.divide(ret, s[None, :], out=np.zeros_like(ret), where=s[None, :] > 0)
         x, w = np.polynomial.legendre.leggauss(SKY_NODES)
@@ -786,7 +849,9 @@ class CloudySky(SunSkyMixin, SkyModel):
         # the plane albedo's ratio to the spherical albedo changes slowly with wavelength: solved every
         # SKY_WAVELENGTH_STEP grid wavelengths (and the last), interpolated linearly between
         solved = np.unique(np.concatenate([np.arange(0, wl.size, SKY_WAVELENGTH_STEP), [wl.size - 1]]))
-        ratio = air_plane_albedo(self.atmosphere, wl[solved], ref, quad, streams=self.streams) / np.maximum(
+        edges, tau, ssa, moments = column
+        at_solved = (edges, tau[:, solved], ssa[:, solved], moments[:, solved])
+        ratio = _air_from_below(self.atmosphere, wl[solved], ref, quad, self.streams, None, at_solved) / np.maximum(
             s[solved], 1e-12)[None, :]
         plane = np.stack([np.interp(wl, wl[solved], row) for row in ratio]) * s[None, :]  # (n_quad, n_wl)
         order = np.argsort(mu)
@@ -943,8 +1008,8 @@ class CloudySky(SunSkyMixin, SkyModel):
         if key not in cache:
             other = object.__new__(type(self))
             other.__dict__.update({k: v for k, v in self.__dict__.items()
-                                   if k not in ("_field", "_xyz_grid", "_direct", "_top_fields", "_air_chords",
-                                                "_limb_sky")})
+                                   if k not in ("_field", "_xyz_grid", "_direct", "_column", "_top_fields",
+                                                "_air_chords", "_limb_sky")})
             other.altitude = self._cloud_top
             other.illumination = "column"
             other.sun_zenith = float(sun_zenith)
@@ -959,7 +1024,7 @@ class CloudySky(SunSkyMixin, SkyModel):
         per node: a table, not a loop over directions)."""
         atm = self.atmosphere
         obs = min(self.altitude, atm.thickness)
-        edges, tau, _, _ = cloud_column(atm, GRID_WAVELENGTHS, obs)
+        edges, tau, _, _ = self._column
         keep = (edges[1:] >= self._cloud_top - 1e-6) & (edges[:-1] <= obs + 1e-6)
         e = np.concatenate([edges[:-1][keep], [edges[1:][keep][-1]]])
         t = tau[keep]

@@ -8,10 +8,41 @@ import math
 import numpy as np
 from numba import prange
 
-from ..jit import parallel_kernel
+from ..jit import inline, parallel_kernel
 from ..precomputed.geometry import bilinear_weights
 
 __all__ = ["grid_lookup", "patch_field_lookup"]
+
+
+#: Uniform cells over [0, pi] [rad] in which :func:`grid_lookup` starts its searches for a node (then walks on).
+SEARCH_CELLS = 2048
+#: Directions per block of :func:`grid_lookup`'s parallel loop (within a block, a row of equal zenith angles, as
+#: an equirectangular map's, takes its arccos and search once).
+LOOKUP_BLOCK = 4096
+
+
+@inline
+def _search_starts(nodes, cells):
+    """``starts[c]`` = (number of ``nodes`` [rad] below ``c pi / cells``) - 1, c = 0..cells: where a search for an
+    angle in cell ``c`` starts (the node index a binary search gives is at or after it)."""
+    starts = np.empty(cells + 1, dtype=np.int64)
+    h = math.pi / cells
+    for c in range(cells + 1):
+        starts[c] = np.searchsorted(nodes, c * h) - 1
+    return starts
+
+
+@inline
+def _node_below(nodes, starts, inv_cell, x):
+    """The index ``i`` of ``nodes`` (ascending, in [0, pi]) with ``nodes[i] < x <= nodes[i + 1]``, clamped to
+    [0, n - 2]: ``np.searchsorted(nodes, x) - 1`` found from the start of ``x``'s uniform cell (``starts`` of
+    :func:`_search_starts`, ``inv_cell`` its cells per radian) by walking forward, a node or two, instead of a
+    binary search."""
+    n = nodes.shape[0]
+    i = starts[min(max(int(x * inv_cell), 0), starts.shape[0] - 1)]
+    while i + 1 < n and nodes[i + 1] < x:
+        i += 1
+    return min(max(i, 0), n - 2)
 
 
 @parallel_kernel
@@ -20,31 +51,45 @@ def grid_lookup(dirs, sun_azimuth, theta_nodes, phi_nodes, grid, out):
     NaN where the vector has a NaN, an infinity or zero length):
     its zenith angle among ``theta_nodes`` [rad] (ascending) and its azimuth from ``sun_azimuth`` [rad] folded
     into [0, pi] (the field is symmetric about the sun's vertical plane) among ``phi_nodes`` [rad] (ascending,
-    0 to pi)."""
+    0 to pi).
+
+    Cost (2 M directions of a 2048 x 1024 map: 0.16 -> 0.10 CPU-s, the same values): the node searches start
+    from a table of uniform cells; a run of directions with the same normalised z (a map's row) takes one
+    arccos and search; the azimuth's fold into [-pi, pi) adds 2 pi where Python's ``%`` would (it is exact
+    there), ``%`` (a slow ``fmod``) only outside."""
     n = dirs.shape[0]
-    nt = theta_nodes.shape[0]
-    npf = grid.shape[1]
     nc = grid.shape[2]
-    for i in prange(n):
-        norm = math.sqrt(dirs[i, 0] * dirs[i, 0] + dirs[i, 1] * dirs[i, 1] + dirs[i, 2] * dirs[i, 2])
-        if not (norm > 0.0 and norm < math.inf):  # NaN, infinite or zero: flagged for the caller to refuse
+    t_starts = _search_starts(theta_nodes, SEARCH_CELLS)
+    p_starts = _search_starts(phi_nodes, SEARCH_CELLS)
+    inv_cell = SEARCH_CELLS / math.pi
+    two_pi = 2.0 * math.pi
+    for block in prange((n + LOOKUP_BLOCK - 1) // LOOKUP_BLOCK):
+        last_z = math.nan
+        it = 0
+        u = 0.0
+        for i in range(block * LOOKUP_BLOCK, min(n, (block + 1) * LOOKUP_BLOCK)):
+            norm = math.sqrt(dirs[i, 0] * dirs[i, 0] + dirs[i, 1] * dirs[i, 1] + dirs[i, 2] * dirs[i, 2])
+            if not (norm > 0.0 and norm < math.inf):  # NaN, infinite or zero: flagged for the caller to refuse
+                for c in range(nc):
+                    out[i, c] = math.nan
+                continue
+            z = min(1.0, max(-1.0, dirs[i, 2] / norm))
+            if z != last_z:
+                last_z = z
+                theta = math.acos(z)
+                it = _node_below(theta_nodes, t_starts, inv_cell, theta)
+                u = min(1.0, max(0.0, (theta - theta_nodes[it]) / (theta_nodes[it + 1] - theta_nodes[it])))
+            x = math.atan2(dirs[i, 0], dirs[i, 1]) - sun_azimuth + math.pi
+            if -two_pi < x < 0.0:
+                x += two_pi  # Python's x % (2 pi) here (fmod(x, 2 pi) is x itself)
+            elif not 0.0 <= x < two_pi:
+                x = x % two_pi
+            rel = abs(x - math.pi)
+            ip = _node_below(phi_nodes, p_starts, inv_cell, rel)
+            v = min(1.0, max(0.0, (rel - phi_nodes[ip]) / (phi_nodes[ip + 1] - phi_nodes[ip])))
             for c in range(nc):
-                out[i, c] = math.nan
-            continue
-        z = min(1.0, max(-1.0, dirs[i, 2] / norm))
-        theta = math.acos(z)
-        it = np.searchsorted(theta_nodes, theta) - 1
-        it = min(max(it, 0), nt - 2)
-        u = (theta - theta_nodes[it]) / (theta_nodes[it + 1] - theta_nodes[it])
-        u = min(1.0, max(0.0, u))
-        rel = math.atan2(dirs[i, 0], dirs[i, 1]) - sun_azimuth
-        rel = abs((rel + math.pi) % (2.0 * math.pi) - math.pi)
-        ip = np.searchsorted(phi_nodes, rel) - 1
-        ip = min(max(ip, 0), npf - 2)
-        v = min(1.0, max(0.0, (rel - phi_nodes[ip]) / (phi_nodes[ip + 1] - phi_nodes[ip])))
-        for c in range(nc):
-            out[i, c] = ((1.0 - u) * ((1.0 - v) * grid[it, ip, c] + v * grid[it, ip + 1, c])
-                         + u * ((1.0 - v) * grid[it + 1, ip, c] + v * grid[it + 1, ip + 1, c]))
+                out[i, c] = ((1.0 - u) * ((1.0 - v) * grid[it, ip, c] + v * grid[it, ip + 1, c])
+                             + u * ((1.0 - v) * grid[it + 1, ip, c] + v * grid[it + 1, ip + 1, c]))
 
 
 @parallel_kernel
