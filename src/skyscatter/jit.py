@@ -47,6 +47,14 @@ installation compile each function once (compiling a precomputation's kernels co
 taken inside numba's own (per-process, re-entrant) compiler lock, and a process that already holds a function's
 lock (numba compiles callees while compiling their caller) does not take it again. Functions call each other
 without cycles, so processes that hold some locks and wait for others cannot wait for each other in a circle.
+
+A function is compiled for the types of its arguments, never for their values: numba types a constant argument of
+a call from compiled code as a literal (``Literal[bool](True)``, ``Literal[int](0)``) and would compile the callee
+once per constant and once more for a variable (``geometry.scattering_r_mu_coord`` 5 times, ``sampling.r_mu_cell``
+3 times in one process of the precomputed tests), each a full numba and LLVM pass, in every process. The compile
+hook below compiles the plain types instead (``numba.core.types.unliteral``), which the call with the constant then
+uses; no function here asks for a literal (``numba.literally``). The machine code is not slower: numba links a
+helper into its caller's LLVM module, where the constant is propagated as before.
 """
 
 from __future__ import annotations
@@ -57,7 +65,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import numba
-from numba.core import sigutils
+from numba.core import sigutils, types
 from numba.core.compiler_lock import global_compiler_lock
 
 from .fileio import build_lock
@@ -116,17 +124,22 @@ def _compile_lock_path(dispatcher: Any) -> Path | None:
 
 
 def _lock_compilation(dispatcher: Any) -> Any:
-    """Make ``dispatcher.compile`` hold the function's inter-process compile lock (module docstring) when the
-    signature is not compiled in this process yet (numba calls ``compile`` for a call with new argument types and
-    when it types a caller); without a numba on-disk cache the dispatcher is returned unchanged."""
+    """Make ``dispatcher.compile`` compile the plain (non-literal) argument types and hold the function's
+    inter-process compile lock (module docstring) when the signature is not compiled in this process yet (numba
+    calls ``compile`` for a call with new argument types and when it types a caller); without a numba on-disk cache
+    it only takes the plain types, and without numba (``NUMBA_DISABLE_JIT``) the function is returned unchanged."""
     path = _compile_lock_path(dispatcher)
-    if path is None:
+    compile_unlocked = getattr(dispatcher, "compile", None)
+    if compile_unlocked is None:
         return dispatcher
-    compile_unlocked = dispatcher.compile
 
     def compile(sig: Any) -> Any:
-        args, _ = sigutils.normalize_signature(sig)
-        if tuple(args) in dispatcher.overloads:  # compiled or loaded in this process already
+        args, ret = sigutils.normalize_signature(sig)
+        plain = tuple(types.unliteral(a) for a in args)
+        if plain != tuple(args):  # a call from compiled code with constants (module docstring)
+            sig = plain if ret is None else ret(*plain)
+            args = plain
+        if path is None or tuple(args) in dispatcher.overloads:  # no disk cache, or compiled in this process
             return compile_unlocked(sig)
         with global_compiler_lock, _compile_lock(path):  # numba's lock first: one thread of this process waits
             return compile_unlocked(sig)

@@ -384,6 +384,8 @@ def columns_above(rb: float, rt: float, edges: NDArray[np.float64], layers: NDAr
     table = np.zeros((nodes, nc))
     tmp = np.empty(nc)
     kinf = np.zeros(nc)
+    # the shells read-only, as the paths' kernels get them (_run_task): one compile of the march for both
+    edges, layers, nlay = _readonly(edges), _readonly(layers), _readonly(nlay)
     for j, x in enumerate(xs):
         mu = math.exp(x) if j < nodes - 1 else 1.0
         sn = math.sqrt(max(1.0 - mu * mu, 0.0))
@@ -872,10 +874,14 @@ def direct_transmittance(medium: Medium, origins: NDArray[np.float64], sun: NDAr
     radius = 0.0 if point else m.sun_angular_radius
     if point:
         n_radial = n_angular = 1
+    # read-only views, as the paths' kernel gets them (_run_task): one compile of this kernel, and of the field's
+    # tracking helpers it shares with trace_block, whether the field's arrays were read-only or not (compiled
+    # twice in one process of tests/test_montecarlo_clouds.py before)
+    inputs = [_readonly(a) for a in (sun, radius, m.bottom_radius, m.top_radius, m.edges, m.layers, m.nlay, m.coef,
+                                     f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe, f.ye, f.re, m.fs)]
     for k in range(origins.shape[0]):
-        kernels.disc_transmittance(np.ascontiguousarray(origins[k]), sun, radius, m.bottom_radius,
-                                   m.top_radius, m.edges, m.layers, m.nlay, m.coef, f.vf, f.vi, f.rho, f.bmax,
-                                   f.bmin, f.xe, f.ye, f.re, m.fs, int(n_radial), int(n_angular), out[k])
+        kernels.disc_transmittance(_readonly(np.ascontiguousarray(origins[k])), *inputs, int(n_radial),
+                                   int(n_angular), out[k])
     return out
 
 
