@@ -23,9 +23,10 @@ seeds, the same estimator) as the photon-weighted mean ``sum n_i E_i / N`` with 
 * sun 10 deg: those and the runs of ``cloudy_low_sun.json`` at the Earth's radius (65536-photon seeds 21, 22 for
   optical depths 1 and 15; 131072-photon seeds 61-66 for 30 and 60);
 * sun 2 deg: backward paths (the forward photons' periodic domain is 7-34 % off in a sphere there): the stored
-  400000 paths of ``cloudy_montecarlo.json`` (seed 41) and the backward runs of ``cloudy_low_sun.json`` at the
-  Earth's radius (optical depth 5: 400000 paths each, seeds 51-63); fewer than 400000 paths in all is no
-  reference (their heavy tail, docs/clouds.md "The sun 2 deg high").
+  ones of ``cloudy_montecarlo.json`` (400000 paths, seed 41, for optical depths 1 and 5; 20000, seed 77, for
+  15-60) and the backward runs of ``cloudy_low_sun.json`` at the Earth's radius (400000 paths each: optical depth
+  5 seeds 51-63, 15 seeds 71, 72, 77, 78); fewer than 400000 paths in all is no reference (their heavy tail,
+  docs/clouds.md "The sun 2 deg high").
 
 The runs of 2026-12-02 (``cloudy_montecarlo.json``, ``cloudy_sun30_forward.json``, seeds 21 and 22) were traced
 with the droplets' Mie optics on the size quadrature of then (24 nodes per e, whose aliased phase function the

@@ -25,8 +25,9 @@ pytest.importorskip("disortpp")
 
 #: the target of docs/clouds.md [K]
 TARGET_K = 200.0
-#: cases with a Monte Carlo reference (sun 2 deg: optical depths 15-60 have 20000 backward paths only)
-CASES = [(tau, sun) for sun in (60.0, 30.0, 10.0) for tau in (1.0, 5.0, 15.0, 30.0, 60.0)] + [(1.0, 2.0), (5.0, 2.0)]
+#: cases with a Monte Carlo reference (sun 2 deg: optical depths 30 and 60 have 20000 backward paths only)
+CASES = ([(tau, sun) for sun in (60.0, 30.0, 10.0) for tau in (1.0, 5.0, 15.0, 30.0, 60.0)]
+         + [(1.0, 2.0), (5.0, 2.0), (15.0, 2.0)])
 
 
 def _model(tau: float, sun: float) -> tuple[np.ndarray, np.ndarray]:
@@ -37,7 +38,9 @@ def _model(tau: float, sun: float) -> tuple[np.ndarray, np.ndarray]:
 
 @pytest.mark.parametrize("tau, sun", CASES)
 def test_cct_of_the_diffuse_light_against_the_monte_carlo(tau, sun):
-    """Within 200 K of the pooled Monte Carlo (docs/clouds.md)."""
+    """Within 200 K of the pooled Monte Carlo (docs/clouds.md; measured -150..+96 K, sigma 7-223 K). Against the
+    stored single runs alone three cases missed (optical depth 60 at sun 30 and 10 deg by 295 and 235 K, 5 at
+    sun 2 deg by 528 K): those runs' noise, as the runs added on 2026-12-04 show."""
     ref = reference(tau, sun)
     assert ref is not None
     mc, err, _, _ = ref
