@@ -251,7 +251,10 @@ class TableLookups:
 
         In the spectral mode, for one position inside the atmosphere and one sun direction (a sky seen by one
         observer), the lookups run on 2D slices of the tables projected to XYZ (:func:`.lookup.observer_slices`):
-        the same values as ``to_xyz(sky_radiance(...))`` to rounding, several times faster. Otherwise this is
+        the same values as ``to_xyz(sky_radiance(...))`` to rounding, several times faster, except with the sun from
+        -1 to 25 deg up, where the read along the sun zenith (:func:`.geometry.sun_zenith_read`) acts on each XYZ
+        channel instead of each wavelength (a difference of up to about 1 % in a few directions with the sun on the
+        horizon on the default tables; docs/realtime.md). Otherwise this is
         ``to_xyz(sky_radiance(...))`` (with fewer wavelengths the colour rule is not linear in the spectrum: the
         negative-lobe guard of :mod:`.conversion`).
         """

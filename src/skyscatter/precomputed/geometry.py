@@ -718,7 +718,8 @@ def sun_zenith_read(mu_s: float, bottom: float, top: float, mu_s_min: float, n_m
     in haze, where the tables agree with 3 times finer ones within 1 % (``benchmarks/low_sun_mu_s_read.py``,
     docs/accuracy.md "The read along the sun zenith"). Below the horizon the quadratic's curvature moves the read
     away from the nearer texel where the single scattering is shadowed (measured worse), so it stays linear there;
-    above 25 deg the linear read is within 0.5 % and the three reads would cost the daytime lookups."""
+    above 25 deg the log-quadratic read changes the radiance by 0.01-0.14 % median, at most 0.5 % (Earth, turbidity
+    3, optical depth 0.5, from the ground), not worth the three reads in the daytime lookups."""
     m0, m1, m2, m3 = _SUN_READ_MU
     f = min(max((mu_s - m0) / (m1 - m0), 0.0), 1.0) * min(max((m3 - mu_s) / (m3 - m2), 0.0), 1.0)
     if n_mu_s < 3 or mu_s < mu_s_min:

@@ -344,7 +344,9 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     one for all wavelengths (from the middle one), so the lookup is linear in the table values and the inscattered
     radiance a sum of table values times wavelength-independent phase factors: projecting the slice first gives the
     same XYZ as projecting each looked-up spectrum (Bruneton's 2017 rewrite folds its tables to luminance the same
-    way). Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables' sun limit;
+    way); except with the sun -1 to 25 deg up, where :func:`observer_kernel` combines the slices at three sun-zenith
+    texels log-quadratically per projected channel (:func:`observer_read_slices`), which does not commute with
+    the projection. Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables' sun limit;
     :data:`.geometry.MU_S_LIMIT_TOLERANCE` for rounding). ``sun_texel``: if given, the slices at that sun-zenith
     texel instead of at ``mu_s`` (the reads of :func:`.geometry.sun_zenith_read`, :func:`observer_read_slices`).
     """

@@ -507,10 +507,10 @@ vec3 GetTransmittanceToSun(float r, float mu_s) {
 // there with each texture's own weight (AzimuthLerp), as skyscatter's lookups since table format 12, except the
 // single-scattering textures where the point is in the Earth's shadow: linear with the shadow factors of their
 // constituent's density (ShadowLerp, ShadowFactors), as skyscatter's lookups (skyscatter.precomputed.lookup). Returns single
-// Rayleigh (no phase); single Mie (no phase) and multiple scattering in the out parameters. Zero below the tables'
-// sun limit MU_S_MIN.
-// GetScattering at the sun zenith cosine mu_s (at least MU_S_MIN) with the textures read at the index position p_s
-// along mu_s (ScatteringMuSIndex(mu_s), or a texel of the read along the sun zenith, GetInscatter).
+// Rayleigh (no phase); single Mie (no phase) and multiple scattering in the out parameters. GetScatteringAt: at the
+// sun zenith cosine mu_s (at least MU_S_MIN) with the textures read at the index position p_s along mu_s
+// (ScatteringMuSIndex(mu_s), or a texel of the read along the sun zenith: GetInscatter); GetScattering: at mu_s,
+// zero below the tables' sun limit MU_S_MIN.
 vec3 GetScatteringAt(float r, float mu, float mu_s, float nu, bool hits_ground, float p_s, out vec3 mie,
                      out vec3 multiple) {
   vec2 vw = ScatteringMuRCoords(r, mu, hits_ground);
