@@ -26,8 +26,11 @@ those paths instead of a pilot (files written before 2026-12-04 hold no seeds: t
 first seed and the follow-up at the next, what this script did); gensdaymtx's columns are taken from it, and
 gensdaymtx is not run. ``--kinds`` (default all) says which kinds of hours (low-sun hours by their kind) get new
 paths; the other hours are carried from the earlier file with their Monte Carlo as it was and our matrix
-recomputed. ``--retrieval`` pickles the year's retrieval (read when it exists). Our matrix is computed for the
-picked hours only.
+recomputed; ``--only`` restricts the new paths to some hours (to split a run over processes, gathered afterwards
+by ``--budget 0`` with every file resumed). ``--subset`` (overcast hours only) retrieves and computes our matrix on
+a record of those hours alone (:func:`prepare_subset`), every other hour carried verbatim from the first resumed
+file. ``--retrieval`` pickles the year's retrieval (read when it exists). Our matrix is computed for the picked
+hours only.
 
 **Ours** is the matrix itself (``spectral_sky_matrix``, Tregenza, one cell per patch, 5 nm bands centred at those
 wavelengths with their neighbours, no gases, over the band's E0 and the day's eccentricity); **gensdaymtx's** the
