@@ -16,8 +16,21 @@ gensdaymtx's 20 nm bands, nodes of our tables).
 hours are ``(1 - f) MC_clear + f MC_overcast``, the matrix's own blend). Paths: a pilot of ``--pilot`` (512)
 paths per direction per sky, then more paths so that the 90th percentile over the hour's patches and
 wavelengths of the relative standard error reaches ``--target`` (2.5 %), within the time left (``--budget``
-minutes of CPU, shared evenly over the skies still to run); pilot and follow-up are pooled. Dask's synchronous
-scheduler: one core.
+minutes of CPU, shared evenly over the skies still to run), in calls of at most ``--chunk`` paths, each with its
+own seed (``1000 hour + 10 part`` for the pilot, then one more per call), all pooled; the JSON lists every sky's
+runs (seed, paths, CPU seconds). Dask's synchronous scheduler: one core.
+
+**Resuming** (``--resume`` earlier JSON, repeatable): a sky whose earlier Monte Carlo ran through the same air
+(the retrieved aerosol optical depth and albedo, or cloud optical depth; the same sun and patches) starts from
+those paths instead of a pilot (files written before 2026-12-04 hold no seeds: their runs are the pilot at the
+first seed and the follow-up at the next, what this script did); gensdaymtx's columns are taken from it, and
+gensdaymtx is not run. ``--kinds`` (default all) says which kinds of hours (low-sun hours by their kind) get new
+paths; the other hours are carried from the earlier file with their Monte Carlo as it was and our matrix
+recomputed; ``--only`` restricts the new paths to some hours (to split a run over processes, gathered afterwards
+by ``--budget 0`` with every file resumed). ``--subset`` (overcast hours only) retrieves and computes our matrix on
+a record of those hours alone (:func:`prepare_subset`), every other hour carried verbatim from the first resumed
+file. ``--retrieval`` pickles the year's retrieval (read when it exists). Our matrix is computed for the picked
+hours only.
 
 **Ours** is the matrix itself (``spectral_sky_matrix``, Tregenza, one cell per patch, 5 nm bands centred at those
 wavelengths with their neighbours, no gases, over the band's E0 and the day's eccentricity); **gensdaymtx's** the
@@ -29,7 +42,8 @@ its sky).
 Results go to ``--out`` (JSON, rewritten atomically after every hour, so a stopped run keeps what finished);
 ``--plot`` redraws the figure docs/images/spectral_skymatrix_montecarlo.png and prints the table from a JSON.
 
-Usage: ``python benchmarks/compare_spectral_skymatrix_montecarlo.py [--hours 20] [--budget 50] [--out X.json]``,
+Usage: ``python benchmarks/compare_spectral_skymatrix_montecarlo.py [--hours 20] [--budget 50] [--out X.json]
+[--kinds overcast --resume OLD.json]``,
 ``python benchmarks/compare_spectral_skymatrix_montecarlo.py --plot X.json``.
 """
 
@@ -230,7 +244,24 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "spectral_skymatrix_montecarlo.json")
     ap.add_argument("--radiance-dir", type=Path, default=None,
                     help="gensdaymtx's working folder (its atmos_data cache); default SKYSCATTER_CACHE_DIR/radiance")
-    ap.add_argument("--until", default=None, help="UTC HH:MM: stop starting new Monte Carlo skies then")
+    ap.add_argument("--until", default=None, help="UTC HH:MM: stop starting new Monte Carlo runs then")
+    ap.add_argument("--kinds", default=",".join(KINDS),
+                    help="comma-separated kinds of hours (clear, broken, overcast; low-sun hours by their kind) that "
+                         "get Monte Carlo paths in this run; with --resume the others are carried from that file")
+    ap.add_argument("--resume", type=Path, action="append", default=None,
+                    help="an earlier results JSON (repeatable: per hour the row with the most paths): a sky "
+                         "whose air is the same (retrieved optical depths, albedo, sun, patches) starts from its "
+                         "paths (pooled with new seeds) instead of a pilot; its "
+                         "gensdaymtx columns are reused (gensdaymtx is not run)")
+    ap.add_argument("--chunk", type=int, default=8192,
+                    help="most paths per direction in one Monte Carlo call (the budget is checked between calls)")
+    ap.add_argument("--only", default=None, help="comma-separated hours of the year: only these get new paths")
+    ap.add_argument("--subset", action="store_true",
+                    help="with --resume: retrieve and compute our matrix on a record of the --kinds hours alone "
+                         "(the first resumed file's picks), not the year (prepare_subset); other hours carried as "
+                         "they are")
+    ap.add_argument("--retrieval", type=Path, default=None,
+                    help="pickle of the year's retrieval: read if it exists, else written (setup reuse)")
     ap.add_argument("--gens-calibrated", type=Path, default=None,
                     help="gensdaymtx with the year file's illuminance filled (Perez 1990) against a results JSON's "
                          "Monte Carlo; prints a table and exits")
@@ -264,12 +295,32 @@ def main() -> None:
         hh, mm = (int(x) for x in args.until.split(":"))
         now = time.gmtime()
         stop = time.time() + ((hh * 60 + mm) - (now.tm_hour * 60 + now.tm_min)) * 60.0 - now.tm_sec
+    kinds = tuple(k.strip() for k in args.kinds.split(",") if k.strip())
+    if not set(kinds) <= set(KINDS):
+        ap.error(f"--kinds: one or more of {', '.join(KINDS)}")
+    # per hour the earlier rows (and their files), most Monte Carlo paths first
+    candidates: dict[int, list[tuple[dict, dict]]] = {}
+    first = None
+    resumed = []
+    for path in args.resume or []:
+        e = json.loads(path.read_text())
+        gens_per_nm(e)
+        e["file"] = str(path)
+        first = first or e
+        resumed.append(e)
+        for r in e["hours"]:
+            candidates.setdefault(int(r["hour"]), []).append((r, e))
+    for c in candidates.values():
+        c.sort(key=lambda x: -sum(s["paths"] for s in x[0]["skies"]))
+    old_rows = bool(candidates)
+    only = {int(x) for x in args.only.split(",")} if args.only else set()
     jobs_path = args.out.with_suffix(".jobs.pkl")
     if jobs_path.exists():
         setup = load_setup(jobs_path)
         print(f"setup read from {jobs_path}", flush=True)
     else:
-        setup = prepare(args)
+        setup = (prepare_subset(args, first, kinds, only) if args.subset else
+                 prepare(args, with_gens=not old_rows))
         jobs_path.write_bytes(pickle.dumps(setup))
     wl = np.array(WAVELENGTHS)
     res = {k: v for k, v in setup.items() if k not in ("jobs", "dirs")}
@@ -277,13 +328,39 @@ def main() -> None:
     res["directions"] = "the matrix's evaluation point of each patch (one equal-area cell: mid sin(altitude))"
     res.update({"description": __doc__.split("\n\n")[0], "seed": args.seed, "wavelengths": list(WAVELENGTHS),
                 "pilot": args.pilot, "target": args.target, "budget_cpu_min": args.budget, "until_utc": args.until,
+                "kinds": list(kinds), "only_hours": args.only, "subset": args.subset, "chunk": args.chunk,
+                "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+                "resumed_from": [{k: e.get(k) for k in ("file", "date_utc", "until_utc", "kinds", "only_hours",
+                                                        "budget_cpu_min", "mc_cpu_s", "load_average_start",
+                                                        "load_average_now")} for e in resumed],
                 "hours": [], "load_average_start": list(os.getloadavg())})
-    n_skies = sum(len(j["parts"]) for j in setup["jobs"])
+    # skies that get new paths in this run: the hours of --kinds; the others are carried from --resume as they are
+    n_skies = sum(len(j["parts"]) for j in setup["jobs"] if j["kind"] in kinds and (not only or j["hour"] in only))
     dirs_all = matrix_directions()
     mc_cpu = 0.0
     skies_done = 0
-    for job in setup["jobs"]:
-        i, kind, low = job["hour"], job["kind"], job["low_sun"]
+    jobs_by_hour = {j["hour"]: j for j in setup["jobs"]}
+    for pick in setup["picked"]:
+        i = int(pick[0])
+        job = jobs_by_hour.get(i)
+        if job is None:  # not in this run's setup (--subset): the earlier row as it was
+            if i in candidates:
+                row, e = candidates[i][0]
+                src = f"{e['file']} (run of {e.get('date_utc') or '2026-12-02'})"
+                res["hours"].append({**row, "carried_verbatim_from": row.get("carried_verbatim_from", src)})
+            continue
+        kind, low = job["kind"], job["low_sun"]
+        # this run adds paths to the hour's skies (a zero budget only gathers earlier runs)
+        run_here = kind in kinds and (not only or i in only) and args.budget > 0
+        # the earlier row whose skies all ran through this job's air (most paths first), else the first one
+        rows_i = candidates.get(i, [])
+        match = [x for x in rows_i if all(same_sky(x[0], what, job, patch_subset(dirs_all, job["sun_azimuth"]))
+                                          is not None for _, what, _ in job["parts"])]
+        old, earlier = (match or rows_i or [(None, None)])[0]
+        if not run_here and not match:
+            print(f"hour {i} ({kind}) left out: no Monte Carlo through its air in "
+                  f"{[str(p) for p in args.resume or []]}", flush=True)
+            continue
         zen, azi = job["sun_zenith"], job["sun_azimuth"]
         sun = direction_from_angles(zen, azi)
         dirs = dirs_all
@@ -293,33 +370,62 @@ def main() -> None:
         var_mc = np.zeros_like(r_mc)
         away = np.ones(patches.size, bool)
         info = []
+        carried_all = True
         for part, (w, what, air) in enumerate(job["parts"]):
             if stop is not None and time.time() > stop:
                 break
-            seed = 1000 * i + 10 * part
-            w0 = time.perf_counter()
-            m, s, n, c = mc_reduced(air, pd, wl, zen, azi, args.pilot, seed)
-            wall = time.perf_counter() - w0
-            mc_cpu += c
-            est = (m, s, n)
-            rel = np.percentile(s / m, 90)
-            left_skies = max(n_skies - skies_done, 1)
-            left = args.budget * 60.0 - mc_cpu
-            afford = int(n * max(left / left_skies, 0.0) / max(c, 1e-3))
-            if stop is not None:  # wall clock: the machine is shared, a CPU budget alone would overrun
-                afford = min(afford, int(n * max((stop - time.time()) / left_skies, 0.0) / max(wall, 1e-3)))
-            want = int(n * (rel / args.target) ** 2) - n
-            extra = int(min(want, afford, args.max_samples - n))
-            if extra >= 256:
-                m2, s2, n2, c2 = mc_reduced(air, pd, wl, zen, azi, extra, seed + 1)
-                mc_cpu += c2
-                c += c2
-                est = pool(est, (m2, s2, n2))
-            skies_done += 1
+            seed0 = 1000 * i + 10 * part
+            prior = same_sky(old, what, job, patches) if old is not None else None
+            if prior is None and not run_here:
+                break
+            if prior is not None:
+                est = (np.asarray(prior["mc_rel"]), np.asarray(prior["mc_rel_se"]), int(prior["paths"]))
+                runs = runs_of(prior, seed0, earlier)
+                c = float(prior["cpu_s"])
+                c_here = 0.0
+            else:
+                w0 = time.perf_counter()
+                m, s, n, c_here = mc_reduced(air, pd, wl, zen, azi, args.pilot, seed0)
+                est, c = (m, s, n), c_here
+                runs = [{"seed": seed0, "paths": n, "cpu_s": c_here, "wall_s": time.perf_counter() - w0,
+                         "run_utc": res["date_utc"]}]
+            if run_here:
+                left_skies = max(n_skies - skies_done, 1)
+                allowance = (args.budget * 60.0 - mc_cpu) / left_skies  # this sky's share of the CPU left
+                spent = c_here
+                while True:
+                    rel = float(np.percentile(est[1] / est[0], 90))
+                    n = est[2]
+                    want = int(n * (rel / args.target) ** 2) - n
+                    per_path = c / max(n, 1)
+                    afford = int((allowance - spent) / max(per_path, 1e-9))
+                    if stop is not None:  # wall clock: the machine is shared, a CPU budget alone would overrun
+                        timed = [r for r in runs if r.get("wall_s") is not None]
+                        # wall seconds per path of this run's calls; before the first, a quarter core assumed
+                        wall_path = (sum(r["wall_s"] for r in timed) / sum(r["paths"] for r in timed) if timed
+                                     else per_path * 4.0)
+                        afford = min(afford, int((stop - time.time()) / max(left_skies, 1) / max(wall_path, 1e-9)))
+                    extra = int(min(want, afford, args.max_samples - n, args.chunk))
+                    if extra < 256:
+                        break
+                    seed = max(r["seed"] for r in runs) + 1
+                    w0 = time.perf_counter()
+                    m2, s2, n2, c2 = mc_reduced(air, pd, wl, zen, azi, extra, seed)
+                    runs.append({"seed": seed, "paths": n2, "cpu_s": c2, "wall_s": time.perf_counter() - w0,
+                                 "run_utc": res["date_utc"]})
+                    mc_cpu += c2
+                    spent += c2
+                    c += c2
+                    est = pool(est, (m2, s2, n2))
+                    print(f"  hour {i} {what}: {est[2]} paths, p90 SE {np.percentile(est[1] / est[0], 90) * 100:.2f} %"
+                          f" ({c2:.0f} CPU-s)", flush=True)
+                mc_cpu += c_here
+                skies_done += 1
+            carried_all &= prior is not None and len(runs) == len(runs_of(prior, seed0, earlier))
             r_mc += w * est[0]
             var_mc += (w * est[1]) ** 2
             away &= away_from_sun(pd, sun, what)
-            info.append({"sky": what, "weight": w, "paths": int(est[2]), "cpu_s": c,
+            info.append({"sky": what, "weight": w, "paths": int(est[2]), "cpu_s": c, "runs": runs,
                          "p90_rel_se": float(np.percentile(est[1] / est[0], 90)),
                          "patches_all": patches.tolist(), "mc_rel": est[0].tolist(), "mc_rel_se": est[1].tolist()})
         if len(info) < len(job["parts"]):
@@ -330,13 +436,17 @@ def main() -> None:
         row = {"hour": i, "kind": kind, "low_sun": low, "sun_zenith_deg": float(np.degrees(zen)),
                "sun_azimuth_deg": float(np.degrees(azi)), **job["meta"],
                "patches": patches[away].tolist(), "skies": info,
+               "mc_carried": bool(carried_all),
                "mc_rel": r_mc[away].tolist(), "mc_rel_se": (se_mc / r_mc)[away].tolist(),
                "ours_rel_value": r_ours[away].tolist(), "ours_rel": (r_ours / r_mc - 1)[away].tolist()}
-        if job["gens"] is not None:
-            r_g = job["gens"][patches]
-            ratio = (r_g / r_mc)[away]
+        gens = job["gens"][patches][away] if job["gens"] is not None else None
+        if gens is None and old is not None and old.get("gens_value") is not None \
+                and list(old["patches"]) == row["patches"]:
+            gens = np.asarray(old["gens_value"])  # gensdaymtx on the same file: the same bytes, unchanged
+        if gens is not None:
+            ratio = gens / r_mc[away]
             scale = float(np.median(ratio))
-            row.update({"gens_value": r_g[away].tolist(), "gens_rel": (ratio - 1).tolist(),
+            row.update({"gens_value": gens.tolist(), "gens_rel": (ratio - 1).tolist(),
                         "gens_median_ratio": scale, "gens_shape_rel": (ratio / scale - 1).tolist()})
         res["hours"].append(row)
         res["mc_cpu_s"] = mc_cpu
@@ -348,15 +458,47 @@ def main() -> None:
         print(f"{kind:8s}{' low' if low else '    '} hour {i:5d} zenith {row['sun_zenith_deg']:5.1f}: "
               + " + ".join(f"{x['sky']} {x['paths']} paths {x['cpu_s']:.0f} s" for x in info) + "; ours median "
               f"{np.median(o) * 100:+.1f} %, p95 |.| {np.percentile(abs(o), 95) * 100:.1f} %, MC SE median "
-              f"{np.median(row['mc_rel_se']) * 100:.1f} %"
+              f"{np.median(row['mc_rel_se']) * 100:.1f} %" + (" (carried)" if carried_all else "")
               + (f"; gensdaymtx ratio {row['gens_median_ratio']:.3g}, shape p95 "
-                 f"{np.percentile(np.abs(row['gens_shape_rel']), 95) * 100:.1f} %" if job["gens"] is not None
+                 f"{np.percentile(np.abs(row['gens_shape_rel']), 95) * 100:.1f} %" if gens is not None
                  else ""), flush=True)
     if res["hours"]:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            cloudysky_columns(res, setup)
+        save(res, args.out)
         print("\n".join(summarise(res)))
         plot(res, args.figure)
     print(f"Monte Carlo CPU {mc_cpu:.0f} s; wrote {args.out}, {args.figure}; load average {os.getloadavg()}")
 
+
+def runs_of(sky: dict, seed0: int, earlier: dict) -> list[dict]:
+    """The seeded runs of a results JSON's sky: its own ``runs``, or (files written before 2026-12-04) the pilot of
+    ``earlier["pilot"]`` paths at ``seed0`` and the follow-up of the rest at ``seed0 + 1`` (what this script ran)."""
+    if "runs" in sky:
+        return [dict(r) for r in sky["runs"]]
+    pilot = int(earlier["pilot"])
+    when = earlier.get("date_utc", "2026-12-02 08:10")
+    runs = [{"seed": seed0, "paths": min(pilot, int(sky["paths"])), "cpu_s": None, "run_utc": when}]
+    if int(sky["paths"]) > pilot:
+        runs.append({"seed": seed0 + 1, "paths": int(sky["paths"]) - pilot, "cpu_s": None, "run_utc": when})
+    return runs
+
+
+def same_sky(old: dict, what: str, job: dict, patches: np.ndarray) -> dict | None:
+    """The sky ``what`` of an earlier results row when its Monte Carlo ran through the air this job's would (the
+    same retrieved aerosol optical depth and albedo, cloud optical depth and sun, the same patches), else None."""
+    sky = next((s for s in old["skies"] if s["sky"] == what), None)
+    if sky is None or list(sky["patches_all"]) != patches.tolist():
+        return None
+    keys = ("aod", "ssa") if what == "clear" else ("cloud_optical_depth",)
+    for k in keys:
+        a, b = float(old[k]), float(job["meta"][k])
+        if not (np.isclose(a, b, rtol=1e-9, atol=0.0) or (np.isnan(a) and np.isnan(b))):
+            return None
+    if not np.isclose(old["sun_zenith_deg"], np.degrees(job["sun_zenith"]), rtol=0, atol=1e-9):
+        return None
+    return sky
 
 def gens_reduced(epw: Path, hours: list[int], cache: Path | None) -> dict[int, np.ndarray]:
     """gensdaymtx's patches of ``hours`` per nm (over :data:`GENSDAYMTX_SPAN_NM`), over its bands' E0 and the
@@ -480,6 +622,8 @@ def cloudysky_columns(res: dict, setup: dict) -> None:
     dirs = matrix_directions()
     jobs = {j["hour"]: j for j in setup["jobs"]}
     for row in res["hours"]:
+        if row["hour"] not in jobs or row.get("carried_verbatim_from"):
+            continue  # an earlier run's row kept as it was (its columns with it)
         parts = {s["sky"]: s for s in row["skies"]}
         if "overcast" not in parts or "mc_rel" not in parts["overcast"]:
             continue
@@ -500,9 +644,13 @@ def cloudysky_columns(res: dict, setup: dict) -> None:
         row["ours_vs_cloudysky_blend"] = (job["ours"][pa] / blend - 1)[keep].tolist()
 
 
-def prepare(args) -> dict:
-    """Retrieval, our matrix and gensdaymtx's on the made year; per picked hour the reduced patch radiances of
-    both (all 145 patches, the 4 wavelengths) and the Monte Carlo skies (weight, kind, air)."""
+def prepare(args, with_gens: bool = True) -> dict:
+    """Retrieval, our matrix and gensdaymtx's (unless not ``with_gens``) on the made year; per picked hour the
+    reduced patch radiances of both (all 145 patches, the 4 wavelengths) and the Monte Carlo skies (weight, kind,
+    air). Our matrix is computed for the picked hours only (every other hour given the night's status: the matrix
+    computes each hour from its own retrieved atmosphere)."""
+    import dataclasses
+
     from skymatrix_mc import band_e0, parts_of
     from skyscatter.fit.spectral_matrix import band_edges, spectral_sky_matrix
     from skyscatter.fit.weather import HOUR_STATUS, retrieve_hourly_atmosphere
@@ -512,9 +660,15 @@ def prepare(args) -> dict:
     w_start = time.perf_counter()
     work = Path(tempfile.mkdtemp(prefix="mc-spectral-"))
     epw = write_year_epw(work / "year.epw")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        h = retrieve_hourly_atmosphere(epw)
+    if args.retrieval is not None and args.retrieval.exists():
+        h = load_setup(args.retrieval)
+        print(f"retrieval read from {args.retrieval}", flush=True)
+    else:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            h = retrieve_hourly_atmosphere(epw)
+        if args.retrieval is not None:
+            args.retrieval.write_bytes(pickle.dumps(h))
     counts = {HOUR_STATUS[k]: int((h.status == k).sum()) for k in HOUR_STATUS}
     print(f"retrieval: {counts} ({time.perf_counter() - w_start:.0f} s)", flush=True)
     picks = pick_hours(h, args.hours, args.seed)
@@ -525,9 +679,12 @@ def prepare(args) -> dict:
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        ds = spectral_sky_matrix(None, scheme=geom, samples=1, bands=centres, atmosphere=h, gases=False)
+        picked = np.zeros(h.status.size, bool)
+        picked[[p[0] for p in picks]] = True
+        only = dataclasses.replace(h, status=np.where(picked, h.status, 0))
+        ds = spectral_sky_matrix(None, scheme=geom, samples=1, bands=centres, atmosphere=only, gases=False)
     t_ours = time.perf_counter() - t0
-    print(f"our matrix (Tregenza, {len(centres)} bands, the whole year): {t_ours:.1f} s", flush=True)
+    print(f"our matrix (Tregenza, {len(centres)} bands, the {len(picks)} hours): {t_ours:.1f} s", flush=True)
     _, edges5 = band_edges(centres)
     e0_ours = band_e0(edges5, k_ours)
     c20, edges20 = band_edges(20)
@@ -535,6 +692,8 @@ def prepare(args) -> dict:
     e0_gens = band_e0(edges20, b_wl)
     t0 = time.perf_counter()
     try:
+        if not with_gens:
+            raise RuntimeError("not run: its columns come from --resume")
         gens = gensdaymtx_matrix(epw, args.radiance_dir)
         print(f"gensdaymtx -m 1 (the whole year): {time.perf_counter() - t0:.1f} s", flush=True)
     except Exception as exc:  # noqa: BLE001 - the peer is optional
@@ -555,6 +714,65 @@ def prepare(args) -> dict:
     return {"epw": "tests/weather_synth.py write_year_epw seed 24", "retrieval_counts": counts,
             "picked": [list(p) for p in picks], "our_matrix_seconds": t_ours,
             "setup_wall_s": time.perf_counter() - w_start, "jobs": jobs}
+
+
+
+def prepare_subset(args, earlier: dict, kinds: tuple[str, ...], only: set[int]) -> dict:
+    """:func:`prepare` for the hours of ``kinds`` (and ``only``, when given) among ``earlier``'s picks, on a
+    record of those hours alone: the year's retrieval needs the whole table family (36 tables by default), which
+    overcast hours do not use. The same as the year's for overcast hours when the hours' aerosol comes from the
+    file's field in both (no clear hour on their day: checked against ``earlier``'s ``aod``) and the cloud table's
+    aerosol node is the same (the node nearest the median of the cloudy hours' aerosol). Not for clear or broken
+    hours (their skies come from the family's tables; refused)."""
+    from skymatrix_mc import band_e0, parts_of
+    from skyscatter.fit.spectral_matrix import band_edges, spectral_sky_matrix
+    from skyscatter.fit.weather import HOUR_STATUS, retrieve_hourly_atmosphere
+    from skyscatter.patches import patch_scheme
+    from weather_synth import write_year_epw
+
+    if set(kinds) != {"overcast"}:
+        raise SystemExit("--subset: overcast hours only (clear and broken hours need the year's table family)")
+    w_start = time.perf_counter()
+    picks = [tuple(p) for p in earlier["picked"] if p[1] in kinds and (not only or int(p[0]) in only)]
+    hours = sorted(int(p[0]) for p in picks)
+    work = Path(tempfile.mkdtemp(prefix="mc-spectral-"))
+    lines = write_year_epw(work / "year.epw").read_text().splitlines()
+    sub = work / "hours.epw"
+    sub.write_text("\n".join(lines[:8] + [lines[8 + i] for i in hours]) + "\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        h = retrieve_hourly_atmosphere(sub)
+    rows = {int(r["hour"]): r for r in earlier["hours"]}
+    for j, i in enumerate(hours):
+        if h.aerosol_source[j] != "file" or (i in rows and not np.isclose(h.aerosol_optical_depth[j], rows[i]["aod"])):
+            raise SystemExit(f"--subset: hour {i}'s aerosol ({h.aerosol_source[j]}) is not the year's")
+    print(f"retrieval of the {len(hours)} hours: {time.perf_counter() - w_start:.0f} s; {h.notes}", flush=True)
+    geom = patch_scheme("tregenza")
+    centres = [w + d for w in WAVELENGTHS for d in (-5.0, 0.0, 5.0)]
+    k_ours = [1 + 3 * j for j in range(len(WAVELENGTHS))]
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds = spectral_sky_matrix(None, scheme=geom, samples=1, bands=centres, atmosphere=h, gases=False)
+    t_ours = time.perf_counter() - t0
+    _, edges5 = band_edges(centres)
+    e0_ours = band_e0(edges5, k_ours)
+    jobs = []
+    for i, kind, low in picks:
+        j = hours.index(int(i))
+        ecc = float(h.eccentricity[j])
+        jobs.append({"hour": int(i), "kind": kind, "low_sun": low, "sun_zenith": float(h.sun_zenith[j]),
+                     "sun_azimuth": float(h.sun_azimuth[j]), "parts": parts_of(h, ds, j, kind),
+                     "ours": ds["sky_radiance"].values[j][:, k_ours] / (e0_ours * ecc), "gens": None,
+                     "meta": {"aod": float(h.aerosol_optical_depth[j]),
+                              "ssa": float(ds["single_scattering_albedo"].values[j]),
+                              "cloud_optical_depth": float(h.cloud_optical_depth[j]),
+                              "cloud_fraction": float(h.cloud_fraction[j]), "status": HOUR_STATUS[int(h.status[j])],
+                              "dhi_closure": float(ds["dhi_closure"].values[j])}})
+    return {"epw": "tests/weather_synth.py write_year_epw seed 24", "retrieval_counts": earlier["retrieval_counts"],
+            "picked": earlier["picked"], "our_matrix_seconds": t_ours, "setup_wall_s": time.perf_counter() - w_start,
+            "setup": f"--subset: retrieval and matrix on a record of the hours {hours} alone ({h.notes})",
+            "jobs": jobs}
 
 
 if __name__ == "__main__":
