@@ -30,29 +30,3 @@ def sample_texture(tex, coords):
             for c in range(2):
                 out += wts[0][a] * wts[1][b] * wts[2][c] * tex[idx[2][c], idx[1][b], idx[0][a]]
     return out
-
-
-def gpu_inscatter(ns, tex, r, mu, mu_s, nu, hits):
-    """GetInscatter of the GLSL library (RGB), from the manifest's Python mappings ``ns`` and the float32 textures
-    ``tex``: the scattering textures read at the view-sun azimuth's two texels, and along the sun zenith the linear
-    read, or with the sun -1..25 deg up the three texel columns combined as the library does."""
-    if mu_s < ns["MU_S_MIN"] - 1e-6:
-        return np.zeros(3)
-    mu_s = max(mu_s, ns["MU_S_MIN"])
-    cell = ns["scattering_ground_cell"](r, mu, hits)
-
-    def read(name, uvw):
-        return ns["scattering_texture"](lambda q: sample_texture(tex[name], q), uvw, cell)
-
-    def at(p_s):
-        uvw0, uvw1, w = ns["scattering_uvw"](r, mu, mu_s, nu, hits, p_s)
-        parts = [ns["single_scattering_lerp"](read(n, uvw0), read(n, uvw1), r, mu, mu_s, nu, w, n)
-                 for n in ("rayleigh", "mie")]
-        parts.append(ns["azimuth_lerp"](read("multiple", uvw0), read("multiple", uvw1), w))
-        return ns["inscattered_radiance"](*parts, nu)
-
-    j0, t, f = ns["scattering_mu_s_read"](mu_s)
-    lin = at(None) if f < 1.0 else None
-    if f <= 0.0:
-        return np.array(lin)
-    return np.array(ns["sun_zenith_lerp"](lin, at(j0), at(j0 + 1), at(j0 + 2), t, f))

@@ -10,7 +10,6 @@ import math
 import numpy as np
 import pytest
 
-from gl_sampling import gpu_inscatter
 from gl_sampling import sample_texture as _sample
 from skyscatter.conventions import direction_from_angles
 from skyscatter.errors import FileFormatError, InvalidParameterError
@@ -40,7 +39,25 @@ def _gpu_sky(ns, tex, r, mu, mu_s, nu):
     """Sky radiance (RGB) as a shader computes it, from the manifest's Python mappings."""
     if mu_s < ns["MU_S_MIN"]:
         return np.zeros(3)
-    return gpu_inscatter(ns, tex, r, mu, mu_s, nu, ns["ray_hits_ground"](r, mu))
+    mu_s = max(mu_s, ns["MU_S_MIN"])
+    hits = ns["ray_hits_ground"](r, mu)
+    cell = ns["scattering_ground_cell"](r, mu, hits)
+
+    def read(n, uvw):
+        return ns["scattering_texture"](lambda q: _sample(tex[n], q), uvw, cell)
+
+    def at(p_s):
+        uvw0, uvw1, w = ns["scattering_uvw"](r, mu, mu_s, nu, hits, p_s)
+        parts = [ns["single_scattering_lerp"](read(n, uvw0), read(n, uvw1), r, mu, mu_s, nu, w, n)
+                 for n in ("rayleigh", "mie")]
+        parts.append(ns["azimuth_lerp"](read("multiple", uvw0), read("multiple", uvw1), w))
+        return ns["inscattered_radiance"](*parts, nu)
+
+    j0, t, f = ns["scattering_mu_s_read"](mu_s)
+    lin = at(None) if f < 1.0 else None
+    if f <= 0.0:
+        return np.array(lin)
+    return np.array(ns["sun_zenith_lerp"](lin, at(j0), at(j0 + 1), at(j0 + 2), t, f))
 
 
 def test_manifest_mappings_and_textures_give_the_colour_lookup(atm, luts):
