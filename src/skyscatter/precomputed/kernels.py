@@ -415,10 +415,13 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     n_lt = n_l if table else 0
     # one wavelength's truncated phase at a time (n_om, n_v), filled just before its product: a table of all
     # wavelengths was n_l times larger (67 MB at 16 wavelengths and default sizes) and written then read back
-    phase_t = np.empty((n_om if table else 0, n_v))
+    phase_t = np.empty((n_om if table else 0, n_v), dtype=np.float32)
+    # the cell of each direction pair's cosine on that grid, the same for every wavelength: found once per radius
+    cell_i = np.empty((n_om if table else 0, n_v), dtype=np.int32)
+    cell_f = np.empty((n_om if table else 0, n_v))
     norm_t = np.empty((n_lt, n_v))
     mie_t = np.empty((n_lt, n_s, n_v))
-    rad_k = np.empty((n_s, n_om))
+    rad_k = np.empty((n_s, n_om), dtype=np.float32)
     n_u = phase_trunc.shape[1]
     half_u = 0.5 * (n_u - 1)
     view_x = np.empty(n_v)  # the view directions' components apart: contiguous for the phase fill
@@ -515,26 +518,31 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
                         for b in range(3):
                             m2[i_s, k, a, b] += om[w, a] * om[w, b] * lw
         if table:
+            for w in range(n_om):
+                ox, oy, oz = om[w, 0], om[w, 1], om[w, 2]
+                for v in range(n_v):
+                    x = (min(max(view_x[v] * ox + view_y[v] * oy + view_z[v] * oz, -1.0), 1.0) + 1.0) * half_u
+                    i = min(int(x), n_u - 2)
+                    cell_i[w, v] = i
+                    cell_f[w, v] = x - i
             for k in range(n_l):
                 for v in range(n_v):
                     norm_t[k, v] = 0.0
                 pk = phase_trunc[k]
                 for w in range(n_om):
                     dw = dom[w]
-                    ox, oy, oz = om[w, 0], om[w, 1], om[w, 2]
                     for v in range(n_v):
-                        # the cell of v . w on the truncated phase's even cosine grid, recomputed per wavelength:
-                        # cheaper than reading a stored (n_om, n_v) index and weight (8 MB) 16 times
-                        x = (min(max(view_x[v] * ox + view_y[v] * oy + view_z[v] * oz, -1.0), 1.0) + 1.0) * half_u
-                        i = min(int(x), n_u - 2)
-                        f = x - i
-                        p = (1.0 - f) * pk[i] + f * pk[i + 1]
+                        i = cell_i[w, v]
+                        f = cell_f[w, v]
+                        p = np.float32((1.0 - f) * pk[i] + f * pk[i + 1])
                         phase_t[w, v] = p
-                        norm_t[k, v] += p * dw
+                        norm_t[k, v] += p * dw  # of the rounded values the product uses, as for an analytic phase
                 for i_s in range(n_s):
                     for w in range(n_om):
                         rad_k[i_s, w] = radiance[i_s * n_l + k, w]
-                mie_t[k] = np.dot(rad_k, phase_t)  # (n_s, n_v): sum over quadrature directions of L dw p*
+                # (n_s, n_v): sum over quadrature directions of L dw p*, in single precision like the analytic
+                # phase's product (SGEMM)
+                mie_t[k] = np.dot(rad_k, phase_t)
             mie = phase_m[:0]
         else:
             radiance32[:] = radiance
