@@ -26,7 +26,11 @@ error the reference is run at. It is deterministic, so shadow rays through the s
 columns are per component and wavelength independent; the optical depth at any wavelength is
 ``sum_c k_c(lambda) col_c``. Free paths in the shells are sampled by inverting this optical depth (``tau(t) =
 -ln(1 - xi)``, Newton with bisection safeguard inside the piece where the target is crossed), so the collision
-density ``sigma_t(x) T(x)`` is known exactly for every wavelength, which spectral MIS needs. Through the cloud
+density ``sigma_t(x) T(x)`` is known exactly for every wavelength, which spectral MIS needs. From inside a cloud
+layer (a shell where a component's density is constant: ``ushell``, ``driver.uniform_shells``) the same density is
+sampled by decomposition ([Kutz2017]; :func:`_uniform_free_path`): the layer's free path in closed form, the air
+marched up to it with a target of its own (one Gauss-Legendre piece, no Newton), and a shadow ray from there ends
+without a march once the layer alone passes its depth (:func:`_uniform_lower_bound`). Through the cloud
 field, free paths are sampled by decomposition and delta tracking against a block majorant grid and shadow rays
 by residual ratio tracking (:mod:`.tracking`); the two are combined by decomposition: the shell free path
 ``t_s`` is drawn first, the field is tracked up to ``t_s``, and whichever collides first is the collision.
@@ -546,9 +550,9 @@ def _uniform_free_path(px, py, pz, dx, dy, dz, t_end, target, kh, s, ushell, rb,
                        rec, kha, cseg, st):
     """A free path from ``p`` [m] inside the uniform shell ``s`` (:func:`_uniform_shell`) along ``d`` up to
     ``t_end`` [m], for the hero's coefficients ``kh`` [m^-1]: the same collision density ``sigma_t T`` as
-    :func:`_march` with ``target``, sampled by decomposition ([Kutz2017] Sec. 3; the first of two independent
-    collisions wins): the shell's constant part ``K = sum_q kh_q rho_q`` has the closed-form free path ``target /
-    K`` inside the shell, the rest of the medium (the air) is marched with its own exponential target
+    :func:`_march` with ``target``, sampled by decomposition ([Kutz2017], decomposition tracking: the first of two
+    independent collisions wins): the shell's constant part ``K = sum_q kh_q rho_q`` has the closed-form free path
+    ``target / K`` inside the shell, the rest of the medium (the air) is marched with its own exponential target
     (coefficients ``kha``: ``kh`` without the shell's constant components) up to that distance. Inside a thick
     cloud the air's optical depth over a free path is some 1e-3 of the cloud's, so the march is one Gauss-Legendre
     piece without Newton's inversion. A path that leaves the shell without a collision draws a fresh free path
