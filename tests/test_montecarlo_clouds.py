@@ -33,6 +33,8 @@ long runs and their figures: benchmarks/validate_clouds.py, docs/clouds.md).
 * The same uniform layer (Henyey-Greenstein; Mie droplets) traced as a particle component and as a 3D field gives
   the same sky radiance.
 * The tabulated phase function's inverse CDF as the kernels call it follows the table (chi-square).
+* Free paths and shadow rays from inside a cloud layer taking the layer in closed form (``driver.UNIFORM_SHELLS``)
+  against the estimator without it: within 4 standard errors.
 """
 
 from __future__ import annotations

@@ -1,6 +1,8 @@
 """Physics of the Monte Carlo reference (skyscatter.montecarlo) against things we did not write.
 
 * Column densities along rays against scipy's adaptive quadrature (QUADPACK).
+* Free paths from inside a cloud layer by decomposition against the march's collision density (Kolmogorov-Smirnov
+  on the sampled optical depths, scipy).
 * An optically thin atmosphere against the single-scattering integral (closed form in the path length for a
   uniform medium, integrated by scipy).
 * The plane-parallel limit against DISORT (disortpp; Stamnes et al. 1988, Appl. Opt. 27, 2502,
