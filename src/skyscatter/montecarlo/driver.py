@@ -61,6 +61,12 @@ NEE_ROULETTE_DEPTH = 8.0
 SHADOW_TABLE_NODES = 512
 #: Smallest cosine [-] of the shadow rays' table; rays leaving the cloud tops more grazing are marched.
 SHADOW_TABLE_MU = 0.005
+#: Free paths and shadow rays from inside a cloud layer (a shell where a further particle component has a constant
+#: density, :func:`uniform_shells`) take that component in closed form: free paths by decomposition (the layer's
+#: exponential free path, the air marched up to it), shadow rays ended without a march once the layer alone passes
+#: their depth (``kernels._uniform_free_path``, ``kernels._uniform_lower_bound``). False: every free path inverted
+#: by the march (Newton in the Gauss-Legendre piece). Clear media do not use it.
+UNIFORM_SHELLS = True
 #: Splitting and roulette by importance in cloudy media (``kernels`` module docstring, "splitting"): a path's
 #: medium vertex is in class ``k`` when its next-event shadow ray's optical depth (least extinguished wavelength) is
 #: below ``k`` of :data:`SPLIT_DEPTHS`; a path that climbs ``k`` classes above its first medium vertex's is split
@@ -117,7 +123,8 @@ class Medium:
     voxel its own block (exact transmittance of the direct sun); both :func:`.tracking.empty_field` without one.
     ``peak_lobe``, ``pval``, ``pcdf``, ``pa``: the lobe whose forward peak is split off the next-event estimates
     (-1: none) and the peak as :func:`forward_peak` returns it. ``sgeo``, ``stab``: the shadow rays' table of the
-    columns above the cloud tops (:func:`columns_above`; ``sgeo[0] = 0``: none).
+    columns above the cloud tops (:func:`columns_above`; ``sgeo[0] = 0``: none). ``ushell``: the uniform shells
+    (:func:`uniform_shells`; no rows: none).
     """
 
     bottom_radius: float
@@ -153,6 +160,7 @@ class Medium:
     ddis_gate: float = 0.0
     sgeo: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(3))
     stab: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros((4, 1)))
+    ushell: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros((0, 2)))
 
     @property
     def cloud_paths(self) -> bool:
@@ -357,7 +365,34 @@ def prepare_medium(atmosphere: AtmosphereParameters, wavelengths: NDArray[np.flo
         np.ascontiguousarray(fss, dtype=float), DDIS_PROBABILITY if cloudy else 0.0, ddis_lobe, peak_lobe, pval,
         pcdf, pa, NEE_ROULETTE_DEPTH if cloudy else math.inf, _split_table() if cloudy else np.ones(1),
         dval, dcdf, math.exp(-DDIS_DEPTH), sgeo, stab,
+        uniform_shells(atmosphere) if cloudy and UNIFORM_SHELLS else np.zeros((0, 2)),
     )
+
+
+def uniform_shells(atmosphere: AtmosphereParameters) -> NDArray[np.float64]:
+    """The shells where a further particle component (a cloud layer) has a constant density: rows ``r_lo, r_hi``
+    [m] (planet radii of the layer's base and top) and the relative densities of the shell components there (that
+    component's, 0 for every other: those are marched). Free paths and shadow rays that start inside one use the
+    constant part in closed form (``kernels._uniform_free_path``, ``kernels._uniform_lower_bound``)."""
+    profiles = _shell_profiles(atmosphere)
+    rows = []
+    for q in range(3, len(profiles)):
+        start = 0.0
+        layers = profiles[q].layers
+        for k, lay in enumerate(layers):
+            end = atmosphere.thickness if k == len(layers) - 1 else start + lay.width
+            if lay.linear_term == 0.0 and (lay.exp_term == 0.0 or lay.exp_scale == 0.0):
+                rho = max(lay.constant_term + lay.exp_term, 0.0)
+                if rho > 0.0 and end > start:
+                    row = np.zeros(2 + len(profiles))
+                    row[0] = atmosphere.bottom_radius + start
+                    row[1] = atmosphere.bottom_radius + end
+                    row[2 + q] = rho
+                    rows.append(row)
+            start = end
+    if not rows:
+        return np.zeros((0, 2))
+    return np.array(rows)
 
 
 def _profile_top(profile: Any, thickness: float) -> float:
@@ -495,8 +530,8 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
     f = m.field
     inputs = [_readonly(a) for a in (
         origins, jitter, dirs, mode, dir_index, sun, math.cos(m.sun_angular_radius), m.bottom_radius, m.top_radius,
-        m.edges, m.layers, m.nlay, m.sgeo, m.stab, m.coef, m.scat, m.lobe, m.lobe_g, m.lobe_tab, m.tmu, m.tval,
-        m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe, f.ye, f.re, m.fs, m.fss, m.ddis,
+        m.edges, m.layers, m.nlay, m.sgeo, m.stab, m.ushell, m.coef, m.scat, m.lobe, m.lobe_g, m.lobe_tab, m.tmu,
+        m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe, f.ye, f.re, m.fs, m.fss, m.ddis,
         m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa, m.nee_roulette, m.split, m.dval, m.dcdf, m.ddis_gate,
         _CLOUDY if m.cloud_paths else None)]
     kernels.trace_block(*inputs, seed, group, batch0, n_batches, batch_size, sums, sumsq, verts)

@@ -26,7 +26,11 @@ error the reference is run at. It is deterministic, so shadow rays through the s
 columns are per component and wavelength independent; the optical depth at any wavelength is
 ``sum_c k_c(lambda) col_c``. Free paths in the shells are sampled by inverting this optical depth (``tau(t) =
 -ln(1 - xi)``, Newton with bisection safeguard inside the piece where the target is crossed), so the collision
-density ``sigma_t(x) T(x)`` is known exactly for every wavelength, which spectral MIS needs. Through the cloud
+density ``sigma_t(x) T(x)`` is known exactly for every wavelength, which spectral MIS needs. From inside a cloud
+layer (a shell where a component's density is constant: ``ushell``, ``driver.uniform_shells``) the same density is
+sampled by decomposition ([Kutz2017]; :func:`_uniform_free_path`): the layer's free path in closed form, the air
+marched up to it with a target of its own (one Gauss-Legendre piece, no Newton), and a shadow ray from there ends
+without a march once the layer alone passes its depth (:func:`_uniform_lower_bound`). Through the cloud
 field, free paths are sampled by decomposition and delta tracking against a block majorant grid and shadow rays
 by residual ratio tracking (:mod:`.tracking`); the two are combined by decomposition: the shell free path
 ``t_s`` is drawn first, the field is tracked up to ``t_s``, and whichever collides first is the collision.
@@ -519,9 +523,93 @@ def _shadow_march(px, py, pz, wx, wy, wz, te, target, kmin, rb, edges, layers, n
 
 
 @helper
+def _uniform_shell(r2, ushell):
+    """Index of the first uniform shell of ``ushell`` (rows ``r_lo, r_hi, rho_0 ... rho_C-1``: radii [m] and the
+    relative densities of the components that are constant between them) strictly containing the radius
+    ``sqrt(r2)`` [m], -1 if none."""
+    for s in range(ushell.shape[0]):
+        if ushell[s, 0] * ushell[s, 0] < r2 < ushell[s, 1] * ushell[s, 1]:
+            return s
+    return -1
+
+
+@helper
+def _shell_exit(px, py, pz, dx, dy, dz, rlo, rhi):
+    """Distance [m] along ``p + t d`` from a point strictly between the spheres ``rlo < r < rhi`` [m] to where the
+    ray leaves that shell (through the inner sphere when it meets it, else the outer one)."""
+    r2 = px * px + py * py + pz * pz
+    b = px * dx + py * dy + pz * dz
+    disc = b * b - (r2 - rlo * rlo)
+    if b < 0.0 and disc >= 0.0:
+        return max(-b - math.sqrt(disc), 0.0)
+    return max(-b + math.sqrt(max(b * b - (r2 - rhi * rhi), 0.0)), 0.0)
+
+
+@helper
+def _uniform_free_path(px, py, pz, dx, dy, dz, t_end, target, kh, s, ushell, rb, edges, layers, nlay, cols, tmp,
+                       rec, kha, cseg, st):
+    """A free path from ``p`` [m] inside the uniform shell ``s`` (:func:`_uniform_shell`) along ``d`` up to
+    ``t_end`` [m], for the hero's coefficients ``kh`` [m^-1]: the same collision density ``sigma_t T`` as
+    :func:`_march` with ``target``, sampled by decomposition ([Kutz2017], decomposition tracking: the first of two
+    independent collisions wins): the shell's constant part ``K = sum_q kh_q rho_q`` has the closed-form free path
+    ``target / K`` inside the shell, the rest of the medium (the air) is marched with its own exponential target
+    (coefficients ``kha``: ``kh`` without the shell's constant components) up to that distance. Inside a thick
+    cloud the air's optical depth over a free path is some 1e-3 of the cloud's, so the march is one Gauss-Legendre
+    piece without Newton's inversion. A path that leaves the shell without a collision draws a fresh free path
+    from the shell's boundary (the exponential law is memoryless). Returns ``(t, reached)`` and, in ``cols``, the
+    shell columns [m] from ``p`` to ``t``; ``cseg`` (n_comp,) is a work array."""
+    nc = cols.shape[0]
+    k_uni = 0.0
+    for q in range(nc):
+        rho = ushell[s, 2 + q]
+        k_uni += kh[q] * rho
+        kha[q] = kh[q] if rho == 0.0 else 0.0
+    d_shell = min(_shell_exit(px, py, pz, dx, dy, dz, ushell[s, 0], ushell[s, 1]), t_end)
+    t_c = target / k_uni if k_uni > 0.0 else np.inf
+    t_lim = min(t_c, d_shell)
+    target_a = -math.log1p(-next_uniform(st))
+    t, reached, _ = _march(px, py, pz, dx, dy, dz, t_lim, target_a, kha, rb, edges, layers, nlay, cols, tmp, rec,
+                           True)
+    if reached:
+        return t, True
+    if t_c < d_shell:
+        return t_c, True
+    if d_shell >= t_end:
+        return t_end, False
+    # no collision inside the shell: a new free path from its boundary, the columns added up
+    for q in range(nc):
+        cseg[q] = cols[q]
+    qx = px + d_shell * dx
+    qy = py + d_shell * dy
+    qz = pz + d_shell * dz
+    target2 = -math.log1p(-next_uniform(st))
+    t2, reached2, _ = _march(qx, qy, qz, dx, dy, dz, t_end - d_shell, target2, kh, rb, edges, layers, nlay, cols, tmp,
+                             rec, True)
+    for q in range(nc):
+        cols[q] += cseg[q]
+    if reached2:
+        return d_shell + t2, True
+    return t_end, False
+
+
+@helper
+def _uniform_lower_bound(px, py, pz, wx, wy, wz, te, kmin, ushell):
+    """A lower bound of the optical depth ``kmin . col`` along ``p + t w``, ``0 <= t <= te`` [m]: the constant
+    components of the uniform shell containing ``p`` over the ray's length inside that shell (the other
+    components and the rest of the ray add to it); 0 outside every uniform shell."""
+    s = _uniform_shell(px * px + py * py + pz * pz, ushell)
+    if s < 0:
+        return 0.0
+    k = 0.0
+    for q in range(kmin.shape[0]):
+        k += kmin[q] * ushell[s, 2 + q]
+    return k * min(_shell_exit(px, py, pz, wx, wy, wz, ushell[s, 0], ushell[s, 1]), te)
+
+
+@helper
 def _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb, edges, layers, nlay, sgeo, stab,
-                       fs, fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau,
-                       trf, out):
+                       ushell, fs, fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec,
+                       tau, trf, out):
     """The shadow ray of a next-event estimate: ``out[i]`` the transmittance [-] from ``p`` [m] along the unit
     direction ``w`` over ``te`` [m] (to the top of the atmosphere) per wavelength, through the shells (exact) and
     the field (ratio tracking, into ``trf``). Returns False (``out`` not set) where it is zero for every
@@ -545,6 +633,8 @@ def _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t
     w = 1.0
     if rr_depth < _NEE_STOP:
         end = min(rr_depth - math.log1p(-next_uniform(st)), _NEE_STOP)
+        if _uniform_lower_bound(px, py, pz, wx, wy, wz, te, kmin, ushell) >= end:
+            return False  # the uniform shell alone reaches the depth: no march
         if _shadow_march(px, py, pz, wx, wy, wz, te, end, kmin, rb, edges, layers, nlay, sgeo, stab, tot, tmp, rec):
             return False
         _transmittances(coef_t, tot, tau, out)  # to the top: ``tot`` holds the whole columns
@@ -552,6 +642,8 @@ def _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t
         if excess > 0.0:
             w = math.exp(excess)
     else:
+        if _uniform_lower_bound(px, py, pz, wx, wy, wz, te, kmin, ushell) >= _NEE_STOP:
+            return False
         if _shadow_march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, sgeo, stab, tot, tmp,
                          rec):
             return False
@@ -802,7 +894,8 @@ _SPLIT_STACK = 64
 
 
 @helper
-def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, coef_t, scat_t, kh,
+def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, ushell, kha, cseg,
+                coef_t, scat_t, kh,
                 kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax,
                 fsmin, rr_depth, st, fstate, cols, tot, tmp, rec, dens, sc, stt, sst, tau, trf, pk, fp, pp, chain, g):
     """The sunlight reaching ``p`` [m] after a chain of L >= 1 forward-peak scatterings (module docstring, "forward
@@ -851,12 +944,17 @@ def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nl
                                            nlay, cols, tmp, rec, fs, fsmax, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre,
                                            fp, pp, st, fstate)
         else:
-            # the shells alone, without the call (as in trace_block)
+            # the shells alone, without the call (as in trace_block); inside a uniform shell by decomposition
             rho_f = 0.0
-            t, reached, _ = _march(qx, qy, qz, dx, dy, dz, t_end, target, kh, rb, edges, layers, nlay, cols, tmp, rec,
-                                   True)
-            if not reached:
-                t = t_end
+            su = _uniform_shell(qx * qx + qy * qy + qz * qz, ushell)
+            if su >= 0:
+                t, reached = _uniform_free_path(qx, qy, qz, dx, dy, dz, t_end, target, kh, su, ushell, rb, edges,
+                                                layers, nlay, cols, tmp, rec, kha, cseg, st)
+            else:
+                t, reached, _ = _march(qx, qy, qz, dx, dy, dz, t_end, target, kh, rb, edges, layers, nlay, cols, tmp,
+                                       rec, True)
+                if not reached:
+                    t = t_end
         if not reached:
             return False, 0.0, 0.0, 0.0
         qx, qy, qz = _collide(qx, qy, qz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers, nlay, coef_t,
@@ -870,8 +968,8 @@ def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nl
     if blocked:
         return False, 0.0, 0.0, 0.0
     if not _sun_transmittance(qx, qy, qz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb, edges, layers, nlay, sgeo,
-                              stab, fs, fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp,
-                              rec, tau, trf, fp):
+                              stab, ushell, fs, fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate,
+                              tot, tmp, rec, tau, trf, fp):
         return False, 0.0, 0.0, 0.0
     for i in range(n):
         g[i] *= esun[i] * fp[i]
@@ -943,7 +1041,8 @@ def _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy
 
 
 @kernel
-def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, coef,
+def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, ushell,
+                coef,
                 scat, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
                 fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, nee_roulette, split, dval, dcdf, ddis_gate,
                 cloudy, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
@@ -960,6 +1059,9 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     layers : (C, L, 5) density layers of the shell components; nlay : (C,) int64 layer counts.
     sgeo (3,), stab (m, C): the shadow rays' table of the shells' columns [m] above the cloud tops
     (:func:`_shadow_march`, ``driver.columns_above``; ``sgeo[0] = 0``: none, every shadow ray marched).
+    ushell (m, 2 + C): uniform shells (cloud layers): radii [m] ``r_lo, r_hi`` and the relative densities of the
+    components constant between them (0 for the others); free paths and shadow rays from inside one use that
+    (:func:`_uniform_free_path`, :func:`_uniform_lower_bound`). Zero rows: none.
     coef, scat : (n_wl, C) extinction and scattering coefficients at relative density 1 [m^-1].
     lobe, lobe_g, lobe_tab : (C + 1,) phase code (``LOBE_*``), asymmetry and table index of each shell component
     and, last, of the cloud field. tmu (m,), tval and tcdf (n_tab, n_wl, m): the phase tables (ascending mu).
@@ -1055,7 +1157,10 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
         if lobe[c] != LOBE_NONE:
             active[n_active] = c
             n_active += 1
-    _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, coef,
+    kha = np.empty(nc)
+    cseg = np.empty(nc)
+    _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, ushell,
+                 kha, cseg, coef,
                  lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
                  fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, seed, group, batch0,
                  n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp, dens,
@@ -1065,7 +1170,8 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
 
 
 @helper
-def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, coef,
+def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, ushell,
+                 kha, cseg, coef,
                  lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
                  fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, seed, group, batch0,
                  n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp, dens,
@@ -1150,11 +1256,20 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                                                rb, edges, layers, nlay, cols, tmp, rec, fs, fsmax, fvf,
                                                                fvi, frho, fbmax, fbmin, fxe, fye, fre, f, p, st, fstate)
                             else:
-                                # the shells alone, without the call (the clear sky's paths: 9 % of their time)
-                                t, reached, _ = _march(px, py, pz, dx, dy, dz, t_end, target, kh, rb, edges, layers,
-                                                       nlay, cols, tmp, rec, True)
-                                if not reached:
-                                    t = t_end
+                                # the shells alone, without the call (the clear sky's paths: 9 % of their time);
+                                # inside a uniform shell (a cloud layer) by decomposition, without Newton's inversion
+                                su = -1
+                                if clouds_on:
+                                    su = _uniform_shell(px * px + py * py + pz * pz, ushell)
+                                if su >= 0:
+                                    t, reached = _uniform_free_path(px, py, pz, dx, dy, dz, t_end, target, kh, su,
+                                                                    ushell, rb, edges, layers, nlay, cols, tmp, rec,
+                                                                    kha, cseg, st)
+                                else:
+                                    t, reached, _ = _march(px, py, pz, dx, dy, dz, t_end, target, kh, rb, edges,
+                                                           layers, nlay, cols, tmp, rec, True)
+                                    if not reached:
+                                        t = t_end
                             if reached:
                                 collided = True
                             elif not ground:
@@ -1183,9 +1298,9 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                 live = False
                             elif clouds_on:
                                 live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb,
-                                                          edges, layers, nlay, sgeo, stab, fs, fsmax, fsmin, fvf, fvi,
-                                                          frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec,
-                                                          tau, trf, trs)
+                                                          edges, layers, nlay, sgeo, stab, ushell, fs, fsmax, fsmin,
+                                                          fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot,
+                                                          tmp, rec, tau, trf, trs)
                             else:
                                 _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers,
                                                       nlay, tot, tmp, rec, False)
@@ -1207,7 +1322,8 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                 qprobe = min(1.0, max(_PEAK_PROBE_MIN, _PEAK_PROBE_GAIN * tsun))
                             if peak and (qprobe >= 1.0 or next_uniform(st) < qprobe):
                                 alive, wx, wy, wz = _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges,
-                                    layers, nlay, sgeo, stab, coef_t, scat_t, kh, kmin, peak_lobe, tmu, pval, pcdf, pa,
+                                    layers, nlay, sgeo, stab, ushell, kha, cseg, coef_t, scat_t, kh, kmin, peak_lobe,
+                                    tmu, pval, pcdf, pa,
                                     esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth,
                                     st, fstate, cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain,
                                     gch)
@@ -1284,8 +1400,8 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                 te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
                                 if clouds_on:
                                     live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t,
-                                        rb, edges, layers, nlay, sgeo, stab, fs, fsmax, fsmin, fvf, fvi, frho, fbmax,
-                                        fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf, trs)
+                                        rb, edges, layers, nlay, sgeo, stab, ushell, fs, fsmax, fsmin, fvf, fvi, frho,
+                                        fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf, trs)
                                 else:
                                     live = _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges,
                                                                  layers, nlay, tot, tmp, rec, tau, trs)
@@ -1294,7 +1410,8 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                         contrib[i] += ws * f[i] * albedo[i] / math.pi * cs * esun[i] * trs[i]
                             if peak:
                                 alive, wx, wy, wz = _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges,
-                                    layers, nlay, sgeo, stab, coef_t, scat_t, kh, kmin, peak_lobe, tmu, pval, pcdf, pa,
+                                    layers, nlay, sgeo, stab, ushell, kha, cseg, coef_t, scat_t, kh, kmin, peak_lobe,
+                                    tmu, pval, pcdf, pa,
                                     esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth,
                                     st, fstate, cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain,
                                     gch)
