@@ -707,8 +707,9 @@ def cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike
 
 
 #: Version of the cloud table's stored layout and contents (part of its disk cache key). 3: a verified entry of
-#: :mod:`skyscatter.diskcache` (checksums).
-_CLOUD_TABLE_VERSION = 3
+#: :mod:`skyscatter.diskcache` (checksums). 4: :class:`~skyscatter.sky.cloudy.CloudySky`'s sky irradiance on the cloud
+#: top from the radiance tables (the skies it stores changed by up to a few per cent).
+_CLOUD_TABLE_VERSION = 4
 _CLOUD_TABLE_ARRAYS = ("optical_depths", "zeniths", "wavelengths", "diffuse", "slant", "field_theta", "field_phi",
                        "field", "peak")
 
