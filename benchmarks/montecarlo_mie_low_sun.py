@@ -10,6 +10,10 @@ direction with a fixed seed per air; the values, their standard errors, the seed
 ``--out`` (tests/data/montecarlo_mie_low_sun.json), which tests/test_precomputed_mie.py holds the tables against.
 
     nice PYTHONPATH=src python benchmarks/montecarlo_mie_low_sun.py --out tests/data/montecarlo_mie_low_sun.json
+    PYTHONPATH=src python benchmarks/montecarlo_mie_low_sun.py --compare tests/data/montecarlo_mie_low_sun.json
+
+``--compare FILE`` runs no Monte Carlo: it prints the tables (the DISORT tests' sizes, 6 orders; ``--sizes`` a JSON
+object of size fields to change) / the stored values - 1 [%] and the stored standard errors.
 """
 
 from __future__ import annotations
@@ -41,12 +45,43 @@ def air(name: str) -> AtmosphereParameters:
                                                   solar_irradiance=1.0)
 
 
+def compare(path: Path, extra: dict) -> None:
+    """Print the tables / the stored Monte Carlo values of ``path`` - 1 [%] per air and side."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from disort_reference import TABLE_SIZES
+
+    from skyscatter.precomputed import PrecomputedAtmosphere
+
+    data = json.loads(path.read_text())
+    ts = math.radians(data["sun_zenith_deg"])
+    v = np.array(data["views"])
+    vz, side = np.radians(v[:, 0]), v[:, 1]
+    d = np.stack([side * np.sin(vz), 0 * vz, np.cos(vz)], axis=-1)
+    for case in data["cases"]:
+        atm = PrecomputedAtmosphere.compute(air(case["type"]), orders=6, wavelengths=[550.0],
+                                            sizes=dict(TABLE_SIZES, **extra), progress=False)
+        ours = atm.sky_radiance([0.0, 0.0, atm.parameters.bottom_radius], d, [math.sin(ts), 0.0, math.cos(ts)])[:, 0]
+        err = 100 * (ours / np.array(case["radiance"]) - 1)
+        se = 100 * np.array(case["relative_stderr"])
+        for s, label in ((1.0, "towards sun"), (-1.0, "away")):
+            k = side == s
+            cells = " ".join(f"{vv:.0f}:{e:+.1f}" for vv, e in zip(v[k, 0], err[k], strict=True))
+            print(f"| {case['type']} | {label} | {cells} | {se[k].max():.2f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sun-zenith", type=float, default=70.0, help="[deg]")
     ap.add_argument("--paths", type=int, default=65536, help="per direction")
     ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--compare", type=Path, default=None)
+    ap.add_argument("--sizes", default="{}")
     args = ap.parse_args()
+    if args.compare:
+        compare(args.compare, json.loads(args.sizes))
+        return
     ts = math.radians(args.sun_zenith)
     vs = views(args.sun_zenith)
     vz = np.radians([v[0] for v in vs])
