@@ -51,7 +51,6 @@ def compare(path: Path, extra: dict) -> None:
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
     from disort_reference import TABLE_SIZES
-
     from skyscatter.precomputed import PrecomputedAtmosphere
 
     data = json.loads(path.read_text())
