@@ -17,6 +17,8 @@
 * Multiple scattering against the Monte Carlo reference, which samples the full phase table (never truncated):
   benchmarks/compare_montecarlo_mie.py (docs/aerosols.md: within 1.2 % for two types); here the same case in the
   principal plane, view zenith 0-70 deg (not within 5 deg of the sun), within 3 % + 3 standard errors.
+  At sun 70 deg both airs against stored Monte Carlo values (tests/data/montecarlo_mie_low_sun.json), the same
+  bound; and maritime-clean at optical depth 0.5 against DISORT with 32 radius rows.
 * The default aerosol's tables are unchanged (tests/test_precomputed_tables.py and the cache keys).
 """
 
@@ -132,6 +134,33 @@ def test_sea_salt_against_disort_with_its_intensity_correction():
 
 
 @pytest.mark.slow
+def test_maritime_clean_at_a_low_sun_against_disort():
+    """OPAC maritime-clean, optical depth 0.5, sun at 70 deg, principal plane, view zenith 0-70 deg (not the sun
+    itself) against DISORT with the intensity correction of the phase table, within 3 % plus the sphericity
+    allowance, with 32 radius rows (the default tables' number; the other sizes the DISORT tests'). With the tests'
+    16 rows the orders' scattering density, read linearly between rows along the view rays, misses its curvature in
+    altitude in the sea-salt layer (0.86 km) and the tables are -5.8 % away from the sun at view zenith 70 deg,
+    0.7 point beyond the allowance there; with 32 rows -3.9 % (docs/aerosols.md, "Tables vs DISORT")."""
+    pytest.importorskip("disortpp")
+    from disort_reference import TABLE_SIZES, disort_radiance, sphericity_allowance
+
+    p = AtmosphereParameters.with_aerosol_type("maritime-clean", 0.5, 50.0, ozone_column=0.0, ground_albedo=0.1,
+                                               solar_irradiance=1.0)
+    atm = PrecomputedAtmosphere.compute(p, orders=6, wavelengths=[550.0], sizes=dict(TABLE_SIZES, scattering_r=32),
+                                        progress=False)
+    ts = math.radians(70.0)
+    vz = np.radians(np.arange(0.0, 71.0, 10.0))
+    ref = disort_radiance(p, 550.0, ts, vz, np.radians([0.0, 180.0]), n_layers=100, n_streams=32, n_moments=400)
+    tol = 0.03 + sphericity_allowance(p, ts, vz)
+    for j, side in enumerate((1.0, -1.0)):
+        keep = np.abs(side * np.degrees(vz) - 70.0) > 1.0  # not the sun itself
+        d = np.stack([side * np.sin(vz), 0 * vz, np.cos(vz)], axis=-1)
+        ours = atm.sky_radiance([0.0, 0.0, p.bottom_radius], d, [math.sin(ts), 0.0, math.cos(ts)])[:, 0]
+        err = ours / ref[:, j] - 1.0
+        assert np.all(np.abs(err[keep]) < tol[keep]), (side, np.round(100 * err, 2))
+
+
+@pytest.mark.slow
 def test_multiple_scattering_against_the_monte_carlo(mie_params, mie_tables):
     pytest.importorskip("dask")
     from skyscatter.montecarlo import sky_radiance
@@ -148,6 +177,38 @@ def test_multiple_scattering_against_the_monte_carlo(mie_params, mie_tables):
                           scheduler="synchronous")
         rel = np.abs(ours / mc.radiance[:, 0] - 1)
         assert np.all(rel < 0.03 + 3 * mc.relative_stderr[:, 0]), (side, rel, mc.relative_stderr[:, 0])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("aerosol_type", ["continental-average", "maritime-clean"])
+def test_multiple_scattering_against_the_monte_carlo_at_a_low_sun(mie_params, mie_tables, aerosol_type):
+    """Sun at 70 deg, optical depth 0.2, principal plane, view zenith 0-70 deg (not within 5 deg of the sun): the
+    tables at the DISORT tests' sizes against the stored Monte Carlo values of tests/data/montecarlo_mie_low_sun.json
+    (benchmarks/montecarlo_mie_low_sun.py: its seeds and path counts there; the full phase table sampled) within
+    the issue's 3 % + 3 standard errors (docs/aerosols.md has the measured differences)."""
+    import json
+    from pathlib import Path
+
+    data = json.loads((Path(__file__).parent / "data" / "montecarlo_mie_low_sun.json").read_text())
+    case = next(c for c in data["cases"] if c["type"] == aerosol_type)
+    if aerosol_type == "continental-average":
+        p, atm = mie_params, mie_tables  # the same air as the stored values'
+    else:
+        from disort_reference import TABLE_SIZES
+
+        p = AtmosphereParameters.with_aerosol_type(aerosol_type, case["aod_550"], case["relative_humidity"],
+                                                   ozone_column=0.0, solar_irradiance=1.0, ground_albedo=0.1)
+        atm = PrecomputedAtmosphere.compute(p, orders=6, wavelengths=[550.0], sizes=TABLE_SIZES, progress=False)
+    assert p.to_dict() == AtmosphereParameters.with_aerosol_type(
+        aerosol_type, case["aod_550"], case["relative_humidity"], ozone_column=0.0, solar_irradiance=1.0,
+        ground_albedo=0.1).to_dict()
+    ts = math.radians(data["sun_zenith_deg"])
+    vz, side = np.radians(np.array(data["views"])[:, 0]), np.array(data["views"])[:, 1]
+    d = np.stack([side * np.sin(vz), 0 * vz, np.cos(vz)], axis=-1)
+    ours = atm.sky_radiance([0.0, 0.0, p.bottom_radius], d, [math.sin(ts), 0.0, math.cos(ts)])[:, 0]
+    mc, se = np.array(case["radiance"]), np.array(case["relative_stderr"])
+    rel = ours / mc - 1.0
+    assert np.all(np.abs(rel) < 0.03 + 3 * se), (np.round(100 * rel, 2), np.round(100 * se, 2))
 
 
 def test_saved_tables_carry_the_phase_table(mie_params, tmp_path, monkeypatch):
