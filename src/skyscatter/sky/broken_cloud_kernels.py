@@ -22,7 +22,7 @@ __all__ = ["exp_lanes", "march_rays", "shadow_volume", "ground_shadow", "shaft_l
 # layout of the float geometry ``gf``
 G_X0, G_Y0, G_DX, G_DY, G_DZ, G_LX, G_LY, G_RBASE, G_RTOP, G_RGROUND, G_PERIODIC = range(11)
 # layout of the march parameters ``mp``
-M_A, M_B, M_C, M_D, M_STEP, M_LOD, M_TMIN, M_TOP, M_SIDE = range(9)
+M_A, M_B, M_C, M_D, M_STEP, M_LOD, M_TMIN, M_TOP, M_SIDE, M_BASE = range(10)
 #: View transmittance (every wavelength) below which a ray's march stops: what lies behind adds < 1e-3 of it.
 T_STOP = 1e-3
 
@@ -203,7 +203,8 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g
     the ray start distance and the factors of the
     octaves ``i >= 1`` for the energy entering the clouds through their tops and through their sides
     (:func:`.broken_cloud.entry_factors`), blended per sample by the share of the sun's path that runs through
-    the cloud above the point, ``min(tau_sun mu_s / tau_top, 1)``. ``linear``: the
+    the cloud above the point, ``min(tau_sun mu_s / tau_top, 1)``; and the switch (nonzero: on) of the
+    diffusion's profile near a thick cloud's base (:data:`.broken_cloud.BASE_PROFILE`). ``linear``: the
     densities and optical depths interpolated trilinearly between voxel centres (smooth cloud edges; ``occupied``
     must then count a voxel's neighbours); else constant per voxel (the field's definition, the Monte Carlo's).
     ``thin_aware``: octave ``i`` weighted by ``(1 - exp(-tau_column))^i`` (:mod:`.broken_cloud`).
@@ -269,10 +270,16 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g
     el = np.empty(nwl)  # the same for an octave's exponentials per wavelength where the polynomial is not used
     lbits = np.empty(nwl, dtype=np.int64)
     lscale = lbits.view(np.float64)
+    # the diffusion profile near the cloud base (below): on or off, and 1 - g
+    base_on = mp[M_BASE] != 0.0
+    gm1 = 1.0 - gbar
     for ray in range(start, stop):
         dx = dirs[ray, 0]
         dy = dirs[ray, 1]
         dz = dirs[ray, 2]
+        # the cosine of the light's downward travel towards the eye with the eye's vertical (the ray's elevation;
+        # over a field of tens of kilometres the vertical turns by < 1e-2 rad), 0 for light travelling upwards
+        mu_down = max((dx * ox + dy * oy + dz * oz) / math.sqrt(ox * ox + oy * oy + oz * oz), 0.0)
         # the step: ``step_fraction`` of the voxel along the axis the ray crosses fastest (the altitude's rate taken
         # at the eye: further out the planet's curvature steepens it by at most t / R)
         rate = max(abs(dx) * inv_dx, abs(dy) * inv_dy, abs(dz) * inv_dz)
@@ -444,6 +451,19 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g
                 # its optical depth tau_top / mu_s (a horizontally uniform cloud); less means it leaves by a side
                 ftop = min(ts * mus / tup, 1.0) if tup > 1e-6 and mus > 0.0 else 1.0
                 entry = ftop * mp[M_TOP] + (1.0 - ftop) * mp[M_SIDE]
+                if base_on:
+                    # the diffused light near a thick cloud's base (:data:`.broken_cloud.BASE_PROFILE`): the
+                    # conservative Eddington layer's source there, I1 (2/3 + (1 - g) tau_b + g mu) ([Joseph1976]'s
+                    # equations without the delta scaling; tau_b the optical depth above the base, mu the cosine of
+                    # the light's downward travel), relative to the octaves' flat source taken as I1 4/3 (so that the
+                    # flux leaving the base is kept: 2 int mu (2/3 + mu) dmu = 4/3); the mean radiance's part capped
+                    # at 1 where it reaches 4/3 ((1 - g) tau_b = 2/3), the anisotropy g mu / (2/3 + (1 - g) tau_b)
+                    # fading above; phased in over (1 - g) tau_c from 0.7 to 1.4 (column optical depths of about
+                    # 5 to 10), below which the octaves' own attenuation to the sun shapes the light
+                    i0 = 2.0 / 3.0 + gm1 * tdn
+                    hb = min(0.75 * i0, 1.0) * (1.0 + gbar * mu_down / i0)
+                    wcol = min(max((gm1 * (tup + tdn) - 0.7) / 0.7, 0.0), 1.0)
+                    entry *= 1.0 + wcol * (hb - 1.0)
                 # every octave's exp(-x kbar) and the step's exp(-sigma h kbar) at once
                 for o in range(n_octaves):
                     ez[o] = -(a_pow[o] * ts) * kbar
