@@ -386,6 +386,7 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g
                     ts = 0.0
                     tup = 0.0
                     tdn = 0.0
+                    tb = 0.0
                     for q in range(1, 4):
                         val = (w000 * vol[i0, j0, k0, q] + w100 * vol[i0 + 1, j0, k0, q]
                                + w010 * vol[i0, j0 + 1, k0, q] + w110 * vol[i0 + 1, j0 + 1, k0, q]
@@ -397,6 +398,7 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g
                             tup = val / r
                         else:
                             tdn = val / r
+                            tb = tdn
                 else:
                     ix = int(fx) + 1
                     iy = int(fy) + 1
@@ -406,6 +408,8 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g
                     ts = float(vol[ix, iy, iz, 1])
                     tup = float(vol[ix, iy, iz, 2]) / r
                     tdn = float(vol[ix, iy, iz, 3]) / r
+                    # the optical depth above the base at the sample itself (the voxel's is at its centre)
+                    tb = tdn + (fz - iz - 0.5) * r * gf[G_DZ]
                 if not met:
                     # phase of each octave towards the eye (a function of the ray only: the sun's rays are parallel),
                     # computed at the ray's first cloud sample (rays that meet none never need it)
@@ -460,7 +464,7 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g
                     # at 1 where it reaches 4/3 ((1 - g) tau_b = 2/3), the anisotropy g mu / (2/3 + (1 - g) tau_b)
                     # fading above; phased in over (1 - g) tau_c from 0.7 to 1.4 (column optical depths of about
                     # 5 to 10), below which the octaves' own attenuation to the sun shapes the light
-                    i0 = 2.0 / 3.0 + gm1 * tdn
+                    i0 = 2.0 / 3.0 + gm1 * max(tb, 0.0)
                     hb = min(0.75 * i0, 1.0) * (1.0 + gbar * mu_down / i0)
                     wcol = min(max((gm1 * (tup + tdn) - 0.7) / 0.7, 0.0), 1.0)
                     entry *= 1.0 + wcol * (hb - 1.0)
