@@ -251,7 +251,10 @@ class TableLookups:
 
         In the spectral mode, for one position inside the atmosphere and one sun direction (a sky seen by one
         observer), the lookups run on 2D slices of the tables projected to XYZ (:func:`.lookup.observer_slices`):
-        the same values as ``to_xyz(sky_radiance(...))`` to rounding, several times faster. Otherwise this is
+        the same values as ``to_xyz(sky_radiance(...))`` to rounding, several times faster, except with the sun from
+        -1 to 25 deg up, where the read along the sun zenith (:func:`.geometry.sun_zenith_read`) acts on each XYZ
+        channel instead of each wavelength (a difference of up to about 1 % in a few directions with the sun on the
+        horizon on the default tables; docs/realtime.md). Otherwise this is
         ``to_xyz(sky_radiance(...))`` (with fewer wavelengths the colour rule is not linear in the spectrum: the
         negative-lobe guard of :mod:`.conversion`).
         """
@@ -270,6 +273,24 @@ class TableLookups:
             if fast is not None:
                 return fast[..., 0]
         return self.sky_xyz(positions, directions, sun_direction, include_ground=include_ground)[..., 1]
+
+    def sky_colour(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike,
+                   matrix: ArrayLike, *, include_ground: bool = True) -> NDArray[np.float64]:
+        """:meth:`sky_radiance` (no light shafts) projected to colour channels by ``matrix`` (C, n_wavelengths), shape
+        broadcast + (C,): e.g. :func:`skyscatter.realtime.export.fold_matrix` for the linear sRGB of the GLSL library.
+
+        On the observer's fast path (one position inside the atmosphere, one sun) the tables' slices are projected
+        first and each channel is read along the sun zenith with its own weight (:func:`.geometry.sun_zenith_read`,
+        from -1 to 25 deg sun elevation), as the GLSL library reads its colour textures: the same values, to rounding,
+        as the library. The per-wavelength read of :meth:`sky_radiance`, folded, differs from it there by up to a few
+        per cent at low sun (docs/realtime.md). Elsewhere ``sky_radiance(...) @ matrix.T``."""
+        m = np.asarray(matrix, dtype=float)
+        if m.ndim != 2 or m.shape[1] != self.wavelengths.size:
+            raise InvalidParameterError(f"matrix must be (C, {self.wavelengths.size}); got shape {m.shape}")
+        fast = self._observer(positions, directions, sun_direction, include_ground, m)
+        if fast is not None:
+            return fast
+        return self.sky_radiance(positions, directions, sun_direction, include_ground=include_ground) @ m.T
 
     def sky_spectrum(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike,
                      wavelengths: ArrayLike, *, include_ground: bool = True) -> NDArray[np.float64]:
@@ -328,12 +349,15 @@ class TableLookups:
         # the slices at the observer's radius and sun, decoded from the stored tables (a memory-mapped file is
         # read there only: the first sky from a cached file does not wait for all of it)
         stored = self.stored
-        slices = lookup.observer_slices(stored["single_rayleigh"], stored["single_mie"], stored["multiple"],
-                                        min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, projection)
+        # (and at the three sun-zenith texels of the read along the sun zenith, lookup.observer_read_slices)
+        slices, slices3, read_t, read_f = lookup.observer_read_slices(
+            stored["single_rayleigh"], stored["single_mie"], stored["multiple"], min(max(r, bottom), top), mu_s,
+            bottom, top, mu_s_min, projection)
         out = np.empty((dirs.shape[0], projection.shape[0]))
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
-        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, stored["single_rayleigh"].shape[0],
+        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, slices3, read_t, read_f,
+                     stored["single_rayleigh"].shape[0],
                      stored["transmittance"], stored["irradiance"], self._albedo, self._solar,
                      projection,
                      bottom, top, mu_s_min, self._mie_g, self._mie_kind, self._lobe, *self._profiles,

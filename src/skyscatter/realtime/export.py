@@ -99,8 +99,11 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: lookups read each wavelength with its own), the alpha is no longer read. 10: the multiple-scattering texture holds
 #: the multiple scattering divided by the lobe MultipleLobe(nu) (constants MULTIPLE_LOBE, MULTIPLE_LOBE_G; multiple_lobe
 #: and inscattered_radiance of the mappings; skyscatter table format 19); the irradiance texture's alpha is 0 (was the
-#: illuminance, unread since version 9).
-MANIFEST_VERSION = 10
+#: illuminance, unread since version 9). 11: with the sun from -1 to 25 deg above the horizon the scattering textures
+#: are read at the three sun-zenith texels nearest mu_s and the radiance combined per colour channel quadratically in
+#: the logarithm (scattering_mu_s_read, log_quadratic_value, sun_zenith_lerp; scattering_uvw takes the index
+#: position along mu_s); the textures are unchanged.
+MANIFEST_VERSION = 11
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -289,6 +292,45 @@ def scattering_mu_s_index(mu_s):
     x_a = clamp(1.0 - math.acos(clamp(mu_s, -1.0, 1.0)) / math.acos(MU_S_MIN), 0.0, 1.0)
     return 0.5 * (x_d + x_a) * (SCATTERING_N_MU_S - 1)
 
+#: Sines of the sun elevations -1, 0, 20 and 25 deg (scattering_mu_s_read).
+SUN_READ_MU = (-0.0174524064, 0.0, 0.3420201433, 0.4226182617)
+
+def scattering_mu_s_read(mu_s):
+    """The read along the sun zenith of the scattering textures at mu_s (at least MU_S_MIN): (j0, t, f), the index
+    of the first of the three sun-zenith texels nearest mu_s (the cell and the texel next to its nearer end), the
+    position t in [-1, 1] relative to the middle one, and the share f of the log-quadratic read: 1 with the sun from
+    0 to 20 deg, ramping to 0 at -1 and 25 deg (linear in mu_s), 0 outside. A lookup is sun_zenith_lerp(lin, y0, y1,
+    y2, t, f) of the radiance read at mu_s (lin) and at the texels j0, j0 + 1, j0 + 2 (scattering_uvw's p_s)."""
+    m0, m1, m2, m3 = SUN_READ_MU
+    f = clamp((mu_s - m0) / (m1 - m0), 0.0, 1.0) * clamp((m3 - mu_s) / (m3 - m2), 0.0, 1.0)
+    if SCATTERING_N_MU_S < 3:
+        return 0, 0.0, 0.0
+    p = clamp(scattering_mu_s_index(mu_s), 0.0, SCATTERING_N_MU_S - 1)
+    j = min(math.floor(p), SCATTERING_N_MU_S - 2)
+    j0 = min(max(j - 1 if p - j < 0.5 else j, 0), SCATTERING_N_MU_S - 3)
+    return j0, p - (j0 + 1), f
+
+def log_quadratic_value(y0, y1, y2, t):
+    """The value at t of the three-point Lagrange formula in the logarithm through y0, y1, y2 (t in [-1, 1] relative
+    to the middle texel), kept between the cell's two values; linear in the cell where a value is not positive or
+    the two are equal."""
+    lo, hi, w = (y0, y1, t + 1.0) if t < 0.0 else (y1, y2, t)
+    lin = lo + w * (hi - lo)
+    if not (y0 > 0.0 and y1 > 0.0 and y2 > 0.0) or hi == lo:
+        return lin
+    y = math.exp(0.5 * t * (t - 1.0) * math.log(y0) + (1.0 - t * t) * math.log(y1)
+                 + 0.5 * t * (t + 1.0) * math.log(y2))
+    return clamp(y, min(lo, hi), max(lo, hi))
+
+def sun_zenith_lerp(lin, y0, y1, y2, t, f):
+    """RGB of the inscattered radiance along the sun zenith: per channel log_quadratic_value of the radiance (RGB)
+    at the three texels of scattering_mu_s_read, blended with the linear read lin by its share f (lin is not used
+    where f is 1)."""
+    q = [log_quadratic_value(a, b, c, t) for a, b, c in zip(y0, y1, y2)]
+    if f >= 1.0:
+        return q
+    return [a + f * (b - a) for a, b in zip(lin, q)]
+
 def scattering_nu_index(mu, mu_s, nu):
     """Index position of nu (x_nu = 1 - phi / pi, phi the view-sun azimuth)."""
     s = safe_sqrt((1.0 - mu * mu) * (1.0 - mu_s * mu_s))
@@ -297,13 +339,15 @@ def scattering_nu_index(mu, mu_s, nu):
     cphi = clamp((nu - mu * mu_s) / s, -1.0, 1.0)
     return (1.0 - math.acos(cphi) / math.pi) * (SCATTERING_N_NU - 1)
 
-def scattering_uvw(r, mu, mu_s, nu, hits_ground):
+def scattering_uvw(r, mu, mu_s, nu, hits_ground, p_s=None):
     """The two texture coordinates (u, v, w) of the nu slices around nu and the fraction w of the cell between
     them: a lookup is azimuth_lerp(texture(uvw0), texture(uvw1), w), each read trilinear (the single scattering:
     single_scattering_lerp), or within the cell touching the ground with scattering_texture(texture, uvw,
-    scattering_ground_cell(r, mu, hits_ground))."""
+    scattering_ground_cell(r, mu, hits_ground)). p_s: the index position along mu_s to read at (a texel of
+    scattering_mu_s_read), by default that of mu_s."""
     v, w = scattering_mu_r_coords(r, mu, hits_ground)
-    p_s = scattering_mu_s_index(max(mu_s, MU_S_MIN))
+    if p_s is None:
+        p_s = scattering_mu_s_index(max(mu_s, MU_S_MIN))
     p_n = clamp(scattering_nu_index(mu, mu_s, nu), 0.0, SCATTERING_N_NU - 1)
     i_n = min(math.floor(p_n), SCATTERING_N_NU - 2)
     n_x = SCATTERING_N_NU * SCATTERING_N_MU_S

@@ -255,6 +255,40 @@ float LogQuadraticWeight(float y0, float y1, float y2, float t) {
   return hi == lo ? w : clamp((y - lo) / (hi - lo), 0.0, 1.0);
 }
 
+// The value at t of the three-point Lagrange formula in the logarithm through y0, y1, y2 (as LogQuadraticWeight),
+// kept between the cell's two values; linear in the cell where a value is not positive or the two are equal
+// (skyscatter.precomputed.geometry.log_quadratic_value).
+float LogQuadraticValue(float y0, float y1, float y2, float t) {
+  float lo = t < 0.0 ? y0 : y1;
+  float hi = t < 0.0 ? y1 : y2;
+  float lin = mix(lo, hi, t < 0.0 ? t + 1.0 : t);
+  if (!(y0 > 0.0 && y1 > 0.0 && y2 > 0.0) || hi == lo) return lin;
+  float y = exp(0.5 * t * (t - 1.0) * log(y0) + (1.0 - t * t) * log(y1) + 0.5 * t * (t + 1.0) * log(y2));
+  return clamp(y, min(lo, hi), max(lo, hi));
+}
+
+// Sines of the sun elevations -1, 0, 20 and 25 deg: the inscattered radiance is read log-quadratically along the sun
+// zenith fully from 0 to 20 deg, blended with the linear read from -1 to 0 and from 20 to 25 deg, linear outside
+// (skyscatter.precomputed.geometry.SUN_READ_ELEVATIONS, sun_zenith_read).
+const float SUN_READ_MU_0 = -0.0174524064;
+const float SUN_READ_MU_1 = 0.0;
+const float SUN_READ_MU_2 = 0.3420201433;
+const float SUN_READ_MU_3 = 0.4226182617;
+
+// The read along the sun zenith of the scattering textures at mu_s (at least MU_S_MIN): (j0, t, f), the index of the
+// first of the three sun-zenith texels nearest mu_s (the cell and the texel next to its nearer end), the position t
+// in [-1, 1] relative to the middle one, and the share f of the log-quadratic read (per channel, LogQuadraticValue
+// of the radiance at the three texels) blended with the linear one (skyscatter.precomputed.geometry.sun_zenith_read).
+vec3 ScatteringMuSRead(float mu_s) {
+  float f = clamp((mu_s - SUN_READ_MU_0) / (SUN_READ_MU_1 - SUN_READ_MU_0), 0.0, 1.0)
+            * clamp((SUN_READ_MU_3 - mu_s) / (SUN_READ_MU_3 - SUN_READ_MU_2), 0.0, 1.0);
+  if (SCATTERING_N_MU_S < 3) return vec3(0.0);
+  float p = clamp(ScatteringMuSIndex(mu_s), 0.0, float(SCATTERING_N_MU_S - 1));
+  float j = min(floor(p), float(SCATTERING_N_MU_S - 2));
+  float j0 = clamp(p - j < 0.5 ? j - 1.0 : j, 0.0, float(SCATTERING_N_MU_S - 3));
+  return vec3(j0, p - (j0 + 1.0), f);
+}
+
 // RGB of the irradiance texture from the reads e0, e1, e2 of its three mu_s columns (IrradianceUvs) at t: where the
 // cell starts below the horizon each channel of the cell's two columns with its own weight, LogQuadraticWeight of
 // that channel's three values (the twilight sky irradiance falls faster the lower the sun, and its blue and red at
@@ -473,15 +507,13 @@ vec3 GetTransmittanceToSun(float r, float mu_s) {
 // there with each texture's own weight (AzimuthLerp), as skyscatter's lookups since table format 12, except the
 // single-scattering textures where the point is in the Earth's shadow: linear with the shadow factors of their
 // constituent's density (ShadowLerp, ShadowFactors), as skyscatter's lookups (skyscatter.precomputed.lookup). Returns single
-// Rayleigh (no phase); single Mie (no phase) and multiple scattering in the out parameters. Zero below the tables'
-// sun limit MU_S_MIN.
-vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, out vec3 mie, out vec3 multiple) {
-  mie = vec3(0.0);
-  multiple = vec3(0.0);
-  if (mu_s < MU_S_MIN - MU_S_LIMIT_TOLERANCE) return vec3(0.0);
-  mu_s = max(mu_s, MU_S_MIN);
+// Rayleigh (no phase); single Mie (no phase) and multiple scattering in the out parameters. GetScatteringAt: at the
+// sun zenith cosine mu_s (at least MU_S_MIN) with the textures read at the index position p_s along mu_s
+// (ScatteringMuSIndex(mu_s), or a texel of the read along the sun zenith: GetInscatter); GetScattering: at mu_s,
+// zero below the tables' sun limit MU_S_MIN.
+vec3 GetScatteringAt(float r, float mu, float mu_s, float nu, bool hits_ground, float p_s, out vec3 mie,
+                     out vec3 multiple) {
   vec2 vw = ScatteringMuRCoords(r, mu, hits_ground);
-  float p_s = ScatteringMuSIndex(mu_s);
   float p_n = clamp(ScatteringNuIndex(mu, mu_s, nu), 0.0, float(SCATTERING_N_NU - 1));
   float i_n = min(floor(p_n), float(SCATTERING_N_NU - 2));
   float w_n = p_n - i_n;
@@ -503,12 +535,38 @@ vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, ou
                      w_n);
 }
 
+vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, out vec3 mie, out vec3 multiple) {
+  mie = vec3(0.0);
+  multiple = vec3(0.0);
+  if (mu_s < MU_S_MIN - MU_S_LIMIT_TOLERANCE) return vec3(0.0);
+  mu_s = max(mu_s, MU_S_MIN);
+  return GetScatteringAt(r, mu, mu_s, nu, hits_ground, ScatteringMuSIndex(mu_s), mie, multiple);
+}
+
 // Inscattered radiance S[L](x, v, s) = S_R[L0] P_R(nu) + S_M[L0] P_M(nu) + S[L*] ([Bruneton2008] Eqs. 7-8 with the
 // single scattering kept apart, Sec. 4 "Angular precision").
-vec3 GetInscatter(float r, float mu, float mu_s, float nu, bool hits_ground) {
+// Along the sun zenith (ScatteringMuSRead): from 0 to 20 deg the radiance at the three texels nearest mu_s combined
+// per colour channel by LogQuadraticValue (the radiance is far from linear in the sun elevation near the horizon),
+// blended with the linear read from -1 to 0 and from 20 to 25 deg, linear outside; skyscatter's lookups do the same
+// per output channel (per colour channel when they project to colour, so they give these values).
+vec3 InscatterAt(float r, float mu, float mu_s, float nu, bool hits_ground, float p_s) {
   vec3 mie, multiple;
-  vec3 rayleigh = GetScattering(r, mu, mu_s, nu, hits_ground, mie, multiple);
+  vec3 rayleigh = GetScatteringAt(r, mu, mu_s, nu, hits_ground, p_s, mie, multiple);
   return rayleigh * RayleighPhase(nu) + mie * MiePhase(nu) + multiple * MultipleLobe(nu);
+}
+
+vec3 GetInscatter(float r, float mu, float mu_s, float nu, bool hits_ground) {
+  if (mu_s < MU_S_MIN - MU_S_LIMIT_TOLERANCE) return vec3(0.0);
+  mu_s = max(mu_s, MU_S_MIN);
+  vec3 read = ScatteringMuSRead(mu_s);
+  vec3 lin = read.z < 1.0 ? InscatterAt(r, mu, mu_s, nu, hits_ground, ScatteringMuSIndex(mu_s)) : vec3(0.0);
+  if (read.z <= 0.0) return lin;
+  vec3 y0 = InscatterAt(r, mu, mu_s, nu, hits_ground, read.x);
+  vec3 y1 = InscatterAt(r, mu, mu_s, nu, hits_ground, read.x + 1.0);
+  vec3 y2 = InscatterAt(r, mu, mu_s, nu, hits_ground, read.x + 2.0);
+  vec3 q = vec3(LogQuadraticValue(y0.r, y1.r, y2.r, read.y), LogQuadraticValue(y0.g, y1.g, y2.g, read.y),
+                LogQuadraticValue(y0.b, y1.b, y2.b, read.y));
+  return read.z >= 1.0 ? q : mix(lin, q, read.z);
 }
 
 // Moves a camera outside the atmosphere to where its ray enters it; false if the ray misses the atmosphere.
