@@ -372,12 +372,11 @@ def _emulate_aerial(ns, tex, cam, point, sun):
             parts.append(ns["azimuth_lerp"](read("multiple", uvw0), read("multiple", uvw1), w))
             return ns["inscattered_radiance"](*parts, nu)
 
-        # along mu_s the read of the library's GetInscatter: three texel columns with the sun -1..25 deg up
-        j0, t, f = ns["scattering_mu_s_read"](mu_s)
-        lin = at(None) if f < 1.0 else None
+        # along mu_s the read of the library's GetInscatter: the cell's two texel columns with the sun -1..25 deg up
+        i, w, f = ns["scattering_mu_s_read"](mu_s)
         if f <= 0.0:
-            return np.array(lin)
-        return np.array(ns["sun_zenith_lerp"](lin, at(j0), at(j0 + 1), at(j0 + 2), t, f))
+            return np.array(at(None))
+        return np.array(ns["sun_zenith_lerp"](at(i), at(i + 1), w, f))
 
     def to_point(r, mu, mu_s, nu, d, hits):
         c = inscatter(r, mu, mu_s, nu, hits)

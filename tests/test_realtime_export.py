@@ -53,11 +53,10 @@ def _gpu_sky(ns, tex, r, mu, mu_s, nu):
         parts.append(ns["azimuth_lerp"](read("multiple", uvw0), read("multiple", uvw1), w))
         return ns["inscattered_radiance"](*parts, nu)
 
-    j0, t, f = ns["scattering_mu_s_read"](mu_s)
-    lin = at(None) if f < 1.0 else None
+    i, w, f = ns["scattering_mu_s_read"](mu_s)
     if f <= 0.0:
-        return np.array(lin)
-    return np.array(ns["sun_zenith_lerp"](lin, at(j0), at(j0 + 1), at(j0 + 2), t, f))
+        return np.array(at(None))
+    return np.array(ns["sun_zenith_lerp"](at(i), at(i + 1), w, f))
 
 
 def test_manifest_mappings_and_textures_give_the_colour_lookup(atm, luts):
@@ -75,7 +74,8 @@ def test_manifest_mappings_and_textures_give_the_colour_lookup(atm, luts):
     for alt in (0.0, 20.0, 1500.0, 12e3, 45e3):  # 20 m: the cell touching the ground (rows read at their own mu)
         pos = np.array([0.0, 0.0, p.bottom_radius + alt])
         # three random suns, two in twilight (-3 and -6 deg: the observer in the Earth's shadow below 12 km) and three
-        # where the read along the sun zenith is log-quadratic (2 deg), blended with the linear one (-0.5, 22 deg)
+        # where the read along the sun zenith is the mean of the linear and the geometric one (2 deg), or ramps to it
+        # (-0.5, 22 deg)
         for zenith in (*rng.uniform(0.0, 1.75, 3), np.radians(93.0), np.radians(96.0), np.radians(88.0),
                        np.radians(90.5), np.radians(68.0)):
             sun = direction_from_angles(zenith, rng.uniform(0, 2 * np.pi))
@@ -94,20 +94,20 @@ def test_manifest_mappings_and_textures_give_the_colour_lookup(atm, luts):
 
 
 def test_colour_read_against_the_spectral_read_folded(atm):
-    """The read along the sun zenith (geometry.sun_zenith_read) acts on the output channels: per colour channel when
+    """The read along the sun zenith (geometry.sun_zenith_value) acts on the output channels: per colour channel when
     the lookup projects to colour (PrecomputedAtmosphere.sky_colour, the GLSL library), per wavelength for spectra.
-    The two differ only where that read is not linear (sun -1 to 25 deg), by how much the channels' curvature along
-    the sun zenith differs from their wavelengths'. On these coarse tables (6 sun-zenith texels) from 1.5 km, 200 sky
-    directions: measured median / worst 0.55 / 3.3 % at 0 deg, 0.35 / 10.0 % at 2 deg, 0.05 / 1.5 % at 4 deg, 0.03 /
-    1.3 % at 10 deg; on the default tables (32 texels, 16 wavelengths, Earth) median at most 0.02 %, worst 1.4 % at 0
-    deg (docs/realtime.md). The bounds: 1.5 times the measured figures (the values are deterministic: the margin
-    covers rounding and platform libm only, not a change of rule; a read per wavelength folded, or one weight for
-    all channels, gives 0 here, which the lower bound refuses); by day (30 deg) the two agree to rounding."""
+    The two differ only where that read is not linear (sun -1 to 25 deg): its geometric half of a sum of wavelengths
+    is not the sum of their geometric halves. On these coarse tables (6 sun-zenith texels) from 1.5 km, 200 sky
+    directions: measured median / worst 0.033 / 0.32 % at 0 deg, 0.048 / 0.64 % at 2 deg, 0.041 / 0.72 % at 4 deg,
+    0.020 / 0.046 % at 10 deg (docs/realtime.md). The bounds: 1.5 times the measured figures (the values are
+    deterministic: the margin covers rounding and platform libm only, not a change of rule; a read per wavelength
+    folded, or one weight for all channels, gives 0 here, which the lower bound refuses); by day (30 deg) the two
+    agree to rounding."""
     m = fold_matrix(atm)
     rng = np.random.default_rng(11)
     dirs = direction_from_angles(np.arccos(rng.uniform(0.0, 1.0, 200)), rng.uniform(0, 2 * np.pi, 200))
     pos = np.array([0.0, 0.0, atm.parameters.bottom_radius + 1500.0])
-    measured = {0.0: (5.5e-3, 3.3e-2), 2.0: (3.5e-3, 1.0e-1), 4.0: (4.7e-4, 1.5e-2), 10.0: (3.4e-4, 1.3e-2)}
+    measured = {0.0: (3.3e-4, 3.2e-3), 2.0: (4.8e-4, 6.4e-3), 4.0: (4.1e-4, 7.2e-3), 10.0: (2.0e-4, 4.6e-4)}
     for elevation in (*measured, 30.0):
         sun = direction_from_angles(np.radians(90.0 - elevation), 0.7)
         colour = atm.sky_colour(pos, dirs, sun, m, include_ground=False)

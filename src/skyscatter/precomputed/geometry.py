@@ -63,8 +63,8 @@ __all__ = [
     "lerp_index",
     "log_lerp_weight",
     "log_quadratic_weight",
-    "log_quadratic_value",
-    "sun_zenith_read",
+    "sun_zenith_share",
+    "sun_zenith_value",
     "point_along_ray",
     "ray_hits_ground",
     "scattering_nu_azimuth",
@@ -677,53 +677,47 @@ def scattering_params(i_r: int, i_mu: int, i_mu_s: int, i_nu: int, bottom: float
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def log_quadratic_value(y0: float, y1: float, y2: float, t: float) -> float:
-    """The value at ``t`` (in [-1, 1] relative to the middle texel, :func:`irradiance_log_nodes`) of the three-point
-    Lagrange formula in the logarithm ([Abramowitz1964] Eq. 25.2.11) through ``y0``, ``y1``, ``y2`` (radiances
-    [W m^-2 sr^-1 nm^-1] or any positive quantity) at three consecutive texels, kept between the two values of the
-    cell around ``t``; linear in the cell where a value is not positive (a texel below the tables' sun limit or in
-    the Earth's shadow, whose logarithm is not finite) or the cell's two values are equal. The rendering lookups'
-    read along the sun zenith (:func:`sun_zenith_read`)."""
-    if t < 0.0:
-        lo, hi, w = y0, y1, t + 1.0
-    else:
-        lo, hi, w = y1, y2, t
+def sun_zenith_value(lo: float, hi: float, w: float, f: float) -> float:
+    """The rendering lookups' read along the sun zenith between two sun-zenith texels: from the radiances ``lo``,
+    ``hi`` [W m^-2 sr^-1 nm^-1] (or any non-negative quantity) at the cell's two texels, the value at the fraction
+    ``w`` in [0, 1] of the cell, ``(1 - f / 2) lin + (f / 2) geo``: ``lin = lo + w (hi - lo)`` the linear and
+    ``geo = lo^(1 - w) hi^w`` the geometric interpolation (the two-point Lagrange formula, [Abramowitz1964] Eq.
+    25.2.1, in the value and in its logarithm), ``geo = 0`` where ``lo`` or ``hi`` is not positive (its limit
+    there); ``f`` in [0, 1] the share of :func:`sun_zenith_share` (the mean of the two rules at ``f = 1``, the
+    linear rule at ``f = 0``); ``w``, ``f`` dimensionless.
+
+    Why: near the horizon the sky radiance falls with the sun faster than linearly, so the linear read between
+    texels lies above it, and the geometric read (exact for an exponential) below it (its logarithm is concave in
+    the sun elevation): the truth lies between the two (docs/accuracy.md, "The read along the sun zenith"). A convex
+    combination of the two is non-decreasing in each texel's value and continuous in ``lo``, ``hi`` and ``w``:
+    more light at a texel never reads as less (so every scattering order adds light to the read), and the read has
+    no step along the sun zenith. A curvature taken from a third texel (the three-point Lagrange formula in the
+    logarithm) follows each atmosphere's curvature better but weighs the third texel negatively (an order added
+    there could read as light removed) and steps where the third texel changes sides; measured and not kept."""
     lin = lo + w * (hi - lo)
-    if not (y0 > 0.0 and y1 > 0.0 and y2 > 0.0) or hi == lo:
+    if f <= 0.0:
         return lin
-    y = math.exp(0.5 * t * (t - 1.0) * math.log(y0) + (1.0 - t * t) * math.log(y1)
-                 + 0.5 * t * (t + 1.0) * math.log(y2))
-    return min(max(y, min(lo, hi)), max(lo, hi))
+    geo = math.exp((1.0 - w) * math.log(lo) + w * math.log(hi)) if lo > 0.0 and hi > 0.0 else 0.0
+    return lin + 0.5 * f * (geo - lin)
 
 
-#: Sun elevations [deg] between which the rendering lookups read the inscattered radiance along the sun zenith
-#: log-quadratically (:func:`sun_zenith_read`): fully from ``SUN_READ_ELEVATIONS[1]`` to ``[2]``, blended with the
-#: linear read over ``[0]..[1]`` and ``[2]..[3]`` (no seam), linear outside.
+#: Sun elevations [deg] between which the rendering lookups read the inscattered radiance along the sun zenith with
+#: :func:`sun_zenith_value`: its share :func:`sun_zenith_share` is 1 from ``SUN_READ_ELEVATIONS[1]`` to ``[2]``,
+#: ramps to 0 over ``[0]..[1]`` and ``[2]..[3]`` (no seam), 0 outside (linear).
 SUN_READ_ELEVATIONS = (-1.0, 0.0, 20.0, 25.0)
 _SUN_READ_MU = tuple(math.sin(math.radians(e)) for e in SUN_READ_ELEVATIONS)
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def sun_zenith_read(mu_s: float, bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> tuple[int, float, float]:
-    """How the rendering lookups read the inscattered radiance along the sun zenith of the scattering tables (n_mu_s
-    texels) at the sun zenith cosine ``mu_s`` (bottom, top: radii [m]; ``mu_s_min`` the tables' limit): the three
-    texels ``j0, j0 + 1, j0 + 2`` nearest it and the position ``t`` of :func:`irradiance_log_nodes`, and the share
-    ``f`` in [0, 1] of the log-quadratic read (:func:`log_quadratic_value` of the radiance at the three texels, per
-    output channel) in ``(1 - f) linear + f log-quadratic``: 1 with the sun from 0 to 20 deg above the horizon,
-    ramping linearly in ``mu_s`` to 0 at -1 and 25 deg (:data:`SUN_READ_ELEVATIONS`), 0 for tables of fewer than 3
-    texels.
+def sun_zenith_share(mu_s: float) -> float:
+    """The share ``f`` in [0, 1] of :func:`sun_zenith_value`'s geometric part at the sun zenith cosine ``mu_s``: 1
+    with the sun from 0 to 20 deg above the horizon, ramping linearly in ``mu_s`` to 0 at -1 and 25 deg
+    (:data:`SUN_READ_ELEVATIONS`), 0 outside, where the rendering lookups read linearly between the sun-zenith texels.
 
-    Why: the sky radiance varies with the sun elevation near the horizon far from linearly (exponentially, with
-    curvature), and the linear read between texels was 1-3 % off at the median with the sun 0-4 deg up, up to 10-20 %
-    in haze, where the tables agree with 3 times finer ones within 1 % (``benchmarks/low_sun_mu_s_read.py``,
-    docs/accuracy.md "The read along the sun zenith"). Below the horizon the quadratic's curvature moves the read
-    away from the nearer texel where the single scattering is shadowed (measured worse), so it stays linear there;
-    above 25 deg the log-quadratic read changes the radiance by 0.01-0.14 % median, at most 0.5 % (Earth, turbidity
-    3, optical depth 0.5, from the ground), not worth the three reads in the daytime lookups."""
+    Why there: the linear read between texels was 1-3 % off at the median with the sun 0-4 deg up, up to 10-20 % in
+    haze, where the tables agree with 3 times finer ones within 1 % (``benchmarks/low_sun_mu_s_read.py``,
+    docs/accuracy.md "The read along the sun zenith"); above 25 deg the rules differ little and the linear read
+    costs one read instead of two; below -1 deg the tested twilight suns sit within 0.12 deg of a texel, so the low-sun
+    test does not measure a rule there (kept linear, as before)."""
     m0, m1, m2, m3 = _SUN_READ_MU
-    f = min(max((mu_s - m0) / (m1 - m0), 0.0), 1.0) * min(max((m3 - mu_s) / (m3 - m2), 0.0), 1.0)
-    if n_mu_s < 3 or mu_s < mu_s_min:
-        return 0, 0.0, 0.0
-    p = scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_mu_s)
-    j0, t = irradiance_log_nodes(p, n_mu_s)
-    return j0, t, f
+    return min(max((mu_s - m0) / (m1 - m0), 0.0), 1.0) * min(max((m3 - mu_s) / (m3 - m2), 0.0), 1.0)

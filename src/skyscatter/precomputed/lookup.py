@@ -40,14 +40,14 @@ from .geometry import (
     irradiance_coord,
     lerp_index,
     log_lerp_weight,
-    log_quadratic_value,
     point_along_ray,
     ray_hits_ground,
     scattering_nu_azimuth,
     scattering_nu_coord,
     scattering_r_mu_coord,
     sky_mu_unit,
-    sun_zenith_read,
+    sun_zenith_share,
+    sun_zenith_value,
     transmittance_coord,
 )
 from .sampling import (
@@ -117,10 +117,9 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lob
     to 100 times, and the geometric interpolation of such a pair falls far below the light of the nearer texel
     (Earth, sun -6 deg, 2 deg / 90 deg, 560 nm: -77 %, against +10 % linear; measured).
 
-    Along the sun zenith the read of :func:`.geometry.sun_zenith_read`: the radiance at the three sun-zenith texels
-    nearest ``mu_s`` (each a cell read with the texel fixed) combined per wavelength by
-    :func:`.geometry.log_quadratic_value`, blended with the linear read where its share is below 1; ``vals``: a
-    buffer (3, n_wavelengths)."""
+    Along the sun zenith, where :func:`.geometry.sun_zenith_share` is above 0 (the sun -1 to 25 deg up), the radiance
+    at the cell's two sun-zenith texels (each a cell read with the texel fixed) combined per wavelength by
+    :func:`.geometry.sun_zenith_value`; linear elsewhere. ``vals``: a buffer (2, n_wavelengths)."""
     for k in range(out.shape[0]):
         out[k] = 0.0
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
@@ -129,23 +128,20 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lob
     n_r, n_mu, n_s, n_n, _ = ray.shape
     i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
-    j0, t, f = sun_zenith_read(mu_s, bottom, top, mu_s_min, n_s)
-    if f < 1.0:
+    f = sun_zenith_share(mu_s)
+    if f <= 0.0:
         _inscatter_cell(ray, mie, mult, r, mu, mu_s, nu, bottom, top, lobe, p_r, p_m, p_m_spec, profiles, counts,
                         i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, out)
-    if f <= 0.0:
         return
-    for q in range(3):
-        # texel j0 + q as a cell with weight 0 at its start (1 at the end of the last cell for the last texel)
-        i_q, w_q = (j0 + q, 0.0) if j0 + q < n_s - 1 else (n_s - 2, 1.0)
+    for q in range(2):
+        # the cell's texel i_s + q, as the cell with weight q along the sun zenith
         row = vals[q]
         for k in range(row.shape[0]):
             row[k] = 0.0
         _inscatter_cell(ray, mie, mult, r, mu, mu_s, nu, bottom, top, lobe, p_r, p_m, p_m_spec, profiles, counts,
-                        i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_q, w_q, i_n, w_n, row)
+                        i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, float(q), i_n, w_n, row)
     for k in range(out.shape[0]):
-        v = log_quadratic_value(vals[0, k], vals[1, k], vals[2, k], t)
-        out[k] = v if f >= 1.0 else out[k] + f * (v - out[k])
+        out[k] = sun_zenith_value(vals[0, k], vals[1, k], w_s, f)
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -264,7 +260,7 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
     e_sky = np.empty(n_l)
     e_sun = np.empty(n_l)
     ground = np.empty(n_l)
-    vals = np.empty((3, n_l))
+    vals = np.empty((2, n_l))
     for q in range(start, stop):
         vx, vy, vz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
         sx, sy, sz = suns[q, 0], suns[q, 1], suns[q, 2]
@@ -344,11 +340,11 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     one for all wavelengths (from the middle one), so the lookup is linear in the table values and the inscattered
     radiance a sum of table values times wavelength-independent phase factors: projecting the slice first gives the
     same XYZ as projecting each looked-up spectrum (Bruneton's 2017 rewrite folds its tables to luminance the same
-    way); except with the sun -1 to 25 deg up, where :func:`observer_kernel` combines the slices at three sun-zenith
-    texels log-quadratically per projected channel (:func:`observer_read_slices`), which does not commute with
-    the projection. Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables' sun limit;
-    :data:`.geometry.MU_S_LIMIT_TOLERANCE` for rounding). ``sun_texel``: if given, the slices at that sun-zenith
-    texel instead of at ``mu_s`` (the reads of :func:`.geometry.sun_zenith_read`, :func:`observer_read_slices`).
+    way); except with the sun -1 to 25 deg up, where :func:`observer_kernel` combines the slices at the cell's two
+    sun-zenith texels by :func:`.geometry.sun_zenith_value` per projected channel (:func:`observer_read_slices`),
+    which does not commute with the projection. Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables'
+    sun limit; :data:`.geometry.MU_S_LIMIT_TOLERANCE` for rounding). ``sun_texel``: if given, the slices at that
+    sun-zenith texel instead of at ``mu_s`` (the reads of :func:`observer_read_slices`).
     """
     n_r, n_mu, n_s, n_nu, _ = single_rayleigh.shape
     proj = np.asarray(projection, dtype=np.float64)
@@ -382,23 +378,20 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
 
 def observer_read_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, projection):
     """What :func:`observer_kernel` reads for an observer at radius ``r`` [m] under a sun of zenith cosine ``mu_s``:
-    ``(slices, slices3, t, f)``, the :func:`observer_slices` at ``mu_s`` (the linear read along the sun zenith;
-    zeros where ``f`` is 1, as the kernel then does not read them), those at the three sun-zenith texels of
-    :func:`.geometry.sun_zenith_read` stacked (3, 2, n_mu, n_nu, C + 1, 4) (an empty stack where ``f`` is 0), and
-    that read's position ``t`` and share ``f``."""
-    n_s = single_rayleigh.shape[2]
-    j0, t, f = sun_zenith_read(max(mu_s, mu_s_min), bottom, top, mu_s_min, n_s)
-    if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
-        f = 0.0
+    ``(slices, slices2, w, f)``: where the share ``f`` of :func:`.geometry.sun_zenith_share` is 0, the
+    :func:`observer_slices` at ``mu_s`` (the linear read along the sun zenith) and an empty stack; elsewhere zeros
+    (not read) and the :func:`observer_slices` at the two sun-zenith texels of the cell around ``mu_s`` stacked
+    (2, 2, n_mu, n_nu, C + 1, 4), which the kernel combines by :func:`.geometry.sun_zenith_value` at the cell's
+    fraction ``w``."""
+    n_r, _, n_s, _, _ = single_rayleigh.shape
+    f = sun_zenith_share(max(mu_s, mu_s_min)) if mu_s >= mu_s_min - MU_S_LIMIT_TOLERANCE else 0.0
     args = (single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, projection)
-    slices = observer_slices(*args) if f < 1.0 else None
-    if f > 0.0:
-        slices3 = np.stack([observer_slices(*args, sun_texel=j0 + q) for q in range(3)])
-    else:
-        slices3 = np.zeros((0, *slices.shape))
-    if slices is None:
-        slices = np.zeros(slices3.shape[1:])
-    return slices, slices3, t, f
+    if f <= 0.0:
+        slices = observer_slices(*args)
+        return slices, np.zeros((0, *slices.shape)), 0.0, 0.0
+    _, _, i_s, w_s, _ = r_mu_s_cell(r, max(mu_s, mu_s_min), bottom, top, mu_s_min, n_r, n_s)
+    slices2 = np.stack([observer_slices(*args, sun_texel=i_s + q) for q in range(2)])
+    return np.zeros(slices2.shape[1:]), slices2, w_s, f
 
 
 #: Rays per block of :func:`observer_kernel` (its buffers stay in the L1 cache).
@@ -627,7 +620,7 @@ def _observer_inscatter(flat, flat1, two_rows, shadowed, block, px, py, pz, r, r
 
 
 @kernel
-def observer_kernel(position, sun, slices, slices3, read_t, read_f, n_r, transmittance, irradiance, albedo, solar,
+def observer_kernel(position, sun, slices, slices2, read_w, read_f, n_r, transmittance, irradiance, albedo, solar,
                     projection, bottom, top, mu_s_min, g, mie_kind, lobe, profiles, counts, alpha, include_ground, dirs,
                     out, bad, start, stop):
     """:func:`sky_kernel`'s radiance (no shadows) for rays ``start..stop`` from one ``position`` inside the
@@ -645,12 +638,12 @@ def observer_kernel(position, sun, slices, slices3, read_t, read_f, n_r, transmi
     ground term (vectorised) and its spectrum, projected. ``mu_s_min``: the tables' sun limit; ``profiles``,
     ``counts``: the density profiles of :func:`.compute.density_profiles`.
 
-    Along the sun zenith the read of :func:`.geometry.sun_zenith_read` (:func:`observer_read_slices`): with its share
-    ``read_f`` above 0 the inscattered radiance of each ray is also gathered from the slices at the three sun-zenith
-    texels ``slices3`` (3, 2, n_mu, n_nu, C + 1, 4) and combined per output channel by
-    :func:`.geometry.log_quadratic_value` at ``read_t`` (per wavelength for spectra, per colour channel for colour:
-    the read is not linear in the table values, so the projection no longer commutes with it), blended with the
-    linear read from ``slices`` for ``read_f`` below 1 (not read where it is 1).
+    Along the sun zenith (:func:`observer_read_slices`): with the share ``read_f`` of
+    :func:`.geometry.sun_zenith_share` above 0 the inscattered radiance of each ray is gathered from the slices at
+    the cell's two sun-zenith texels ``slices2`` (2, 2, n_mu, n_nu, C + 1, 4) (``slices`` not read) and combined per
+    output channel by :func:`.geometry.sun_zenith_value` at the cell's fraction ``read_w`` (per wavelength for
+    spectra, per colour channel for colour: the read is not linear in the table values, so the projection no longer
+    commutes with it); otherwise read linearly from ``slices``.
     """
     n_l = transmittance.shape[2]
     n_c = out.shape[1]  # slices: n_c channels and the sums over wavelengths
@@ -658,8 +651,8 @@ def observer_kernel(position, sun, slices, slices3, read_t, read_f, n_r, transmi
     half = n_mu // 2
     flat = slices[0].reshape(n_mu * n_nu, slices.shape[3], 4)
     flat1 = slices[1].reshape(n_mu * n_nu, slices.shape[3], 4)
-    n_read = slices3.shape[0]
-    three = np.empty((3, OBSERVER_BLOCK, n_c))
+    n_read = slices2.shape[0]
+    two = np.empty((2, OBSERVER_BLOCK, n_c))
     p_r0 = np.empty(OBSERVER_BLOCK)
     p_m0 = np.empty(OBSERVER_BLOCK)
     t = np.empty(n_l)
@@ -727,34 +720,28 @@ def observer_kernel(position, sun, slices, slices3, read_t, read_f, n_r, transmi
                 n_ground += 1
             elif kind[k] == 0:
                 bad[b0 + k] = True
-        linear = read_f < 1.0
-        if linear:
-            if n_read and shadowed:
-                for k in range(m):  # kept for the texels' reads: the shadow factors multiply them
-                    p_r0[k] = p_r[k]
-                    p_m0[k] = p_m[k]
+        if n_read == 0:
             _observer_inscatter(flat, flat1, two_rows, shadowed, block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom,
                                 top, cos_phi, profiles, counts, n_nu, n_c, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m],
                                 w_nu[:m], w_tab, ends, p_r[:m], p_m[:m], p_l[:m], upper, out[b0:b1])
-        elif n_read and shadowed:
-            for k in range(m):
-                p_r0[k] = p_r[k]
-                p_m0[k] = p_m[k]
-        if n_read:
-            for q in range(3):
-                if shadowed and (linear or q > 0):
+        else:
+            if shadowed:
+                for k in range(m):  # kept for the second texel's read: the shadow factors multiply them
+                    p_r0[k] = p_r[k]
+                    p_m0[k] = p_m[k]
+            for q in range(2):
+                if shadowed and q > 0:
                     for k in range(m):
                         p_r[k] = p_r0[k]
                         p_m[k] = p_m0[k]
-                _observer_inscatter(slices3[q, 0].reshape(n_mu * n_nu, slices.shape[3], 4),
-                                    slices3[q, 1].reshape(n_mu * n_nu, slices.shape[3], 4), two_rows, shadowed,
+                _observer_inscatter(slices2[q, 0].reshape(n_mu * n_nu, slices.shape[3], 4),
+                                    slices2[q, 1].reshape(n_mu * n_nu, slices.shape[3], 4), two_rows, shadowed,
                                     block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, cos_phi, profiles,
                                     counts, n_nu, n_c, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m], w_nu[:m], w_tab, ends,
-                                    p_r[:m], p_m[:m], p_l[:m], upper, three[q, :m])
+                                    p_r[:m], p_m[:m], p_l[:m], upper, two[q, :m])
             for k in range(m):
                 for ch in range(n_c):
-                    v = log_quadratic_value(three[0, k, ch], three[1, k, ch], three[2, k, ch], read_t)
-                    out[b0 + k, ch] = out[b0 + k, ch] + read_f * (v - out[b0 + k, ch]) if linear else v
+                    out[b0 + k, ch] = sun_zenith_value(two[0, k, ch], two[1, k, ch], read_w, read_f)
         if n_ground == 0 or not include_ground:
             continue
         _ground_coords_block(n_ground, g_v, g_mu, px, py, pz, sx, sy, sz, rc, bottom, top, alpha, n_tr, n_tmu, n_er,
@@ -828,33 +815,33 @@ def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0,
     n_mu, n_s, n_nu, _ = ray0.shape
     n_c = projection.shape[0]
     slices = np.zeros((2, n_mu, n_nu, n_c + 1, 4))
-    slices3 = np.zeros((3, 2, n_mu, n_nu, n_c + 1, 4))
+    slices2 = np.zeros((2, 2, n_mu, n_nu, n_c + 1, 4))
     acc = np.empty(ray0.shape[3])
     n_rays = dirs.shape[0]
     two_rows = observer_two_rows(r_slices, bottom, top, n_r)
     for h in range(start, stop):
         slices[:] = 0.0
         m = mu_s[h]
-        read_t, read_f, n_read = 0.0, 0.0, 0
+        read_w, read_f, n_read = 0.0, 0.0, 0
         if m >= mu_s_min - MU_S_LIMIT_TOLERANCE:
             m = max(m, mu_s_min)
             _, w_r, i_s, w_s, w_g = r_mu_s_cell(r_slices, m, bottom, top, mu_s_min, n_r, n_s)
-            j0, read_t, read_f = sun_zenith_read(m, bottom, top, mu_s_min, n_s)
-            if read_f < 1.0:
+            read_f = sun_zenith_share(m)
+            if read_f <= 0.0:
                 _slice_layers(ray0, ray1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 0, acc, slices)
                 _slice_layers(mie0, mie1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 1, acc, slices)
                 _slice_layers(mult0, mult1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 2, acc, slices)
-            if read_f > 0.0:
-                n_read = 3
-                slices3[:] = 0.0
-                for q in range(3):
-                    # the texel j0 + q (as observer_slices with its sun_texel)
-                    i_q, w_q = (j0 + q, 0.0) if j0 + q < n_s - 1 else (n_s - 2, 1.0)
-                    _slice_layers(ray0, ray1, w_r, w_g, i_q, w_q, projection, identity, two_rows, 0, acc, slices3[q])
-                    _slice_layers(mie0, mie1, w_r, w_g, i_q, w_q, projection, identity, two_rows, 1, acc, slices3[q])
-                    _slice_layers(mult0, mult1, w_r, w_g, i_q, w_q, projection, identity, two_rows, 2, acc,
-                                  slices3[q])
-        observer_kernel(position, suns[h], slices, slices3[:n_read], read_t, read_f, n_r, transmittance, irradiance,
+            else:
+                n_read, read_w = 2, w_s
+                slices2[:] = 0.0
+                for q in range(2):
+                    # the cell's texel i_s + q (as observer_slices with its sun_texel)
+                    w_q = float(q)
+                    _slice_layers(ray0, ray1, w_r, w_g, i_s, w_q, projection, identity, two_rows, 0, acc, slices2[q])
+                    _slice_layers(mie0, mie1, w_r, w_g, i_s, w_q, projection, identity, two_rows, 1, acc, slices2[q])
+                    _slice_layers(mult0, mult1, w_r, w_g, i_s, w_q, projection, identity, two_rows, 2, acc,
+                                  slices2[q])
+        observer_kernel(position, suns[h], slices, slices2[:n_read], read_w, read_f, n_r, transmittance, irradiance,
                         albedo, solar, projection, bottom, top, mu_s_min, g, mie_kind, lobe, profiles, counts, alpha,
                         include_ground, dirs, out[h], bad[h], 0, n_rays)
 
@@ -890,7 +877,7 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
     c2 = np.empty(n_l)
     tmp = np.empty(n_l)
     lo_c = np.empty(n_l)
-    vals = np.empty((3, n_l))
+    vals = np.empty((2, n_l))
     p_m_spec = np.empty(n_l if mie_kind == TABLE_PHASE else 0)
     for q in range(start, stop):
         dx = points[q, 0] - cams[q, 0]

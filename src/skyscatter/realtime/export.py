@@ -100,9 +100,9 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: the multiple scattering divided by the lobe MultipleLobe(nu) (constants MULTIPLE_LOBE, MULTIPLE_LOBE_G; multiple_lobe
 #: and inscattered_radiance of the mappings; skyscatter table format 19); the irradiance texture's alpha is 0 (was the
 #: illuminance, unread since version 9). 11: with the sun from -1 to 25 deg above the horizon the scattering textures
-#: are read at the three sun-zenith texels nearest mu_s and the radiance combined per colour channel quadratically in
-#: the logarithm (scattering_mu_s_read, log_quadratic_value, sun_zenith_lerp; scattering_uvw takes the index
-#: position along mu_s); the textures are unchanged.
+#: are read at the two sun-zenith texels of the cell around mu_s and the radiance combined per colour channel as the
+#: mean of the linear and the geometric interpolation (scattering_mu_s_read, sun_zenith_value, sun_zenith_lerp;
+#: scattering_uvw takes the index position along mu_s); the textures are unchanged.
 MANIFEST_VERSION = 11
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
@@ -296,40 +296,30 @@ def scattering_mu_s_index(mu_s):
 SUN_READ_MU = (-0.0174524064, 0.0, 0.3420201433, 0.4226182617)
 
 def scattering_mu_s_read(mu_s):
-    """The read along the sun zenith of the scattering textures at mu_s (at least MU_S_MIN): (j0, t, f), the index
-    of the first of the three sun-zenith texels nearest mu_s (the cell and the texel next to its nearer end), the
-    position t in [-1, 1] relative to the middle one, and the share f of the log-quadratic read: 1 with the sun from
-    0 to 20 deg, ramping to 0 at -1 and 25 deg (linear in mu_s), 0 outside. A lookup is sun_zenith_lerp(lin, y0, y1,
-    y2, t, f) of the radiance read at mu_s (lin) and at the texels j0, j0 + 1, j0 + 2 (scattering_uvw's p_s)."""
+    """The read along the sun zenith of the scattering textures at mu_s (at least MU_S_MIN): (i, w, f), the first
+    sun-zenith texel of the cell around mu_s, the fraction w of the cell, and the share f of the geometric part of
+    sun_zenith_value: 1 with the sun from 0 to 20 deg, ramping to 0 at -1 and 25 deg (linear in mu_s), 0 outside.
+    Where f > 0 a lookup is sun_zenith_lerp(y0, y1, w, f) of the radiance read at the texels i and i + 1
+    (scattering_uvw's p_s); elsewhere the linear read at mu_s."""
     m0, m1, m2, m3 = SUN_READ_MU
     f = clamp((mu_s - m0) / (m1 - m0), 0.0, 1.0) * clamp((m3 - mu_s) / (m3 - m2), 0.0, 1.0)
-    if SCATTERING_N_MU_S < 3:
-        return 0, 0.0, 0.0
     p = clamp(scattering_mu_s_index(mu_s), 0.0, SCATTERING_N_MU_S - 1)
-    j = min(math.floor(p), SCATTERING_N_MU_S - 2)
-    j0 = min(max(j - 1 if p - j < 0.5 else j, 0), SCATTERING_N_MU_S - 3)
-    return j0, p - (j0 + 1), f
+    i = min(math.floor(p), SCATTERING_N_MU_S - 2)
+    return i, p - i, f
 
-def log_quadratic_value(y0, y1, y2, t):
-    """The value at t of the three-point Lagrange formula in the logarithm through y0, y1, y2 (t in [-1, 1] relative
-    to the middle texel), kept between the cell's two values; linear in the cell where a value is not positive or
-    the two are equal."""
-    lo, hi, w = (y0, y1, t + 1.0) if t < 0.0 else (y1, y2, t)
+def sun_zenith_value(lo, hi, w, f):
+    """(1 - f / 2) lin + (f / 2) geo of the values lo, hi at the cell's two texels at the fraction w: lin the linear,
+    geo the geometric interpolation (0 where lo or hi is not positive)."""
     lin = lo + w * (hi - lo)
-    if not (y0 > 0.0 and y1 > 0.0 and y2 > 0.0) or hi == lo:
+    if f <= 0.0:
         return lin
-    y = math.exp(0.5 * t * (t - 1.0) * math.log(y0) + (1.0 - t * t) * math.log(y1)
-                 + 0.5 * t * (t + 1.0) * math.log(y2))
-    return clamp(y, min(lo, hi), max(lo, hi))
+    geo = math.exp((1.0 - w) * math.log(lo) + w * math.log(hi)) if lo > 0.0 and hi > 0.0 else 0.0
+    return lin + 0.5 * f * (geo - lin)
 
-def sun_zenith_lerp(lin, y0, y1, y2, t, f):
-    """RGB of the inscattered radiance along the sun zenith: per channel log_quadratic_value of the radiance (RGB)
-    at the three texels of scattering_mu_s_read, blended with the linear read lin by its share f (lin is not used
-    where f is 1)."""
-    q = [log_quadratic_value(a, b, c, t) for a, b, c in zip(y0, y1, y2)]
-    if f >= 1.0:
-        return q
-    return [a + f * (b - a) for a, b in zip(lin, q)]
+def sun_zenith_lerp(y0, y1, w, f):
+    """RGB of the inscattered radiance along the sun zenith: per channel sun_zenith_value of the radiance (RGB) at
+    the two texels of scattering_mu_s_read."""
+    return [sun_zenith_value(a, b, w, f) for a, b in zip(y0, y1)]
 
 def scattering_nu_index(mu, mu_s, nu):
     """Index position of nu (x_nu = 1 - phi / pi, phi the view-sun azimuth)."""

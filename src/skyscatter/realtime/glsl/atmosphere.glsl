@@ -255,38 +255,26 @@ float LogQuadraticWeight(float y0, float y1, float y2, float t) {
   return hi == lo ? w : clamp((y - lo) / (hi - lo), 0.0, 1.0);
 }
 
-// The value at t of the three-point Lagrange formula in the logarithm through y0, y1, y2 (as LogQuadraticWeight),
-// kept between the cell's two values; linear in the cell where a value is not positive or the two are equal
-// (skyscatter.precomputed.geometry.log_quadratic_value).
-float LogQuadraticValue(float y0, float y1, float y2, float t) {
-  float lo = t < 0.0 ? y0 : y1;
-  float hi = t < 0.0 ? y1 : y2;
-  float lin = mix(lo, hi, t < 0.0 ? t + 1.0 : t);
-  if (!(y0 > 0.0 && y1 > 0.0 && y2 > 0.0) || hi == lo) return lin;
-  float y = exp(0.5 * t * (t - 1.0) * log(y0) + (1.0 - t * t) * log(y1) + 0.5 * t * (t + 1.0) * log(y2));
-  return clamp(y, min(lo, hi), max(lo, hi));
-}
-
-// Sines of the sun elevations -1, 0, 20 and 25 deg: the inscattered radiance is read log-quadratically along the sun
-// zenith fully from 0 to 20 deg, blended with the linear read from -1 to 0 and from 20 to 25 deg, linear outside
-// (skyscatter.precomputed.geometry.SUN_READ_ELEVATIONS, sun_zenith_read).
+// Sines of the sun elevations -1, 0, 20 and 25 deg: the inscattered radiance is read along the sun zenith by
+// SunZenithValue with the share SunZenithShare of its geometric part: 1 from 0 to 20 deg, ramping to 0 at -1 and 25
+// deg, 0 outside (linear) (skyscatter.precomputed.geometry.SUN_READ_ELEVATIONS, sun_zenith_share).
 const float SUN_READ_MU_0 = -0.0174524064;
 const float SUN_READ_MU_1 = 0.0;
 const float SUN_READ_MU_2 = 0.3420201433;
 const float SUN_READ_MU_3 = 0.4226182617;
 
-// The read along the sun zenith of the scattering textures at mu_s (at least MU_S_MIN): (j0, t, f), the index of the
-// first of the three sun-zenith texels nearest mu_s (the cell and the texel next to its nearer end), the position t
-// in [-1, 1] relative to the middle one, and the share f of the log-quadratic read (per channel, LogQuadraticValue
-// of the radiance at the three texels) blended with the linear one (skyscatter.precomputed.geometry.sun_zenith_read).
-vec3 ScatteringMuSRead(float mu_s) {
-  float f = clamp((mu_s - SUN_READ_MU_0) / (SUN_READ_MU_1 - SUN_READ_MU_0), 0.0, 1.0)
-            * clamp((SUN_READ_MU_3 - mu_s) / (SUN_READ_MU_3 - SUN_READ_MU_2), 0.0, 1.0);
-  if (SCATTERING_N_MU_S < 3) return vec3(0.0);
-  float p = clamp(ScatteringMuSIndex(mu_s), 0.0, float(SCATTERING_N_MU_S - 1));
-  float j = min(floor(p), float(SCATTERING_N_MU_S - 2));
-  float j0 = clamp(p - j < 0.5 ? j - 1.0 : j, 0.0, float(SCATTERING_N_MU_S - 3));
-  return vec3(j0, p - (j0 + 1.0), f);
+float SunZenithShare(float mu_s) {
+  return clamp((mu_s - SUN_READ_MU_0) / (SUN_READ_MU_1 - SUN_READ_MU_0), 0.0, 1.0)
+         * clamp((SUN_READ_MU_3 - mu_s) / (SUN_READ_MU_3 - SUN_READ_MU_2), 0.0, 1.0);
+}
+
+// (1 - f / 2) lin + (f / 2) geo of the values lo, hi at a sun-zenith cell's two texels at the fraction w of the cell:
+// lin the linear, geo the geometric interpolation (0 where lo or hi is not positive). Non-decreasing in lo and hi
+// (skyscatter.precomputed.geometry.sun_zenith_value).
+float SunZenithValue(float lo, float hi, float w, float f) {
+  float lin = mix(lo, hi, w);
+  float geo = lo > 0.0 && hi > 0.0 ? exp((1.0 - w) * log(lo) + w * log(hi)) : 0.0;
+  return lin + 0.5 * f * (geo - lin);
 }
 
 // RGB of the irradiance texture from the reads e0, e1, e2 of its three mu_s columns (IrradianceUvs) at t: where the
@@ -545,10 +533,10 @@ vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, ou
 
 // Inscattered radiance S[L](x, v, s) = S_R[L0] P_R(nu) + S_M[L0] P_M(nu) + S[L*] ([Bruneton2008] Eqs. 7-8 with the
 // single scattering kept apart, Sec. 4 "Angular precision").
-// Along the sun zenith (ScatteringMuSRead): from 0 to 20 deg the radiance at the three texels nearest mu_s combined
-// per colour channel by LogQuadraticValue (the radiance is far from linear in the sun elevation near the horizon),
-// blended with the linear read from -1 to 0 and from 20 to 25 deg, linear outside; skyscatter's lookups do the same
-// per output channel (per colour channel when they project to colour, so they give these values).
+// Along the sun zenith with the sun from -1 to 25 deg up (SunZenithShare above 0): the radiance at the cell's two
+// sun-zenith texels combined per colour channel by SunZenithValue (the radiance falls with the sun faster than
+// linearly near the horizon); linear outside. skyscatter's lookups do the same per output channel (per colour
+// channel when they project to colour, so they give these values).
 vec3 InscatterAt(float r, float mu, float mu_s, float nu, bool hits_ground, float p_s) {
   vec3 mie, multiple;
   vec3 rayleigh = GetScatteringAt(r, mu, mu_s, nu, hits_ground, p_s, mie, multiple);
@@ -558,15 +546,15 @@ vec3 InscatterAt(float r, float mu, float mu_s, float nu, bool hits_ground, floa
 vec3 GetInscatter(float r, float mu, float mu_s, float nu, bool hits_ground) {
   if (mu_s < MU_S_MIN - MU_S_LIMIT_TOLERANCE) return vec3(0.0);
   mu_s = max(mu_s, MU_S_MIN);
-  vec3 read = ScatteringMuSRead(mu_s);
-  vec3 lin = read.z < 1.0 ? InscatterAt(r, mu, mu_s, nu, hits_ground, ScatteringMuSIndex(mu_s)) : vec3(0.0);
-  if (read.z <= 0.0) return lin;
-  vec3 y0 = InscatterAt(r, mu, mu_s, nu, hits_ground, read.x);
-  vec3 y1 = InscatterAt(r, mu, mu_s, nu, hits_ground, read.x + 1.0);
-  vec3 y2 = InscatterAt(r, mu, mu_s, nu, hits_ground, read.x + 2.0);
-  vec3 q = vec3(LogQuadraticValue(y0.r, y1.r, y2.r, read.y), LogQuadraticValue(y0.g, y1.g, y2.g, read.y),
-                LogQuadraticValue(y0.b, y1.b, y2.b, read.y));
-  return read.z >= 1.0 ? q : mix(lin, q, read.z);
+  float f = SunZenithShare(mu_s);
+  float p_s = ScatteringMuSIndex(mu_s);
+  if (f <= 0.0) return InscatterAt(r, mu, mu_s, nu, hits_ground, p_s);
+  float p = clamp(p_s, 0.0, float(SCATTERING_N_MU_S - 1));
+  float i = min(floor(p), float(SCATTERING_N_MU_S - 2));
+  float w = p - i;
+  vec3 y0 = InscatterAt(r, mu, mu_s, nu, hits_ground, i);
+  vec3 y1 = InscatterAt(r, mu, mu_s, nu, hits_ground, i + 1.0);
+  return vec3(SunZenithValue(y0.r, y1.r, w, f), SunZenithValue(y0.g, y1.g, w, f), SunZenithValue(y0.b, y1.b, w, f));
 }
 
 // Moves a camera outside the atmosphere to where its ray enters it; false if the ray misses the atmosphere.
