@@ -547,9 +547,9 @@ class TableLookups:
         :func:`.geometry.sun_zenith_share` of the sun zenith: linear outside -1..25 deg sun elevation); beyond 98 deg
         computed directly. Why the texels: the radiance read changes its cell there (a kink along the sun zenith),
         which a node between them smoothed over (on the coarse tables of a retrieval, optical depth 0.5, 16
-        wavelengths: up to 27 % at -4 deg and 0.6 % at 10-15 deg between the regular nodes, 0.34 % and 0.1 % with
+        wavelengths: up to 27 % at -4 deg and 0.6 % at 10-15 deg between the regular nodes, 0.34 % and 0.16 % with
         the texels among them; docs/accuracy.md); why the same rule: between two nodes within a texel cell the
-        integral of the radiance read follows the read's curvature (at 84.2 deg 5.1e-4 linear, 2.6e-4 with it).
+        integral of the radiance read follows the read's curvature (at 84.2 deg 5.1e-4 linear, 2.5e-4 with it).
 
         This is the quantity a sky matrix integrates over its patches. The precomputed irradiance of
         :meth:`ground_irradiance` (Eq. 14) integrates the scattering orders on the coarser sphere quadrature of the
