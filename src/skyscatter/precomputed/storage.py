@@ -99,7 +99,10 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "PHASE_NAMES", "STORE
 #: 19: the same layout; the multiple-scattering table (and the orders' scattering densities) hold their values
 #: divided by the lobe :func:`.sampling.multiple_lobe` at each texel's view-sun cosine, so that every read between
 #: the azimuth texels follows the aerosol's forward lobe; the lookups multiply by it at the read's own ``nu``.
-FORMAT_VERSION = 19
+#: 20: the same layout; the orders' ray integrals read the scattering density quadratically in ``rho`` over three
+#: radius rows (:func:`.kernels.multiple_scattering_kernel`; before: linearly over two), so the multiple-scattering
+#: tables of format 19 hold other values (the lookups are unchanged).
+FORMAT_VERSION = 20
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).
