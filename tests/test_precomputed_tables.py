@@ -511,9 +511,9 @@ def test_streaming_and_chunks_do_not_change_the_tables(monkeypatch):
 def test_multiple_scattering_kernel_against_a_float64_reference():
     """The orders' ray integral (:func:`.kernels.multiple_scattering_kernel`, float32 arithmetic per sun and
     wavelength) against the same integral written out in float64 here: samples, product-integration weights,
-    the density interpolated linearly in r and mu and log-linearly in mu_s and nu (``w' = w a / (w a + (1 - w)
-    sqrt(a b))``, the smaller end floored at ``LOG_LERP_FLOOR`` times the larger). A density falling by up to 10^9
-    along mu_s exercises the log-linear weights and the floor. Tolerance 2e-6 relative: float32 rounding of the
+    the density interpolated quadratically in rho over three rows, linearly in mu and log-linearly in mu_s
+    and nu (``w' = w a / (w a + (1 - w) sqrt(a b))``, the smaller end floored at ``LOG_LERP_FLOOR`` times the
+    larger). A density falling by up to 10^9 along mu_s exercises the log-linear weights and the floor. Tolerance 2e-6 relative: float32 rounding of the
     slice and of the weights (6e-8 each), summed over the samples in float64."""
     from skyscatter.precomputed import geometry
     from skyscatter.precomputed.compute import Medium
@@ -561,8 +561,20 @@ def test_multiple_scattering_kernel_against_a_float64_reference():
         expected = np.zeros((n_s, n_n, wl.size))
         for i, (r_i, mu_i) in enumerate(pts):
             jr, wr, jm, wm, jm1, wm1 = sampling.r_mu_cell(r_i, mu_i, hits, bottom, top, n_r, n_mu)
-            sl = beta[i] * ((1 - wr) * ((1 - wm) * d64[jr, jm] + wm * d64[jr, jm + 1])
-                            + wr * ((1 - wm1) * d64[jr + 1, jm1] + wm1 * d64[jr + 1, jm1 + 1]))  # (n_s, n_n, n_l)
+            # quadratic in rho through rows k0 .. k0 + 2 (the cell's and the one below it; rows 0-2 at the ground)
+            x = math.sqrt(max(r_i * r_i - bottom * bottom, 0.0)) / math.sqrt(top * top - bottom * bottom) * (n_r - 1)
+            k0 = min(max(int(x) - 1, 0), n_r - 3)
+            t = min(max(x - k0, 0.0), 2.0)
+            lag = ((t - 1) * (t - 2) / 2, -t * (t - 2), t * (t - 1) / 2)
+            if k0 == 0 and jr == 0 and geometry.ground_cell_rows_apart(bottom, top, n_r) and not hits:
+                m2 = geometry.lerp_index(geometry.scattering_row_mu_coord(2, mu_i, bottom, top, n_r, n_mu),
+                                         n_mu // 2, n_mu - 1)
+                cells = ((jm, wm), (jm1, wm1), m2)
+            else:
+                cells = ((jm, wm),) * 3
+            sl = beta[i] * np.maximum(sum(lg * ((1 - w) * d64[k0 + j, m] + w * d64[k0 + j, m + 1])
+                                          for j, (lg, (m, w)) in enumerate(zip(lag, cells, strict=True))),
+                                      0.0)  # (n_s, n_n, n_l)
             for i_s in range(n_s):
                 for i_n in range(n_n):
                     nu = geometry.scattering_nu_param(i_n, mu, mu_s_tab[i_s], n_n)
