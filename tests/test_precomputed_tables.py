@@ -513,8 +513,9 @@ def test_multiple_scattering_kernel_against_a_float64_reference():
     wavelength) against the same integral written out in float64 here: samples, product-integration weights,
     the density interpolated quadratically in rho over three rows, linearly in mu and log-linearly in mu_s
     and nu (``w' = w a / (w a + (1 - w) sqrt(a b))``, the smaller end floored at ``LOG_LERP_FLOOR`` times the
-    larger). A density falling by up to 10^9 along mu_s exercises the log-linear weights and the floor. Tolerance 2e-6 relative: float32 rounding of the
-    slice and of the weights (6e-8 each), summed over the samples in float64."""
+    larger). A density falling by up to 10^9 along mu_s exercises the log-linear weights and the floor. Tolerance
+    2e-6 relative: float32 rounding of the slice and of the weights (6e-8 each), summed over the samples in
+    float64."""
     from skyscatter.precomputed import geometry
     from skyscatter.precomputed.compute import Medium
 
