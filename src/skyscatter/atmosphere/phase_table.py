@@ -561,19 +561,19 @@ if TYPE_CHECKING:
         phase_table_inverse_cdf_segment as phase_table_inverse_cdf_segment,
     )
     from ._phase_numba import (
-        phase_table_segment_near as phase_table_segment_near,
-    )
-    from ._phase_numba import (
-        phase_table_values_at as phase_table_values_at,
-    )
-    from ._phase_numba import (
         phase_table_segment as phase_table_segment,
+    )
+    from ._phase_numba import (
+        phase_table_segment_near as phase_table_segment_near,
     )
     from ._phase_numba import (
         phase_table_value as phase_table_value,
     )
     from ._phase_numba import (
         phase_table_values as phase_table_values,
+    )
+    from ._phase_numba import (
+        phase_table_values_at as phase_table_values_at,
     )
 
 _LAZY = {name: "_phase_numba" for name in (
