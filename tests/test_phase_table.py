@@ -136,6 +136,31 @@ def test_inverse_cdf_is_exact_for_the_interpolant_and_numba_agrees(hg):
         np.testing.assert_allclose(nb, mu, atol=1e-13)
 
 
+
+def test_segment_hints_give_the_bisection_to_the_bit(hg):
+    """The look-ups the Monte Carlo shares (``phase_table_inverse_cdf_segment``'s segment as the hint of
+    ``phase_table_segment_near``, ``phase_table_values_at``): the same ``(i, w)`` and values as the bisection, for
+    the right hint, wrong hints, no hint and the ends; a hint is only a shortcut."""
+    arr = hg.numba_arrays()
+    n = arr.mu.size
+    u = np.r_[0.0, 1e-300, 1e-9, np.random.default_rng(3).random(400), 1.0 - 1e-16, 1.0]
+    out_a = np.empty(3)
+    out_b = np.empty(3)
+    used = 0
+    for k in range(3):
+        for x in u:
+            mu, seg = pt.phase_table_inverse_cdf_segment(arr.mu, arr.values, arr.cdf, k, x)
+            assert mu == pt.phase_table_inverse_cdf(arr.mu, arr.values, arr.cdf, k, x)
+            ref = pt.phase_table_segment(arr.mu, mu)
+            for hint in (seg, -1, 0, n - 2, n - 1, n + 5, (seg + 1) % (n - 1), max(seg - 1, 0)):
+                got = pt.phase_table_segment_near(arr.mu, mu, hint)
+                assert got[0] == ref[0] and got[1] == ref[1], (k, x, mu, hint, got, ref)
+            used += seg == ref[0]
+            pt.phase_table_values(arr.mu, arr.values, mu, out_a)
+            pt.phase_table_values_at(arr.values, ref[0], ref[1], out_b)
+            assert np.array_equal(out_a, out_b)
+    assert used >= 0.95 * 3 * u.size  # the drawn segment is almost always the cosine's: the bisection is skipped
+
 def test_samples_follow_the_analytic_function_ks():
     g = 0.8
     table = PhaseTable.henyey_greenstein(g, [550.0])

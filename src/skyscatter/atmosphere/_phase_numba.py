@@ -91,22 +91,42 @@ def phase_table_value(mu_nodes, values, k, mu):
 
 
 @helper
-def phase_table_values(mu_nodes, values, mu, out):
-    """``out[k]`` = tabulated phase function [sr^-1] of every wavelength ``k`` at ``mu`` (one bisection)."""
-    i, w = phase_table_segment(mu_nodes, mu)
+def phase_table_segment_near(mu_nodes, mu, hint):
+    """:func:`phase_table_segment` of ``mu``, without the bisection when ``mu`` lies in the segment ``hint`` (an
+    index from an earlier look-up, e.g. :func:`phase_table_inverse_cdf_segment`'s; -1: none). Returns the same
+    ``(i, w)`` to the bit: the bisection's segment is the only ``i`` with ``mu_nodes[i] <= mu < mu_nodes[i + 1]``
+    (strictly ascending nodes), and ``w`` is the same expression."""
+    n = mu_nodes.shape[0]
+    if 0 <= hint < n - 1 and mu_nodes[0] < mu < mu_nodes[n - 1] and mu_nodes[hint] <= mu < mu_nodes[hint + 1]:
+        return hint, (mu - mu_nodes[hint]) / (mu_nodes[hint + 1] - mu_nodes[hint])
+    return phase_table_segment(mu_nodes, mu)
+
+
+@helper
+def phase_table_values_at(values, i, w, out):
+    """``out[k]`` = tabulated phase function [sr^-1] of every wavelength ``k`` at the point of segment ``i`` with
+    weight ``w`` of node ``i + 1`` (:func:`phase_table_segment`): several tables on the same nodes at one ``mu``
+    share one look-up."""
     for k in range(values.shape[0]):
         out[k] = (1.0 - w) * values[k, i] + w * values[k, i + 1]
 
 
 @helper
-def phase_table_inverse_cdf(mu_nodes, values, cdf, k, u):
-    """``mu`` [-] with CDF ``u`` in [0, 1] under the table of wavelength index ``k``: exact for the interpolant
-    linear in ``mu`` (:meth:`.phase_table.PhaseTable.inverse_cdf`, the same formula)."""
+def phase_table_values(mu_nodes, values, mu, out):
+    """``out[k]`` = tabulated phase function [sr^-1] of every wavelength ``k`` at ``mu`` (one bisection)."""
+    i, w = phase_table_segment(mu_nodes, mu)
+    phase_table_values_at(values, i, w, out)
+
+
+@helper
+def phase_table_inverse_cdf_segment(mu_nodes, values, cdf, k, u):
+    """``(mu, i)``: :func:`phase_table_inverse_cdf` and the segment ``i`` of the nodes it was found in (a hint for
+    :func:`phase_table_segment_near`; ``mu`` may round onto the segment's end, which that checks)."""
     n = mu_nodes.shape[0]
     if u <= 0.0:
-        return -1.0
+        return -1.0, 0
     if u >= 1.0:
-        return 1.0
+        return 1.0, n - 2
     lo = 0
     hi = n - 1
     while hi - lo > 1:  # largest i with cdf[k, i] <= u
@@ -123,4 +143,13 @@ def phase_table_inverse_cdf(mu_nodes, values, cdf, k, u):
     den = v0 + math.sqrt(max(v0 * v0 + 2.0 * s * c, 0.0))
     x = 2.0 * c / den if den > 0.0 else 0.0
     x = min(max(x, 0.0), dmu)
-    return min(max(a + x, -1.0), 1.0)
+    return min(max(a + x, -1.0), 1.0), lo
+
+
+@helper
+def phase_table_inverse_cdf(mu_nodes, values, cdf, k, u):
+    """``mu`` [-] with CDF ``u`` in [0, 1] under the table of wavelength index ``k``: exact for the interpolant
+    linear in ``mu`` (:meth:`.phase_table.PhaseTable.inverse_cdf`, the same formula): the root of the quadratic
+    CDF in the segment found by bisection in the cumulative table."""
+    mu, _ = phase_table_inverse_cdf_segment(mu_nodes, values, cdf, k, u)
+    return mu

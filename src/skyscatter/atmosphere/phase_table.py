@@ -46,7 +46,11 @@ package does not import numba), are
   weight ``w`` of node ``i + 1`` (bisection, 10 steps for 863 nodes);
 * ``phase_table_value(mu_nodes, values, k, mu) -> p`` [sr^-1] at wavelength index ``k``;
 * ``phase_table_values(mu_nodes, values, mu, out)``: ``out[k] = p_k(mu)`` for every wavelength (one bisection);
-* ``phase_table_inverse_cdf(mu_nodes, values, cdf, k, u) -> mu``: the exact inverse CDF of wavelength ``k``.
+* ``phase_table_inverse_cdf(mu_nodes, values, cdf, k, u) -> mu``: the exact inverse CDF of wavelength ``k``;
+  ``phase_table_inverse_cdf_segment`` also returns the segment it found, and ``phase_table_segment_near(mu_nodes,
+  mu, i)`` is ``phase_table_segment`` without the bisection when ``mu`` is in segment ``i`` (the same result to the
+  bit); ``phase_table_values_at(values, i, w, out)`` interpolates every wavelength at a segment found once (tables
+  on the same nodes share it).
 
 Each takes ``mu`` in [-1, 1] and ``u`` in [0, 1] without checking (clamped), never allocates and is compiled
 without numba's runtime (docs/architecture.md, numba rules).
@@ -554,7 +558,13 @@ if TYPE_CHECKING:
         phase_table_inverse_cdf as phase_table_inverse_cdf,
     )
     from ._phase_numba import (
+        phase_table_inverse_cdf_segment as phase_table_inverse_cdf_segment,
+    )
+    from ._phase_numba import (
         phase_table_segment as phase_table_segment,
+    )
+    from ._phase_numba import (
+        phase_table_segment_near as phase_table_segment_near,
     )
     from ._phase_numba import (
         phase_table_value as phase_table_value,
@@ -562,8 +572,12 @@ if TYPE_CHECKING:
     from ._phase_numba import (
         phase_table_values as phase_table_values,
     )
+    from ._phase_numba import (
+        phase_table_values_at as phase_table_values_at,
+    )
 
 _LAZY = {name: "_phase_numba" for name in (
-    "phase_table_segment", "phase_table_value", "phase_table_values", "phase_table_inverse_cdf")}
+    "phase_table_segment", "phase_table_value", "phase_table_values", "phase_table_inverse_cdf",
+    "phase_table_segment_near", "phase_table_values_at", "phase_table_inverse_cdf_segment")}
 
 __getattr__ = lazy_namespace(globals(), _LAZY)[0]

@@ -144,7 +144,14 @@ from ..atmosphere.phase import (
     rayleigh_inverse_cdf_scalar,
     rayleigh_phase_scalar,
 )
-from ..atmosphere.phase_table import phase_table_inverse_cdf, phase_table_values
+from ..atmosphere.phase_table import (
+    phase_table_inverse_cdf,
+    phase_table_inverse_cdf_segment,
+    phase_table_segment,
+    phase_table_segment_near,
+    phase_table_values,
+    phase_table_values_at,
+)
 from ..jit import helper, inline, kernel
 from .rng import next_uniform, sample_state, stream_key
 from .tracking import field_box_hit, field_density_at, field_free_path, field_transmittance
@@ -253,6 +260,26 @@ def _piece_columns(r2, b, a, c, rb, layers, nlay, out):
         out[0] = s0 * half
         out[1] = s1 * half
         out[2] = s2 * half
+        return
+    if nc == 4:
+        # one further component (a cloud layer): the same sums in registers, in the same order as the loop below
+        # (the same bits), where the loop keeps them in ``out`` across the calls to exp
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        s3 = 0.0
+        for k in range(4):
+            t = mid + half * _GX[k]
+            h = math.sqrt(max(r2 + 2.0 * b * t + t * t, 0.0)) - rb
+            w = _GW[k]
+            s0 += w * _density(h, layers, nlay, 0)
+            s1 += w * _density(h, layers, nlay, 1)
+            s2 += w * _density(h, layers, nlay, 2)
+            s3 += w * _density(h, layers, nlay, 3)
+        out[0] = s0 * half
+        out[1] = s1 * half
+        out[2] = s2 * half
+        out[3] = s3 * half
         return
     for q in range(nc):
         out[q] = 0.0
@@ -719,11 +746,20 @@ def _lobe_values(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, ph, qs):
 @helper
 def _sample_lobe(kind, g, tab, hero, u, tmu, tval, tcdf):
     """Cosine of the scattering angle drawn from lobe ``kind`` for the hero wavelength (uniform ``u``)."""
+    mu, _ = _sample_lobe_segment(kind, g, tab, hero, u, tmu, tval, tcdf)
+    return mu
+
+
+@helper
+def _sample_lobe_segment(kind, g, tab, hero, u, tmu, tval, tcdf):
+    """:func:`_sample_lobe` and, for a table, the segment of ``tmu`` the cosine was drawn in (-1 for an analytic
+    lobe): the phase sums at that cosine then find their segment without a second bisection
+    (:func:`_phase_sums`'s ``hint``)."""
     if kind == LOBE_RAYLEIGH:
-        return rayleigh_inverse_cdf_scalar(u)
+        return rayleigh_inverse_cdf_scalar(u), -1
     if kind == LOBE_TABLE:
-        return phase_table_inverse_cdf(tmu, tval[tab], tcdf[tab], hero, u)
-    return henyey_greenstein_inverse_cdf_scalar(u, g)
+        return phase_table_inverse_cdf_segment(tmu, tval[tab], tcdf[tab], hero, u)
+    return henyey_greenstein_inverse_cdf_scalar(u, g), -1
 
 
 @helper
@@ -738,6 +774,15 @@ def _optical_depths(coef_t, cols, out):
         c2 = cols[2]
         for i in range(n):
             out[i] = coef_t[0, i] * c0 + coef_t[1, i] * c1 + coef_t[2, i] * c2
+        return
+    if cols.shape[0] == 4:
+        # one cloud layer: the loop below's sums in its order (the same bits; 0 + x = x for these non-negative terms)
+        c0 = cols[0]
+        c1 = cols[1]
+        c2 = cols[2]
+        c3 = cols[3]
+        for i in range(n):
+            out[i] = coef_t[0, i] * c0 + coef_t[1, i] * c1 + coef_t[2, i] * c2 + coef_t[3, i] * c3
         return
     for i in range(n):
         out[i] = 0.0
@@ -770,6 +815,26 @@ def _medium_at(px, py, pz, rho_f, rb, layers, nlay, coef_t, scat_t, fs, fss, den
             sc[3, i] = v3
             stt[i] = coef_t[0, i] * d0 + coef_t[1, i] * d1 + coef_t[2, i] * d2 + fs[i] * rho_f
             sst[i] = v0 + v1 + v2 + v3
+        return
+    if nc == 4:
+        # one cloud layer: the loops below fused, their sums in their order (the same bits)
+        d0 = dens[0]
+        d1 = dens[1]
+        d2 = dens[2]
+        d3 = dens[3]
+        for i in range(n):
+            v0 = scat_t[0, i] * d0
+            v1 = scat_t[1, i] * d1
+            v2 = scat_t[2, i] * d2
+            v3 = scat_t[3, i] * d3
+            v4 = fss[i] * rho_f
+            sc[0, i] = v0
+            sc[1, i] = v1
+            sc[2, i] = v2
+            sc[3, i] = v3
+            sc[4, i] = v4
+            stt[i] = coef_t[0, i] * d0 + coef_t[1, i] * d1 + coef_t[2, i] * d2 + coef_t[3, i] * d3 + fs[i] * rho_f
+            sst[i] = v0 + v1 + v2 + v3 + v4
         return
     for i in range(n):
         stt[i] = 0.0
@@ -830,12 +895,15 @@ def _collide(px, py, pz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers
 
 
 @helper
-def _phase_sums(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, density):
+def _phase_sums(mu, hint, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, density):
     """``val[i] = sum_c sc[c, i] P_c,i(mu)`` [m^-1 sr^-1] over the active lobes and, with ``density``, ``val2[i] =
     sum_c sc[c, i] q_c,i(mu)`` with ``q`` the density by which lobe ``c`` is sampled (Henyey-Greenstein for a
     Cornette-Shanks lobe, else ``P``). A tabulated lobe's values are left in ``ph[c]`` (the forward peak is taken
     off them, :func:`_without_peak`); analytic lobes are one value for every wavelength and are summed directly
-    (the clear sky's two lobes in one loop: each loop over the wavelengths costs about as much as its body)."""
+    (the clear sky's two lobes in one loop: each loop over the wavelengths costs about as much as its body).
+    The tables share the nodes ``tmu``: their segment at ``mu`` is looked up once (no bisection when ``mu`` lies
+    in segment ``hint``, e.g. where it was drawn; -1: none; :func:`phase_table_segment_near`, the same segment to
+    the bit) and returned as ``(i, w)`` (``i = -1``: no table lobe), for :func:`_without_peak`."""
     n = val.shape[0]
     if active.shape[0] == 2 and lobe[active[0]] != LOBE_TABLE and lobe[active[1]] != LOBE_TABLE:
         c0 = active[0]
@@ -847,14 +915,18 @@ def _phase_sums(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2
         if density:
             for i in range(n):
                 val2[i] = sc[c0, i] * w0 + sc[c1, i] * w1
-        return
+        return -1, 0.0
     for i in range(n):
         val[i] = 0.0
         val2[i] = 0.0
+    seg = -1
+    sw = 0.0
     for a in range(active.shape[0]):
         c = active[a]
         if lobe[c] == LOBE_TABLE:
-            phase_table_values(tmu, tval[lobe_tab[c]], mu, ph[c])
+            if seg < 0:
+                seg, sw = phase_table_segment_near(tmu, mu, hint)
+            phase_table_values_at(tval[lobe_tab[c]], seg, sw, ph[c])
             for i in range(n):
                 v = sc[c, i] * ph[c, i]
                 val[i] += v
@@ -864,6 +936,7 @@ def _phase_sums(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2
         for i in range(n):
             val[i] += sc[c, i] * v
             val2[i] += sc[c, i] * w
+    return seg, sw
 
 
 @inline
@@ -920,12 +993,13 @@ def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nl
     wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
     ax, ay, az = wx, wy, wz
     for k in range(nl - 1, -1, -1):
-        mu = phase_table_inverse_cdf(tmu, pval, pcdf, hero, next_uniform(st))
+        mu, seg = phase_table_inverse_cdf_segment(tmu, pval, pcdf, hero, next_uniform(st))
         ax, ay, az = direction_about_axis(ax, ay, az, mu, 2.0 * math.pi * next_uniform(st))
         chain[k, 0] = ax
         chain[k, 1] = ay
         chain[k, 2] = az
-        phase_table_values(tmu, pval, mu, pk)
+        seg, sw = phase_table_segment_near(tmu, mu, seg)
+        phase_table_values_at(pval, seg, sw, pk)
         if pk[hero] <= 0.0:
             return False, 0.0, 0.0, 0.0
         for i in range(n):
@@ -977,10 +1051,13 @@ def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nl
 
 
 @helper
-def _without_peak(mu, peak_lobe, tmu, pval, pa, pk, sc, ph, val):
+def _without_peak(mu, seg, sw, peak_lobe, tmu, pval, pa, pk, sc, ph, val):
     """Take the forward peak ``pa_i pval_i(mu)`` off the peak lobe's phase values ``ph[peak_lobe]`` (never below
-    0) in the sums ``val`` of :func:`_phase_sums`."""
-    phase_table_values(tmu, pval, mu, pk)
+    0) in the sums ``val`` of :func:`_phase_sums`; ``(seg, sw)`` the segment of ``mu`` in ``tmu`` that returned
+    (``seg = -1``: looked up here)."""
+    if seg < 0:
+        seg, sw = phase_table_segment(tmu, mu)
+    phase_table_values_at(pval, seg, sw, pk)
     for i in range(pk.shape[0]):
         val[i] -= sc[peak_lobe, i] * min(ph[peak_lobe, i], pa[i] * pk[i])
 
@@ -997,6 +1074,7 @@ def _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy
     n = f.shape[0]
     n_active = active.shape[0]
     drest = dval.shape[1] > 2
+    seg = -1
     if use_ddis and eps > 0.0 and next_uniform(st) < eps:
         if drest:
             ms = phase_table_inverse_cdf(tmu, dval, dcdf, hero, next_uniform(st))
@@ -1016,10 +1094,10 @@ def _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy
             if u < acc:
                 pick = c
                 break
-        mu = _sample_lobe(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st), tmu,
-                          tval, tcdf)
+        mu, seg = _sample_lobe_segment(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st), tmu,
+                                       tval, tcdf)
         dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
-    _phase_sums(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, True)
+    _phase_sums(mu, seg, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, True)
     if use_ddis and eps > 0.0:
         # each wavelength's density of that direction: the lobes' mixture or, with
         # probability ddis, the cloud's phase function of its own wavelength about the sun
@@ -1309,9 +1387,10 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                     _transmittances(coef_t, tot, tau, trs)
                             if live:
                                 mw = wx * dx + wy * dy + wz * dz
-                                _phase_sums(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, False)
+                                seg, sw = _phase_sums(mw, -1, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val,
+                                                      val2, False)
                                 if peak and not first:
-                                    _without_peak(mw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
+                                    _without_peak(mw, seg, sw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
                                 for i in range(n):
                                     contrib[i] += ws * f[i] * val[i] * esun[i] * trs[i]
                                 tsun = trs[hero]
@@ -1329,9 +1408,10 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                     gch)
                                 if alive:
                                     mw = wx * dx + wy * dy + wz * dz
-                                    _phase_sums(mw, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, False)
+                                    seg, sw = _phase_sums(mw, -1, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph,
+                                                          val, val2, False)
                                     if not first:
-                                        _without_peak(mw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
+                                        _without_peak(mw, seg, sw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
                                     for i in range(n):
                                         contrib[i] += ws * f[i] * val[i] * gch[i] / qprobe
                             # importance splitting / roulette (cloudy media; module docstring, "splitting"), then
@@ -1692,10 +1772,10 @@ def _flux_paths(sun, rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, 
                         if u < acc:
                             pick = c
                             break
-                    mu = _sample_lobe(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st), tmu, tval,
-                                      tcdf)
+                    mu, seg = _sample_lobe_segment(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st),
+                                                   tmu, tval, tcdf)
                     dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
-                    _phase_sums(mu, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, True)
+                    _phase_sums(mu, seg, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, True)
                     for i in range(n):
                         f[i] *= val[i]
                         p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
