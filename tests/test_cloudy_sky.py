@@ -158,7 +158,7 @@ def test_a_vanishing_cloud_gives_the_clear_sky_on_its_top(sun):
     ground's albedo was taken out: +2.8 / +2.2 / +1.9 % at 450 / 550 / 650 nm with the sun 10 deg high (+1.2 / +1.2
     / +1.5 % at 2 deg; the air below 1500 m and the ground reflect 0.26 / 0.24 / 0.22 of the light there, mostly at
     low elevations, which the air above returns more than Lambertian light), so the light on a cloud's top was 1.5
-    / 0.6 / 0.3 % too bright and the ground under optical depths 15-60 1.4-1.9 % too bright at 450 nm."""
+    / 0.6 / 0.3 % too bright and the ground under optical depths 15-60 1.8-1.9 % too bright at 450 nm."""
     case, mu, w, az = _top_sky_case(sun)
     wl = np.array(TOP_SKY["wavelengths_nm"])
     kw = dict(cloud_base=1000.0, cloud_top=TOP_SKY["cloud_top_m"], ground_albedo=TOP_SKY["ground_albedo"])
