@@ -708,8 +708,9 @@ def cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike
 
 #: Version of the cloud table's stored layout and contents (part of its disk cache key). 3: a verified entry of
 #: :mod:`skyscatter.diskcache` (checksums). 4: :class:`~skyscatter.sky.cloudy.CloudySky`'s sky irradiance on the cloud
-#: top from the radiance tables (the skies it stores changed by up to a few per cent).
-_CLOUD_TABLE_VERSION = 4
+#: top from the radiance tables (the skies it stores changed by up to a few per cent). 5: the light that the clear air
+#: below the cloud top sends up taken out of the tables' sky by the adding method (low suns: up to 1.5 % less light).
+_CLOUD_TABLE_VERSION = 5
 _CLOUD_TABLE_ARRAYS = ("optical_depths", "zeniths", "wavelengths", "diffuse", "slant", "field_theta", "field_phi",
                        "field", "peak")
 

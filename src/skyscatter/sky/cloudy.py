@@ -650,9 +650,11 @@ class CloudySky(SunSkyMixin, SkyModel):
             # the sky's beams (their m = 0 terms) and seen through it
             top_down = mu_eff * beam_flux + math.pi * sky_iso
             up_rows = np.nonzero(theta < 0.5 * math.pi)[0]
+            clear_up, clear_rising = self._clear_below(wl, ref, theta, np.radians(phi), beam_flux, mu_eff, albedo,
+                                                       sky_iso)
             extra, shape_nodes, shape_rows = self._interreflection(
                 wl, ref, top_up + sky["top_up"], top_down, -np.cos(theta[rising]), top_rising + sky["top_rising"],
-                sky["nodes"], np.cos(theta[up_rows]))
+                sky["nodes"], np.cos(theta[up_rows]), clear_up, clear_rising)
             boundary = sky["ring"][:, None] * shape_nodes * extra[None, :]  # (n_mu, n_wl): each ring's beam flux
             rad += sky["radiance"] + np.einsum("ik,itk->tk", boundary, sky["g0"])[:, None, :]
             rad[up_rows] += (shape_rows * extra[None, :] * sky["through"])[:, None, :]
@@ -819,9 +821,67 @@ class CloudySky(SunSkyMixin, SkyModel):
                 "nodes": mu, "ring": 2.0 * math.pi * wmu, "g0": at_grid(g[:, :, 0, :]), "node_fluxes": node_fluxes,
                 "through": seen_t}
 
+    def _clear_below(self, wl: NDArray[np.float64], ref: float, theta: NDArray[np.float64],
+                     phi: NDArray[np.float64], beam_flux: NDArray[np.float64], mu_beam: NDArray[np.float64],
+                     albedo: NDArray[np.float64], sky_iso: NDArray[np.float64]
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The light that the clear air below ``ref`` [m] (the highest cloud top) and the ground (albedo ``albedo``
+        (n_wl,)) send up through ``ref`` when the cloud is absent, per unit solar irradiance: ``(up, rising)``, the
+        upward flux there (n_wl,) [-] and its azimuthal mean radiance (n_up, n_wl) [sr^-1] on the grid's rows of
+        rising light (view zenith angles ``theta`` > 90 deg; ``phi`` the grid's azimuths [rad]). Lit as the cloud
+        column is: the tables' sun (``beam_flux`` (n_wl,) [-] at the cosines ``mu_beam`` (n_wl,)) and sky
+        (:meth:`_sky_light` with ``sky_iso`` (n_wl,) [sr^-1]); the clear air's layers of :func:`cloud_column` below
+        ``ref``, solved by DISORT ([Stamnes1988]) at :data:`SKY_STREAMS` streams.
+
+        The tables' sky at the cloud top already holds this light as the air above sent it back; the adding method
+        (:meth:`_interreflection`) takes it out before it adds the cloud's. Its reflectance is not the ground's
+        albedo ``a``: the air below the top scatters the sun's light up too, most of it at low elevations, which the
+        air above returns more than Lambertian light (sun 10 deg, 1500 m, 450 nm: 0.26 against 0.2, and twice the
+        Lambertian return)."""
+        import disortpp
+
+        column = cloud_column(self.atmosphere.replace(particles=()), wl, observer_altitude=ref)
+        edges, tau, ssa, moments = column
+        below = np.flatnonzero(edges[:-1] <= ref + 1e-6)  # layers whose top edge is at or below the cloud top
+        tau, ssa, moments = tau[below], ssa[below], moments[below]
+        sky = self._sky_light(wl, ref, theta, phi, tau, ssa, moments, 0, albedo, sky_iso)
+        up, rising = sky["top_up"].copy(), sky["top_rising"].copy()
+        streams = min(self.streams, SKY_STREAMS)
+        rows = np.nonzero(theta > 0.5 * math.pi)[0]
+        mu_up = -np.cos(theta[rows])  # DISORT: mu > 0 travels up
+        order = np.argsort(mu_up, kind="stable")
+        for k in range(wl.size):
+            if beam_flux[k] <= 0.0:
+                continue
+            cfg = disortpp.DisortConfig(int(tau.shape[0]), streams, streams)
+            cfg.flags.use_user_mu = True
+            cfg.flags.use_user_tau = True
+            cfg.flags.use_lambertian_surface = True
+            cfg.num_user_tau = 1
+            cfg.num_user_mu = int(rows.size)
+            cfg.num_phi = 1
+            cfg.allocate()
+            cfg.delta_tau = [float(t) for t in tau[:, k]]
+            cfg.single_scat_albedo = [float(v) for v in ssa[:, k]]
+            cfg.phase_function_moments = moments[:, k, : streams + 1].tolist()
+            cfg.tau_user = [0.0]
+            cfg.mu_user = [float(v) for v in mu_up[order]]
+            cfg.phi_user = [0.0]
+            cfg.bc.direct_beam_flux = float(beam_flux[k])
+            cfg.bc.direct_beam_mu = float(mu_beam[k])
+            cfg.bc.direct_beam_phi = 0.0
+            cfg.bc.surface_albedo = float(albedo[k])
+            res = disortpp.DisortSolver().solve(cfg)
+            up[k] += res.flux_up[0]
+            mean = np.empty(rows.size)
+            mean[order] = np.asarray(res.intensity_azimuth_avg)[0]
+            rising[:, k] += mean
+        return up, rising
+
     def _interreflection(self, wl: NDArray[np.float64], ref: float, up: NDArray[np.float64],
                          down: NDArray[np.float64], mu: NDArray[np.float64], rising: NDArray[np.float64],
-                         nodes: NDArray[np.float64], views: NDArray[np.float64]
+                         nodes: NDArray[np.float64], views: NDArray[np.float64],
+                         clear_up: NDArray[np.float64], clear_rising: NDArray[np.float64]
                          ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """The light the cloud reflects that the air above sends back down, by the adding method ([Liou2002] Sec.
         6.2): ``(extra, at_nodes, at_views)``, ``extra`` (n_wl,) its flux on the cloud top per unit solar
@@ -830,15 +890,24 @@ class CloudySky(SunSkyMixin, SkyModel):
         brightest near the horizon; neither isotropic nor the clear sky's shape about the sun, which under optical
         depth 15 were 10-20 % off 10-80 deg high just below the cloud top against the whole column in DISORT).
 
-        ``down`` (n_wl,): the downward flux at the top (the tables' sun and sky, which already hold the ground's
-        light, albedo ``a``, that the air sent back: ``D0 = down (1 - a s)`` is the light without it); ``up``
+        ``down`` (n_wl,): the downward flux at the top (the tables' sun and sky, which already hold the light that
+        the clear air below the top and the ground sent up and the air above sent back; ``D0`` is the light without
+        it); ``up``
         (n_wl,): the column's upward flux there, ``r = up / down`` its reflectance; ``rising`` (n_mu, n_wl)
         [sr^-1]: the azimuthal mean of that upward radiance at the cosines ``mu`` (n_mu,) > 0. The air sends back
         the fraction ``R`` of it, its plane albedo from below (:func:`air_plane_albedo`) averaged over the reflected
         light's angles: a thin cloud under a low sun sends its light up at low elevations, which the air returns
         more than Lambertian light (optical depth 1, sun 10 deg: twice as much at 650 nm); the light returned again
         is nearly diffuse (the spherical albedo ``s``, :func:`air_spherical_albedo`). Then
-        ``F = D0 (1 + r R / (1 - r s))`` (``D0 / (1 - r s)`` where ``R = s``) and ``extra = F - down``."""
+        ``F = D0 (1 + r R / (1 - r s))`` (``D0 / (1 - r s)`` where ``R = s``) and ``extra = F - down``.
+
+        ``D0``: the same adding applied to the clear column below the top (``clear_up``, ``clear_rising``:
+        :meth:`_clear_below`), whose return the tables' sky holds, ``down = D0 (1 + r_c R_c / (1 - r_c s))``; so a
+        vanishing cloud gives the tables' sky back (``F = down``). Until 2026-12-04 ``D0 = down (1 - a s)``, the
+        ground's albedo ``a`` alone under the top (the first-order term of that adding for a Lambertian floor):
+        with the sun 10 deg high the clear air below 1500 m and the ground reflect ``r_c`` = 0.26 / 0.24 / 0.22 at
+        450 / 550 / 650 nm, mostly at low elevations, so the cloud top's light was 1.5 / 0.6 / 0.3 % too bright
+        (docs/clouds.md)."""
         cos = np.concatenate([nodes, views])
         # the clear air's layers once, for both solves (their values per wavelength do not depend on the others)
         column = cloud_column(self.atmosphere.replace(particles=()), wl, observer_altitude=ref)
@@ -857,14 +926,19 @@ class CloudySky(SunSkyMixin, SkyModel):
         plane = np.stack([np.interp(wl, wl[solved], row) for row in ratio]) * s[None, :]  # (n_quad, n_wl)
         order = np.argsort(mu)
         m = mu[order]
-        flux = 2.0 * math.pi * rising[order] * m[:, None]  # (n_mu, n_wl): the upward flux per unit cosine
+
+        def returned(up_flux: NDArray[np.float64], rising_mu: NDArray[np.float64]) -> NDArray[np.float64]:
+            # r R / (1 - r s): the adding method's light sent back down per unit of light without it
+            flux = 2.0 * math.pi * rising_mu[order] * m[:, None]  # (n_mu, n_wl): the upward flux per unit cosine
+            total_flux = np.trapezoid(flux, m, axis=0)
+            back = np.divide(np.trapezoid(flux * r_mu, m, axis=0), total_flux, out=s.copy(), where=total_flux > 0)
+            r = np.divide(up_flux, down, out=np.zeros(wl.size), where=down > 0)
+            return r * back / np.maximum(1.0 - r * s, 1e-6)
+
         r_mu = np.stack([np.interp(m, quad, plane[:, k]) for k in range(wl.size)], axis=1)
-        total_flux = np.trapezoid(flux, m, axis=0)
-        back = np.divide(np.trapezoid(flux * r_mu, m, axis=0), total_flux, out=s.copy(), where=total_flux > 0)
-        a = self.atmosphere.ground_albedo_at(wl)
-        r = np.divide(up, down, out=np.zeros(wl.size), where=down > 0)
-        total = down * (1.0 - a * s) * (1.0 + r * back / np.maximum(1.0 - r * s, 1e-6))
-        return np.maximum(total - down, 0.0), shape[: nodes.size], shape[nodes.size:]
+        d0 = down / (1.0 + returned(clear_up, clear_rising))
+        total = d0 * (1.0 + returned(up, rising))
+        return total - down, shape[: nodes.size], shape[nodes.size:]
 
     def _table_illumination(self, wl: NDArray[np.float64], height: float
                             ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
