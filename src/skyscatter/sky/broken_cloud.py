@@ -508,7 +508,10 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         suns = np.stack([np.sqrt(1.0 - mu**2), np.zeros_like(mu), mu], axis=-1)
         pos = np.zeros((r.size, 1, 3))
         pos[:, 0, 2] = r
-        _, e_down = tab.ground_irradiance(pos, np.array([0.0, 0.0, 1.0]), suns[None, :, :])
+        # the irradiance table's read at the cloud levels (rows 4 km apart: -3..-9 % off the sky radiance's
+        # hemisphere integral at 480-830 nm here, docs/clouds.md); the octaves were fitted with it, and the
+        # integral on these 32 levels x 131 sun cosines costs about 15 CPU-s per sky: not yet switched
+        _, e_down = tab.table_irradiance(pos, np.array([0.0, 0.0, 1.0]), suns[None, :, :])
         ground = np.array([0.0, 0.0, bottom])
         e_sun_g, e_sky_g = tab.ground_irradiance(ground, np.array([0.0, 0.0, 1.0]), self._sun_planet)
         shadow = np.exp(-np.multiply.outer(self._volumes["tau_ground"].ravel(), k)).mean(axis=0)
