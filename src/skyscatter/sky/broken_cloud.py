@@ -552,9 +552,6 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         # rays towards a sun below the point's horizon meet the ground: no sunlight
         horizon = -np.sqrt(np.maximum(1.0 - (bottom / r) ** 2, 0.0))
         t_atm[mu[None, :] < horizon[:, None]] = 0.0
-        suns = np.stack([np.sqrt(1.0 - mu**2), np.zeros_like(mu), mu], axis=-1)
-        pos = np.zeros((r.size, 1, 3))
-        pos[:, 0, 2] = r
         e_down = _sky_irradiance_levels(tab, r, mu)
         ground = np.array([0.0, 0.0, bottom])
         e_sun_g, e_sky_g = tab.ground_irradiance(ground, np.array([0.0, 0.0, 1.0]), self._sun_planet)
