@@ -168,11 +168,14 @@ def disort_radiance(params, wavelength: float, sun_zenith: float, view_zenith, v
                                  exact_phase=phase)
 
 
-def disort_diffuse_irradiance(params, wavelength: float, sun_zenith: float, *, n_layers: int = 150,
-                              n_streams: int = 32, n_moments: int = 400) -> float:
-    """Diffuse downward irradiance on the ground per unit solar irradiance [-] (plane-parallel DISORT, fluxes
-    only): DISORT's diffuse down-flux, which is total minus the direct beam without delta-M scaling, so the light
-    of a forward peak is in it (Stamnes et al. 1988; DISORT's RFLDN). Layers and moments as
+def disort_diffuse_irradiance(params, wavelength: float, sun_zenith: float, *, altitude: float = 0.0,
+                              n_layers: int = 150, n_streams: int = 32, n_moments: int = 400) -> float:
+    """Diffuse downward irradiance on a horizontal surface at ``altitude`` [m] above the ground (default: on it)
+    per unit solar irradiance [-] (plane-parallel DISORT, fluxes only): DISORT's diffuse down-flux, which is total
+    minus the direct beam without delta-M scaling, so the light of a forward peak is in it (Stamnes et al. 1988;
+    DISORT's RFLDN), at the optical depth of the column above ``altitude`` (the layers above it, and the part of
+    its own layer above it integrated from the density profiles as :func:`_column` integrates each layer: the
+    layer is homogeneous in DISORT, so the level is placed by its optical depth). Layers and moments as
     :func:`disort_radiance`."""
     tau, ssa, moments, albedo, _ = _column(params, wavelength, n_layers, n_moments)
     disortpp, cfg, dtau, rayleigh, moments = _config(tau, ssa, moments, sun_zenith=sun_zenith,
@@ -181,8 +184,24 @@ def disort_diffuse_irradiance(params, wavelength: float, sun_zenith: float, *, n
     cfg.num_user_tau = 1
     cfg.allocate()
     _fill(cfg, dtau, ssa, moments, rayleigh, sun_zenith, albedo)
-    cfg.tau_user = [float(dtau.sum())]  # at the ground
+    cfg.tau_user = [_optical_depth_above(params, wavelength, float(altitude), n_layers) if altitude > 0.0
+                    else float(dtau.sum())]  # at the ground by default
     return float(disortpp.DisortSolver().solve(cfg).flux_down[0])
+
+
+def _optical_depth_above(params, wavelength: float, altitude: float, n_layers: int) -> float:
+    """The vertical optical depth [-] from the top of :func:`_column`'s layers down to ``altitude`` [m]: each
+    layer's part above ``altitude`` integrated from the profiles (:func:`_layer_integral`), so the layers wholly
+    above it sum to the column's own optical depths."""
+    wl = [float(wavelength)]
+    edges = np.linspace(params.thickness, 0.0, n_layers + 1)
+    z_hi, z_lo = edges[:-1], edges[1:]
+    keep = z_hi > altitude
+    z_hi, z_lo = z_hi[keep], np.maximum(z_lo[keep], altitude)
+    tau = (float(params.rayleigh_scattering_at(wl)[0]) * _layer_integral(params.rayleigh_density, z_lo, z_hi)
+           + float(params.mie_extinction_at(wl)[0]) * _layer_integral(params.aerosol_component.density, z_lo, z_hi)
+           + float(params.ozone_absorption_at(wl)[0]) * _layer_integral(params.ozone_density, z_lo, z_hi))
+    return float(tau.sum())
 
 
 def _config(delta_tau, single_scattering_albedo, phase_moments, *, sun_zenith: float, ground_albedo: float,

@@ -265,7 +265,7 @@ def test_library_sky_and_irradiance_functions_match_the_python_lookups(viewer, a
     got = viewer.evaluate("([k, c]) => window.skyscatterViewer.probe(k, c)",
                           ["irradiance", [[list(a), list(b), list(c)] for a, b, c in zip(cams, normals, suns,
                                                                                          strict=True)]])
-    e_sun, e_sky = atm.ground_irradiance(cams, normals, suns)
+    e_sun, e_sky = atm.table_irradiance(cams, normals, suns)  # the table read the GLSL reproduces
     p = atm.parameters
     folded = np.ascontiguousarray(np.asarray(atm.tables["irradiance"], np.float64) @ m.T)
     for i, (sun_rgb, sky_rgb) in enumerate(got):

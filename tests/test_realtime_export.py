@@ -129,7 +129,7 @@ def test_transmittance_and_irradiance_textures(atm, luts):
         for el in (30.0, 4.0, -4.0):
             sun = direction_from_angles(np.radians(90 - el), 0.3)
             point = np.array([0.0, 0.0, r])
-            _, e_sky = atm.ground_irradiance(point, [0.0, 0.0, 1.0], sun)
+            _, e_sky = atm.table_irradiance(point, [0.0, 0.0, 1.0], sun)  # the table read the GLSL reproduces
             uv0, uv1, uv2, t, below = ns["irradiance_uvs"](r, sun[2])
             # the SMALL table's 8 texels: +-4 deg lie in the cell across the horizon (-8.2..+8.2 deg), read
             # log-quadratically over three columns

@@ -62,7 +62,7 @@ Light at a point of the cloud (per wavelength; ``sigma_e = rho k``, ``rho`` the 
   (voxels) x (crossings) once, a few tenths of a second, because the sun's rays are parallel.
 * **The sun above the field and the sky's light: the clear-sky tables.** ``T_air(h, mu_s)`` is the tables'
   transmittance from the point's altitude to the sun and the ambient light the tables' sky irradiance there
-  (:meth:`~skyscatter.precomputed.evaluation.TableLookups.ground_irradiance`), isotropic:
+  (their sky radiance integrated over the hemisphere, :func:`_sky_irradiance_levels`), isotropic:
   ``J_amb = omega (E_down exp(-d tau_above k) + rho_g E_ground exp(-d tau_below k)) / (2 pi)`` with the
   vertical optical depths to the field's top and base and the ground's upward light ``E_up`` (below); ``d`` is
   fitted with ``a, b, c``.
@@ -269,6 +269,9 @@ PROCEDURAL_RESOLUTION = (128, 128, 32)
 PROCEDURAL_FEATURE = 4_000.0
 #: Sun cosines of the air's transmittance and irradiance tables read by the march.
 _MU_NODES = np.linspace(-0.3, 1.0, 131)
+#: Every how many of :data:`_MU_NODES` the sky's hemisphere integral on the clouds is taken (0.05 apart in the
+#: sun's cosine; :func:`_sky_irradiance_levels` interpolates its ratio to the irradiance table between them).
+_MU_NODE_STRIDE = 5
 #: Rays per chunk of the march and its lookups (bounds the working arrays to about 100 MB).
 CHUNK = 1 << 17
 #: The march's step as a fraction of a voxel along the axis the ray crosses fastest.
@@ -290,6 +293,50 @@ SHAFT_NODES = 65
 #: steps and this optical length of the air [-] (along the ray, or the altitude change's towards the sun) between
 #: two (a ray's loss within 0.2 % of every step a node, tests/test_broken_cloud_shaft_nodes.py; docs/clouds.md).
 SHAFT_GROUP = (16, 0.1)
+
+
+def _sky_irradiance_levels(tab: Any, radii: NDArray[np.float64], mu: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The clear sky's downward irradiance [W m^-2 nm^-1] on a horizontal surface at ``radii`` [m] (the field's
+    levels, (nz,)) under suns of cosines ``mu`` (:data:`_MU_NODES`), (nz, n_mu, n_wl): the tables' sky radiance
+    integrated over the hemisphere ([Bruneton2008] Eq. 16;
+    :meth:`~skyscatter.precomputed.evaluation.TableLookups.sky_irradiance_integral`), not the irradiance table
+    (Eq. 15), whose rows are 4 km apart (linear in the altitude) and interpolate across an aerosol's scale height.
+
+    The integral is taken on the radiance tables' own radius rows around the levels (linear in ``rho``, dense
+    near the ground) and on every :data:`_MU_NODE_STRIDE`-th sun cosine; between the rows it is interpolated
+    linearly in ``rho``, as the radiance tables themselves are, and along ``mu`` its ratio to the irradiance
+    table's read at the same level is (the table holds the shape in the sun's cosine on all the nodes)."""
+    bottom, top = tab.parameters.bottom_radius, tab.parameters.top_radius
+    n_r = int(tab.sizes.scattering_r)
+    big_h = math.sqrt(top * top - bottom * bottom)
+    x = np.sqrt(np.maximum(radii**2 - bottom**2, 0.0)) / big_h * (n_r - 1)
+    rows = np.arange(int(math.floor(x.min())), min(int(math.ceil(x.max())), n_r - 1) + 1)
+    r_rows = np.sqrt((big_h * rows / (n_r - 1)) ** 2 + bottom**2)
+    coarse = np.unique(np.append(np.arange(0, mu.size, _MU_NODE_STRIDE), mu.size - 1))
+    up = np.array([0.0, 0.0, 1.0])
+
+    def suns(m: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.stack([np.sqrt(1.0 - m**2), np.zeros_like(m), m], axis=-1)[None, :, :]
+
+    def points(r: NDArray[np.float64]) -> NDArray[np.float64]:
+        p = np.zeros((r.size, 1, 3))
+        p[:, 0, 2] = r
+        return p
+
+    e_rows = tab.sky_irradiance_integral(points(r_rows), suns(mu[coarse]))  # (n_rows, n_coarse, n_wl)
+    if rows.size > 1:
+        k = np.clip(np.searchsorted(rows, x, side="right") - 1, 0, rows.size - 2)
+        w = np.clip(x - rows[k], 0.0, 1.0)[:, None, None]
+        e_levels = (1.0 - w) * e_rows[k] + w * e_rows[k + 1]
+    else:
+        e_levels = np.broadcast_to(e_rows[0], (radii.size, *e_rows.shape[1:]))
+    _, table = tab.table_irradiance(points(radii), up, suns(mu))  # (nz, n_mu, n_wl)
+    ratio_c = np.divide(e_levels, table[:, coarse], out=np.ones_like(e_levels), where=table[:, coarse] > 0.0)
+    ratio = np.empty_like(table)
+    for i in range(radii.size):
+        for wl in range(table.shape[2]):
+            ratio[i, :, wl] = np.interp(mu, mu[coarse], ratio_c[i, :, wl])
+    return np.ascontiguousarray(table * ratio)
 
 
 class BrokenCloudSky(SunSkyMixin, SkyModel):
@@ -505,10 +552,7 @@ class BrokenCloudSky(SunSkyMixin, SkyModel):
         # rays towards a sun below the point's horizon meet the ground: no sunlight
         horizon = -np.sqrt(np.maximum(1.0 - (bottom / r) ** 2, 0.0))
         t_atm[mu[None, :] < horizon[:, None]] = 0.0
-        suns = np.stack([np.sqrt(1.0 - mu**2), np.zeros_like(mu), mu], axis=-1)
-        pos = np.zeros((r.size, 1, 3))
-        pos[:, 0, 2] = r
-        _, e_down = tab.ground_irradiance(pos, np.array([0.0, 0.0, 1.0]), suns[None, :, :])
+        e_down = _sky_irradiance_levels(tab, r, mu)
         ground = np.array([0.0, 0.0, bottom])
         e_sun_g, e_sky_g = tab.ground_irradiance(ground, np.array([0.0, 0.0, 1.0]), self._sun_planet)
         shadow = np.exp(-np.multiply.outer(self._volumes["tau_ground"].ravel(), k)).mean(axis=0)
