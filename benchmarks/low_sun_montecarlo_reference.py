@@ -2,14 +2,17 @@
 tests/data/low_sun_montecarlo.json, tests/test_precomputed_low_sun.py, docs/accuracy.md "Low sun").
 
 Three atmospheres (Earth defaults; turbidity 3, :meth:`AtmosphereParameters.from_turbidity`; aerosol optical
-depth 0.5 at 550 nm, :meth:`AtmosphereParameters.from_aerosol_optical_depth`), sun elevations +10, +3, 0, -3 and
--6 deg at azimuth 0, an observer on the ground, view elevations 2, 5 and 15 deg at azimuths 0, 45, 90, 135 and
-180 deg from the sun, the 16 default table wavelengths (400-700 nm every 20 nm, one hero group per path):
+depth 0.5 at 550 nm, :meth:`AtmosphereParameters.from_aerosol_optical_depth`), sun elevations +10, +3, 0, -3,
+-6, -2.3 and -5.1 deg at azimuth 0, an observer on the ground, view elevations 2, 5 and 15 deg at azimuths 0, 45,
+90, 135 and 180 deg from the sun, the 16 default table wavelengths (400-700 nm every 20 nm, one hero group per path):
 :func:`skyscatter.montecarlo.sky_radiance` with the seed and path count stored per case.
 
 ``nice python benchmarks/low_sun_montecarlo_reference.py --out tests/data/low_sun_montecarlo.json`` (cases
 already in the output file are kept and skipped: the file is rewritten atomically after each case; ``--paths``
-sets the paths per direction with the sun up, twice and eight times that at -3 and -6 deg).
+sets the paths per direction with the sun up, twice that at -3 and -2.3 deg and eight times at -5.1 and -6 deg).
+
+The cases at -2.3 and -5.1 deg (:data:`MID_SUNS`, added 2026-12-04) were made with ``--paths 262144 --seed 100``
+(524288 and 2097152 paths per direction; 216-1127 s each on the shared machine at load 5-9).
 
 Each case has its own random stream, seed ``--seed`` plus its place in :data:`CASE_ORDER` (since 2026-12-03, with
 131072 paths: the values stored before used seed 1 in every case and 32768 paths, so a direction's draw repeated at
@@ -35,6 +38,10 @@ DESCRIPTION = ("Monte Carlo sky radiance at low sun seen from the ground (skysca
                "stored values the precomputed tables are held against (tests/test_precomputed_low_sun.py)")
 WAVELENGTHS = [float(w) for w in range(400, 701, 20)]
 SUNS = [10.0, 3.0, 0.0, -3.0, -6.0]
+#: Sun elevations [deg] between two sun-zenith texels of the default tables (-2.95 / -1.66 and -5.88 / -4.34 deg),
+#: where the lookups read between texels below the horizon (the suns of :data:`SUNS` below it sit within 0.12 deg of a
+#: texel): added 2026-12-04.
+MID_SUNS = [-2.3, -5.1]
 ELEVATIONS = [2.0, 5.0, 15.0]
 AZIMUTHS = [0.0, 45.0, 90.0, 135.0, 180.0]
 ATMOSPHERES = {
@@ -60,12 +67,13 @@ def directions(sun_azimuth_deg: float = 0.0) -> np.ndarray:
 
 
 #: The order in which the cases take their seeds (``--seed`` + 1 + the case's index).
-CASE_ORDER = [(a, s) for a in ("aod05", "turbidity3", "earth") for s in SUNS]
+CASE_ORDER = ([(a, s) for a in ("aod05", "turbidity3", "earth") for s in SUNS]
+              + [(a, s) for a in ("aod05", "turbidity3", "earth") for s in MID_SUNS])
 
 
 def paths_for(sun_elev: float, paths: int) -> int:
     """Paths per direction: below the horizon most collisions are in the planet's shadow (docs/accuracy.md)."""
-    if sun_elev <= -6.0:
+    if sun_elev <= -4.5:
         return 8 * paths
     if sun_elev < 0.0:
         return 2 * paths
@@ -89,7 +97,7 @@ def main() -> None:
     ap.add_argument("--paths", type=int, default=131072, help="paths per direction with the sun up (default 131072)")
     ap.add_argument("--seed", type=int, default=100, help="base seed: a case's is this + 1 + its place in CASE_ORDER")
     ap.add_argument("--atmospheres", default=",".join(ATMOSPHERES))
-    ap.add_argument("--suns", default=",".join(f"{s:g}" for s in SUNS), help="sun elevations [deg]")
+    ap.add_argument("--suns", default=",".join(f"{s:g}" for s in SUNS + MID_SUNS), help="sun elevations [deg]")
     args = ap.parse_args()
     doc = json.loads(args.out.read_text()) if args.out.exists() else {
         "description": DESCRIPTION,
