@@ -35,6 +35,10 @@ DESCRIPTION = ("Monte Carlo sky radiance at low sun seen from the ground (skysca
                "stored values the precomputed tables are held against (tests/test_precomputed_low_sun.py)")
 WAVELENGTHS = [float(w) for w in range(400, 701, 20)]
 SUNS = [10.0, 3.0, 0.0, -3.0, -6.0]
+#: Sun elevations [deg] between two sun-zenith texels of the default tables (-2.95 / -1.66 and -5.88 / -4.34 deg),
+#: where the lookups read between texels below the horizon (the suns of :data:`SUNS` below it sit within 0.12 deg of a
+#: texel): added 2026-12-04.
+MID_SUNS = [-2.3, -5.1]
 ELEVATIONS = [2.0, 5.0, 15.0]
 AZIMUTHS = [0.0, 45.0, 90.0, 135.0, 180.0]
 ATMOSPHERES = {
@@ -60,12 +64,13 @@ def directions(sun_azimuth_deg: float = 0.0) -> np.ndarray:
 
 
 #: The order in which the cases take their seeds (``--seed`` + 1 + the case's index).
-CASE_ORDER = [(a, s) for a in ("aod05", "turbidity3", "earth") for s in SUNS]
+CASE_ORDER = ([(a, s) for a in ("aod05", "turbidity3", "earth") for s in SUNS]
+              + [(a, s) for a in ("aod05", "turbidity3", "earth") for s in MID_SUNS])
 
 
 def paths_for(sun_elev: float, paths: int) -> int:
     """Paths per direction: below the horizon most collisions are in the planet's shadow (docs/accuracy.md)."""
-    if sun_elev <= -6.0:
+    if sun_elev <= -4.5:
         return 8 * paths
     if sun_elev < 0.0:
         return 2 * paths
@@ -89,7 +94,7 @@ def main() -> None:
     ap.add_argument("--paths", type=int, default=131072, help="paths per direction with the sun up (default 131072)")
     ap.add_argument("--seed", type=int, default=100, help="base seed: a case's is this + 1 + its place in CASE_ORDER")
     ap.add_argument("--atmospheres", default=",".join(ATMOSPHERES))
-    ap.add_argument("--suns", default=",".join(f"{s:g}" for s in SUNS), help="sun elevations [deg]")
+    ap.add_argument("--suns", default=",".join(f"{s:g}" for s in SUNS + MID_SUNS), help="sun elevations [deg]")
     args = ap.parse_args()
     doc = json.loads(args.out.read_text()) if args.out.exists() else {
         "description": DESCRIPTION,

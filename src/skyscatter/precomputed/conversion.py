@@ -31,16 +31,19 @@ than a fit.
   the blue, and the quadratic through three samples can dip below zero between or beyond them (it gave negative
   Z and an invented violet peak at sunset). The piecewise-linear interpolant in ``x`` held constant beyond the end
   samples is a convex combination of the samples and so never negative. Each sample triple uses the blend
-  ``(1 - t) quadratic + t linear`` with ``t = min(2 t0, 1)``, where ``t0 = max(-p / (l - p))`` over the
+  ``(1 - t) quadratic + t linear`` with ``t = min(t0 (1 + 2 t0), 1)``, where ``t0 = max(-p / (l - p))`` over the
   wavelengths (360-830 nm, every 5 nm) where the quadratic ``p`` is negative (``l`` the linear rule there,
   ``l - p > 0`` wherever ``p < 0``) is the least weight that keeps the blend non-negative. ``t`` is 0 where the
   quadratic is non-negative, moves continuously with the samples, and reaches the linear rule alone when the
   negative lobe is deep: an all-or-nothing switch between the rules made 13-26 % jumps in the sky's luminance
   between directions 0.01 deg apart, 1-4 deg above the horizon at low sun (seams; docs/bruneton.md), while the least
   weight ``t0`` alone keeps the quadratic's rise beyond the 440 nm sample (a sunset triple then has
-  ``rho(360 nm)`` 1400 times ``rho(440 nm)``: the invented violet). The factor 2 gives every triple whose
-  quadratic is negative a blend that stays non-negative with margin. Both rules are linear, so the blend costs
-  two small matrix products and a maximum per sample (:class:`ColourConversion`).
+  ``rho(360 nm)`` 1400 times ``rho(440 nm)``: the invented violet). ``t0 (1 + 2 t0)`` lies between ``t0`` and ``2 t0``
+  (both reach 1 at ``t0 = 0.5``): every triple whose quadratic is negative gets a blend that stays
+  non-negative with margin, the linear rule at sunset, and at the lobe's onset the weight rises with the slope of
+  ``t0`` itself, not twice it (with ``2 t0`` the ramp stepped the luminance 1.23 % between view elevations 0.01 deg
+  apart where a lobe began 0.7 deg above the horizon opposite a sun on the horizon; 2026-12-04). Both rules are
+  linear, so the blend costs two small matrix products and a maximum per sample (:class:`ColourConversion`).
 
 Reference: [Bruneton2008].
 """
@@ -184,9 +187,9 @@ class ColourConversion:
             self._check_linear = _reconstruction(tw, FINE_GRID[::5], atmosphere, piecewise_linear=True)
 
     def linear_weight(self, radiance: ArrayLike) -> NDArray[np.float64]:
-        """Weight ``t`` (...,) of the piecewise-linear rule in the blend of the module docstring: twice the least
-        weight that keeps ``(1 - t) quadratic + t linear`` non-negative on the 5 nm check grid, at most 1 (0 where
-        the quadratic is non-negative; always 0 in the spectral mode)."""
+        """Weight ``t`` (...,) of the piecewise-linear rule in the blend of the module docstring: ``t0 (1 + 2 t0)``
+        of the least weight ``t0`` that keeps ``(1 - t) quadratic + t linear`` non-negative on the 5 nm check grid,
+        at most 1 (0 where the quadratic is non-negative; always 0 in the spectral mode)."""
         rad = np.asarray(radiance, dtype=float)
         if not self.guarded:
             return np.zeros(rad.shape[:-1])
@@ -204,7 +207,8 @@ class ColourConversion:
             gap = chunk[rows] @ self._check_linear.T - p  # l - p > 0 wherever p < 0 (l >= 0)
             with np.errstate(divide="ignore", invalid="ignore"):
                 need = np.where(neg[rows], -p / gap, 0.0)
-            out[lo + rows] = np.clip(2.0 * need.max(axis=1), 0.0, 1.0)
+            t0 = need.max(axis=1)
+            out[lo + rows] = np.clip(t0 * (1.0 + 2.0 * t0), 0.0, 1.0)
         return out.reshape(rad.shape[:-1])
 
     def to_xyz(self, radiance: ArrayLike) -> NDArray[np.float64]:

@@ -251,7 +251,9 @@ class TableLookups:
 
         In the spectral mode, for one position inside the atmosphere and one sun direction (a sky seen by one
         observer), the lookups run on 2D slices of the tables projected to XYZ (:func:`.lookup.observer_slices`):
-        the same values as ``to_xyz(sky_radiance(...))`` to rounding, several times faster. Otherwise this is
+        the same values as ``to_xyz(sky_radiance(...))`` to rounding, several times faster, except with the sun
+        0.5-10 deg below the horizon, where the geometric read along the sun zenith (:func:`.geometry.sun_zenith_value`)
+        acts on each XYZ channel instead of each wavelength (docs/realtime.md). Otherwise this is
         ``to_xyz(sky_radiance(...))`` (with fewer wavelengths the colour rule is not linear in the spectrum: the
         negative-lobe guard of :mod:`.conversion`).
         """
@@ -270,6 +272,24 @@ class TableLookups:
             if fast is not None:
                 return fast[..., 0]
         return self.sky_xyz(positions, directions, sun_direction, include_ground=include_ground)[..., 1]
+
+    def sky_colour(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike,
+                   matrix: ArrayLike, *, include_ground: bool = True) -> NDArray[np.float64]:
+        """:meth:`sky_radiance` (no light shafts) projected to colour channels by ``matrix`` (C, n_wavelengths), shape
+        broadcast + (C,): e.g. :func:`skyscatter.realtime.export.fold_matrix` for the linear sRGB of the GLSL library.
+
+        On the observer's fast path (one position inside the atmosphere, one sun) the tables' slices are projected
+        first and each channel is read along the sun zenith with its own weight (:func:`.geometry.sun_zenith_value`,
+        with the sun 0.5-10 deg below the horizon), as the GLSL library reads its colour textures: the same values, to
+        rounding, as the library. The per-wavelength read of :meth:`sky_radiance`, folded, differs from it there
+        (docs/realtime.md). Elsewhere ``sky_radiance(...) @ matrix.T``."""
+        m = np.asarray(matrix, dtype=float)
+        if m.ndim != 2 or m.shape[1] != self.wavelengths.size:
+            raise InvalidParameterError(f"matrix must be (C, {self.wavelengths.size}); got shape {m.shape}")
+        fast = self._observer(positions, directions, sun_direction, include_ground, m)
+        if fast is not None:
+            return fast
+        return self.sky_radiance(positions, directions, sun_direction, include_ground=include_ground) @ m.T
 
     def sky_spectrum(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike,
                      wavelengths: ArrayLike, *, include_ground: bool = True) -> NDArray[np.float64]:
@@ -328,12 +348,15 @@ class TableLookups:
         # the slices at the observer's radius and sun, decoded from the stored tables (a memory-mapped file is
         # read there only: the first sky from a cached file does not wait for all of it)
         stored = self.stored
-        slices = lookup.observer_slices(stored["single_rayleigh"], stored["single_mie"], stored["multiple"],
-                                        min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, projection)
+        # (or at the cell's two sun-zenith texels of the read along the sun zenith, lookup.observer_read_slices)
+        slices, slices2, read_w, read_f = lookup.observer_read_slices(
+            stored["single_rayleigh"], stored["single_mie"], stored["multiple"], min(max(r, bottom), top), mu_s,
+            bottom, top, mu_s_min, projection)
         out = np.empty((dirs.shape[0], projection.shape[0]))
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
-        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, stored["single_rayleigh"].shape[0],
+        parallel_for(lookup.observer_kernel, dirs.shape[0], pos, s, slices, slices2, read_w, read_f,
+                     stored["single_rayleigh"].shape[0],
                      stored["transmittance"], stored["irradiance"], self._albedo, self._solar,
                      projection,
                      bottom, top, mu_s_min, self._mie_g, self._mie_kind, self._lobe, *self._profiles,
@@ -517,14 +540,21 @@ class TableLookups:
         by the Gauss-Legendre rule of :func:`skyscatter.quadrature.plane_quadrature` with
         :data:`HORIZONTAL_SKY_NODES` (48 x 96 nodes; within 0.04 % of a 0.25 deg midpoint grid for aerosol optical
         depths up to 0.5, sun zenith 0-90 deg, 96 x 192 nodes within 0.005 %). Tabulated once per tables on sun
-        zeniths every 2 deg to 80 deg and every 0.5 deg from 80 to 98 deg (77 radiance integrals) and interpolated
-        linearly; beyond 98 deg computed directly.
+        zeniths every 2 deg to 80 deg, every 0.5 deg from 80 to 98 deg (77 radiance integrals) and at the sun
+        zeniths of the scattering tables' sun-zenith texels from 90 to 98 deg, and read between these nodes as the
+        radiance is read between the texels (:func:`.geometry.sun_zenith_value` with the share
+        :func:`.geometry.sun_zenith_share` of the sun zenith: geometric with the sun 0.5-10 deg below the horizon,
+        linear elsewhere); beyond 98 deg computed directly. Why the texels: below the horizon the radiance's
+        geometric read changes its cell there (a kink along the sun zenith), which a node between them would smooth
+        over; why the same rule: between two nodes within a texel cell the integral of the radiance read follows
+        the read's curvature.
 
         This is the quantity a sky matrix integrates over its patches. The precomputed irradiance of
         :meth:`ground_irradiance` (Eq. 14) integrates the scattering orders on the coarser sphere quadrature of the
         table build (``irradiance_sphere_samples``) and differs from it by a few per cent (docs/sky_matrices.md).
         """
         from ..quadrature import plane_quadrature
+        from . import geometry
 
         z = np.atleast_1d(np.asarray(sun_zenith, dtype=float))
         if z.ndim != 1 or not np.all(np.isfinite(z)):
@@ -543,6 +573,15 @@ class TableLookups:
 
         if cached is None:
             nodes = np.radians(np.concatenate([np.arange(0.0, 80.0, 2.0), np.arange(80.0, 98.001, 0.5)]))
+            bottom, top, mu_s_min = self._geometry()
+            n_s = self.stored["single_rayleigh"].shape[2]
+            texels = np.arccos(np.clip([geometry.scattering_mu_s_param(i, bottom, top, mu_s_min, n_s)
+                                        for i in range(n_s)], -1.0, 1.0))
+            # (below the horizon, where the read is geometric: by day the nodes are as before)
+            texels = texels[(texels > np.radians(90.0)) & (texels <= nodes[-1])]
+            if texels.size:  # a regular node within 0.01 deg of a texel gives way to it (no near-empty cells)
+                near = np.min(np.abs(nodes[:, None] - texels[None, :]), axis=1) < np.radians(0.01)
+                nodes = np.unique(np.concatenate([nodes[~near], texels]))
             cached = (nodes, integrate(nodes))
             self._horizontal_sky_cache = cached
         nodes, values = cached
@@ -551,7 +590,14 @@ class TableLookups:
         zc = np.clip(z[inside], 0.0, None)
         k = np.clip(np.searchsorted(nodes, zc, side="right") - 1, 0, nodes.size - 2)
         w = ((zc - nodes[k]) / (nodes[k + 1] - nodes[k]))[:, None]
-        out[inside] = (1.0 - w) * values[k] + w * values[k + 1]
+        lo, hi = values[k], values[k + 1]
+        lin = lo + w * (hi - lo)
+        m0, m1, m2, m3 = np.sin(np.radians(geometry.SUN_READ_ELEVATIONS))  # geometry.sun_zenith_share, vectorised
+        mu_s = np.cos(zc)[:, None]
+        f = np.clip((mu_s - m0) / (m1 - m0), 0.0, 1.0) * np.clip((m3 - mu_s) / (m3 - m2), 0.0, 1.0)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            geo = np.where((lo > 0.0) & (hi > 0.0), np.exp((1.0 - w) * np.log(lo) + w * np.log(hi)), lin)
+        out[inside] = lin + f * (geo - lin)  # geometry.sun_zenith_value, vectorised
         if np.any(~inside):
             out[~inside] = integrate(z[~inside])
         return out

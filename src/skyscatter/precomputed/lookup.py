@@ -46,6 +46,8 @@ from .geometry import (
     scattering_nu_coord,
     scattering_r_mu_coord,
     sky_mu_unit,
+    sun_zenith_share,
+    sun_zenith_value,
     transmittance_coord,
 )
 from .sampling import (
@@ -97,7 +99,7 @@ def _enter_atmosphere(px, py, pz, vx, vy, vz, top):
 
 @helper(fastmath=CONTRACT_ARCP)
 def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec, profiles,
-               counts, out):
+               counts, vals, out):
     """Inscattered radiance ``S_R P_R + S_M P_M + S_multiple`` from the tables at a point, into ``out``
     (``p_r``, ``p_m``: phase functions at ``nu``; ``p_m_spec``, if not empty, the aerosol phase per wavelength,
     used instead of ``p_m``; ``lobe``: the weight of :func:`.sampling.multiple_lobe`, by which the multiple
@@ -113,7 +115,11 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lob
     (docs/accuracy.md, "Low sun"). The log-linear weight of the rescaled values is not used: where a texel's ray
     leaves the shadow higher than the query's its factor is capped at 1 and the rescaled values still differ by 10
     to 100 times, and the geometric interpolation of such a pair falls far below the light of the nearer texel
-    (Earth, sun -6 deg, 2 deg / 90 deg, 560 nm: -77 %, against +10 % linear; measured)."""
+    (Earth, sun -6 deg, 2 deg / 90 deg, 560 nm: -77 %, against +10 % linear; measured).
+
+    Along the sun zenith, where :func:`.geometry.sun_zenith_share` is above 0 (the sun 0.5-10 deg below the horizon), the radiance
+    at the cell's two sun-zenith texels (each a cell read with the texel fixed) combined per wavelength by
+    :func:`.geometry.sun_zenith_value`; linear elsewhere. ``vals``: a buffer (2, n_wavelengths)."""
     for k in range(out.shape[0]):
         out[k] = 0.0
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
@@ -122,6 +128,29 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lob
     n_r, n_mu, n_s, n_n, _ = ray.shape
     i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
+    f = sun_zenith_share(mu_s)
+    if f < 1.0:  # the linear read (alone where f is 0; blended with the geometric one where it ramps)
+        _inscatter_cell(ray, mie, mult, r, mu, mu_s, nu, bottom, top, lobe, p_r, p_m, p_m_spec, profiles, counts,
+                        i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, out)
+    if f <= 0.0:
+        return
+    for q in range(2):
+        # the cell's texel i_s + q, as the cell with weight q along the sun zenith
+        row = vals[q]
+        for k in range(row.shape[0]):
+            row[k] = 0.0
+        _inscatter_cell(ray, mie, mult, r, mu, mu_s, nu, bottom, top, lobe, p_r, p_m, p_m_spec, profiles, counts,
+                        i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, float(q), i_n, w_n, row)
+    for k in range(out.shape[0]):
+        out[k] = sun_zenith_value(out[k], vals[0, k], vals[1, k], w_s, f)
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _inscatter_cell(ray, mie, mult, r, mu, mu_s, nu, bottom, top, lobe, p_r, p_m, p_m_spec, profiles, counts,
+                    i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, out):
+    """:func:`_inscatter`'s read of the cell (``i_r``, ``w_r``, ...: :func:`.sampling.r_mu_cell`,
+    :func:`.sampling.mu_s_nu_cell`) linear along the sun zenith, added to ``out`` (zeroed by the caller)."""
+    n_n = ray.shape[3]
     if in_earth_shadow(r, mu_s, bottom):
         h_q, h_0, h_1 = shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_n, bottom, top)
         a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[0], counts[0])
@@ -232,6 +261,7 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
     e_sky = np.empty(n_l)
     e_sun = np.empty(n_l)
     ground = np.empty(n_l)
+    vals = np.empty((2, n_l))
     for q in range(start, stop):
         vx, vy, vz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
         sx, sy, sz = suns[q, 0], suns[q, 1], suns[q, 2]
@@ -259,13 +289,13 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
                     c[k] = 0.0
             else:
                 _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m,
-                           p_m_spec, profiles, counts, c)
+                           p_m_spec, profiles, counts, vals, c)
             transmittance_segment(transmittance, rc, mu, l_sh, hits, bottom, top, t, tmp)
             for k in range(n_l):
                 c[k] *= t[k]
         else:
             _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec,
-                       profiles, counts, c)
+                       profiles, counts, vals, c)
         for k in range(n_l):
             rad_out[q, k] = c[k]
         if hits and include_ground:
@@ -294,7 +324,8 @@ def observer_two_rows(r, bottom, top, n_r):
     return 0.0 < p_r < 1.0 and ground_cell_rows_apart(bottom, top, n_r)
 
 
-def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, projection):
+def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, projection,
+                    sun_texel=None):
     """The 4D inscattering tables at one observer radius ``r`` [m] and sun zenith cosine ``mu_s``: an array
     (2, n_mu, n_nu, C + 1, 4) holding, for each channel, single Rayleigh, single Mie and multiple scattering over the
     view axes (and a zero, so that each texel's three values are one aligned 32-byte load), each
@@ -310,8 +341,11 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     one for all wavelengths (from the middle one), so the lookup is linear in the table values and the inscattered
     radiance a sum of table values times wavelength-independent phase factors: projecting the slice first gives the
     same XYZ as projecting each looked-up spectrum (Bruneton's 2017 rewrite folds its tables to luminance the same
-    way). Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables' sun limit;
-    :data:`.geometry.MU_S_LIMIT_TOLERANCE` for rounding).
+    way); except with the sun 0.5-10 deg below the horizon, where :func:`observer_kernel` combines the slices at the cell's two
+    sun-zenith texels by :func:`.geometry.sun_zenith_value` per projected channel (:func:`observer_read_slices`),
+    which does not commute with the projection. Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables'
+    sun limit; :data:`.geometry.MU_S_LIMIT_TOLERANCE` for rounding). ``sun_texel``: if given, the slices at that
+    sun-zenith texel instead of at ``mu_s`` (the reads of :func:`observer_read_slices`).
     """
     n_r, n_mu, n_s, n_nu, _ = single_rayleigh.shape
     proj = np.asarray(projection, dtype=np.float64)
@@ -321,6 +355,8 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
         return out
     mu_s = max(mu_s, mu_s_min)
     i_r, w_r, i_s, w_s, w_g = r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_s)
+    if sun_texel is not None:
+        i_s, w_s = (sun_texel, 0.0) if sun_texel < n_s - 1 else (n_s - 2, 1.0)
     half = n_mu // 2
     # within the cell touching the ground each row's share apart (out[0], out[1]), read at its own mu coordinate
     parts = (0, 1) if observer_two_rows(r, bottom, top, n_r) else (None,)
@@ -339,6 +375,24 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
             out[k, :, :, :n_c, j] = acc @ proj.T
             out[k, :, :, n_c, j] = acc[:, :, acc.shape[-1] // 2]
     return out
+
+
+def observer_read_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, projection):
+    """What :func:`observer_kernel` reads for an observer at radius ``r`` [m] under a sun of zenith cosine ``mu_s``:
+    ``(slices, slices2, w, f)``: the :func:`observer_slices` at ``mu_s`` (the linear read along the sun zenith;
+    zeros, not read, where the share ``f`` of :func:`.geometry.sun_zenith_share` is 1) and, where ``f`` is above 0,
+    the :func:`observer_slices` at the two sun-zenith texels of the cell around ``mu_s`` stacked
+    (2, 2, n_mu, n_nu, C + 1, 4) (else an empty stack), which the kernel combines by
+    :func:`.geometry.sun_zenith_value` at the cell's fraction ``w``."""
+    n_r, _, n_s, _, _ = single_rayleigh.shape
+    f = sun_zenith_share(max(mu_s, mu_s_min)) if mu_s >= mu_s_min - MU_S_LIMIT_TOLERANCE else 0.0
+    args = (single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, projection)
+    if f <= 0.0:
+        slices = observer_slices(*args)
+        return slices, np.zeros((0, *slices.shape)), 0.0, 0.0
+    _, _, i_s, w_s, _ = r_mu_s_cell(r, max(mu_s, mu_s_min), bottom, top, mu_s_min, n_r, n_s)
+    slices2 = np.stack([observer_slices(*args, sun_texel=i_s + q) for q in range(2)])
+    return (observer_slices(*args) if f < 1.0 else np.zeros(slices2.shape[1:])), slices2, w_s, f
 
 
 #: Rays per block of :func:`observer_kernel` (its buffers stay in the L1 cache).
@@ -544,9 +598,32 @@ def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, p_l, out):
                          + u11 * slices[b + 1, c, 2])
 
 
+@helper(fastmath=CONTRACT_ARCP)
+def _observer_inscatter(flat, flat1, two_rows, shadowed, block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top,
+                        cos_phi, profiles, counts, n_nu, n_c, cell, w_mu, cell1, w_mu1, w_nu, w_tab, ends, p_r, p_m,
+                        p_l, upper, out):
+    """The inscattered radiance of a block of rays (coordinates of :func:`_observer_coords`) from one set of
+    observer slices (``flat``, ``flat1``: its two rows' shares as (n_mu * n_nu, C + 1, 4)) into ``out`` (m, C):
+    the azimuth weights, for an observer in the Earth's shadow (``shadowed``) those of the single scattering with
+    the shadow factors (which multiply ``p_r`` and ``p_m``), the gather, and with ``two_rows`` the upper row's
+    share added (``upper``: a buffer (>= m, C))."""
+    _observer_nu_weights(flat, flat1, two_rows, n_nu, n_c, cell, w_mu, cell1, w_mu1, w_nu, w_tab, ends)
+    if shadowed:
+        _observer_shadow_weights(block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, cos_phi, profiles,
+                                 counts, cell, w_nu, w_tab, p_r, p_m)
+    _observer_gather(flat, n_nu, cell, w_mu, w_tab, p_r, p_m, p_l, out)
+    if two_rows:
+        m = cell.shape[0]
+        _observer_gather(flat1, n_nu, cell1, w_mu1, w_tab, p_r, p_m, p_l, upper[:m])
+        for k in range(m):
+            for ch in range(n_c):
+                out[k, ch] += upper[k, ch]
+
+
 @kernel
-def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albedo, solar, projection, bottom, top,
-                    mu_s_min, g, mie_kind, lobe, profiles, counts, alpha, include_ground, dirs, out, bad, start, stop):
+def observer_kernel(position, sun, slices, slices2, read_w, read_f, n_r, transmittance, irradiance, albedo, solar,
+                    projection, bottom, top, mu_s_min, g, mie_kind, lobe, profiles, counts, alpha, include_ground, dirs,
+                    out, bad, start, stop):
     """:func:`sky_kernel`'s radiance (no shadows) for rays ``start..stop`` from one ``position`` inside the
     atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C)); ``slices`` of
     :func:`observer_slices` from 4D tables of ``n_r`` radii.
@@ -561,6 +638,13 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
     :func:`_observer_shadow_weights`), table reads, then for the rays that meet the ground the coordinates of the
     ground term (vectorised) and its spectrum, projected. ``mu_s_min``: the tables' sun limit; ``profiles``,
     ``counts``: the density profiles of :func:`.compute.density_profiles`.
+
+    Along the sun zenith (:func:`observer_read_slices`): with the share ``read_f`` of
+    :func:`.geometry.sun_zenith_share` above 0 the inscattered radiance of each ray is gathered from the slices at
+    the cell's two sun-zenith texels ``slices2`` (2, 2, n_mu, n_nu, C + 1, 4) and combined per output channel by
+    :func:`.geometry.sun_zenith_value` at the cell's fraction ``read_w`` with the linear read from ``slices`` (not
+    read where ``read_f`` is 1) (per wavelength for spectra, per colour channel for colour: the read is not linear
+    in the table values, so the projection no longer commutes with it); otherwise read linearly from ``slices``.
     """
     n_l = transmittance.shape[2]
     n_c = out.shape[1]  # slices: n_c channels and the sums over wavelengths
@@ -568,6 +652,10 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
     half = n_mu // 2
     flat = slices[0].reshape(n_mu * n_nu, slices.shape[3], 4)
     flat1 = slices[1].reshape(n_mu * n_nu, slices.shape[3], 4)
+    n_read = slices2.shape[0]
+    two = np.empty((2, OBSERVER_BLOCK, n_c))
+    p_r0 = np.empty(OBSERVER_BLOCK)
+    p_m0 = np.empty(OBSERVER_BLOCK)
     t = np.empty(n_l)
     tmp = np.empty(n_l)
     e_sky = np.empty(n_l)
@@ -633,17 +721,35 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
                 n_ground += 1
             elif kind[k] == 0:
                 bad[b0 + k] = True
-        _observer_nu_weights(flat, flat1, two_rows, n_nu, n_c, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m], w_nu[:m],
-                             w_tab, ends)
-        if shadowed:
-            _observer_shadow_weights(block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, cos_phi, profiles,
-                                     counts, cell[:m], w_nu[:m], w_tab, p_r[:m], p_m[:m])
-        _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_tab, p_r[:m], p_m[:m], p_l[:m], out[b0:b1])
-        if two_rows:
-            _observer_gather(flat1, n_nu, cell1[:m], w_mu1[:m], w_tab, p_r[:m], p_m[:m], p_l[:m], upper[:m])
+        if n_read == 0:
+            _observer_inscatter(flat, flat1, two_rows, shadowed, block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom,
+                                top, cos_phi, profiles, counts, n_nu, n_c, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m],
+                                w_nu[:m], w_tab, ends, p_r[:m], p_m[:m], p_l[:m], upper, out[b0:b1])
+        else:
+            if shadowed:
+                for k in range(m):  # kept for the second texel's read: the shadow factors multiply them
+                    p_r0[k] = p_r[k]
+                    p_m0[k] = p_m[k]
+            # the two texels' reads, and where the share ramps (read_f < 1) the linear read into out
+            for q in range(2 if read_f >= 1.0 else 3):
+                if shadowed and q > 0:
+                    for k in range(m):
+                        p_r[k] = p_r0[k]
+                        p_m[k] = p_m0[k]
+                if q < 2:
+                    _observer_inscatter(slices2[q, 0].reshape(n_mu * n_nu, slices.shape[3], 4),
+                                        slices2[q, 1].reshape(n_mu * n_nu, slices.shape[3], 4), two_rows, shadowed,
+                                        block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, cos_phi, profiles,
+                                        counts, n_nu, n_c, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m], w_nu[:m], w_tab,
+                                        ends, p_r[:m], p_m[:m], p_l[:m], upper, two[q, :m])
+                else:
+                    _observer_inscatter(flat, flat1, two_rows, shadowed, block, px, py, pz, r, rc, sx, sy, sz, mu_s_t,
+                                        bottom, top, cos_phi, profiles, counts, n_nu, n_c, cell[:m], w_mu[:m],
+                                        cell1[:m], w_mu1[:m], w_nu[:m], w_tab, ends, p_r[:m], p_m[:m], p_l[:m], upper,
+                                        out[b0:b1])
             for k in range(m):
                 for ch in range(n_c):
-                    out[b0 + k, ch] += upper[k, ch]
+                    out[b0 + k, ch] = sun_zenith_value(out[b0 + k, ch], two[0, k, ch], two[1, k, ch], read_w, read_f)
         if n_ground == 0 or not include_ground:
             continue
         _ground_coords_block(n_ground, g_v, g_mu, px, py, pz, sx, sy, sz, rc, bottom, top, alpha, n_tr, n_tmu, n_er,
@@ -717,33 +823,48 @@ def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0,
     n_mu, n_s, n_nu, _ = ray0.shape
     n_c = projection.shape[0]
     slices = np.zeros((2, n_mu, n_nu, n_c + 1, 4))
+    slices2 = np.zeros((2, 2, n_mu, n_nu, n_c + 1, 4))
     acc = np.empty(ray0.shape[3])
     n_rays = dirs.shape[0]
     two_rows = observer_two_rows(r_slices, bottom, top, n_r)
     for h in range(start, stop):
         slices[:] = 0.0
         m = mu_s[h]
+        read_w, read_f, n_read = 0.0, 0.0, 0
         if m >= mu_s_min - MU_S_LIMIT_TOLERANCE:
             m = max(m, mu_s_min)
             _, w_r, i_s, w_s, w_g = r_mu_s_cell(r_slices, m, bottom, top, mu_s_min, n_r, n_s)
-            _slice_layers(ray0, ray1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 0, acc, slices)
-            _slice_layers(mie0, mie1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 1, acc, slices)
-            _slice_layers(mult0, mult1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 2, acc, slices)
-        observer_kernel(position, suns[h], slices, n_r, transmittance, irradiance, albedo, solar, projection,
-                        bottom, top, mu_s_min, g, mie_kind, lobe, profiles, counts, alpha, include_ground, dirs, out[h],
-                        bad[h], 0, n_rays)
+            read_f = sun_zenith_share(m)
+            if read_f < 1.0:  # the linear read (blended with the texels' geometric one where read_f ramps)
+                _slice_layers(ray0, ray1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 0, acc, slices)
+                _slice_layers(mie0, mie1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 1, acc, slices)
+                _slice_layers(mult0, mult1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 2, acc, slices)
+            if read_f > 0.0:
+                n_read, read_w = 2, w_s
+                slices2[:] = 0.0
+                for q in range(2):
+                    # the cell's texel i_s + q (as observer_slices with its sun_texel)
+                    w_q = float(q)
+                    _slice_layers(ray0, ray1, w_r, w_g, i_s, w_q, projection, identity, two_rows, 0, acc, slices2[q])
+                    _slice_layers(mie0, mie1, w_r, w_g, i_s, w_q, projection, identity, two_rows, 1, acc, slices2[q])
+                    _slice_layers(mult0, mult1, w_r, w_g, i_s, w_q, projection, identity, two_rows, 2, acc,
+                                  slices2[q])
+        observer_kernel(position, suns[h], slices, slices2[:n_read], read_w, read_f, n_r, transmittance, irradiance,
+                        albedo, solar, projection, bottom, top, mu_s_min, g, mie_kind, lobe, profiles, counts, alpha,
+                        include_ground, dirs, out[h], bad[h], 0, n_rays)
 
 
 @helper(fastmath=CONTRACT_ARCP)
 def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, lobe, p_r,
-                        p_m, p_m_spec, profiles, counts, c, t, c2, tmp):
-    """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``."""
+                        p_m, p_m_spec, profiles, counts, vals, c, t, c2, tmp):
+    """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``
+    (``vals``: :func:`_inscatter`'s buffer)."""
     _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec, profiles,
-               counts, c)
+               counts, vals, c)
     r_p, mu_p = point_along_ray(r, mu, d, bottom, top)
     mu_s_p = clamp((r * mu_s + d * nu) / r_p, -1.0, 1.0)
     _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec,
-               profiles, counts, c2)
+               profiles, counts, vals, c2)
     transmittance_segment(transmittance, r, mu, d, hits, bottom, top, t, tmp)
     for k in range(c.shape[0]):
         c[k] = max(c[k] - t[k] * c2[k], 0.0)
@@ -764,6 +885,7 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
     c2 = np.empty(n_l)
     tmp = np.empty(n_l)
     lo_c = np.empty(n_l)
+    vals = np.empty((2, n_l))
     p_m_spec = np.empty(n_l if mie_kind == TABLE_PHASE else 0)
     for q in range(start, stop):
         dx = points[q, 0] - cams[q, 0]
@@ -802,15 +924,15 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
             mu_lo = mu_h - HORIZON_EPSILON
             mu_hi = mu_h + HORIZON_EPSILON
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_lo, mu_s, nu, d_lit, True, bottom, top,
-                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, lo_c, t, c2, tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, vals, lo_c, t, c2, tmp)
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_hi, mu_s, nu, d_lit, False, bottom, top,
-                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, vals, c, t, c2, tmp)
             a = (mu - mu_lo) / (mu_hi - mu_lo)
             for k in range(n_l):
                 c[k] = (1.0 - a) * lo_c[k] + a * c[k]
         else:
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu, mu_s, nu, d_lit, hits, bottom, top,
-                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
+                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, vals, c, t, c2, tmp)
         for k in range(n_l):
             in_out[q, k] = c[k]
 

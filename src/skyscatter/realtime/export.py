@@ -99,8 +99,11 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: lookups read each wavelength with its own), the alpha is no longer read. 10: the multiple-scattering texture holds
 #: the multiple scattering divided by the lobe MultipleLobe(nu) (constants MULTIPLE_LOBE, MULTIPLE_LOBE_G; multiple_lobe
 #: and inscattered_radiance of the mappings; skyscatter table format 19); the irradiance texture's alpha is 0 (was the
-#: illuminance, unread since version 9).
-MANIFEST_VERSION = 10
+#: illuminance, unread since version 9). 11: with the sun from 0.5 to 10 deg below the horizon the scattering textures
+#: are read at the two sun-zenith texels of the cell around mu_s and the radiance combined per colour channel by the
+#: geometric interpolation (ramping to the linear one at -0.5 and -10 deg) (scattering_mu_s_read, sun_zenith_value, sun_zenith_lerp;
+#: scattering_uvw takes the index position along mu_s); the textures are unchanged.
+MANIFEST_VERSION = 11
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -289,6 +292,35 @@ def scattering_mu_s_index(mu_s):
     x_a = clamp(1.0 - math.acos(clamp(mu_s, -1.0, 1.0)) / math.acos(MU_S_MIN), 0.0, 1.0)
     return 0.5 * (x_d + x_a) * (SCATTERING_N_MU_S - 1)
 
+#: Sines of the sun elevations -10, -9, -1.5 and -0.5 deg (scattering_mu_s_read).
+SUN_READ_MU = (-0.1736481777, -0.1564344650, -0.0261769483, -0.0087265355)
+
+def scattering_mu_s_read(mu_s):
+    """The read along the sun zenith of the scattering textures at mu_s (at least MU_S_MIN): (i, w, f), the first
+    sun-zenith texel of the cell around mu_s, the fraction w of the cell, and the share f of the geometric part of
+    sun_zenith_value: 1 with the sun from 1.5 to 9 deg below the horizon, ramping to 0 at 0.5 and 10 deg below it
+    (linear in mu_s), 0 outside.
+    Where f > 0 a lookup is sun_zenith_lerp(y, y0, y1, w, f) of the linear read y at mu_s (not needed where f is 1)
+    and the radiance read at the texels i and i + 1 (scattering_uvw's p_s); elsewhere the linear read at mu_s."""
+    m0, m1, m2, m3 = SUN_READ_MU
+    f = clamp((mu_s - m0) / (m1 - m0), 0.0, 1.0) * clamp((m3 - mu_s) / (m3 - m2), 0.0, 1.0)
+    p = clamp(scattering_mu_s_index(mu_s), 0.0, SCATTERING_N_MU_S - 1)
+    i = min(math.floor(p), SCATTERING_N_MU_S - 2)
+    return i, p - i, f
+
+def sun_zenith_value(lin, lo, hi, w, f):
+    """(1 - f) lin + f geo: lin the linear read at the query, geo the geometric interpolation of the values lo, hi
+    at the cell's two texels at the fraction w (their chord where lo or hi is not positive); geo alone where f is 1."""
+    geo = math.exp((1.0 - w) * math.log(lo) + w * math.log(hi)) if lo > 0.0 and hi > 0.0 else lo + w * (hi - lo)
+    if f >= 1.0:
+        return geo
+    return lin + f * (geo - lin)
+
+def sun_zenith_lerp(y, y0, y1, w, f):
+    """RGB of the inscattered radiance along the sun zenith: per channel sun_zenith_value of the linear read y
+    (RGB; ignored where f is 1) and the radiance (RGB) at the two texels of scattering_mu_s_read."""
+    return [sun_zenith_value(c, a, b, w, f) for c, a, b in zip(y, y0, y1)]
+
 def scattering_nu_index(mu, mu_s, nu):
     """Index position of nu (x_nu = 1 - phi / pi, phi the view-sun azimuth)."""
     s = safe_sqrt((1.0 - mu * mu) * (1.0 - mu_s * mu_s))
@@ -297,13 +329,15 @@ def scattering_nu_index(mu, mu_s, nu):
     cphi = clamp((nu - mu * mu_s) / s, -1.0, 1.0)
     return (1.0 - math.acos(cphi) / math.pi) * (SCATTERING_N_NU - 1)
 
-def scattering_uvw(r, mu, mu_s, nu, hits_ground):
+def scattering_uvw(r, mu, mu_s, nu, hits_ground, p_s=None):
     """The two texture coordinates (u, v, w) of the nu slices around nu and the fraction w of the cell between
     them: a lookup is azimuth_lerp(texture(uvw0), texture(uvw1), w), each read trilinear (the single scattering:
     single_scattering_lerp), or within the cell touching the ground with scattering_texture(texture, uvw,
-    scattering_ground_cell(r, mu, hits_ground))."""
+    scattering_ground_cell(r, mu, hits_ground)). p_s: the index position along mu_s to read at (a texel of
+    scattering_mu_s_read), by default that of mu_s."""
     v, w = scattering_mu_r_coords(r, mu, hits_ground)
-    p_s = scattering_mu_s_index(max(mu_s, MU_S_MIN))
+    if p_s is None:
+        p_s = scattering_mu_s_index(max(mu_s, MU_S_MIN))
     p_n = clamp(scattering_nu_index(mu, mu_s, nu), 0.0, SCATTERING_N_NU - 1)
     i_n = min(math.floor(p_n), SCATTERING_N_NU - 2)
     n_x = SCATTERING_N_NU * SCATTERING_N_MU_S

@@ -62,11 +62,19 @@ def render_directions(precomputed: PrecomputedAtmosphere, position: ArrayLike, d
     sun = as_directions(sun_direction)
     pos = np.asarray(position, dtype=float)
     if output != "spectral" and precomputed.spectral_mode:
-        # XYZ straight from the lookups (linear in the spectrum here): the disc is added in XYZ.
-        xyz = precomputed.sky_xyz(pos, d, sun)
+        # The output's channels straight from the lookups (linear in the spectrum, except the read along the sun
+        # zenith at low sun, which then acts on each output channel, as the GLSL library's on its sRGB textures):
+        # the disc is added in the same channels.
+        if output == "xyz":
+            xyz = precomputed.sky_xyz(pos, d, sun)
+            if include_sun:
+                _add_disc(precomputed, pos, d, sun, xyz, precomputed.to_xyz(precomputed.sun_radiance(pos, sun)))
+            return xyz
+        matrix = np.asarray(xyz_to_linear_srgb(precomputed.xyz_matrix.T).T * HDR_SCALE, dtype=np.float64)
+        rgb = precomputed.sky_colour(pos, d, sun, matrix)
         if include_sun:
-            _add_disc(precomputed, pos, d, sun, xyz, precomputed.to_xyz(precomputed.sun_radiance(pos, sun)))
-        return xyz if output == "xyz" else xyz_to_linear_srgb(xyz) * HDR_SCALE
+            _add_disc(precomputed, pos, d, sun, rgb, matrix @ precomputed.sun_radiance(pos, sun))
+        return rgb
     rad = precomputed.sky_radiance(pos, d, sun)
     if include_sun:
         _add_disc(precomputed, pos, d, sun, rad, precomputed.sun_radiance(pos, sun))

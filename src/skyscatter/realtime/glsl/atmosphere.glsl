@@ -255,6 +255,28 @@ float LogQuadraticWeight(float y0, float y1, float y2, float t) {
   return hi == lo ? w : clamp((y - lo) / (hi - lo), 0.0, 1.0);
 }
 
+// Sines of the sun elevations -10, -9, -1.5 and -0.5 deg: the inscattered radiance is read along the sun zenith by
+// SunZenithValue with the share SunZenithShare of its geometric part: 1 with the sun 1.5-9 deg below the horizon,
+// ramping to 0 at 0.5 and 10 deg below it, 0 outside (linear) (skyscatter.precomputed.geometry.SUN_READ_ELEVATIONS,
+// sun_zenith_share: in twilight the sky falls with the sun's depression nearly exponentially).
+const float SUN_READ_MU_0 = -0.1736481777;
+const float SUN_READ_MU_1 = -0.1564344650;
+const float SUN_READ_MU_2 = -0.0261769483;
+const float SUN_READ_MU_3 = -0.0087265355;
+
+float SunZenithShare(float mu_s) {
+  return clamp((mu_s - SUN_READ_MU_0) / (SUN_READ_MU_1 - SUN_READ_MU_0), 0.0, 1.0)
+         * clamp((SUN_READ_MU_3 - mu_s) / (SUN_READ_MU_3 - SUN_READ_MU_2), 0.0, 1.0);
+}
+
+// (1 - f) lin + f geo: lin the linear read at the query, geo the geometric interpolation of the values lo, hi at a
+// sun-zenith cell's two texels at the fraction w of the cell (their chord where lo or hi is not positive); geo alone
+// where f is 1 (skyscatter.precomputed.geometry.sun_zenith_value).
+float SunZenithValue(float lin, float lo, float hi, float w, float f) {
+  float geo = lo > 0.0 && hi > 0.0 ? exp((1.0 - w) * log(lo) + w * log(hi)) : mix(lo, hi, w);
+  return f >= 1.0 ? geo : lin + f * (geo - lin);
+}
+
 // RGB of the irradiance texture from the reads e0, e1, e2 of its three mu_s columns (IrradianceUvs) at t: where the
 // cell starts below the horizon each channel of the cell's two columns with its own weight, LogQuadraticWeight of
 // that channel's three values (the twilight sky irradiance falls faster the lower the sun, and its blue and red at
@@ -473,15 +495,13 @@ vec3 GetTransmittanceToSun(float r, float mu_s) {
 // there with each texture's own weight (AzimuthLerp), as skyscatter's lookups since table format 12, except the
 // single-scattering textures where the point is in the Earth's shadow: linear with the shadow factors of their
 // constituent's density (ShadowLerp, ShadowFactors), as skyscatter's lookups (skyscatter.precomputed.lookup). Returns single
-// Rayleigh (no phase); single Mie (no phase) and multiple scattering in the out parameters. Zero below the tables'
-// sun limit MU_S_MIN.
-vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, out vec3 mie, out vec3 multiple) {
-  mie = vec3(0.0);
-  multiple = vec3(0.0);
-  if (mu_s < MU_S_MIN - MU_S_LIMIT_TOLERANCE) return vec3(0.0);
-  mu_s = max(mu_s, MU_S_MIN);
+// Rayleigh (no phase); single Mie (no phase) and multiple scattering in the out parameters. GetScatteringAt: at the
+// sun zenith cosine mu_s (at least MU_S_MIN) with the textures read at the index position p_s along mu_s
+// (ScatteringMuSIndex(mu_s), or a texel of the read along the sun zenith: GetInscatter); GetScattering: at mu_s,
+// zero below the tables' sun limit MU_S_MIN.
+vec3 GetScatteringAt(float r, float mu, float mu_s, float nu, bool hits_ground, float p_s, out vec3 mie,
+                     out vec3 multiple) {
   vec2 vw = ScatteringMuRCoords(r, mu, hits_ground);
-  float p_s = ScatteringMuSIndex(mu_s);
   float p_n = clamp(ScatteringNuIndex(mu, mu_s, nu), 0.0, float(SCATTERING_N_NU - 1));
   float i_n = min(floor(p_n), float(SCATTERING_N_NU - 2));
   float w_n = p_n - i_n;
@@ -503,12 +523,41 @@ vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, ou
                      w_n);
 }
 
+vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, out vec3 mie, out vec3 multiple) {
+  mie = vec3(0.0);
+  multiple = vec3(0.0);
+  if (mu_s < MU_S_MIN - MU_S_LIMIT_TOLERANCE) return vec3(0.0);
+  mu_s = max(mu_s, MU_S_MIN);
+  return GetScatteringAt(r, mu, mu_s, nu, hits_ground, ScatteringMuSIndex(mu_s), mie, multiple);
+}
+
 // Inscattered radiance S[L](x, v, s) = S_R[L0] P_R(nu) + S_M[L0] P_M(nu) + S[L*] ([Bruneton2008] Eqs. 7-8 with the
 // single scattering kept apart, Sec. 4 "Angular precision").
-vec3 GetInscatter(float r, float mu, float mu_s, float nu, bool hits_ground) {
+// Along the sun zenith with the sun 0.5-10 deg below the horizon (SunZenithShare above 0): the radiance at the cell's
+// two sun-zenith texels combined per colour channel by SunZenithValue (the twilight sky falls with the sun's
+// depression nearly exponentially); linear outside. skyscatter's lookups do the same per output channel (per colour
+// channel when they project to colour, so they give these values).
+vec3 InscatterAt(float r, float mu, float mu_s, float nu, bool hits_ground, float p_s) {
   vec3 mie, multiple;
-  vec3 rayleigh = GetScattering(r, mu, mu_s, nu, hits_ground, mie, multiple);
+  vec3 rayleigh = GetScatteringAt(r, mu, mu_s, nu, hits_ground, p_s, mie, multiple);
   return rayleigh * RayleighPhase(nu) + mie * MiePhase(nu) + multiple * MultipleLobe(nu);
+}
+
+vec3 GetInscatter(float r, float mu, float mu_s, float nu, bool hits_ground) {
+  if (mu_s < MU_S_MIN - MU_S_LIMIT_TOLERANCE) return vec3(0.0);
+  mu_s = max(mu_s, MU_S_MIN);
+  float f = SunZenithShare(mu_s);
+  float p_s = ScatteringMuSIndex(mu_s);
+  if (f <= 0.0) return InscatterAt(r, mu, mu_s, nu, hits_ground, p_s);
+  float p = clamp(p_s, 0.0, float(SCATTERING_N_MU_S - 1));
+  float i = min(floor(p), float(SCATTERING_N_MU_S - 2));
+  float w = p - i;
+  vec3 y0 = InscatterAt(r, mu, mu_s, nu, hits_ground, i);
+  vec3 y1 = InscatterAt(r, mu, mu_s, nu, hits_ground, i + 1.0);
+  // the linear read where the share ramps: the texels' chord is not it (the azimuth's log-linear weights)
+  vec3 y = f < 1.0 ? InscatterAt(r, mu, mu_s, nu, hits_ground, p_s) : vec3(0.0);
+  return vec3(SunZenithValue(y.r, y0.r, y1.r, w, f), SunZenithValue(y.g, y0.g, y1.g, w, f),
+              SunZenithValue(y.b, y0.b, y1.b, w, f));
 }
 
 // Moves a camera outside the atmosphere to where its ray enters it; false if the ray misses the atmosphere.
