@@ -406,6 +406,35 @@ def _air_from_below(atmosphere: AtmosphereParameters, wavelengths: ArrayLike, al
     return out if user is None else (out, radiance)
 
 
+def _beam_config(disortpp: Any, tau: NDArray[np.float64], ssa: NDArray[np.float64], moments: NDArray[np.float64],
+                 n_moments: int, streams: int, tau_user: list[float], mu_user: NDArray[np.float64],
+                 phi_user: NDArray[np.float64], beam_flux: float, beam_mu: float, albedo: float) -> Any:
+    """The disortpp set-up ([Stamnes1988]) the cloudy sky's column solves share: layers top down of optical depths
+    ``tau``, single-scattering albedos ``ssa`` and phase moments ``moments`` (n_layers, n_moments + 1 or more) over a
+    Lambertian ground of ``albedo``, a beam of flux ``beam_flux`` [per unit of the caller's flux] at cosine
+    ``beam_mu``, ``streams`` streams, radiances at the optical depths ``tau_user``, the cosines ``mu_user`` (DISORT's
+    sign: positive travels up) and the azimuths ``phi_user`` [deg]. The caller adds any further flag and solves."""
+    cfg = disortpp.DisortConfig(int(len(tau)), streams, n_moments)
+    cfg.flags.use_user_mu = True
+    cfg.flags.use_user_tau = True
+    cfg.flags.use_lambertian_surface = True
+    cfg.num_user_tau = len(tau_user)
+    cfg.num_user_mu = int(len(mu_user))
+    cfg.num_phi = int(len(phi_user))
+    cfg.allocate()
+    cfg.delta_tau = [float(t) for t in tau]
+    cfg.single_scat_albedo = [float(v) for v in ssa]
+    cfg.phase_function_moments = np.asarray(moments).tolist()
+    cfg.tau_user = [float(t) for t in tau_user]
+    cfg.mu_user = [float(v) for v in mu_user]
+    cfg.phi_user = [float(v) for v in phi_user]
+    cfg.bc.direct_beam_flux = float(beam_flux)
+    cfg.bc.direct_beam_mu = float(beam_mu)
+    cfg.bc.direct_beam_phi = 0.0
+    cfg.bc.surface_albedo = float(albedo)
+    return cfg
+
+
 @lru_cache(maxsize=1)
 def _hemisphere_quadrature() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Midpoint quadrature of the upper hemisphere, 0.5 deg x 0.5 deg: unit directions (64800, 3) and their
@@ -613,26 +642,11 @@ class CloudySky(SunSkyMixin, SkyModel):
         for k in range(wl.size):
             if fed and beam_flux[k] <= 0.0:
                 continue  # twilight: the sky alone lights the column (:meth:`_sky_light`)
-            cfg = disortpp.DisortConfig(int(tau.shape[0]), self.streams, PHASE_MOMENTS)
-            cfg.flags.use_user_mu = True
-            cfg.flags.use_user_tau = True
-            cfg.flags.use_lambertian_surface = True
+            cfg = _beam_config(disortpp, tau[:, k], ssa[:, k], moments[:, k, :], PHASE_MOMENTS, self.streams,
+                               [0.0, float(cum[level, k])] if fed else [float(cum[level, k])], mu_user[order], phi,
+                               beam_flux[k], mu_eff[k], albedo[k])
             cfg.flags.intensity_corr_nakajima = True
-            cfg.num_user_tau = 2 if fed else 1
-            cfg.num_user_mu = int(theta.size)
-            cfg.num_phi = int(phi.size)
-            cfg.allocate()
-            cfg.delta_tau = [float(t) for t in tau[:, k]]
-            cfg.single_scat_albedo = [float(s) for s in ssa[:, k]]
-            cfg.phase_function_moments = moments[:, k, :].tolist()
-            cfg.tau_user = [0.0, float(cum[level, k])] if fed else [float(cum[level, k])]
-            cfg.mu_user = [float(m) for m in mu_user[order]]
-            cfg.phi_user = [float(p) for p in phi]
-            cfg.bc.direct_beam_flux = float(beam_flux[k])
-            cfg.bc.direct_beam_mu = float(mu_eff[k])
-            cfg.bc.direct_beam_phi = 0.0
             cfg.bc.isotropic_flux_top = 0.0
-            cfg.bc.surface_albedo = float(albedo[k])
             res = disortpp.DisortSolver().solve(cfg)
             lu = 1 if fed else 0
             vals = np.asarray(res.intensity)[lu]  # (n_theta, n_phi): [level][user mu][azimuth] in one copy
@@ -769,24 +783,8 @@ class CloudySky(SunSkyMixin, SkyModel):
         top_mean = np.zeros((mu.size, rising.size, solved.size))
         for q, k in enumerate(solved):
             for i in range(mu.size):
-                cfg = disortpp.DisortConfig(int(tau.shape[0]), streams, streams)
-                cfg.flags.use_user_mu = True
-                cfg.flags.use_user_tau = True
-                cfg.flags.use_lambertian_surface = True
-                cfg.num_user_tau = 2
-                cfg.num_user_mu = int(theta.size)
-                cfg.num_phi = int(az.size)
-                cfg.allocate()
-                cfg.delta_tau = [float(t) for t in tau[:, k]]
-                cfg.single_scat_albedo = [float(v) for v in ssa[:, k]]
-                cfg.phase_function_moments = moments[:, k, : streams + 1].tolist()
-                cfg.tau_user = [0.0, max(float(depth[k]), 1e-9)]
-                cfg.mu_user = [float(v) for v in mu_user[order]]
-                cfg.phi_user = [float(v) for v in az]
-                cfg.bc.direct_beam_flux = 1.0
-                cfg.bc.direct_beam_mu = float(mu[i])
-                cfg.bc.direct_beam_phi = 0.0
-                cfg.bc.surface_albedo = float(albedo[k])
+                cfg = _beam_config(disortpp, tau[:, k], ssa[:, k], moments[:, k, : streams + 1], streams, streams,
+                                   [0.0, max(float(depth[k]), 1e-9)], mu_user[order], az, 1.0, mu[i], albedo[k])
                 res = disortpp.DisortSolver().solve(cfg)
                 vals = np.asarray(res.intensity)[1]
                 g[i, order, :, q] = vals @ inv.T
@@ -853,24 +851,8 @@ class CloudySky(SunSkyMixin, SkyModel):
         for k in range(wl.size):
             if beam_flux[k] <= 0.0:
                 continue
-            cfg = disortpp.DisortConfig(int(tau.shape[0]), streams, streams)
-            cfg.flags.use_user_mu = True
-            cfg.flags.use_user_tau = True
-            cfg.flags.use_lambertian_surface = True
-            cfg.num_user_tau = 1
-            cfg.num_user_mu = int(rows.size)
-            cfg.num_phi = 1
-            cfg.allocate()
-            cfg.delta_tau = [float(t) for t in tau[:, k]]
-            cfg.single_scat_albedo = [float(v) for v in ssa[:, k]]
-            cfg.phase_function_moments = moments[:, k, : streams + 1].tolist()
-            cfg.tau_user = [0.0]
-            cfg.mu_user = [float(v) for v in mu_up[order]]
-            cfg.phi_user = [0.0]
-            cfg.bc.direct_beam_flux = float(beam_flux[k])
-            cfg.bc.direct_beam_mu = float(mu_beam[k])
-            cfg.bc.direct_beam_phi = 0.0
-            cfg.bc.surface_albedo = float(albedo[k])
+            cfg = _beam_config(disortpp, tau[:, k], ssa[:, k], moments[:, k, : streams + 1], streams, streams, [0.0],
+                               mu_up[order], np.zeros(1), beam_flux[k], mu_beam[k], albedo[k])
             res = disortpp.DisortSolver().solve(cfg)
             up[k] += res.flux_up[0]
             mean = np.empty(rows.size)
