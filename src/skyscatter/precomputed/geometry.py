@@ -541,6 +541,9 @@ def mu_s_limit_a(mu_s_min: float, bottom: float, top: float) -> float:
     return _mu_s_a(mu_s_min, bottom, top)
 
 
+TWILIGHT_SHARE = float(__import__('os').environ.get('TWILIGHT_SHARE', '0.35'))
+
+
 @helper(fastmath=CONTRACT_ARCP)
 def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float, theta_max: float,
                             n_mu_s: int) -> float:
@@ -557,7 +560,10 @@ def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float
     a = (d - d_min) / (math.sqrt(h2) - d_min)
     x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0)
     x_a = clamp(1.0 - acos_table(mu_s) / theta_max, 0.0, 1.0)
-    return 0.5 * (x_d + x_a) * (n_mu_s - 1)
+    # EXPERIMENT: a share of the texels spread uniformly in the sun's angle over the twilight below the horizon
+    x_t = clamp(1.0 - (acos_table(mu_s) - 0.5 * math.pi) / (theta_max - 0.5 * math.pi), 0.0, 1.0)
+    c = TWILIGHT_SHARE
+    return ((1.0 - c) * 0.5 * (x_d + x_a) + c * x_t) * (n_mu_s - 1)
 
 
 @helper(fastmath=CONTRACT_ARCP)
