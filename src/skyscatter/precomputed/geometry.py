@@ -542,6 +542,8 @@ def mu_s_limit_a(mu_s_min: float, bottom: float, top: float) -> float:
 
 
 TWILIGHT_SHARE = float(__import__('os').environ.get('TWILIGHT_SHARE', '0.35'))
+#: zenith angle [rad] where the twilight share's uniform spread starts (90 deg - its elevation)
+TWILIGHT_TOP = math.radians(90.0 - float(__import__('os').environ.get('TWILIGHT_TOP_ELEV', '0.0')))
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -561,7 +563,7 @@ def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float
     x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0)
     x_a = clamp(1.0 - acos_table(mu_s) / theta_max, 0.0, 1.0)
     # EXPERIMENT: a share of the texels spread uniformly in the sun's angle over the twilight below the horizon
-    x_t = clamp(1.0 - (acos_table(mu_s) - 0.5 * math.pi) / (theta_max - 0.5 * math.pi), 0.0, 1.0)
+    x_t = clamp(1.0 - (acos_table(mu_s) - TWILIGHT_TOP) / (theta_max - TWILIGHT_TOP), 0.0, 1.0)
     c = TWILIGHT_SHARE
     return ((1.0 - c) * 0.5 * (x_d + x_a) + c * x_t) * (n_mu_s - 1)
 
