@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import itertools
+import math
+
 import numpy as np
 import pytest
 
@@ -107,3 +110,85 @@ def test_noise_is_periodic_and_bounded():
     w = worley_fbm(pts, per, 2, 5)
     np.testing.assert_allclose(w, worley_fbm(pts + per * np.array([0, 1, 1]), per, 2, 5), atol=1e-12)
     assert np.all((w >= 0.0) & (w <= 1.0))
+
+
+# [Perlin2002]'s 12 edge gradients, written out again for the straightforward evaluation below
+_EDGE_GRADIENTS = [(1, 1, 0), (-1, 1, 0), (1, -1, 0), (-1, -1, 0), (1, 0, 1), (-1, 0, 1), (1, 0, -1), (-1, 0, -1),
+                   (0, 1, 1), (0, -1, 1), (0, 1, -1), (0, -1, -1)]
+
+
+def _fbm_by_definition(point, period, octaves, seed, octave_value):
+    """Fractal sum at one point, octave by octave (frequency x2, amplitude /2, normalised to amplitude 1), with
+    each octave's random table drawn as the docstrings of perlin_fbm / worley_fbm say (one generator of the seed,
+    octaves in order)."""
+    rng = np.random.default_rng(seed)
+    total, norm = 0.0, 0.0
+    for o in range(octaves):
+        per = [p * 2**o for p in period]
+        total += 0.5**o * octave_value([c * 2**o for c in point], per, rng)
+        norm += 0.5**o
+    return total / norm
+
+
+def _perlin_octave(p, per, rng):
+    """Gradient noise at one point: the fade-weighted sum over the cell's 2^d corners of the corner's gradient
+    dotted with the offset from the corner ([Perlin2002])."""
+    grads = rng.integers(0, 12, size=tuple(per))
+    cell = [math.floor(c) for c in p]
+    value = 0.0
+    for corner in itertools.product((0, 1), repeat=len(p)):
+        node = tuple((cell[k] + corner[k]) % per[k] for k in range(len(p)))
+        g = _EDGE_GRADIENTS[grads[node]]
+        weight, dot = 1.0, 0.0
+        for k in range(len(p)):
+            t = p[k] - cell[k]
+            fade = 6 * t**5 - 15 * t**4 + 10 * t**3
+            weight *= fade if corner[k] else 1.0 - fade
+            dot += g[k] * (t - corner[k])
+        value += weight * dot
+    return value
+
+
+def _inverted_worley_octave(p, per, rng):
+    """1 - distance to the nearest feature point (one per cell, at the cell's corner + a uniform offset) of the
+    3^d cells around the point, the lattice wrapped with the period ([Worley1996])."""
+    feats = rng.random(tuple(per) + (len(p),))
+    cell = [math.floor(c) for c in p]
+    nearest = math.inf
+    for off in itertools.product((-1, 0, 1), repeat=len(p)):
+        nb = [cell[k] + off[k] for k in range(len(p))]
+        fp = feats[tuple(nb[k] % per[k] for k in range(len(p)))]
+        nearest = min(nearest, math.dist(p, [nb[k] + fp[k] for k in range(len(p))]))
+    return 1.0 - nearest
+
+
+@pytest.mark.parametrize("period", [(3, 2), (2, 3, 1)])
+def test_compiled_noise_is_the_noise_of_its_definition(period):
+    # points across the period and beyond it (negative and past one period: the wrap-around), a few octaves
+    rng = np.random.default_rng(11)
+    pts = (rng.random((12, len(period))) * 3.0 - 1.0) * np.array(period)
+    for octaves, seed in ((1, 0), (3, 4)):
+        perlin = perlin_fbm(pts, period, octaves, seed)
+        worley = worley_fbm(pts, period, octaves, seed)
+        for i, p in enumerate(pts.tolist()):
+            assert perlin[i] == pytest.approx(_fbm_by_definition(p, period, octaves, seed, _perlin_octave),
+                                              rel=0.0, abs=1e-13)
+            assert worley[i] == pytest.approx(_fbm_by_definition(p, period, octaves, seed, _inverted_worley_octave),
+                                              rel=0.0, abs=1e-13)
+    with pytest.raises(InvalidParameterError, match="2 or 3 coordinates"):
+        perlin_fbm(np.zeros((4, 4)), (1, 1, 1, 1), 1, 0)
+    with pytest.raises(InvalidParameterError, match="whole numbers >= 1"):
+        worley_fbm(pts, period[:-1], 1, 0)
+    with pytest.raises(InvalidParameterError, match="whole numbers >= 1"):
+        perlin_fbm(pts, (0,) * len(period), 1, 0)
+
+
+def test_procedural_fields_are_those_of_the_stored_references():
+    # SHA-256 of the grids made by the numpy evaluation of the noise (commit b252cdb), which made the Monte Carlo
+    # references of tests/data/broken_cloud_*: the compiled noise must give the same fields to the last bit
+    small = CloudField.procedural(cover=0.4, base=1000.0, top=3000.0, particles=DROPS, optical_depth=12.0,
+                                  size=8000.0, resolution=(48, 40, 12), feature_size=2000.0, seed=7)
+    assert small.digest() == "71711009e05ba9d6aa0d2fae7133c5dea59d479d3296ee0a5e780ecde4469160"
+    bench = CloudField.procedural(cover=0.4, base=1000.0, top=2500.0, particles=DROPS, optical_depth=10.0,
+                                  size=16_000.0, resolution=(128, 128, 32), feature_size=4000.0, seed=1)
+    assert bench.digest() == "163a071eb42ff42bba329e364b83ab5690a3579e0e48115c40c94d48e4953483"

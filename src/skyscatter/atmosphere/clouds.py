@@ -408,75 +408,89 @@ _GRADIENTS = np.array([[1, 1, 0], [-1, 1, 0], [1, -1, 0], [-1, -1, 0], [1, 0, 1]
                        [-1, 0, -1], [0, 1, 1], [0, -1, 1], [0, 1, -1], [0, -1, -1]], dtype=float)
 
 
-def _fade(t: NDArray[np.float64]) -> NDArray[np.float64]:
-    return t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
+def _noise_arguments(points: ArrayLike, period: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Points (..., d) of the noise as a C-ordered (n, d) float64 array, and the period (d,) as int64; d must be
+    2 or 3 and the period whole numbers >= 1 (the compiled octaves index their tables without bounds checks)."""
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    if pts.ndim < 1 or pts.shape[-1] not in (2, 3):
+        raise InvalidParameterError(f"noise points must have 2 or 3 coordinates (..., d); got shape {pts.shape}")
+    per = np.asarray(period)
+    if per.shape != (pts.shape[-1],) or not np.issubdtype(per.dtype, np.integer) or np.any(per < 1):
+        raise InvalidParameterError(f"noise period must be {pts.shape[-1]} whole numbers >= 1; got {period!r}")
+    return pts.reshape(-1, pts.shape[-1]), per.astype(np.int64)
 
 
-def _perlin(points: NDArray[np.float64], period: NDArray[np.int64], rng: np.random.Generator) -> NDArray[np.float64]:
-    """[Perlin2002] gradient noise at ``points`` (..., d) [lattice units], periodic with ``period`` (d,) cells;
-    values in about [-1, 1]. d = 2 or 3 (2D uses the gradients' first two components)."""
-    d = points.shape[-1]
-    grads = rng.integers(0, 12, size=tuple(int(p) for p in period))
-    cell = np.floor(points).astype(np.int64)
-    frac = points - cell
-    out = np.zeros(points.shape[:-1])
-    w = _fade(frac)
-    for corner in range(2**d):
-        offs = np.array([(corner >> k) & 1 for k in range(d)])
-        idx = tuple(np.mod(cell[..., k] + offs[k], period[k]) for k in range(d))
-        g = _GRADIENTS[grads[idx]][..., :d]
-        dot = np.sum(g * (frac - offs), axis=-1)
-        weight = np.ones(points.shape[:-1])
-        for k in range(d):
-            weight = weight * (w[..., k] if offs[k] else 1.0 - w[..., k])
-        out += weight * dot
-    return out
+def perlin_fbm(points: ArrayLike, period: ArrayLike, octaves: int, seed: int) -> NDArray[np.float64]:
+    """Fractal sum of [Perlin2002] gradient-noise octaves (frequency x2, amplitude /2), normalised to amplitude 1.
 
+    Parameters
+    ----------
+    points : array (..., d)
+        Where [lattice units of the first octave], d = 2 or 3 (2D uses the gradients' first two components).
+    period : int array (d,)
+        Lattice period of the first octave [cells]; octave ``o`` has period ``period * 2**o``.
+    octaves : int
+        Number of octaves.
+    seed : int
+        Seed of the gradient tables (one index into the 12 edge gradients per lattice node and octave, drawn
+        with numpy's generator in octave order).
 
-def _worley(points: NDArray[np.float64], period: NDArray[np.int64], rng: np.random.Generator) -> NDArray[np.float64]:
-    """[Worley1996] cellular noise F1: distance to the nearest feature point (one per cell, uniform in it),
-    periodic with ``period`` cells; in lattice units, about [0, 1]."""
-    d = points.shape[-1]
-    feats = rng.random(tuple(int(p) for p in period) + (d,))
-    cell = np.floor(points).astype(np.int64)
-    best = np.full(points.shape[:-1], np.inf)
-    for off in np.ndindex(*(3,) * d):
-        o = np.array(off) - 1
-        nb = cell + o
-        idx = tuple(np.mod(nb[..., k], period[k]) for k in range(d))
-        fp = nb + feats[idx]
-        dist = np.sqrt(np.sum((points - fp) ** 2, axis=-1))
-        best = np.minimum(best, dist)
-    return best
+    Returns
+    -------
+    array (...)
+        The noise [-], about [-1, 1].
+    """
+    from ._noise_numba import add_perlin_octave
 
-
-def perlin_fbm(points: NDArray[np.float64], period: ArrayLike, octaves: int, seed: int) -> NDArray[np.float64]:
-    """Fractal sum of Perlin octaves (frequency x2, amplitude /2), normalised to amplitude 1; periodic with the
-    integer ``period`` (cells of the first octave)."""
+    pts, per = _noise_arguments(points, period)
     rng = np.random.default_rng(seed)
-    per = np.asarray(period, dtype=np.int64)
-    total = np.zeros(points.shape[:-1])
+    total = np.zeros(pts.shape[0])
     amp = 1.0
     norm = 0.0
     for o in range(octaves):
-        total += amp * _perlin(points * 2**o, per * 2**o, rng)
+        per_o = per * 2**o
+        grads = rng.integers(0, 12, size=tuple(int(p) for p in per_o))
+        add_perlin_octave(total, pts, float(2**o), per_o, grads.ravel(), _GRADIENTS, amp)
         norm += amp
         amp *= 0.5
-    return total / norm
+    return (total / norm).reshape(np.shape(points)[:-1])
 
 
-def worley_fbm(points: NDArray[np.float64], period: ArrayLike, octaves: int, seed: int) -> NDArray[np.float64]:
-    """Fractal sum of inverted Worley octaves (``1 - F1``; frequency x2, amplitude /2), in about [0, 1]."""
+def worley_fbm(points: ArrayLike, period: ArrayLike, octaves: int, seed: int) -> NDArray[np.float64]:
+    """Fractal sum of inverted [Worley1996] cellular-noise octaves (``1 - F1``, F1 the distance to the nearest
+    feature point, one uniform in each cell; frequency x2, amplitude /2), normalised to amplitude 1.
+
+    Parameters
+    ----------
+    points : array (..., d)
+        Where [lattice units of the first octave], d = 2 or 3.
+    period : int array (d,)
+        Lattice period of the first octave [cells]; octave ``o`` has period ``period * 2**o``.
+    octaves : int
+        Number of octaves.
+    seed : int
+        Seed of the feature points (drawn with numpy's generator in octave order).
+
+    Returns
+    -------
+    array (...)
+        The noise [-], about [0, 1].
+    """
+    from ._noise_numba import add_worley_octave
+
+    pts, per = _noise_arguments(points, period)
+    d = pts.shape[1]
     rng = np.random.default_rng(seed)
-    per = np.asarray(period, dtype=np.int64)
-    total = np.zeros(points.shape[:-1])
+    total = np.zeros(pts.shape[0])
     amp = 1.0
     norm = 0.0
     for o in range(octaves):
-        total += amp * (1.0 - _worley(points * 2**o, per * 2**o, rng))
+        per_o = per * 2**o
+        feats = rng.random(tuple(int(p) for p in per_o) + (d,))
+        add_worley_octave(total, pts, float(2**o), per_o, feats.reshape(-1, d), amp)
         norm += amp
         amp *= 0.5
-    return total / norm
+    return (total / norm).reshape(np.shape(points)[:-1])
 
 
 def _procedural_extinction(cover: float, nx: int, ny: int, nz: int, sx: float, sy: float, depth: float,
