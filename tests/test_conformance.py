@@ -49,8 +49,9 @@ def _sky(spec, **parameters) -> SkyModel:
 
 
 #: The default sky of each model that is not cheap to build, built once for the tests below that only evaluate it
-#: (a broken-cloud sky's procedural 128 x 128 x 32 field alone took 2.3 s of CPU, and five tests, one of them with
-#: five cases, asked for it); a cheap model is built afresh each time.
+#: (a broken-cloud sky's procedural 128 x 128 x 32 field alone took 2.3 s of CPU before its noise was compiled, 0.1 s
+#: since, and its set-up and coupling more; five tests, one of them with five cases, ask for it); a cheap model is
+#: built afresh each time.
 _DEFAULT_SKIES: dict[str, SkyModel] = {}
 
 
