@@ -541,6 +541,24 @@ def mu_s_limit_a(mu_s_min: float, bottom: float, top: float) -> float:
     return _mu_s_a(mu_s_min, bottom, top)
 
 
+# EXPERIMENT (branch smoothmap): x = (1 - c) x_old + c ((1 - beta) g + beta x_a), g the normalised CDF of a
+# logistic-difference bump density in the sun elevation (from LO to HI deg, edges of width W deg), set by
+# SKYSCATTER_SUNMAP="c,beta,lo,hi,w" at import; unset: c = 0, the format-19 mapping.
+_SUNMAP = [float(v) for v in (__import__("os").environ.get("SKYSCATTER_SUNMAP") or "0,0,-13,3,2").split(",")]
+SUNMAP_C, SUNMAP_BETA, SUNMAP_LO, SUNMAP_HI, SUNMAP_W = _SUNMAP
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _softplus(z: float) -> float:
+    return max(z, 0.0) + math.log1p(math.exp(-abs(z)))
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _bump_cdf(elev: float) -> float:
+    w = SUNMAP_W
+    return w * (_softplus((elev - SUNMAP_LO) / w) - _softplus((elev - SUNMAP_HI) / w))
+
+
 @helper(fastmath=CONTRACT_ARCP)
 def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float, theta_max: float,
                             n_mu_s: int) -> float:
@@ -556,8 +574,16 @@ def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float
     d_min = top - bottom
     a = (d - d_min) / (math.sqrt(h2) - d_min)
     x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0)
-    x_a = clamp(1.0 - acos_table(mu_s) / theta_max, 0.0, 1.0)
-    return 0.5 * (x_d + x_a) * (n_mu_s - 1)
+    theta = min(acos_table(mu_s), theta_max)
+    x_a = clamp(1.0 - theta / theta_max, 0.0, 1.0)
+    x_old = 0.5 * (x_d + x_a)
+    c = SUNMAP_C
+    if c == 0.0:
+        return x_old * (n_mu_s - 1)
+    deg = 180.0 / math.pi
+    g0 = _bump_cdf(90.0 - theta_max * deg)
+    g = (_bump_cdf(90.0 - theta * deg) - g0) / (_bump_cdf(90.0) - g0)
+    return ((1.0 - c) * x_old + c * ((1.0 - SUNMAP_BETA) * g + SUNMAP_BETA * x_a)) * (n_mu_s - 1)
 
 
 @helper(fastmath=CONTRACT_ARCP)
