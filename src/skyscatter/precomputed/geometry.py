@@ -546,6 +546,10 @@ def mu_s_limit_a(mu_s_min: float, bottom: float, top: float) -> float:
 # SKYSCATTER_SUNMAP="c,beta,lo,hi,w" at import; unset: c = 0, the format-19 mapping.
 _SUNMAP = [float(v) for v in (__import__("os").environ.get("SKYSCATTER_SUNMAP") or "0,0,-13,3,2").split(",")]
 SUNMAP_C, SUNMAP_BETA, SUNMAP_LO, SUNMAP_HI, SUNMAP_W = _SUNMAP
+# EXPERIMENT: x += c2 (g - h), h the normalised CDF of a second logistic-difference plateau (LO2..HI2 deg, edges W2
+# deg) in the day: texels moved from that part of the day only; SKYSCATTER_SUNMAP_DAY="c2,lo2,hi2,w2" (unset: c2 = 0).
+_SUNMAP_DAY = [float(v) for v in (__import__("os").environ.get("SKYSCATTER_SUNMAP_DAY") or "0,14,45,8").split(",")]
+SUNMAP_C2, SUNMAP_LO2, SUNMAP_HI2, SUNMAP_W2 = _SUNMAP_DAY
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -557,6 +561,12 @@ def _softplus(z: float) -> float:
 def _bump_cdf(elev: float) -> float:
     w = SUNMAP_W
     return w * (_softplus((elev - SUNMAP_LO) / w) - _softplus((elev - SUNMAP_HI) / w))
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _day_cdf(elev: float) -> float:
+    w = SUNMAP_W2
+    return w * (_softplus((elev - SUNMAP_LO2) / w) - _softplus((elev - SUNMAP_HI2) / w))
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -578,12 +588,16 @@ def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float
     x_a = clamp(1.0 - theta / theta_max, 0.0, 1.0)
     x_old = 0.5 * (x_d + x_a)
     c = SUNMAP_C
-    if c == 0.0:
+    c2 = SUNMAP_C2
+    if c == 0.0 and c2 == 0.0:
         return x_old * (n_mu_s - 1)
     deg = 180.0 / math.pi
     g0 = _bump_cdf(90.0 - theta_max * deg)
     g = (_bump_cdf(90.0 - theta * deg) - g0) / (_bump_cdf(90.0) - g0)
-    return ((1.0 - c) * x_old + c * ((1.0 - SUNMAP_BETA) * g + SUNMAP_BETA * x_a)) * (n_mu_s - 1)
+    h0 = _day_cdf(90.0 - theta_max * deg)
+    h = (_day_cdf(90.0 - theta * deg) - h0) / (_day_cdf(90.0) - h0)
+    x = (1.0 - c) * x_old + c * ((1.0 - SUNMAP_BETA) * g + SUNMAP_BETA * x_a) + c2 * (g - h)
+    return x * (n_mu_s - 1)
 
 
 @helper(fastmath=CONTRACT_ARCP)
