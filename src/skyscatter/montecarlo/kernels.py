@@ -694,11 +694,32 @@ def _uniform_free_path(px, py, pz, dx, dy, dz, t_end, target, kh, s, ushell, rb,
     d_shell = min(_shell_exit(px, py, pz, dx, dy, dz, ushell[s, 0], ushell[s, 1]), t_end)
     t_c = target / k_uni if k_uni > 0.0 else np.inf
     t_lim = min(t_c, d_shell)
-    target_a = -math.log1p(-next_uniform(st))
-    t, reached, _ = _march(px, py, pz, dx, dy, dz, t_lim, target_a, kha, rb, edges, layers, nlay, cols, tmp, rec,
-                           True)
-    if reached:
-        return t, True
+    u_a = next_uniform(st)
+    rlo = ushell[s, 0]
+    rhi = ushell[s, 1]
+    inner = False  # a quadrature shell inside the uniform one: the ray up to t_lim may be more than one piece
+    for e in range(edges.shape[0]):
+        if rlo < edges[e] < rhi:
+            inner = True
+    if inner:
+        target_a = -math.log1p(-u_a)
+        t, reached, _ = _march(px, py, pz, dx, dy, dz, t_lim, target_a, kha, rb, edges, layers, nlay, cols, tmp, rec,
+                               True)
+        if reached:
+            return t, True
+    else:
+        # the ray stays in the shell up to t_lim, which no quadrature shell cuts: one piece, as the march would
+        # have it, without the march's search for crossings; the air's exponential target -ln(1 - u_a) >= u_a is
+        # taken (one logarithm) only when u_a does not already exceed the air's optical depth, some 1e-3 here
+        r2 = px * px + py * py + pz * pz
+        b = px * dx + py * dy + pz * dz
+        _piece_columns(r2, b, 0.0, t_lim, rb, layers, nlay, cols)
+        tau_a = _dot(kha, cols)
+        if u_a <= tau_a:
+            target_a = -math.log1p(-u_a)
+            if tau_a >= target_a:
+                t = _invert_in_piece(r2, b, 0.0, t_lim, target_a, tau_a, target_a, kha, rb, layers, nlay, cols)
+                return t, True
     if t_c < d_shell:
         return t_c, True
     if d_shell >= t_end:
