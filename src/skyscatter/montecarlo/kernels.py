@@ -639,10 +639,22 @@ def _shadow_march(px, py, pz, wx, wy, wz, te, target, kmin, rb, edges, layers, n
         b = px * wx + py * wy + pz * wz
         tc = -b + math.sqrt(max(b * b - (r2 - rc * rc), 0.0))
         if tc < te:
-            _, deep, _ = _march(px, py, pz, wx, wy, wz, tc, target, kmin, rb, edges, layers, nlay, tot, tmp, rec,
-                                False)
-            if deep:
-                return True
+            # outwards with no quadrature shell between r and rc, the ray up to rc is one piece: taken without the
+            # march's search for crossings (the same piece and sum)
+            one = b >= 0.0
+            if one:
+                for e in range(edges.shape[0]):
+                    if r2 < edges[e] * edges[e] < rc * rc:
+                        one = False
+            if one:
+                _piece_columns(r2, b, 0.0, tc, rb, layers, nlay, tot)
+                if _dot(kmin, tot) >= target:
+                    return True
+            else:
+                _, deep, _ = _march(px, py, pz, wx, wy, wz, tc, target, kmin, rb, edges, layers, nlay, tot, tmp, rec,
+                                    False)
+                if deep:
+                    return True
             if _add_columns_above(sgeo, stab, (b + tc) / rc, tot):
                 return _dot(kmin, tot) >= target
     _, deep, _ = _march(px, py, pz, wx, wy, wz, te, target, kmin, rb, edges, layers, nlay, tot, tmp, rec, False)
