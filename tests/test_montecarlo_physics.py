@@ -103,9 +103,10 @@ def test_shadow_rays_columns_above_a_cloud_layer_match_adaptive_quadrature(alt, 
                                                    (1100.0, 45.0, 560.0), (1480.0, 175.0, 450.0)])
 def test_short_pieces_inside_a_cloud_layer_match_adaptive_quadrature(alt, zen_deg, length):
     """Pieces of a ray inside a cloud layer up to 2 km long (free paths and shadow rays there) take their columns
-    in closed form about the piece's midpoint (kernels._short_piece_columns): every component's column agrees with
-    QUADPACK to 1e-9 relative (the bound its docstring derives), horizontal and downward rays included; the
-    layer's own column is its length."""
+    in closed form about the piece's midpoint (kernels._short_piece_columns, used by kernels._uniform_free_path and
+    kernels._shadow_march): every component's column agrees with QUADPACK to 1e-9 relative (the bound its
+    docstring derives), horizontal and downward rays included; the layer's own column is its length. Too long a
+    piece, or one across the layer's base, is left to Gauss-Legendre."""
     from scipy.integrate import quad
 
     from skyscatter.atmosphere.clouds import CloudLayer
@@ -116,9 +117,8 @@ def test_short_pieces_inside_a_cloud_layer_match_adaptive_quadrature(alt, zen_de
     mu = math.cos(math.radians(zen_deg))
     d = (math.sqrt(1 - mu * mu), 0.0, mu)
     nc = m.layers.shape[0]
-    cols, tmp = np.empty(nc), np.empty(nc)
-    kernels.column_along(0.0, 0.0, r0, *d, length, np.inf, np.zeros(nc), p.bottom_radius, m.edges, m.layers,
-                         m.nlay, cols, tmp)
+    cols = np.full(nc, np.nan)
+    assert kernels._short_piece_columns(r0 * r0, r0 * mu, 0.0, length, p.bottom_radius, m.layers, m.nlay, cols)
     ref = []
     for prof in (p.rayleigh_density, p.mie_density, p.ozone_density, p.particle_components[1].density):
         def f(t, prof=prof):
@@ -128,6 +128,9 @@ def test_short_pieces_inside_a_cloud_layer_match_adaptive_quadrature(alt, zen_de
         ref.append(quad(f, 0.0, length, points=pts or None, limit=500, epsabs=0.0, epsrel=1e-13)[0])
     assert ref[3] == pytest.approx(length, rel=1e-12)  # the ray stays in the layer
     np.testing.assert_allclose(cols, ref, rtol=1e-9, atol=1e-12)
+    assert not kernels._short_piece_columns(r0 * r0, r0 * mu, 0.0, 2100.0, p.bottom_radius, m.layers, m.nlay, cols)
+    r1 = p.bottom_radius + 999.0  # straight up from 1 m below the base, 2 m: across it
+    assert not kernels._short_piece_columns(r1 * r1, r1, 0.0, 2.0, p.bottom_radius, m.layers, m.nlay, cols)
 
 
 def test_free_path_inversion_hits_the_target_optical_depth():

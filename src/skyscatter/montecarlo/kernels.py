@@ -359,11 +359,8 @@ def _piece_columns(r2, b, a, c, rb, layers, nlay, out):
         out[2] = s2 * half
         return
     if nc == 4:
-        # one further component (a cloud layer): a short piece (a free path or shadow ray inside the layer) in
-        # closed form, else the same sums in registers, in the same order as the loop below (the same bits), where
-        # the loop keeps them in ``out`` across the calls to exp
-        if _short_piece_columns(r2, b, a, c, rb, layers, nlay, out):
-            return
+        # one further component (a cloud layer): the same sums in registers, in the same order as the loop below
+        # (the same bits), where the loop keeps them in ``out`` across the calls to exp
         s0 = 0.0
         s1 = 0.0
         s2 = 0.0
@@ -647,7 +644,8 @@ def _shadow_march(px, py, pz, wx, wy, wz, te, target, kmin, rb, edges, layers, n
                     if r2 < edges[e] * edges[e] < rc * rc:
                         one = False
             if one:
-                _piece_columns(r2, b, 0.0, tc, rb, layers, nlay, tot)
+                if not _short_piece_columns(r2, b, 0.0, tc, rb, layers, nlay, tot):
+                    _piece_columns(r2, b, 0.0, tc, rb, layers, nlay, tot)
                 if _dot(kmin, tot) >= target:
                     return True
             else:
@@ -725,7 +723,8 @@ def _uniform_free_path(px, py, pz, dx, dy, dz, t_end, target, kh, s, ushell, rb,
         # taken (one logarithm) only when u_a does not already exceed the air's optical depth, some 1e-3 here
         r2 = px * px + py * py + pz * pz
         b = px * dx + py * dy + pz * dz
-        _piece_columns(r2, b, 0.0, t_lim, rb, layers, nlay, cols)
+        if not _short_piece_columns(r2, b, 0.0, t_lim, rb, layers, nlay, cols):
+            _piece_columns(r2, b, 0.0, t_lim, rb, layers, nlay, cols)
         tau_a = _dot(kha, cols)
         if u_a <= tau_a:
             target_a = -math.log1p(-u_a)
