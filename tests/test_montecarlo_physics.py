@@ -115,7 +115,6 @@ def test_short_pieces_inside_a_cloud_layer_match_adaptive_quadrature(alt, zen_de
     m = prepare_medium(p, np.array([550.0]))
     r0 = p.bottom_radius + alt
     mu = math.cos(math.radians(zen_deg))
-    d = (math.sqrt(1 - mu * mu), 0.0, mu)
     nc = m.layers.shape[0]
     cols = np.full(nc, np.nan)
     assert kernels._short_piece_columns(r0 * r0, r0 * mu, 0.0, length, p.bottom_radius, m.layers, m.nlay, cols)

@@ -29,8 +29,10 @@ columns are per component and wavelength independent; the optical depth at any w
 density ``sigma_t(x) T(x)`` is known exactly for every wavelength, which spectral MIS needs. From inside a cloud
 layer (a shell where a component's density is constant: ``ushell``, ``driver.uniform_shells``) the same density is
 sampled by decomposition ([Kutz2017]; :func:`_uniform_free_path`): the layer's free path in closed form, the air
-marched up to it with a target of its own (one Gauss-Legendre piece, no Newton), and a shadow ray from there ends
-without a march once the layer alone passes its depth (:func:`_uniform_lower_bound`). Through the cloud
+up to it with a target of its own (one piece, no Newton), and a shadow ray from there ends without a march once the
+layer alone passes its depth (:func:`_uniform_lower_bound`). A piece of a ray inside the layer up to 2 km long
+(the air along such a free path, or up to the layer's top along a shadow ray) takes its columns in closed form
+about its midpoint (:func:`_short_piece_columns`; within 1e-9 relative) instead of Gauss-Legendre. Through the cloud
 field, free paths are sampled by decomposition and delta tracking against a block majorant grid and shadow rays
 by residual ratio tracking (:mod:`.tracking`); the two are combined by decomposition: the shell free path
 ``t_s`` is drawn first, the field is tracked up to ``t_s``, and whichever collides first is the collision.
@@ -262,22 +264,23 @@ _SHORT_EDGE = 1e-3
 
 @inline
 def _short_piece_columns(r2, b, a, c, rb, layers, nlay, out):
-    """Columns [m] of every component over ``[a, c]`` [m] of a ray with ``|p|^2 = r2`` [m^2], ``p.d = b`` [m], in
-    closed form about the piece's midpoint, for short pieces; False (``out`` unchanged) where it does not apply.
+    """Columns [m] of every component over ``[a, c]`` [m] of a ray with ``|p|^2 = r2`` [m^2], ``p.d = b`` [m], in closed
+    form about the piece's midpoint, for short pieces; False (``out`` unchanged) where it does not apply.
 
     With ``u`` the distance [m] from the midpoint (radius ``r_m``, cosine to the vertical ``mu_m``), the altitude is
     ``h(u) = h_m + mu_m u + kappa u^2 + O(u^3 / r_m^2)``, ``kappa = (1 - mu_m^2) / (2 r_m)`` (Taylor expansion of
-    ``sqrt(r_m^2 + 2 r_m mu_m u + u^2)``). A layer ``a e^(s h)`` ([m] density law of ``DensityProfile``) then
-    integrates over the piece of length ``L`` to ``a e^(s h_m) L [S(x) + s kappa L^2 C(x)]`` with ``x = s mu_m L /
-    2``, ``S(x) = sinh(x) / x`` and ``C(x) = int_{-1/2}^{1/2} v^2 e^(2 x v) dv`` (their Taylor series,
-    [Abramowitz1964] 4.5.62; the first-order term of ``e^(s kappa u^2)``), and a linear layer ``l h + c`` to ``L (l
-    h_m + c) + l kappa L^3 / 12`` (0 where it is negative: ``max(0, .)``). Applies where each component keeps one layer
-    over the piece's altitude range and a linear layer keeps its sign there (no kink of ``max(0, .)``), a layer with ``e^(s h)`` has no linear
-    part, ``|s| L <= _SHORT_SL`` (2) and ``L <= _SHORT_LEN`` (2 km): with ``|x| <= 1`` and ``kappa <= 7.9e-8`` m^-1
-    the truncated terms are then ``x^14 / 15! < 1e-12`` in ``S``, ``x^8 / 1774080`` in ``C`` (times the curvature
-    term, itself ``<= |s| L kappa L / 12 < 3e-5``) and ``(s kappa L^2)^2 / 160 < 1e-9``, where the 4-point Gauss-Legendre sum of :func:`_piece_columns` is within 3e-7 (module
-    docstring). Inside a cloud layer a free path of some 30 m costs one square root per end and one exponential
-    per exponential component instead of four square roots and four exponentials per component."""
+    ``sqrt(r_m^2 + 2 r_m mu_m u + u^2)``). A layer ``a e^(s h)`` ([m] density law of ``DensityProfile``) then integrates
+    over the piece of length ``L`` to ``a e^(s h_m) L [S(x) + s kappa L^2 C(x)]`` with ``x = s mu_m L / 2``, ``S(x) =
+    sinh(x) / x`` and ``C(x) = int_{-1/2}^{1/2} v^2 e^(2 x v) dv`` (their Taylor series, [Abramowitz1964] 4.5.62; the
+    first-order term of ``e^(s kappa u^2)``), and a linear layer ``l h + c`` to ``L (l h_m + c) + l kappa L^3 / 12`` (0
+    where it is negative: ``max(0, .)``). Applies where each component keeps one layer over the piece's altitude range
+    and a linear layer keeps its sign there (no kink of ``max(0, .)``), a layer with ``e^(s h)`` has no linear part,
+    ``|s| L <= _SHORT_SL`` (2) and ``L <= _SHORT_LEN`` (2 km): with ``|x| <= 1`` and ``kappa <= 7.9e-8`` m^-1 the
+    truncated terms are then ``x^14 / 15! < 1e-12`` in ``S``, ``x^8 / 1774080`` in ``C`` (times the curvature term,
+    itself ``<= |s| L kappa L / 12 < 3e-5``) and ``(s kappa L^2)^2 / 160 < 1e-9``, where the 4-point Gauss-Legendre sum
+    of :func:`_piece_columns` is within 3e-7 (module docstring). Inside a cloud layer a free path of some 30 m costs one
+    square root per end and one exponential per exponential component instead of four square roots and four exponentials
+    per component."""
     ln = c - a
     if not (0.0 < ln <= _SHORT_LEN):
         return False
@@ -629,7 +632,8 @@ def _shadow_march(px, py, pz, wx, wy, wz, te, target, kmin, rb, edges, layers, n
     (they depend on the cosine there only, the shells being spherically symmetric). The table's nodes are the
     same pieces and Gauss-Legendre sums as the march (the sphere is a quadrature shell), so the only difference is
     the interpolation (within 5e-10 relative, docs/clouds.md). Near the top of a cloud the ray's 10-odd pieces
-    above it become one or two."""
+    above it become one or two; a ray going outwards with no quadrature shell below that sphere is one piece, taken
+    without the march (in closed form, :func:`_short_piece_columns`, where that applies)."""
     rc = sgeo[0]
     r2 = px * px + py * py + pz * pz
     if rc > 0.0 and r2 < rc * rc:
@@ -685,16 +689,19 @@ def _shell_exit(px, py, pz, dx, dy, dz, rlo, rhi):
 @helper
 def _uniform_free_path(px, py, pz, dx, dy, dz, t_end, target, kh, s, ushell, rb, edges, layers, nlay, cols, tmp,
                        rec, kha, cseg, st):
-    """A free path from ``p`` [m] inside the uniform shell ``s`` (:func:`_uniform_shell`) along ``d`` up to
-    ``t_end`` [m], for the hero's coefficients ``kh`` [m^-1]: the same collision density ``sigma_t T`` as
-    :func:`_march` with ``target``, sampled by decomposition ([Kutz2017], decomposition tracking: the first of two
-    independent collisions wins): the shell's constant part ``K = sum_q kh_q rho_q`` has the closed-form free path
-    ``target / K`` inside the shell, the rest of the medium (the air) is marched with its own exponential target
-    (coefficients ``kha``: ``kh`` without the shell's constant components) up to that distance. Inside a thick
-    cloud the air's optical depth over a free path is some 1e-3 of the cloud's, so the march is one Gauss-Legendre
-    piece without Newton's inversion. A path that leaves the shell without a collision draws a fresh free path
-    from the shell's boundary (the exponential law is memoryless). Returns ``(t, reached)`` and, in ``cols``, the
-    shell columns [m] from ``p`` to ``t``; ``cseg`` (n_comp,) is a work array."""
+    """A free path from ``p`` [m] inside the uniform shell ``s`` (:func:`_uniform_shell`) along ``d`` up to ``t_end``
+    [m], for the hero's coefficients ``kh`` [m^-1]: the same collision density ``sigma_t T`` as :func:`_march` with
+    ``target``, sampled by decomposition ([Kutz2017], decomposition tracking: the first of two independent collisions
+    wins): the shell's constant part ``K = sum_q kh_q rho_q`` has the closed-form free path ``target / K`` inside the
+    shell, the rest of the medium (the air) is marched with its own exponential target (coefficients ``kha``: ``kh``
+    without the shell's constant components) up to that distance. Inside a thick cloud the air's optical depth over a
+    free path is some 1e-3 of the cloud's, so the march is one piece without Newton's inversion; where no quadrature
+    shell cuts the uniform one it is that piece alone (no search for crossings), its columns in closed form
+    (:func:`_short_piece_columns`) where that applies, and the air's target ``-ln(1 - u) >= u`` is computed only when
+    the uniform ``u`` is below the air's optical depth (the same decision as the march's, one logarithm fewer per free
+    path). A path that leaves the shell without a collision draws a fresh free path from the shell's boundary (the
+    exponential law is memoryless). Returns ``(t, reached)`` and, in ``cols``, the shell columns [m] from ``p`` to
+    ``t``; ``cseg`` (n_comp,) is a work array."""
     nc = cols.shape[0]
     k_uni = 0.0
     for q in range(nc):
