@@ -258,6 +258,8 @@ def _layer_index(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> i
 #: columns (:func:`_short_piece_columns`): their truncation is then below 1e-9 relative (its docstring).
 _SHORT_SL = 2.0
 _SHORT_LEN = 2000.0
+#: Largest curvature term ``kappa L`` [-] of the closed-form columns (Earth's at ``_SHORT_LEN``: 1.57e-4).
+_SHORT_KL = 1.6e-4
 #: How far inside a piece's altitude range [m] its layers are read (its ends lie on layer boundaries up to rounding).
 _SHORT_EDGE = 1e-3
 
@@ -275,7 +277,7 @@ def _short_piece_columns(r2, b, a, c, rb, layers, nlay, out):
     first-order term of ``e^(s kappa u^2)``), and a linear layer ``l h + c`` to ``L (l h_m + c) + l kappa L^3 / 12`` (0
     where it is negative: ``max(0, .)``). Applies where each component keeps one layer over the piece's altitude range
     and a linear layer keeps its sign there (no kink of ``max(0, .)``), a layer with ``e^(s h)`` has no linear part,
-    ``|s| L <= _SHORT_SL`` (2) and ``L <= _SHORT_LEN`` (2 km): with ``|x| <= 1`` and ``kappa <= 7.9e-8`` m^-1 the
+    ``|s| L <= _SHORT_SL`` (2), ``L <= _SHORT_LEN`` (2 km) and ``kappa L <= _SHORT_KL`` (1.6e-4): with ``|x| <= 1`` the
     truncated terms are then ``x^14 / 15! < 1e-12`` in ``S``, ``x^8 / 1774080`` in ``C`` (times the curvature term,
     itself ``<= |s| L kappa L / 12 < 3e-5``) and ``(s kappa L^2)^2 / 160 < 1e-9``, where the 4-point Gauss-Legendre sum
     of :func:`_piece_columns` is within 3e-7 (module docstring). Inside a cloud layer a free path of some 30 m costs one
@@ -290,6 +292,8 @@ def _short_piece_columns(r2, b, a, c, rb, layers, nlay, out):
     hm = rm - rb
     mum = (b + tm) / rm
     kap = (1.0 - mum * mum) / (2.0 * rm)
+    if kap * ln > _SHORT_KL:
+        return False  # a small planet's curvature (on Earth kappa L <= 1.6e-4 at 2 km)
     # the altitude range of the piece: its ends, and the tangent point where the ray passes it
     ha = math.sqrt(max(r2 + 2.0 * b * a + a * a, 0.0)) - rb
     hc = math.sqrt(max(r2 + 2.0 * b * c + c * c, 0.0)) - rb
