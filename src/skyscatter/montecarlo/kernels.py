@@ -29,8 +29,10 @@ columns are per component and wavelength independent; the optical depth at any w
 density ``sigma_t(x) T(x)`` is known exactly for every wavelength, which spectral MIS needs. From inside a cloud
 layer (a shell where a component's density is constant: ``ushell``, ``driver.uniform_shells``) the same density is
 sampled by decomposition ([Kutz2017]; :func:`_uniform_free_path`): the layer's free path in closed form, the air
-marched up to it with a target of its own (one Gauss-Legendre piece, no Newton), and a shadow ray from there ends
-without a march once the layer alone passes its depth (:func:`_uniform_lower_bound`). Through the cloud
+up to it with a target of its own (one piece, no Newton), and a shadow ray from there ends without a march once the
+layer alone passes its depth (:func:`_uniform_lower_bound`). A piece of a ray inside the layer up to 2 km long
+(the air along such a free path, or up to the layer's top along a shadow ray) takes its columns in closed form
+about its midpoint (:func:`_short_piece_columns`; within 1e-9 relative) instead of Gauss-Legendre. Through the cloud
 field, free paths are sampled by decomposition and delta tracking against a block majorant grid and shadow rays
 by residual ratio tracking (:mod:`.tracking`); the two are combined by decomposition: the shell free path
 ``t_s`` is drawn first, the field is tracked up to ``t_s``, and whichever collides first is the collision.
@@ -237,6 +239,108 @@ def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     disc2 = b * b - (r2 - rt * rt)
     t = -b + math.sqrt(disc2 if disc2 > 0.0 else 0.0)
     return (t if t > 0.0 else 0.0), False
+
+
+@inline
+def _layer_index(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> int:
+    """Index of the layer of component ``comp`` that :func:`_density` uses at altitude ``h`` [m]."""
+    start = 0.0
+    n = nlay[comp]
+    for k in range(n):
+        w = layers[comp, k, 0]
+        if k == n - 1 or h < start + w:
+            return k
+        start += w
+    return n - 1
+
+
+#: Largest ``|s| L`` (exponential rate [m^-1] times piece length [m]) and piece length [m] of the closed-form
+#: columns (:func:`_short_piece_columns`): their truncation is then below 1e-9 relative (its docstring).
+_SHORT_SL = 2.0
+_SHORT_LEN = 2000.0
+#: Largest curvature term ``kappa L`` [-] of the closed-form columns (Earth's at ``_SHORT_LEN``: 1.57e-4).
+_SHORT_KL = 1.6e-4
+#: How far inside a piece's altitude range [m] its layers are read (its ends lie on layer boundaries up to rounding).
+_SHORT_EDGE = 1e-3
+
+
+@inline
+def _short_piece_columns(r2, b, a, c, rb, layers, nlay, out):
+    """Columns [m] of every component over ``[a, c]`` [m] of a ray with ``|p|^2 = r2`` [m^2], ``p.d = b`` [m], in closed
+    form about the piece's midpoint, for short pieces; False (``out`` unchanged) where it does not apply.
+
+    With ``u`` the distance [m] from the midpoint (radius ``r_m``, cosine to the vertical ``mu_m``), the altitude is
+    ``h(u) = h_m + mu_m u + kappa u^2 + O(u^3 / r_m^2)``, ``kappa = (1 - mu_m^2) / (2 r_m)`` (Taylor expansion of
+    ``sqrt(r_m^2 + 2 r_m mu_m u + u^2)``). A layer ``a e^(s h)`` ([m] density law of ``DensityProfile``) then integrates
+    over the piece of length ``L`` to ``a e^(s h_m) L [S(x) + s kappa L^2 C(x)]`` with ``x = s mu_m L / 2``, ``S(x) =
+    sinh(x) / x`` and ``C(x) = int_{-1/2}^{1/2} v^2 e^(2 x v) dv`` (their Taylor series, [Abramowitz1964] 4.5.62; the
+    first-order term of ``e^(s kappa u^2)``), and a linear layer ``l h + c`` to ``L (l h_m + c) + l kappa L^3 / 12`` (0
+    where it is negative: ``max(0, .)``). Applies where each component keeps one layer over the piece's altitude range
+    and a linear layer keeps its sign there (no kink of ``max(0, .)``), a layer with ``e^(s h)`` has no linear part,
+    ``|s| L <= _SHORT_SL`` (2), ``L <= _SHORT_LEN`` (2 km) and ``kappa L <= _SHORT_KL`` (1.6e-4): with ``|x| <= 1`` the
+    truncated terms are then ``x^14 / 15! < 1e-12`` in ``S``, ``x^8 / 1774080`` in ``C`` (times the curvature term,
+    itself ``<= |s| L kappa L / 12 < 3e-5``) and ``(s kappa L^2)^2 / 160 < 1e-9``, where the 4-point Gauss-Legendre sum
+    of :func:`_piece_columns` is within 3e-7 (module docstring). Inside a cloud layer a free path of some 30 m costs one
+    square root per end and one exponential per exponential component instead of four square roots and four exponentials
+    per component."""
+    ln = c - a
+    if not (0.0 < ln <= _SHORT_LEN):
+        return False
+    tm = 0.5 * (a + c)
+    rm2 = r2 + 2.0 * b * tm + tm * tm
+    rm = math.sqrt(rm2)
+    hm = rm - rb
+    mum = (b + tm) / rm
+    kap = (1.0 - mum * mum) / (2.0 * rm)
+    if kap * ln > _SHORT_KL:
+        return False  # a small planet's curvature (on Earth kappa L <= 1.6e-4 at 2 km)
+    # the altitude range of the piece: its ends, and the tangent point where the ray passes it
+    ha = math.sqrt(max(r2 + 2.0 * b * a + a * a, 0.0)) - rb
+    hc = math.sqrt(max(r2 + 2.0 * b * c + c * c, 0.0)) - rb
+    hlo = min(ha, hc)
+    hhi = max(ha, hc)
+    if a < -b < c:
+        hlo = min(hlo, math.sqrt(max(r2 - b * b, 0.0)) - rb)
+    # a piece ends on a layer boundary (a quadrature shell) up to rounding: the layers are those 1 mm inside its
+    # range (as for the Gauss-Legendre nodes, which lie 7 % of the piece inside its ends)
+    if hhi - hlo > 2.0 * _SHORT_EDGE:
+        hlo += _SHORT_EDGE
+        hhi -= _SHORT_EDGE
+    else:
+        hlo = hm
+        hhi = hm
+    for q in range(out.shape[0]):
+        k = _layer_index(hlo, layers, nlay, q)
+        if _layer_index(hhi, layers, nlay, q) != k:
+            return False
+        ea = layers[q, k, 1]
+        es = layers[q, k, 2]
+        el = layers[q, k, 3]
+        ec = layers[q, k, 4]
+        if ea != 0.0 and es != 0.0:
+            if el != 0.0 or ec != 0.0 or ea < 0.0 or abs(es) * ln > _SHORT_SL:
+                return False
+        elif (el * hlo + ec + ea < 0.0) != (el * hhi + ec + ea < 0.0):
+            return False  # a zero inside the piece: the kink of max(0, .)
+    hk = min(max(hm, hlo), hhi)
+    for q in range(out.shape[0]):
+        k = _layer_index(hk, layers, nlay, q)
+        ea = layers[q, k, 1]
+        es = layers[q, k, 2]
+        el = layers[q, k, 3]
+        ec = layers[q, k, 4]
+        if ea != 0.0 and es != 0.0:
+            x = 0.5 * es * mum * ln
+            x2 = x * x
+            sx = 1.0 + x2 * (1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (1.0 / 5040.0 + x2 * (1.0 / 362880.0 + x2 * (
+                1.0 / 39916800.0 + x2 * (1.0 / 6227020800.0))))))
+            cx = 1.0 / 12.0 + x2 * (1.0 / 40.0 + x2 * (1.0 / 672.0 + x2 * (1.0 / 25920.0)))
+            out[q] = ea * math.exp(es * hm) * ln * (sx + es * kap * ln * ln * cx)
+        elif el * hk + ec + ea < 0.0:
+            out[q] = 0.0  # negative over the whole piece (checked above): the density's max(0, .)
+        else:
+            out[q] = ln * (el * hm + ec + ea) + el * kap * ln * ln * ln / 12.0
+    return True
 
 
 @helper
@@ -532,17 +636,31 @@ def _shadow_march(px, py, pz, wx, wy, wz, te, target, kmin, rb, edges, layers, n
     (they depend on the cosine there only, the shells being spherically symmetric). The table's nodes are the
     same pieces and Gauss-Legendre sums as the march (the sphere is a quadrature shell), so the only difference is
     the interpolation (within 5e-10 relative, docs/clouds.md). Near the top of a cloud the ray's 10-odd pieces
-    above it become one or two."""
+    above it become one or two; a ray going outwards with no quadrature shell below that sphere is one piece, taken
+    without the march (in closed form, :func:`_short_piece_columns`, where that applies)."""
     rc = sgeo[0]
     r2 = px * px + py * py + pz * pz
     if rc > 0.0 and r2 < rc * rc:
         b = px * wx + py * wy + pz * wz
         tc = -b + math.sqrt(max(b * b - (r2 - rc * rc), 0.0))
         if tc < te:
-            _, deep, _ = _march(px, py, pz, wx, wy, wz, tc, target, kmin, rb, edges, layers, nlay, tot, tmp, rec,
-                                False)
-            if deep:
-                return True
+            # outwards with no quadrature shell between r and rc, the ray up to rc is one piece: taken without the
+            # march's search for crossings (the same piece and sum)
+            one = b >= 0.0
+            if one:
+                for e in range(edges.shape[0]):
+                    if r2 < edges[e] * edges[e] < rc * rc:
+                        one = False
+            if one:
+                if not _short_piece_columns(r2, b, 0.0, tc, rb, layers, nlay, tot):
+                    _piece_columns(r2, b, 0.0, tc, rb, layers, nlay, tot)
+                if _dot(kmin, tot) >= target:
+                    return True
+            else:
+                _, deep, _ = _march(px, py, pz, wx, wy, wz, tc, target, kmin, rb, edges, layers, nlay, tot, tmp, rec,
+                                    False)
+                if deep:
+                    return True
             if _add_columns_above(sgeo, stab, (b + tc) / rc, tot):
                 return _dot(kmin, tot) >= target
     _, deep, _ = _march(px, py, pz, wx, wy, wz, te, target, kmin, rb, edges, layers, nlay, tot, tmp, rec, False)
@@ -575,16 +693,19 @@ def _shell_exit(px, py, pz, dx, dy, dz, rlo, rhi):
 @helper
 def _uniform_free_path(px, py, pz, dx, dy, dz, t_end, target, kh, s, ushell, rb, edges, layers, nlay, cols, tmp,
                        rec, kha, cseg, st):
-    """A free path from ``p`` [m] inside the uniform shell ``s`` (:func:`_uniform_shell`) along ``d`` up to
-    ``t_end`` [m], for the hero's coefficients ``kh`` [m^-1]: the same collision density ``sigma_t T`` as
-    :func:`_march` with ``target``, sampled by decomposition ([Kutz2017], decomposition tracking: the first of two
-    independent collisions wins): the shell's constant part ``K = sum_q kh_q rho_q`` has the closed-form free path
-    ``target / K`` inside the shell, the rest of the medium (the air) is marched with its own exponential target
-    (coefficients ``kha``: ``kh`` without the shell's constant components) up to that distance. Inside a thick
-    cloud the air's optical depth over a free path is some 1e-3 of the cloud's, so the march is one Gauss-Legendre
-    piece without Newton's inversion. A path that leaves the shell without a collision draws a fresh free path
-    from the shell's boundary (the exponential law is memoryless). Returns ``(t, reached)`` and, in ``cols``, the
-    shell columns [m] from ``p`` to ``t``; ``cseg`` (n_comp,) is a work array."""
+    """A free path from ``p`` [m] inside the uniform shell ``s`` (:func:`_uniform_shell`) along ``d`` up to ``t_end``
+    [m], for the hero's coefficients ``kh`` [m^-1]: the same collision density ``sigma_t T`` as :func:`_march` with
+    ``target``, sampled by decomposition ([Kutz2017], decomposition tracking: the first of two independent collisions
+    wins): the shell's constant part ``K = sum_q kh_q rho_q`` has the closed-form free path ``target / K`` inside the
+    shell, the rest of the medium (the air) is marched with its own exponential target (coefficients ``kha``: ``kh``
+    without the shell's constant components) up to that distance. Inside a thick cloud the air's optical depth over a
+    free path is some 1e-3 of the cloud's, so the march is one piece without Newton's inversion; where no quadrature
+    shell cuts the uniform one it is that piece alone (no search for crossings), its columns in closed form
+    (:func:`_short_piece_columns`) where that applies, and the air's target ``-ln(1 - u) >= u`` is computed only when
+    the uniform ``u`` is below the air's optical depth (the same decision as the march's, one logarithm fewer per free
+    path). A path that leaves the shell without a collision draws a fresh free path from the shell's boundary (the
+    exponential law is memoryless). Returns ``(t, reached)`` and, in ``cols``, the shell columns [m] from ``p`` to
+    ``t``; ``cseg`` (n_comp,) is a work array."""
     nc = cols.shape[0]
     k_uni = 0.0
     for q in range(nc):
@@ -594,11 +715,33 @@ def _uniform_free_path(px, py, pz, dx, dy, dz, t_end, target, kh, s, ushell, rb,
     d_shell = min(_shell_exit(px, py, pz, dx, dy, dz, ushell[s, 0], ushell[s, 1]), t_end)
     t_c = target / k_uni if k_uni > 0.0 else np.inf
     t_lim = min(t_c, d_shell)
-    target_a = -math.log1p(-next_uniform(st))
-    t, reached, _ = _march(px, py, pz, dx, dy, dz, t_lim, target_a, kha, rb, edges, layers, nlay, cols, tmp, rec,
-                           True)
-    if reached:
-        return t, True
+    u_a = next_uniform(st)
+    rlo = ushell[s, 0]
+    rhi = ushell[s, 1]
+    inner = False  # a quadrature shell inside the uniform one: the ray up to t_lim may be more than one piece
+    for e in range(edges.shape[0]):
+        if rlo < edges[e] < rhi:
+            inner = True
+    if inner:
+        target_a = -math.log1p(-u_a)
+        t, reached, _ = _march(px, py, pz, dx, dy, dz, t_lim, target_a, kha, rb, edges, layers, nlay, cols, tmp, rec,
+                               True)
+        if reached:
+            return t, True
+    else:
+        # the ray stays in the shell up to t_lim, which no quadrature shell cuts: one piece, as the march would
+        # have it, without the march's search for crossings; the air's exponential target -ln(1 - u_a) >= u_a is
+        # taken (one logarithm) only when u_a does not already exceed the air's optical depth, some 1e-3 here
+        r2 = px * px + py * py + pz * pz
+        b = px * dx + py * dy + pz * dz
+        if not _short_piece_columns(r2, b, 0.0, t_lim, rb, layers, nlay, cols):
+            _piece_columns(r2, b, 0.0, t_lim, rb, layers, nlay, cols)
+        tau_a = _dot(kha, cols)
+        if u_a <= tau_a:
+            target_a = -math.log1p(-u_a)
+            if tau_a >= target_a:
+                t = _invert_in_piece(r2, b, 0.0, t_lim, target_a, tau_a, target_a, kha, rb, layers, nlay, cols)
+                return t, True
     if t_c < d_shell:
         return t_c, True
     if d_shell >= t_end:
