@@ -11,7 +11,12 @@ Each process's CPU time (user + system of the finished child) is printed beside 
 machine the CPU time is the comparable figure. ``--tables coarse`` runs the quick-look tables instead of the
 default ones (what ``skyscatter skymatrix --spectral`` uses; their first build, the cold case, is the family line).
 
-Usage: ``python benchmarks/bench_spectral_skymatrix.py [--repeat 2] [--sites 4] [--skip-gensdaymtx]
+After the rounds it prints, per program, the best and the median over the rounds of the wall and CPU times and
+of the peak RSS, and the per-round ratio ours / gensdaymtx (best and median), with the load average (1 min) at
+the end of each round: ``--warmup`` runs each program once, untimed, before the rounds (the page cache then holds
+the tables and the Python modules, so the first round is not the cold case).
+
+Usage: ``python benchmarks/bench_spectral_skymatrix.py [--repeat 2] [--warmup] [--sites 4] [--skip-gensdaymtx]
 [--tables default|coarse]``. Set SKYSCATTER_CACHE_DIR to a cache that holds (or may hold) the family. State the
 load average with the numbers.
 """
@@ -43,9 +48,31 @@ def run(cmd: list[str], env: dict, cwd: Path | None = None) -> tuple[float, floa
     return wall, usage.ru_maxrss / 1024.0, usage.ru_utime + usage.ru_stime
 
 
+def summary(stats: dict[str, list[tuple[float, float, float, float]]]) -> None:
+    """Best and median over the rounds of each program's wall time, CPU time [s] and peak RSS [MiB], the range of
+    the load average at the rounds' ends, and the per-round ratios ours / gensdaymtx."""
+    import numpy as np
+
+    for name, rows in stats.items():
+        if not rows:
+            continue
+        a = np.array(rows)
+        print(f"{name}: {len(rows)} rounds: wall best {a[:, 0].min():.1f} s, median {np.median(a[:, 0]):.1f} s; "
+              f"CPU best {a[:, 1].min():.1f} s, median {np.median(a[:, 1]):.1f} s; peak RSS {a[:, 2].min():.0f}-"
+              f"{a[:, 2].max():.0f} MiB (median {np.median(a[:, 2]):.0f}); "
+              f"load {a[:, 3].min():.1f}-{a[:, 3].max():.1f}")
+    if stats["ours"] and len(stats["gensdaymtx"]) == len(stats["ours"]):
+        o, g = np.array(stats["ours"]), np.array(stats["gensdaymtx"])
+        rw, rc = o[:, 0] / g[:, 0], o[:, 1] / g[:, 1]
+        print(f"ratio ours / gensdaymtx per round: wall {np.round(rw, 2).tolist()} (best-to-best "
+              f"{o[:, 0].min() / g[:, 0].min():.2f}, median {np.median(rw):.2f}); CPU {np.round(rc, 2).tolist()} "
+              f"(best-to-best {o[:, 1].min() / g[:, 1].min():.2f}, median {np.median(rc):.2f})")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--warmup", action="store_true", help="one untimed run of each program before the rounds")
     ap.add_argument("--sites", type=int, default=4)
     ap.add_argument("--skip-gensdaymtx", action="store_true")
     ap.add_argument("--tables", choices=("default", "coarse"), default="default")
@@ -80,11 +107,21 @@ def main() -> None:
         subprocess.run(gens[:1] + ["-m", "1", str(epw)], cwd=rad_dir, env=genv, stdout=subprocess.DEVNULL,
                        stderr=subprocess.DEVNULL, check=False)
         print(f"gensdaymtx atmos_data ready (built or loaded, plus one Tregenza run): {time.perf_counter() - t0:.1f} s")
+    if args.warmup:
+        (work / "year.nc").unlink(missing_ok=True)
+        w, m, c = run(ours, env)
+        print(f"warm-up (untimed): skyscatter skymatrix --spectral: {w:.1f} s wall, {c:.1f} s CPU, peak {m:.0f} MiB "
+              f"(load {os.getloadavg()[0]:.1f})")
+        if gens is not None:
+            with open(work / "g.mtx", "wb") as fh:
+                subprocess.run(gens, cwd=rad_dir, env=genv, stdout=fh, stderr=subprocess.DEVNULL, check=False)
+    stats: dict[str, list[tuple[float, float, float, float]]] = {"ours": [], "gensdaymtx": []}
     for r in range(args.repeat):
         (work / "year.nc").unlink(missing_ok=True)
         w, m, c = run(ours, env)
+        stats["ours"].append((w, c, m, os.getloadavg()[0]))
         print(f"round {r + 1}: skyscatter skymatrix --spectral: {w:.1f} s wall, {c:.1f} s CPU, peak {m:.0f} MiB "
-              f"(load {os.getloadavg()[0]:.1f})")
+              f"(load {os.getloadavg()[0]:.1f})", flush=True)
         if gens is not None:
             with open(work / "g.mtx", "wb") as fh:
                 t0 = time.perf_counter()
@@ -92,8 +129,11 @@ def main() -> None:
                 _, _, usage = os.wait4(p.pid, 0)
                 gw = time.perf_counter() - t0
             gc = usage.ru_utime + usage.ru_stime
+            stats["gensdaymtx"].append((gw, gc, usage.ru_maxrss / 1024.0, os.getloadavg()[0]))
             print(f"round {r + 1}: gensdaymtx -m 2: {gw:.1f} s wall, {gc:.1f} s CPU, peak {usage.ru_maxrss / 1024:.0f} "
-                  f"MiB; ratio ours / gensdaymtx {w / gw:.2f} wall, {c / gc:.2f} CPU")
+                  f"MiB (load {os.getloadavg()[0]:.1f}); ratio ours / gensdaymtx {w / gw:.2f} wall, {c / gc:.2f} CPU",
+                  flush=True)
+    summary(stats)
     if args.sites > 0:
         sites = []
         for k in range(args.sites):

@@ -485,15 +485,26 @@ def runs_of(sky: dict, seed0: int, earlier: dict) -> list[dict]:
     return runs
 
 
+def phase_g(ds, h, i: int) -> float:
+    """The phase g of hour ``i``'s clear air as the Monte Carlo takes it (``skymatrix_mc.parts_of``): the matrix's
+    ``aerosol_phase_g``, the family base's where NaN or absent (a particle aerosol has no such axis)."""
+    base = float(h.family.base.mie_phase_g) if h.family is not None else np.nan
+    g = float(ds["aerosol_phase_g"].values[i]) if "aerosol_phase_g" in ds else np.nan
+    return g if np.isfinite(g) else base
+
+
 def same_sky(old: dict, what: str, job: dict, patches: np.ndarray) -> dict | None:
     """The sky ``what`` of an earlier results row when its Monte Carlo ran through the air this job's would (the
-    same retrieved aerosol optical depth and albedo, cloud optical depth and sun, the same patches), else None."""
+    same retrieved aerosol optical depth, albedo and phase g, cloud optical depth and sun, the same patches), else
+    None. A row written before the retrieval had a phase leg (2026-12-02) has no ``aerosol_phase_g``: its clear
+    sky ran through the base medium's g (``meta["base_phase_g"]``)."""
     sky = next((s for s in old["skies"] if s["sky"] == what), None)
     if sky is None or list(sky["patches_all"]) != patches.tolist():
         return None
-    keys = ("aod", "ssa") if what == "clear" else ("cloud_optical_depth",)
+    keys = ("aod", "ssa", "aerosol_phase_g") if what == "clear" else ("cloud_optical_depth",)
     for k in keys:
-        a, b = float(old[k]), float(job["meta"][k])
+        # a row without the phase's g ran before the retrieval's phase leg: through the base medium's g
+        a, b = float(old.get(k, job["meta"].get("base_phase_g", np.nan))), float(job["meta"].get(k, np.nan))
         if not (np.isclose(a, b, rtol=1e-9, atol=0.0) or (np.isnan(a) and np.isnan(b))):
             return None
     if not np.isclose(old["sun_zenith_deg"], np.degrees(job["sun_zenith"]), rtol=0, atol=1e-9):
@@ -708,6 +719,8 @@ def prepare(args, with_gens: bool = True) -> dict:
                      "gens": None if gens is None else gens[i][:, b_wl] / (GENSDAYMTX_SPAN_NM * e0_gens * ecc),
                      "meta": {"aod": float(h.aerosol_optical_depth[i]),
                               "ssa": float(ds["single_scattering_albedo"].values[i]),
+                              "aerosol_phase_g": phase_g(ds, h, i),
+                              "base_phase_g": phase_g({}, h, 0),
                               "cloud_optical_depth": float(h.cloud_optical_depth[i]),
                               "cloud_fraction": float(h.cloud_fraction[i]), "status": HOUR_STATUS[int(h.status[i])],
                               "dhi_closure": float(ds["dhi_closure"].values[i])}})
@@ -766,6 +779,8 @@ def prepare_subset(args, earlier: dict, kinds: tuple[str, ...], only: set[int]) 
                      "ours": ds["sky_radiance"].values[j][:, k_ours] / (e0_ours * ecc), "gens": None,
                      "meta": {"aod": float(h.aerosol_optical_depth[j]),
                               "ssa": float(ds["single_scattering_albedo"].values[j]),
+                              "aerosol_phase_g": phase_g(ds, h, j),
+                              "base_phase_g": phase_g({}, h, 0),
                               "cloud_optical_depth": float(h.cloud_optical_depth[j]),
                               "cloud_fraction": float(h.cloud_fraction[j]), "status": HOUR_STATUS[int(h.status[j])],
                               "dhi_closure": float(ds["dhi_closure"].values[j])}})
