@@ -60,10 +60,14 @@ _MAPPINGS = {
                        "x = ((d - d_min) / (d_max - d_min) + theta / theta_h) / 2, d = distance to the top, "
                        "d_min = top_radius - r, d_max = rho + H, theta = acos(mu), theta_h = acos(-rho / r); "
                        "never interpolate across the two halves",
-    "scattering.x_mu_s": "(max(1 - a / A, 0) / (1 + a) + 1 - acos(mu_s) / acos(mu_s_min)) / 2, "
-                         "a = (d - d_min) / (d_max - d_min), d = distance from the "
+    "scattering.x_mu_s": "(max(1 - a / A, 0) / (1 + a) + 1 - acos(mu_s) / acos(mu_s_min)) / 2 "
+                         "+ 0.1 (g - h), a = (d - d_min) / (d_max - d_min), d = distance from the "
                          "ground to the top along mu_s, d_min = top_radius - bottom_radius, d_max = H, "
-                         "A = a at mu_s_min",
+                         "A = a at mu_s_min; e = 90 - acos(mu_s) [deg] the sun elevation, e_min its value at "
+                         "mu_s_min, g = (G(e) - G(e_min)) / (G(90) - G(e_min)) with "
+                         "G(e) = 1.5 (softplus((e + 9) / 1.5) - softplus((e - 1.5) / 1.5)), h the same with "
+                         "G(e) = 12 (softplus((e - 14) / 12) - softplus((e - 40) / 12)), "
+                         "softplus(z) = log(1 + exp(z))",
     "scattering.x_nu": "1 - phi / pi, cos(phi) = (nu - mu mu_s) / sqrt((1 - mu^2) (1 - mu_s^2)) (view-sun azimuth)",
     "radiance": "L = C* * P_R(nu) + C_M * P_M(nu) (paper), or without the C* bias at clamped texels "
                 "L = S_R * P_R(nu) + C_M * P_M(nu) + S_multiple; P_R = 3 / (16 pi) (1 + nu^2); "

@@ -24,9 +24,11 @@ Mappings (Sec. 4, "Parameterization", with the distance-based forms of Bruneton'
   top, ``d_min = R_t - r``, ``d_max = rho + H``) and ``theta / theta_h`` (zenith angle over the horizon's).
 * ``u_mu_s``: with ``d`` the distance from the ground to the top along the sun direction,
   ``a = (d - d_min) / (d_max - d_min)`` (``d_min = R_t - R_g``, ``d_max = H``) and ``A`` its value at the
-  largest tabulated sun zenith, the mean of ``max(1 - a / A, 0) / (1 + a)`` (dense near the horizon like the
-  paper's ``(1 - exp(-3 mu_s - 0.6)) / (1 - exp(-3.6))`` but ending exactly at the chosen ``mu_s_min``) and
-  ``1 - theta_s / theta_max``.
+  largest tabulated sun zenith, the mean of ``x_d = max(1 - a / A, 0) / (1 + a)`` (dense near the horizon like
+  the paper's ``(1 - exp(-3 mu_s - 0.6)) / (1 - exp(-3.6))`` but ending exactly at the chosen ``mu_s_min``) and
+  ``x_a = 1 - theta_s / theta_max``, plus ``c (g - h)``: ``g`` and ``h`` the normalised CDFs of smooth plateaus in
+  the sun elevation over twilight (-9..+1.5 deg) and the high day (14..40 deg), which move texels from the high
+  day to twilight (:func:`scattering_mu_s_coord`).
 * ``x_nu = 1 - phi / pi``, ``phi`` the azimuth between view and sun (the paper's ``(1 + nu) / 2`` needs ``nu``
   clamped per texel).
 * Irradiance table: ``x_r = (r - R_g) / (R_t - R_g)``, ``x_mu_s = (1 + mu_s) / 2``.
@@ -541,6 +543,42 @@ def mu_s_limit_a(mu_s_min: float, bottom: float, top: float) -> float:
     return _mu_s_a(mu_s_min, bottom, top)
 
 
+#: Share of the sun-zenith axis moved from the high day to twilight (:func:`scattering_mu_s_coord`).
+MU_S_SHIFT = 0.1
+#: The twilight plateau's density in the sun elevation: 1 from ``MU_S_TWILIGHT_LO`` to ``MU_S_TWILIGHT_HI`` [deg]
+#: with logistic edges of width ``MU_S_TWILIGHT_EDGE`` [deg] (:func:`_plateau_cdf`).
+MU_S_TWILIGHT_LO = -9.0
+MU_S_TWILIGHT_HI = 1.5
+MU_S_TWILIGHT_EDGE = 1.5
+#: The day plateau's, from which the texels are taken: ``MU_S_DAY_LO`` to ``MU_S_DAY_HI`` [deg], edges of width
+#: ``MU_S_DAY_EDGE`` [deg].
+MU_S_DAY_LO = 14.0
+MU_S_DAY_HI = 40.0
+MU_S_DAY_EDGE = 12.0
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _softplus(z: float) -> float:
+    """``log(1 + exp(z))`` without overflow (the integral of the logistic function)."""
+    return max(z, 0.0) + math.log1p(math.exp(-abs(z)))
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _plateau_cdf(elev: float, lo: float, hi: float, w: float) -> float:
+    """Unnormalised CDF [deg] at sun elevation ``elev`` [deg] of the plateau density
+    ``sigma((e - lo) / w) - sigma((e - hi) / w)`` (``sigma`` the logistic function; ``lo``, ``hi`` [deg] its
+    ends, ``w`` [deg] the width of its edges): ``w (softplus((e - lo) / w) - softplus((e - hi) / w))``, smooth
+    (C-infinity) everywhere."""
+    return w * (_softplus((elev - lo) / w) - _softplus((elev - hi) / w))
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _plateau_share(elev: float, elev_min: float, lo: float, hi: float, w: float) -> float:
+    """:func:`_plateau_cdf` normalised to 0 at ``elev_min`` [deg] (the tables' lowest sun) and 1 at the zenith."""
+    c0 = _plateau_cdf(elev_min, lo, hi, w)
+    return (_plateau_cdf(elev, lo, hi, w) - c0) / (_plateau_cdf(90.0, lo, hi, w) - c0)
+
+
 @helper(fastmath=CONTRACT_ARCP)
 def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float, theta_max: float,
                             n_mu_s: int) -> float:
@@ -556,18 +594,41 @@ def scattering_mu_s_coord_a(mu_s: float, bottom: float, top: float, big_a: float
     d_min = top - bottom
     a = (d - d_min) / (math.sqrt(h2) - d_min)
     x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0)
-    x_a = clamp(1.0 - acos_table(mu_s) / theta_max, 0.0, 1.0)
-    return 0.5 * (x_d + x_a) * (n_mu_s - 1)
+    theta = min(acos_table(mu_s), theta_max)
+    x_a = clamp(1.0 - theta / theta_max, 0.0, 1.0)
+    deg = 180.0 / math.pi
+    elev = 90.0 - theta * deg
+    elev_min = 90.0 - theta_max * deg
+    g = _plateau_share(elev, elev_min, MU_S_TWILIGHT_LO, MU_S_TWILIGHT_HI, MU_S_TWILIGHT_EDGE)
+    h = _plateau_share(elev, elev_min, MU_S_DAY_LO, MU_S_DAY_HI, MU_S_DAY_EDGE)
+    # g - h is 0 at both ends; the clamp removes the rounding (1e-18) of its two shares there
+    return clamp(0.5 * (x_d + x_a) + MU_S_SHIFT * (g - h), 0.0, 1.0) * (n_mu_s - 1)
 
 
 @helper(fastmath=CONTRACT_ARCP)
 def scattering_mu_s_coord(mu_s: float, bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> float:
     """Index position of ``mu_s`` in the scattering tables (0 at ``mu_s_min``, n - 1 at the zenith).
 
-    The mean of the 2017 mapping ``max(1 - a / A, 0) / (1 + a)`` (dense near the horizon, for twilight) and
-    ``1 - theta_s / theta_max`` (uniform in the sun's zenith angle): the 2017 mapping alone leaves sun zenith
-    angles 0-42 deg in one cell of a 32-texel axis, across which the forward-peaked multiple scattering of
-    aerosols cannot be interpolated (+18 % at the zenith against DISORT, docs/bruneton.md).
+    ``x = (x_d + x_a) / 2 + c (g - h)`` (``c`` = ``MU_S_SHIFT`` = 0.1): ``x_d = max(1 - a / A, 0) / (1 + a)`` the
+    2017 mapping (Bruneton 2017, dense near the horizon), ``x_a = 1 - theta_s / theta_max`` (uniform in the sun's
+    zenith angle: the 2017 mapping alone leaves sun zenith angles 0-42 deg in one cell of a 32-texel axis, across
+    which the forward-peaked multiple scattering of aerosols cannot be interpolated, +18 % at the zenith against
+    DISORT, docs/bruneton.md); ``g`` and ``h`` the normalised CDFs (:func:`_plateau_share`, 0 at ``theta_max``,
+    1 at the zenith) of smooth plateaus in the sun elevation over twilight (-9..+1.5 deg, edges 1.5 deg) and the
+    high day (14..40 deg, edges 12 deg). ``g - h`` is 0 at both ends and its slope is positive in twilight and
+    negative in the high day only, so texels move from the day above about +14 deg into twilight and the low day
+    keeps its cells.
+
+    Why (docs/accuracy.md, "A smooth twilight mapping", variant E): in twilight the sky seen from the ground falls
+    2-5 times per degree of sun elevation, so the lookups' linear read between the format-19 texels ``(x_d +
+    x_a) / 2``, 1.2-2.0 deg apart there, was up to +105 % off mid-cell against the Monte Carlo. With ``c`` = 0.1
+    the 32 texels are at -12, -9.90, -8.26, -6.90, -5.70, -4.59, -3.55, -2.56, -1.59, -0.63, 0.34, 1.36, 2.45,
+    3.66, 5.02, 6.58, 8.38, 10.49, 13.01, 16.07, 19.84, 24.50, 30.14, 36.62, 43.52, 50.41, 57.16, 63.77, 70.31,
+    76.83, 83.39, 90 deg (cells reaching into -8.5..-0.5 deg 0.96-1.63 deg wide where format 19's were
+    1.23-2.02; the largest day cell 6.90 deg of sun zenith, below the 7 deg that keeps the aerosol's multiple
+    scattering readable). The mapping is smooth (C-infinity): kinked mappings left the suns next to the kink off
+    in every direction (docs/accuracy.md,
+    "Twilight between the texels").
     """
     return scattering_mu_s_coord_a(mu_s, bottom, top, _mu_s_a(mu_s_min, bottom, top), acos_table(mu_s_min),
                                    n_mu_s)

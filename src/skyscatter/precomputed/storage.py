@@ -99,7 +99,10 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "PHASE_NAMES", "STORE
 #: 19: the same layout; the multiple-scattering table (and the orders' scattering densities) hold their values
 #: divided by the lobe :func:`.sampling.multiple_lobe` at each texel's view-sun cosine, so that every read between
 #: the azimuth texels follows the aerosol's forward lobe; the lookups multiply by it at the read's own ``nu``.
-FORMAT_VERSION = 19
+#: 20: the same layout; the sun-zenith axis of the scattering tables has the smooth twilight mapping
+#: (:func:`.geometry.scattering_mu_s_coord`: texels moved from the day above +14 deg to twilight, 0.96-1.6 deg apart
+#: from -8.5 to -0.5 deg), so its texels sit at other sun elevations than format 19's.
+FORMAT_VERSION = 20
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).

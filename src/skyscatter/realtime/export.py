@@ -99,8 +99,10 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: lookups read each wavelength with its own), the alpha is no longer read. 10: the multiple-scattering texture holds
 #: the multiple scattering divided by the lobe MultipleLobe(nu) (constants MULTIPLE_LOBE, MULTIPLE_LOBE_G; multiple_lobe
 #: and inscattered_radiance of the mappings; skyscatter table format 19); the irradiance texture's alpha is 0 (was the
-#: illuminance, unread since version 9).
-MANIFEST_VERSION = 10
+#: illuminance, unread since version 9). 11: the sun-zenith axis of the scattering textures has the smooth twilight
+#: mapping (ScatteringMuSIndex, scattering_mu_s_index: constants MU_S_SHIFT, MU_S_TWILIGHT_*, MU_S_DAY_*; table
+#: format 20).
+MANIFEST_VERSION = 11
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -281,13 +283,35 @@ def mu_s_distance_unit(mu_s):
     d_min = TOP_RADIUS - BOTTOM_RADIUS
     return (distance_to_top(BOTTOM_RADIUS, mu_s) - d_min) / (big_h - d_min)
 
+def softplus(z):
+    """log(1 + exp(z)) without overflow."""
+    return max(z, 0.0) + math.log1p(math.exp(-abs(z)))
+
+def plateau_cdf(elev, lo, hi, w):
+    """Unnormalised CDF at sun elevation elev [deg] of the plateau density sigma((e - lo) / w) - sigma((e - hi) / w)
+    (ends lo, hi [deg], edges of width w [deg])."""
+    return w * (softplus((elev - lo) / w) - softplus((elev - hi) / w))
+
+def plateau_share(elev, elev_min, lo, hi, w):
+    """plateau_cdf normalised to 0 at elev_min [deg] and 1 at the zenith."""
+    c0 = plateau_cdf(elev_min, lo, hi, w)
+    return (plateau_cdf(elev, lo, hi, w) - c0) / (plateau_cdf(90.0, lo, hi, w) - c0)
+
 def scattering_mu_s_index(mu_s):
-    """Index position of mu_s along an nu slice (0 at MU_S_MIN, n_mu_s - 1 at the zenith)."""
+    """Index position of mu_s along an nu slice (0 at MU_S_MIN, n_mu_s - 1 at the zenith): (x_d + x_a) / 2 +
+    MU_S_SHIFT (g - h), x_d = max(1 - a / A, 0) / (1 + a), x_a = 1 - theta_s / theta_max, g and h the plateau_share
+    of the twilight (MU_S_TWILIGHT_*) and the high day (MU_S_DAY_*)."""
     a = mu_s_distance_unit(mu_s)
     big_a = mu_s_distance_unit(MU_S_MIN)
     x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0)
-    x_a = clamp(1.0 - math.acos(clamp(mu_s, -1.0, 1.0)) / math.acos(MU_S_MIN), 0.0, 1.0)
-    return 0.5 * (x_d + x_a) * (SCATTERING_N_MU_S - 1)
+    theta_max = math.acos(MU_S_MIN)
+    theta = min(math.acos(clamp(mu_s, -1.0, 1.0)), theta_max)
+    x_a = clamp(1.0 - theta / theta_max, 0.0, 1.0)
+    elev = 90.0 - math.degrees(theta)
+    elev_min = 90.0 - math.degrees(theta_max)
+    g = plateau_share(elev, elev_min, MU_S_TWILIGHT_LO, MU_S_TWILIGHT_HI, MU_S_TWILIGHT_EDGE)
+    h = plateau_share(elev, elev_min, MU_S_DAY_LO, MU_S_DAY_HI, MU_S_DAY_EDGE)
+    return clamp(0.5 * (x_d + x_a) + MU_S_SHIFT * (g - h), 0.0, 1.0) * (SCATTERING_N_MU_S - 1)
 
 def scattering_nu_index(mu, mu_s, nu):
     """Index position of nu (x_nu = 1 - phi / pi, phi the view-sun azimuth)."""
@@ -521,6 +545,7 @@ def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]
 
 def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
     from ..atmosphere.phase import aerosol_phase_kind
+    from ..precomputed import geometry
     from ..precomputed.compute import density_profiles
     from ..precomputed.geometry import LOG_LERP_FLOOR
     from ..precomputed.sampling import MULTIPLE_LOBE_G, SHADOW_RATIO_MAX, lobe_weight
@@ -546,6 +571,10 @@ def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
         "IRRADIANCE_N_R": atm.sizes.irradiance_r, "IRRADIANCE_N_MU_S": atm.sizes.irradiance_mu_s,
         "SCATTERING_N_R": n_r, "SCATTERING_N_MU": n_mu, "SCATTERING_N_MU_S": n_s, "SCATTERING_N_NU": n_n,
         "LOG_LERP_FLOOR": float(LOG_LERP_FLOOR), "SHADOW_RATIO_MAX": float(SHADOW_RATIO_MAX),
+        "MU_S_SHIFT": float(geometry.MU_S_SHIFT), "MU_S_TWILIGHT_LO": float(geometry.MU_S_TWILIGHT_LO),
+        "MU_S_TWILIGHT_HI": float(geometry.MU_S_TWILIGHT_HI),
+        "MU_S_TWILIGHT_EDGE": float(geometry.MU_S_TWILIGHT_EDGE), "MU_S_DAY_LO": float(geometry.MU_S_DAY_LO),
+        "MU_S_DAY_HI": float(geometry.MU_S_DAY_HI), "MU_S_DAY_EDGE": float(geometry.MU_S_DAY_EDGE),
         "DENSITY_MAX_LAYERS": n_layers,
         "RAYLEIGH_DENSITY_LAYERS": int(counts[0]), "MIE_DENSITY_LAYERS": int(counts[1]),
         "RAYLEIGH_DENSITY": [float(v) for v in profiles[0, :n_layers].ravel()],

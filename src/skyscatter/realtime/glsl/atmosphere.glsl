@@ -19,6 +19,9 @@
 //             SCATTERING_N_R, SCATTERING_N_MU, SCATTERING_N_MU_S, SCATTERING_N_NU   texel counts
 //   const float LOG_LERP_FLOOR                               floor of the smaller value's ratio in LogLerpWeight
 //   const float SHADOW_RATIO_MAX                             largest shadow factor in ShadowFactors
+//   const float MU_S_SHIFT                                   share of the sun-zenith axis moved from day to twilight
+//   const float MU_S_TWILIGHT_LO, MU_S_TWILIGHT_HI, MU_S_TWILIGHT_EDGE [deg]  the sun-zenith mapping's twilight plateau
+//   const float MU_S_DAY_LO, MU_S_DAY_HI, MU_S_DAY_EDGE [deg]  its day plateau
 //   const int DENSITY_MAX_LAYERS; const int RAYLEIGH_DENSITY_LAYERS, MIE_DENSITY_LAYERS   layers of the profiles
 //   const float RAYLEIGH_DENSITY[5 * DENSITY_MAX_LAYERS], MIE_DENSITY[...]   relative density profiles of air and
 //             aerosol, per layer (width [m], exp_term, exp_scale [1/m], linear_term [1/m], constant_term)
@@ -203,14 +206,40 @@ float MuSDistanceUnit(float mu_s) {
   return (DistanceToTop(BOTTOM_RADIUS, mu_s) - (TOP_RADIUS - BOTTOM_RADIUS)) / (H - (TOP_RADIUS - BOTTOM_RADIUS));
 }
 
-// Index position of mu_s: the mean of max(1 - a / A, 0) / (1 + a) ([Bruneton2017], A = a(MU_S_MIN)) and
-// 1 - theta_s / theta_max (theta_max = Acos(MU_S_MIN)); 0 at MU_S_MIN, n - 1 at the zenith.
+// log(1 + exp(z)) without overflow.
+float Softplus(float z) {
+  return max(z, 0.0) + log(1.0 + exp(-abs(z)));
+}
+
+// Unnormalised CDF at sun elevation elev [deg] of the plateau density sigma((e - lo) / w) - sigma((e - hi) / w)
+// (ends lo, hi [deg], edges of width w [deg]; smooth everywhere).
+float PlateauCdf(float elev, float lo, float hi, float w) {
+  return w * (Softplus((elev - lo) / w) - Softplus((elev - hi) / w));
+}
+
+// PlateauCdf normalised to 0 at elev_min [deg] and 1 at the zenith.
+float PlateauShare(float elev, float elev_min, float lo, float hi, float w) {
+  float c0 = PlateauCdf(elev_min, lo, hi, w);
+  return (PlateauCdf(elev, lo, hi, w) - c0) / (PlateauCdf(90.0, lo, hi, w) - c0);
+}
+
+// Index position of mu_s: (x_d + x_a) / 2 + MU_S_SHIFT (g - h) with x_d = max(1 - a / A, 0) / (1 + a)
+// ([Bruneton2017], A = a(MU_S_MIN)), x_a = 1 - theta_s / theta_max (theta_max = Acos(MU_S_MIN)), g and h the
+// PlateauShare of the twilight (MU_S_TWILIGHT_*) and the high day (MU_S_DAY_*): texels moved from the day above
+// +14 deg to twilight; 0 at MU_S_MIN, n - 1 at the zenith.
 float ScatteringMuSIndex(float mu_s) {
   float a = MuSDistanceUnit(mu_s);
   float big_a = MuSDistanceUnit(MU_S_MIN);
   float x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0);
-  float x_a = clamp(1.0 - Acos(clamp(mu_s, -1.0, 1.0)) / Acos(MU_S_MIN), 0.0, 1.0);
-  return 0.5 * (x_d + x_a) * float(SCATTERING_N_MU_S - 1);
+  float theta_max = Acos(MU_S_MIN);
+  float theta = min(Acos(clamp(mu_s, -1.0, 1.0)), theta_max);
+  float x_a = clamp(1.0 - theta / theta_max, 0.0, 1.0);
+  float deg = 180.0 / PI;
+  float elev = 90.0 - theta * deg;
+  float elev_min = 90.0 - theta_max * deg;
+  float g = PlateauShare(elev, elev_min, MU_S_TWILIGHT_LO, MU_S_TWILIGHT_HI, MU_S_TWILIGHT_EDGE);
+  float h = PlateauShare(elev, elev_min, MU_S_DAY_LO, MU_S_DAY_HI, MU_S_DAY_EDGE);
+  return clamp(0.5 * (x_d + x_a) + MU_S_SHIFT * (g - h), 0.0, 1.0) * float(SCATTERING_N_MU_S - 1);
 }
 
 // Index position of nu: x_nu = 1 - phi / pi, phi the azimuth between view and sun,
