@@ -182,20 +182,30 @@ LOBE_NONE, LOBE_RAYLEIGH, LOBE_CORNETTE_SHANKS, LOBE_HENYEY_GREENSTEIN, LOBE_TAB
 
 
 @inline
-def _density(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> float:
-    """Relative density of component ``comp`` at altitude ``h`` [m] (DensityProfile semantics)."""
+def _layer_index(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> int:
+    """Index of the layer of component ``comp`` that :func:`_density` uses at altitude ``h`` [m] (-1: the
+    component has no layers)."""
     start = 0.0
     n = nlay[comp]
     for k in range(n):
         w = layers[comp, k, 0]
         if k == n - 1 or h < start + w:
-            v = layers[comp, k, 3] * h + layers[comp, k, 4]
-            a = layers[comp, k, 1]
-            if a != 0.0:
-                v += a * math.exp(layers[comp, k, 2] * h)
-            return v if v > 0.0 else 0.0
+            return k
         start += w
-    return 0.0
+    return n - 1
+
+
+@inline
+def _density(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> float:
+    """Relative density of component ``comp`` at altitude ``h`` [m] (DensityProfile semantics)."""
+    k = _layer_index(h, layers, nlay, comp)
+    if k < 0:
+        return 0.0
+    v = layers[comp, k, 3] * h + layers[comp, k, 4]
+    a = layers[comp, k, 1]
+    if a != 0.0:
+        v += a * math.exp(layers[comp, k, 2] * h)
+    return v if v > 0.0 else 0.0
 
 
 @helper
@@ -240,18 +250,6 @@ def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     t = -b + math.sqrt(disc2 if disc2 > 0.0 else 0.0)
     return (t if t > 0.0 else 0.0), False
 
-
-@inline
-def _layer_index(h: float, layers: np.ndarray, nlay: np.ndarray, comp: int) -> int:
-    """Index of the layer of component ``comp`` that :func:`_density` uses at altitude ``h`` [m]."""
-    start = 0.0
-    n = nlay[comp]
-    for k in range(n):
-        w = layers[comp, k, 0]
-        if k == n - 1 or h < start + w:
-            return k
-        start += w
-    return n - 1
 
 
 #: Largest ``|s| L`` (exponential rate [m^-1] times piece length [m]) and piece length [m] of the closed-form
