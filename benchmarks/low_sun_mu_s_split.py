@@ -35,8 +35,10 @@ of ``benchmarks/low_sun_montecarlo_reference.py`` from the ground):
    is larger, at some wavelength): directions outside per case and in all (of 315).
 
 ``python benchmarks/low_sun_mu_s_split.py [--splits 32/32/32,40/40/16,...] [--montecarlo]`` (a split is
-``n_rayleigh/n_mie/n_multiple``; the tables from the cache or computed at the three wavelengths: a few minutes
-each for the 94-texel ones).
+``n_rayleigh/n_mie/n_multiple``; a count ending in ``c``, e.g. ``32/32/32c``, reads that table with the sun below
+the horizon by the four-point Lagrange formula in the logarithm over its texels ``k - 1 .. k + 2``, kept between
+the cell's two values, instead of linearly; the tables from the cache or computed at the three wavelengths: a few
+minutes each for the 94-texel ones).
 """
 
 from __future__ import annotations
@@ -111,7 +113,8 @@ class Emulator:
     def _knot(self, name: str, n: int, k: int) -> np.ndarray:
         key = (name, n, k)
         if key not in self._knots:
-            self._knots[key] = knot(self.tables[name], k * (FINE - 1) / (n - 1))
+            # float32 as the tables (the cache holds up to a few hundred slices of 0.4 MB)
+            self._knots[key] = knot(self.tables[name], k * (FINE - 1) / (n - 1)).astype(np.float32)
         return self._knots[key]
 
     def slice(self, name: str, n: int, mu_s: float, cubic: bool = False) -> np.ndarray:
