@@ -37,8 +37,8 @@ of ``benchmarks/low_sun_montecarlo_reference.py`` from the ground):
 ``python benchmarks/low_sun_mu_s_split.py [--splits 32/32/32,40/40/16,...] [--montecarlo]`` (a split is
 ``n_rayleigh/n_mie/n_multiple``; a count ending in ``c``, e.g. ``32/32/32c``, reads that table with the sun below
 the horizon by the four-point Lagrange formula in the logarithm over its texels ``k - 1 .. k + 2``, kept between
-the cell's two values, instead of linearly; the tables from the cache or computed at the three wavelengths: a few
-minutes each for the 94-texel ones).
+the cell's two values, instead of linearly, and ``C`` at every sun; the tables from the cache or computed at the
+three wavelengths: a few minutes each for the 94-texel ones).
 """
 
 from __future__ import annotations
@@ -63,8 +63,9 @@ from low_sun_montecarlo_reference import ATMOSPHERES, directions  # noqa: E402  
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data" / "low_sun_montecarlo.json"
 WAVELENGTHS = [400.0, 560.0, 700.0]
 FINE = 94
-#: Sun-zenith texels and the logarithmic read below the horizon (True) of each scattering table, in SCATTERING's order
-Split = tuple[tuple[int, bool], ...]
+#: Sun-zenith texels and the read of each scattering table, in SCATTERING's order: "" linear, "c" the logarithmic
+#: four-point read with the sun below the horizon (linear above), "C" that read at every sun
+Split = tuple[tuple[int, str], ...]
 SCATTERING = ("single_rayleigh", "single_mie", "multiple")
 BANDS = [(-12.0, -7.0), (-7.0, -4.5), (-4.5, -2.0), (-2.0, -0.5), (-0.5, 1.5), (1.5, 4.0), (4.0, 8.0), (8.0, 16.5),
          (16.5, 61.0)]
@@ -134,7 +135,7 @@ class Emulator:
         """Tables of two sun-zenith texels, each holding every scattering table's read at ``mu_s``."""
         t = {name: v for name, v in self.tables.items() if name not in SCATTERING}
         for name, (n, cubic) in zip(SCATTERING, split, strict=True):
-            s = self.slice(name, n, mu_s, cubic and mu_s < 0.0).astype(np.float32)
+            s = self.slice(name, n, mu_s, cubic == "C" or (cubic == "c" and mu_s < 0.0)).astype(np.float32)
             t[name] = np.ascontiguousarray(np.stack([s, s], axis=2))
         f = self.fine
         return PrecomputedAtmosphere(f.parameters, f.wavelengths, self.sizes2, f.orders, t)
@@ -174,15 +175,15 @@ def outside(cases: list[dict], values: list[np.ndarray], cols: list[int]) -> lis
 
 
 def parse_splits(text: str) -> list[Split]:
-    """``"a/b/c,..."`` -> [((n_rayleigh, cubic), (n_mie, cubic), (n_multiple, cubic)), ...] (sun-zenith texels per
+    """``"a/b/c,..."`` -> [((n_rayleigh, read), (n_mie, read), (n_multiple, read)), ...] (sun-zenith texels per
     table; a count ending in ``c`` reads that table by the logarithmic four-point rule with the sun below the
-    horizon)."""
-    return [tuple((int(v.rstrip("c")), v.endswith("c")) for v in s.split("/")) for s in text.split(",")]
+    horizon, ``C`` at every sun)."""
+    return [tuple((int(v.rstrip("cC")), v[len(v.rstrip("cC")):]) for v in s.split("/")) for s in text.split(",")]
 
 
 def label(split: Split) -> str:
     """``"32/32/44c"``: the split as given on the command line."""
-    return "/".join(f"{n}{'c' if c else ''}" for n, c in split)
+    return "/".join(f"{n}{c}" for n, c in split)
 
 
 def main() -> None:
