@@ -23,12 +23,15 @@ the direct part, the rest the diffuse part. The radiance arriving in a bin of vi
 theta2)``: the mean of the radiance over the bin's solid angle and the ring's area, so a bin's finite size is a
 bias of second order in its width where the radiance is smooth (measured by halving the bins, docs/clouds.md).
 
-The annulus. A ray with impact parameter ``b <= R`` meets the ground where the sun stands at ``e = acos(b / R)``; the
-rays with ``R < b <= r_top`` miss the ground and light it only through scattering, near and beyond the terminator.
-``launch`` gives the annulus as the local sun elevations of its two edges: its lower end below 0 takes every ray up
-to the top of the atmosphere (no truncation on that side). The diffuse light of a ring comes from photons launched
-within a few degrees of it (horizontal transport through the air and the clouds: tens to hundreds of km); that the
-default margin of 3 deg on each side costs nothing measurable is checked by widening it (docs/clouds.md).
+The annulus. A ray with impact parameter ``b <= R`` meets the ground where the sun stands at ``e = acos(b / R)``;
+before that it passes over the ground points of higher sun (at radius ``r`` it is above the point ``e'`` with ``b =
+r cos e'``), so the air above a ring is crossed by every ray from the one landing at the ring's upper edge, ``b = R
+cos e_hi``, to the one crossing the top of the atmosphere above its lower edge, ``b = r_top cos e_lo`` (all rays up
+to ``r_top`` when ``e_lo <= 0``, those grazing past the planet included): at a low sun most of a ring's sky light
+is scattered out of rays that land far down-sun of it or miss the ground (sun 2 deg, clear air, 450 nm: the rays
+landing between 0.75 and 3.25 deg give 7 % of it). The annulus must hold those rays, plus a margin for the light
+scattered sideways and back, carried through the air and the clouds; that the default margin of 3 deg costs nothing
+measurable is checked by widening it (tests; docs/clouds.md).
 
 Standard errors from the spread between batches of photons (as :mod:`.domain`); the photons of a task are a run of
 batches of one wavelength group, distributed through Dask like the other drivers and added in task order, so the
@@ -50,7 +53,6 @@ from ..atmosphere import AtmosphereParameters
 from ..errors import InvalidParameterError
 from ..validation import whole_number
 from .driver import (
-    DEFAULT_GROUP_SIZE,
     _readonly,
     batch_layout,
     check_wavelengths,
@@ -85,8 +87,7 @@ class SphereGroundFluxes:
         [rad] over [0, pi]).
     ground_fraction, escaped_fraction, absorbed_fraction : (n_wl,) the launched energy arriving at the ground
         (every arrival, reflections included, anywhere), leaving through the top, absorbed in the medium.
-    launch : (2,) the annulus' impact parameters [m]; launch_elevations : (2,) the same as local sun elevations
-        [rad] (the lower one -pi/2 when the annulus reaches the top of the atmosphere).
+    launch : (2,) the annulus' impact parameters [m].
     wavelengths : (n_wl,) [nm]; photons : launched per wavelength group; mean_vertices; seconds (wall);
     cpu_seconds (process CPU time of the call).
     """
@@ -104,7 +105,6 @@ class SphereGroundFluxes:
     escaped_fraction: NDArray[np.float64]
     absorbed_fraction: NDArray[np.float64]
     launch: NDArray[np.float64]
-    launch_elevations: NDArray[np.float64]
     wavelengths: NDArray[np.float64]
     photons: int
     mean_vertices: float
@@ -171,12 +171,13 @@ def sphere_ground_fluxes(atmosphere: AtmosphereParameters, wavelengths: ArrayLik
         Edges of the rings of local sun elevation (ascending, within [-pi/2, pi/2]), e.g. 0.5 deg wide.
     photons : int
         Photons launched (per wavelength group), >= 1000 (rounded up to whole batches of 512).
-    launch : (2,) array_like [rad], optional
-        Local sun elevations of the annulus' edges (the sun's ray with impact parameter ``b = R cos e``); a lower
-        edge <= 0 takes every ray up to the top of the atmosphere. Must contain the rings (with the margin of the
-        diffuse light, which is the caller's choice). Default: the rings widened by ``margin`` on both sides.
+    launch : (2,) array_like [m], optional
+        The annulus' impact parameters (distance of a sun ray from the axis). It must hold every ray through the
+        air above the rings (module docstring). Default: from the ray that lands ``margin`` above the rings'
+        upper edge (``b = R cos(e_hi + margin)``) to the one that crosses the top of the atmosphere ``margin``
+        below their lower edge (``b = r_top cos(e_lo - margin)``, every ray to the top when that is <= 0).
     margin : float [rad]
-        Default annulus' margin beyond the rings (>= 0; unused with ``launch``).
+        The default annulus' margin (>= 0; unused with ``launch``).
     view_zenith_edges : array_like [rad]
         Edges of the radiance's view zenith bins (ascending, within [0, pi/2]).
     azimuth_bins : int
@@ -201,26 +202,31 @@ def sphere_ground_fluxes(atmosphere: AtmosphereParameters, wavelengths: ArrayLik
     na = whole_number("azimuth_bins", azimuth_bins, 1)
     if not (math.isfinite(float(margin)) and float(margin) >= 0.0):
         raise InvalidParameterError(f"margin must be an angle >= 0 [rad]; got {margin!r}")
-    if launch is None:
-        le = np.array([se[0] - float(margin), min(se[-1] + float(margin), math.pi / 2)])
-    else:
-        le = np.asarray(launch, dtype=float).ravel()
-        if le.size != 2 or not np.all(np.isfinite(le)) or not le[0] < le[1] or le[1] > math.pi / 2:
-            raise InvalidParameterError(
-                f"launch must be two ascending local sun elevations [rad], the upper at most pi/2; got {launch!r}")
-    # an annulus reaching the top of the atmosphere (lower edge <= 0) launches every ray that lights the night side
-    if not ((le[0] <= 0.0 or le[0] <= se[0]) and se[-1] <= le[1]):
-        raise InvalidParameterError(
-            f"the rings ({math.degrees(se[0]):.4g} to {math.degrees(se[-1]):.4g} deg) must lie within the launched "
-            f"annulus ({math.degrees(le[0]):.4g} to {math.degrees(le[1]):.4g} deg of local sun elevation)")
-    if le[1] <= 0.0:
-        raise InvalidParameterError("the launched annulus must reach the sunlit ground (its upper edge above 0)")
     medium = prepare_medium(atmosphere, wl)
     rb, rt = medium.bottom_radius, medium.top_radius
-    b_lo = rb * math.cos(float(le[1]))
-    b_hi = rt if le[0] <= 0.0 else rb * math.cos(float(le[0]))
+    e_lo, e_hi = float(se[0]), float(se[-1])
+    if e_hi <= 0.0:
+        raise InvalidParameterError("the rings must reach the sunlit ground (their upper edge above 0)")
+    # every ray through the air above the rings: from the ray that lands at their upper edge to the ray that
+    # crosses the top of the atmosphere above their lower edge
+    need = (rb * math.cos(e_hi), rt * math.cos(e_lo) if e_lo > 0.0 else rt)
+    if launch is None:
+        m = float(margin)
+        b_lo = rb * math.cos(min(e_hi + m, math.pi / 2))
+        b_hi = rt * math.cos(e_lo - m) if e_lo - m > 0.0 else rt
+    else:
+        lb = np.asarray(launch, dtype=float).ravel()
+        if lb.size != 2 or not np.all(np.isfinite(lb)) or not 0.0 <= lb[0] < lb[1] <= rt:
+            raise InvalidParameterError(
+                f"launch must be two ascending impact parameters [m] from 0 to the top radius ({rt:.8g} m); "
+                f"got {launch!r}")
+        b_lo, b_hi = float(lb[0]), float(lb[1])
+    if not (b_lo <= need[0] * (1.0 + 1e-12) and b_hi >= need[1] * (1.0 - 1e-12)):
+        raise InvalidParameterError(
+            f"the launched annulus ({b_lo:.8g} to {b_hi:.8g} m from the axis) must hold every ray through the air "
+            f"above the rings ({math.degrees(e_lo):.4g} to {math.degrees(e_hi):.4g} deg): {need[0]:.8g} to "
+            f"{need[1]:.8g} m")
     launch_b = np.array([b_lo, b_hi])
-    le_out = np.array([-math.pi / 2 if le[0] <= 0.0 else float(le[0]), float(le[1])])
     sedges = np.ascontiguousarray(np.sin(se))
     # view zenith edges as ascending cosines (from the largest zenith to the smallest)
     muedges = np.ascontiguousarray(np.cos(mz[::-1]))
@@ -276,7 +282,7 @@ def sphere_ground_fluxes(atmosphere: AtmosphereParameters, wavelengths: ArrayLik
     r, r_err = r[:, ::-1], r_err[:, ::-1]
     rscale = scale[:, None, None, :] / omega[None, :, :, None]
     return SphereGroundFluxes(se, d * scale, d_err * scale, f * scale, f_err * scale, r * rscale, r_err * rscale,
-                              mz, az, tt[0], tt[1], tt[2], launch_b, le_out, wl, used,
+                              mz, az, tt[0], tt[1], tt[2], launch_b, wl, used,
                               verts[0] / (used * len(groups)), time.perf_counter() - t0, time.process_time() - c0)
 
 
