@@ -11,8 +11,9 @@ by ``(de)^2 / 24 E''/E``). Stored per case and wavelength (450 / 550 / 650 nm): 
 ring, the photons, seed, CPU seconds (process time) and the load average.
 
 ``nice -n 19 python benchmarks/cloudy_sphere_reference.py --cases 15:2,30:2 --photons 2000000 --seed 1
---out tests/data/cloudy_sphere_forward.json`` (a case already in the file is replaced; written atomically after
-each case).
+--out tests/data/cloudy_sphere_forward.json`` (a run of the same case and seed already in the file is replaced;
+runs of other seeds are kept, to be pooled; written atomically after each case; ``--zenith-edges`` and
+``--azimuth-bins`` choose the radiance's bins).
 """
 
 from __future__ import annotations
@@ -73,6 +74,9 @@ def main() -> None:
     ap.add_argument("--photons", type=int, default=2_000_000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--wavelengths", default=",".join(f"{w:g}" for w in WAVELENGTHS))
+    ap.add_argument("--zenith-edges", default=",".join(f"{v:g}" for v in ZENITH_EDGES_DEG),
+                    help="view zenith bin edges [deg] of the radiance")
+    ap.add_argument("--azimuth-bins", type=int, default=AZIMUTH_BINS)
     ap.add_argument("--out", default=str(Path(__file__).parents[1] / "tests" / "data" / "cloudy_sphere_forward.json"))
     a = ap.parse_args()
     out = Path(a.out)
@@ -82,9 +86,11 @@ def main() -> None:
     wl = [float(w) for w in a.wavelengths.split(",")]
     for spec in a.cases.split(","):
         tau, sun = (float(v) for v in spec.split(":"))
-        case = run_case(tau, sun, a.photons, a.seed, ZENITH_EDGES_DEG, AZIMUTH_BINS, wl)
-        data["cases"] = [c for c in data["cases"] if (c["tau"], c["sun_elevation_deg"]) != (tau, sun)] + [case]
-        data["cases"].sort(key=lambda c: (-c["sun_elevation_deg"], c["tau"]))
+        case = run_case(tau, sun, a.photons, a.seed, [float(v) for v in a.zenith_edges.split(",")], a.azimuth_bins,
+                        wl)
+        key = (tau, sun, a.seed)
+        data["cases"] = [c for c in data["cases"] if (c["tau"], c["sun_elevation_deg"], c["seed"]) != key] + [case]
+        data["cases"].sort(key=lambda c: (-c["sun_elevation_deg"], c["tau"], c["seed"]))
         with atomic_path(out) as tmp:
             Path(tmp).write_text(json.dumps(data, indent=1) + "\n")
 

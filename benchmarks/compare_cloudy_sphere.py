@@ -47,13 +47,19 @@ def main() -> None:
     data = json.loads(Path(a.data).read_text())
     fine = ref_mod.FINE
     rows = []
-    for case in data["cases"]:
-        tau, sun = case["tau"], case["sun_elevation_deg"]
+    keys = sorted({(c["tau"], c["sun_elevation_deg"]) for c in data["cases"]}, key=lambda k: (-k[1], k[0]))
+    for tau, sun in keys:
+        sets = [c for c in data["cases"] if (c["tau"], c["sun_elevation_deg"]) == (tau, sun)]
+        case = sets[0]
         wl = case["wavelengths_nm"]
-        runs = case["runs"]
-        mc = np.array([r["diffuse_irradiance"][1] for r in runs])
-        mce = np.array([r["diffuse_irradiance_stderr"][1] for r in runs])
-        three = np.array([r["diffuse_irradiance"] for r in runs])        # (wl, 3 rings)
+        # the diffuse irradiance pooled over the runs of every seed (photon-weighted; tests/cloudy_cct_reference.py)
+        pooled = [ref_mod.pooled([(np.array(c["runs"][k]["diffuse_irradiance"]),
+                                   np.array(c["runs"][k]["diffuse_irradiance_stderr"]), c["runs"][k]["photons"])
+                                  for c in sets]) for k in range(len(wl))]
+        three = np.array([p[0] for p in pooled])                    # (wl, 3 rings)
+        mc = three[:, 1]
+        mce = np.array([p[1][1] for p in pooled])
+        photons = [p[2] for p in pooled]
         de = math.radians(case["ring_edges_deg"][2] - case["ring_edges_deg"][1])
         curv = (three[:, 0] - 2 * three[:, 1] + three[:, 2]) / de ** 2 / three[:, 1]
         width_bias = de ** 2 / 24 * np.abs(curv)
@@ -64,34 +70,36 @@ def main() -> None:
         t_model, t_mc, t_sig = ref_mod.monte_carlo_cct(spectrum, model, mc, mce)
         row = {"tau": tau, "sun": sun, "mc": mc.tolist(), "mc_stderr": mce.tolist(), "model": model.tolist(),
                "diff": (model / mc - 1).tolist(), "width_bias": width_bias.tolist(),
-               "cct_model": t_model, "cct_mc": t_mc, "cct_sigma": t_sig, "cpu_seconds": sum(r["cpu_seconds"]
-                                                                                           for r in runs)}
+               "cct_model": t_model, "cct_mc": t_mc, "cct_sigma": t_sig, "photons": photons,
+               "seeds": [c["seed"] for c in sets],
+               "cpu_seconds": sum(r["cpu_seconds"] for c in sets for r in c["runs"])}
         ref = ref_mod.reference(tau, sun) if sun < 5.0 and tau in (1.0, 5.0, 15.0) else None
         if ref is not None:
             row["backward"] = ref[0].tolist()
             row["backward_stderr"] = ref[1].tolist()
             row["photons_vs_backward"] = (mc / ref[0] - 1).tolist()
             row["photons_vs_backward_sigma"] = ((mc - ref[0]) / np.hypot(mce, ref[1])).tolist()
-        ze = np.radians(case["view_zenith_edges_deg"])
-        na = case["azimuth_bins"]
-        ae = np.linspace(0.0, math.pi, na + 1)
-        rad = np.array([r["radiance"] for r in runs])            # (wl, nz, na)
-        rade = np.array([r["radiance_stderr"] for r in runs])
         bins = []
-        for j in range(ze.size - 1):
-            if math.degrees(math.pi / 2 - ze[j + 1]) < 10.0 - 1e-9:
-                continue
-            for k in range(na):
-                lm = bin_mean(sky, ze[j], ze[j + 1], ae[k], ae[k + 1], wl)
-                bins.append({"zenith_deg": [math.degrees(ze[j]), math.degrees(ze[j + 1])],
-                             "azimuth_deg": [math.degrees(ae[k]), math.degrees(ae[k + 1])],
-                             "mc": rad[:, j, k].tolist(), "mc_stderr": rade[:, j, k].tolist(), "model": lm.tolist(),
-                             "diff": (lm / rad[:, j, k] - 1).tolist()})
+        for c in sets:   # the radiance per run (each run its own bins)
+            ze = np.radians(c["view_zenith_edges_deg"])
+            na = c["azimuth_bins"]
+            ae = np.linspace(0.0, math.pi, na + 1)
+            rad = np.array([r["radiance"] for r in c["runs"]])            # (wl, nz, na)
+            rade = np.array([r["radiance_stderr"] for r in c["runs"]])
+            for j in range(ze.size - 1):
+                if math.degrees(math.pi / 2 - ze[j + 1]) < 10.0 - 1e-9:
+                    continue
+                for k in range(na):
+                    lm = bin_mean(sky, ze[j], ze[j + 1], ae[k], ae[k + 1], wl)
+                    bins.append({"seed": c["seed"], "zenith_deg": [math.degrees(ze[j]), math.degrees(ze[j + 1])],
+                                 "azimuth_deg": [math.degrees(ae[k]), math.degrees(ae[k + 1])],
+                                 "mc": rad[:, j, k].tolist(), "mc_stderr": rade[:, j, k].tolist(),
+                                 "model": lm.tolist(), "diff": (lm / rad[:, j, k] - 1).tolist()})
         row["radiance_bins"] = bins
         rows.append(row)
         dl = np.array([b["diff"] for b in bins])
         rel = np.array([np.array(b["mc_stderr"]) / np.array(b["mc"]) for b in bins])
-        bw = (" | backward (pooled) vs photons " + " / ".join(f"{100 * v:+.1f}" for v in row["photons_vs_backward"])
+        bw = (" | photons vs pooled backward " + " / ".join(f"{100 * v:+.1f}" for v in row["photons_vs_backward"])
               + " % (" + " / ".join(f"{v:+.1f}" for v in row["photons_vs_backward_sigma"]) + " sigma)") \
             if "backward" in row else ""
         print(f"| {tau:g} | {sun:g} | {' / '.join(f'{100 * v:+.1f}' for v in row['diff'])} % | "
