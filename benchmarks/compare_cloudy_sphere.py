@@ -3,11 +3,12 @@
 Reads ``tests/data/cloudy_sphere_forward.json`` (``benchmarks/cloudy_sphere_reference.py``) and prints, per case,
 the model's diffuse irradiance on the ground against the photons' centre ring (450 / 550 / 650 nm) with their
 standard error, the ring's width as a bias bound (the curvature of ``E`` over the three rings, ``(de)^2 / 24
-E''/E``), the pooled backward paths where they exist (``tests/cloudy_cct_reference.py``: sun 2 deg, optical depths
-1, 5, 15) against the photons, the radiance in each stored bin >= 10 deg above the horizon (the model averaged over
-the bin's solid angle, 6 x 6 points, against the photons' bin mean), and the CCT of the model against that of the
-photons (``monte_carlo_cct``: the model's spectrum times the Monte Carlo / model ratio; Hernandez 1999).
-``python benchmarks/compare_cloudy_sphere.py [--json out.json]``.
+E''/E``), the photons against the pooled backward paths where they exist (``tests/cloudy_cct_reference.py``: sun 2
+deg, optical depths 1, 5, 15) and at sun 10 deg against the pooled forward photons of the periodic domain, the
+radiance in each stored bin >= 10 deg above the horizon (the model averaged over the bin's solid angle, 6 x 6
+points, against the photons' bin mean), and the CCT of the model against that of the photons (``monte_carlo_cct``:
+the model's spectrum times the Monte Carlo / model ratio; Hernandez 1999). ``python
+benchmarks/compare_cloudy_sphere.py [--json out.json]``.
 """
 
 from __future__ import annotations
@@ -37,6 +38,14 @@ def bin_mean(sky: CloudySky, z0: float, z1: float, a0: float, a1: float, wl: lis
     s = np.sqrt(1.0 - m * m)
     d = np.stack([s * np.sin(a), s * np.cos(a), m], axis=-1).reshape(-1, 3)   # sun at azimuth 0 (north)
     return sky.spectral_radiance(d, wl).mean(axis=0)
+
+
+def _centre(z0: float, z1: float, a0: float, a1: float) -> np.ndarray:
+    """The direction at a bin's centre (mid cosine, mid azimuth), (1, 3)."""
+    mu = 0.5 * (np.cos(z0) + np.cos(z1))
+    a = 0.5 * (a0 + a1)
+    s = math.sqrt(1.0 - mu * mu)
+    return np.array([[s * math.sin(a), s * math.cos(a), mu]])
 
 
 def main() -> None:
@@ -73,7 +82,7 @@ def main() -> None:
                "cct_model": t_model, "cct_mc": t_mc, "cct_sigma": t_sig, "photons": photons,
                "seeds": [c["seed"] for c in sets],
                "cpu_seconds": sum(r["cpu_seconds"] for c in sets for r in c["runs"])}
-        ref = ref_mod.reference(tau, sun) if sun < 5.0 and tau in (1.0, 5.0, 15.0) else None
+        ref = ref_mod.reference(tau, sun) if (sun < 5.0 and tau in (1.0, 5.0, 15.0)) or sun == 10.0 else None
         if ref is not None:
             row["backward"] = ref[0].tolist()
             row["backward_stderr"] = ref[1].tolist()
@@ -91,21 +100,28 @@ def main() -> None:
                     continue
                 for k in range(na):
                     lm = bin_mean(sky, ze[j], ze[j + 1], ae[k], ae[k + 1], wl)
+                    # the bin's size as a bias of its mean read as the radiance at its centre: the model's own
+                    lc = sky.spectral_radiance(
+                        _centre(ze[j], ze[j + 1], ae[k], ae[k + 1]), wl)[0]
                     bins.append({"seed": c["seed"], "zenith_deg": [math.degrees(ze[j]), math.degrees(ze[j + 1])],
                                  "azimuth_deg": [math.degrees(ae[k]), math.degrees(ae[k + 1])],
                                  "mc": rad[:, j, k].tolist(), "mc_stderr": rade[:, j, k].tolist(),
-                                 "model": lm.tolist(), "diff": (lm / rad[:, j, k] - 1).tolist()})
+                                 "model": lm.tolist(), "diff": (lm / rad[:, j, k] - 1).tolist(),
+                                 "size_effect": (lm / lc - 1).tolist()})
         row["radiance_bins"] = bins
         rows.append(row)
         dl = np.array([b["diff"] for b in bins])
         rel = np.array([np.array(b["mc_stderr"]) / np.array(b["mc"]) for b in bins])
-        bw = (" | photons vs pooled backward " + " / ".join(f"{100 * v:+.1f}" for v in row["photons_vs_backward"])
+        size = np.max(np.abs([b["size_effect"] for b in bins]))
+        kind = ref[3] if ref is not None else ""
+        bw = (f" | photons vs pooled {kind} " + " / ".join(f"{100 * v:+.1f}" for v in row["photons_vs_backward"])
               + " % (" + " / ".join(f"{v:+.1f}" for v in row["photons_vs_backward_sigma"]) + " sigma)") \
             if "backward" in row else ""
         print(f"| {tau:g} | {sun:g} | {' / '.join(f'{100 * v:+.1f}' for v in row['diff'])} % | "
               f"{' / '.join(f'{100 * v:.1f}' for v in mce / mc)} % | "
               f"{' / '.join(f'{100 * v:.2f}' for v in width_bias)} % | "
-              f"{np.median(np.abs(dl)) * 100:.1f} %, {np.max(np.abs(dl)) * 100:.1f} % ({np.median(rel) * 100:.1f} %) | "
+              f"{np.median(np.abs(dl)) * 100:.1f} %, {np.max(np.abs(dl)) * 100:.1f} % ({np.median(rel) * 100:.1f} %; "
+              f"bin size {size * 100:.1f} %) | "
               f"{t_model:.0f} / {t_mc:.0f} +- {t_sig:.0f} K ({t_model - t_mc:+.0f}) |{bw}", flush=True)
     print(f"load average {os.getloadavg()}")
     if a.json:

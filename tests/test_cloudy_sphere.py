@@ -51,21 +51,21 @@ def test_sphere_photons_against_pooled_backward_paths_at_sun_2_deg(tau):
     np.testing.assert_array_less(np.abs(mc - bwd[0]), 3.0 * np.hypot(mce, bwd[1]))
 
 
-@pytest.mark.parametrize("tau", [1.0, 15.0, 60.0])
+@pytest.mark.parametrize("tau", [1.0, 15.0])
 def test_sphere_photons_against_periodic_domain_photons_at_sun_10_deg(tau):
-    ref = sphere_reference(tau, 10.0)
-    if ref is None:
-        pytest.skip("no stored run")
-    mc, mce, _ = ref
+    mc, mce, _ = sphere_reference(tau, 10.0)
     dom = reference(tau, 10.0)
     assert dom is not None and dom[3] == "forward"
     np.testing.assert_array_less(np.abs(mc - dom[0]), 3.0 * np.hypot(mce, dom[1]) + DOMAIN_MARGIN * mc)
 
 
-#: (optical depth, sun elevation) rows where the model meets the diffuse target (docs/clouds.md)
-DIFFUSE_ROWS: list[tuple[float, float]] = []
-#: rows where it meets the CCT target
-CCT_ROWS: list[tuple[float, float]] = []
+#: (optical depth, sun elevation) rows where the model meets the diffuse target (docs/clouds.md, measured
+#: 2026-12-05: sun 10 deg -0.1 / -1.8 / +0.1 % and +0.1 / -2.4 / +0.9 %). Not held: every sun 2 deg row misses at
+#: 550 nm, -3.2 / -3.2 / -3.4 / -4.6 / -4.4 % under optical depths 1 / 5 / 15 / 30 / 60 (450 and 650 nm within
+#: -2.5..+0.4 %)
+DIFFUSE_ROWS = [(1.0, 10.0), (15.0, 10.0)]
+#: rows where it meets the CCT target (measured -100..+163 K); not held: optical depth 60 at sun 2 deg, +215 +- 156 K
+CCT_ROWS = [(1.0, 2.0), (5.0, 2.0), (15.0, 2.0), (30.0, 2.0), (1.0, 10.0), (15.0, 10.0)]
 
 
 @pytest.mark.parametrize("tau, sun", DIFFUSE_ROWS)
