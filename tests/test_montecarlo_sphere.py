@@ -13,9 +13,9 @@
   ground or leaves through the top (ground + escaped = 1 to rounding; no Russian roulette fires at weight 1).
 * The truncation of the launch annulus: a margin of 6 deg instead of the default 3 deg leaves the 10 deg ring's
   diffuse irradiance (450 nm, the most scattering air) within 3 combined standard errors (at 10 deg both edges of
-  the annulus move; at 2 deg its outer edge is the top of the atmosphere for either margin). Without the rays
-  that cross the air above the ring but land elsewhere (an annulus 0.75-3.25 deg of landing elevation) the 2 deg
-  ring's sky light falls to a few per cent of itself: the check can fail.
+  the annulus move; at 2 deg its outer edge is the top of the atmosphere for either margin). An annulus without
+  the rays that cross the air above the ring but land elsewhere is refused (landing elevations 0.75-3.25 deg give
+  7 % of the 2 deg ring's sky light, docs/clouds.md).
 * The radiance's normalisation (ring area x solid angle x cosine): over bins covering the hemisphere (18 x 6),
   ``sum L_bin * integral of cos over the bin`` is the diffuse irradiance of the same photons, to the bins' finite
   size (the radiance's variation across a 5 deg bin: 0.5 % allowed, a factor 2 in the solid angle would be 50 %).
