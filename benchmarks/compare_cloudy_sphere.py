@@ -60,11 +60,12 @@ def main() -> None:
     for tau, sun in keys:
         sets = [c for c in data["cases"] if (c["tau"], c["sun_elevation_deg"]) == (tau, sun)]
         case = sets[0]
-        wl = case["wavelengths_nm"]
-        # the diffuse irradiance pooled over the runs of every seed (photon-weighted; tests/cloudy_cct_reference.py)
-        pooled = [ref_mod.pooled([(np.array(c["runs"][k]["diffuse_irradiance"]),
-                                   np.array(c["runs"][k]["diffuse_irradiance_stderr"]), c["runs"][k]["photons"])
-                                  for c in sets]) for k in range(len(wl))]
+        wl = ref_mod.WAVELENGTHS
+        # the diffuse irradiance pooled over the runs of every seed (photon-weighted; tests/cloudy_cct_reference.py;
+        # a run set may hold some of the wavelengths only)
+        pooled = [ref_mod.pooled([(np.array(r["diffuse_irradiance"]), np.array(r["diffuse_irradiance_stderr"]),
+                                   r["photons"]) for c in sets for r in c["runs"] if r["wavelength_nm"] == w])
+                  for w in wl]
         three = np.array([p[0] for p in pooled])                    # (wl, 3 rings)
         mc = three[:, 1]
         mce = np.array([p[1][1] for p in pooled])
@@ -93,6 +94,8 @@ def main() -> None:
             ze = np.radians(c["view_zenith_edges_deg"])
             na = c["azimuth_bins"]
             ae = np.linspace(0.0, math.pi, na + 1)
+            if c["wavelengths_nm"] != wl:
+                continue   # the radiance is compared for the run sets of all three wavelengths
             rad = np.array([r["radiance"] for r in c["runs"]])            # (wl, nz, na)
             rade = np.array([r["radiance_stderr"] for r in c["runs"]])
             for j in range(ze.size - 1):

@@ -155,15 +155,14 @@ SPHERE = json.loads((DATA_DIR / "cloudy_sphere_forward.json").read_text())
 
 def sphere_reference(tau: float, sun: float) -> tuple[np.ndarray, np.ndarray, int] | None:
     """The spherical forward photons' diffuse irradiance [W m^-2 nm^-1] at :data:`WAVELENGTHS` on the ring centred
-    on the sun's elevation, pooled over the stored seeds (:func:`pooled`), its standard error and the photons per
-    wavelength; None where none is stored."""
+    on the sun's elevation, pooled over the stored seeds (:func:`pooled`), its standard error and the fewest photons
+    of a wavelength; None where none is stored."""
     sets = [c for c in SPHERE["cases"] if (c["tau"], c["sun_elevation_deg"]) == (tau, sun)]
     if not sets:
         return None
     per_wl = []
-    for k, w in enumerate(WAVELENGTHS):
-        runs = [(c["runs"][k]["diffuse_irradiance"], c["runs"][k]["diffuse_irradiance_stderr"],
-                 c["runs"][k]["photons"]) for c in sets]
-        assert all(c["runs"][k]["wavelength_nm"] == w for c in sets)
+    for w in WAVELENGTHS:   # a stored run set may hold some of the wavelengths only
+        runs = [(r["diffuse_irradiance"], r["diffuse_irradiance_stderr"], r["photons"]) for c in sets
+                for r in c["runs"] if r["wavelength_nm"] == w]
         per_wl.append(pooled(runs))
-    return (np.array([p[0][1] for p in per_wl]), np.array([p[1][1] for p in per_wl]), int(per_wl[0][2]))
+    return (np.array([p[0][1] for p in per_wl]), np.array([p[1][1] for p in per_wl]), int(min(p[2] for p in per_wl)))
