@@ -147,3 +147,22 @@ def monte_carlo_cct(spectrum: np.ndarray, model: np.ndarray, mc: np.ndarray, mc_
     xy_mc = np.asarray(xyz_to_chromaticity(ratio @ basis))[:2]
     xy_draws = np.asarray(xyz_to_chromaticity(drawn @ basis))[..., :2]
     return float(cct_from_xy(xy_model)), float(cct_from_xy(xy_mc)), float(np.std(cct_from_xy(xy_draws)))
+
+
+#: forward photons through the whole sphere (benchmarks/cloudy_sphere_reference.py), the low sun's reference
+SPHERE = json.loads((DATA_DIR / "cloudy_sphere_forward.json").read_text())
+
+
+def sphere_reference(tau: float, sun: float) -> tuple[np.ndarray, np.ndarray, int] | None:
+    """The spherical forward photons' diffuse irradiance [W m^-2 nm^-1] at :data:`WAVELENGTHS` on the ring centred
+    on the sun's elevation, pooled over the stored seeds (:func:`pooled`), its standard error and the fewest photons
+    of a wavelength; None where none is stored."""
+    sets = [c for c in SPHERE["cases"] if (c["tau"], c["sun_elevation_deg"]) == (tau, sun)]
+    if not sets:
+        return None
+    per_wl = []
+    for w in WAVELENGTHS:   # a stored run set may hold some of the wavelengths only
+        runs = [(r["diffuse_irradiance"], r["diffuse_irradiance_stderr"], r["photons"]) for c in sets
+                for r in c["runs"] if r["wavelength_nm"] == w]
+        per_wl.append(pooled(runs))
+    return (np.array([p[0][1] for p in per_wl]), np.array([p[1][1] for p in per_wl]), int(min(p[2] for p in per_wl)))

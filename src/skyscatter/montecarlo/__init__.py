@@ -8,8 +8,15 @@ only on the seed. See ``docs/montecarlo.md`` for the method and its validation.
 
 numba kernels are in :mod:`.kernels`, random numbers in :mod:`.rng`, the Dask driver in :mod:`.driver` and the
 Zarr batch front end in :mod:`.dataset`. Dask, xarray and zarr are imported only when used.
+
+``sphere_ground_fluxes(atmosphere, wavelengths, elevation_edges=..., photons=...)`` (:mod:`.sphere`) is the forward
+counterpart for horizontally uniform media: photons from the sun through the whole spherical atmosphere, the
+ground's direct and diffuse irradiance and sky radiance tallied by local sun elevation (the low sun's reference
+under cloud layers).
 """
 
 from .driver import MonteCarloResult, sky_radiance, solar_disc_radiance
+from .sphere import SphereGroundFluxes, sphere_direct_irradiance, sphere_ground_fluxes
 
-__all__ = ["MonteCarloResult", "sky_radiance", "solar_disc_radiance"]
+__all__ = ["MonteCarloResult", "SphereGroundFluxes", "sky_radiance", "solar_disc_radiance", "sphere_direct_irradiance",
+           "sphere_ground_fluxes"]

@@ -1970,3 +1970,238 @@ def _flux_paths(sun, rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, 
                 absorbed[k, i, 0] += v
                 absorbed[k, i, 1] += v * v
     return nvert
+
+
+@helper
+def _bin_of(x, edges):
+    """Index ``k`` with ``edges[k] <= x < edges[k + 1]`` (``edges`` ascending; bisection), -1 outside."""
+    nb = edges.shape[0] - 1
+    if not (edges[0] <= x < edges[nb]):
+        return -1
+    lo = 0
+    hi = nb
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if x >= edges[mid]:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@kernel
+def sphere_block(rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo,
+                 fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, launch, sedges, muedges, seed, group, batch0,
+                 n_batches, batch_size, direct, diffuse, rad, totals, vertices_out):
+    """Forward photons from a parallel sun through the whole spherical atmosphere, tallied at the ground by the local
+    sun elevation (:mod:`.sphere`).
+
+    The sun stands on the planet frame's +z axis; photons travel along -z from the top sphere ``rt`` [m] with impact
+    parameters ``b`` (distance from the axis [m]) uniform in area over ``launch[0] <= b <= launch[1]`` and a uniform
+    azimuth, and are tracked with the same free paths, collision densities, lobes and hero-wavelength weights as
+    :func:`flux_block`. A horizontally uniform medium is axially symmetric about that axis, so a ground point's
+    irradiance depends only on its local sun elevation ``e``, ``sin e = z / r``. Each arrival at the ground adds the
+    photon's weight to the ring of ``sin e`` (``sedges`` (nr + 1,) ascending): to ``direct`` when it was never
+    scattered nor reflected, else to ``diffuse`` and, with ``1 / mu_v`` (``mu_v`` the cosine of the arrival direction
+    to the local vertical), to ``rad`` at the bin of ``mu_v`` (``muedges`` (nm + 1,) ascending) and of the azimuth
+    from the local sun's vertical plane folded into ``[0, pi]`` (``rad.shape[2]`` equal bins). ``totals`` (3, n,
+    2): weight arriving at the ground anywhere, escaping through the top, absorbed in the medium (energy check).
+    Outputs (nr, n, 2), (nr, nm, na, n, 2) and (3, n, 2): per batch the tallies are summed, then their sum and sum
+    of squares over batches are added to ``[..., 0]`` and ``[..., 1]`` (the track of a photon is the collision
+    estimator's random walk, [SpanierGelbard1969] Ch. 3; arrivals are counted like the boundary-crossing tallies of
+    :func:`flux_block`). ``vertices_out`` (1,) counts the vertices.
+    """
+    n = coef.shape[0]
+    nc = coef.shape[1]
+    nr = direct.shape[0]
+    nm = rad.shape[1]
+    na = rad.shape[2]
+    st = np.empty(1, dtype=np.uint64)
+    f = np.empty(n)
+    p = np.empty(n)
+    cols = np.empty(nc)
+    tmp = np.empty(nc)
+    dens = np.empty(nc)
+    kh = np.empty(nc)
+    coef_t = np.ascontiguousarray(coef.T)
+    scat_t = np.ascontiguousarray(scat.T)
+    sc = np.empty((nc + 1, n))
+    ph = np.empty((nc + 1, n))
+    stt = np.empty(n)
+    sst = np.empty(n)
+    tau = np.empty(n)
+    val = np.empty(n)
+    val2 = np.empty(n)
+    bdir = np.empty((nr, n))
+    bdif = np.empty((nr, n))
+    brad = np.empty((nr, nm, na, n))
+    btot = np.empty((3, n))
+    fstate = np.zeros(6, dtype=np.int64)
+    rec = np.empty((2 * edges.shape[0] + 2, 2 + nc))
+    field = fvf[8] != 0.0
+    fsmax = 0.0
+    for i in range(n):
+        fsmax = max(fsmax, fs[i])
+    n_active = 0
+    for c in range(nc + 1):
+        if lobe[c] != LOBE_NONE:
+            n_active += 1
+    active = np.empty(n_active, dtype=np.int64)
+    n_active = 0
+    for c in range(nc + 1):
+        if lobe[c] != LOBE_NONE:
+            active[n_active] = c
+            n_active += 1
+    vertices_out[0] += _sphere_paths(rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, tmu, tval, tcdf,
+                                     albedo, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, launch, sedges,
+                                     muedges, seed, group, batch0, n_batches, batch_size, direct, diffuse, rad, totals,
+                                     n, nc, nr, nm, na, st, f, p, cols, tmp, dens, kh, coef_t, scat_t, sc, ph, stt, sst,
+                                     tau, val, val2, bdir, bdif, brad, btot, fstate, rec, field, fsmax, active)
+
+
+@helper
+def _sphere_paths(rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, fvf, fvi, frho,
+                  fbmax, fbmin, fxe, fye, fre, fs, fss, launch, sedges, muedges, seed, group, batch0, n_batches,
+                  batch_size, direct, diffuse, rad, totals, n, nc, nr, nm, na, st, f, p, cols, tmp, dens, kh, coef_t,
+                  scat_t, sc, ph, stt, sst, tau, val, val2, bdir, bdif, brad, btot, fstate, rec, field, fsmax, active):
+    """The photons of :func:`sphere_block` (its loop over batches and photons) with its buffers; returns the number of
+    vertices. A helper, as :func:`_flux_paths` (no reference counting in the loop)."""
+    n_active = active.shape[0]
+    nvert = 0
+    b2lo = launch[0] * launch[0]
+    b2span = launch[1] * launch[1] - b2lo
+    for bi in range(n_batches):
+        key = stream_key(seed, 0, group, batch0 + bi)
+        for i in range(n):
+            for k in range(nr):
+                bdir[k, i] = 0.0
+                bdif[k, i] = 0.0
+                for j in range(nm):
+                    for a in range(na):
+                        brad[k, j, a, i] = 0.0
+            for k in range(3):
+                btot[k, i] = 0.0
+        for smp in range(batch_size):
+            st[0] = sample_state(key, smp)
+            for i in range(n):
+                f[i] = 1.0
+                p[i] = 1.0
+            hero = min(int(next_uniform(st) * n), n - 1)
+            for q in range(nc):
+                kh[q] = coef[hero, q]
+            # uniform over the annulus' area: b^2 uniform; on the top sphere, heading down the axis
+            bb = math.sqrt(b2lo + next_uniform(st) * b2span)
+            phi = 2.0 * math.pi * next_uniform(st)
+            px, py = bb * math.cos(phi), bb * math.sin(phi)
+            pz = math.sqrt(max(rt * rt - bb * bb, 0.0))
+            dx, dy, dz = 0.0, 0.0, -1.0
+            scattered = False
+            vertices = 0
+            while True:
+                t_end, ground = _exit_distance(px, py, pz, dx, dy, dz, rb, rt)
+                u = next_uniform(st)
+                t, reached, rho_f = _free_path(px, py, pz, dx, dy, dz, t_end, -math.log1p(-u), kh, hero, field, rb,
+                                               edges, layers, nlay, cols, tmp, rec, fs, fsmax, fvf, fvi, frho, fbmax,
+                                               fbmin, fxe, fye, fre, f, p, st, fstate)
+                if reached:
+                    px, py, pz = _collide(px, py, pz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers, nlay,
+                                          coef_t, scat_t, fs, fss, cols, dens, sc, stt, sst, tau)
+                    for i in range(n):
+                        tr = math.exp(-tau[i])
+                        f[i] *= tr
+                        p[i] *= stt[i] * tr
+                    _normalise(f, p, n)
+                    for i in range(n):
+                        btot[2, i] += f[i] * (stt[i] - sst[i])
+                    if sst[hero] <= 0.0:
+                        break
+                    u = next_uniform(st) * sst[hero]
+                    pick = active[n_active - 1]
+                    acc = 0.0
+                    for a in range(n_active):
+                        c = active[a]
+                        acc += sc[c, hero]
+                        if u < acc:
+                            pick = c
+                            break
+                    mu, seg = _sample_lobe_segment(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st),
+                                                   tmu, tval, tcdf)
+                    dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
+                    _phase_sums(mu, seg, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, True)
+                    for i in range(n):
+                        f[i] *= val[i]
+                        p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
+                    _normalise(f, p, n)
+                    scattered = True
+                else:
+                    px += t * dx
+                    py += t * dy
+                    pz += t * dz
+                    _optical_depths(coef_t, cols, tau)
+                    for i in range(n):
+                        tr = math.exp(-tau[i])
+                        f[i] *= tr
+                        p[i] *= tr
+                    _normalise(f, p, n)
+                    if not ground:
+                        for i in range(n):
+                            btot[1, i] += f[i]
+                        break  # out of the top of the atmosphere
+                    rr = math.sqrt(px * px + py * py + pz * pz)
+                    nx, ny, nz = px / rr, py / rr, pz / rr
+                    for i in range(n):
+                        btot[0, i] += f[i]
+                    k = _bin_of(nz, sedges)  # sin of the local sun elevation (the sun on +z)
+                    if k >= 0:
+                        if not scattered:
+                            for i in range(n):
+                                bdir[k, i] += f[i]
+                        else:
+                            for i in range(n):
+                                bdif[k, i] += f[i]
+                            mu_v = -(dx * nx + dy * ny + dz * nz)
+                            j = _bin_of(mu_v, muedges)
+                            if j >= 0 and mu_v > 0.0:
+                                # azimuth of the arrival (towards where the light comes from, -d) from the local
+                                # sun's vertical plane: both projected on the tangent plane
+                                vx, vy, vz = -dx - mu_v * nx, -dy - mu_v * ny, -dz - mu_v * nz
+                                sx, sy, sz = -nz * nx, -nz * ny, 1.0 - nz * nz
+                                nv = math.sqrt(vx * vx + vy * vy + vz * vz)
+                                ns = math.sqrt(sx * sx + sy * sy + sz * sz)
+                                ca = 1.0
+                                if nv > 0.0 and ns > 0.0:
+                                    ca = (vx * sx + vy * sy + vz * sz) / (nv * ns)
+                                ca = min(1.0, max(-1.0, ca))
+                                a = min(int(math.acos(ca) / math.pi * na), na - 1)
+                                for i in range(n):
+                                    brad[k, j, a, i] += f[i] / mu_v
+                    px, py, pz = nx * rb, ny * rb, nz * rb
+                    u1 = next_uniform(st)
+                    dx, dy, dz = direction_about_axis(nx, ny, nz, math.sqrt(u1), 2.0 * math.pi * next_uniform(st))
+                    for i in range(n):
+                        f[i] *= albedo[i]
+                    scattered = True
+                vertices += 1
+                if vertices >= _MAX_VERTICES:
+                    break
+                if not _roulette(f, n, vertices, st):
+                    break
+            nvert += vertices
+        for i in range(n):
+            for k in range(nr):
+                v = bdir[k, i]
+                direct[k, i, 0] += v
+                direct[k, i, 1] += v * v
+                v = bdif[k, i]
+                diffuse[k, i, 0] += v
+                diffuse[k, i, 1] += v * v
+                for j in range(nm):
+                    for a in range(na):
+                        v = brad[k, j, a, i]
+                        rad[k, j, a, i, 0] += v
+                        rad[k, j, a, i, 1] += v * v
+            for k in range(3):
+                v = btot[k, i]
+                totals[k, i, 0] += v
+                totals[k, i, 1] += v * v
+    return nvert
