@@ -19,7 +19,8 @@ spectra. Usage: ``python benchmarks/bench_montecarlo.py [--directions N] [--targ
 [--overcast [--overcast-samples N] [--roulette-ab | --split-ab]]`` (``--roulette-ab``: the overcast pilot with and
 without the shadow-ray roulette, alternating; ``--split-ab``: with and without the importance splitting,
 ``driver.SPLIT_FACTOR`` 1 / default, 4096 paths, 3 rounds, seeds 1-3). The clear-sky throughput against the
-kernels before the clouds: ``benchmarks/bench_montecarlo_clear_ab.py``.
+kernels before the clouds: ``benchmarks/bench_montecarlo_clear_ab.py``; with and without the binding of ``exp``
+and ``log`` (``skyscatter.jit``): ``benchmarks/bench_libm_binding_ab.py``.
 Run on an otherwise idle machine: other processes on the cores inflate every figure.
 """
 

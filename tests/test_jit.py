@@ -98,3 +98,47 @@ def test_a_second_process_loads_the_first_ones_compilation(tmp_path):
         sys.modules.pop("lockdemo", None)
     assert proc.returncode == 0
     assert out.split() == ["0", "1"]  # no compilation, one load from the cache
+
+
+def test_exp_and_log_bound_without_the_wrapper_give_the_same_bits():
+    """Compiled ``exp`` and ``log`` bound to glibc's ``__exp_finite`` / ``__log_finite`` (``jit._bind_libm``): on glibc
+    the binding is made (the Monte Carlo's speed counts on it), and the values are libm's own to the bit across the
+    whole range, overflow, underflow, subnormals, zeros, infinities and NaN included (numpy's ``exp``/``log`` call the
+    same glibc functions through their default symbol versions, but vectorise some loops: Python's ``math`` is the
+    reference)."""
+    import ctypes
+    import math
+    import platform
+
+    if platform.system() == "Linux" and platform.libc_ver()[0] == "glibc":
+        libm = ctypes.CDLL("libm.so.6")
+        dlvsym = ctypes.CDLL(None).dlvsym
+        dlvsym.restype = ctypes.c_void_p
+        dlvsym.argtypes = (ctypes.c_void_p, ctypes.c_char_p, ctypes.c_char_p)
+        assert set(jit.LIBM_BINDINGS) == {"exp", "log"}
+        for name, addr in jit.LIBM_BINDINGS.items():
+            assert addr == dlvsym(libm._handle, f"__{name}_finite".encode(), b"GLIBC_2.15")
+
+    @jit.kernel
+    def both(x, out_exp, out_log):
+        for i in range(x.shape[0]):
+            out_exp[i] = math.exp(x[i])
+            out_log[i] = math.log(x[i]) if x[i] > 0.0 else 0.0
+
+    rng = np.random.default_rng(11)
+    x = np.concatenate([rng.uniform(-760.0, 720.0, 20000), rng.uniform(-1.0, 1.0, 20000),
+                        10.0 ** rng.uniform(-320.0, 308.0, 20000), [0.0, -0.0, 5e-324, 709.78, 709.79, -745.2, -745.1,
+                                                                    np.inf, -np.inf, np.nan]])
+    out_exp = np.empty_like(x)
+    out_log = np.empty_like(x)
+    both(x, out_exp, out_log)
+    def py_exp(v):
+        try:
+            return math.exp(v)
+        except OverflowError:
+            return math.inf
+
+    ref_exp = np.array([py_exp(v) for v in x])
+    ref_log = np.array([math.log(v) if v > 0.0 else 0.0 for v in x])
+    assert np.array_equal(out_exp, ref_exp, equal_nan=True)
+    assert np.array_equal(out_log, ref_log, equal_nan=True)
