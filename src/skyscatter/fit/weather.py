@@ -710,7 +710,9 @@ def cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike
 #: :mod:`skyscatter.diskcache` (checksums). 4: :class:`~skyscatter.sky.cloudy.CloudySky`'s sky irradiance on the cloud
 #: top from the radiance tables (the skies it stores changed by up to a few per cent). 5: the light that the clear air
 #: below the cloud top sends up taken out of the tables' sky by the adding method (low suns: up to 1.5 % less light).
-_CLOUD_TABLE_VERSION = 5
+#: 6: the clear sky (optical depth 0) with its empty cloud shell kept, lit by the tables like any layer (the sun's
+#: chord through the column's layers then has the layer's edges, as the clouded skies' it is divided by).
+_CLOUD_TABLE_VERSION = 6
 _CLOUD_TABLE_ARRAYS = ("optical_depths", "zeniths", "wavelengths", "diffuse", "slant", "field_theta", "field_phi",
                        "field", "peak")
 

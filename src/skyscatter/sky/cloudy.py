@@ -553,16 +553,18 @@ class CloudySky(SunSkyMixin, SkyModel):
         if top >= air.thickness:
             raise InvalidParameterError(f"cloud_top ({top:g} m) must be below the atmosphere's top "
                                         f"({air.thickness:g} m)")
-        changes: dict[str, Any] = {}
-        if tau > 0:
-            changes["particles"] = (*air.particles, layer)
+        # A layer of optical depth 0 is kept (an empty shell): the sky is then the tables' clear sky carried down
+        # through the clear column as for any layer, continuous in the optical depth. Without it the whole clear
+        # column was solved by DISORT with its pseudo-spherical beam, which at a low sun is far too dark (sun 2 deg:
+        # 0.60-0.67 of the sky of optical depth 0.001 at 450-650 nm; docs/clouds.md).
+        changes: dict[str, Any] = {"particles": (*air.particles, layer)}
         if ground_albedo is not None:
             changes["ground_albedo"] = ground_albedo
         self.atmosphere = air.replace(**changes) if changes else air
         self.sun_zenith = zen
         self.sun_azimuth = azi
         self.altitude = alt
-        self.cloud_layer = layer if tau > 0 else None
+        self.cloud_layer = layer
         self.streams = int(streams)
         self.sun_angular_radius = self.atmosphere.sun_angular_radius
         self._remember(cloud_optical_depth=tau, cloud_base=base, cloud_top=top, cloud_effective_radius=radius,
