@@ -471,13 +471,10 @@ def _invert_in_piece(r2, b, a, c, rem, dtau, target, k, rb, layers, nlay, tmp):
     return s
 
 
-@helper
-def _march(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec, locate):
-    """:func:`column_along`; also records, per piece ``j``, its end ``t``, the cumulative optical depth and the
-    cumulative columns in ``rec[j, 0]``, ``rec[j, 1]``, ``rec[j, 2:]`` (``rec`` has at least ``2 len(edges) + 2``
-    rows). Returns ``(t, reached, n_pieces)``: with ``reached`` the pieces recorded are those before the one
-    where the target is reached. Without ``locate`` a reached target is not located in its piece (``t`` and
-    ``cols`` are those of the piece's end): a shadow ray needs only whether it is reached."""
+@inline
+def _march_pieces(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec, locate):
+    """The body of :func:`_march` (its docstring), inlined into it and into :func:`_march_locate` and
+    :func:`_march_reach`, where ``locate`` is a constant."""
     nc = cols.shape[0]
     for q in range(nc):
         cols[q] = 0.0
@@ -564,6 +561,30 @@ def _march(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, co
         if c >= t_end:
             return t_end, False, npc
         a = c
+
+
+@helper
+def _march(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec, locate):
+    """:func:`column_along`; also records, per piece ``j``, its end ``t``, the cumulative optical depth and the
+    cumulative columns in ``rec[j, 0]``, ``rec[j, 1]``, ``rec[j, 2:]`` (``rec`` has at least ``2 len(edges) + 2``
+    rows). Returns ``(t, reached, n_pieces)``: with ``reached`` the pieces recorded are those before the one
+    where the target is reached. Without ``locate`` a reached target is not located in its piece (``t`` and
+    ``cols`` are those of the piece's end): a shadow ray needs only whether it is reached."""
+    return _march_pieces(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec, locate)
+
+
+@helper
+def _march_locate(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec):
+    """:func:`_march` with ``locate``, compiled with it a constant (for the clear sky's free paths: a run-time
+    ``locate`` took it 1.05-1.08x the CPU time of the kernels before the clouds, docs/clouds.md "Speed")."""
+    return _march_pieces(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec, True)
+
+
+@helper
+def _march_reach(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec):
+    """:func:`_march` without ``locate``, compiled with it a constant (for the clear sky's shadow rays, as
+    :func:`_march_locate`)."""
+    return _march_pieces(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec, False)
 
 
 @kernel
@@ -862,7 +883,7 @@ def _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges, l
     that: a call passing the field's arrays at every vertex cost the clear sky some 10 %; at medium vertices it
     marches itself, one call fewer): ``out[i]`` the transmittance along the ray, False where the least extinguished
     wavelength's optical depth passes ``_NEE_STOP`` (exp(-50))."""
-    _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, tot, tmp, rec, False)
+    _, opaque, _ = _march_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, tot, tmp, rec)
     if opaque:
         return False
     _transmittances(coef_t, tot, tau, out)
@@ -1482,8 +1503,8 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                             forced = ta >= tb
                         rho_f = 0.0
                         if forced:
-                            _, _, npc = _march(px, py, pz, dx, dy, dz, t_end, np.inf, kh, rb, edges, layers, nlay, tot,
-                                               tmp, rec, True)
+                            _, _, npc = _march_locate(px, py, pz, dx, dy, dz, t_end, np.inf, kh, rb, edges, layers,
+                                                      nlay, tot, tmp, rec)
                             tau_tot = _dot(kh, tot)
                             if tau_tot <= 0.0:
                                 break
@@ -1510,8 +1531,8 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                                                     ushell, rb, edges, layers, nlay, cols, tmp, rec,
                                                                     kha, cseg, st)
                                 else:
-                                    t, reached, _ = _march(px, py, pz, dx, dy, dz, t_end, target, kh, rb, edges,
-                                                           layers, nlay, cols, tmp, rec, True)
+                                    t, reached, _ = _march_locate(px, py, pz, dx, dy, dz, t_end, target, kh, rb,
+                                                                  edges, layers, nlay, cols, tmp, rec)
                                     if not reached:
                                         t = t_end
                             if reached:
@@ -1546,8 +1567,8 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                                           fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot,
                                                           tmp, rec, tau, trf, trs)
                             else:
-                                _, opaque, _ = _march(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers,
-                                                      nlay, tot, tmp, rec, False)
+                                _, opaque, _ = _march_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges,
+                                                            layers, nlay, tot, tmp, rec)
                                 live = not opaque
                                 if live:
                                     _transmittances(coef_t, tot, tau, trs)
