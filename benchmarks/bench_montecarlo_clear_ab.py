@@ -10,6 +10,9 @@ repository. ``--overcast``: the pilot of ``bench_montecarlo.py --overcast`` inst
 15, Mie droplets r_e 10 um at 1000-1500 m, sun zenith 60 deg, 20 of the 200 views, 4096 paths, seed 1 + run):
 paths per CPU-second, events per path, per-path relative standard deviation (median), efficiency 1 / (variance x
 CPU time), the minutes a 1 % median standard error takes on 2 cores, and per run the z-scores of new against old.
+The old package is compiled in the process every time; delete the tree's numba cache (``find src -name
+'*.nb[ic]' -delete``) first, so the working tree's kernels are too: a kernel loaded from the cache ran some 5 %
+slower than the same kernel compiled in the process (docs/clouds.md, "Speed").
 """
 
 from __future__ import annotations

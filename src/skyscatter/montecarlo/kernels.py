@@ -245,6 +245,21 @@ def _roulette(f, n, vertices, st):
 
 
 @helper
+def _roulette_max(f, n, vertices, st, wmax):
+    """:func:`_roulette` with the largest weight ``wmax`` of ``f`` already known (the clear sky's vertices find it
+    in the loop that normalises the weights: one loop over the wavelengths fewer)."""
+    if wmax <= 0.0:
+        return False
+    if vertices >= 2 and wmax < _RR_THRESHOLD:
+        q = wmax / _RR_THRESHOLD
+        if next_uniform(st) >= q:
+            return False
+        for i in range(n):
+            f[i] /= q
+    return True
+
+
+@helper
 def _exit_distance(px, py, pz, dx, dy, dz, rb, rt):
     """Distance [m] along the ray to the ground or out of the top of the atmosphere, and whether it is the ground."""
     r2 = px * px + py * py + pz * pz
@@ -1305,6 +1320,200 @@ def _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy
     return dx, dy, dz
 
 
+@inline
+def _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, scat_t, a0, a1, cols, tot, sc, sst, f, p):
+    """The collision of a clear-sky path (three shell components, the analytic lobes ``a0``, ``a1``) at ``p`` [m]:
+    what :func:`_collide` and the weights' update by the free path's transmittance and collision density do there,
+    the same operations in the same order (the same bits; the field's terms, 0 here, left out: x + 0 = x), in one
+    loop over the wavelengths instead of four (each such loop costs about as much as its body: the clear sky took
+    1.08x the CPU time of the kernels before the clouds with them, docs/clouds.md "Speed"). ``cols`` the free path's
+    columns [m], ``tot`` (``forced``) the view ray's. Fills ``sc[a0]``, ``sc[a1]``, ``sst`` [m^-1]; returns the
+    mean of the updated ``p`` (:func:`_normalise`'s divisor, applied by :func:`_clear_nee`)."""
+    n = f.shape[0]
+    h = math.sqrt(px * px + py * py + pz * pz) - rb
+    d0 = _density(h, layers, nlay, 0)
+    d1 = _density(h, layers, nlay, 1)
+    d2 = _density(h, layers, nlay, 2)
+    c0 = cols[0]
+    c1 = cols[1]
+    c2 = cols[2]
+    m = 0.0
+    if forced:
+        e0 = tot[0]
+        e1 = tot[1]
+        e2 = tot[2]
+        for i in range(n):
+            v0 = scat_t[0, i] * d0
+            v1 = scat_t[1, i] * d1
+            sc[a0, i] = v0
+            sc[a1, i] = v1
+            sst[i] = v0 + v1 + scat_t[2, i] * d2
+            stt = coef_t[0, i] * d0 + coef_t[1, i] * d1 + coef_t[2, i] * d2
+            tr = math.exp(-(coef_t[0, i] * c0 + coef_t[1, i] * c1 + coef_t[2, i] * c2))
+            pdf = stt * tr
+            ttot = -math.expm1(-(coef_t[0, i] * e0 + coef_t[1, i] * e1 + coef_t[2, i] * e2))
+            pdf = pdf / ttot if ttot > 0.0 else 0.0
+            f[i] *= tr
+            q = p[i] * pdf
+            p[i] = q
+            m += q
+    else:
+        for i in range(n):
+            v0 = scat_t[0, i] * d0
+            v1 = scat_t[1, i] * d1
+            sc[a0, i] = v0
+            sc[a1, i] = v1
+            sst[i] = v0 + v1 + scat_t[2, i] * d2
+            stt = coef_t[0, i] * d0 + coef_t[1, i] * d1 + coef_t[2, i] * d2
+            tr = math.exp(-(coef_t[0, i] * c0 + coef_t[1, i] * c1 + coef_t[2, i] * c2))
+            f[i] *= tr
+            q = p[i] * (stt * tr)
+            p[i] = q
+            m += q
+    return m / n
+
+
+@inline
+def _clear_nee(px, py, pz, dx, dy, dz, m, sun, cos_sun, rb, rt, edges, layers, nlay, coef_t, kmin, a0, a1, lobe,
+               lobe_g, esun, sc, f, p, contrib, st, tot, tmp, rec):
+    """After :func:`_clear_collision` at ``p`` [m] (reached along ``d``): the weights divided by their mean ``m``
+    (:func:`_normalise`) and the next-event estimate to the sun (:func:`_march_reach`, :func:`_transmittances`,
+    :func:`_phase_sums`, the contributions ``contrib``) in one loop over the wavelengths, the same operations in the
+    same order (the same bits). The path's copy weight is 1 in a clear medium (no splitting): left out (1 x = x)."""
+    n = f.shape[0]
+    wx, wy, wz = _sun_sample(sun[0], sun[1], sun[2], cos_sun, next_uniform(st), next_uniform(st))
+    te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
+    live = False
+    if not blocked:
+        _, opaque, _ = _march_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, tot, tmp,
+                                    rec)
+        live = not opaque
+    v0 = 0.0
+    v1 = 0.0
+    if live:
+        mw = wx * dx + wy * dy + wz * dz
+        v0, _ = _analytic_phase(lobe[a0], lobe_g[a0], mw, False)
+        v1, _ = _analytic_phase(lobe[a1], lobe_g[a1], mw, False)
+    e0 = tot[0]
+    e1 = tot[1]
+    e2 = tot[2]
+    if m > 0.0:
+        if live:
+            for i in range(n):
+                fi = f[i] / m
+                f[i] = fi
+                p[i] = p[i] / m
+                tr = math.exp(-(coef_t[0, i] * e0 + coef_t[1, i] * e1 + coef_t[2, i] * e2))
+                contrib[i] += fi * (sc[a0, i] * v0 + sc[a1, i] * v1) * esun[i] * tr
+        else:
+            for i in range(n):
+                f[i] /= m
+                p[i] = p[i] / m
+    elif live:
+        for i in range(n):
+            tr = math.exp(-(coef_t[0, i] * e0 + coef_t[1, i] * e1 + coef_t[2, i] * e2))
+            contrib[i] += f[i] * (sc[a0, i] * v0 + sc[a1, i] * v1) * esun[i] * tr
+
+
+@inline
+def _clear_scatter(dx, dy, dz, hero, a0, a1, lobe, lobe_g, sc, sst, f, p, st):
+    """The scattering direction at a clear-sky vertex after :func:`_clear_nee`: what :func:`_scatter` does without
+    directional sampling (the lobe chosen by the hero's scattering coefficients, its cosine drawn for it; ``f``
+    times the phase sums, ``p`` times the direction's density, normalised), the same operations in the same order
+    (the same bits), in two loops over the wavelengths instead of five. Returns the new direction and the largest
+    weight (for :func:`_roulette_max`)."""
+    n = f.shape[0]
+    u = next_uniform(st) * sst[hero]
+    pick = a0 if u < sc[a0, hero] else a1
+    if lobe[pick] == LOBE_RAYLEIGH:
+        mu = rayleigh_inverse_cdf_scalar(next_uniform(st))
+    else:
+        mu = henyey_greenstein_inverse_cdf_scalar(next_uniform(st), lobe_g[pick])
+    dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
+    v0, w0 = _analytic_phase(lobe[a0], lobe_g[a0], mu, True)
+    v1, w1 = _analytic_phase(lobe[a1], lobe_g[a1], mu, True)
+    m = 0.0
+    for i in range(n):
+        s0 = sc[a0, i]
+        s1 = sc[a1, i]
+        f[i] *= s0 * v0 + s1 * v1
+        s = sst[i]
+        q = p[i] * ((s0 * w0 + s1 * w1) / s if s > 0.0 else 0.0)
+        p[i] = q
+        m += q
+    m /= n
+    wmax = 0.0
+    if m > 0.0:
+        for i in range(n):
+            fi = f[i] / m
+            f[i] = fi
+            p[i] = p[i] / m
+            if fi > wmax:
+                wmax = fi
+    else:
+        for i in range(n):
+            if f[i] > wmax:
+                wmax = f[i]
+    return dx, dy, dz, wmax
+
+
+@inline
+def _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun, rb, rt, edges, layers, nlay, coef_t, kmin, albedo,
+                  esun, cols, tot, tmp, rec, f, p, contrib, st):
+    """A ground vertex of a clear-sky path (Lambertian; three shell components) where the ray from ``p`` [m] along
+    ``d`` meets the ground at ``t_end`` [m]: what :func:`_trace_paths`' ground vertex does, the same operations in the
+    same order (the same bits; the copy weight, 1 here, left out), its loops over the wavelengths fused into two
+    (:func:`_clear_collision`). Returns the ground point, the new direction and the largest weight."""
+    n = f.shape[0]
+    px += t_end * dx
+    py += t_end * dy
+    pz += t_end * dz
+    rr = math.sqrt(px * px + py * py + pz * pz)
+    nx, ny, nz = px / rr, py / rr, pz / rr
+    px, py, pz = nx * rb, ny * rb, nz * rb
+    c0 = cols[0]
+    c1 = cols[1]
+    c2 = cols[2]
+    m = 0.0
+    for i in range(n):
+        tr = math.exp(-(coef_t[0, i] * c0 + coef_t[1, i] * c1 + coef_t[2, i] * c2))
+        f[i] *= tr
+        q = p[i] * tr
+        p[i] = q
+        m += q
+    m /= n
+    wx, wy, wz = _sun_sample(sun[0], sun[1], sun[2], cos_sun, next_uniform(st), next_uniform(st))
+    cs = wx * nx + wy * ny + wz * nz
+    live = False
+    if cs > 0.0:
+        te, _ = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
+        _, opaque, _ = _march_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, tot, tmp,
+                                    rec)
+        live = not opaque
+    # cosine-weighted hemisphere: weight albedo
+    u1 = next_uniform(st)
+    mu = math.sqrt(u1)
+    dx, dy, dz = direction_about_axis(nx, ny, nz, mu, 2.0 * math.pi * next_uniform(st))
+    e0 = tot[0]
+    e1 = tot[1]
+    e2 = tot[2]
+    norm = m > 0.0
+    wmax = 0.0
+    for i in range(n):
+        fi = f[i]
+        if norm:
+            fi = fi / m
+            p[i] = p[i] / m
+        if live:
+            tr = math.exp(-(coef_t[0, i] * e0 + coef_t[1, i] * e1 + coef_t[2, i] * e2))
+            contrib[i] += fi * albedo[i] / math.pi * cs * esun[i] * tr
+        fi *= albedo[i]
+        f[i] = fi
+        if fi > wmax:
+            wmax = fi
+    return px, py, pz, dx, dy, dz, wmax
+
+
 @kernel
 def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, ushell,
                 coef,
@@ -1454,6 +1663,15 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
     peak = clouds_on and peak
     split_on = clouds_on and split_on
     sx, sy, sz = sun[0], sun[1], sun[2]
+    # the clear sky's medium (Rayleigh, aerosol, ozone; two analytic lobes): its vertices in fused loops over the
+    # wavelengths (_clear_collision, _clear_nee, _clear_scatter, _clear_ground)
+    a0 = 0
+    a1 = 0
+    clear3 = False
+    if not clouds_on and nc == 3 and active.shape[0] == 2:
+        a0 = active[0]
+        a1 = active[1]
+        clear3 = lobe[a0] != LOBE_TABLE and lobe[a1] != LOBE_TABLE
     for j in range(ndir):
         ax, ay, az = dirs[j, 0], dirs[j, 1], dirs[j, 2]
         cosine = mode[j] == 1
@@ -1539,7 +1757,17 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                 collided = True
                             elif not ground:
                                 break  # escaped to space; the sun is reached by NEE only
-                        if collided:
+                        wmax = -1.0  # the largest weight after the vertex, when its loops found it
+                        if collided and clear3:
+                            px, py, pz = px + t * dx, py + t * dy, pz + t * dz
+                            m = _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, scat_t, a0, a1, cols,
+                                                 tot, sc, sst, f, p)
+                            if sst[hero] <= 0.0:
+                                break  # absorbed for the hero: no continuation can be sampled
+                            _clear_nee(px, py, pz, dx, dy, dz, m, sun, cos_sun, rb, rt, edges, layers, nlay, coef_t,
+                                       kmin, a0, a1, lobe, lobe_g, esun, sc, f, p, contrib, st, tot, tmp, rec)
+                            dx, dy, dz, wmax = _clear_scatter(dx, dy, dz, hero, a0, a1, lobe, lobe_g, sc, sst, f, p, st)
+                        elif collided:
                             px, py, pz = _collide(px, py, pz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers,
                                                   nlay, coef_t, scat_t, fs, fss, cols, dens, sc, stt, sst, tau)
                             if forced:
@@ -1647,6 +1875,11 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                             dx, dy, dz = _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy,
                                                   sz, active, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, sc, sst, ph, val,
                                                   val2, ph2, qs2, f, p, dval, dcdf)
+                        elif clear3:
+                            px, py, pz, dx, dy, dz, wmax = _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun,
+                                                                         rb, rt, edges, layers, nlay, coef_t, kmin,
+                                                                         albedo, esun, cols, tot, tmp, rec, f, p,
+                                                                         contrib, st)
                         else:
                             # ground (Lambertian)
                             px += t_end * dx
@@ -1696,7 +1929,10 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                         vertices += 1
                         if vertices >= _MAX_VERTICES:
                             break
-                        if not _roulette(f, n, vertices, st):
+                        if wmax >= 0.0:
+                            if not _roulette_max(f, n, vertices, st, wmax):
+                                break
+                        elif not _roulette(f, n, vertices, st):
                             break
                     if nstk == 0:
                         break
