@@ -711,8 +711,9 @@ def cloud_table(atmosphere: AtmosphereParameters, optical_depth_nodes: ArrayLike
 #: top from the radiance tables (the skies it stores changed by up to a few per cent). 5: the light that the clear air
 #: below the cloud top sends up taken out of the tables' sky by the adding method (low suns: up to 1.5 % less light).
 #: 6: the clear sky (optical depth 0) with its empty cloud shell kept, lit by the tables like any layer (the sun's
-#: chord through the column's layers then has the layer's edges, as the clouded skies' it is divided by).
-_CLOUD_TABLE_VERSION = 6
+#: chord through the column's layers then has the layer's edges, as the clouded skies' it is divided by). 7: the
+#: spectral reads as ratios to the ozone transmittance along the sun's path (``sky.cloudy.ozone_read``).
+_CLOUD_TABLE_VERSION = 7
 _CLOUD_TABLE_ARRAYS = ("optical_depths", "zeniths", "wavelengths", "diffuse", "slant", "field_theta", "field_phi",
                        "field", "peak")
 
