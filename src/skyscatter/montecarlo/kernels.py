@@ -2125,6 +2125,54 @@ def flux_block(sun, rb, rt, edges, layers, nlay, coef, scat, lobe, lobe_g, lobe_
                                    val2, bu, bd, ba, fstate, rec, field, fsmax, active, lx, ly)
 
 
+@inline
+def _photon_collision_weights(f, p, stt, tau, n):
+    """A forward photon's weights at a collision: the free path's transmittance ``exp(-tau)`` per wavelength (``f``),
+    the hero's path density times the extinction there (``p``; the spectral MIS of :func:`_normalise`)."""
+    for i in range(n):
+        tr = math.exp(-tau[i])
+        f[i] *= tr
+        p[i] *= stt[i] * tr
+    _normalise(f, p, n)
+
+
+@inline
+def _photon_pass_weights(f, p, tau, n):
+    """A forward photon's weights along a free path that reached a boundary without a collision: ``exp(-tau)``."""
+    for i in range(n):
+        tr = math.exp(-tau[i])
+        f[i] *= tr
+        p[i] *= tr
+    _normalise(f, p, n)
+
+
+@inline
+def _photon_scatter(dx, dy, dz, hero, st, active, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, sc, ph, val, val2, sst, f,
+                    p, n):
+    """A forward photon's scattering (``sst[hero] > 0``): the component by its share of the hero's scattering
+    coefficient, its phase function sampled exactly (tables by their segment), the new direction and the weights'
+    phase ratios (the spectral MIS); returns the direction. The photons of :func:`_flux_paths` and
+    :func:`_sphere_paths` share it."""
+    n_active = active.shape[0]
+    u = next_uniform(st) * sst[hero]
+    pick = active[n_active - 1]
+    acc = 0.0
+    for a in range(n_active):
+        c = active[a]
+        acc += sc[c, hero]
+        if u < acc:
+            pick = c
+            break
+    mu, seg = _sample_lobe_segment(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st), tmu, tval, tcdf)
+    dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
+    _phase_sums(mu, seg, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, True)
+    for i in range(n):
+        f[i] *= val[i]
+        p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
+    _normalise(f, p, n)
+    return dx, dy, dz
+
+
 @helper
 def _flux_paths(sun, rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, fvf, fvi,
                 frho, fbmax, fbmin, fxe, fye, fre, fs, fss, dom, levels, seed, group, batch0, n_batches, batch_size, up,
@@ -2134,7 +2182,6 @@ def _flux_paths(sun, rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, 
     the number of vertices. A helper (no reference counting, ``skyscatter.jit``), as :func:`_trace_paths`: compiled
     inside the kernel, every array passed to the inlined :func:`_collide` was counted up and down at each collision
     (atomic operations)."""
-    n_active = active.shape[0]
     nvert = 0
     for bi in range(n_batches):
         key = stream_key(seed, 0, group, batch0 + bi)
@@ -2174,11 +2221,7 @@ def _flux_paths(sun, rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, 
                 if reached:
                     px, py, pz = _collide(px, py, pz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers, nlay,
                                           coef_t, scat_t, fs, fss, cols, dens, sc, stt, sst, tau)
-                    for i in range(n):
-                        tr = math.exp(-tau[i])
-                        f[i] *= tr
-                        p[i] *= stt[i] * tr
-                    _normalise(f, p, n)
+                    _photon_collision_weights(f, p, stt, tau, n)
                     rr = math.sqrt(px * px + py * py + pz * pz)
                     if r_base <= rr <= r_top:
                         k = _pixel(px, py, dom)
@@ -2186,33 +2229,14 @@ def _flux_paths(sun, rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, 
                             ba[k, i] += f[i] * (stt[i] - sst[i])
                     if sst[hero] <= 0.0:
                         break
-                    u = next_uniform(st) * sst[hero]
-                    pick = active[n_active - 1]
-                    acc = 0.0
-                    for a in range(n_active):
-                        c = active[a]
-                        acc += sc[c, hero]
-                        if u < acc:
-                            pick = c
-                            break
-                    mu, seg = _sample_lobe_segment(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st),
-                                                   tmu, tval, tcdf)
-                    dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
-                    _phase_sums(mu, seg, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, True)
-                    for i in range(n):
-                        f[i] *= val[i]
-                        p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
-                    _normalise(f, p, n)
+                    dx, dy, dz = _photon_scatter(dx, dy, dz, hero, st, active, lobe, lobe_g, lobe_tab, tmu, tval, tcdf,
+                                                 sc, ph, val, val2, sst, f, p, n)
                 else:
                     px += t * dx
                     py += t * dy
                     pz += t * dz
                     _optical_depths(coef_t, cols, tau)
-                    for i in range(n):
-                        tr = math.exp(-tau[i])
-                        f[i] *= tr
-                        p[i] *= tr
-                    _normalise(f, p, n)
+                    _photon_pass_weights(f, p, tau, n)
                     if lev >= 0:
                         k = _pixel(px, py, dom)
                         if outward:
@@ -2348,7 +2372,6 @@ def _sphere_paths(rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, tmu
                   scat_t, sc, ph, stt, sst, tau, val, val2, bdir, bdif, brad, btot, fstate, rec, field, fsmax, active):
     """The photons of :func:`sphere_block` (its loop over batches and photons) with its buffers; returns the number of
     vertices. A helper, as :func:`_flux_paths` (no reference counting in the loop)."""
-    n_active = active.shape[0]
     nvert = 0
     b2lo = launch[0] * launch[0]
     b2span = launch[1] * launch[1] - b2lo
@@ -2388,43 +2411,20 @@ def _sphere_paths(rb, rt, edges, layers, nlay, coef, lobe, lobe_g, lobe_tab, tmu
                 if reached:
                     px, py, pz = _collide(px, py, pz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers, nlay,
                                           coef_t, scat_t, fs, fss, cols, dens, sc, stt, sst, tau)
-                    for i in range(n):
-                        tr = math.exp(-tau[i])
-                        f[i] *= tr
-                        p[i] *= stt[i] * tr
-                    _normalise(f, p, n)
+                    _photon_collision_weights(f, p, stt, tau, n)
                     for i in range(n):
                         btot[2, i] += f[i] * (stt[i] - sst[i])
                     if sst[hero] <= 0.0:
                         break
-                    u = next_uniform(st) * sst[hero]
-                    pick = active[n_active - 1]
-                    acc = 0.0
-                    for a in range(n_active):
-                        c = active[a]
-                        acc += sc[c, hero]
-                        if u < acc:
-                            pick = c
-                            break
-                    mu, seg = _sample_lobe_segment(lobe[pick], lobe_g[pick], lobe_tab[pick], hero, next_uniform(st),
-                                                   tmu, tval, tcdf)
-                    dx, dy, dz = direction_about_axis(dx, dy, dz, mu, 2.0 * math.pi * next_uniform(st))
-                    _phase_sums(mu, seg, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val, val2, True)
-                    for i in range(n):
-                        f[i] *= val[i]
-                        p[i] *= val2[i] / sst[i] if sst[i] > 0.0 else 0.0
-                    _normalise(f, p, n)
+                    dx, dy, dz = _photon_scatter(dx, dy, dz, hero, st, active, lobe, lobe_g, lobe_tab, tmu, tval, tcdf,
+                                                 sc, ph, val, val2, sst, f, p, n)
                     scattered = True
                 else:
                     px += t * dx
                     py += t * dy
                     pz += t * dz
                     _optical_depths(coef_t, cols, tau)
-                    for i in range(n):
-                        tr = math.exp(-tau[i])
-                        f[i] *= tr
-                        p[i] *= tr
-                    _normalise(f, p, n)
+                    _photon_pass_weights(f, p, tau, n)
                     if not ground:
                         for i in range(n):
                             btot[1, i] += f[i]
