@@ -25,19 +25,15 @@ import numpy as np
 from skyscatter.sky.cloudy import CloudySky
 
 HERE = Path(__file__).parents[1]
+DEFAULT_DATA = str(HERE / "tests" / "data" / "cloudy_sphere_forward.json")
 sys.path.insert(0, str(HERE / "tests"))
 import cloudy_cct_reference as ref_mod  # noqa: E402
 
 
 def bin_mean(sky: CloudySky, z0: float, z1: float, a0: float, a1: float, wl: list[float], n: int = 6) -> np.ndarray:
     """The model's radiance averaged over the solid angle of a bin of view zenith [z0, z1] and azimuth from the sun
-    [a0, a1] (rad): midpoints uniform in cos(zenith) and in azimuth (equal solid angles)."""
-    mu = np.cos(z0) + (np.cos(z1) - np.cos(z0)) * (np.arange(n) + 0.5) / n
-    az = a0 + (a1 - a0) * (np.arange(n) + 0.5) / n
-    m, a = np.meshgrid(mu, az, indexing="ij")
-    s = np.sqrt(1.0 - m * m)
-    d = np.stack([s * np.sin(a), s * np.cos(a), m], axis=-1).reshape(-1, 3)   # sun at azimuth 0 (north)
-    return sky.spectral_radiance(d, wl).mean(axis=0)
+    [a0, a1] (rad): ``tests/cloudy_cct_reference.py`` (``model_bin_mean``, which the tests use too)."""
+    return ref_mod.model_bin_mean(sky, (z0, z1), (a0, a1), wl, n)
 
 
 def _centre(z0: float, z1: float, a0: float, a1: float) -> np.ndarray:
@@ -50,7 +46,7 @@ def _centre(z0: float, z1: float, a0: float, a1: float) -> np.ndarray:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", default=str(HERE / "tests" / "data" / "cloudy_sphere_forward.json"))
+    ap.add_argument("--data", default=DEFAULT_DATA)
     ap.add_argument("--json", default=None, help="also write the figures here")
     a = ap.parse_args()
     data = json.loads(Path(a.data).read_text())
@@ -112,6 +108,11 @@ def main() -> None:
                                  "model": lm.tolist(), "diff": (lm / rad[:, j, k] - 1).tolist(),
                                  "size_effect": (lm / lc - 1).tolist()})
         row["radiance_bins"] = bins
+        # the run sets of the same bins pooled (tests/cloudy_cct_reference.py, as tests/test_cloudy_sphere.py reads
+        # them): the bins' relative differences per wavelength, mean and largest abs
+        pooled_bins = ref_mod.sphere_radiance_bins(tau, sun) if a.data == DEFAULT_DATA else []
+        pd = np.array([ref_mod.model_bin_mean(sky, z, az, wl) / m - 1 for z, az, m, _, _ in pooled_bins])
+        row["radiance_pooled_diff"] = pd.tolist()
         rows.append(row)
         dl = np.array([b["diff"] for b in bins])
         rel = np.array([np.array(b["mc_stderr"]) / np.array(b["mc"]) for b in bins])
@@ -126,6 +127,10 @@ def main() -> None:
               f"{np.median(np.abs(dl)) * 100:.1f} %, {np.max(np.abs(dl)) * 100:.1f} % ({np.median(rel) * 100:.1f} %; "
               f"bin size {size * 100:.1f} %) | "
               f"{t_model:.0f} / {t_mc:.0f} +- {t_sig:.0f} K ({t_model - t_mc:+.0f}) |{bw}", flush=True)
+        if pd.size:
+            print(f"    pooled bins ({len(pooled_bins)}): mean per wavelength "
+                  + " / ".join(f"{100 * v:+.1f}" for v in pd.mean(axis=0)) + " %, largest abs "
+                  + " / ".join(f"{100 * v:.1f}" for v in np.abs(pd).max(axis=0)) + " %", flush=True)
     print(f"load average {os.getloadavg()}")
     if a.json:
         Path(a.json).write_text(json.dumps(rows, indent=1) + "\n")
