@@ -61,10 +61,14 @@ def test_sphere_photons_against_pooled_backward_paths_at_sun_2_deg(tau):
     np.testing.assert_array_less(np.abs(mc - bwd[0]), 3.0 * np.hypot(mce, bwd[1]))
 
 
-@pytest.mark.parametrize("tau", [1.0, 15.0])
-def test_sphere_photons_against_periodic_domain_photons_at_sun_10_deg(tau):
-    mc, mce, _ = sphere_reference(tau, 10.0)
-    dom = reference(tau, 10.0)
+@pytest.mark.parametrize("tau, sun", [(1.0, 10.0), (5.0, 10.0), (15.0, 10.0), (30.0, 10.0), (5.0, 30.0),
+                                      (30.0, 30.0)])
+def test_sphere_photons_against_periodic_domain_photons(tau, sun):
+    """Sun 10 and 30 deg: the periodic domain's error in a sphere (at most 1.6 % at 10 deg, less higher up) is the
+    stated margin (measured -0.3..+3.1 %, at most 3.1 combined sigma; the sphere's photons higher at 450 nm,
+    +1.0..+2.4 %, as that domain's deficit of sky light on the cloud top says)."""
+    mc, mce, _ = sphere_reference(tau, sun)
+    dom = reference(tau, sun)
     assert dom is not None and dom[3] == "forward"
     np.testing.assert_array_less(np.abs(mc - dom[0]), 3.0 * np.hypot(mce, dom[1]) + DOMAIN_MARGIN * mc)
 
@@ -75,12 +79,15 @@ def test_sphere_photons_against_periodic_domain_photons_at_sun_10_deg(tau):
 #: -2.1 / -1.6 / +0.4 against the first 5-7 million photons),
 #: -1.3 / -2.4 / -0.8 (30), -0.7 / -2.3 / -0.5 (60); sun 10 deg +0.1 / -1.0 / +0.2 (1), +0.2 / -1.6 / +1.0 (15).
 #: Before the ozone reads 550 nm missed under 1 / 30 / 60 at sun 2 deg (-3.1 / -3.8 / -3.7 %).
-DIFFUSE_ROWS = [(1.0, 2.0), (5.0, 2.0), (15.0, 2.0), (30.0, 2.0), (60.0, 2.0), (1.0, 10.0), (15.0, 10.0)]
+#: Sun 10 and 30 deg under 5 and 30 (seeds 901 and 902, 2026-12-05): -0.7 / -0.5 / +0.3 (5, 10 deg), -0.8 / +0.1 /
+#: +0.0 (30, 10 deg), -0.8 / +0.1 / +0.8 (5, 30 deg), -0.8 / +0.1 / +0.1 (30, 30 deg).
+DIFFUSE_ROWS = [(1.0, 2.0), (5.0, 2.0), (15.0, 2.0), (30.0, 2.0), (60.0, 2.0), (1.0, 10.0), (5.0, 10.0), (15.0, 10.0),
+                (30.0, 10.0), (5.0, 30.0), (30.0, 30.0)]
 #: rows where it meets the CCT target, measured the same day: -118..+103 K; optical depth 15 at sun 2 deg was -201 K
 #: (sigma 103 K) against 5-7 million photons per wavelength, a strict xfail until two more seeds (501, 601, 10
 #: million photons each per wavelength) put it at +15 +- 45 K (the model -0.6 / -1.2 / -0.3 %; the first seeds'
-#: 450 nm values were 1.5-2.1 % above the new ones)
-CCT_ROWS = [(1.0, 2.0), (5.0, 2.0), (15.0, 2.0), (30.0, 2.0), (60.0, 2.0), (1.0, 10.0), (15.0, 10.0)]
+#: 450 nm values were 1.5-2.1 % above the new ones); sun 10 deg under 5 / 30 -36 / -52 K, sun 30 deg -54 / -39 K
+CCT_ROWS = DIFFUSE_ROWS
 
 
 @pytest.mark.parametrize("tau, sun", DIFFUSE_ROWS)
@@ -103,8 +110,9 @@ RADIANCE_TARGET = 0.05
 #: (optical depth, sun elevation) rows where the model's radiance meets it (docs/clouds.md, 2026-12-05, bin means
 #: per wavelength 450 / 550 / 650 nm): sun 2 deg -0.9 / -0.5 / +2.1 % (optical depth 1), -2.1 / -0.2 / +1.2 (5),
 #: -0.8 / -1.5 / +0.4 (15), +0.6 / -2.5 / -0.7 (30), -0.4 / -3.0 / -0.5 (60); sun 10 deg -1.5 / -2.6 / -0.9 (1),
-#: +0.1 / -1.8 / +1.2 (15)
-RADIANCE_ROWS = [(1.0, 2.0), (5.0, 2.0), (15.0, 2.0), (30.0, 2.0), (60.0, 2.0), (1.0, 10.0), (15.0, 10.0)]
+#: +0.1 / -1.8 / +1.2 (15), -0.0 / +0.1 / +0.4 (5), -0.4 / +0.2 / -0.4 (30); sun 30 deg -1.2 / -0.9 / +0.2 (5), -0.9 /
+#: +0.0 / +0.6 (30)
+RADIANCE_ROWS = DIFFUSE_ROWS
 
 
 @pytest.mark.parametrize("tau, sun", RADIANCE_ROWS)
