@@ -4,10 +4,11 @@ Reads ``tests/data/cloudy_sphere_forward.json`` (``benchmarks/cloudy_sphere_refe
 the model's diffuse irradiance on the ground against the photons' centre ring (450 / 550 / 650 nm) with their
 standard error, the ring's width as a bias bound (the curvature of ``E`` over the three rings, ``(de)^2 / 24
 E''/E``), the photons against the pooled backward paths where they exist (``tests/cloudy_cct_reference.py``: sun 2
-deg, optical depths 1, 5, 15) and at sun 10 deg against the pooled forward photons of the periodic domain, the
-radiance in each stored bin >= 10 deg above the horizon (the model averaged over the bin's solid angle, 6 x 6
-points, against the photons' bin mean), and the CCT of the model against that of the photons (``monte_carlo_cct``:
-the model's spectrum times the Monte Carlo / model ratio; Hernandez 1999). ``python
+deg, optical depths 1, 5, 15) and at sun 10 deg and higher against the pooled forward photons of the periodic
+domain, the radiance in each stored bin >= 10 deg above the horizon (the model averaged over the bin's solid angle,
+6 x 6 points, against the photons' bin mean; per run set, and the run sets of the same bins pooled: their mean
+difference per wavelength, as tests/test_cloudy_sphere.py holds it), and the CCT of the model against that of the
+photons (``monte_carlo_cct``: the model's spectrum times the Monte Carlo / model ratio; Hernandez 1999). ``python
 benchmarks/compare_cloudy_sphere.py [--json out.json]``.
 """
 
@@ -25,19 +26,15 @@ import numpy as np
 from skyscatter.sky.cloudy import CloudySky
 
 HERE = Path(__file__).parents[1]
+DEFAULT_DATA = str(HERE / "tests" / "data" / "cloudy_sphere_forward.json")
 sys.path.insert(0, str(HERE / "tests"))
 import cloudy_cct_reference as ref_mod  # noqa: E402
 
 
 def bin_mean(sky: CloudySky, z0: float, z1: float, a0: float, a1: float, wl: list[float], n: int = 6) -> np.ndarray:
     """The model's radiance averaged over the solid angle of a bin of view zenith [z0, z1] and azimuth from the sun
-    [a0, a1] (rad): midpoints uniform in cos(zenith) and in azimuth (equal solid angles)."""
-    mu = np.cos(z0) + (np.cos(z1) - np.cos(z0)) * (np.arange(n) + 0.5) / n
-    az = a0 + (a1 - a0) * (np.arange(n) + 0.5) / n
-    m, a = np.meshgrid(mu, az, indexing="ij")
-    s = np.sqrt(1.0 - m * m)
-    d = np.stack([s * np.sin(a), s * np.cos(a), m], axis=-1).reshape(-1, 3)   # sun at azimuth 0 (north)
-    return sky.spectral_radiance(d, wl).mean(axis=0)
+    [a0, a1] (rad): ``tests/cloudy_cct_reference.py`` (``model_bin_mean``, which the tests use too)."""
+    return ref_mod.model_bin_mean(sky, (z0, z1), (a0, a1), wl, n)
 
 
 def _centre(z0: float, z1: float, a0: float, a1: float) -> np.ndarray:
@@ -50,7 +47,7 @@ def _centre(z0: float, z1: float, a0: float, a1: float) -> np.ndarray:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", default=str(HERE / "tests" / "data" / "cloudy_sphere_forward.json"))
+    ap.add_argument("--data", default=DEFAULT_DATA)
     ap.add_argument("--json", default=None, help="also write the figures here")
     a = ap.parse_args()
     data = json.loads(Path(a.data).read_text())
@@ -83,7 +80,7 @@ def main() -> None:
                "cct_model": t_model, "cct_mc": t_mc, "cct_sigma": t_sig, "photons": photons,
                "seeds": [c["seed"] for c in sets],
                "cpu_seconds": sum(r["cpu_seconds"] for c in sets for r in c["runs"])}
-        ref = ref_mod.reference(tau, sun) if (sun < 5.0 and tau in (1.0, 5.0, 15.0)) or sun == 10.0 else None
+        ref = ref_mod.reference(tau, sun) if (sun < 5.0 and tau in (1.0, 5.0, 15.0)) or sun >= 10.0 else None
         if ref is not None:
             row["backward"] = ref[0].tolist()
             row["backward_stderr"] = ref[1].tolist()
@@ -112,6 +109,11 @@ def main() -> None:
                                  "model": lm.tolist(), "diff": (lm / rad[:, j, k] - 1).tolist(),
                                  "size_effect": (lm / lc - 1).tolist()})
         row["radiance_bins"] = bins
+        # the run sets of the same bins pooled (tests/cloudy_cct_reference.py, as tests/test_cloudy_sphere.py reads
+        # them): the bins' relative differences per wavelength, mean and largest abs
+        pooled_bins = ref_mod.sphere_radiance_bins(tau, sun) if a.data == DEFAULT_DATA else []
+        pd = np.array([ref_mod.model_bin_mean(sky, z, az, wl) / m - 1 for z, az, m, _, _ in pooled_bins])
+        row["radiance_pooled_diff"] = pd.tolist()
         rows.append(row)
         dl = np.array([b["diff"] for b in bins])
         rel = np.array([np.array(b["mc_stderr"]) / np.array(b["mc"]) for b in bins])
@@ -126,6 +128,10 @@ def main() -> None:
               f"{np.median(np.abs(dl)) * 100:.1f} %, {np.max(np.abs(dl)) * 100:.1f} % ({np.median(rel) * 100:.1f} %; "
               f"bin size {size * 100:.1f} %) | "
               f"{t_model:.0f} / {t_mc:.0f} +- {t_sig:.0f} K ({t_model - t_mc:+.0f}) |{bw}", flush=True)
+        if pd.size:
+            print(f"    pooled bins ({len(pooled_bins)}): mean per wavelength "
+                  + " / ".join(f"{100 * v:+.1f}" for v in pd.mean(axis=0)) + " %, largest abs "
+                  + " / ".join(f"{100 * v:.1f}" for v in np.abs(pd).max(axis=0)) + " %", flush=True)
     print(f"load average {os.getloadavg()}")
     if a.json:
         Path(a.json).write_text(json.dumps(rows, indent=1) + "\n")

@@ -166,3 +166,46 @@ def sphere_reference(tau: float, sun: float) -> tuple[np.ndarray, np.ndarray, in
                 for r in c["runs"] if r["wavelength_nm"] == w]
         per_wl.append(pooled(runs))
     return (np.array([p[0][1] for p in per_wl]), np.array([p[1][1] for p in per_wl]), int(min(p[2] for p in per_wl)))
+
+
+def sphere_radiance_bins(tau: float, sun: float, min_elevation_deg: float = 10.0
+                         ) -> list[tuple[tuple[float, float], tuple[float, float], np.ndarray, np.ndarray, int]]:
+    """The spherical forward photons' radiance [W m^-2 sr^-1 nm^-1] at :data:`WAVELENGTHS` in the stored bins of
+    view zenith and azimuth from the sun's vertical plane whose lowest direction is ``min_elevation_deg`` [deg] or
+    more above the horizon (the centre ring's bin means, ``benchmarks/cloudy_sphere_reference.py``).
+
+    Run sets with the same bins and all three wavelengths are pooled (:func:`pooled`); per bin: (view zenith edges
+    [rad], azimuth edges [rad], mean (3,), standard error (3,), photons of the fewest-photon wavelength)."""
+    layouts: dict[tuple, list[dict]] = {}
+    for c in SPHERE["cases"]:
+        if (c["tau"], c["sun_elevation_deg"]) == (tau, sun) and c["wavelengths_nm"] == WAVELENGTHS:
+            layouts.setdefault((tuple(c["view_zenith_edges_deg"]), c["azimuth_bins"]), []).append(c)
+    out = []
+    for (zenith_deg, azimuth_bins), sets in layouts.items():
+        ze = np.radians(zenith_deg)
+        ae = np.linspace(0.0, np.pi, azimuth_bins + 1)
+        per_wl = [pooled([(np.ravel(r["radiance"]), np.ravel(r["radiance_stderr"]), r["photons"]) for c in sets
+                          for r in c["runs"] if r["wavelength_nm"] == w]) for w in WAVELENGTHS]
+        mean = np.array([p[0] for p in per_wl]).reshape(3, ze.size - 1, azimuth_bins)
+        err = np.array([p[1] for p in per_wl]).reshape(3, ze.size - 1, azimuth_bins)
+        n = min(p[2] for p in per_wl)
+        for j in range(ze.size - 1):
+            if 90.0 - np.degrees(ze[j + 1]) < min_elevation_deg - 1e-9:
+                continue
+            for k in range(azimuth_bins):
+                out.append(((float(ze[j]), float(ze[j + 1])), (float(ae[k]), float(ae[k + 1])), mean[:, j, k],
+                            err[:, j, k], n))
+    return out
+
+
+def model_bin_mean(sky, zenith: tuple[float, float], azimuth: tuple[float, float], wavelengths: list[float],
+                   n: int = 6) -> np.ndarray:
+    """A sky model's radiance [W m^-2 sr^-1 nm^-1] averaged over the solid angle of a bin of view zenith and
+    azimuth from the sun (sun at azimuth 0, north) [rad]: ``n x n`` midpoints uniform in cos(zenith) and in
+    azimuth (equal solid angles), (len(wavelengths),)."""
+    mu = np.cos(zenith[0]) + (np.cos(zenith[1]) - np.cos(zenith[0])) * (np.arange(n) + 0.5) / n
+    az = azimuth[0] + (azimuth[1] - azimuth[0]) * (np.arange(n) + 0.5) / n
+    m, a = np.meshgrid(mu, az, indexing="ij")
+    s = np.sqrt(1.0 - m * m)
+    d = np.stack([s * np.sin(a), s * np.cos(a), m], axis=-1).reshape(-1, 3)
+    return np.asarray(sky.spectral_radiance(d, wavelengths)).mean(axis=0)

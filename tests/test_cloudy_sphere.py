@@ -13,8 +13,9 @@ sun's elevation, pooled over the stored seeds (``tests/cloudy_cct_reference.py``
   periodic domain (``cloudy_low_sun.json``, ``cloudy_montecarlo.json``) plus their domain's error in a sphere, at
   most 1.6 % under these layers (docs/clouds.md, "What the references are worth") - a stated margin, since their
   sky light on the cloud top is short there (about -1.8 % at 450 nm at the ground).
-* The model (default coupling) against the photons: the issue's targets, diffuse irradiance within 3 % and CCT
-  within 200 K, held for the rows that meet them (the misses are in docs/clouds.md with their size).
+* The model (default coupling) against the photons: the issue's targets, diffuse irradiance within 3 %, CCT
+  within 200 K and the radiance 10 deg or more above the horizon within 5 % (the bins' mean difference per
+  wavelength), held for the rows that meet them (the misses are in docs/clouds.md with their size).
 """
 
 from __future__ import annotations
@@ -24,7 +25,16 @@ import math
 import numpy as np
 import pytest
 
-from cloudy_cct_reference import FINE, MONTECARLO, WAVELENGTHS, monte_carlo_cct, reference, sphere_reference
+from cloudy_cct_reference import (
+    FINE,
+    MONTECARLO,
+    WAVELENGTHS,
+    model_bin_mean,
+    monte_carlo_cct,
+    reference,
+    sphere_radiance_bins,
+    sphere_reference,
+)
 from skyscatter.sky.cloudy import CloudySky
 
 pytest.importorskip("disortpp")
@@ -51,26 +61,33 @@ def test_sphere_photons_against_pooled_backward_paths_at_sun_2_deg(tau):
     np.testing.assert_array_less(np.abs(mc - bwd[0]), 3.0 * np.hypot(mce, bwd[1]))
 
 
-@pytest.mark.parametrize("tau", [1.0, 15.0])
-def test_sphere_photons_against_periodic_domain_photons_at_sun_10_deg(tau):
-    mc, mce, _ = sphere_reference(tau, 10.0)
-    dom = reference(tau, 10.0)
+@pytest.mark.parametrize("tau, sun", [(1.0, 10.0), (5.0, 10.0), (15.0, 10.0), (30.0, 10.0), (5.0, 30.0),
+                                      (30.0, 30.0)])
+def test_sphere_photons_against_periodic_domain_photons(tau, sun):
+    """Sun 10 and 30 deg: the periodic domain's error in a sphere (at most 1.6 % at 10 deg, less higher up) is the
+    stated margin (measured -0.3..+3.1 %, at most 3.1 combined sigma; the sphere's photons higher at 450 nm,
+    +1.0..+2.4 %, as that domain's deficit of sky light on the cloud top says)."""
+    mc, mce, _ = sphere_reference(tau, sun)
+    dom = reference(tau, sun)
     assert dom is not None and dom[3] == "forward"
     np.testing.assert_array_less(np.abs(mc - dom[0]), 3.0 * np.hypot(mce, dom[1]) + DOMAIN_MARGIN * mc)
 
 
 #: (optical depth, sun elevation) rows where the model meets the diffuse target: all measured (docs/clouds.md,
 #: 2026-12-05, with the spectral reads as ratios to the ozone transmittance, ``sky.cloudy.ozone_read``): sun 2 deg
-#: 450 / 550 / 650 nm -1.6 / -1.6 / -0.2 % (optical depth 1), -1.4 / -1.5 / +0.7 (5), -2.1 / -1.6 / +0.4 (15),
+#: 450 / 550 / 650 nm -1.6 / -1.6 / -0.2 % (optical depth 1), -1.4 / -1.5 / +0.7 (5), -0.6 / -1.2 / -0.3 (15;
+#: -2.1 / -1.6 / +0.4 against the first 5-7 million photons),
 #: -1.3 / -2.4 / -0.8 (30), -0.7 / -2.3 / -0.5 (60); sun 10 deg +0.1 / -1.0 / +0.2 (1), +0.2 / -1.6 / +1.0 (15).
 #: Before the ozone reads 550 nm missed under 1 / 30 / 60 at sun 2 deg (-3.1 / -3.8 / -3.7 %).
-DIFFUSE_ROWS = [(1.0, 2.0), (5.0, 2.0), (15.0, 2.0), (30.0, 2.0), (60.0, 2.0), (1.0, 10.0), (15.0, 10.0)]
-#: rows where it meets the CCT target, measured the same day: -118..+103 K; optical depth 15 at sun 2 deg is -201 K
-#: (the photons' CCT sigma 103 K; -114 K before the ozone reads moved the model's 575-600 nm light, which were 2-5 %
-#: too bright there): a strict xfail below, not a row here
-CCT_ROWS = [(1.0, 2.0), (5.0, 2.0), (30.0, 2.0), (60.0, 2.0), (1.0, 10.0), (15.0, 10.0)]
-CCT_MISSES = [pytest.param(15.0, 2.0, marks=pytest.mark.xfail(strict=True, reason="-201 K against the photons' CCT "
-                                                                 "(sigma 103 K), measured 2026-12-05"))]
+#: Sun 10 and 30 deg under 5 and 30 (seeds 901 and 902, 2026-12-05): -0.7 / -0.5 / +0.3 (5, 10 deg), -0.8 / +0.1 /
+#: +0.0 (30, 10 deg), -0.8 / +0.1 / +0.8 (5, 30 deg), -0.8 / +0.1 / +0.1 (30, 30 deg).
+DIFFUSE_ROWS = [(1.0, 2.0), (5.0, 2.0), (15.0, 2.0), (30.0, 2.0), (60.0, 2.0), (1.0, 10.0), (5.0, 10.0), (15.0, 10.0),
+                (30.0, 10.0), (5.0, 30.0), (30.0, 30.0)]
+#: rows where it meets the CCT target, measured the same day: -118..+103 K; optical depth 15 at sun 2 deg was -201 K
+#: (sigma 103 K) against 5-7 million photons per wavelength, a strict xfail until two more seeds (501, 601, 10
+#: million photons each per wavelength) put it at +15 +- 45 K (the model -0.6 / -1.2 / -0.3 %; the first seeds'
+#: 450 nm values were 1.5-2.1 % above the new ones); sun 10 deg under 5 / 30 -36 / -52 K, sun 30 deg -54 / -39 K
+CCT_ROWS = DIFFUSE_ROWS
 
 
 @pytest.mark.parametrize("tau, sun", DIFFUSE_ROWS)
@@ -80,9 +97,33 @@ def test_cloudy_diffuse_irradiance_against_sphere_photons(tau, sun):
     np.testing.assert_array_less(np.abs(model / mc - 1.0), DIFFUSE_TARGET)
 
 
-@pytest.mark.parametrize("tau, sun", CCT_ROWS + CCT_MISSES)
+@pytest.mark.parametrize("tau, sun", CCT_ROWS)
 def test_cloudy_cct_against_sphere_photons(tau, sun):
     mc, mce, _ = sphere_reference(tau, sun)
     spectrum, model = _model(tau, sun)
     t_model, t_mc, sigma = monte_carlo_cct(spectrum, model, mc, mce)
     assert abs(t_model - t_mc) <= CCT_TARGET_K, (t_model, t_mc, sigma)
+
+
+#: the issue's radiance target (10 deg or more above the horizon)
+RADIANCE_TARGET = 0.05
+#: (optical depth, sun elevation) rows where the model's radiance meets it (docs/clouds.md, 2026-12-05, bin means
+#: per wavelength 450 / 550 / 650 nm): sun 2 deg -0.9 / -0.5 / +2.1 % (optical depth 1), -2.1 / -0.2 / +1.2 (5),
+#: -0.8 / -1.5 / +0.4 (15), +0.6 / -2.5 / -0.7 (30), -0.4 / -3.0 / -0.5 (60); sun 10 deg -1.5 / -2.6 / -0.9 (1),
+#: +0.1 / -1.8 / +1.2 (15), -0.0 / +0.1 / +0.4 (5), -0.4 / +0.2 / -0.4 (30); sun 30 deg -1.2 / -0.9 / +0.2 (5), -0.9 /
+#: +0.0 / +0.6 (30)
+RADIANCE_ROWS = DIFFUSE_ROWS
+
+
+@pytest.mark.parametrize("tau, sun", RADIANCE_ROWS)
+def test_cloudy_radiance_against_sphere_photons(tau, sun):
+    """The model's radiance averaged over each stored bin 10 deg or more above the horizon against the photons'
+    bin means (run sets of the same bins pooled): the mean over the bins of the relative difference, per
+    wavelength, within 5 % (single bins carry 1.5-9 % of the photons' noise; the figures per bin are in
+    docs/clouds.md)."""
+    bins = sphere_radiance_bins(tau, sun)
+    assert len(bins) >= 6
+    sky = CloudySky(math.radians(90.0 - sun), 0.0, cloud_optical_depth=tau, cloud_base=MONTECARLO["cloud_base_m"],
+                    cloud_top=MONTECARLO["cloud_top_m"], ground_albedo=MONTECARLO["ground_albedo"])
+    diff = np.array([model_bin_mean(sky, z, a, WAVELENGTHS) / mc - 1.0 for z, a, mc, _, _ in bins])
+    np.testing.assert_array_less(np.abs(diff.mean(axis=0)), RADIANCE_TARGET)
