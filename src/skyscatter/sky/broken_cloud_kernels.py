@@ -221,7 +221,7 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g
             tj[jj, wl] = cj
     direct = np.empty(nwl)
     # the octaves' extinction factors a^i (the same products as the octave loop's running one) and a buffer for
-    # their exponentials and the step's, computed together per sample (:func:`exp_lanes`)
+    # their exponentials and the step's, computed together per sample (:func:`skyscatter.vecmath.exp_lanes`)
     a_pow = np.empty(n_octaves)
     att = 1.0
     for o in range(n_octaves):
@@ -596,8 +596,8 @@ def shaft_loss(origin, dirs, seg, t0, sun, gf, tau_ground, tau_sun, h_step, beta
     be1 = np.empty(n_l)
     dk = np.empty(n_l)
     p_aer = np.empty(n_l)
-    # the air's transmittance over a step or between nodes at every wavelength, by :func:`exp_lanes` (one vectorised
-    # loop instead of a libm call per wavelength)
+    # the air's transmittance over a step or between nodes at every wavelength, by
+    # :func:`skyscatter.vecmath.exp_lanes` (one vectorised loop instead of a libm call per wavelength)
     ez = np.empty(n_l)
     m_ph = ph_mu.shape[0]
     # per group: the shadow's moments sum c_j rho dt and sum c_j rho s dt (j = 0..3; Rayleigh then particles), and
