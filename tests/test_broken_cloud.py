@@ -548,17 +548,3 @@ def test_air_to_the_top_by_cosine_nodes_matches_the_per_ray_lookup(altitude):
     assert rel[high].max() < 1e-4
     assert rel[ref >= 1e-3].max() < 5e-3
 
-
-def test_vector_exponentials_match_libm():
-    """The march's batched exponentials (``exp_lanes``: Cody-Waite reduction and a degree-13 Taylor polynomial)
-    against Python's ``math.exp`` (the C library's, an independent implementation) over the march's range of
-    arguments, [-60, 0], and at the ends of the reduction's interval: within 4e-16 relative (2 units in the last
-    place)."""
-    from skyscatter.sky.broken_cloud_kernels import exp_lanes
-
-    z = np.concatenate([-np.geomspace(1e-12, 60.0, 4001), [0.0, -0.5 * math.log(2.0), -1.5 * math.log(2.0)]])
-    bits = np.empty(z.size, dtype=np.int64)
-    out = z.copy()
-    exp_lanes(out, z.size, bits, bits.view(np.float64))
-    expected = np.array([math.exp(v) for v in z])
-    assert np.max(np.abs(out / expected - 1.0)) < 4e-16

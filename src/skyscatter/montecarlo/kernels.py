@@ -155,6 +155,7 @@ from ..atmosphere.phase_table import (
     phase_table_values_at,
 )
 from ..jit import helper, inline, kernel
+from ..vecmath import exp_lane
 from .rng import next_uniform, sample_state, stream_key
 from .tracking import field_box_hit, field_density_at, field_free_path, field_transmittance
 
@@ -889,7 +890,25 @@ def _transmittances(coef_t, cols, tau, out):
     """``out[i] = exp(-tau[i])`` with ``tau`` the optical depths of the columns ``cols`` (:func:`_optical_depths`)."""
     _optical_depths(coef_t, cols, tau)
     for i in range(out.shape[0]):
-        out[i] = math.exp(-tau[i])
+        out[i] = exp_lane(-tau[i])
+
+
+@helper
+def _transmittances3(coef_t, c0, c1, c2, out):
+    """``out[i] = exp(-tau_i)`` with ``tau_i`` the optical depth of the columns ``c0``, ``c1``, ``c2`` [m] of three
+    shell components at wavelength ``i`` (``coef_t`` (>= 3, len(out)) [m^-1]): the clear sky's transmittances, in one
+    loop that runs in SIMD lanes (:func:`skyscatter.vecmath.exp_lane`; ``out`` a multiple of 4 long leaves no scalar
+    remainder), compiled once (not inlined: with the loop inlined at its 4 call sites the clear sky ran at 0.95x
+    ``main``'s paths per CPU-second, the path loop's code larger)."""
+    for i in range(out.shape[0]):
+        out[i] = exp_lane(-(coef_t[0, i] * c0 + coef_t[1, i] * c1 + coef_t[2, i] * c2))
+
+
+@helper
+def _exp_negated(tau, n):
+    """``tau[i] = exp(-tau[i])`` in place for ``i < n`` (in SIMD lanes, :func:`skyscatter.vecmath.exp_lane`)."""
+    for i in range(n):
+        tau[i] = exp_lane(-tau[i])
 
 
 @helper
@@ -1235,11 +1254,11 @@ def _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges, layers, nl
             return False, 0.0, 0.0, 0.0
         qx, qy, qz = _collide(qx, qy, qz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers, nlay, coef_t,
                               scat_t, fs, fss, cols, dens, sc, stt, sst, tau)
-        den = stt[hero] * math.exp(-tau[hero]) * pp[hero]
+        den = stt[hero] * exp_lane(-tau[hero]) * pp[hero]
         if not den > 0.0 or sc[peak_lobe, hero] <= 0.0:
             return False, 0.0, 0.0, 0.0
         for i in range(n):
-            g[i] *= fp[i] * math.exp(-tau[i]) * sc[peak_lobe, i] / den
+            g[i] *= fp[i] * exp_lane(-tau[i]) * sc[peak_lobe, i] / den
     te, blocked = _exit_distance(qx, qy, qz, wx, wy, wz, rb, rt)
     if blocked:
         return False, 0.0, 0.0, 0.0
@@ -1321,14 +1340,18 @@ def _scatter(dx, dy, dz, hero, st, use_ddis, eps, ddis_lobe, ddis_active, sx, sy
 
 
 @inline
-def _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, scat_t, a0, a1, cols, tot, sc, sst, f, p):
+def _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, coef_p, scat_t, a0, a1, cols, tot, sc, sst, f, p,
+                     trn):
     """The collision of a clear-sky path (three shell components, the analytic lobes ``a0``, ``a1``) at ``p`` [m]:
     what :func:`_collide` and the weights' update by the free path's transmittance and collision density do there,
     the same operations in the same order (the same bits; the field's terms, 0 here, left out: x + 0 = x), in one
     loop over the wavelengths instead of four (each such loop costs about as much as its body: the clear sky took
     1.08x the CPU time of the kernels before the clouds with them, docs/clouds.md "Speed"). ``cols`` the free path's
-    columns [m], ``tot`` (``forced``) the view ray's. Fills ``sc[a0]``, ``sc[a1]``, ``sst`` [m^-1]; returns the
-    mean of the updated ``p`` (:func:`_normalise`'s divisor, applied by :func:`_clear_nee`)."""
+    columns [m], ``tot`` (``forced``) the view ray's. Fills ``sc[a0]``, ``sc[a1]``, ``sst`` [m^-1] and the free
+    path's transmittances ``trn`` (n_pad,) [-] (computed first by :func:`_transmittances3` from ``coef_p``, the
+    (3, n_pad) coefficients [m^-1] padded with zeros to a multiple of 4 wavelengths, in a loop that runs in SIMD lanes
+    without a scalar remainder; the fused loop's sum keeps that loop scalar); returns the mean of the updated ``p``
+    (:func:`_normalise`'s divisor, applied by :func:`_clear_nee`)."""
     n = f.shape[0]
     h = math.sqrt(px * px + py * py + pz * pz) - rb
     d0 = _density(h, layers, nlay, 0)
@@ -1337,6 +1360,7 @@ def _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, scat_t, a0, a
     c0 = cols[0]
     c1 = cols[1]
     c2 = cols[2]
+    _transmittances3(coef_p, c0, c1, c2, trn)
     m = 0.0
     if forced:
         e0 = tot[0]
@@ -1349,7 +1373,7 @@ def _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, scat_t, a0, a
             sc[a1, i] = v1
             sst[i] = v0 + v1 + scat_t[2, i] * d2
             stt = coef_t[0, i] * d0 + coef_t[1, i] * d1 + coef_t[2, i] * d2
-            tr = math.exp(-(coef_t[0, i] * c0 + coef_t[1, i] * c1 + coef_t[2, i] * c2))
+            tr = trn[i]
             pdf = stt * tr
             ttot = -math.expm1(-(coef_t[0, i] * e0 + coef_t[1, i] * e1 + coef_t[2, i] * e2))
             pdf = pdf / ttot if ttot > 0.0 else 0.0
@@ -1365,7 +1389,7 @@ def _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, scat_t, a0, a
             sc[a1, i] = v1
             sst[i] = v0 + v1 + scat_t[2, i] * d2
             stt = coef_t[0, i] * d0 + coef_t[1, i] * d1 + coef_t[2, i] * d2
-            tr = math.exp(-(coef_t[0, i] * c0 + coef_t[1, i] * c1 + coef_t[2, i] * c2))
+            tr = trn[i]
             f[i] *= tr
             q = p[i] * (stt * tr)
             p[i] = q
@@ -1374,12 +1398,14 @@ def _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, scat_t, a0, a
 
 
 @inline
-def _clear_nee(px, py, pz, dx, dy, dz, m, sun, cos_sun, rb, rt, edges, layers, nlay, coef_t, kmin, a0, a1, lobe,
-               lobe_g, esun, sc, f, p, contrib, st, tot, tmp, rec):
+def _clear_nee(px, py, pz, dx, dy, dz, m, sun, cos_sun, rb, rt, edges, layers, nlay, coef_p, kmin, a0, a1, lobe,
+               lobe_g, esun, sc, f, p, contrib, st, tot, tmp, rec, trn):
     """After :func:`_clear_collision` at ``p`` [m] (reached along ``d``): the weights divided by their mean ``m``
     (:func:`_normalise`) and the next-event estimate to the sun (:func:`_march_reach`, :func:`_transmittances`,
     :func:`_phase_sums`, the contributions ``contrib``) in one loop over the wavelengths, the same operations in the
-    same order (the same bits). The path's copy weight is 1 in a clear medium (no splitting): left out (1 x = x)."""
+    same order (the same bits). The path's copy weight is 1 in a clear medium (no splitting): left out (1 x = x).
+    The shadow ray's transmittances are computed first into ``trn`` (n_pad,) [-] from the padded ``coef_p`` (3, n_pad)
+    [m^-1], in a loop that runs in SIMD lanes (:func:`_clear_collision`)."""
     n = f.shape[0]
     wx, wy, wz = _sun_sample(sun[0], sun[1], sun[2], cos_sun, next_uniform(st), next_uniform(st))
     te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
@@ -1397,22 +1423,22 @@ def _clear_nee(px, py, pz, dx, dy, dz, m, sun, cos_sun, rb, rt, edges, layers, n
     e0 = tot[0]
     e1 = tot[1]
     e2 = tot[2]
+    if live:
+        _transmittances3(coef_p, e0, e1, e2, trn)
     if m > 0.0:
         if live:
             for i in range(n):
                 fi = f[i] / m
                 f[i] = fi
                 p[i] = p[i] / m
-                tr = math.exp(-(coef_t[0, i] * e0 + coef_t[1, i] * e1 + coef_t[2, i] * e2))
-                contrib[i] += fi * (sc[a0, i] * v0 + sc[a1, i] * v1) * esun[i] * tr
+                contrib[i] += fi * (sc[a0, i] * v0 + sc[a1, i] * v1) * esun[i] * trn[i]
         else:
             for i in range(n):
                 f[i] /= m
                 p[i] = p[i] / m
     elif live:
         for i in range(n):
-            tr = math.exp(-(coef_t[0, i] * e0 + coef_t[1, i] * e1 + coef_t[2, i] * e2))
-            contrib[i] += f[i] * (sc[a0, i] * v0 + sc[a1, i] * v1) * esun[i] * tr
+            contrib[i] += f[i] * (sc[a0, i] * v0 + sc[a1, i] * v1) * esun[i] * trn[i]
 
 
 @inline
@@ -1458,12 +1484,13 @@ def _clear_scatter(dx, dy, dz, hero, a0, a1, lobe, lobe_g, sc, sst, f, p, st):
 
 
 @inline
-def _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun, rb, rt, edges, layers, nlay, coef_t, kmin, albedo,
-                  esun, cols, tot, tmp, rec, f, p, contrib, st):
+def _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun, rb, rt, edges, layers, nlay, coef_p, kmin, albedo,
+                  esun, cols, tot, tmp, rec, f, p, contrib, st, trn):
     """A ground vertex of a clear-sky path (Lambertian; three shell components) where the ray from ``p`` [m] along
     ``d`` meets the ground at ``t_end`` [m]: what :func:`_trace_paths`' ground vertex does, the same operations in the
     same order (the same bits; the copy weight, 1 here, left out), its loops over the wavelengths fused into two
-    (:func:`_clear_collision`). Returns the ground point, the new direction and the largest weight."""
+    (:func:`_clear_collision`), the transmittances first into ``trn`` (n_pad,) [-] from the padded ``coef_p`` (3,
+    n_pad) [m^-1] (a loop in SIMD lanes). Returns the ground point, the new direction and the largest weight."""
     n = f.shape[0]
     px += t_end * dx
     py += t_end * dy
@@ -1474,9 +1501,10 @@ def _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun, rb, rt, edges, la
     c0 = cols[0]
     c1 = cols[1]
     c2 = cols[2]
+    _transmittances3(coef_p, c0, c1, c2, trn)
     m = 0.0
     for i in range(n):
-        tr = math.exp(-(coef_t[0, i] * c0 + coef_t[1, i] * c1 + coef_t[2, i] * c2))
+        tr = trn[i]
         f[i] *= tr
         q = p[i] * tr
         p[i] = q
@@ -1497,6 +1525,8 @@ def _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun, rb, rt, edges, la
     e0 = tot[0]
     e1 = tot[1]
     e2 = tot[2]
+    if live:
+        _transmittances3(coef_p, e0, e1, e2, trn)
     norm = m > 0.0
     wmax = 0.0
     for i in range(n):
@@ -1505,8 +1535,7 @@ def _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun, rb, rt, edges, la
             fi = fi / m
             p[i] = p[i] / m
         if live:
-            tr = math.exp(-(coef_t[0, i] * e0 + coef_t[1, i] * e1 + coef_t[2, i] * e2))
-            contrib[i] += fi * albedo[i] / math.pi * cs * esun[i] * tr
+            contrib[i] += fi * albedo[i] / math.pi * cs * esun[i] * trn[i]
         fi *= albedo[i]
         f[i] = fi
         if fi > wmax:
@@ -1576,6 +1605,12 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     kh = np.empty(nc)
     coef_t = np.ascontiguousarray(coef.T)
     scat_t = np.ascontiguousarray(scat.T)
+    # the clear sky's transmittances run on a multiple of 4 wavelengths (the SIMD lanes of 4 doubles): coef_t padded
+    # with zero columns, their transmittances (1) left unused; no scalar remainder after the vector loop
+    n_pad = (n + 3) // 4 * 4
+    coef_p = np.zeros((nc, n_pad))
+    coef_p[:, :n] = coef_t
+    trn = np.empty(n_pad)
     sc = np.empty((nc + 1, n))
     ph = np.empty((nc + 1, n))
     tau = np.empty(n)
@@ -1640,7 +1675,7 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
                  n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp, dens,
                  kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate, rec,
                  cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3, chain,
-                 split_on, stk, stk_f, stk_p, f0, p0, kmin, active)
+                 split_on, stk, stk_f, stk_p, f0, p0, kmin, active, coef_p, trn)
 
 
 @helper
@@ -1651,7 +1686,7 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                  n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp, dens,
                  kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate, rec,
                  cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3, chain,
-                 split_on, stk, stk_f, stk_p, f0, p0, kmin, active):
+                 split_on, stk, stk_f, stk_p, f0, p0, kmin, active, coef_p, trn):
     """The paths of :func:`trace_block` (its loop over entries, batches and paths), with the buffers it allocated.
     A helper (no reference counting, ``skyscatter.jit``): compiled inside the kernel, every array passed to an
     inlined function was counted up and down at each vertex (atomic operations, some 15 % of the time of a
@@ -1760,20 +1795,23 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                         wmax = -1.0  # the largest weight after the vertex, when its loops found it
                         if collided and clear3:
                             px, py, pz = px + t * dx, py + t * dy, pz + t * dz
-                            m = _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, scat_t, a0, a1, cols,
-                                                 tot, sc, sst, f, p)
+                            m = _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, coef_p, scat_t, a0, a1,
+                                                 cols, tot, sc, sst, f, p, trn)
                             if sst[hero] <= 0.0:
                                 break  # absorbed for the hero: no continuation can be sampled
-                            _clear_nee(px, py, pz, dx, dy, dz, m, sun, cos_sun, rb, rt, edges, layers, nlay, coef_t,
-                                       kmin, a0, a1, lobe, lobe_g, esun, sc, f, p, contrib, st, tot, tmp, rec)
+                            _clear_nee(px, py, pz, dx, dy, dz, m, sun, cos_sun, rb, rt, edges, layers, nlay, coef_p,
+                                       kmin, a0, a1, lobe, lobe_g, esun, sc, f, p, contrib, st, tot, tmp, rec, trn)
                             dx, dy, dz, wmax = _clear_scatter(dx, dy, dz, hero, a0, a1, lobe, lobe_g, sc, sst, f, p, st)
                         elif collided:
                             px, py, pz = _collide(px, py, pz, dx, dy, dz, t, field, rho_f, fvf, fvi, frho, rb, layers,
                                                   nlay, coef_t, scat_t, fs, fss, cols, dens, sc, stt, sst, tau)
                             if forced:
                                 _optical_depths(coef_t, tot, tau2)
+                            # the transmittances in a loop of their own, which runs in SIMD lanes (the loop below
+                            # calls expm1 when forced); tau is free after this vertex's collision
+                            _exp_negated(tau, n)
                             for i in range(n):
-                                tr = math.exp(-tau[i])
+                                tr = tau[i]
                                 pdf = stt[i] * tr
                                 if forced:
                                     ttot = -math.expm1(-tau2[i])
@@ -1877,9 +1915,9 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                                   val2, ph2, qs2, f, p, dval, dcdf)
                         elif clear3:
                             px, py, pz, dx, dy, dz, wmax = _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun,
-                                                                         rb, rt, edges, layers, nlay, coef_t, kmin,
+                                                                         rb, rt, edges, layers, nlay, coef_p, kmin,
                                                                          albedo, esun, cols, tot, tmp, rec, f, p,
-                                                                         contrib, st)
+                                                                         contrib, st, trn)
                         else:
                             # ground (Lambertian)
                             px += t_end * dx
@@ -1890,7 +1928,7 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                             px, py, pz = nx * rb, ny * rb, nz * rb
                             _optical_depths(coef_t, cols, tau)
                             for i in range(n):
-                                tr = math.exp(-tau[i])
+                                tr = exp_lane(-tau[i])
                                 f[i] *= tr
                                 p[i] *= tr
                             _normalise(f, p, n)
@@ -2002,7 +2040,7 @@ def disc_transmittance(origin, sun, sun_radius, rb, rt, edges, layers, nlay, coe
                 field_transmittance(px, py, pz, wx, wy, wz, te, fs, fsmax, fsmin, fvf, fvi, frho, fbmax, fbmin, fxe,
                                     fye, fre, trf, st, fstate)
             for i in range(n):
-                v = math.exp(-_dot_row(coef, i, cols))
+                v = exp_lane(-_dot_row(coef, i, cols))
                 out[i] += v * trf[i] if field else v
     for i in range(n):
         out[i] /= n_radial * n_angular
@@ -2130,7 +2168,7 @@ def _photon_collision_weights(f, p, stt, tau, n):
     """A forward photon's weights at a collision: the free path's transmittance ``exp(-tau)`` per wavelength (``f``),
     the hero's path density times the extinction there (``p``; the spectral MIS of :func:`_normalise`)."""
     for i in range(n):
-        tr = math.exp(-tau[i])
+        tr = exp_lane(-tau[i])
         f[i] *= tr
         p[i] *= stt[i] * tr
     _normalise(f, p, n)
@@ -2140,7 +2178,7 @@ def _photon_collision_weights(f, p, stt, tau, n):
 def _photon_pass_weights(f, p, tau, n):
     """A forward photon's weights along a free path that reached a boundary without a collision: ``exp(-tau)``."""
     for i in range(n):
-        tr = math.exp(-tau[i])
+        tr = exp_lane(-tau[i])
         f[i] *= tr
         p[i] *= tr
     _normalise(f, p, n)

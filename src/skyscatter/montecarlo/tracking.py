@@ -46,6 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..jit import helper, inline
+from ..vecmath import exp_lane
 from .rng import next_uniform
 
 __all__ = ["PackedField", "STOP_OPTICAL_DEPTH", "box_clip", "empty_field", "field_box_hit", "field_density",
@@ -379,7 +380,7 @@ def field_free_path(ox, oy, oz, dx, dy, dz, t_end, hero, s, smax, vf, vi, rho, b
                         if next_uniform(st) * mu < sh * (r - small):
                             if small > 0.0:
                                 for i in range(n):
-                                    e = math.exp(-s[i] * small * (tt - t))
+                                    e = exp_lane(-s[i] * small * (tt - t))
                                     f[i] *= e
                                     p[i] *= e
                             return tt, True, r
@@ -389,7 +390,7 @@ def field_free_path(ox, oy, oz, dx, dy, dz, t_end, hero, s, smax, vf, vi, rho, b
                             p[i] *= w
                 if small > 0.0:
                     for i in range(n):
-                        e = math.exp(-s[i] * small * (tcut - t))
+                        e = exp_lane(-s[i] * small * (tcut - t))
                         f[i] *= e
                         p[i] *= e
                 if tc < tn:
@@ -463,7 +464,7 @@ def field_transmittance(ox, oy, oz, dx, dy, dz, t_end, s, smax, smin, vf, vi, rh
         if not _step(ox, oy, oz, dx, dy, dz, t, axis, vf, vi, re, state):
             break
     for i in range(n):
-        tr[i] *= math.exp(-s[i] * column)
+        tr[i] *= exp_lane(-s[i] * column)
 
 
 # --------------------------------------------------------------------------------------------- packing

@@ -16,8 +16,9 @@ import numpy as np
 from ..jit import CONTRACT_ARCP, helper, inline, kernel
 from ..montecarlo.tracking import box_clip, field_transmittance
 from ..precomputed.geometry import bilinear_weights
+from ..vecmath import exp_lanes
 
-__all__ = ["exp_lanes", "march_rays", "shadow_volume", "ground_shadow", "shaft_loss"]
+__all__ = ["march_rays", "shadow_volume", "ground_shadow", "shaft_loss"]
 
 # layout of the float geometry ``gf``
 G_X0, G_Y0, G_DX, G_DY, G_DZ, G_LX, G_LY, G_RBASE, G_RTOP, G_RGROUND, G_PERIODIC = range(11)
@@ -133,44 +134,6 @@ def _field_coords(px, py, pz, x0, y0, inv_dx, inv_dy, inv_dz, rbase, nx, ny, nz,
     return fx, fy, fz, r, (0.0 <= fx < nx and 0.0 <= fy < ny)
 
 
-#: exp's argument reduction: ln 2 split in a part exact in 32 bits and the rest ([Cody1980] Ch. 6)
-_LN2_HI = 0.693147180369123816490
-_LN2_LO = 1.90821492927058770002e-10
-_LOG2E = 1.4426950408889634
-
-
-@inline
-def exp_lanes(z, n, bits, scale):
-    """``exp(z[:n])`` in place for ``z`` (>= n,) [-] <= 0 (below -700 taken as -700), ``n`` the count, in loops
-    without calls that LLVM vectorizes (numba has no vector exp without Intel's SVML: each ``math.exp`` is a call to
-    libm; the march's octaves needed eight per sample). ``bits`` (int64) and ``scale`` (float64) are two views of one
-    buffer of >= ``n``. The reduction of [Cody1980] Ch. 6, ``z = k ln 2 + r``, ``|r| <= ln 2 / 2``, ``exp(r)`` by
-    its Taylor polynomial of degree 13 (remainder ``(ln 2 / 2)^14 / 14! = 4e-18``), times ``2^k`` built in the
-    exponent's bits: within 2 units in the last place of libm's ``exp`` (tests/test_broken_cloud.py)."""
-    for i in range(n):
-        zi = max(z[i], -700.0)
-        kf = math.floor(zi * _LOG2E + 0.5)
-        r = (zi - kf * _LN2_HI) - kf * _LN2_LO
-        p = 1.0 / 6227020800.0
-        p = p * r + 1.0 / 479001600.0
-        p = p * r + 1.0 / 39916800.0
-        p = p * r + 1.0 / 3628800.0
-        p = p * r + 1.0 / 362880.0
-        p = p * r + 1.0 / 40320.0
-        p = p * r + 1.0 / 5040.0
-        p = p * r + 1.0 / 720.0
-        p = p * r + 1.0 / 120.0
-        p = p * r + 1.0 / 24.0
-        p = p * r + 1.0 / 6.0
-        p = p * r + 0.5
-        p = p * r + 1.0
-        p = p * r + 1.0
-        z[i] = p
-        bits[i] = (np.int64(kf) + 1023) << 52
-    for i in range(n):
-        z[i] *= scale[i]
-
-
 @kernel(fastmath=CONTRACT_ARCP)
 def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g, solar, mu0, dmu, src_sun,
                src_amb, amb_up, mp, n_octaves, linear, thin_aware, radiance, transmittance, depth, hit, start, stop):
@@ -258,18 +221,14 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g
             tj[jj, wl] = cj
     direct = np.empty(nwl)
     # the octaves' extinction factors a^i (the same products as the octave loop's running one) and a buffer for
-    # their exponentials and the step's, computed together per sample (:func:`exp_lanes`)
+    # their exponentials and the step's, computed together per sample (:func:`skyscatter.vecmath.exp_lanes`)
     a_pow = np.empty(n_octaves)
     att = 1.0
     for o in range(n_octaves):
         a_pow[o] = att
         att *= a
     ez = np.empty(n_octaves + 1)
-    ebits = np.empty(n_octaves + 1, dtype=np.int64)
-    escale = ebits.view(np.float64)
     el = np.empty(nwl)  # the same for an octave's exponentials per wavelength where the polynomial is not used
-    lbits = np.empty(nwl, dtype=np.int64)
-    lscale = lbits.view(np.float64)
     # the diffusion profile near the cloud base (below): on or off, and 1 - g
     base_on = mp[M_BASE] != 0.0
     gm1 = 1.0 - gbar
@@ -472,7 +431,7 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g
                 for o in range(n_octaves):
                     ez[o] = -(a_pow[o] * ts) * kbar
                 ez[n_octaves] = -(r * h) * kbar
-                exp_lanes(ez, n_octaves + 1, ebits, escale)
+                exp_lanes(ez, n_octaves + 1)
                 pw = 1.0
                 for wl in range(nwl):
                     direct[wl] = 0.0
@@ -502,7 +461,7 @@ def march_rays(origin, dirs, sun, gf, vol, occupied, bsize, k, ph_mu, oct_val, g
                     else:
                         for wl in range(nwl):
                             el[wl] = -x * k[wl]
-                        exp_lanes(el, nwl, lbits, lscale)
+                        exp_lanes(el, nwl)
                         for wl in range(nwl):
                             direct[wl] += po * w[o, wl] * el[wl]
                 # the step's transmittance exp(-x k_l), x = sigma h: the same expansion about kbar
@@ -637,11 +596,9 @@ def shaft_loss(origin, dirs, seg, t0, sun, gf, tau_ground, tau_sun, h_step, beta
     be1 = np.empty(n_l)
     dk = np.empty(n_l)
     p_aer = np.empty(n_l)
-    # the air's transmittance over a step or between nodes at every wavelength, by :func:`exp_lanes` (one vectorised
-    # loop instead of a libm call per wavelength)
+    # the air's transmittance over a step or between nodes at every wavelength, by
+    # :func:`skyscatter.vecmath.exp_lanes` (one vectorised loop instead of a libm call per wavelength)
     ez = np.empty(n_l)
-    ebits = np.empty(n_l, dtype=np.int64)
-    escale = ebits.view(np.float64)
     m_ph = ph_mu.shape[0]
     # per group: the shadow's moments sum c_j rho dt and sum c_j rho s dt (j = 0..3; Rayleigh then particles), and
     # over the field sum rho dt, sum rho s dt (Rayleigh, particles); s the distance from the group's first node
@@ -764,7 +721,7 @@ def shaft_loss(origin, dirs, seg, t0, sun, gf, tau_ground, tau_sun, h_step, beta
                 be_max = 0.0
                 for w in range(n_l):
                     ez[w] = -0.5 * be0[w] * dt
-                exp_lanes(ez, n_l, ebits, escale)
+                exp_lanes(ez, n_l)
                 for w in range(n_l):
                     f = ez[w]
                     for j in range(4):
@@ -833,7 +790,7 @@ def shaft_loss(origin, dirs, seg, t0, sun, gf, tau_ground, tau_sun, h_step, beta
             inv_s = 1.0 / s
             for w in range(n_l):
                 ez[w] = -0.5 * (be0[w] + be1[w]) * s
-            exp_lanes(ez, n_l, ebits, escale)
+            exp_lanes(ez, n_l)
             for w in range(n_l):
                 f = ez[w]
                 t_view[w] *= f
