@@ -489,8 +489,8 @@ def _invert_in_piece(r2, b, a, c, rem, dtau, target, k, rb, layers, nlay, tmp):
 
 @inline
 def _march_pieces(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec, locate):
-    """The body of :func:`_march` (its docstring), inlined into it and into :func:`_march_locate` and
-    :func:`_march_reach`, where ``locate`` is a constant."""
+    """The body of :func:`_march` (its docstring), inlined into it and into :func:`_march_locate`, where ``locate``
+    is a constant."""
     nc = cols.shape[0]
     for q in range(nc):
         cols[q] = 0.0
@@ -591,16 +591,136 @@ def _march(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, co
 
 @helper
 def _march_locate(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec):
-    """:func:`_march` with ``locate``, compiled with it a constant (for the clear sky's free paths: a run-time
-    ``locate`` took it 1.05-1.08x the CPU time of the kernels before the clouds, docs/clouds.md "Speed")."""
+    """:func:`_march` with ``locate``, compiled with it a constant (the cloudy kernel's free paths in the shells;
+    the clear kernel's take :func:`_march3_locate`)."""
     return _march_pieces(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec, True)
 
 
 @helper
-def _march_reach(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec):
-    """:func:`_march` without ``locate``, compiled with it a constant (for the clear sky's shadow rays, as
-    :func:`_march_locate`)."""
-    return _march_pieces(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec, False)
+def _invert_in_piece3(r2, b, a, c, rem, dtau, target, k0, k1, k2, rb, layers, nlay, tmp):
+    """:func:`_invert_in_piece` for the clear sky's three components, their coefficients ``k0``, ``k1``, ``k2``
+    [m^-1] as scalars (in registers) and no test of the component count in its loop; the same operations in the
+    same order (the same bits)."""
+    lo = a
+    hi = c
+    s = a + (c - a) * (rem / dtau if dtau > 0.0 else 0.5)
+    for _ in range(60):
+        _piece_columns3(r2, b, a, s, rb, layers, nlay, tmp)
+        f = k0 * tmp[0] + k1 * tmp[1] + k2 * tmp[2] - rem
+        if f > 0.0:
+            hi = s
+        else:
+            lo = s
+        if abs(f) <= 1e-12 * target + 1e-300 or hi - lo <= 1e-9 * (1.0 + s):
+            break
+        h = math.sqrt(max(r2 + 2.0 * b * s + s * s, 0.0)) - rb
+        deriv = (k0 * _density(h, layers, nlay, 0) + k1 * _density(h, layers, nlay, 1)
+                 + k2 * _density(h, layers, nlay, 2))
+        s_new = s - f / deriv if deriv > 0.0 else 0.5 * (lo + hi)
+        if not (lo < s_new < hi):
+            s_new = 0.5 * (lo + hi)
+        s = s_new
+    return s
+
+
+@inline
+def _march3_pieces(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec,
+                   locate):
+    """:func:`_march_pieces` for the clear sky's three components (``cols``, ``tmp`` (3,) [m]), their coefficients
+    ``k0``, ``k1``, ``k2`` [m^-1] as scalars: the march of the kernels before the clouds, with no test of the
+    component count and no array of coefficients read at every piece. The same operations in the same order as
+    :func:`_march_pieces` (the same bits)."""
+    cols[0] = 0.0
+    cols[1] = 0.0
+    cols[2] = 0.0
+    if t_end <= 0.0:
+        return 0.0, False, 0
+    r2 = px * px + py * py + pz * pz
+    r = math.sqrt(r2)
+    b = px * dx + py * dy + pz * dz
+    ne = edges.shape[0]
+    tau = 0.0
+    a = 0.0
+    npc = 0
+    # crossings in increasing t: inward crossings of the spheres below r (descending radius), then outward ones
+    i_in = ne - 1
+    while i_in >= 0 and edges[i_in] >= r:
+        i_in -= 1
+    inward = b < 0.0
+    i_out = 0
+    while True:
+        c = t_end
+        found = False
+        while inward and i_in >= 0:
+            re = edges[i_in]
+            disc = b * b - (r2 - re * re)
+            if disc < 0.0:
+                inward = False
+                break
+            tc = -b - math.sqrt(disc)
+            i_in -= 1
+            if tc > a:
+                if tc < t_end:
+                    c = tc
+                    found = True
+                break
+        if not found:
+            inward = False
+            while i_out < ne:
+                re = edges[i_out]
+                disc = b * b - (r2 - re * re)
+                i_out += 1
+                if disc < 0.0:
+                    continue
+                tc = -b + math.sqrt(disc)
+                if tc > a:
+                    if tc < t_end:
+                        c = tc
+                        found = True
+                    else:
+                        i_out = ne
+                    break
+        _piece_columns3(r2, b, a, c, rb, layers, nlay, tmp)
+        dtau = k0 * tmp[0] + k1 * tmp[1] + k2 * tmp[2]
+        if tau + dtau >= target:
+            if locate:
+                c = _invert_in_piece3(r2, b, a, c, target - tau, dtau, target, k0, k1, k2, rb, layers, nlay, tmp)
+            cols[0] += tmp[0]
+            cols[1] += tmp[1]
+            cols[2] += tmp[2]
+            return c, True, npc
+        tau += dtau
+        c0 = cols[0] + tmp[0]
+        c1 = cols[1] + tmp[1]
+        c2 = cols[2] + tmp[2]
+        cols[0] = c0
+        cols[1] = c1
+        cols[2] = c2
+        rec[npc, 0] = c
+        rec[npc, 1] = tau
+        rec[npc, 2] = c0
+        rec[npc, 3] = c1
+        rec[npc, 4] = c2
+        npc += 1
+        if c >= t_end:
+            return t_end, False, npc
+        a = c
+
+
+@helper
+def _march3_locate(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec):
+    """:func:`_march_locate` for the clear sky's three components, the coefficients as scalars
+    (:func:`_march3_pieces`): the clear kernel's free paths."""
+    return _march3_pieces(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec,
+                          True)
+
+
+@helper
+def _march3_reach(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec):
+    """:func:`_march3_locate` without ``locate`` (:func:`_march`): the clear kernel's shadow rays, which need only
+    whether the target is reached, and its first (forced) march, whose target is infinite."""
+    return _march3_pieces(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec,
+                          False)
 
 
 @kernel
@@ -652,6 +772,34 @@ def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k, rb, layers, nl
         a = rec[j, 0]
         tau = rec[j, 1]
     for q in range(nc):
+        cols[q] = rec[npc - 1, 2 + q] if npc > 0 else 0.0
+    return t_end, False
+
+
+@helper
+def _forced_from_record3(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, layers, nlay, rec, npc, cols, tmp):
+    """:func:`_forced_from_record` for the clear sky's three components, their coefficients ``k0``, ``k1``, ``k2``
+    [m^-1] as scalars (:func:`_invert_in_piece3`); the same operations in the same order (the same bits)."""
+    r2 = px * px + py * py + pz * pz
+    b = px * dx + py * dy + pz * dz
+    a = 0.0
+    tau = 0.0
+    for j in range(npc):
+        if rec[j, 1] >= target:
+            s = _invert_in_piece3(r2, b, a, rec[j, 0], target - tau, rec[j, 1] - tau, target, k0, k1, k2, rb, layers,
+                                  nlay, tmp)
+            if j > 0:
+                cols[0] = rec[j - 1, 2] + tmp[0]
+                cols[1] = rec[j - 1, 3] + tmp[1]
+                cols[2] = rec[j - 1, 4] + tmp[2]
+            else:
+                cols[0] = 0.0 + tmp[0]
+                cols[1] = 0.0 + tmp[1]
+                cols[2] = 0.0 + tmp[2]
+            return s, True
+        a = rec[j, 0]
+        tau = rec[j, 1]
+    for q in range(3):
         cols[q] = rec[npc - 1, 2 + q] if npc > 0 else 0.0
     return t_end, False
 
@@ -917,7 +1065,8 @@ def _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges, l
     that: a call passing the field's arrays at every vertex cost the clear sky some 10 %; at medium vertices it
     marches itself, one call fewer): ``out[i]`` the transmittance along the ray, False where the least extinguished
     wavelength's optical depth passes ``_NEE_STOP`` (exp(-50))."""
-    _, opaque, _ = _march_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, tot, tmp, rec)
+    _, opaque, _ = _march3_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin[0], kmin[1], kmin[2], rb, edges, layers,
+                                 nlay, tot, tmp, rec)
     if opaque:
         return False
     _transmittances(coef_t, tot, tau, out)
@@ -1401,7 +1550,7 @@ def _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, coef_p, scat_
 def _clear_nee(px, py, pz, dx, dy, dz, m, sun, cos_sun, rb, rt, edges, layers, nlay, coef_p, kmin, a0, a1, lobe,
                lobe_g, esun, sc, f, p, contrib, st, tot, tmp, rec, trn):
     """After :func:`_clear_collision` at ``p`` [m] (reached along ``d``): the weights divided by their mean ``m``
-    (:func:`_normalise`) and the next-event estimate to the sun (:func:`_march_reach`, :func:`_transmittances`,
+    (:func:`_normalise`) and the next-event estimate to the sun (:func:`_march3_reach`, :func:`_transmittances`,
     :func:`_phase_sums`, the contributions ``contrib``) in one loop over the wavelengths, the same operations in the
     same order (the same bits). The path's copy weight is 1 in a clear medium (no splitting): left out (1 x = x).
     The shadow ray's transmittances are computed first into ``trn`` (n_pad,) [-] from the padded ``coef_p`` (3, n_pad)
@@ -1411,8 +1560,8 @@ def _clear_nee(px, py, pz, dx, dy, dz, m, sun, cos_sun, rb, rt, edges, layers, n
     te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
     live = False
     if not blocked:
-        _, opaque, _ = _march_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, tot, tmp,
-                                    rec)
+        _, opaque, _ = _march3_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin[0], kmin[1], kmin[2], rb, edges,
+                                     layers, nlay, tot, tmp, rec)
         live = not opaque
     v0 = 0.0
     v1 = 0.0
@@ -1515,8 +1664,8 @@ def _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun, rb, rt, edges, la
     live = False
     if cs > 0.0:
         te, _ = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
-        _, opaque, _ = _march_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges, layers, nlay, tot, tmp,
-                                    rec)
+        _, opaque, _ = _march3_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin[0], kmin[1], kmin[2], rb, edges,
+                                     layers, nlay, tot, tmp, rec)
         live = not opaque
     # cosine-weighted hemisphere: weight albedo
     u1 = next_uniform(st)
@@ -1586,13 +1735,17 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     ``_NEE_STOP``: never).
     cloudy : None for a medium without a field, a forward peak or directional sampling (then those are off whatever
     the arguments before say), else any array. Numba compiles a separate kernel for ``None`` in which the tests
-    below are the constant False and LLVM removes the cloud code.
+    below are the constant False and LLVM removes the cloud code; that kernel marches the clear sky's three shell
+    components (Rayleigh, aerosol, ozone: ``C = 3``, else ValueError) with their coefficients as scalars
+    (:func:`_march3_locate`).
     seed, group, batch0 : RNG counters (batch numbers batch0 .. batch0 + n_batches - 1).
     sums, sumsq : (n, n_wl, n_batches) outputs: per batch, sum and sum of squares of the per-path estimate.
     vertices_out : (n, n_batches) output: per batch, the number of scattering and ground vertices of its paths.
     """
     n = coef.shape[0]
     nc = coef.shape[1]
+    if cloudy is None and nc != 3:
+        raise ValueError("the kernel without the cloud code (cloudy None) takes the three shell components")
     ndir = dirs.shape[0]
     st = np.empty(1, dtype=np.uint64)
     f = np.empty(n)
@@ -1723,6 +1876,7 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                 hero = min(int(next_uniform(st) * n), n - 1)
                 for q in range(nc):
                     kh[q] = coef[hero, q]
+                kh0, kh1, kh2 = kh[0], kh[1], kh[2]  # the clear kernel's marches take them as scalars
                 ox, oy, oz = origins[j, 0], origins[j, 1], origins[j, 2]
                 if jx > 0.0 or jy > 0.0:
                     ox += (next_uniform(st) - 0.5) * jx
@@ -1756,15 +1910,23 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                             forced = ta >= tb
                         rho_f = 0.0
                         if forced:
-                            _, _, npc = _march_locate(px, py, pz, dx, dy, dz, t_end, np.inf, kh, rb, edges, layers,
-                                                      nlay, tot, tmp, rec)
+                            if clouds_on:
+                                _, _, npc = _march_locate(px, py, pz, dx, dy, dz, t_end, np.inf, kh, rb, edges,
+                                                          layers, nlay, tot, tmp, rec)
+                            else:
+                                _, _, npc = _march3_reach(px, py, pz, dx, dy, dz, t_end, np.inf, kh0, kh1, kh2, rb,
+                                                          edges, layers, nlay, tot, tmp, rec)
                             tau_tot = _dot(kh, tot)
                             if tau_tot <= 0.0:
                                 break
                             u = next_uniform(st)
                             target = -math.log1p(u * math.expm1(-tau_tot))
-                            t, reached = _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, kh, rb, layers,
-                                                             nlay, rec, npc, cols, tmp)
+                            if clouds_on:
+                                t, reached = _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, kh, rb, layers,
+                                                                 nlay, rec, npc, cols, tmp)
+                            else:
+                                t, reached = _forced_from_record3(px, py, pz, dx, dy, dz, t_end, target, kh0, kh1, kh2,
+                                                                  rb, layers, nlay, rec, npc, cols, tmp)
                             collided = True
                         else:
                             u = next_uniform(st)
@@ -1783,9 +1945,14 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                     t, reached = _uniform_free_path(px, py, pz, dx, dy, dz, t_end, target, kh, su,
                                                                     ushell, rb, edges, layers, nlay, cols, tmp, rec,
                                                                     kha, cseg, st)
-                                else:
+                                elif clouds_on:
                                     t, reached, _ = _march_locate(px, py, pz, dx, dy, dz, t_end, target, kh, rb,
                                                                   edges, layers, nlay, cols, tmp, rec)
+                                    if not reached:
+                                        t = t_end
+                                else:
+                                    t, reached, _ = _march3_locate(px, py, pz, dx, dy, dz, t_end, target, kh0, kh1,
+                                                                   kh2, rb, edges, layers, nlay, cols, tmp, rec)
                                     if not reached:
                                         t = t_end
                             if reached:
@@ -1833,8 +2000,8 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                                           fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot,
                                                           tmp, rec, tau, trf, trs)
                             else:
-                                _, opaque, _ = _march_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin, rb, edges,
-                                                            layers, nlay, tot, tmp, rec)
+                                _, opaque, _ = _march3_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin[0], kmin[1],
+                                                             kmin[2], rb, edges, layers, nlay, tot, tmp, rec)
                                 live = not opaque
                                 if live:
                                     _transmittances(coef_t, tot, tau, trs)
