@@ -7,7 +7,8 @@ scheduler). Prints the best, second best and median paths per CPU-second of each
 relative difference of the radiances. Default commit 663eefd: the kernels before the clouds (issue 21).
 Usage: ``python benchmarks/bench_montecarlo_clear_ab.py [--commit REV] [--also REV] [--runs N] [--overcast]``; run
 from the repository. ``--also REV``: a third package (``skyscatter_also``, e.g. ``main``) alternated with the two in
-every round (clear sky), with its ratios and whether the working tree's radiances equal its to the bit.
+every round (clear sky), with its ratios and whether the working tree's radiances equal its to the bit. The packages
+take turns at running first in a round.
 ``--overcast``: the pilot of ``bench_montecarlo.py --overcast`` instead (issue 21's layer of optical depth
 15, Mie droplets r_e 10 um at 1000-1500 m, sun zenith 60 deg, 20 of the 200 views, 4096 paths, seed 1 + run):
 paths per CPU-second, events per path, per-path relative standard deviation (median), efficiency 1 / (variance x
@@ -80,8 +81,10 @@ def main() -> None:
         print(f"load average {os.getloadavg()[0]:.1f} at start")
         rates: dict[str, list[float]] = {k: [] for k in impl}
         rad = {}
+        names = list(impl)
         for run in range(args.runs):
-            for name, (atm, fn) in impl.items():
+            for name in names[run % len(names):] + names[:run % len(names)]:  # each first in turn (order effects)
+                atm, fn = impl[name]
                 c0 = time.process_time()
                 r = fn(atm, dirs, WAVELENGTHS, sun_zenith=sun_zenith, samples=samples, scheduler="synchronous",
                        seed=1 + run if oc else 1)
