@@ -5,10 +5,10 @@ The older ``src/skyscatter`` is extracted (``git archive``) into a temporary fol
 rays of the clear air (Earth defaults, 11 wavelengths 360-760 nm, the hero's coefficients per ray): origins at
 altitudes uniform in 0-20 km, directions uniform on the sphere, to the ground or the top. ``free``: the free paths'
 march (a target ``-ln(1 - u)``, located in its piece: the old ``_march``, the clear kernel's ``_march3_locate``);
-``shadow``: the shadow rays' march (the old ``_march`` with no target, the clear kernel's ``_march3_reach`` with the
-least extinguished wavelength's coefficients and ``_NEE_STOP``). Rounds alternate old and new; prints best and
-median CPU time per round and their ratio, and whether the columns agree to the bit. Delete the tree's numba cache
-first (``find src -name '*.nb[ic]' -delete``): both are compiled in the process.
+``shadow``: the shadow rays' march (the old ``_march`` with no target, the clear kernel's ``_march3_columns`` and its
+test of the least extinguished wavelength's depth against ``_NEE_STOP``, ``_opaque3``). Rounds alternate old and
+new; prints best and median CPU time per round and their ratio, and whether the columns agree to the bit. Delete the
+tree's numba cache first (``find src -name '*.nb[ic]' -delete``): both are compiled in the process.
 Usage: ``python benchmarks/bench_march_ab.py [--commit REV] [--rays N] [--rounds N] [--repeat N]``.
 """
 
@@ -66,7 +66,6 @@ def main() -> None:
     assert coef.shape[1] == 3, "the clear sky's three components"
     kmin = coef.min(axis=0)
     pts, dirs, us, heroes = _rays(args.rays, rb)
-    stop = kernels._NEE_STOP
     with tempfile.TemporaryDirectory() as tmp:
         old = _old_kernels(args.commit, Path(tmp))
         o_march, o_exit = old._march, old._exit_distance
@@ -94,7 +93,7 @@ def main() -> None:
                     out[i, 2] = cols[1]
                     out[i, 3] = cols[2]
 
-        m3_locate, m3_reach = kernels._march3_locate, kernels._march3_reach
+        m3_locate, m3_columns, m3_opaque = kernels._march3_locate, kernels._march3_columns, kernels._opaque3
 
         @numba.njit(nogil=True, error_model="numpy")
         def loop_new3(pts, dirs, us, heroes, coef, kmin, rb, rt, edges, layers, nlay, shadow, repeat, out):
@@ -107,8 +106,8 @@ def main() -> None:
                     dx, dy, dz = dirs[i, 0], dirs[i, 1], dirs[i, 2]
                     te, _g = n_exit(px, py, pz, dx, dy, dz, rb, rt)
                     if shadow:
-                        t, _r, _n = m3_reach(px, py, pz, dx, dy, dz, te, stop, kmin[0], kmin[1], kmin[2], rb, edges,
-                                             layers, nlay, cols, tmp, rec)
+                        m3_columns(px, py, pz, dx, dy, dz, te, rb, edges, layers, nlay, cols, tmp, rec)
+                        t = te if not m3_opaque(kmin, cols) else 0.0
                     else:
                         h = heroes[i]
                         t, _r, _n = m3_locate(px, py, pz, dx, dy, dz, te, -math.log1p(-us[i]), coef[h, 0], coef[h, 1],

@@ -625,11 +625,12 @@ def _invert_in_piece3(r2, b, a, c, rem, dtau, target, k0, k1, k2, rb, layers, nl
 
 @inline
 def _march3_pieces(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec,
-                   locate):
+                   locate, stop=True):
     """:func:`_march_pieces` for the clear sky's three components (``cols``, ``tmp`` (3,) [m]), their coefficients
     ``k0``, ``k1``, ``k2`` [m^-1] as scalars: the march of the kernels before the clouds, with no test of the
     component count and no array of coefficients read at every piece. The same operations in the same order as
-    :func:`_march_pieces` (the same bits)."""
+    :func:`_march_pieces` (the same bits). Without ``stop`` (a constant: :func:`_march3_columns`) the columns to
+    ``t_end`` only: no optical depth summed, no target, no record."""
     cols[0] = 0.0
     cols[1] = 0.0
     cols[2] = 0.0
@@ -681,26 +682,28 @@ def _march3_pieces(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges,
                         i_out = ne
                     break
         _piece_columns3(r2, b, a, c, rb, layers, nlay, tmp)
-        dtau = k0 * tmp[0] + k1 * tmp[1] + k2 * tmp[2]
-        if tau + dtau >= target:
-            if locate:
-                c = _invert_in_piece3(r2, b, a, c, target - tau, dtau, target, k0, k1, k2, rb, layers, nlay, tmp)
-            cols[0] += tmp[0]
-            cols[1] += tmp[1]
-            cols[2] += tmp[2]
-            return c, True, npc
-        tau += dtau
+        if stop:
+            dtau = k0 * tmp[0] + k1 * tmp[1] + k2 * tmp[2]
+            if tau + dtau >= target:
+                if locate:
+                    c = _invert_in_piece3(r2, b, a, c, target - tau, dtau, target, k0, k1, k2, rb, layers, nlay, tmp)
+                cols[0] += tmp[0]
+                cols[1] += tmp[1]
+                cols[2] += tmp[2]
+                return c, True, npc
+            tau += dtau
         c0 = cols[0] + tmp[0]
         c1 = cols[1] + tmp[1]
         c2 = cols[2] + tmp[2]
         cols[0] = c0
         cols[1] = c1
         cols[2] = c2
-        rec[npc, 0] = c
-        rec[npc, 1] = tau
-        rec[npc, 2] = c0
-        rec[npc, 3] = c1
-        rec[npc, 4] = c2
+        if stop:
+            rec[npc, 0] = c
+            rec[npc, 1] = tau
+            rec[npc, 2] = c0
+            rec[npc, 3] = c1
+            rec[npc, 4] = c2
         npc += 1
         if c >= t_end:
             return t_end, False, npc
@@ -717,8 +720,8 @@ def _march3_locate(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges,
 
 @helper
 def _march3_reach(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec):
-    """:func:`_march3_locate` without ``locate`` (:func:`_march`): the clear kernel's shadow rays, which need only
-    whether the target is reached, and its first (forced) march, whose target is infinite."""
+    """:func:`_march3_locate` without ``locate`` (:func:`_march`): the clear kernel's first (forced) march, whose
+    target is infinite."""
     return _march3_pieces(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges, layers, nlay, cols, tmp, rec,
                           False)
 
@@ -774,6 +777,27 @@ def _forced_from_record(px, py, pz, dx, dy, dz, t_end, target, k, rb, layers, nl
     for q in range(nc):
         cols[q] = rec[npc - 1, 2 + q] if npc > 0 else 0.0
     return t_end, False
+
+
+@helper
+def _march3_columns(px, py, pz, dx, dy, dz, t_end, rb, edges, layers, nlay, cols, tmp, rec):
+    """The clear sky's columns ``cols`` (3,) [m] along ``p + t d`` for ``0 <= t <= t_end`` [m] (:func:`_march3_pieces`
+    without ``stop``; ``rec`` is not written): a shadow ray's, whose stop at ``_NEE_STOP`` the caller tests on the
+    whole ray (:func:`_opaque3`). Where that is not reached the columns are those of :func:`_march3_reach` to the bit
+    (the same pieces and sums; an opaque ray is marched to its end, and the test on the ray's sum can differ from
+    the pieces' running sum by a rounding at exp(-50)); without the optical depth summed and tested at every piece
+    and the pieces recorded, the shadow rays' march took
+    0.96x the CPU time of the kernels before the clouds in a micro-benchmark, with them 1.02-1.04x
+    (``benchmarks/bench_march_ab.py``; docs/clouds.md, "Speed")."""
+    _march3_pieces(px, py, pz, dx, dy, dz, t_end, np.inf, 0.0, 0.0, 0.0, rb, edges, layers, nlay, cols, tmp, rec,
+                   False, False)
+
+
+@inline
+def _opaque3(kmin, tot):
+    """Whether the least extinguished wavelength's optical depth ``kmin . tot`` (coefficients [m^-1], columns [m])
+    reaches ``_NEE_STOP`` (a shadow ray whose transmittance, below exp(-50), is taken as 0)."""
+    return kmin[0] * tot[0] + kmin[1] * tot[1] + kmin[2] * tot[2] >= _NEE_STOP
 
 
 @helper
@@ -1065,9 +1089,8 @@ def _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges, l
     that: a call passing the field's arrays at every vertex cost the clear sky some 10 %; at medium vertices it
     marches itself, one call fewer): ``out[i]`` the transmittance along the ray, False where the least extinguished
     wavelength's optical depth passes ``_NEE_STOP`` (exp(-50))."""
-    _, opaque, _ = _march3_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin[0], kmin[1], kmin[2], rb, edges, layers,
-                                 nlay, tot, tmp, rec)
-    if opaque:
+    _march3_columns(px, py, pz, wx, wy, wz, te, rb, edges, layers, nlay, tot, tmp, rec)
+    if _opaque3(kmin, tot):
         return False
     _transmittances(coef_t, tot, tau, out)
     return True
@@ -1550,7 +1573,7 @@ def _clear_collision(px, py, pz, forced, rb, layers, nlay, coef_t, coef_p, scat_
 def _clear_nee(px, py, pz, dx, dy, dz, m, sun, cos_sun, rb, rt, edges, layers, nlay, coef_p, kmin, a0, a1, lobe,
                lobe_g, esun, sc, f, p, contrib, st, tot, tmp, rec, trn):
     """After :func:`_clear_collision` at ``p`` [m] (reached along ``d``): the weights divided by their mean ``m``
-    (:func:`_normalise`) and the next-event estimate to the sun (:func:`_march3_reach`, :func:`_transmittances`,
+    (:func:`_normalise`) and the next-event estimate to the sun (:func:`_march3_columns`, :func:`_transmittances`,
     :func:`_phase_sums`, the contributions ``contrib``) in one loop over the wavelengths, the same operations in the
     same order (the same bits). The path's copy weight is 1 in a clear medium (no splitting): left out (1 x = x).
     The shadow ray's transmittances are computed first into ``trn`` (n_pad,) [-] from the padded ``coef_p`` (3, n_pad)
@@ -1560,9 +1583,8 @@ def _clear_nee(px, py, pz, dx, dy, dz, m, sun, cos_sun, rb, rt, edges, layers, n
     te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
     live = False
     if not blocked:
-        _, opaque, _ = _march3_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin[0], kmin[1], kmin[2], rb, edges,
-                                     layers, nlay, tot, tmp, rec)
-        live = not opaque
+        _march3_columns(px, py, pz, wx, wy, wz, te, rb, edges, layers, nlay, tot, tmp, rec)
+        live = not _opaque3(kmin, tot)
     v0 = 0.0
     v1 = 0.0
     if live:
@@ -1664,9 +1686,8 @@ def _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun, rb, rt, edges, la
     live = False
     if cs > 0.0:
         te, _ = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
-        _, opaque, _ = _march3_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin[0], kmin[1], kmin[2], rb, edges,
-                                     layers, nlay, tot, tmp, rec)
-        live = not opaque
+        _march3_columns(px, py, pz, wx, wy, wz, te, rb, edges, layers, nlay, tot, tmp, rec)
+        live = not _opaque3(kmin, tot)
     # cosine-weighted hemisphere: weight albedo
     u1 = next_uniform(st)
     mu = math.sqrt(u1)
@@ -2000,9 +2021,8 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                                           fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot,
                                                           tmp, rec, tau, trf, trs)
                             else:
-                                _, opaque, _ = _march3_reach(px, py, pz, wx, wy, wz, te, _NEE_STOP, kmin[0], kmin[1],
-                                                             kmin[2], rb, edges, layers, nlay, tot, tmp, rec)
-                                live = not opaque
+                                _march3_columns(px, py, pz, wx, wy, wz, te, rb, edges, layers, nlay, tot, tmp, rec)
+                                live = not _opaque3(kmin, tot)
                                 if live:
                                     _transmittances(coef_t, tot, tau, trs)
                             if live:
