@@ -488,6 +488,47 @@ def _invert_in_piece(r2, b, a, c, rem, dtau, target, k, rb, layers, nlay, tmp):
 
 
 @inline
+def _next_crossing(r2, b, a, t_end, edges, i_in, i_out, inward):
+    """The next crossing after ``a`` [m] of a shell edge (``edges`` [m], ascending) by the ray of squared start radius
+    ``r2`` [m^2] and ``b`` = start . direction [m], or ``t_end`` [m] if none comes before it: the inward crossings
+    of the spheres below the start (``i_in`` down to 0, while ``inward``), then the outward ones (``i_out`` up).
+    Returns ``(c, i_in, i_out, inward)``, the search's state for the next piece (the ray-sphere roots
+    ``t = -b -+ sqrt(b^2 - r^2 + R^2)``; shared by :func:`_march_pieces` and :func:`_march3_pieces`)."""
+    ne = edges.shape[0]
+    c = t_end
+    found = False
+    while inward and i_in >= 0:
+        re = edges[i_in]
+        disc = b * b - (r2 - re * re)
+        if disc < 0.0:
+            inward = False
+            break
+        tc = -b - math.sqrt(disc)
+        i_in -= 1
+        if tc > a:
+            if tc < t_end:
+                c = tc
+                found = True
+            break
+    if not found:
+        inward = False
+        while i_out < ne:
+            re = edges[i_out]
+            disc = b * b - (r2 - re * re)
+            i_out += 1
+            if disc < 0.0:
+                continue
+            tc = -b + math.sqrt(disc)
+            if tc > a:
+                if tc < t_end:
+                    c = tc
+                else:
+                    i_out = ne
+                break
+    return c, i_in, i_out, inward
+
+
+@inline
 def _march_pieces(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec, locate):
     """The body of :func:`_march` (its docstring), inlined into it and into :func:`_march_locate`, where ``locate``
     is a constant."""
@@ -510,37 +551,7 @@ def _march_pieces(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, n
     inward = b < 0.0
     i_out = 0
     while True:
-        c = t_end
-        found = False
-        while inward and i_in >= 0:
-            re = edges[i_in]
-            disc = b * b - (r2 - re * re)
-            if disc < 0.0:
-                inward = False
-                break
-            tc = -b - math.sqrt(disc)
-            i_in -= 1
-            if tc > a:
-                if tc < t_end:
-                    c = tc
-                    found = True
-                break
-        if not found:
-            inward = False
-            while i_out < ne:
-                re = edges[i_out]
-                disc = b * b - (r2 - re * re)
-                i_out += 1
-                if disc < 0.0:
-                    continue
-                tc = -b + math.sqrt(disc)
-                if tc > a:
-                    if tc < t_end:
-                        c = tc
-                        found = True
-                    else:
-                        i_out = ne
-                    break
+        c, i_in, i_out, inward = _next_crossing(r2, b, a, t_end, edges, i_in, i_out, inward)
         if nc == 3:
             _piece_columns3(r2, b, a, c, rb, layers, nlay, tmp)
         else:
@@ -650,37 +661,7 @@ def _march3_pieces(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges,
     inward = b < 0.0
     i_out = 0
     while True:
-        c = t_end
-        found = False
-        while inward and i_in >= 0:
-            re = edges[i_in]
-            disc = b * b - (r2 - re * re)
-            if disc < 0.0:
-                inward = False
-                break
-            tc = -b - math.sqrt(disc)
-            i_in -= 1
-            if tc > a:
-                if tc < t_end:
-                    c = tc
-                    found = True
-                break
-        if not found:
-            inward = False
-            while i_out < ne:
-                re = edges[i_out]
-                disc = b * b - (r2 - re * re)
-                i_out += 1
-                if disc < 0.0:
-                    continue
-                tc = -b + math.sqrt(disc)
-                if tc > a:
-                    if tc < t_end:
-                        c = tc
-                        found = True
-                    else:
-                        i_out = ne
-                    break
+        c, i_in, i_out, inward = _next_crossing(r2, b, a, t_end, edges, i_in, i_out, inward)
         _piece_columns3(r2, b, a, c, rb, layers, nlay, tmp)
         if stop:
             dtau = k0 * tmp[0] + k1 * tmp[1] + k2 * tmp[2]
