@@ -35,7 +35,7 @@ import numpy as np
 
 from skyscatter.atmosphere import AtmosphereParameters
 from skyscatter.montecarlo import sky_radiance
-from skyscatter.montecarlo.dataset import equal_area_directions
+from skyscatter.montecarlo.dataset import almucantar_directions, equal_area_directions
 
 WAVELENGTHS = np.arange(360.0, 761.0, 40.0)
 SUN_ZENITH = math.radians(90.0 - 20.0)
@@ -48,6 +48,9 @@ def main() -> None:
     ap.add_argument("--no-cluster", action="store_true")
     ap.add_argument("--overcast", action="store_true", help="only the overcast section (4)")
     ap.add_argument("--overcast-samples", type=int, default=None)
+    ap.add_argument("--layout", choices=("fibonacci", "almucantars"), default="fibonacci",
+                    help="with --overcast: the 200 directions as the spherical Fibonacci set or 10 almucantars x 20 "
+                         "azimuths (views of a ring share paths)")
     ap.add_argument("--roulette-ab", action="store_true",
                     help="with --overcast: only the pilot, with and without the shadow-ray roulette, alternating")
     ap.add_argument("--split-ab", action="store_true",
@@ -107,11 +110,13 @@ def overcast(args) -> None:
     from skyscatter.atmosphere.clouds import CloudLayer
 
     atm = AtmosphereParameters(particles=(CloudLayer(1000.0, 1500.0, 15.0, effective_radius=10e-6),))
-    dirs = equal_area_directions(200)
+    # the 200 directions: the spherical Fibonacci set (no two of one zenith angle: every view traced alone) or
+    # 10 almucantars x 20 azimuths (a sky scan's layout: the views of a ring share their paths, kernels docstring)
+    dirs = almucantar_directions(10, 20) if args.layout == "almucantars" else equal_area_directions(200)
     sz = math.radians(60.0)
     print(f"machine: {len(os.sched_getaffinity(0))} cores, load average {os.getloadavg()[0]:.1f} at start")
     sky_radiance(atm, dirs[:1], WAVELENGTHS, sun_zenith=sz, samples=8, scheduler="synchronous")  # compile
-    sub = dirs[::10]
+    sub = dirs[::10] if args.layout == "fibonacci" else dirs  # 20 views alone, or the 10 rings whole
     if args.roulette_ab:
         roulette_ab(atm, sub, sz)
         return
@@ -119,15 +124,17 @@ def overcast(args) -> None:
         split_ab(atm, sub, sz)
         return
     c0 = time.process_time()
-    pilot = sky_radiance(atm, sub, WAVELENGTHS, sun_zenith=sz, samples=1024, scheduler="synchronous", seed=1)
+    pilot = sky_radiance(atm, sub, WAVELENGTHS, sun_zenith=sz, samples=1024 if args.layout == "fibonacci" else 512,
+                         scheduler="synchronous", seed=1)
     cpu = time.process_time() - c0
     n_paths = sub.shape[0] * pilot.samples
     med = float(np.median(pilot.relative_stderr))
     need = pilot.samples * (med / 0.01) ** 2
     rate = n_paths / cpu
     sd = med * math.sqrt(pilot.samples)  # per-path relative standard deviation
-    print(f"4. overcast tau 15: {rate:,.0f} paths per CPU-second on one thread, {pilot.mean_vertices:.1f} scattering "
-          f"events per path ({rate * pilot.mean_vertices:,.0f} events per CPU-second); pilot median relative stderr "
+    print(f"4. overcast tau 15 ({args.layout}): {rate:,.0f} paths per CPU-second on one thread, "
+          f"{pilot.mean_vertices:.1f} scattering events per path ({rate * pilot.mean_vertices:,.0f} events per "
+          f"CPU-second); pilot median relative stderr "
           f"{med:.3f} at {pilot.samples} paths (per-path relative standard deviation {sd:.2f}; efficiency "
           f"1 / (variance x CPU time per path) {rate / sd**2:,.0f}) -> "
           f"{need:,.0f} paths per direction for 1 %, "

@@ -9,8 +9,9 @@ thread), and writes ``/tmp/perf-PID.map`` (removed after the report): start, siz
 ``trace_block``'s compiled library (the helpers LLVM did not inline into their callers), which ``perf report``
 reads. It then prints each function's share of the samples in the compiled code and libm (self time: an inlined
 helper counts in its caller).
-Usage: ``python benchmarks/profile_montecarlo_stages.py [--samples N]`` (needs ``perf``; re-runs itself under
-``perf record``); run from the repository with the tree under test first on PYTHONPATH.
+Usage: ``python benchmarks/profile_montecarlo_stages.py [--samples N] [--layout almucantars]`` (needs ``perf``;
+re-runs itself under ``perf record``; ``--layout almucantars``: 2 rings of 20 views, each ring traced as one); run
+from the repository with the tree under test first on PYTHONPATH.
 """
 
 from __future__ import annotations
@@ -26,17 +27,18 @@ import time
 from collections import defaultdict
 
 
-def _run(samples: int) -> None:
+def _run(samples: int, layout: str) -> None:
     import numpy as np
 
     from skyscatter.atmosphere import AtmosphereParameters
     from skyscatter.atmosphere.clouds import CloudLayer
     from skyscatter.montecarlo import kernels, sky_radiance
-    from skyscatter.montecarlo.dataset import equal_area_directions
+    from skyscatter.montecarlo.dataset import almucantar_directions, equal_area_directions
 
     wl = np.arange(360.0, 761.0, 40.0)
     atm = AtmosphereParameters(particles=(CloudLayer(1000.0, 1500.0, 15.0, effective_radius=10e-6),))
-    dirs = equal_area_directions(200)[::10]
+    # 20 of the 200 Fibonacci views (each traced alone), or 2 almucantars of 20 views (each traced as one)
+    dirs = equal_area_directions(200)[::10] if layout == "fibonacci" else almucantar_directions(10, 20)[40:80]
     sz = math.radians(60.0)
     sky_radiance(atm, dirs[:2], wl, sun_zenith=sz, samples=8, scheduler="synchronous")  # compile
     c0 = time.process_time()
@@ -70,16 +72,17 @@ def _short(sym: str) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--samples", type=int, default=4096)
+    ap.add_argument("--layout", choices=("fibonacci", "almucantars"), default="fibonacci")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
-        _run(args.samples)
+        _run(args.samples, args.layout)
         return
     with tempfile.TemporaryDirectory() as tmp:
         data = os.path.join(tmp, "perf.data")
         env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(tmp, "numba"))
         subprocess.run(["perf", "record", "-q", "-F", "499", "-o", data, sys.executable, __file__, "--child",
-                        "--samples", str(args.samples)], env=env, check=True)
+                        "--samples", str(args.samples), "--layout", args.layout], env=env, check=True)
         rep = subprocess.run(["perf", "report", "-i", data, "--no-children", "--sort", "dso,sym", "--stdio"],
                              capture_output=True, text=True, check=True).stdout
         with open(os.path.join(tmp, "map")) as fh:

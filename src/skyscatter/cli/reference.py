@@ -72,6 +72,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--directions", type=_whole_in(1, MAX_DIRECTIONS), default=200, metavar="N",
                    help=f"number of equal-area sky directions over the upper hemisphere (spherical Fibonacci), 1 to "
                    f"{MAX_DIRECTIONS}")
+    p.add_argument("--almucantars", type=_whole_in(1, MAX_DIRECTIONS), default=None, metavar="K",
+                   help="lay the --directions on K almucantars (rings of equal zenith angle, centres of equal-area "
+                   "bands) of N/K azimuths each instead of the Fibonacci set; N must be a multiple of K. Under a "
+                   "cloud layer the views of a ring share their paths (about half the time); default: off")
     p.add_argument("--samples", type=_whole_in(1, MAX_SAMPLES), default=4096, metavar="N",
                    help=f"paths per direction, 1 to {MAX_SAMPLES:.0e} (rounded up to whole batches of 512; the "
                    "standard error falls as 1/sqrt(N))")
@@ -102,7 +106,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..montecarlo.dataset import equal_area_directions, reference
+    from ..montecarlo.dataset import almucantar_directions, equal_area_directions, reference
+
+    if args.almucantars is None:
+        directions = equal_area_directions(args.directions)
+    elif args.directions % args.almucantars:
+        raise InvalidParameterError(f"--directions ({args.directions}) must be a multiple of --almucantars "
+                                    f"({args.almucantars})")
+    else:
+        directions = almucantar_directions(args.almucantars, args.directions // args.almucantars)
 
     bar = None
 
@@ -144,7 +156,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         ds = reference(args.output, sun_elevations=[math.radians(e) for e in args.sun_elevation],
                        turbidities=turbidity, aerosol_optical_depths=aod, albedos=args.albedo,
-                       wavelengths=args.wavelengths, directions=equal_area_directions(args.directions),
+                       wavelengths=args.wavelengths, directions=directions,
                        atmosphere=atmosphere, samples=args.samples,
                        seed=args.seed, altitude=args.altitude, scheduler=args.scheduler, progress=progress)
     finally:

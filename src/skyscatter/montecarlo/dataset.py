@@ -96,6 +96,21 @@ def equal_area_directions(n: int) -> NDArray[np.float64]:
     return np.stack([s * np.sin(phi), s * np.cos(phi), z], axis=-1)
 
 
+def almucantar_directions(n_zenith: int, n_azimuth: int) -> NDArray[np.float64]:
+    """``n_zenith x n_azimuth`` directions over the upper hemisphere on almucantars (rings of equal zenith angle),
+    unit ENU vectors (n_zenith * n_azimuth, 3), ring by ring from the zenith down: ring ``i`` at ``cos(zenith) = 1 -
+    (i + 1/2) / n_zenith`` (the centres of equal-area bands, as :func:`equal_area_directions`), azimuths ``(k +
+    1/2) 2 pi / n_azimuth`` from north towards east. The Monte Carlo traces the views of one ring as one where the
+    medium allows it (``driver.almucantars``), so a sky on this layout costs about half as much under clouds."""
+    nz = whole_number("number of almucantars", n_zenith, 1)
+    na = whole_number("number of azimuths per almucantar", n_azimuth, 1)
+    z = 1.0 - (np.arange(nz) + 0.5) / nz
+    phi = (np.arange(na) + 0.5) * (2.0 * math.pi / na)
+    zz, pp = np.meshgrid(z, phi, indexing="ij")
+    s = np.sqrt(1.0 - zz * zz)
+    return np.stack([s * np.sin(pp), s * np.cos(pp), zz], axis=-1).reshape(-1, 3)
+
+
 @dataclass(frozen=True)
 class ReferenceJob:
     """A validated reference job (angles in radians, wavelengths in nm)."""

@@ -517,19 +517,20 @@ _CLOUDY = np.zeros(1)
 
 
 def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float64], dirs: NDArray[np.float64],
-              mode: NDArray[np.int64], sun: NDArray[np.float64], dir_index: NDArray[np.int64], group: int,
-              wl_index: NDArray[np.int64], batch0: int, n_batches: int, batch_size: int, seed: int
-              ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """One task: per-batch sums and sums of squares, each (n_entries, n_group_wavelengths, n_batches), and the
-    vertices per batch (n_entries, n_batches)."""
+              mode: NDArray[np.int64], suns: NDArray[np.float64], sun_ptr: NDArray[np.int64],
+              dir_index: NDArray[np.int64], group: int, wl_index: NDArray[np.int64], batch0: int, n_batches: int,
+              batch_size: int, seed: int) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """One task: per-batch sums and sums of squares, each (n_rows, n_group_wavelengths, n_batches), and the
+    vertices per batch (n_rows, n_batches); a row per sun of the entries (``kernels.trace_block``)."""
     m = medium.subset(wl_index)
-    n = dirs.shape[0]
-    sums = np.zeros((n, wl_index.size, n_batches))
+    rows = suns.shape[0]
+    sums = np.zeros((rows, wl_index.size, n_batches))
     sumsq = np.zeros_like(sums)
-    verts = np.zeros((n, n_batches))
+    verts = np.zeros((rows, n_batches))
     f = m.field
     inputs = [_readonly(a) for a in (
-        origins, jitter, dirs, mode, dir_index, sun, math.cos(m.sun_angular_radius), m.bottom_radius, m.top_radius,
+        origins, jitter, dirs, mode, dir_index, suns, sun_ptr, math.cos(m.sun_angular_radius), m.bottom_radius,
+        m.top_radius,
         m.edges, m.layers, m.nlay, m.sgeo, m.stab, m.ushell, m.coef, m.scat, m.lobe, m.lobe_g, m.lobe_tab, m.tmu,
         m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe, f.ye, f.re, m.fs, m.fss, m.ddis,
         m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa, m.nee_roulette, m.split, m.dval, m.dcdf, m.ddis_gate,
@@ -757,12 +758,58 @@ def _check_clouds(clouds: Any) -> Any:
     return clouds
 
 
+def almucantars(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float64],
+                dirs: NDArray[np.float64], mode: NDArray[np.int64], sun: NDArray[np.float64]
+                ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+    """The entries traced for N views and the suns of their next-event estimates (``kernels`` module docstring,
+    "Almucantars").
+
+    Views share paths when the kernels run their cloud code (``Medium.cloud_paths``: a forward peak, splitting or
+    roulette; the clear sky's kernel takes one sun per entry), there is no cloud field, every entry is a radiance
+    (mode 0) without a footprint, and every origin is the same point on the planet's axis (``sky_radiance``'s
+    observer); then views whose directions have the same vertical component (within 1e-12, i.e. the same zenith
+    angle within about 1e-12 rad) form one entry, traced along its first view, with for each view the sun turned
+    about the vertical by minus the angle from the first view's azimuth to the view's. Otherwise every view is its
+    own entry with the sun.
+
+    Returns ``(order, ptr, suns)``: ``order`` (N,) the views in the order of the rows, entries contiguous (each
+    entry's first view first; entries ordered by their first view); ``ptr`` (E + 1,) the rows of entry ``e``
+    ``ptr[e] .. ptr[e + 1] - 1``; ``suns`` (N, 3) each row's sun. The entry of ``e`` is the view ``order[ptr[e]]``.
+    """
+    n = dirs.shape[0]
+    shared = (medium.cloud_paths and not medium.has_field and bool(np.all(mode == 0)) and not np.any(jitter)
+              and bool(np.all(origins[:, :2] == 0.0)) and bool(np.all(origins == origins[0])))
+    if not shared:
+        return np.arange(n, dtype=np.int64), np.arange(n + 1, dtype=np.int64), np.tile(sun, (n, 1))
+    by_z = np.argsort(dirs[:, 2], kind="stable")
+    cut = np.flatnonzero(np.diff(dirs[by_z, 2]) > 1e-12) + 1
+    rings = sorted((np.sort(g) for g in np.split(by_z, cut)), key=lambda g: int(g[0]))
+    order = np.concatenate(rings).astype(np.int64)
+    ptr = np.concatenate([[0], np.cumsum([g.size for g in rings])]).astype(np.int64)
+    first = np.repeat(order[ptr[:-1]], np.diff(ptr))
+    h0, h = dirs[first, :2], dirs[order, :2]
+    norm = np.hypot(h0[:, 0], h0[:, 1]) * np.hypot(h[:, 0], h[:, 1])
+    ok = norm > 0.0  # a view along the vertical: no azimuth, the sun unturned
+    cos_a = np.where(ok, (h0 * h).sum(axis=1) / np.where(ok, norm, 1.0), 1.0)
+    sin_a = np.where(ok, (h0[:, 0] * h[:, 1] - h0[:, 1] * h[:, 0]) / np.where(ok, norm, 1.0), 0.0)
+    # R turns the first view's azimuth to the view's (counter-clockwise in x-y by the angle a); the sun is turned by
+    # R^-1 (the transpose)
+    suns = np.stack([cos_a * sun[0] + sin_a * sun[1], -sin_a * sun[0] + cos_a * sun[1],
+                     np.full(n, sun[2])], axis=-1)
+    suns /= np.linalg.norm(suns, axis=-1)[:, None]
+    suns[ptr[:-1]] = sun  # each traced view's own sun exactly (a view alone is traced to the bit as without rings)
+    return order, ptr, np.ascontiguousarray(suns)
+
+
 def trace(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float64], dirs: NDArray[np.float64],
           mode: NDArray[np.int64], sun: NDArray[np.float64], n_wavelengths: int, *, samples: int, seed: int,
           scheduler: Any = None, group_size: int = DEFAULT_GROUP_SIZE, directions_per_task: int | None = None,
           batches_per_task: int | None = None, progress: Callable[[int, int], None] | None = None
           ) -> tuple[NDArray[np.float64], NDArray[np.float64], int, float]:
     """Run the kernels for N entries (origin, footprint, direction, mode; ``kernels.trace_block``) on dask.
+
+    Views of one almucantar share their paths where the medium allows it (:func:`almucantars`); the tasks are
+    made of whole entries (``directions_per_task`` counts entries).
 
     Returns ``(mean, stderr, samples_used, mean_vertices)``: per entry and wavelength the mean per-path estimate
     and its standard error, the paths per entry and the mean number of scattering and ground vertices per path.
@@ -775,22 +822,25 @@ def trace(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float
     batch_size, n_batches = batch_layout(n_samples)
     groups = wavelength_groups(n_wavelengths, group_size)
     n = dirs.shape[0]
+    order, ptr, suns = almucantars(medium, origins, jitter, dirs, mode, sun)
+    entry = order[ptr[:-1]]  # the view each entry is traced along (and whose random streams it takes)
+    n_entries = entry.size
     sizes = dict(directions_per_task=directions_per_task, batches_per_task=batches_per_task)
-    total = count_tasks(n, len(groups), n_batches, batch_size, **sizes)
-    index = np.arange(n, dtype=np.int64)
+    total = count_tasks(n_entries, len(groups), n_batches, batch_size, **sizes)
     fold = _BatchFold(n, n_wavelengths, groups)
     specs: dict[int, TaskSpec] = {}
     vertices = [0.0]
 
     def c(a, sl):
-        return np.ascontiguousarray(a[sl])
+        return np.ascontiguousarray(a[entry[sl]])
 
     def calls() -> Iterator[tuple]:
-        for k, sp in enumerate(iter_tasks(n, len(groups), n_batches, batch_size, **sizes)):
-            specs[k] = sp
+        for k, sp in enumerate(iter_tasks(n_entries, len(groups), n_batches, batch_size, **sizes)):
+            e0, e1 = sp.dir_slice.start, sp.dir_slice.stop
+            specs[k] = dataclasses.replace(sp, dir_slice=slice(int(ptr[e0]), int(ptr[e1])))  # its rows
             yield (medium, c(origins, sp.dir_slice), c(jitter, sp.dir_slice), c(dirs, sp.dir_slice),
-                   c(mode, sp.dir_slice), sun, index[sp.dir_slice], sp.group, groups[sp.group], sp.batch0,
-                   sp.n_batches, batch_size, seed)
+                   c(mode, sp.dir_slice), np.ascontiguousarray(suns[ptr[e0]:ptr[e1]]), ptr[e0:e1 + 1] - ptr[e0],
+                   entry[sp.dir_slice], sp.group, groups[sp.group], sp.batch0, sp.n_batches, batch_size, seed)
 
     def add(k: int, result: tuple) -> None:
         a, b, v = result
@@ -800,7 +850,9 @@ def trace(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float
     run_tasks(_run_task, calls(), scheduler, on_result=add, progress=progress, total=total)
     used = batch_size * n_batches
     mean, stderr = reduce_batches(fold.sums, fold.sumsq, used)
-    return mean, stderr, used, vertices[0] / (n * len(groups) * used)
+    out_mean, out_stderr = np.empty_like(mean), np.empty_like(stderr)
+    out_mean[order], out_stderr[order] = mean, stderr  # the rows back in the views' order
+    return out_mean, out_stderr, used, vertices[0] / (n * len(groups) * used)
 
 
 def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavelengths: ArrayLike, *,

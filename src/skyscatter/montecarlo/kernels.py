@@ -125,6 +125,18 @@ lobes' sampling densities weighted by ``k``'s scattering coefficients, and throu
 would be unbounded between 320 and 720 nm (Rayleigh differs by a factor 25); the balance heuristic bounds them
 by ``n_group * F_i / p_i``. The shared cost (geometry, columns of every shadow ray) is paid once per path.
 
+Almucantars. A medium of spherical shells without a field, seen from a point on the planet's axis through it,
+is unchanged by any rotation ``R`` about that axis; so is the estimator, whose every density is built from the
+geometry. A path traced for the view ``d`` with the sun ``s`` is therefore, turned by ``R``, a path for the view
+``R d`` with the sun ``R s``, drawn with the same density, and its estimate with the sun ``R^-1 s`` is an unbiased
+estimate of the radiance seen along ``R d`` with the sun ``s``. Views of one zenith angle (an almucantar: a row
+of an equirectangular map, a ring of a sky scan) are traced as one entry whose next-event estimates and peak probes
+are made once per view, each towards its own turned sun (``suns``, ``sun_ptr``), while the free paths, the
+scattering and the roulette, about half of a cloudy path's time, are shared. Each view's estimate has the
+distribution it would have had traced alone (the splitting's classes follow the first sun, a rule that depends on
+the path only, so they stay unbiased for the others); the views' estimates are correlated, each standard error is
+its own. The driver forms the almucantars (``driver.trace``).
+
 Observers. Each entry ``j`` of a block has an origin (planet frame), a direction and a mode: 0 - the radiance
 arriving from ``-dirs[j]`` travelling along ... i.e. seen looking along ``dirs[j]``; 1 - a direction drawn per
 path from the cosine distribution about ``dirs[j]``, each path's estimate multiplied by pi, so that the mean is
@@ -1695,11 +1707,10 @@ def _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun, rb, rt, edges, la
 
 
 @kernel
-def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, ushell,
-                coef,
-                scat, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye,
-                fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, nee_roulette, split, dval, dcdf, ddis_gate,
-                cloudy, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
+def trace_block(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab,
+        ushell, coef, scat, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe,
+        fye, fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, nee_roulette, split, dval, dcdf, ddis_gate,
+        cloudy, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out):
     """Trace ``n_batches`` batches of ``batch_size`` paths for each entry of a block; one wavelength group.
 
     Parameters (all SI; arrays float64 unless stated)
@@ -1708,7 +1719,10 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     path's origin is drawn uniformly (0: fixed). dirs : (n, 3) unit directions (view direction, or the axis of the
     cosine distribution). mode : (n,) int64, 0 radiance along ``dirs``, 1 irradiance on the plane facing
     ``dirs`` (cosine-distributed directions, estimates times pi). dir_index : (n,) int64 global entry numbers.
-    sun : (3,) unit vector to the sun centre. cos_sun : cosine of the solar angular radius.
+    suns : (m, 3) unit vectors to the sun centre; sun_ptr : (n + 1,) int64: entry ``j`` estimates with the suns
+    ``sun_ptr[j] .. sun_ptr[j + 1] - 1`` (at least one; several only for an almucantar of views traced as one, module
+    docstring "Almucantars", and only in the kernel with the cloud code), each into its own output row.
+    cos_sun : cosine of the solar angular radius.
     rb, rt : planet and top-of-atmosphere radii [m]. edges : sorted radii [m] of the quadrature shells.
     layers : (C, L, 5) density layers of the shell components; nlay : (C,) int64 layer counts.
     sgeo (3,), stab (m, C): the shadow rays' table of the shells' columns [m] above the cloud tops
@@ -1741,18 +1755,27 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
     components (Rayleigh, aerosol, ozone: ``C = 3``, else ValueError) with their coefficients as scalars
     (:func:`_march3_locate`).
     seed, group, batch0 : RNG counters (batch numbers batch0 .. batch0 + n_batches - 1).
-    sums, sumsq : (n, n_wl, n_batches) outputs: per batch, sum and sum of squares of the per-path estimate.
-    vertices_out : (n, n_batches) output: per batch, the number of scattering and ground vertices of its paths.
+    sums, sumsq : (m, n_wl, n_batches) outputs, one row per sun: per batch, sum and sum of squares of the per-path
+    estimate. vertices_out : (m, n_batches) output: per batch, the number of scattering and ground vertices of the
+    paths of the row's entry.
     """
     n = coef.shape[0]
     nc = coef.shape[1]
     if cloudy is None and nc != 3:
         raise ValueError("the kernel without the cloud code (cloudy None) takes the three shell components")
     ndir = dirs.shape[0]
+    for j in range(ndir):
+        if sun_ptr[j + 1] <= sun_ptr[j] or (cloudy is None and sun_ptr[j + 1] - sun_ptr[j] != 1):
+            raise ValueError("each entry takes one sun or more (one in the kernel without the cloud code)")
     st = np.empty(1, dtype=np.uint64)
     f = np.empty(n)
     p = np.empty(n)
     contrib = np.empty(n)
+    m_sun = 1
+    for j in range(ndir):
+        m_sun = max(m_sun, sun_ptr[j + 1] - sun_ptr[j])
+    cr = np.empty((m_sun, n))
+    sun = np.empty(3)
     cols = np.empty(nc)
     tot = np.empty(nc)
     tmp = np.empty(nc)
@@ -1823,25 +1846,23 @@ def trace_block(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, ed
             n_active += 1
     kha = np.empty(nc)
     cseg = np.empty(nc)
-    _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, ushell,
-                 kha, cseg, coef,
-                 lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
-                 fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, seed, group, batch0,
-                 n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp, dens,
-                 kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate, rec,
-                 cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3, chain,
-                 split_on, stk, stk_f, stk_p, f0, p0, kmin, active, coef_p, trn)
+    _trace_paths(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, sun, cr, cos_sun, rb, rt, edges, layers, nlay,
+            sgeo, stab, ushell, kha, cseg, coef, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho,
+            fbmax, fbmin, fxe, fye, fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf,
+            ddis_gate, seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p,
+            contrib, cols, tot, tmp, dens, kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt,
+            sst, trf, fstate, rec, cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3,
+            stt3, sst3, chain, split_on, stk, stk_f, stk_p, f0, p0, kmin, active, coef_p, trn)
 
 
 @helper
-def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab, ushell,
-                 kha, cseg, coef,
-                 lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs,
-                 fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate, seed, group, batch0,
-                 n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp, dens,
-                 kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate, rec,
-                 cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3, chain,
-                 split_on, stk, stk_f, stk_p, f0, p0, kmin, active, coef_p, trn):
+def _trace_paths(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, sun, cr, cos_sun, rb, rt, edges, layers, nlay,
+        sgeo, stab, ushell, kha, cseg, coef, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho,
+        fbmax, fbmin, fxe, fye, fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, split, dval, dcdf, ddis_gate,
+        seed, group, batch0, n_batches, batch_size, sums, sumsq, vertices_out, n, nc, ndir, st, f, p, contrib, cols,
+        tot, tmp, dens, kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate,
+        rec, cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3, chain,
+        split_on, stk, stk_f, stk_p, f0, p0, kmin, active, coef_p, trn):
     """The paths of :func:`trace_block` (its loop over entries, batches and paths), with the buffers it allocated.
     A helper (no reference counting, ``skyscatter.jit``): compiled inside the kernel, every array passed to an
     inlined function was counted up and down at each vertex (atomic operations, some 15 % of the time of a
@@ -1852,7 +1873,6 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
     use_ddis = clouds_on and use_ddis
     peak = clouds_on and peak
     split_on = clouds_on and split_on
-    sx, sy, sz = sun[0], sun[1], sun[2]
     # the clear sky's medium (Rayleigh, aerosol, ozone; two analytic lobes): its vertices in fused loops over the
     # wavelengths (_clear_collision, _clear_nee, _clear_scatter, _clear_ground)
     a0 = 0
@@ -1864,6 +1884,11 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
         clear3 = lobe[a0] != LOBE_TABLE and lobe[a1] != LOBE_TABLE
     for j in range(ndir):
         ax, ay, az = dirs[j, 0], dirs[j, 1], dirs[j, 2]
+        k0 = sun_ptr[j]  # the entry's suns and output rows k0 .. k0 + ns - 1
+        ns = sun_ptr[j + 1] - k0
+        sx, sy, sz = suns[k0, 0], suns[k0, 1], suns[k0, 2]
+        for q in range(3):
+            sun[q] = suns[k0, q]
         cosine = mode[j] == 1
         jx, jy = jitter[j, 0], jitter[j, 1]
         for bi in range(n_batches):
@@ -1875,6 +1900,9 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                     f[i] = 1.0
                     p[i] = 1.0
                     contrib[i] = 0.0
+                for s in range(ns):
+                    for i in range(n):
+                        cr[s, i] = 0.0
                 hero = min(int(next_uniform(st) * n), n - 1)
                 for q in range(nc):
                     kh[q] = coef[hero, q]
@@ -1990,58 +2018,60 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                             _normalise(f, p, n)
                             if sst[hero] <= 0.0:
                                 break  # absorbed for the hero: no continuation can be sampled
-                            # next-event estimation to the sun
-                            wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
-                            te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
-                            tsun = 0.0
-                            if blocked:
-                                live = False
-                            elif clouds_on:
-                                live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t, rb,
-                                                          edges, layers, nlay, sgeo, stab, ushell, fs, fsmax, fsmin,
-                                                          fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot,
-                                                          tmp, rec, tau, trf, trs)
-                            else:
-                                _march3_columns(px, py, pz, wx, wy, wz, te, rb, edges, layers, nlay, tot, tmp, rec)
-                                live = not _opaque3(kmin, tot)
+                            # next-event estimation to the sun, once per sun of the entry (its own and, for an
+                            # almucantar of views traced as one, the sun turned about the vertical for each other
+                            # view: module docstring, "Almucantars"); the first sun's transmittance steers splitting
+                            tm = 0.0
+                            for s in range(ns):
+                                qx, qy, qz = suns[k0 + s, 0], suns[k0 + s, 1], suns[k0 + s, 2]
+                                wx, wy, wz = _sun_sample(qx, qy, qz, cos_sun, next_uniform(st), next_uniform(st))
+                                te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
+                                tsun = 0.0
+                                if blocked:
+                                    live = False
+                                elif clouds_on:
+                                    live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t,
+                                            rb, edges, layers, nlay, sgeo, stab, ushell, fs, fsmax, fsmin, fvf, fvi,
+                                            frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf, trs)
+                                else:
+                                    _march3_columns(px, py, pz, wx, wy, wz, te, rb, edges, layers, nlay, tot, tmp, rec)
+                                    live = not _opaque3(kmin, tot)
+                                    if live:
+                                        _transmittances(coef_t, tot, tau, trs)
                                 if live:
-                                    _transmittances(coef_t, tot, tau, trs)
-                            if live:
-                                mw = wx * dx + wy * dy + wz * dz
-                                seg, sw = _phase_sums(mw, -1, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph, val,
-                                                      val2, False)
-                                if peak and not first:
-                                    _without_peak(mw, seg, sw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
-                                for i in range(n):
-                                    contrib[i] += ws * f[i] * val[i] * esun[i] * trs[i]
-                                tsun = trs[hero]
-                            # the sun through a chain of forward-peak scatterings (module docstring), probed with
-                            # probability 1 where the sun is seen, _PEAK_PROBE_MIN where it is not
-                            qprobe = 1.0
-                            if peak:
-                                qprobe = min(1.0, max(_PEAK_PROBE_MIN, _PEAK_PROBE_GAIN * tsun))
-                            if peak and (qprobe >= 1.0 or next_uniform(st) < qprobe):
-                                alive, wx, wy, wz = _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges,
-                                    layers, nlay, sgeo, stab, ushell, kha, cseg, coef_t, scat_t, kh, kmin, peak_lobe,
-                                    tmu, pval, pcdf, pa,
-                                    esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth,
-                                    st, fstate, cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain,
-                                    gch)
-                                if alive:
                                     mw = wx * dx + wy * dy + wz * dz
                                     seg, sw = _phase_sums(mw, -1, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph,
-                                                          val, val2, False)
-                                    if not first:
+                                            val, val2, False)
+                                    if peak and not first:
                                         _without_peak(mw, seg, sw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
                                     for i in range(n):
-                                        contrib[i] += ws * f[i] * val[i] * gch[i] / qprobe
+                                        cr[s, i] += ws * f[i] * val[i] * esun[i] * trs[i]
+                                    tsun = trs[hero]
+                                # the sun through a chain of forward-peak scatterings (module docstring), probed with
+                                # probability 1 where the sun is seen, _PEAK_PROBE_MIN where it is not
+                                qprobe = 1.0
+                                if peak:
+                                    qprobe = min(1.0, max(_PEAK_PROBE_MIN, _PEAK_PROBE_GAIN * tsun))
+                                if peak and (qprobe >= 1.0 or next_uniform(st) < qprobe):
+                                    alive, wx, wy, wz = _peak_probe(px, py, pz, hero, qx, qy, qz, cos_sun, rb, rt,
+                                            edges, layers, nlay, sgeo, stab, ushell, kha, cseg, coef_t, scat_t, kh,
+                                            kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf, fvi, frho, fbmax, fbmin,
+                                            fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth, st, fstate, cols, tot, tmp,
+                                            rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain, gch)
+                                    if alive:
+                                        mw = wx * dx + wy * dy + wz * dz
+                                        seg, sw = _phase_sums(mw, -1, active, lobe, lobe_g, lobe_tab, tmu, tval, sc, ph,
+                                                              val, val2, False)
+                                        if not first:
+                                            _without_peak(mw, seg, sw, peak_lobe, tmu, pval, pa, pk, sc, ph, val)
+                                        for i in range(n):
+                                            cr[s, i] += ws * f[i] * val[i] * gch[i] / qprobe
+                                if s == 0 and (split_on or use_ddis) and live:
+                                    for i in range(n):
+                                        tm = max(tm, trs[i])
                             # importance splitting / roulette (cloudy media; module docstring, "splitting"), then
                             # the scattering direction of this copy and of each new one
                             m_split = 1
-                            tm = 0.0
-                            if (split_on or use_ddis) and live:
-                                for i in range(n):
-                                    tm = max(tm, trs[i])
                             eps = ddis if use_ddis and tm > ddis_gate else 0.0
                             if split_on:
                                 cls = 0
@@ -2100,31 +2130,33 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                                 f[i] *= tr
                                 p[i] *= tr
                             _normalise(f, p, n)
-                            wx, wy, wz = _sun_sample(sx, sy, sz, cos_sun, next_uniform(st), next_uniform(st))
-                            cs = wx * nx + wy * ny + wz * nz
-                            if cs > 0.0:
-                                te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
-                                if clouds_on:
-                                    live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin, coef_t,
-                                        rb, edges, layers, nlay, sgeo, stab, ushell, fs, fsmax, fsmin, fvf, fvi, frho,
-                                        fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec, tau, trf, trs)
-                                else:
-                                    live = _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb, edges,
-                                                                 layers, nlay, tot, tmp, rec, tau, trs)
-                                if live:
-                                    for i in range(n):
-                                        contrib[i] += ws * f[i] * albedo[i] / math.pi * cs * esun[i] * trs[i]
-                            if peak:
-                                alive, wx, wy, wz = _peak_probe(px, py, pz, hero, sx, sy, sz, cos_sun, rb, rt, edges,
-                                    layers, nlay, sgeo, stab, ushell, kha, cseg, coef_t, scat_t, kh, kmin, peak_lobe,
-                                    tmu, pval, pcdf, pa,
-                                    esun, fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth,
-                                    st, fstate, cols, tot, tmp, rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain,
-                                    gch)
+                            for s in range(ns):  # each sun of the entry, as at a medium vertex
+                                qx, qy, qz = suns[k0 + s, 0], suns[k0 + s, 1], suns[k0 + s, 2]
+                                wx, wy, wz = _sun_sample(qx, qy, qz, cos_sun, next_uniform(st), next_uniform(st))
                                 cs = wx * nx + wy * ny + wz * nz
-                                if alive and cs > 0.0:
-                                    for i in range(n):
-                                        contrib[i] += ws * f[i] * albedo[i] / math.pi * cs * gch[i]
+                                if cs > 0.0:
+                                    te, blocked = _exit_distance(px, py, pz, wx, wy, wz, rb, rt)
+                                    if clouds_on:
+                                        live = _sun_transmittance(px, py, pz, wx, wy, wz, te, field, rr_depth, kmin,
+                                                coef_t, rb, edges, layers, nlay, sgeo, stab, ushell, fs, fsmax, fsmin,
+                                                fvf, fvi, frho, fbmax, fbmin, fxe, fye, fre, st, fstate, tot, tmp, rec,
+                                                tau, trf, trs)
+                                    else:
+                                        live = _shells_transmittance(px, py, pz, wx, wy, wz, te, kmin, coef_t, rb,
+                                                edges, layers, nlay, tot, tmp, rec, tau, trs)
+                                    if live:
+                                        for i in range(n):
+                                            cr[s, i] += ws * f[i] * albedo[i] / math.pi * cs * esun[i] * trs[i]
+                                if peak:
+                                    alive, wx, wy, wz = _peak_probe(px, py, pz, hero, qx, qy, qz, cos_sun, rb, rt,
+                                            edges, layers, nlay, sgeo, stab, ushell, kha, cseg, coef_t, scat_t, kh,
+                                            kmin, peak_lobe, tmu, pval, pcdf, pa, esun, fvf, fvi, frho, fbmax, fbmin,
+                                            fxe, fye, fre, fs, fss, fsmax, fsmin, rr_depth, st, fstate, cols, tot, tmp,
+                                            rec, dens, sc3, stt3, sst3, tau, trf, pk, fp, pp, chain, gch)
+                                    cs = wx * nx + wy * ny + wz * nz
+                                    if alive and cs > 0.0:
+                                        for i in range(n):
+                                            cr[s, i] += ws * f[i] * albedo[i] / math.pi * cs * gch[i]
                             # cosine-weighted hemisphere: weight albedo
                             u1 = next_uniform(st)
                             mu = math.sqrt(u1)
@@ -2153,11 +2185,19 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, sun, cos_sun, rb, rt, e
                     first = False
                 nvert += vertices
                 scale = math.pi if cosine else 1.0
-                for i in range(n):
-                    c = contrib[i] * scale
-                    sums[j, i, bi] += c
-                    sumsq[j, i, bi] += c * c
-            vertices_out[j, bi] += nvert
+                if clear3:
+                    for i in range(n):
+                        c = contrib[i] * scale
+                        sums[k0, i, bi] += c
+                        sumsq[k0, i, bi] += c * c
+                else:
+                    for s in range(ns):
+                        for i in range(n):
+                            c = cr[s, i] * scale
+                            sums[k0 + s, i, bi] += c
+                            sumsq[k0 + s, i, bi] += c * c
+            for s in range(ns):
+                vertices_out[k0 + s, bi] += nvert
 
 
 @kernel
