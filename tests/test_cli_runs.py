@@ -160,6 +160,19 @@ def _zarr(name, cells):
     return check
 
 
+def _almucantars(name, n_zenith, n_azimuth):
+    """The store's directions are the almucantars asked for (zenith angles of equal-area bands, N/K azimuths)."""
+    def check(folder: Path, out: str) -> None:
+        import xarray as xr
+
+        ds = xr.open_zarr(folder / name, consolidated=False)
+        zen = np.sort(np.unique(np.round(ds["view_zenith"].values, 9)))
+        expected = np.degrees(np.arccos(1.0 - (np.arange(n_zenith) + 0.5) / n_zenith))
+        np.testing.assert_allclose(zen, expected, rtol=1e-9)
+        assert ds.sizes["direction"] == n_zenith * n_azimuth
+    return check
+
+
 def _reference_air(name, aerosol_type, air_file):
     """The store's job holds the air the options asked for: an OPAC type's Mie aerosol with the cells' optical
     depths, or the air of a JSON file with its Angstrom exponent."""
@@ -488,9 +501,10 @@ RUNS = {
                              "--no-progress"], _zarr("r.zarr", 4)),
     "reference-aod": (["reference", "a.zarr", "--sun-elevation", "20:40:20", "--aod", "0.1", "--wavelengths",
                        "500", "--directions", "2", "--samples", "4", "--phase", "cornette-shanks"], _zarr("a.zarr", 2)),
-    "reference-cloud": (["reference", "c.zarr", "--sun-elevation", "30", "--wavelengths", "500", "--directions", "2",
-                         "--samples", "4", "--cloud-optical-depth", "10", "--cloud-base", "700", "--cloud-top", "1200",
-                         "--cloud-effective-radius", "8"], _zarr("c.zarr", 1)),
+    "reference-cloud": (["reference", "c.zarr", "--sun-elevation", "30", "--wavelengths", "500", "--directions", "4",
+                         "--almucantars", "2", "--samples", "4", "--cloud-optical-depth", "10", "--cloud-base", "700",
+                         "--cloud-top", "1200", "--cloud-effective-radius", "8"],
+                        _all(_zarr("c.zarr", 1), _almucantars("c.zarr", 2, 2))),
     "reference-aerosol-type": (["reference", "t.zarr", "--sun-elevation", "30", "--aerosol", "maritime-clean", "--aod",
                                 "0.05,0.3", "--wavelengths", "450,650", "--directions", "2", "--samples", "4"],
                                _all(_zarr("t.zarr", 2), _reference_air("t.zarr", "maritime-clean", None))),

@@ -129,13 +129,17 @@ def test_rng_streams_are_uniform_and_distinct():
 
 
 def test_standard_error_shrinks_as_one_over_sqrt_n():
-    """16x the samples: the standard error falls by 4 (within the scatter of a variance estimate, +-15 %), and
-    the two estimates agree within 3 combined standard errors."""
+    """16x the samples: the standard error falls by 4 (the median of the 6 ratios within +-10 %), and the two
+    estimates agree within 3 combined standard errors. The median, not each ratio: the per-path estimates are
+    heavy-tailed (a rare path through the aureole), so a standard error from 512 paths scatters more than a normal
+    sample's variance would; over seeds 4-9 (2026-12-05) single ratios ranged 3.11-7.99 while their medians stayed
+    within 3.79-4.20, with the stratified error and with the plain per-path one alike."""
     kw = dict(sun_zenith=math.radians(50.0), seed=4, scheduler="synchronous")
     a = sky_radiance(EARTH, DIRS, [450.0, 600.0], samples=512, **kw)
     b = sky_radiance(EARTH, DIRS, [450.0, 600.0], samples=8192, **kw)
     ratio = a.stderr / b.stderr
-    assert np.all(np.abs(ratio / 4 - 1) < 0.15), ratio
+    assert abs(float(np.median(ratio)) / 4 - 1) < 0.10, ratio
+    assert np.all((ratio > 2.0) & (ratio < 10.0)), ratio  # no ratio that a wrong power of N would give
     assert np.all(np.abs(a.radiance - b.radiance) < 3 * np.hypot(a.stderr, b.stderr))
 
 

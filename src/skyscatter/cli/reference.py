@@ -73,9 +73,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help=f"number of equal-area sky directions over the upper hemisphere (spherical Fibonacci), 1 to "
                    f"{MAX_DIRECTIONS}")
     p.add_argument("--almucantars", type=_whole_in(1, MAX_DIRECTIONS), default=None, metavar="K",
-                   help="lay the --directions on K almucantars (rings of equal zenith angle, centres of equal-area "
-                   "bands) of N/K azimuths each instead of the Fibonacci set; N must be a multiple of K. Under a "
-                   "cloud layer the views of a ring share their paths (about half the time); default: off")
+                   help=f"lay the --directions on K almucantars (rings of equal zenith angle, centres of equal-area "
+                   f"bands) of N/K azimuths each instead of the Fibonacci set, K 1 to {MAX_DIRECTIONS}, N a multiple "
+                   "of K. Under a cloud layer the views of a ring share their paths (about half the time); default: "
+                   "the Fibonacci set")
     p.add_argument("--samples", type=_whole_in(1, MAX_SAMPLES), default=4096, metavar="N",
                    help=f"paths per direction, 1 to {MAX_SAMPLES:.0e} (rounded up to whole batches of 512; the "
                    "standard error falls as 1/sqrt(N))")

@@ -520,12 +520,14 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
               mode: NDArray[np.int64], suns: NDArray[np.float64], sun_ptr: NDArray[np.int64],
               dir_index: NDArray[np.int64], group: int, wl_index: NDArray[np.int64], batch0: int, n_batches: int,
               batch_size: int, seed: int) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """One task: per-batch sums and sums of squares, each (n_rows, n_group_wavelengths, n_batches), and the
-    vertices per batch (n_rows, n_batches); a row per sun of the entries (``kernels.trace_block``)."""
+    """One task: per-batch sums and sums of squares per wavelength and hero, each (n_rows, n_group_wavelengths,
+    n_group_wavelengths, n_batches), the paths per hero (n_rows, n_group_wavelengths, n_batches) and the vertices
+    per batch (n_rows, n_batches); a row per sun of the entries (``kernels.trace_block``)."""
     m = medium.subset(wl_index)
     rows = suns.shape[0]
-    sums = np.zeros((rows, wl_index.size, n_batches))
+    sums = np.zeros((rows, wl_index.size, wl_index.size, n_batches))
     sumsq = np.zeros_like(sums)
+    counts = np.zeros((rows, wl_index.size, n_batches))
     verts = np.zeros((rows, n_batches))
     f = m.field
     inputs = [_readonly(a) for a in (
@@ -535,8 +537,8 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
         m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe, f.ye, f.re, m.fs, m.fss, m.ddis,
         m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa, m.nee_roulette, m.split, m.dval, m.dcdf, m.ddis_gate,
         _CLOUDY if m.cloud_paths else None)]
-    kernels.trace_block(*inputs, seed, group, batch0, n_batches, batch_size, sums, sumsq, verts)
-    return sums, sumsq, verts
+    kernels.trace_block(*inputs, seed, group, batch0, n_batches, batch_size, sums, sumsq, counts, verts)
+    return sums, sumsq, counts, verts
 
 
 def _readonly(value: Any) -> Any:
@@ -843,13 +845,13 @@ def trace(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float
                    entry[sp.dir_slice], sp.group, groups[sp.group], sp.batch0, sp.n_batches, batch_size, seed)
 
     def add(k: int, result: tuple) -> None:
-        a, b, v = result
-        fold.add(specs.pop(k), a, b)
+        a, b, cnt, v = result
+        fold.add(specs.pop(k), a, b, cnt)
         vertices[0] += float(np.sum(v))  # whole numbers: exact in any order
 
     run_tasks(_run_task, calls(), scheduler, on_result=add, progress=progress, total=total)
     used = batch_size * n_batches
-    mean, stderr = reduce_batches(fold.sums, fold.sumsq, used)
+    mean, stderr = reduce_strata(fold.sums, fold.sumsq, fold.counts, used)
     out_mean, out_stderr = np.empty_like(mean), np.empty_like(stderr)
     out_mean[order], out_stderr[order] = mean, stderr  # the rows back in the views' order
     return out_mean, out_stderr, used, vertices[0] / (n * len(groups) * used)
@@ -916,30 +918,61 @@ def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavele
 class _BatchFold:
     """Adds per-batch sums into running totals in one fixed order: for every direction and wavelength, batch 0,
     then 1, 2, ... (tasks arriving out of order wait for their turn). The result is therefore the same bits
-    whatever the task sizes, the scheduler or the order of completion, in memory independent of the samples."""
+    whatever the task sizes, the scheduler or the order of completion, in memory independent of the samples.
+    The totals are kept per hero (the strata of the standard error, :func:`reduce_strata`): ``sums``, ``sumsq``,
+    ``counts`` (n_dirs, n_wl, largest group)."""
 
     def __init__(self, n_dirs: int, n_wl: int, groups: list[NDArray[np.int64]]) -> None:
-        self.sums = np.zeros((n_dirs, n_wl))
-        self.sumsq = np.zeros((n_dirs, n_wl))
+        h = max(g.size for g in groups)
+        self.sums = np.zeros((n_dirs, n_wl, h))
+        self.sumsq = np.zeros((n_dirs, n_wl, h))
+        self.counts = np.zeros((n_dirs, n_wl, h))
         self.groups = groups
         self.next: dict[tuple[int, int], int] = {}
         self.waiting: dict[tuple[int, int], dict[int, tuple]] = {}
 
-    def add(self, spec: TaskSpec, sums: NDArray[np.float64], sumsq: NDArray[np.float64]) -> None:
+    def add(self, spec: TaskSpec, sums: NDArray[np.float64], sumsq: NDArray[np.float64],
+            counts: NDArray[np.float64]) -> None:
         key = (spec.dir_slice.start, spec.group)
         waiting = self.waiting.setdefault(key, {})
-        waiting[spec.batch0] = (spec, sums, sumsq)
+        waiting[spec.batch0] = (spec, sums, sumsq, counts)
         nxt = self.next.get(key, 0)
         while nxt in waiting:
-            sp, a, b = waiting.pop(nxt)
+            sp, a, b, c = waiting.pop(nxt)
             gi = self.groups[sp.group]
             cols = slice(int(gi[0]), int(gi[-1]) + 1)
-            tot, tot2 = self.sums[sp.dir_slice, cols], self.sumsq[sp.dir_slice, cols]
+            heroes = slice(0, gi.size)
+            tot, tot2 = self.sums[sp.dir_slice, cols, heroes], self.sumsq[sp.dir_slice, cols, heroes]
+            cnt = self.counts[sp.dir_slice, cols, heroes]
             for k in range(sp.n_batches):  # one batch at a time: the order of the additions is fixed
                 tot += a[..., k]
                 tot2 += b[..., k]
+                cnt += c[:, None, :, k]  # whole numbers: exact
             nxt += sp.n_batches
         self.next[key] = nxt
+
+
+def reduce_strata(sums: NDArray[np.float64], sumsq: NDArray[np.float64], counts: NDArray[np.float64], n: int
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Mean and standard error of ``n`` per-path estimates from their sums, sums of squares and counts per stratum
+    (the hero; last axis; ``kernels`` module docstring, "Hero wavelengths").
+
+    The mean is the sum over all paths over ``n``; its variance the stratified one, ``sum_h n_h s_h^2 / n^2`` with
+    ``s_h^2`` the sample variance of stratum ``h``'s ``n_h`` paths (Cochran 1977, Sampling Techniques, Eq. 5.6 with
+    the sample variances for the strata's, proportional allocation). A stratum of fewer than 2 paths takes the
+    strata's pooled variance; with none of 2 or more (a handful of paths) the variance of all the paths taken as
+    one sample (:func:`reduce_batches`), which can only be larger in expectation."""
+    mean = sums.sum(axis=-1) / n
+    safe = np.maximum(counts, 1.0)
+    within = np.maximum(sumsq - sums * sums / safe, 0.0)  # (n_h - 1) s_h^2
+    ok = counts >= 2.0
+    dof = np.where(ok, counts - 1.0, 0.0).sum(axis=-1)
+    pooled = np.where(dof > 0, np.where(ok, within, 0.0).sum(axis=-1) / np.maximum(dof, 1.0), 0.0)
+    s2 = np.where(ok, within / np.maximum(counts - 1.0, 1.0), pooled[..., None])
+    var = (counts * s2).sum(axis=-1) / float(n) ** 2
+    _, plain = reduce_batches(sums.sum(axis=-1), sumsq.sum(axis=-1), n)
+    stderr = np.where(dof > 0, np.sqrt(var), plain)
+    return mean, stderr
 
 
 def reduce_batches(sums: NDArray[np.float64], sumsq: NDArray[np.float64], n: int
