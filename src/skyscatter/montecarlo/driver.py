@@ -954,14 +954,14 @@ class _BatchFold:
 
 def reduce_strata(sums: NDArray[np.float64], sumsq: NDArray[np.float64], counts: NDArray[np.float64], n: int
                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Mean and standard error of ``n`` per-path estimates from their sums, sums of squares and counts per stratum
-    (the hero; last axis; ``kernels`` module docstring, "Hero wavelengths").
+    """Mean and standard error of ``n`` per-path estimates from their sums, sums of squares and counts per stratum (the
+    hero; last axis; ``kernels`` module docstring, "Hero wavelengths").
 
     The mean is the sum over all paths over ``n``; its variance the stratified one, ``sum_h n_h s_h^2 / n^2`` with
-    ``s_h^2`` the sample variance of stratum ``h``'s ``n_h`` paths (Cochran 1977, Sampling Techniques, Eq. 5.6 with
-    the sample variances for the strata's, proportional allocation). A stratum of fewer than 2 paths takes the
-    strata's pooled variance; with none of 2 or more (a handful of paths) the variance of all the paths taken as
-    one sample (:func:`reduce_batches`), which can only be larger in expectation."""
+    ``s_h^2`` the sample variance of stratum ``h``'s ``n_h`` paths ([Cochran1977] Ch. 5: the variance of the stratified
+    mean, estimated with the strata's sample variances; proportional allocation). A stratum of fewer than 2 paths takes
+    the strata's pooled variance; with none of 2 or more (a handful of paths) the variance of all the paths taken as one
+    sample (:func:`reduce_batches`), which can only be larger in expectation."""
     mean = sums.sum(axis=-1) / n
     safe = np.maximum(counts, 1.0)
     within = np.maximum(sumsq - sums * sums / safe, 0.0)  # (n_h - 1) s_h^2

@@ -143,10 +143,15 @@ geometry. A path traced for the view ``d`` with the sun ``s`` is therefore, turn
 estimate of the radiance seen along ``R d`` with the sun ``s``. Views of one zenith angle (an almucantar: a row
 of an equirectangular map, a ring of a sky scan) are traced as one entry whose next-event estimates and peak probes
 are made once per view, each towards its own turned sun (``suns``, ``sun_ptr``), while the free paths, the
-scattering and the roulette, about half of a cloudy path's time, are shared. Each view's estimate has the
-distribution it would have had traced alone (the splitting's classes follow the first sun, a rule that depends on
-the path only, so they stay unbiased for the others); the views' estimates are correlated, each standard error is
-its own. The driver forms the almucantars (``driver.trace``).
+scattering and the roulette (under the overcast of optical depth 15 some 45 % of a path traced alone, measured by
+ablation) are shared. Each view's estimate has the distribution it would have had traced alone (the splitting's
+classes follow the first sun, a rule that depends on the path only, so they stay unbiased for the others); the
+views' estimates are correlated, each standard error is its own. The turned suns' shadow rays share one roulette
+depth (``_sun_transmittance``'s ``end_in``), and at a vertex where the uniform shell around it already passes that
+depth along the steepest direction of any of their discs (:func:`_suns_hidden`) no shadow ray is drawn and their
+peak probes share one draw: deep in an overcast most vertices, where twenty suns would each have drawn a disc
+point, an exit distance and a bound to learn the same (the job of docs/clouds.md 1.4x faster). Correlated draws
+across the views change no view's distribution. The driver forms the almucantars (``driver.almucantars``).
 
 Observers. Each entry ``j`` of a block has an origin (planet frame), a direction and a mode: 0 - the radiance
 arriving from ``-dirs[j]`` travelling along ... i.e. seen looking along ``dirs[j]``; 1 - a direction drawn per
