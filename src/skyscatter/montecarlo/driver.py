@@ -519,7 +519,8 @@ _CLOUDY = np.zeros(1)
 def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float64], dirs: NDArray[np.float64],
               mode: NDArray[np.int64], suns: NDArray[np.float64], sun_ptr: NDArray[np.int64],
               dir_index: NDArray[np.int64], group: int, wl_index: NDArray[np.int64], batch0: int, n_batches: int,
-              batch_size: int, seed: int) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+              batch_size: int, seed: int
+              ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """One task: per-batch sums and sums of squares per wavelength and hero, each (n_rows, n_group_wavelengths,
     n_group_wavelengths, n_batches), the paths per hero (n_rows, n_group_wavelengths, n_batches) and the vertices
     per batch (n_rows, n_batches); a row per sun of the entries (``kernels.trace_block``)."""
