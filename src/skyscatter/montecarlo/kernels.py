@@ -557,6 +557,21 @@ def _next_crossing(r2, b, a, t_end, edges, i_in, i_out, inward):
 
 
 @inline
+def _ray_start(px, py, pz, dx, dy, dz, edges):
+    """Where a march along ``p + t d`` starts: ``r^2`` [m^2], ``b = p . d`` [m], the index of the first quadrature
+    sphere the ray can cross inwards (the largest below ``r``; -1 if none) and whether it heads inwards. The
+    crossings come in increasing ``t``: inward ones of the spheres below ``r`` (descending radius), then outward
+    ones (:func:`_next_crossing`). Shared by :func:`_march_pieces` and :func:`_march3_pieces`."""
+    r2 = px * px + py * py + pz * pz
+    r = math.sqrt(r2)
+    b = px * dx + py * dy + pz * dz
+    i_in = edges.shape[0] - 1
+    while i_in >= 0 and edges[i_in] >= r:
+        i_in -= 1
+    return r2, b, i_in, b < 0.0
+
+
+@inline
 def _march_pieces(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, nlay, cols, tmp, rec, locate):
     """The body of :func:`_march` (its docstring), inlined into it and into :func:`_march_locate`, where ``locate``
     is a constant."""
@@ -565,18 +580,10 @@ def _march_pieces(px, py, pz, dx, dy, dz, t_end, target, k, rb, edges, layers, n
         cols[q] = 0.0
     if t_end <= 0.0:
         return 0.0, False, 0
-    r2 = px * px + py * py + pz * pz
-    r = math.sqrt(r2)
-    b = px * dx + py * dy + pz * dz
-    ne = edges.shape[0]
+    r2, b, i_in, inward = _ray_start(px, py, pz, dx, dy, dz, edges)
     tau = 0.0
     a = 0.0
     npc = 0
-    # crossings in increasing t: inward crossings of the spheres below r (descending radius), then outward ones
-    i_in = ne - 1
-    while i_in >= 0 and edges[i_in] >= r:
-        i_in -= 1
-    inward = b < 0.0
     i_out = 0
     while True:
         c, i_in, i_out, inward = _next_crossing(r2, b, a, t_end, edges, i_in, i_out, inward)
@@ -675,18 +682,10 @@ def _march3_pieces(px, py, pz, dx, dy, dz, t_end, target, k0, k1, k2, rb, edges,
     cols[2] = 0.0
     if t_end <= 0.0:
         return 0.0, False, 0
-    r2 = px * px + py * py + pz * pz
-    r = math.sqrt(r2)
-    b = px * dx + py * dy + pz * dz
-    ne = edges.shape[0]
+    r2, b, i_in, inward = _ray_start(px, py, pz, dx, dy, dz, edges)
     tau = 0.0
     a = 0.0
     npc = 0
-    # crossings in increasing t: inward crossings of the spheres below r (descending radius), then outward ones
-    i_in = ne - 1
-    while i_in >= 0 and edges[i_in] >= r:
-        i_in -= 1
-    inward = b < 0.0
     i_out = 0
     while True:
         c, i_in, i_out, inward = _next_crossing(r2, b, a, t_end, edges, i_in, i_out, inward)
