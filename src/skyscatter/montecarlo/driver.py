@@ -521,14 +521,14 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
               dir_index: NDArray[np.int64], group: int, wl_index: NDArray[np.int64], batch0: int, n_batches: int,
               batch_size: int, seed: int
               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """One task: per-batch sums and sums of squares per wavelength and hero, each (n_rows, n_group_wavelengths,
-    n_group_wavelengths, n_batches), the paths per hero (n_rows, n_group_wavelengths, n_batches) and the vertices
-    per batch (n_rows, n_batches); a row per sun of the entries (``kernels.trace_block``)."""
+    """One task: per-batch sums and sums of squares per hero and wavelength, each (n_rows, n_batches,
+    n_group_wavelengths, n_group_wavelengths), the paths per hero (n_rows, n_batches, n_group_wavelengths) and the
+    vertices per batch (n_rows, n_batches); a row per sun of the entries (``kernels.trace_block``)."""
     m = medium.subset(wl_index)
     rows = suns.shape[0]
-    sums = np.zeros((rows, wl_index.size, wl_index.size, n_batches))
+    sums = np.zeros((rows, n_batches, wl_index.size, wl_index.size))
     sumsq = np.zeros_like(sums)
-    counts = np.zeros((rows, wl_index.size, n_batches))
+    counts = np.zeros((rows, n_batches, wl_index.size))
     verts = np.zeros((rows, n_batches))
     f = m.field
     inputs = [_readonly(a) for a in (
@@ -946,9 +946,9 @@ class _BatchFold:
             tot, tot2 = self.sums[sp.dir_slice, cols, heroes], self.sumsq[sp.dir_slice, cols, heroes]
             cnt = self.counts[sp.dir_slice, cols, heroes]
             for k in range(sp.n_batches):  # one batch at a time: the order of the additions is fixed
-                tot += a[..., k]
-                tot2 += b[..., k]
-                cnt += c[:, None, :, k]  # whole numbers: exact
+                tot += a[:, k].transpose(0, 2, 1)  # (rows, hero, wavelength) -> (rows, wavelength, hero)
+                tot2 += b[:, k].transpose(0, 2, 1)
+                cnt += c[:, k, None, :]  # whole numbers: exact
             nxt += sp.n_batches
         self.next[key] = nxt
 

@@ -1801,9 +1801,9 @@ def trace_block(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, cos_sun, 
     components (Rayleigh, aerosol, ozone: ``C = 3``, else ValueError) with their coefficients as scalars
     (:func:`_march3_locate`).
     seed, group, batch0 : RNG counters (batch numbers batch0 .. batch0 + n_batches - 1).
-    sums, sumsq : (m, n_wl, n_wl, n_batches) outputs, one row per sun: per wavelength, hero and batch, sum and sum of
-    squares of the per-path estimate (the heroes are the strata of the standard error). counts : (m, n_wl,
-    n_batches) output: per hero and batch, the number of paths. vertices_out : (m, n_batches) output: per batch, the
+    sums, sumsq : (m, n_batches, n_wl, n_wl) outputs, one row per sun: per batch, hero and wavelength, sum and sum
+    of squares of the per-path estimate (the heroes are the strata of the standard error; a path's wavelengths
+    contiguous). counts : (m, n_batches, n_wl) output: per batch and hero, the number of paths. vertices_out : (m, n_batches) output: per batch, the
     number of scattering and ground vertices of the
     paths of the row's entry.
     """
@@ -2258,16 +2258,16 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, sun, cr,
                 if clear3:
                     for i in range(n):
                         c = contrib[i] * scale
-                        sums[k0, i, hero, bi] += c
-                        sumsq[k0, i, hero, bi] += c * c
+                        sums[k0, bi, hero, i] += c
+                        sumsq[k0, bi, hero, i] += c * c
                 else:
                     for s in range(ns):
                         for i in range(n):
                             c = cr[s, i] * scale
-                            sums[k0 + s, i, hero, bi] += c
-                            sumsq[k0 + s, i, hero, bi] += c * c
+                            sums[k0 + s, bi, hero, i] += c
+                            sumsq[k0 + s, bi, hero, i] += c * c
                 for s in range(ns):
-                    counts[k0 + s, hero, bi] += 1.0
+                    counts[k0 + s, bi, hero] += 1.0
             for s in range(ns):
                 vertices_out[k0 + s, bi] += nvert
 
