@@ -1803,9 +1803,8 @@ def trace_block(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, cos_sun, 
     seed, group, batch0 : RNG counters (batch numbers batch0 .. batch0 + n_batches - 1).
     sums, sumsq : (m, n_batches, n_wl, n_wl) outputs, one row per sun: per batch, hero and wavelength, sum and sum
     of squares of the per-path estimate (the heroes are the strata of the standard error; a path's wavelengths
-    contiguous). counts : (m, n_batches, n_wl) output: per batch and hero, the number of paths. vertices_out : (m, n_batches) output: per batch, the
-    number of scattering and ground vertices of the
-    paths of the row's entry.
+    contiguous). counts : (m, n_batches, n_wl) output: per batch and hero, the number of paths. vertices_out : (m,
+    n_batches) output: per batch, the number of scattering and ground vertices of the paths of the row's entry.
     """
     n = coef.shape[0]
     nc = coef.shape[1]
