@@ -87,7 +87,7 @@ def manual_lookup(atm, dirs, sun, cubic_tables):
     rb, rt = p.bottom_radius, p.top_radius
     nl = atm.wavelengths.size
     sl = observer_slices(atm.tables["single_rayleigh"], atm.tables["single_mie"], atm.tables["multiple"], rb,
-                         float(sun[2]), rb, rt, p.mu_s_min, np.eye(nl))[0]  # (n_mu, n_nu, nl, 4): on the ground
+                         float(sun[2]), rb, rt, p.mu_s_min, 0, np.eye(nl))[0]  # stored (unsplit) axis; on the ground
     n_mu, n_nu = sl.shape[:2]
     out_s, out_m = [], []
     for d in dirs:

@@ -177,6 +177,30 @@ class TableLookups:
         p = self.parameters
         return p.bottom_radius, p.top_radius, p.mu_s_min
 
+    @property
+    def _mu_s_cells(self) -> int:
+        """The sun-zenith cells of the 4D tables that the lookups split (:func:`.geometry.twilight_cells`)."""
+        from .geometry import twilight_cells  # numba: imported on the first lookup (_kernels)
+
+        bottom, top, mu_s_min = self._geometry()
+        return twilight_cells(bottom, top, mu_s_min, self.stored["single_rayleigh"].shape[2])
+
+    @property
+    def lookup_tables(self) -> dict[str, NDArray[np.float32]]:
+        """The tables the per-ray lookups read (the general sky and the aerial perspective): :attr:`tables` with
+        the three 4D scattering tables refined along the sun zenith in twilight (:func:`.lookup.refine_sun_zenith`;
+        48 sun-zenith texels for the stored 32), float32, built on first use from the stored tables one at a time.
+        The observer's lookups refine only the two radius rows they read, to the same values."""
+        cached = getattr(self, "_lookup_tables_cache", None)
+        if cached is None:
+            lookup = _kernels()
+            cells = self._mu_s_cells
+            cached = {name: (lookup.refine_sun_zenith(t, cells) if name in ("single_rayleigh", "single_mie",
+                                                                           "multiple") else t)
+                      for name, t in self.stored.items()}
+            self._lookup_tables_cache = cached
+        return cached
+
     def transmittance(self, r: ArrayLike, mu: ArrayLike) -> NDArray[np.float64]:
         """Transmittance from radius ``r`` [m] along direction cosine ``mu`` to the top of the atmosphere, or to
         the ground for rays that meet it; shape broadcast(r, mu) + (n_wavelengths,)."""
@@ -245,10 +269,11 @@ class TableLookups:
         sh = np.zeros(n) if shadow is None else shadow
         rad = np.zeros((n, self.wavelengths.size))
         tr = np.ones((n, self.wavelengths.size))
-        parallel_for(lookup.sky_kernel, n, pos, dirs, sun, sh, self.tables["transmittance"],
-                     self.tables["single_rayleigh"], self.tables["single_mie"], self.tables["multiple"],
-                     self.tables["irradiance"], self._albedo, self._solar, bottom, top,
-                     mu_s_min, self._mie_g, self._mie_kind, self._lobe, *self._aerosol_phase[2:], *self._profiles,
+        tab = self.lookup_tables
+        parallel_for(lookup.sky_kernel, n, pos, dirs, sun, sh, tab["transmittance"],
+                     tab["single_rayleigh"], tab["single_mie"], tab["multiple"],
+                     tab["irradiance"], self._albedo, self._solar, bottom, top,
+                     mu_s_min, self._mu_s_cells, self._mie_g, self._mie_kind, self._lobe, *self._aerosol_phase[2:], *self._profiles,
                      self.parameters.sun_angular_radius, include_ground, rad, tr,
                      grain=2048)
         return rad, tr
@@ -337,7 +362,8 @@ class TableLookups:
         # read there only: the first sky from a cached file does not wait for all of it)
         stored = self.stored
         slices = lookup.observer_slices(stored["single_rayleigh"], stored["single_mie"], stored["multiple"],
-                                        min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, projection)
+                                        min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, self._mu_s_cells,
+                                        projection)
         out = np.empty((dirs.shape[0], projection.shape[0]))
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
@@ -403,12 +429,13 @@ class TableLookups:
         stored = self.stored
         tables = [stored[name] for name in ("single_rayleigh", "single_mie", "multiple")]
         n_r, n_s = tables[0].shape[0], tables[0].shape[2]
-        i_r, w_r, _, _, w_g = lookup.r_mu_s_cell(rc, max(mu_s_min, 0.0), bottom, top, mu_s_min, n_r, n_s)
+        cells = self._mu_s_cells
+        i_r, w_r, _, _, w_g = lookup.r_mu_s_cell(rc, max(mu_s_min, 0.0), bottom, top, mu_s_min, n_r,
+                                                 lookup.refined_mu_s_count(n_s, cells), cells)
 
         def layer(table: Any, i: int) -> NDArray[np.float32]:
-            i = min(i, n_r - 1)
-            a = table.radius_layer(i) if hasattr(table, "radius_layer") else table[i]
-            return np.ascontiguousarray(a, dtype=np.float32)
+            # the radius layer refined along the sun zenith, as the other lookups read the tables
+            return lookup.refine_sun_zenith(lookup.radius_layer(table, min(i, n_r - 1))[None], cells)[0]
 
         lower = [layer(t, i_r) for t in tables]
         upper = [layer(t, i_r + 1) if max(w_r, w_g) > 0.0 else lo for t, lo in zip(tables, lower, strict=True)]
@@ -419,7 +446,7 @@ class TableLookups:
         parallel_for(lookup.observer_suns_kernel, s.shape[0], pos, rc, n_r, s, mu_s, *lower, *upper,
                      stored["transmittance"], stored["irradiance"], self._albedo, self._solar,
                      projection, True,
-                     bottom, top, mu_s_min, self._mie_g, self._mie_kind, self._lobe, *self._profiles,
+                     bottom, top, mu_s_min, cells, self._mie_g, self._mie_kind, self._lobe, *self._profiles,
                      self.parameters.sun_angular_radius, bool(include_ground), dirs, out, bad,
                      grain=max(1, 4096 // max(dirs.shape[0], 1)))
         if bad.any():
@@ -493,9 +520,9 @@ class TableLookups:
         sh = np.zeros(n) if sh is None else sh
         t = np.ones((n, self.wavelengths.size))
         s = np.zeros((n, self.wavelengths.size))
-        tab = self.tables
+        tab = self.lookup_tables
         parallel_for(lookup.aerial_kernel, n, cam, pts, sun, sh, tab["transmittance"], tab["single_rayleigh"],
-                     tab["single_mie"], tab["multiple"], bottom, top, mu_s_min, self._mie_g,
+                     tab["single_mie"], tab["multiple"], bottom, top, mu_s_min, self._mu_s_cells, self._mie_g,
                      self._mie_kind, self._lobe, *self._aerosol_phase[2:], *self._profiles, t, s, grain=2048)
         return t.reshape(*shape, -1), s.reshape(*shape, -1)
 

@@ -61,10 +61,14 @@ __all__ = [
     "irradiance_log_nodes",
     "irradiance_params",
     "lerp_index",
+    "log_cubic_nodes",
+    "log_cubic_value",
     "log_lerp_weight",
     "log_quadratic_weight",
     "point_along_ray",
     "ray_hits_ground",
+    "refined_mu_s_cell",
+    "refined_mu_s_count",
     "scattering_nu_azimuth",
     "scattering_nu_coord",
     "scattering_nu_param",
@@ -75,6 +79,7 @@ __all__ = [
     "shadow_exit_altitude",
     "transmittance_coord",
     "transmittance_params",
+    "twilight_cells",
 ]
 
 
@@ -363,6 +368,42 @@ def log_quadratic_weight(y0: float, y1: float, y2: float, t: float) -> float:
     return log_lerp_weight(lo, hi, w)
 
 
+@helper(fastmath=CONTRACT_ARCP)
+def log_cubic_nodes(i_s: int, w_s: float, n_s: int) -> tuple[int, float, float, float, float]:
+    """The four consecutive texels ``j0 .. j0 + 3`` (``j0 = i_s - 1`` clamped to ``0 .. n_s - 4``) around the cell
+    ``i_s``, ``i_s + 1`` of an axis of ``n_s`` (>= 4) texels, and the four-point Lagrange weights ([Abramowitz1964]
+    Eq. 25.2.13) at the position ``x = i_s + w_s - j0`` (in [0, 3]) of the read: ``L_m(x) = prod_(q != m)
+    (x - q) / (m - q)``, for :func:`log_cubic_value`."""
+    j0 = min(max(i_s - 1, 0), n_s - 4)
+    x = (i_s - j0) + w_s
+    x1 = x - 1.0
+    x2 = x - 2.0
+    x3 = x - 3.0
+    return j0, -x1 * x2 * x3 / 6.0, 0.5 * x * x2 * x3, -0.5 * x * x1 * x3, x * x1 * x2 / 6.0
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def log_cubic_value(y0: float, y1: float, y2: float, y3: float, off: int, w: float, c0: float, c1: float, c2: float,
+                    c3: float) -> float:
+    """The four-point Lagrange formula in the logarithm ([Abramowitz1964] Eq. 25.2.13 applied to ``ln y``):
+    ``y = y0^c0 y1^c1 y2^c2 y3^c3`` with the weights of :func:`log_cubic_nodes`, kept between the read's cell's two
+    values (texels ``off`` and ``off + 1`` of the four, ``off = i_s - j0``), so that it meets both at the cell's ends
+    and never leaves them; the linear interpolation ``a + w (b - a)`` of the cell (``w`` its fraction) where a value
+    is not positive (a texel in the Earth's shadow or below the tables' sun limit, whose logarithm is not finite).
+
+    The values of the rendering lookups' sub-texels along the sun zenith in the cells that start below the horizon
+    (:func:`refined_mu_s_cell`, :func:`.lookup.refine_sun_zenith`): there the sky falls by 2-5 times across one
+    cell of the default 32 texels and the slope of its logarithm turns (docs/accuracy.md, "Low sun")."""
+    a = y0 if off == 0 else (y1 if off == 1 else y2)
+    b = y1 if off == 0 else (y2 if off == 1 else y3)
+    if y0 > 0.0 and y1 > 0.0 and y2 > 0.0 and y3 > 0.0:
+        y = math.exp(c0 * math.log(y0) + c1 * math.log(y1) + c2 * math.log(y2) + c3 * math.log(y3))
+        if a < b:
+            return min(max(y, a), b)
+        return min(max(y, b), a)
+    return a + w * (b - a)
+
+
 # --------------------------------------------------------------------------------------------- scattering
 
 
@@ -571,6 +612,45 @@ def scattering_mu_s_coord(mu_s: float, bottom: float, top: float, mu_s_min: floa
     """
     return scattering_mu_s_coord_a(mu_s, bottom, top, _mu_s_a(mu_s_min, bottom, top), acos_table(mu_s_min),
                                    n_mu_s)
+
+
+#: Sub-cells into which the rendering lookups split each sun-zenith cell of the 4D tables that starts below the
+#: horizon (:func:`twilight_cells`): the lookups read tables refined along the sun zenith
+#: (:func:`.lookup.refine_sun_zenith`), whose sub-texels hold :func:`log_cubic_value` of the stored texels, linearly
+#: between them (docs/accuracy.md, "Low sun").
+MU_S_SPLIT = 3
+
+
+def twilight_cells(bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> int:
+    """Number of sun-zenith cells of a 4D table of ``n_mu_s`` texels that start below the horizon (the cell's lower
+    texel at ``mu_s < 0``: every cell below the horizon and the one across it; 8 of the default 32, from -12 to
+    +0.78 deg), which the rendering lookups split into :data:`MU_S_SPLIT` sub-cells; 0 for fewer than 4 texels (the
+    four-point rule needs four). ``bottom``, ``top``: the planet's and the atmosphere's radii [m]; ``mu_s_min``:
+    the tables' smallest sun zenith cosine."""
+    if n_mu_s < 4:
+        return 0
+    p0 = scattering_mu_s_coord(0.0, bottom, top, mu_s_min, n_mu_s)
+    return min(int(math.ceil(p0)), n_mu_s - 1)
+
+
+def refined_mu_s_count(n_mu_s: int, cells: int) -> int:
+    """Texels along the sun zenith of a table of ``n_mu_s`` texels with its first ``cells`` cells split into
+    :data:`MU_S_SPLIT` sub-cells each."""
+    return n_mu_s + (MU_S_SPLIT - 1) * cells
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def refined_mu_s_cell(p: float, n_fine: int, cells: int) -> tuple[int, float]:
+    """Interpolation cell (texel, weight of the next) in a sun-zenith axis of ``n_fine`` texels refined from
+    ``n_fine - (MU_S_SPLIT - 1) cells`` stored ones (:func:`refined_mu_s_count`) of the stored index position
+    ``p`` (:func:`scattering_mu_s_coord` at the stored count): in the first ``cells`` cells ``MU_S_SPLIT p``, above
+    them ``p + (MU_S_SPLIT - 1) cells``, so that every stored texel keeps its value and a read above the split
+    cells is the stored axis' own (the same texels and weight: daytime lookups unchanged to the bit). With
+    ``cells`` 0 it is :func:`lerp_index` on the stored axis."""
+    if p < cells:
+        return lerp_index(MU_S_SPLIT * p, 0, n_fine - 1)
+    i, w = lerp_index(p, 0, n_fine - 1 - (MU_S_SPLIT - 1) * cells)
+    return i + (MU_S_SPLIT - 1) * cells, w
 
 
 @helper(fastmath=CONTRACT_ARCP)

@@ -28,6 +28,7 @@ import numpy as np
 from ..jit import CONTRACT_ARCP, helper, inline, kernel
 from .geometry import (
     MU_S_LIMIT_TOLERANCE,
+    MU_S_SPLIT,
     acos_table,
     bilinear_weights,
     clamp,
@@ -39,15 +40,19 @@ from .geometry import (
     in_earth_shadow,
     irradiance_coord,
     lerp_index,
+    log_cubic_nodes,
+    log_cubic_value,
     log_lerp_weight,
     point_along_ray,
     ray_hits_ground,
+    refined_mu_s_count,
     scattering_nu_azimuth,
     scattering_nu_coord,
     scattering_r_mu_coord,
     sky_mu_unit,
     transmittance_coord,
 )
+from .parallel import parallel_for
 from .sampling import (
     TABLE_PHASE,
     aerosol_phase,
@@ -96,8 +101,8 @@ def _enter_atmosphere(px, py, pz, vx, vy, vz, top):
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec, profiles,
-               counts, out):
+def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, cells, lobe, p_r, p_m, p_m_spec,
+               profiles, counts, out):
     """Inscattered radiance ``S_R P_R + S_M P_M + S_multiple`` from the tables at a point, into ``out``
     (``p_r``, ``p_m``: phase functions at ``nu``; ``p_m_spec``, if not empty, the aerosol phase per wavelength,
     used instead of ``p_m``; ``lobe``: the weight of :func:`.sampling.multiple_lobe`, by which the multiple
@@ -121,7 +126,7 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lob
     mu_s = max(mu_s, mu_s_min)
     n_r, n_mu, n_s, n_n, _ = ray.shape
     i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits, bottom, top, n_r, n_mu)
-    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
+    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n, cells)
     if in_earth_shadow(r, mu_s, bottom):
         h_q, h_0, h_1 = shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_n, bottom, top)
         a, b = shadow_ratios_fast(h_q, h_0, h_1, profiles[0], counts[0])
@@ -214,8 +219,8 @@ def _ground_coords_block(m, gv, gmu, px, py, pz, sx, sy, sz, r, bottom, top, alp
 
 @kernel
 def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradiance, albedo, solar, bottom, top,
-               mu_s_min, g, mie_kind, lobe, phase_mu, phase_values, profiles, counts, alpha, include_ground, rad_out,
-               tr_out, start, stop):
+               mu_s_min, cells, g, mie_kind, lobe, phase_mu, phase_values, profiles, counts, alpha, include_ground,
+               rad_out, tr_out, start, stop):
     """Radiance [W m^-2 sr^-1 nm^-1] and transmittance along rays ``start..stop``; see the module docstring.
 
     Writes ``rad_out`` and ``tr_out`` (n_rays, n_wavelengths), which the caller initialises to 0 and 1
@@ -258,13 +263,13 @@ def sky_kernel(pos, dirs, suns, shadow, transmittance, ray, mie, mult, irradianc
                 for k in range(n_l):
                     c[k] = 0.0
             else:
-                _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m,
+                _inscatter(ray, mie, mult, r_s, mu_ss, mu_s_s, nu, hits, bottom, top, mu_s_min, cells, lobe, p_r, p_m,
                            p_m_spec, profiles, counts, c)
             transmittance_segment(transmittance, rc, mu, l_sh, hits, bottom, top, t, tmp)
             for k in range(n_l):
                 c[k] *= t[k]
         else:
-            _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec,
+            _inscatter(ray, mie, mult, rc, mu, mu_s, nu, hits, bottom, top, mu_s_min, cells, lobe, p_r, p_m, p_m_spec,
                        profiles, counts, c)
         for k in range(n_l):
             rad_out[q, k] = c[k]
@@ -294,7 +299,69 @@ def observer_two_rows(r, bottom, top, n_r):
     return 0.0 < p_r < 1.0 and ground_cell_rows_apart(bottom, top, n_r)
 
 
-def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, projection):
+@kernel
+def refine_mu_s_kernel(table, cells, j_lo, out, start, stop):
+    """Columns ``j_lo .. j_lo + out.shape[2] - 1`` of the sun-zenith axis of ``table`` (n_r, n_mu, n_mu_s, n_nu,
+    n_wavelengths) with its first ``cells`` cells split into :data:`.geometry.MU_S_SPLIT` sub-cells, into ``out``
+    (n_r, n_mu, n_columns, n_nu, n_wavelengths), rows ``start..stop`` of the flattened (r, mu) axes: a stored texel
+    is copied; a sub-texel at the fraction ``w`` of its cell holds :func:`.geometry.log_cubic_value` of the cell's
+    stored column and its neighbours at ``w``, each (nu, wavelength) its own."""
+    n_mu, n_s, n_nu, n_l = table.shape[1], table.shape[2], table.shape[3], table.shape[4]
+    n_out = out.shape[2]
+    split = MU_S_SPLIT * cells
+    for q in range(start, stop):
+        i_r = q // n_mu
+        i_m = q % n_mu
+        for jj in range(n_out):
+            j = j_lo + jj
+            if j >= split or j % MU_S_SPLIT == 0:
+                src = j - (MU_S_SPLIT - 1) * cells if j >= split else j // MU_S_SPLIT
+                for k in range(n_nu):
+                    for m in range(n_l):
+                        out[i_r, i_m, jj, k, m] = table[i_r, i_m, src, k, m]
+                continue
+            i = j // MU_S_SPLIT
+            w = (j % MU_S_SPLIT) / MU_S_SPLIT
+            j0, c0, c1, c2, c3 = log_cubic_nodes(i, w, n_s)
+            for k in range(n_nu):
+                for m in range(n_l):
+                    out[i_r, i_m, jj, k, m] = log_cubic_value(
+                        table[i_r, i_m, j0, k, m], table[i_r, i_m, j0 + 1, k, m], table[i_r, i_m, j0 + 2, k, m],
+                        table[i_r, i_m, j0 + 3, k, m], i - j0, w, c0, c1, c2, c3)
+
+
+def radius_layer(table, i_r):
+    """A 4D table at radius index ``i_r``: (n_mu, n_mu_s, n_nu, n_wavelengths) float32 (a
+    :class:`.storage.HalfTable`'s decoded layer, which it keeps for the next calls)."""
+    return table.radius_layer(i_r) if hasattr(table, "radius_layer") else np.asarray(table[i_r], dtype=np.float32)
+
+
+def refine_sun_zenith(table, cells, columns=None):
+    """A 4D scattering table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths; float32, or a :class:`.storage.HalfTable`,
+    decoded) refined along the sun zenith for the rendering lookups: its first ``cells`` cells (those that start
+    below the horizon, :func:`.geometry.twilight_cells`) split into :data:`.geometry.MU_S_SPLIT` sub-cells
+    (:func:`refine_mu_s_kernel`), float32, read with :func:`.geometry.refined_mu_s_cell`; ``columns`` (start,
+    stop), if given, only those columns of the refined axis. The stored texels keep their values, so a read above
+    the split cells is the stored table's to the bit.
+
+    Why: in twilight the sky falls by 2-5 times across one cell of the default 32 sun-zenith texels and the slope
+    of its logarithm turns within a few cells, so no linear read between two texels follows it (+23 to +34 %
+    median between the texels from -7 to -4.5 deg against tables of 94 texels); the four-point rule in the
+    logarithm follows it to 0.6-0.7 % there (docs/accuracy.md, "Low sun"). Done as data, once per table (or per
+    observer's two radius rows), every lookup stays a linear read: the same cost per ray, and the real-time
+    textures folded to colour read as the spectra do."""
+    values = np.ascontiguousarray(table[:] if not isinstance(table, np.ndarray) else table, dtype=np.float32)
+    n_r, n_mu, n_s, n_nu, n_l = values.shape
+    n_f = refined_mu_s_count(n_s, cells)
+    lo, hi = (0, n_f) if columns is None else (int(columns[0]), int(columns[1]))
+    if not 0 <= lo < hi <= n_f:
+        raise ValueError(f"columns {columns} outside the refined axis of {n_f} texels")
+    out = np.empty((n_r, n_mu, hi - lo, n_nu, n_l), dtype=np.float32)
+    parallel_for(refine_mu_s_kernel, n_r * n_mu, values, int(cells), lo, out, grain=64)
+    return out
+
+
+def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, cells, projection):
     """The 4D inscattering tables at one observer radius ``r`` [m] and sun zenith cosine ``mu_s``: an array
     (2, n_mu, n_nu, C + 1, 4) holding, for each channel, single Rayleigh, single Mie and multiple scattering over the
     view axes (and a zero, so that each texel's three values are one aligned 32-byte load), each
@@ -303,7 +370,9 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     of the lookup is computed (:func:`.sampling.nu_weight`). ``[0]`` holds the slices and ``[1]`` zeros, except
     for an observer within the cell touching the ground (:func:`observer_two_rows`): there ``[0]`` and ``[1]`` hold
     the shares of the lower and the upper row, which the lookup reads each at its own ``mu`` coordinate (the ground
-    half of the ``mu`` axis at the same coordinate in both).
+    half of the ``mu`` axis at the same coordinate in both). The tables are the stored ones; their two radius rows
+    around the observer are refined along the sun zenith here (:func:`refine_sun_zenith`, ``cells`` split cells,
+    only the two columns read), as the other lookups read the whole tables refined.
 
     The lookup is linear in ``r``, ``mu`` and ``mu_s``, so fixing the ``r`` and ``mu_s`` weights once and
     interpolating the slice in (``mu``, ``nu``) gives the same values as the 4D lookup; its weight along ``nu`` is
@@ -320,13 +389,17 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
         return out
     mu_s = max(mu_s, mu_s_min)
-    i_r, w_r, i_s, w_s, w_g = r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_s)
+    n_f = refined_mu_s_count(n_s, cells)
+    i_r, w_r, i_s, w_s, w_g = r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_f, cells)
     half = n_mu // 2
     # within the cell touching the ground each row's share apart (out[0], out[1]), read at its own mu coordinate
     parts = (0, 1) if observer_two_rows(r, bottom, top, n_r) else (None,)
     for j, table in enumerate((single_rayleigh, single_mie, multiple)):
+        # the observer's two radius rows, refined along the sun zenith in the two columns read
+        rows2 = refine_sun_zenith(np.stack([radius_layer(table, min(i, n_r - 1)) for i in (i_r, i_r + 1)]), cells,
+                                  (i_s, i_s + 2))
         for part in parts:
-            acc = np.zeros((n_mu, n_nu, table.shape[-1]))
+            acc = np.zeros((n_mu, n_nu, rows2.shape[-1]))
             # the ground half of the mu axis with its own radius weight (.geometry.scattering_r_mu_coord)
             for rows, w in ((slice(0, half), w_g), (slice(half, n_mu), w_r)):
                 for a, wa in ((0, 1.0 - w), (1, w)):
@@ -334,7 +407,7 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
                         continue
                     for c, wc in ((0, 1.0 - w_s), (1, w_s)):
                         if wa * wc > 0.0:
-                            acc[rows] += (wa * wc) * table[i_r + a, rows, i_s + c, :, :]
+                            acc[rows] += (wa * wc) * rows2[a, rows, c, :, :]
             k = 0 if part is None else part
             out[k, :, :, :n_c, j] = acc @ proj.T
             out[k, :, :, n_c, j] = acc[:, :, acc.shape[-1] // 2]
@@ -705,7 +778,7 @@ def _slice_layers(l0, l1, w_r, w_g, i_s, w_s, projection, identity, two_rows, j,
 
 @kernel
 def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0, ray1, mie1, mult1, transmittance,
-                         irradiance, albedo, solar, projection, identity, bottom, top, mu_s_min, g, mie_kind,
+                         irradiance, albedo, solar, projection, identity, bottom, top, mu_s_min, cells, g, mie_kind,
                          lobe, profiles, counts, alpha, include_ground, dirs, out, bad, start, stop):
     """:func:`observer_kernel` for suns ``start..stop`` of ``suns`` (n, 3) (unit vectors; ``mu_s`` their zenith
     cosines at the observer, as :func:`observer_slices` takes them) seen from one ``position``: per sun the slices
@@ -725,7 +798,7 @@ def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0,
         m = mu_s[h]
         if m >= mu_s_min - MU_S_LIMIT_TOLERANCE:
             m = max(m, mu_s_min)
-            _, w_r, i_s, w_s, w_g = r_mu_s_cell(r_slices, m, bottom, top, mu_s_min, n_r, n_s)
+            _, w_r, i_s, w_s, w_g = r_mu_s_cell(r_slices, m, bottom, top, mu_s_min, n_r, n_s, cells)
             _slice_layers(ray0, ray1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 0, acc, slices)
             _slice_layers(mie0, mie1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 1, acc, slices)
             _slice_layers(mult0, mult1, w_r, w_g, i_s, w_s, projection, identity, two_rows, 2, acc, slices)
@@ -735,14 +808,14 @@ def observer_suns_kernel(position, r_slices, n_r, suns, mu_s, ray0, mie0, mult0,
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, lobe, p_r,
-                        p_m, p_m_spec, profiles, counts, c, t, c2, tmp):
+def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits, bottom, top, mu_s_min, cells, lobe,
+                        p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp):
     """``S|x - T(x, p) S|p`` for the point p at distance d along the ray into ``c``; leaves T(x, p) in ``t``."""
-    _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec, profiles,
-               counts, c)
+    _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, cells, lobe, p_r, p_m, p_m_spec,
+               profiles, counts, c)
     r_p, mu_p = point_along_ray(r, mu, d, bottom, top)
     mu_s_p = clamp((r * mu_s + d * nu) / r_p, -1.0, 1.0)
-    _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, lobe, p_r, p_m, p_m_spec,
+    _inscatter(ray, mie, mult, r_p, mu_p, mu_s_p, nu, hits, bottom, top, mu_s_min, cells, lobe, p_r, p_m, p_m_spec,
                profiles, counts, c2)
     transmittance_segment(transmittance, r, mu, d, hits, bottom, top, t, tmp)
     for k in range(c.shape[0]):
@@ -750,8 +823,8 @@ def _inscatter_to_point(transmittance, ray, mie, mult, r, mu, mu_s, nu, d, hits,
 
 
 @kernel
-def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, g, mie_kind,
-                  lobe, phase_mu, phase_values, profiles, counts, tr_out, in_out, start, stop):
+def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bottom, top, mu_s_min, cells, g,
+                  mie_kind, lobe, phase_mu, phase_values, profiles, counts, tr_out, in_out, start, stop):
     """Transmittance and inscattered radiance between cameras and points (Eqs. 16-17), rays ``start..stop``.
 
     Writes ``tr_out`` (initialised to 1) and ``in_out`` (initialised to 0), each (n_rays, n_wavelengths).
@@ -802,15 +875,15 @@ def aerial_kernel(cams, points, suns, shadow, transmittance, ray, mie, mult, bot
             mu_lo = mu_h - HORIZON_EPSILON
             mu_hi = mu_h + HORIZON_EPSILON
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_lo, mu_s, nu, d_lit, True, bottom, top,
-                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, lo_c, t, c2, tmp)
+                                mu_s_min, cells, lobe, p_r, p_m, p_m_spec, profiles, counts, lo_c, t, c2, tmp)
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu_hi, mu_s, nu, d_lit, False, bottom, top,
-                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
+                                mu_s_min, cells, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
             a = (mu - mu_lo) / (mu_hi - mu_lo)
             for k in range(n_l):
                 c[k] = (1.0 - a) * lo_c[k] + a * c[k]
         else:
             _inscatter_to_point(transmittance, ray, mie, mult, rc, mu, mu_s, nu, d_lit, hits, bottom, top,
-                                mu_s_min, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
+                                mu_s_min, cells, lobe, p_r, p_m, p_m_spec, profiles, counts, c, t, c2, tmp)
         for k in range(n_l):
             in_out[q, k] = c[k]
 

@@ -23,6 +23,7 @@ from ..atmosphere.phase import (
 from ..atmosphere.phase_table import phase_table_values
 from ..jit import helper
 from .geometry import (
+    MU_S_SPLIT,
     acos_table,
     bilinear_weights,
     clamp,
@@ -33,6 +34,7 @@ from .geometry import (
     log_lerp_weight,
     log_quadratic_weight,
     point_along_ray,
+    refined_mu_s_cell,
     scattering_mu_s_coord,
     scattering_nu_coord,
     scattering_nu_param,
@@ -326,25 +328,29 @@ def r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu):
 
 
 @helper
-def mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_mu_s, n_nu):
-    """Interpolation cell (i_mu_s, w_mu_s, i_nu, w_nu) in the 4D tables (view zenith cosine ``mu``)."""
-    p_s = scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_mu_s)
+def mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_mu_s, n_nu, cells):
+    """Interpolation cell (i_mu_s, w_mu_s, i_nu, w_nu) in the 4D tables (view zenith cosine ``mu``) of ``n_mu_s``
+    sun-zenith texels, whose first ``cells`` stored cells are split (:func:`.geometry.refined_mu_s_cell`; 0 for the
+    tables as stored)."""
+    p_s = scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_mu_s - (MU_S_SPLIT - 1) * cells)
     p_n = scattering_nu_coord(mu, mu_s, nu, n_nu)
-    i_s, w_s = lerp_index(p_s, 0, n_mu_s - 1)
+    i_s, w_s = refined_mu_s_cell(p_s, n_mu_s, cells)
     i_n, w_n = lerp_index(p_n, 0, n_nu - 1)
     return i_s, w_s, i_n, w_n
 
 
 @helper
-def r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_mu_s):
+def r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_mu_s, cells):
     """Interpolation cell (i_r, w_r, i_mu_s, w_mu_s, w_r_ground) of an observer radius and sun zenith cosine in the
     4D tables (the axes that stay fixed for one observer); ``w_r`` is the radius weight of the rays that miss the
-    ground, ``w_r_ground`` that of the rays that meet it, in the same cell (:func:`.geometry.scattering_r_mu_coord`)."""
+    ground, ``w_r_ground`` that of the rays that meet it, in the same cell (:func:`.geometry.scattering_r_mu_coord`);
+    ``cells`` as in :func:`mu_s_nu_cell`."""
     p_r, _ = scattering_r_mu_coord(r, 1.0, False, bottom, top, n_r, 4)
     i_r, w_r = lerp_index(p_r, 0, n_r - 1)
     p_g, _ = scattering_r_mu_coord(r, -1.0, True, bottom, top, n_r, 4)
     _, w_g = lerp_index(p_g, 0, n_r - 1)
-    i_s, w_s = lerp_index(scattering_mu_s_coord(mu_s, bottom, top, mu_s_min, n_mu_s), 0, n_mu_s - 1)
+    i_s, w_s = refined_mu_s_cell(scattering_mu_s_coord(mu_s, bottom, top, mu_s_min,
+                                                       n_mu_s - (MU_S_SPLIT - 1) * cells), n_mu_s, cells)
     return i_r, w_r, i_s, w_s, w_g
 
 
@@ -444,7 +450,7 @@ def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min
     directions outside the target from 68 to 48 of 225 (hazy, near the sun: docs/accuracy.md, "Low sun")."""
     n_r, n_mu, n_s, n_n, n_l = table.shape
     i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
-    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
+    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n, 0)
     _lookup4_weighted(table, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * scale, w_n * scale, out)
 
 
@@ -577,7 +583,7 @@ def scattering_lookup_shadow(table, r, mu, mu_s, nu, hits_ground, bottom, top, m
     second order's scattering density at twilight."""
     n_r, n_mu, n_s, n_n, n_l = table.shape
     i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
-    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n)
+    i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n, 0)
     n0, n1 = shadow_nu_weights(r, mu, mu_s, nu, i_n, w_n, n_n, bottom, top, profile, n_layers)
     _lookup4_weighted(table, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, n0 * scale, n1 * scale, out)
 
