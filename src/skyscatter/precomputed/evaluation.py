@@ -273,7 +273,8 @@ class TableLookups:
         parallel_for(lookup.sky_kernel, n, pos, dirs, sun, sh, tab["transmittance"],
                      tab["single_rayleigh"], tab["single_mie"], tab["multiple"],
                      tab["irradiance"], self._albedo, self._solar, bottom, top,
-                     mu_s_min, self._mu_s_cells, self._mie_g, self._mie_kind, self._lobe, *self._aerosol_phase[2:], *self._profiles,
+                     mu_s_min, self._mu_s_cells, self._mie_g, self._mie_kind, self._lobe, *self._aerosol_phase[2:],
+                     *self._profiles,
                      self.parameters.sun_angular_radius, include_ground, rad, tr,
                      grain=2048)
         return rad, tr
