@@ -54,6 +54,12 @@ VIEWS = {
                          fov=90), (192, 108)),
     "ground-sun-4": (dict(sun_elevation=-4, sun_azimuth=180, altitude=0, projection=0, heading=180, pitch=5,
                           fov=90), (192, 108)),
+    # twilight between the stored sun-zenith texels (SIZES' 8: the stored axis at 0.80, the refined one at 2.41,
+    # mid-way between a sub-texel and the next stored texel; -4 deg reads at 2.87, next to the stored texel): the
+    # sky only (0.6-59 deg elevation), every term of which folds exactly (the ground's light carries the sky
+    # irradiance's fold, ground-sun-4)
+    "sky-sun-5": (dict(sun_elevation=-5, sun_azimuth=180, altitude=0, projection=0, heading=170, pitch=30,
+                       fov=90), (192, 108)),
     "10km-sun30": (dict(sun_elevation=30, sun_azimuth=200, altitude=10e3, projection=0, heading=150, pitch=-10,
                         fov=90), (192, 108)),
     "orbit-sun30": (dict(sun_elevation=30, sun_azimuth=180, altitude=400e3, projection=0, heading=180, pitch=-19,
@@ -159,6 +165,8 @@ def test_browser_renders_the_python_image(name, viewer, atm):
     gpu = _gpu_image(viewer, params, size)
     ref = _python_image(atm, params, size)
     assert np.isfinite(gpu).all() and ref.max() > 0
+    if name.startswith("sky-"):  # a view of the sky alone
+        assert (_directions(params, size, atm.parameters.bottom_radius)[..., 2] > 0.0).all(), name
     e = _errors(gpu, ref, params, size, atm)
     rms, worst = float(np.sqrt(np.mean(e**2))), float(e.max())
     ARTEFACTS.mkdir(parents=True, exist_ok=True)
@@ -231,11 +239,13 @@ def test_page_says_what_is_wrong_instead_of_a_black_canvas(how, words, browser, 
 
 
 def _cases(atm, rng, n):
-    """Cameras (2 m, a person's eye, and 2 km), unit directions and suns (30, 4, -4 deg) for the library probes."""
+    """Cameras (2 m, a person's eye, and 2 km), unit directions and suns (30, 4, -4, -5 deg: -5 between the stored
+    sun-zenith texels, mid-way in a sub-cell of the refined axis) for the library probes."""
     bottom = atm.parameters.bottom_radius
     cams = np.zeros((n, 3))
     cams[:, 2] = bottom + rng.choice([2.0, 2000.0], n)
-    suns = direction_from_angles(np.radians(90 - rng.choice([30.0, 4.0, -4.0], n)), rng.uniform(0, 2 * np.pi, n))
+    suns = direction_from_angles(np.radians(90 - rng.choice([30.0, 4.0, -4.0, -5.0], n)),
+                                 rng.uniform(0, 2 * np.pi, n))
     return cams, suns
 
 
@@ -256,9 +266,14 @@ def test_library_sky_and_irradiance_functions_match_the_python_lookups(viewer, a
     want = np.array([m @ atm.sky_radiance(cams[i], views[i], suns[i], include_ground=False) for i in range(n)])
     sky = np.array([g[0] for g in got])
     e = np.abs(sky - want).max(-1) / (np.abs(want).max(-1) + 1e-30)
+    night = np.einsum("ij,ij->i", cams, suns) < 0.0  # the sun below the horizon: the refined sun-zenith cells
+    assert night.sum() >= 10, night.sum()
     ARTEFACTS.mkdir(parents=True, exist_ok=True)
     with open(ARTEFACTS / "figures.jsonl", "a", encoding="utf-8") as fh:
-        fh.write(json.dumps({"sky_probes": n, "sky_median": float(np.median(e)), "sky_worst": float(e.max())}) + "\n")
+        fh.write(json.dumps({"sky_probes": n, "sky_median": float(np.median(e)), "sky_worst": float(e.max()),
+                             "twilight_probes": int(night.sum()), "twilight_rms": float(np.sqrt(np.mean(e[night]**2))),
+                             "twilight_worst": float(e[night].max()), "day_rms": float(np.sqrt(np.mean(e[~night]**2))),
+                             "day_worst": float(e[~night].max())}) + "\n")
     for i in range(n):
         assert np.abs(sky[i] - want[i]).max() <= 1e-4 * np.abs(want[i]).max() + 1e-9, (i, sky[i], want[i])
     normals = direction_from_angles(rng.uniform(0.0, np.pi / 2, n), rng.uniform(0, 2 * np.pi, n))

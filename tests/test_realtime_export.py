@@ -79,6 +79,56 @@ def test_manifest_mappings_and_textures_give_the_spectral_lookup(atm, luts):
     assert worst < 2e-5, worst
 
 
+def test_twilight_reads_between_the_stored_sun_zenith_texels_give_the_lookup(atm, luts):
+    """With the sun 3.5 and 5.5 deg below the horizon the read lies within a split sun-zenith cell, between the
+    stored texels (5.5 deg: mid-cell) and within two different sub-cells: the textures hold the lookups' refined
+    tables folded, and the mappings' position on the refined axis is the lookups', so the GPU read gives the
+    spectral lookup to rounding there too (a linear read between the stored texels is off by far more:
+    test_scattering_alpha_is_the_middle_wavelength_and_its_weight_the_lookups)."""
+    from skyscatter.precomputed.geometry import MU_S_SPLIT, scattering_mu_s_coord, twilight_cells
+
+    data = load_realtime(luts)
+    ns = data.mappings()
+    p = atm.parameters
+    m = fold_matrix(atm)
+    n_s = atm.sizes.scattering_mu_s
+    cells = twilight_cells(p.bottom_radius, p.top_radius, p.mu_s_min, n_s)
+    assert cells >= 1 and ns["SCATTERING_N_MU_S"] == n_s + (MU_S_SPLIT - 1) * cells
+    assert ns["SCATTERING_MU_S_CELLS"] == cells and ns["MU_S_SPLIT"] == MU_S_SPLIT
+    rng = np.random.default_rng(17)
+    worst = 0.0
+    for el in (-3.5, -5.5):  # the SMALL tables' 6 texels: at 2.22 and 1.57 of the refined axis
+        sun = direction_from_angles(np.radians(90.0 - el), 0.4)
+        stored = scattering_mu_s_coord(float(sun[2]), p.bottom_radius, p.top_radius, p.mu_s_min, n_s)
+        fine = ns["scattering_mu_s_index"](float(sun[2]))
+        # within a split cell, between two stored texels and between two sub-texels
+        assert stored < cells and 0.2 < stored % 1.0 < 0.8 and 0.1 < fine % 1.0 < 0.9, (el, stored, fine)
+        for alt in (0.0, 1500.0, 12e3):
+            pos = np.array([0.0, 0.0, p.bottom_radius + alt])
+            dirs = direction_from_angles(rng.uniform(0.0, np.pi, 40), rng.uniform(0, 2 * np.pi, 40))
+            want = atm.sky_radiance(pos, dirs, sun, include_ground=False) @ m.T
+            for d, ref in zip(dirs, want, strict=True):
+                got = _gpu_sky(ns, data.textures, float(pos[2]), d[2], sun[2], float(d @ sun))
+                worst = max(worst, float(np.abs(got - ref).max() / max(np.abs(ref).max(), 1e-6)))
+    assert worst < 2e-5, worst  # as the other suns (test above)
+
+
+def test_scattering_mu_s_index_is_the_lookups_refined_position(atm, luts):
+    """The mappings' sun-zenith position is the lookups' cell (geometry.refined_mu_s_cell of the stored axis'
+    position) over the whole range: below, across and above the split cells."""
+    from skyscatter.precomputed.geometry import refined_mu_s_cell, scattering_mu_s_coord
+
+    ns = load_realtime(luts).mappings()
+    p = atm.parameters
+    n_s, n_f, cells = atm.sizes.scattering_mu_s, ns["SCATTERING_N_MU_S"], ns["SCATTERING_MU_S_CELLS"]
+    for mu_s in np.linspace(p.mu_s_min, 1.0, 397):
+        i, w = refined_mu_s_cell(scattering_mu_s_coord(float(mu_s), p.bottom_radius, p.top_radius, p.mu_s_min,
+                                                       n_s), n_f, cells)
+        # the lookups' arc cosine (geometry.acos_table) is within 2.2e-8 rad of math.acos': 1e-7 of a texel here
+        assert abs(ns["scattering_mu_s_index"](float(mu_s)) - (i + w)) < 1e-7, mu_s
+    assert ns["scattering_mu_s_index"](p.mu_s_min) == 0.0 and ns["scattering_mu_s_index"](1.0) == n_f - 1
+
+
 def test_scattering_alpha_is_the_middle_wavelength_and_its_weight_the_lookups(atm, luts):
     """The scattering textures' alpha is each table at its middle wavelength (the lookups' azimuth weight comes
     from it: sampling.nu_weight), at the texel of the same (r, mu, mu_s, nu); the manifest's weight is
@@ -89,10 +139,22 @@ def test_scattering_alpha_is_the_middle_wavelength_and_its_weight_the_lookups(at
     k = atm.wavelengths.size // 2
     assert data.manifest["azimuth_weight_wavelength_nm"] == float(atm.wavelengths[k])
     n_r, n_mu, n_s, n_n = atm.sizes.scattering_shape
+    cells, split = data.manifest["constants"]["SCATTERING_MU_S_CELLS"], data.manifest["constants"]["MU_S_SPLIT"]
+    n_f = data.manifest["constants"]["SCATTERING_N_MU_S"]
+    # the refined axis' texels that are stored ones: every split-th in the split cells, all above them
+    kept = [split * i for i in range(cells)] + list(range(split * cells, n_f))
     for name, key in (("rayleigh", "single_rayleigh"), ("mie", "single_mie"), ("multiple", "multiple")):
-        alpha = data.textures[name][..., 3].reshape(n_r, n_mu, n_n, n_s)
-        table = np.asarray(atm.tables[key][..., k], dtype=np.float32)
-        np.testing.assert_array_equal(alpha, table.transpose(0, 1, 3, 2))
+        # the lookups' tables: refined along the sun zenith (the table as stored at its own texels)
+        alpha = data.textures[name][..., 3].reshape(n_r, n_mu, n_n, n_f).transpose(0, 1, 3, 2)
+        np.testing.assert_array_equal(alpha, atm.lookup_tables[key][..., k])
+        np.testing.assert_array_equal(alpha[:, :, kept], np.asarray(atm.tables[key][..., k], dtype=np.float32))
+        # the sub-texels are not the stored axis' linear read: the twilight sky is not linear along the sun zenith
+        # (an export of the stored tables read at the refined positions would be off by this much)
+        table = np.asarray(atm.tables[key][..., k], dtype=np.float64)
+        lin = table[:, :, :cells] + (table[:, :, 1:cells + 1] - table[:, :, :cells]) / split
+        sub = alpha[:, :, 1:split * cells:split]
+        big = lin > 1e-3 * table.max()
+        assert np.abs(sub / np.where(big, lin, 1.0) - 1.0)[big].max() > 0.05, name
     ns = data.mappings()
     rng = np.random.default_rng(11)
     a = rng.uniform(0.0, 1.0, 300) * 10.0 ** rng.uniform(-6, 1, 300)
@@ -167,7 +229,7 @@ def test_half_and_exr_match_float32(luts):
 
 def test_manifest_states_version_units_scale_and_code(luts):
     manifest = json.loads((luts / MANIFEST_NAME).read_text())
-    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 10
+    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 11
     assert manifest["hdr_scale"]["cd_m2_per_unit_Y"] == 683.0
     assert manifest["mappings"]["glsl"] == glsl_mappings() and manifest["mappings"]["glsl"] in glsl_library()
     for name in ("transmittance_uv", "irradiance_uv", "irradiance_uvs", "irradiance_lerp", "scattering_uvw"):
@@ -238,7 +300,7 @@ def test_server_serves_the_viewer_and_only_the_exports_files(luts, tmp_path):
         assert b"GetSkyRadianceToPoint" in get("/glsl/atmosphere.glsl")
         for path in ("/", "/viewer/viewer.js", "/viewer/style.css"):  # nothing loaded from the network
             assert b"http://" not in get(path) and b"https://" not in get(path) and b"//cdn" not in get(path)
-        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 10
+        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 11
         assert len(get("/luts/rayleigh.rgba32f")) == (luts / "rayleigh.rgba32f").stat().st_size
         for path in ("/luts/secret.txt", "/luts/../secret.txt", "/etc/passwd", "/viewer/../export.py"):
             with pytest.raises(urllib.error.HTTPError, match="404"):

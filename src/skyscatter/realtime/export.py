@@ -35,6 +35,15 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
   linear in r; manifest version 9, as :func:`skyscatter.precomputed.sampling.irradiance_read` reads each wavelength;
   ``irradiance_uvs``, ``irradiance_lerp`` and ``log_quadratic_weight`` of the mappings).
 * ``rayleigh``, ``mie``, ``multiple`` 3D, width n_nu * n_mu_s (x = i_nu * n_mu_s + i_mu_s), height n_mu, depth n_r:
+  the library's lookup tables (:attr:`skyscatter.precomputed.PrecomputedAtmosphere.lookup_tables`): the stored
+  tables refined along the sun zenith (manifest version 11), their first C cells (those that start below the
+  horizon, :func:`skyscatter.precomputed.geometry.twilight_cells`, 8 of the default 32) split into ``MU_S_SPLIT``
+  (3) sub-cells whose texels hold the four-point Lagrange rule in the logarithm of the stored texels
+  (:func:`skyscatter.precomputed.lookup.refine_sun_zenith`), so n_mu_s = the stored count + 2 C (48 of the default
+  32). The refinement is per wavelength and not linear, so it is done before the fold: the texture unit's linear
+  read of a folded texel column is then the fold of the library's linear read of the refined spectra. The mu_s
+  position of a read is the stored axis' p, times 3 in the split cells (p < C), else p + 2 C
+  (``scattering_mu_s_index`` of the mappings, :func:`skyscatter.precomputed.geometry.refined_mu_s_cell`).
   RGB single Rayleigh and single Mie scattering without their phase functions, multiple scattering with it and
   divided by the lobe ``multiple_lobe(nu)`` of the mappings at each texel's own nu (manifest version 10, table
   format 19: :func:`skyscatter.precomputed.sampling.multiple_lobe`; ``inscattered_radiance`` multiplies by it at
@@ -99,8 +108,11 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: lookups read each wavelength with its own), the alpha is no longer read. 10: the multiple-scattering texture holds
 #: the multiple scattering divided by the lobe MultipleLobe(nu) (constants MULTIPLE_LOBE, MULTIPLE_LOBE_G; multiple_lobe
 #: and inscattered_radiance of the mappings; skyscatter table format 19); the irradiance texture's alpha is 0 (was the
-#: illuminance, unread since version 9).
-MANIFEST_VERSION = 10
+#: illuminance, unread since version 9). 11: the scattering textures hold the library's lookup tables refined along
+#: the sun zenith (the cells that start below the horizon split into MU_S_SPLIT sub-cells; SCATTERING_N_MU_S is the
+#: refined count, the constants SCATTERING_MU_S_CELLS and MU_S_SPLIT; scattering_mu_s_index of the mappings returns
+#: the refined position).
+MANIFEST_VERSION = 11
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -282,12 +294,17 @@ def mu_s_distance_unit(mu_s):
     return (distance_to_top(BOTTOM_RADIUS, mu_s) - d_min) / (big_h - d_min)
 
 def scattering_mu_s_index(mu_s):
-    """Index position of mu_s along an nu slice (0 at MU_S_MIN, n_mu_s - 1 at the zenith)."""
+    """Index position of mu_s along an nu slice of the refined axis (0 at MU_S_MIN, SCATTERING_N_MU_S - 1 at the
+    zenith): p, the position on the stored axis of SCATTERING_N_MU_S - (MU_S_SPLIT - 1) SCATTERING_MU_S_CELLS
+    texels, is MU_S_SPLIT p in the first SCATTERING_MU_S_CELLS cells (split into MU_S_SPLIT sub-cells each) and
+    p + (MU_S_SPLIT - 1) SCATTERING_MU_S_CELLS above them (the same at p = SCATTERING_MU_S_CELLS)."""
     a = mu_s_distance_unit(mu_s)
     big_a = mu_s_distance_unit(MU_S_MIN)
     x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0)
     x_a = clamp(1.0 - math.acos(clamp(mu_s, -1.0, 1.0)) / math.acos(MU_S_MIN), 0.0, 1.0)
-    return 0.5 * (x_d + x_a) * (SCATTERING_N_MU_S - 1)
+    cells = SCATTERING_MU_S_CELLS
+    p = 0.5 * (x_d + x_a) * (SCATTERING_N_MU_S - (MU_S_SPLIT - 1) * cells - 1)
+    return MU_S_SPLIT * p if p < cells else p + (MU_S_SPLIT - 1) * cells
 
 def scattering_nu_index(mu, mu_s, nu):
     """Index position of nu (x_nu = 1 - phi / pi, phi the view-sun azimuth)."""
@@ -497,9 +514,11 @@ def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]
     """
     _analytic_phase(atm)
     m = fold_matrix(atm)
-    t = atm.tables
+    # the tables the library's lookups read: the 4D ones refined along the sun zenith, per wavelength, so that the
+    # folded textures read linearly give the fold of the library's read (the refinement is not linear)
+    t = atm.lookup_tables
     solar = atm.parameters.solar_irradiance_at(atm.wavelengths)
-    n_r, n_mu, n_s, n_n = atm.sizes.scattering_shape
+    n_r, n_mu, n_s, n_n = t["single_rayleigh"].shape[:4]
     tau = -np.log(np.maximum(t["transmittance"].astype(np.float64), 1e-30))  # T = 0 -> optical depth 69
     w = np.maximum(np.vstack([m, _y_row(m)]), 0.0) * solar
     w /= w.sum(axis=1, keepdims=True)
@@ -522,7 +541,7 @@ def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]
 def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
     from ..atmosphere.phase import aerosol_phase_kind
     from ..precomputed.compute import density_profiles
-    from ..precomputed.geometry import LOG_LERP_FLOOR
+    from ..precomputed.geometry import LOG_LERP_FLOOR, MU_S_SPLIT, refined_mu_s_count, twilight_cells
     from ..precomputed.sampling import MULTIPLE_LOBE_G, SHADOW_RATIO_MAX, lobe_weight
     from ..sun.disc import solar_disc_solid_angle
 
@@ -532,6 +551,7 @@ def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
     solar = p.solar_irradiance_at(atm.wavelengths)
     albedo = p.ground_albedo_at(atm.wavelengths)
     n_r, n_mu, n_s, n_n = atm.sizes.scattering_shape
+    cells = twilight_cells(p.bottom_radius, p.top_radius, p.mu_s_min, n_s)
     profiles, counts = density_profiles(p)
     n_layers = int(max(counts[0], counts[1]))
     return {
@@ -544,7 +564,8 @@ def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
         "GROUND_ALBEDO": [float(v) for v in (m @ (albedo * solar)) / (m @ solar)],
         "TRANSMITTANCE_N_R": atm.sizes.transmittance_r, "TRANSMITTANCE_N_MU": atm.sizes.transmittance_mu,
         "IRRADIANCE_N_R": atm.sizes.irradiance_r, "IRRADIANCE_N_MU_S": atm.sizes.irradiance_mu_s,
-        "SCATTERING_N_R": n_r, "SCATTERING_N_MU": n_mu, "SCATTERING_N_MU_S": n_s, "SCATTERING_N_NU": n_n,
+        "SCATTERING_N_R": n_r, "SCATTERING_N_MU": n_mu, "SCATTERING_N_MU_S": refined_mu_s_count(n_s, cells),
+        "SCATTERING_N_NU": n_n, "SCATTERING_MU_S_CELLS": cells, "MU_S_SPLIT": MU_S_SPLIT,
         "LOG_LERP_FLOOR": float(LOG_LERP_FLOOR), "SHADOW_RATIO_MAX": float(SHADOW_RATIO_MAX),
         "DENSITY_MAX_LAYERS": n_layers,
         "RAYLEIGH_DENSITY_LAYERS": int(counts[0]), "MIE_DENSITY_LAYERS": int(counts[1]),
@@ -604,7 +625,8 @@ def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
                      axes={"x": "mu_s" if name == "irradiance" else "mu", "y": "r"})
     else:
         entry.update(dimensions=3, width=shape[2], height=shape[1], depth=shape[0],
-                     axes={"x": "i_nu * SCATTERING_N_MU_S + i_mu_s", "y": "mu", "z": "r"})
+                     axes={"x": "i_nu * SCATTERING_N_MU_S + i_mu_s (i_mu_s on the refined sun-zenith axis: "
+                                "scattering_mu_s_index of the mappings)", "y": "mu", "z": "r"})
     return entry
 
 

@@ -1,5 +1,5 @@
 // skyscatter real-time atmosphere: GLSL ES 3.00 functions reading the textures of `skyscatter export-luts`
-// (manifest skyscatter_realtime.json, format "skyscatter-realtime-luts" version 4).
+// (manifest skyscatter_realtime.json, format "skyscatter-realtime-luts" version 11).
 //
 // Reference: E. Bruneton, F. Neyret, Precomputed Atmospheric Scattering, EGSR 2008 [Bruneton2008], equation numbers
 // below are the paper's; the distance-based texture mappings and the horizon blend follow Bruneton's 2017 rewrite
@@ -17,6 +17,9 @@
 //   const vec3 GROUND_ALBEDO                                 Lambertian ground, linear sRGB (sunlight-weighted)
 //   const int TRANSMITTANCE_N_R, TRANSMITTANCE_N_MU, IRRADIANCE_N_R, IRRADIANCE_N_MU_S,
 //             SCATTERING_N_R, SCATTERING_N_MU, SCATTERING_N_MU_S, SCATTERING_N_NU   texel counts
+//   const int SCATTERING_MU_S_CELLS, MU_S_SPLIT     the first SCATTERING_MU_S_CELLS cells of the stored sun-zenith
+//             axis (those that start below the horizon) split into MU_S_SPLIT sub-cells each in the scattering
+//             textures, whose SCATTERING_N_MU_S counts the refined axis (ScatteringMuSIndex)
 //   const float LOG_LERP_FLOOR                               floor of the smaller value's ratio in LogLerpWeight
 //   const float SHADOW_RATIO_MAX                             largest shadow factor in ShadowFactors
 //   const int DENSITY_MAX_LAYERS; const int RAYLEIGH_DENSITY_LAYERS, MIE_DENSITY_LAYERS   layers of the profiles
@@ -203,14 +206,22 @@ float MuSDistanceUnit(float mu_s) {
   return (DistanceToTop(BOTTOM_RADIUS, mu_s) - (TOP_RADIUS - BOTTOM_RADIUS)) / (H - (TOP_RADIUS - BOTTOM_RADIUS));
 }
 
-// Index position of mu_s: the mean of max(1 - a / A, 0) / (1 + a) ([Bruneton2017], A = a(MU_S_MIN)) and
-// 1 - theta_s / theta_max (theta_max = Acos(MU_S_MIN)); 0 at MU_S_MIN, n - 1 at the zenith.
+// Index position of mu_s on the refined sun-zenith axis of the scattering textures (0 at MU_S_MIN,
+// SCATTERING_N_MU_S - 1 at the zenith). On the stored axis (SCATTERING_N_MU_S - (MU_S_SPLIT - 1)
+// SCATTERING_MU_S_CELLS texels) it is p, the mean of max(1 - a / A, 0) / (1 + a) ([Bruneton2017], A = a(MU_S_MIN))
+// and 1 - theta_s / theta_max (theta_max = Acos(MU_S_MIN)); the first SCATTERING_MU_S_CELLS cells are split into
+// MU_S_SPLIT sub-cells (sub-texels from the four-point Lagrange rule in the logarithm, [Abramowitz1964]
+// Eq. 25.2.13, of the stored texels: the twilight sky falls by 2-5 times across one stored cell), so the position
+// is MU_S_SPLIT p there and p + (MU_S_SPLIT - 1) SCATTERING_MU_S_CELLS above (continuous at the split's end;
+// skyscatter.precomputed.geometry.refined_mu_s_cell).
 float ScatteringMuSIndex(float mu_s) {
   float a = MuSDistanceUnit(mu_s);
   float big_a = MuSDistanceUnit(MU_S_MIN);
   float x_d = clamp(max(1.0 - a / big_a, 0.0) / (1.0 + a), 0.0, 1.0);
   float x_a = clamp(1.0 - Acos(clamp(mu_s, -1.0, 1.0)) / Acos(MU_S_MIN), 0.0, 1.0);
-  return 0.5 * (x_d + x_a) * float(SCATTERING_N_MU_S - 1);
+  float cells = float(SCATTERING_MU_S_CELLS);
+  float p = 0.5 * (x_d + x_a) * float(SCATTERING_N_MU_S - (MU_S_SPLIT - 1) * SCATTERING_MU_S_CELLS - 1);
+  return p < cells ? float(MU_S_SPLIT) * p : p + float(MU_S_SPLIT - 1) * cells;
 }
 
 // Index position of nu: x_nu = 1 - phi / pi, phi the azimuth between view and sun,
