@@ -195,11 +195,34 @@ class TableLookups:
         if cached is None:
             lookup = _kernels()
             cells = self._mu_s_cells
-            cached = {name: (lookup.refine_sun_zenith(t, cells) if name in ("single_rayleigh", "single_mie",
-                                                                           "multiple") else t)
-                      for name, t in self.stored.items()}
+            cached = dict(self.stored)
+            for name in ("single_rayleigh", "single_mie", "multiple"):
+                t = self.stored[name]
+                n_r, n_mu, n_s, n_nu, n_l = t.shape
+                out = np.empty((n_r, n_mu, lookup.refined_mu_s_count(n_s, cells), n_nu, n_l), dtype=np.float32)
+                for i in range(n_r):  # one radius layer at a time: no whole decoded table besides the result
+                    lookup.refine_sun_zenith(lookup.radius_layer(t, i)[None], cells, out=out[i:i + 1])
+                cached[name] = out
             self._lookup_tables_cache = cached
         return cached
+
+    def _lookup_layer(self, name: str, i_r: int) -> NDArray[np.float32]:
+        """Radius layer ``i_r`` of the 4D table ``name`` as the lookups read it (refined along the sun zenith,
+        :attr:`lookup_tables`): from those tables when they are built, otherwise refined from the stored layer and
+        kept (the last few), for the observer's many-suns path."""
+        built = getattr(self, "_lookup_tables_cache", None)
+        if built is not None:
+            return built[name][i_r]
+        layers = self.__dict__.setdefault("_lookup_layers", {})
+        key = (name, i_r)
+        layer = layers.get(key)
+        if layer is None:
+            lookup = _kernels()
+            layer = lookup.refine_sun_zenith(lookup.radius_layer(self.stored[name], i_r)[None], self._mu_s_cells)[0]
+            while len(layers) >= 6:
+                layers.pop(next(iter(layers)))
+            layers[key] = layer
+        return layer
 
     def transmittance(self, r: ArrayLike, mu: ArrayLike) -> NDArray[np.float64]:
         """Transmittance from radius ``r`` [m] along direction cosine ``mu`` to the top of the atmosphere, or to
@@ -428,18 +451,15 @@ class TableLookups:
         mu_s = np.clip(s @ pos / r, -1.0, 1.0)
         rc = min(max(r, bottom), top)
         stored = self.stored
-        tables = [stored[name] for name in ("single_rayleigh", "single_mie", "multiple")]
-        n_r, n_s = tables[0].shape[0], tables[0].shape[2]
+        names = ("single_rayleigh", "single_mie", "multiple")
+        n_r, n_s = stored[names[0]].shape[0], stored[names[0]].shape[2]
         cells = self._mu_s_cells
         i_r, w_r, _, _, w_g = lookup.r_mu_s_cell(rc, max(mu_s_min, 0.0), bottom, top, mu_s_min, n_r,
                                                  lookup.refined_mu_s_count(n_s, cells), cells)
-
-        def layer(table: Any, i: int) -> NDArray[np.float32]:
-            # the radius layer refined along the sun zenith, as the other lookups read the tables
-            return lookup.refine_sun_zenith(lookup.radius_layer(table, min(i, n_r - 1))[None], cells)[0]
-
-        lower = [layer(t, i_r) for t in tables]
-        upper = [layer(t, i_r + 1) if max(w_r, w_g) > 0.0 else lo for t, lo in zip(tables, lower, strict=True)]
+        # the radius layers refined along the sun zenith, as the other lookups read the tables
+        lower = [self._lookup_layer(name, min(i_r, n_r - 1)) for name in names]
+        upper = [self._lookup_layer(name, min(i_r + 1, n_r - 1)) if max(w_r, w_g) > 0.0 else lo
+                 for name, lo in zip(names, lower, strict=True)]
         dirs = np.ascontiguousarray(d)
         out = np.empty((s.shape[0], dirs.shape[0], n_l))
         bad = np.zeros((s.shape[0], dirs.shape[0]), dtype=np.bool_)

@@ -383,25 +383,20 @@ def log_cubic_nodes(i_s: int, w_s: float, n_s: int) -> tuple[int, float, float, 
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def log_cubic_value(y0: float, y1: float, y2: float, y3: float, off: int, w: float, c0: float, c1: float, c2: float,
+def log_cubic_value(a: float, b: float, l0: float, l1: float, l2: float, l3: float, c0: float, c1: float, c2: float,
                     c3: float) -> float:
     """The four-point Lagrange formula in the logarithm ([Abramowitz1964] Eq. 25.2.13 applied to ``ln y``):
-    ``y = y0^c0 y1^c1 y2^c2 y3^c3`` with the weights of :func:`log_cubic_nodes`, kept between the read's cell's two
-    values (texels ``off`` and ``off + 1`` of the four, ``off = i_s - j0``), so that it meets both at the cell's ends
-    and never leaves them; the linear interpolation ``a + w (b - a)`` of the cell (``w`` its fraction) where a value
-    is not positive (a texel in the Earth's shadow or below the tables' sun limit, whose logarithm is not finite).
+    ``exp(c0 l0 + c1 l1 + c2 l2 + c3 l3)`` with ``l0 .. l3`` the logarithms of four positive values at consecutive
+    texels and ``c0 .. c3`` the weights of :func:`log_cubic_nodes`, kept between the values ``a``, ``b`` at the
+    ends of the read's cell, so that it meets both at the cell's ends and never leaves them.
 
-    The values of the rendering lookups' sub-texels along the sun zenith in the cells that start below the horizon
+    The values of the rendering lookups' sub-texels along the sun zenith in the cells below the horizon
     (:func:`refined_mu_s_cell`, :func:`.lookup.refine_sun_zenith`): there the sky falls by 2-5 times across one
     cell of the default 32 texels and the slope of its logarithm turns (docs/accuracy.md, "Low sun")."""
-    a = y0 if off == 0 else (y1 if off == 1 else y2)
-    b = y1 if off == 0 else (y2 if off == 1 else y3)
-    if y0 > 0.0 and y1 > 0.0 and y2 > 0.0 and y3 > 0.0:
-        y = math.exp(c0 * math.log(y0) + c1 * math.log(y1) + c2 * math.log(y2) + c3 * math.log(y3))
-        if a < b:
-            return min(max(y, a), b)
-        return min(max(y, b), a)
-    return a + w * (b - a)
+    y = math.exp(c0 * l0 + c1 * l1 + c2 * l2 + c3 * l3)
+    if a < b:
+        return min(max(y, a), b)
+    return min(max(y, b), a)
 
 
 # --------------------------------------------------------------------------------------------- scattering

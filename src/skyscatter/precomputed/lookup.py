@@ -300,37 +300,32 @@ def observer_two_rows(r, bottom, top, n_r):
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _sub_texel(table, i_r, i_m, k, m, i, w, last):
-    """Value of a sub-texel of the 4D ``table`` at the fraction ``w`` of the sun-zenith cell ``i``, ``i + 1`` of
-    the column (``i_r``, ``i_m``, nu ``k``, wavelength ``m``), from the stored texels ``0 .. last`` (those below
-    the horizon; y_i = the texel ``i``): :func:`.geometry.log_cubic_value` over four of them around the cell
-    (:func:`.geometry.log_cubic_nodes` on ``last + 1`` texels) where there are four and they are positive (the
-    default tables: 8 texels below the horizon); otherwise the three-point
-    Lagrange formula in the logarithm over y_i, y_i+1, y_i+2 ([Abramowitz1964] Eq. 25.2.11; a texel below the cell
-    in the Earth's shadow), kept between the cell's two values; the geometric interpolation where only the cell's
-    two are positive; where the cell's lower texel is not positive (a single-scattering column whose sunlit part
-    begins within the cell) the log-linear extrapolation of y_i+1, y_i+2 into the cell, at most the linear read
-    ``w y_i+1`` (the sky falls faster, not slower, towards the shadow: a linear read there was +55 to +105 % against
-    the Monte Carlo, docs/accuracy.md, "Low sun"); linear where nothing else applies."""
-    a = table[i_r, i_m, i, k, m]
-    b = table[i_r, i_m, i + 1, k, m]
-    c = table[i_r, i_m, i + 2, k, m] if i + 2 <= last else 0.0
-    if last >= 3:
-        j0, c0, c1, c2, c3 = log_cubic_nodes(i, w, last + 1)
-        y0 = table[i_r, i_m, j0, k, m]
-        y1 = table[i_r, i_m, j0 + 1, k, m]
-        y2 = table[i_r, i_m, j0 + 2, k, m]
-        y3 = table[i_r, i_m, j0 + 3, k, m]
-        if y0 > 0.0 and y1 > 0.0 and y2 > 0.0 and y3 > 0.0:
-            return log_cubic_value(y0, y1, y2, y3, i - j0, w, c0, c1, c2, c3)
+def _sub_texel(y, lg, k, m, i, w, last, j0, c0, c1, c2, c3):
+    """Value of a sub-texel at the fraction ``w`` of the sun-zenith cell ``i``, ``i + 1`` of one column (nu ``k``,
+    wavelength ``m``) from the stored texels ``0 .. last`` below the horizon, ``y[t, k, m]`` with their logarithms
+    ``lg[t, k, m]`` (any value where ``y`` is not positive): :func:`.geometry.log_cubic_value` over the four texels
+    ``j0 .. j0 + 3`` (weights ``c0 .. c3`` of :func:`.geometry.log_cubic_nodes`; ``j0`` negative where there are
+    fewer than four) where they are positive; otherwise the three-point Lagrange formula in the logarithm over the
+    texels ``i .. i + 2`` ([Abramowitz1964] Eq. 25.2.11; a texel below the cell in the Earth's shadow), kept
+    between the cell's two values; the geometric interpolation where only the cell's two are positive; where the
+    cell's lower texel is not positive (a single-scattering column whose sunlit part begins within the cell) the
+    log-linear extrapolation of the texels ``i + 1``, ``i + 2`` into the cell, at most the linear read
+    ``w y[i + 1]`` (the sky falls faster, not slower, towards the shadow: a linear read there was +55 to +105 %
+    against the Monte Carlo, docs/accuracy.md, "Low sun"); linear where nothing else applies."""
+    a = y[i, k, m]
+    b = y[i + 1, k, m]
+    c = y[i + 2, k, m] if i + 2 <= last else 0.0
+    if j0 >= 0 and y[j0, k, m] > 0.0 and y[j0 + 1, k, m] > 0.0 and y[j0 + 2, k, m] > 0.0 and y[j0 + 3, k, m] > 0.0:
+        return log_cubic_value(a, b, lg[j0, k, m], lg[j0 + 1, k, m], lg[j0 + 2, k, m], lg[j0 + 3, k, m],
+                               c0, c1, c2, c3)
     if a > 0.0 and b > 0.0:
         if c > 0.0:
-            y = math.exp(0.5 * (w - 1.0) * (w - 2.0) * math.log(a) - w * (w - 2.0) * math.log(b)
-                         + 0.5 * w * (w - 1.0) * math.log(c))
-            return min(max(y, min(a, b)), max(a, b))
-        return math.exp((1.0 - w) * math.log(a) + w * math.log(b))
+            v = math.exp(0.5 * (w - 1.0) * (w - 2.0) * lg[i, k, m] - w * (w - 2.0) * lg[i + 1, k, m]
+                         + 0.5 * w * (w - 1.0) * lg[i + 2, k, m])
+            return min(max(v, min(a, b)), max(a, b))
+        return math.exp((1.0 - w) * lg[i, k, m] + w * lg[i + 1, k, m])
     if b > 0.0 and c > b:
-        return min(w * b, b * math.exp((1.0 - w) * (math.log(b) - math.log(c))))
+        return min(w * b, b * math.exp((1.0 - w) * (lg[i + 1, k, m] - lg[i + 2, k, m])))
     return a + w * (b - a)
 
 
@@ -340,13 +335,23 @@ def refine_mu_s_kernel(table, cells, j_lo, out, start, stop):
     n_wavelengths) with its first ``cells`` cells split into :data:`.geometry.MU_S_SPLIT` sub-cells, into ``out``
     (n_r, n_mu, n_columns, n_nu, n_wavelengths), rows ``start..stop`` of the flattened (r, mu) axes: a stored texel
     is copied; a sub-texel at the fraction ``w`` of its cell holds :func:`_sub_texel` of the texels ``0 .. cells``
-    (below the horizon), each (nu, wavelength) its own."""
+    (below the horizon), each (nu, wavelength) its own. The logarithms of those texels are taken once per row."""
     n_mu, n_nu, n_l = table.shape[1], table.shape[3], table.shape[4]
     n_out = out.shape[2]
     split = MU_S_SPLIT * cells
+    y = np.empty((cells + 1, n_nu, n_l))
+    lg = np.empty((cells + 1, n_nu, n_l))
+    need = j_lo < split
     for q in range(start, stop):
         i_r = q // n_mu
         i_m = q % n_mu
+        if need:
+            for t in range(cells + 1):
+                for k in range(n_nu):
+                    for m in range(n_l):
+                        v = np.float64(table[i_r, i_m, t, k, m])
+                        y[t, k, m] = v
+                        lg[t, k, m] = math.log(v) if v > 0.0 else 0.0
         for jj in range(n_out):
             j = j_lo + jj
             if j >= split or j % MU_S_SPLIT == 0:
@@ -357,9 +362,13 @@ def refine_mu_s_kernel(table, cells, j_lo, out, start, stop):
                 continue
             i = j // MU_S_SPLIT
             w = (j % MU_S_SPLIT) / MU_S_SPLIT
+            if cells >= 3:
+                j0, c0, c1, c2, c3 = log_cubic_nodes(i, w, cells + 1)
+            else:
+                j0, c0, c1, c2, c3 = -1, 0.0, 0.0, 0.0, 0.0
             for k in range(n_nu):
                 for m in range(n_l):
-                    out[i_r, i_m, jj, k, m] = _sub_texel(table, i_r, i_m, k, m, i, w, cells)
+                    out[i_r, i_m, jj, k, m] = _sub_texel(y, lg, k, m, i, w, cells, j0, c0, c1, c2, c3)
 
 
 def radius_layer(table, i_r):
@@ -368,13 +377,14 @@ def radius_layer(table, i_r):
     return table.radius_layer(i_r) if hasattr(table, "radius_layer") else np.asarray(table[i_r], dtype=np.float32)
 
 
-def refine_sun_zenith(table, cells, columns=None):
+def refine_sun_zenith(table, cells, columns=None, out=None):
     """A 4D scattering table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths; float32, or a :class:`.storage.HalfTable`,
     decoded) refined along the sun zenith for the rendering lookups: its first ``cells`` cells (those that start
     below the horizon, :func:`.geometry.twilight_cells`) split into :data:`.geometry.MU_S_SPLIT` sub-cells
     (:func:`refine_mu_s_kernel`), float32, read with :func:`.geometry.refined_mu_s_cell`; ``columns`` (start,
-    stop), if given, only those columns of the refined axis. The stored texels keep their values, so a read above
-    the split cells is the stored table's to the bit.
+    stop), if given, only those columns of the refined axis; written into ``out`` if given (float32, C-contiguous,
+    of the result's shape). The stored texels keep their values, so a read above the split cells is the stored
+    table's to the bit.
 
     Why: in twilight the sky falls by 2-5 times across one cell of the default 32 sun-zenith texels and the slope
     of its logarithm turns within a few cells, so no linear read between two texels follows it (+23 to +34 %
@@ -388,7 +398,11 @@ def refine_sun_zenith(table, cells, columns=None):
     lo, hi = (0, n_f) if columns is None else (int(columns[0]), int(columns[1]))
     if not 0 <= lo < hi <= n_f:
         raise ValueError(f"columns {columns} outside the refined axis of {n_f} texels")
-    out = np.empty((n_r, n_mu, hi - lo, n_nu, n_l), dtype=np.float32)
+    shape = (n_r, n_mu, hi - lo, n_nu, n_l)
+    if out is None:
+        out = np.empty(shape, dtype=np.float32)
+    elif out.shape != shape or out.dtype != np.float32 or not out.flags.c_contiguous:
+        raise ValueError(f"out must be a C-contiguous float32 array of shape {shape}")
     parallel_for(refine_mu_s_kernel, n_r * n_mu, values, int(cells), lo, out, grain=64)
     return out
 
@@ -426,12 +440,16 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     half = n_mu // 2
     # within the cell touching the ground each row's share apart (out[0], out[1]), read at its own mu coordinate
     parts = (0, 1) if observer_two_rows(r, bottom, top, n_r) else (None,)
+    split = MU_S_SPLIT * cells
     for j, table in enumerate((single_rayleigh, single_mie, multiple)):
-        # the observer's two radius rows, refined along the sun zenith in the two columns read
-        rows2 = refine_sun_zenith(np.stack([radius_layer(table, min(i, n_r - 1)) for i in (i_r, i_r + 1)]), cells,
-                                  (i_s, i_s + 2))
+        layers = [radius_layer(table, min(i, n_r - 1)) for i in (i_r, i_r + 1)]
+        if i_s >= split:  # above the split cells: the stored columns themselves
+            s0 = i_s - (MU_S_SPLIT - 1) * cells
+            rows2 = [layer[:, s0:s0 + 2] for layer in layers]
+        else:  # the observer's two radius rows refined along the sun zenith, in the two columns read
+            rows2 = list(refine_sun_zenith(np.stack(layers), cells, (i_s, i_s + 2)))
         for part in parts:
-            acc = np.zeros((n_mu, n_nu, rows2.shape[-1]))
+            acc = np.zeros((n_mu, n_nu, rows2[0].shape[-1]))
             # the ground half of the mu axis with its own radius weight (.geometry.scattering_r_mu_coord)
             for rows, w in ((slice(0, half), w_g), (slice(half, n_mu), w_r)):
                 for a, wa in ((0, 1.0 - w), (1, w)):
@@ -439,7 +457,7 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
                         continue
                     for c, wc in ((0, 1.0 - w_s), (1, w_s)):
                         if wa * wc > 0.0:
-                            acc[rows] += (wa * wc) * rows2[a, rows, c, :, :]
+                            acc[rows] += (wa * wc) * rows2[a][rows, c, :, :]
             k = 0 if part is None else part
             out[k, :, :, :n_c, j] = acc @ proj.T
             out[k, :, :, n_c, j] = acc[:, :, acc.shape[-1] // 2]
