@@ -14,8 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere, TableSizes
-from skyscatter.precomputed import geometry, lookup
+from skyscatter.precomputed import AtmosphereParameters, PrecomputedAtmosphere, TableSizes, geometry, lookup
 from skyscatter.precomputed.geometry import MU_S_SPLIT, refined_mu_s_cell, refined_mu_s_count, twilight_cells
 from skyscatter.precomputed.kernels import mu_s_texels
 
