@@ -54,10 +54,11 @@ VIEWS = {
                          fov=90), (192, 108)),
     "ground-sun-4": (dict(sun_elevation=-4, sun_azimuth=180, altitude=0, projection=0, heading=180, pitch=5,
                           fov=90), (192, 108)),
-    # twilight between the stored sun-zenith texels (SIZES' 8: the stored axis at 0.80, the refined one at 2.41,
-    # mid-way between a sub-texel and the next stored texel; -4 deg reads at 2.87, next to the stored texel): the
-    # sky only (0.6-59 deg elevation), every term of which folds exactly (the ground's light carries the sky
-    # irradiance's fold, ground-sun-4)
+    # twilight between the stored sun-zenith texels: SIZES' 8 have 2 below the horizon (-12 and -3.73 deg), so 1
+    # cell is split (geometry.twilight_cells) and the refined axis has 8 + 2 = 10 texels; -5 deg reads within the
+    # split cell at 0.80 of the stored axis, 2.41 of the refined one (between sub-texel 2 and the stored texel 1 at
+    # 3; -4 deg at 0.96 and 2.87, next to the stored texel; _split_position): the sky only (0.6-59 deg elevation),
+    # every term of which folds exactly (the ground's light carries the sky irradiance's fold, ground-sun-4)
     "sky-sun-5": (dict(sun_elevation=-5, sun_azimuth=180, altitude=0, projection=0, heading=170, pitch=30,
                        fov=90), (192, 108)),
     "10km-sun30": (dict(sun_elevation=30, sun_azimuth=200, altitude=10e3, projection=0, heading=150, pitch=-10,
@@ -159,14 +160,29 @@ def _errors(gpu, ref, params, size, atm):
     return e[away]
 
 
+def _split_position(atm, elevation):
+    """(position on the stored sun-zenith axis, on the refined one, the split cells) of a sun ``elevation`` [deg]."""
+    from skyscatter.precomputed import geometry
+
+    p = atm.parameters
+    n_s = atm.sizes.scattering_mu_s
+    mu_s = math.sin(math.radians(elevation))
+    stored = geometry.scattering_mu_s_coord(mu_s, p.bottom_radius, p.top_radius, p.mu_s_min, n_s)
+    cells = geometry.twilight_cells(p.bottom_radius, p.top_radius, p.mu_s_min, n_s)
+    i, w = geometry.refined_mu_s_cell(stored, geometry.refined_mu_s_count(n_s, cells), cells)
+    return stored, i + w, cells
+
+
 @pytest.mark.parametrize("name", list(VIEWS))
 def test_browser_renders_the_python_image(name, viewer, atm):
     params, size = VIEWS[name]
     gpu = _gpu_image(viewer, params, size)
     ref = _python_image(atm, params, size)
     assert np.isfinite(gpu).all() and ref.max() > 0
-    if name.startswith("sky-"):  # a view of the sky alone
+    if name.startswith("sky-"):  # a view of the sky alone, the sun within a split cell between the stored texels
         assert (_directions(params, size, atm.parameters.bottom_radius)[..., 2] > 0.0).all(), name
+        stored, fine, cells = _split_position(atm, params["sun_elevation"])
+        assert stored < cells and 0.1 < stored % 1.0 < 0.9 and 0.1 < fine % 1.0 < 0.9, (stored, fine, cells)
     e = _errors(gpu, ref, params, size, atm)
     rms, worst = float(np.sqrt(np.mean(e**2))), float(e.max())
     ARTEFACTS.mkdir(parents=True, exist_ok=True)
@@ -239,8 +255,10 @@ def test_page_says_what_is_wrong_instead_of_a_black_canvas(how, words, browser, 
 
 
 def _cases(atm, rng, n):
-    """Cameras (2 m, a person's eye, and 2 km), unit directions and suns (30, 4, -4, -5 deg: -5 between the stored
-    sun-zenith texels, mid-way in a sub-cell of the refined axis) for the library probes."""
+    """Cameras (2 m, a person's eye, and 2 km), unit directions and suns (30, 4, -4, -5 deg: -4 and -5 within the
+    split sun-zenith cell of SIZES' 8 texels, -12 to -3.73 deg, between its stored texels: at 0.96 and 0.80 of the
+    stored axis, 2.87 and 2.41 of the refined one of 10, both between sub-texel 2 and the stored texel 1 at 3;
+    _split_position) for the library probes."""
     bottom = atm.parameters.bottom_radius
     cams = np.zeros((n, 3))
     cams[:, 2] = bottom + rng.choice([2.0, 2000.0], n)
@@ -268,6 +286,9 @@ def test_library_sky_and_irradiance_functions_match_the_python_lookups(viewer, a
     e = np.abs(sky - want).max(-1) / (np.abs(want).max(-1) + 1e-30)
     night = np.einsum("ij,ij->i", cams, suns) < 0.0  # the sun below the horizon: the refined sun-zenith cells
     assert night.sum() >= 10, night.sum()
+    for el in (-4.0, -5.0):  # both twilight suns read within the split cell, between two stored texels
+        stored, fine, cells = _split_position(atm, el)
+        assert stored < cells and 0.0 < stored % 1.0 and 0.0 < fine % 1.0, (el, stored, fine, cells)
     ARTEFACTS.mkdir(parents=True, exist_ok=True)
     with open(ARTEFACTS / "figures.jsonl", "a", encoding="utf-8") as fh:
         fh.write(json.dumps({"sky_probes": n, "sky_median": float(np.median(e)), "sky_worst": float(e.max()),

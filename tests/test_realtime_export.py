@@ -62,7 +62,8 @@ def test_manifest_mappings_and_textures_give_the_spectral_lookup(atm, luts):
     shadowed = 0
     for alt in (0.0, 20.0, 1500.0, 12e3, 45e3):  # 20 m: the cell touching the ground (rows read at their own mu)
         pos = np.array([0.0, 0.0, p.bottom_radius + alt])
-        # three random suns and two in twilight (-3 and -6 deg: the observer in the Earth's shadow below 12 km)
+        # three random suns and two in twilight (-3 and -6 deg: the observer in the Earth's shadow below 12 km;
+        # both within SMALL's split sun-zenith cell, at 0.80 and 0.47 of the stored axis)
         for zenith in (*rng.uniform(0.0, 1.75, 3), np.radians(93.0), np.radians(96.0)):
             sun = direction_from_angles(zenith, rng.uniform(0, 2 * np.pi))
             shadowed += ns["in_earth_shadow"](float(pos[2]), max(float(sun[2]), ns["MU_S_MIN"]))
@@ -80,10 +81,15 @@ def test_manifest_mappings_and_textures_give_the_spectral_lookup(atm, luts):
 
 
 def test_twilight_reads_between_the_stored_sun_zenith_texels_give_the_lookup(atm, luts):
-    """With the sun 3.5 and 5.5 deg below the horizon the read lies within a split sun-zenith cell, between the
-    stored texels (5.5 deg: mid-cell) and within two different sub-cells: the textures hold the lookups' refined
+    """With the sun 3.5 and 5.5 deg below the horizon the read lies within the split sun-zenith cell, between the
+    stored texels and within two different sub-cells: SMALL's 6 texels have 2 below the horizon (-12 and -1.41
+    deg), so 1 cell wholly below it is split (geometry.twilight_cells; the sub-texels the geometric interpolation of
+    its two texels, too few below the horizon for the four-point rule) and the refined axis has 6 + 2 = 8 texels;
+    -3.5 deg reads at 0.74 of the stored axis, 2.22 of the refined one (between sub-texel 2 and the stored texel 1
+    at 3), -5.5 deg at 0.52 (mid-cell), 1.57 (between sub-texels 1 and 2). The textures hold the lookups' refined
     tables folded, and the mappings' position on the refined axis is the lookups', so the GPU read gives the
-    spectral lookup to rounding there too (a linear read between the stored texels is off by far more:
+    spectral lookup to rounding there too (measured worst 2.6e-7; the stored axis' textures, version 10's: 36; a
+    linear read between the stored texels is off by far more:
     test_scattering_alpha_is_the_middle_wavelength_and_its_weight_the_lookups)."""
     from skyscatter.precomputed.geometry import MU_S_SPLIT, scattering_mu_s_coord, twilight_cells
 
@@ -97,7 +103,7 @@ def test_twilight_reads_between_the_stored_sun_zenith_texels_give_the_lookup(atm
     assert ns["SCATTERING_MU_S_CELLS"] == cells and ns["MU_S_SPLIT"] == MU_S_SPLIT
     rng = np.random.default_rng(17)
     worst = 0.0
-    for el in (-3.5, -5.5):  # the SMALL tables' 6 texels: at 2.22 and 1.57 of the refined axis
+    for el in (-3.5, -5.5):  # SMALL's 6 texels, 1 split cell: at 2.22 and 1.57 of the refined axis of 8
         sun = direction_from_angles(np.radians(90.0 - el), 0.4)
         stored = scattering_mu_s_coord(float(sun[2]), p.bottom_radius, p.top_radius, p.mu_s_min, n_s)
         fine = ns["scattering_mu_s_index"](float(sun[2]))
@@ -149,7 +155,8 @@ def test_scattering_alpha_is_the_middle_wavelength_and_its_weight_the_lookups(at
         np.testing.assert_array_equal(alpha, atm.lookup_tables[key][..., k])
         np.testing.assert_array_equal(alpha[:, :, kept], np.asarray(atm.tables[key][..., k], dtype=np.float32))
         # the sub-texels are not the stored axis' linear read: the twilight sky is not linear along the sun zenith
-        # (an export of the stored tables read at the refined positions would be off by this much)
+        # (an export of the stored tables read at the refined positions would be off by this much; SMALL's split
+        # cell, -12 to -1.41 deg, geometric between its two texels: below the linear read by up to 100 %)
         table = np.asarray(atm.tables[key][..., k], dtype=np.float64)
         lin = table[:, :, :cells] + (table[:, :, 1:cells + 1] - table[:, :, :cells]) / split
         sub = alpha[:, :, 1:split * cells:split]
