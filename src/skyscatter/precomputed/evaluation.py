@@ -189,7 +189,7 @@ class TableLookups:
     def lookup_tables(self) -> dict[str, NDArray[np.float32]]:
         """The tables the per-ray lookups read (the general sky and the aerial perspective): :attr:`tables` with
         the three 4D scattering tables refined along the sun zenith in twilight (:func:`.lookup.refine_sun_zenith`;
-        48 sun-zenith texels for the stored 32), float32, built on first use from the stored tables one at a time.
+        46 sun-zenith texels for the stored 32), float32, built on first use from the stored tables one at a time.
         The observer's lookups refine only the two radius rows they read, to the same values."""
         cached = getattr(self, "_lookup_tables_cache", None)
         if cached is None:

@@ -609,8 +609,8 @@ def scattering_mu_s_coord(mu_s: float, bottom: float, top: float, mu_s_min: floa
                                    n_mu_s)
 
 
-#: Sub-cells into which the rendering lookups split each sun-zenith cell of the 4D tables that starts below the
-#: horizon (:func:`twilight_cells`): the lookups read tables refined along the sun zenith
+#: Sub-cells into which the rendering lookups split each sun-zenith cell of the 4D tables that lies wholly below
+#: the horizon (:func:`twilight_cells`): the lookups read tables refined along the sun zenith
 #: (:func:`.lookup.refine_sun_zenith`), whose sub-texels hold :func:`log_cubic_value` of the stored texels, linearly
 #: between them (docs/accuracy.md, "Low sun").
 MU_S_SPLIT = 3

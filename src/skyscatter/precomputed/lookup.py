@@ -379,8 +379,8 @@ def radius_layer(table, i_r):
 
 def refine_sun_zenith(table, cells, columns=None, out=None):
     """A 4D scattering table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths; float32, or a :class:`.storage.HalfTable`,
-    decoded) refined along the sun zenith for the rendering lookups: its first ``cells`` cells (those that start
-    below the horizon, :func:`.geometry.twilight_cells`) split into :data:`.geometry.MU_S_SPLIT` sub-cells
+    decoded) refined along the sun zenith for the rendering lookups: its first ``cells`` cells (those wholly below
+    the horizon, :func:`.geometry.twilight_cells`) split into :data:`.geometry.MU_S_SPLIT` sub-cells
     (:func:`refine_mu_s_kernel`), float32, read with :func:`.geometry.refined_mu_s_cell`; ``columns`` (start,
     stop), if given, only those columns of the refined axis; written into ``out`` if given (float32, C-contiguous,
     of the result's shape). The stored texels keep their values, so a read above the split cells is the stored
