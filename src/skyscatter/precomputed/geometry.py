@@ -619,9 +619,9 @@ MU_S_SPLIT = 3
 def twilight_cells(bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> int:
     """Number of sun-zenith cells of a 4D table of ``n_mu_s`` texels that lie wholly below the horizon (both texels
     at ``mu_s < 0``: 7 of the default 32, from -12 to -0.43 deg), which the rendering lookups split into
-    :data:`MU_S_SPLIT` sub-cells from the texels below the horizon only (texels ``0 .. cells``; the four-point
-    rule where there are four, :func:`.lookup.refine_sun_zenith`); 0 where fewer than two texels lie below the
-    horizon. The cell across the horizon is not split:
+    :data:`MU_S_SPLIT` sub-cells from the texels below the horizon and the first above it (texels ``0 .. cells +
+    1``; the four-point rule where there are four, :func:`.lookup.refine_sun_zenith`); 0 where fewer than two texels
+    lie below the horizon. The cell across the horizon is not split:
     there the sun rises over the ground's own horizon, a kink in every column that the four-point rule does not
     follow (measured: 29 % from tables of three times the texels, grazing views away from the sun, where the
     linear read is within 3 %; docs/accuracy.md, "Low sun"). ``bottom``, ``top``: the planet's and the

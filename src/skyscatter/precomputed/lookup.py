@@ -302,7 +302,7 @@ def observer_two_rows(r, bottom, top, n_r):
 @helper(fastmath=CONTRACT_ARCP)
 def _sub_texel(y, lg, k, m, i, w, last, j0, c0, c1, c2, c3):
     """Value of a sub-texel at the fraction ``w`` of the sun-zenith cell ``i``, ``i + 1`` of one column (nu ``k``,
-    wavelength ``m``) from the stored texels ``0 .. last`` below the horizon, ``y[t, k, m]`` with their logarithms
+    wavelength ``m``) from the stored texels ``0 .. last``, ``y[t, k, m]`` with their logarithms
     ``lg[t, k, m]`` (any value where ``y`` is not positive): :func:`.geometry.log_cubic_value` over the four texels
     ``j0 .. j0 + 3`` (weights ``c0 .. c3`` of :func:`.geometry.log_cubic_nodes`; ``j0`` negative where there are
     fewer than four) where they are positive; otherwise the three-point Lagrange formula in the logarithm over the
@@ -334,19 +334,23 @@ def refine_mu_s_kernel(table, cells, j_lo, out, start, stop):
     """Columns ``j_lo .. j_lo + out.shape[2] - 1`` of the sun-zenith axis of ``table`` (n_r, n_mu, n_mu_s, n_nu,
     n_wavelengths) with its first ``cells`` cells split into :data:`.geometry.MU_S_SPLIT` sub-cells, into ``out``
     (n_r, n_mu, n_columns, n_nu, n_wavelengths), rows ``start..stop`` of the flattened (r, mu) axes: a stored texel
-    is copied; a sub-texel at the fraction ``w`` of its cell holds :func:`_sub_texel` of the texels ``0 .. cells``
-    (below the horizon), each (nu, wavelength) its own. The logarithms of those texels are taken once per row."""
+    is copied; a sub-texel at the fraction ``w`` of its cell holds :func:`_sub_texel` of the texels ``0 .. cells +
+    1`` (those below the horizon and the first above it: in the last split cell a stencil that ends there was 2-3
+    times further from tables of 94 texels, 90th percentile, than one that takes the next texel; the cell across the
+    horizon itself is not split), each (nu, wavelength) its own. The logarithms of those texels are taken once per
+    row."""
     n_mu, n_nu, n_l = table.shape[1], table.shape[3], table.shape[4]
     n_out = out.shape[2]
     split = MU_S_SPLIT * cells
-    y = np.empty((cells + 1, n_nu, n_l))
-    lg = np.empty((cells + 1, n_nu, n_l))
+    last = min(cells + 1, table.shape[2] - 1)  # the stencil's texels: up to the first above the horizon
+    y = np.empty((last + 1, n_nu, n_l))
+    lg = np.empty((last + 1, n_nu, n_l))
     need = j_lo < split
     for q in range(start, stop):
         i_r = q // n_mu
         i_m = q % n_mu
         if need:
-            for t in range(cells + 1):
+            for t in range(last + 1):
                 for k in range(n_nu):
                     for m in range(n_l):
                         v = np.float64(table[i_r, i_m, t, k, m])
@@ -362,13 +366,13 @@ def refine_mu_s_kernel(table, cells, j_lo, out, start, stop):
                 continue
             i = j // MU_S_SPLIT
             w = (j % MU_S_SPLIT) / MU_S_SPLIT
-            if cells >= 3:
-                j0, c0, c1, c2, c3 = log_cubic_nodes(i, w, cells + 1)
+            if last >= 3:
+                j0, c0, c1, c2, c3 = log_cubic_nodes(i, w, last + 1)
             else:
                 j0, c0, c1, c2, c3 = -1, 0.0, 0.0, 0.0, 0.0
             for k in range(n_nu):
                 for m in range(n_l):
-                    out[i_r, i_m, jj, k, m] = _sub_texel(y, lg, k, m, i, w, cells, j0, c0, c1, c2, c3)
+                    out[i_r, i_m, jj, k, m] = _sub_texel(y, lg, k, m, i, w, last, j0, c0, c1, c2, c3)
 
 
 def radius_layer(table, i_r):
