@@ -26,6 +26,7 @@ import json
 import math
 import os
 import time
+import timeit
 
 import numpy as np
 
@@ -33,12 +34,8 @@ from skyscatter.precomputed import cached_atmosphere
 
 
 def cpu(fn, repeat: int) -> float:
-    best = math.inf
-    for _ in range(repeat):
-        t0 = time.process_time()
-        fn()
-        best = min(best, time.process_time() - t0)
-    return best
+    """Best CPU time [s] (all threads) of ``repeat`` calls."""
+    return min(timeit.repeat(fn, number=1, repeat=repeat, timer=time.process_time))
 
 
 def resident_mib() -> float:
