@@ -206,10 +206,15 @@ class TableLookups:
             self._lookup_tables_cache = cached
         return cached
 
+    def _slice_layer(self, j: int, i_r: int) -> NDArray[np.float32]:
+        """:meth:`_lookup_layer` of the 4D table ``j`` (0 single Rayleigh, 1 single Mie, 2 multiple), for
+        :func:`.lookup.observer_slices`."""
+        return self._lookup_layer(("single_rayleigh", "single_mie", "multiple")[j], i_r)
+
     def _lookup_layer(self, name: str, i_r: int) -> NDArray[np.float32]:
         """Radius layer ``i_r`` of the 4D table ``name`` as the lookups read it (refined along the sun zenith,
         :attr:`lookup_tables`): from those tables when they are built, otherwise refined from the stored layer and
-        kept (the last few), for the observer's many-suns path."""
+        kept (the last six: the two radius rows of one observer's three tables), for the observer's paths."""
         built = getattr(self, "_lookup_tables_cache", None)
         if built is not None:
             return built[name][i_r]
@@ -387,7 +392,7 @@ class TableLookups:
         stored = self.stored
         slices = lookup.observer_slices(stored["single_rayleigh"], stored["single_mie"], stored["multiple"],
                                         min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, self._mu_s_cells,
-                                        projection)
+                                        projection, layers=self._slice_layer)
         out = np.empty((dirs.shape[0], projection.shape[0]))
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.

@@ -346,11 +346,15 @@ def refine_mu_s_kernel(table, cells, j_lo, out, start, stop):
     y = np.empty((last + 1, n_nu, n_l))
     lg = np.empty((last + 1, n_nu, n_l))
     need = j_lo < split
+    # the stored texels the asked columns' stencils and fall-backs read (all of them for the whole axis)
+    i_hi = min((j_lo + n_out - 1) // MU_S_SPLIT, cells - 1)
+    t_lo = max(0, min(j_lo // MU_S_SPLIT - 1, last - 3))
+    t_hi = min(last, i_hi + 3)
     for q in range(start, stop):
         i_r = q // n_mu
         i_m = q % n_mu
         if need:
-            for t in range(last + 1):
+            for t in range(t_lo, t_hi + 1):
                 for k in range(n_nu):
                     for m in range(n_l):
                         v = np.float64(table[i_r, i_m, t, k, m])
@@ -411,7 +415,8 @@ def refine_sun_zenith(table, cells, columns=None, out=None):
     return out
 
 
-def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, cells, projection):
+def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, cells, projection,
+                    layers=None):
     """The 4D inscattering tables at one observer radius ``r`` [m] and sun zenith cosine ``mu_s``: an array
     (2, n_mu, n_nu, C + 1, 4) holding, for each channel, single Rayleigh, single Mie and multiple scattering over the
     view axes (and a zero, so that each texel's three values are one aligned 32-byte load), each
@@ -422,7 +427,9 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     the shares of the lower and the upper row, which the lookup reads each at its own ``mu`` coordinate (the ground
     half of the ``mu`` axis at the same coordinate in both). The tables are the stored ones; their two radius rows
     around the observer are refined along the sun zenith here (:func:`refine_sun_zenith`, ``cells`` split cells,
-    only the two columns read), as the other lookups read the whole tables refined.
+    only the two columns read), as the other lookups read the whole tables refined; or, with ``layers`` (a function
+    of the table's index, 0 single Rayleigh, 1 single Mie, 2 multiple, and a radius index), its columns read from
+    the refined radius layers it returns (n_mu, n_mu_s refined, n_nu, n_wavelengths), which a caller may keep.
 
     The lookup is linear in ``r``, ``mu`` and ``mu_s``, so fixing the ``r`` and ``mu_s`` weights once and
     interpolating the slice in (``mu``, ``nu``) gives the same values as the 4D lookup; its weight along ``nu`` is
@@ -446,12 +453,14 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     parts = (0, 1) if observer_two_rows(r, bottom, top, n_r) else (None,)
     split = MU_S_SPLIT * cells
     for j, table in enumerate((single_rayleigh, single_mie, multiple)):
-        layers = [radius_layer(table, min(i, n_r - 1)) for i in (i_r, i_r + 1)]
-        if i_s >= split:  # above the split cells: the stored columns themselves
+        rows = [min(i, n_r - 1) for i in (i_r, i_r + 1)]
+        if layers is not None:  # the caller's refined radius layers
+            rows2 = [layers(j, i)[:, i_s:i_s + 2] for i in rows]
+        elif i_s >= split:  # above the split cells: the stored columns themselves
             s0 = i_s - (MU_S_SPLIT - 1) * cells
-            rows2 = [layer[:, s0:s0 + 2] for layer in layers]
+            rows2 = [radius_layer(table, i)[:, s0:s0 + 2] for i in rows]
         else:  # the observer's two radius rows refined along the sun zenith, in the two columns read
-            rows2 = list(refine_sun_zenith(np.stack(layers), cells, (i_s, i_s + 2)))
+            rows2 = [refine_sun_zenith(radius_layer(table, i)[None], cells, (i_s, i_s + 2))[0] for i in rows]
         for part in parts:
             acc = np.zeros((n_mu, n_nu, rows2[0].shape[-1]))
             # the ground half of the mu axis with its own radius weight (.geometry.scattering_r_mu_coord)
