@@ -191,3 +191,44 @@ def test_daytime_lookups_unchanged_and_twilight_refined(coarse_and_fine):
         assert np.all(refined > 0.0)
         assert np.array_equal(refined, aerial(sun, atm.tables, 0)) == equal
     assert atm.lookup_tables["multiple"].shape[2] == refined_mu_s_count(32, 7)
+
+
+def test_refined_caches_are_built_once_across_threads(coarse_and_fine):
+    """The refined tables and radius layers are built on first use; eight threads asking at once (per-ray sky,
+    aerial perspective and the observer's sky, twilight and day) get what one thread gets, to the bit."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    atm = coarse_and_fine[0]
+    rng = np.random.default_rng(9)
+    d = rng.normal(size=(200, 3))
+    d[:, 2] = np.abs(d[:, 2]) + 0.05
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    ground = np.array([0.0, 0.0, RB + 2.0])
+    per_ray = np.broadcast_to(ground, d.shape)
+
+    def calls(per_ray_too):
+        out = []
+        for elev in (-5.0, -3.3, 12.0):
+            e = math.radians(elev)
+            sun = np.array([0.0, math.cos(e), math.sin(e)])
+            out.append(atm.sky_luminance(ground, d, sun))
+            if per_ray_too:
+                out.append(atm.sky_radiance(per_ray, d, sun))
+                out.append(atm.aerial_perspective(per_ray, per_ray + 3e3 * d, sun)[1])
+        return out
+
+    def fresh():
+        for name in ("_lookup_tables_cache", "_lookup_layers"):
+            atm.__dict__.pop(name, None)
+
+    for per_ray_too in (False, True):  # the observer's layers alone, then with the whole refined tables
+        fresh()
+        want = calls(per_ray_too)
+        fresh()
+        with ThreadPoolExecutor(8) as pool:
+            got = list(pool.map(lambda _, p=per_ray_too: calls(p), range(8)))
+        for g in got:
+            for a, b in zip(g, want, strict=True):
+                assert np.array_equal(a, b)
+        if not per_ray_too:
+            assert 1 <= len(atm.__dict__["_lookup_layers"]) <= 6 and "_lookup_tables_cache" not in atm.__dict__

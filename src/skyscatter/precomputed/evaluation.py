@@ -13,6 +13,7 @@ Reference: [Bruneton2008].
 
 from __future__ import annotations
 
+import threading
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
@@ -192,7 +193,12 @@ class TableLookups:
         46 sun-zenith texels for the stored 32), float32, built on first use from the stored tables one at a time.
         The observer's lookups refine only the two radius rows they read, to the same values."""
         cached = getattr(self, "_lookup_tables_cache", None)
-        if cached is None:
+        if cached is not None:
+            return cached
+        with self._refine_lock:  # one build, when threads ask at once
+            cached = getattr(self, "_lookup_tables_cache", None)
+            if cached is not None:
+                return cached
             lookup = _kernels()
             cells = self._mu_s_cells
             cached = dict(self.stored)
@@ -204,7 +210,12 @@ class TableLookups:
                     lookup.refine_sun_zenith(lookup.radius_layer(t, i)[None], cells, out=out[i:i + 1])
                 cached[name] = out
             self._lookup_tables_cache = cached
-        return cached
+            return cached
+
+    @property
+    def _refine_lock(self) -> threading.Lock:
+        """The lock of the refined tables' and layers' caches (dict.setdefault is atomic: one lock per object)."""
+        return self.__dict__.setdefault("_refine_lock_obj", threading.Lock())
 
     def _slice_layer(self, j: int, i_r: int) -> NDArray[np.float32]:
         """:meth:`_lookup_layer` of the 4D table ``j`` (0 single Rayleigh, 1 single Mie, 2 multiple), for
@@ -222,11 +233,15 @@ class TableLookups:
         key = (name, i_r)
         layer = layers.get(key)
         if layer is None:
-            lookup = _kernels()
-            layer = lookup.refine_sun_zenith(lookup.radius_layer(self.stored[name], i_r)[None], self._mu_s_cells)[0]
-            while len(layers) >= 6:
-                layers.pop(next(iter(layers)))
-            layers[key] = layer
+            with self._refine_lock:  # the dict changed by one thread at a time
+                layer = layers.get(key)
+                if layer is None:
+                    lookup = _kernels()
+                    layer = lookup.refine_sun_zenith(lookup.radius_layer(self.stored[name], i_r)[None],
+                                                     self._mu_s_cells)[0]
+                    while len(layers) >= 6:
+                        layers.pop(next(iter(layers)))
+                    layers[key] = layer
         return layer
 
     def transmittance(self, r: ArrayLike, mu: ArrayLike) -> NDArray[np.float64]:
