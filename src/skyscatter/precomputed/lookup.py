@@ -370,7 +370,13 @@ def refine_mu_s_kernel(table, cells, j_lo, out, start, stop):
                 continue
             i = j // MU_S_SPLIT
             w = (j % MU_S_SPLIT) / MU_S_SPLIT
-            if last >= 3:
+            if i >= 1 and last >= 4:
+                # texels 1 .. last: the tables' last texel (at mu_s_min) is left out of the stencils of the cells
+                # above it (in the cell -9.65..-7.63 deg of the default tables the 90th percentile against tables
+                # of 94 texels fell from 35-62 % to 2-5 %, Rayleigh and multiple scattering)
+                j0, c0, c1, c2, c3 = log_cubic_nodes(i - 1, w, last)
+                j0 += 1
+            elif last >= 3:
                 j0, c0, c1, c2, c3 = log_cubic_nodes(i, w, last + 1)
             else:
                 j0, c0, c1, c2, c3 = -1, 0.0, 0.0, 0.0, 0.0
