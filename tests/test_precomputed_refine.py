@@ -232,3 +232,24 @@ def test_refined_caches_are_built_once_across_threads(coarse_and_fine):
                 assert np.array_equal(a, b)
         if not per_ray_too:
             assert 1 <= len(atm.__dict__["_lookup_layers"]) <= 6 and "_lookup_tables_cache" not in atm.__dict__
+
+
+def test_observer_slices_refine_their_own_columns_as_the_kept_layers(coarse_and_fine):
+    """``lookup.observer_slices`` without ``layers`` (its two radius rows refined in the two columns it reads, or the
+    stored columns above the split) equals its read of whole refined radius layers, to the bit, for suns in and
+    above the split cells and an observer on the ground and at 3 km."""
+    atm = coarse_and_fine[0]
+    bottom, top, mu_s_min = atm._geometry()
+    st = atm.stored
+    cells = atm._mu_s_cells
+    tables = (st["single_rayleigh"], st["single_mie"], st["multiple"])
+
+    def layer(j, i):
+        return lookup.refine_sun_zenith(lookup.radius_layer(tables[j], i)[None], cells)[0]
+
+    for r in (RB + 1.0, RB + 3000.0):
+        for elev in (-10.0, -5.1, -2.0, 0.5, 20.0):
+            mu_s = math.sin(math.radians(elev))
+            own = lookup.observer_slices(*tables, r, mu_s, bottom, top, mu_s_min, cells, np.eye(1))
+            kept = lookup.observer_slices(*tables, r, mu_s, bottom, top, mu_s_min, cells, np.eye(1), layers=layer)
+            assert np.any(own) and np.array_equal(own, kept)

@@ -459,14 +459,14 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     parts = (0, 1) if observer_two_rows(r, bottom, top, n_r) else (None,)
     split = MU_S_SPLIT * cells
     for j, table in enumerate((single_rayleigh, single_mie, multiple)):
-        rows = [min(i, n_r - 1) for i in (i_r, i_r + 1)]
+        radii = [min(i, n_r - 1) for i in (i_r, i_r + 1)]
         if layers is not None:  # the caller's refined radius layers
-            rows2 = [layers(j, i)[:, i_s:i_s + 2] for i in rows]
+            rows2 = [layers(j, i)[:, i_s:i_s + 2] for i in radii]
         elif i_s >= split:  # above the split cells: the stored columns themselves
             s0 = i_s - (MU_S_SPLIT - 1) * cells
-            rows2 = [radius_layer(table, i)[:, s0:s0 + 2] for i in rows]
+            rows2 = [radius_layer(table, i)[:, s0:s0 + 2] for i in radii]
         else:  # the observer's two radius rows refined along the sun zenith, in the two columns read
-            rows2 = [refine_sun_zenith(radius_layer(table, i)[None], cells, (i_s, i_s + 2))[0] for i in rows]
+            rows2 = [refine_sun_zenith(radius_layer(table, i)[None], cells, (i_s, i_s + 2))[0] for i in radii]
         for part in parts:
             acc = np.zeros((n_mu, n_nu, rows2[0].shape[-1]))
             # the ground half of the mu axis with its own radius weight (.geometry.scattering_r_mu_coord)
