@@ -6,7 +6,9 @@ through :func:`~skyscatter.precomputed.cache.cached_atmosphere`) the tables at t
 the parameters that change from hour to hour, and gives any quantity computed from tables (sky radiance of
 patches, irradiance, the sun) at intermediate parameters by multilinear interpolation between the ``2^k`` nodes
 of the grid cell that holds them. Interpolating the quantity is the same as interpolating the tables (every
-lookup is linear in the table values), so the result is the sky of the interpolated tables.
+lookup is linear in the table values), so the result is the sky of the interpolated tables; with the sun below the
+horizon, where the lookups read sub-texels that are not linear in the stored texels
+(:func:`.lookup.refine_sun_zenith`), it is the interpolation of the nodes' skies.
 
 **Axes.** A :class:`GridAxis` names one parameter and its node values (increasing). The parameter is set on the
 family's base atmosphere by the axis's *setter*, one function registered by name in :data:`AXIS_SETTERS`:
