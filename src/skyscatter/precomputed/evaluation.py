@@ -191,7 +191,7 @@ class TableLookups:
         """The tables the per-ray lookups read (the general sky and the aerial perspective): :attr:`tables` with
         the three 4D scattering tables refined along the sun zenith in twilight (:func:`.lookup.refine_sun_zenith`;
         46 sun-zenith texels for the stored 32), float32, built on first use from the stored tables one at a time.
-        The observer's lookups refine only the two radius rows they read, to the same values."""
+        The observer's lookups read the same values from refined radius layers (:meth:`_lookup_layer`)."""
         cached = getattr(self, "_lookup_tables_cache", None)
         if cached is not None:
             return cached

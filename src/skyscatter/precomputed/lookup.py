@@ -43,6 +43,7 @@ from .geometry import (
     log_cubic_nodes,
     log_cubic_value,
     log_lerp_weight,
+    log_quadratic_weight,
     point_along_ray,
     ray_hits_ground,
     refined_mu_s_count,
@@ -306,8 +307,8 @@ def _sub_texel(y, lg, k, m, i, w, last, j0, c0, c1, c2, c3):
     ``lg[t, k, m]`` (any value where ``y`` is not positive): :func:`.geometry.log_cubic_value` over the four texels
     ``j0 .. j0 + 3`` (weights ``c0 .. c3`` of :func:`.geometry.log_cubic_nodes`; ``j0`` negative where there are
     fewer than four) where they are positive; otherwise the three-point Lagrange formula in the logarithm over the
-    texels ``i .. i + 2`` ([Abramowitz1964] Eq. 25.2.11; a texel below the cell in the Earth's shadow), kept
-    between the cell's two values; the geometric interpolation where only the cell's two are positive; where the
+    texels ``i .. i + 2`` (:func:`.geometry.log_quadratic_weight`; a texel below the cell in the Earth's shadow),
+    kept between the cell's two values; the geometric interpolation where only the cell's two are positive; where the
     cell's lower texel is not positive (a single-scattering column whose sunlit part begins within the cell) the
     log-linear extrapolation of the texels ``i + 1``, ``i + 2`` into the cell, at most the linear read
     ``w y[i + 1]`` (the sky falls faster, not slower, towards the shadow: a linear read there was +55 to +105 %
@@ -319,10 +320,8 @@ def _sub_texel(y, lg, k, m, i, w, last, j0, c0, c1, c2, c3):
         return log_cubic_value(a, b, lg[j0, k, m], lg[j0 + 1, k, m], lg[j0 + 2, k, m], lg[j0 + 3, k, m],
                                c0, c1, c2, c3)
     if a > 0.0 and b > 0.0:
-        if c > 0.0:
-            v = math.exp(0.5 * (w - 1.0) * (w - 2.0) * lg[i, k, m] - w * (w - 2.0) * lg[i + 1, k, m]
-                         + 0.5 * w * (w - 1.0) * lg[i + 2, k, m])
-            return min(max(v, min(a, b)), max(a, b))
+        if c > 0.0:  # the irradiance read's rule, the middle texel i + 1
+            return a + log_quadratic_weight(a, b, c, w - 1.0) * (b - a)
         return math.exp((1.0 - w) * lg[i, k, m] + w * lg[i + 1, k, m])
     if b > 0.0 and c > b:
         return min(w * b, b * math.exp((1.0 - w) * (lg[i + 1, k, m] - lg[i + 2, k, m])))
