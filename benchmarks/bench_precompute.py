@@ -15,7 +15,8 @@
    average is printed: on a shared machine compare the ratios, not the seconds.
 
 Usage: ``python benchmarks/bench_precompute.py [--repeat N] [--spectral N] [--no-genssky] [--rounds N]
-[--rounds-only]``. Run on an otherwise idle machine: other processes on the two cores inflate every figure.
+[--rounds-only] [--orders 6,8]``. Run on an otherwise idle machine: other processes on the two cores inflate every
+figure.
 """
 
 from __future__ import annotations
@@ -66,7 +67,8 @@ def bench_genssky(threads: int) -> float | None:
 _CHILD = """
 import resource, sys
 from skyscatter.precomputed import PrecomputedAtmosphere
-PrecomputedAtmosphere.compute(progress=False, tables=sys.argv[1] if len(sys.argv) > 1 else None)
+kw = {"orders": int(sys.argv[2])} if len(sys.argv) > 2 else {}
+PrecomputedAtmosphere.compute(progress=False, tables=(sys.argv[1] or None) if len(sys.argv) > 1 else None, **kw)
 """
 
 
@@ -83,8 +85,9 @@ def _process(cmd: list[str], **kw) -> tuple[float, float, float]:
     return wall, cpu, after.ru_maxrss / 1024  # ru_maxrss of children: the largest so far [KiB]
 
 
-def bench_processes(rounds: int, threads: int) -> None:
-    """Section 5 of the module docstring."""
+def bench_processes(rounds: int, threads: int, orders: list[int] | None = None) -> None:
+    """Section 5 of the module docstring; ``orders``: also the default tables with these numbers of orders (each
+    a case of its own, alternated with the others)."""
     import statistics
 
     try:
@@ -97,6 +100,8 @@ def bench_processes(rounds: int, threads: int) -> None:
         gen = False
     cases = {"default (16 wavelengths)": [sys.executable, "-c", _CHILD],
              "rgb (3 wavelengths)": [sys.executable, "-c", _CHILD, "rgb"]}
+    for n in orders or []:
+        cases[f"default, {n} orders"] = [sys.executable, "-c", _CHILD, "", str(n)]
     got: dict[str, list[tuple[float, float]]] = {name: [] for name in [*cases, "genssky"]}
     # peak RSS per process needs a fresh child-rusage high-water mark: measure it once per case, first, in a
     # process of its own
@@ -154,11 +159,14 @@ def main() -> int:
     ap.add_argument("--rounds", type=int, default=3,
                     help="alternated whole-process rounds of section 5 (0: skip)")
     ap.add_argument("--rounds-only", action="store_true", help="only section 5")
+    ap.add_argument("--orders", default="", metavar="N,M",
+                    help="section 5 also with these numbers of scattering orders (e.g. 6,8: an A/B of the default)")
     args = ap.parse_args()
+    orders = [int(n) for n in args.orders.split(",") if n]
     if args.rounds_only:
         from skyscatter.precomputed.parallel import n_threads
 
-        bench_processes(max(1, args.rounds), n_threads())
+        bench_processes(max(1, args.rounds), n_threads(), orders)
         return 0
 
     numba_cache = tempfile.mkdtemp(prefix="skyscatter-numba-")
@@ -214,7 +222,7 @@ def main() -> int:
     shutil.rmtree(numba_cache, ignore_errors=True)
     del os.environ["NUMBA_CACHE_DIR"]  # the whole processes below load the compiled kernels from the usual cache
     if args.rounds:
-        bench_processes(args.rounds, threads)
+        bench_processes(args.rounds, threads, orders)
     return 0
 
 

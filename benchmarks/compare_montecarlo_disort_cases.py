@@ -4,9 +4,9 @@ The 12 cases of ``tests/test_precomputed_disort.py`` (aerosol optical depth 0.05
 exponent 0, no ozone; ground albedo 0.1 and 0.8; sun zenith 30 and 70 deg; principal plane, view zenith 0-70 deg
 towards and away from the sun; unit solar irradiance), at 550 nm. DISORT is plane-parallel, so the test against
 it carries a sphericity allowance; the Monte Carlo reference (``skyscatter.montecarlo``) traces the same spherical
-atmosphere as the tables, so this comparison needs none. Tables: default sizes, 6 orders and the geometric tail,
-computed at 550 nm only (cached on disk). Prints a Markdown table of ``tables / MC - 1`` per direction with the
-largest Monte Carlo standard error of the row.
+atmosphere as the tables, so this comparison needs none. Tables: default sizes, the default orders and the
+geometric tail (``DEFAULT_ORDERS``; 6 until 2026-12-05, then 8), computed at 550 nm only (cached on disk). Prints a
+Markdown table of ``tables / MC - 1`` per direction with the largest Monte Carlo standard error of the row.
 
     python benchmarks/compare_montecarlo_disort_cases.py [--samples N]
 """

@@ -4,9 +4,9 @@ For the Earth defaults and a hazy atmosphere (``AtmosphereParameters.from_turbid
 wavelengths (440, 550, 680 nm), sun elevations +60 .. -6 deg and 15 view directions (elevations 2-90 deg at
 azimuths 0, 90 and 180 deg from the sun), it prints a Markdown table of the relative difference
 ``tables / MC - 1`` and its Monte Carlo standard error, and draws ``docs/images/montecarlo_vs_tables.png``.
-Tables: the default orders (6 and the geometric tail) and sizes, computed at exactly these three wavelengths
-(``tables="rgb"``: per-wavelength radiance, no colour rule involved; cached on disk). Re-run after a change
-to the tables:
+Tables: the default orders (``DEFAULT_ORDERS``: 6 until 2026-12-05, then 8; and the geometric tail) and sizes,
+computed at exactly these three wavelengths (``tables="rgb"``: per-wavelength radiance, no colour rule involved;
+cached on disk). Re-run after a change to the tables:
 ``python benchmarks/compare_montecarlo_tables.py [--samples N] [--out docs/images/montecarlo_vs_tables.png]``.
 """
 
@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from skyscatter.montecarlo import sky_radiance
-from skyscatter.precomputed import AtmosphereParameters, cached_atmosphere
+from skyscatter.precomputed import DEFAULT_ORDERS, AtmosphereParameters, cached_atmosphere
 
 SUN_ELEVATIONS = [60.0, 30.0, 10.0, 3.0, 0.0, -3.0, -6.0]
 VIEW_ELEVATIONS = [2.0, 10.0, 30.0, 60.0, 90.0]
@@ -114,8 +114,8 @@ def main() -> None:
             if col == 0:
                 ax.set_ylabel("tables / MC - 1 at 550 nm [%]")
     axes[0, 2].legend(fontsize=7, ncol=2)
-    fig.suptitle("Precomputed tables (6 orders + tail, default sizes) vs Monte Carlo reference; bars: 2 MC standard "
-                 "errors; "
+    fig.suptitle(f"Precomputed tables ({DEFAULT_ORDERS} orders + tail, default sizes) vs Monte Carlo reference; "
+                 "bars: 2 MC standard errors; "
                  "points beyond the axes are clipped")
     fig.savefig(args.out, dpi=110)
     print(f"wrote {args.out}")

@@ -104,7 +104,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="impossible records (DNI above extraterrestrial, DHI > GHI, light with the sun below the "
                    "horizon, missing fields): error, or flag the hour and leave its sky NaN")
     g.add_argument("--tables", choices=["default", "coarse"], default="default",
-                   help="table preset of the family: default (paper sizes, 6 orders, 23 wavelengths) or coarse "
+                   help="table preset of the family: default (paper sizes, 8 orders, 23 wavelengths) or coarse "
                    "(a quick look: small tables, 4 orders, 8 wavelengths)")
     g.add_argument("--aod-nodes", type=str, default=None, metavar="LIST",
                    help="aerosol optical depth grid at 550 nm, comma-separated (default "

@@ -97,6 +97,7 @@ from ..atmosphere.medium import AtmosphereParameters
 from ..conventions import direction_from_angles
 from ..epw import EPWData, EPWLocation, read_epw
 from ..errors import FileFormatError, InvalidParameterError
+from ..precomputed import DEFAULT_ORDERS
 from ..precomputed.family import AXIS_SETTERS, FAMILY_WAVELENGTHS, GridAxis, TableFamily, register_axis
 
 __all__ = [
@@ -1137,9 +1138,10 @@ class RetrievalOptions:
         atmosphere's column, :data:`RAYLEIGH_SCALE_HEIGHT`, the Angstrom aerosol of ``angstrom_alpha`` (Cornette-Shanks
         phase, g = 0.8, 1.2 km scale height) and a ground albedo of 0.2, gendaymtx's default).
     tables : {"default", "coarse"}
-        Table preset of the family (:data:`TABLE_PRESETS`): ``"default"`` (the paper's sizes, 6 orders, the 23
-        wavelengths of :data:`~skyscatter.precomputed.family.FAMILY_WAVELENGTHS`) or ``"coarse"`` (small tables,
-        4 orders, 8 wavelengths: a quick look, about 10x cheaper to build, percent-level less accurate).
+        Table preset of the family (:data:`TABLE_PRESETS`): ``"default"`` (the paper's sizes, the default 8
+        orders, the 23 wavelengths of :data:`~skyscatter.precomputed.family.FAMILY_WAVELENGTHS`) or ``"coarse"``
+        (small tables, 4 orders, 8 wavelengths: a quick look, about 10x cheaper to build, percent-level less
+        accurate).
     sizes : mapping, optional
         Table sizes overriding the preset's.
     orders : int, optional
@@ -1207,7 +1209,7 @@ COARSE_SIZES = {"transmittance_mu": 64, "transmittance_r": 16, "irradiance_mu_s"
                 "ray_samples": 20, "density_sphere_samples": 8, "irradiance_sphere_samples": 8}
 #: Table presets of :class:`RetrievalOptions` (``tables``): sizes, orders and table wavelengths [nm].
 TABLE_PRESETS = {
-    "default": {"sizes": None, "orders": 6, "wavelengths": FAMILY_WAVELENGTHS},
+    "default": {"sizes": None, "orders": DEFAULT_ORDERS, "wavelengths": FAMILY_WAVELENGTHS},
     "coarse": {"sizes": COARSE_SIZES, "orders": 4,
                "wavelengths": (360.0, 390.0, 450.0, 550.0, 650.0, 770.0, 800.0, 830.0)},
 }

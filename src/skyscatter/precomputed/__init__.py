@@ -22,9 +22,10 @@ from .parameters import (
     TabulatedSpectrum,
     rayleigh_scattering_physical,
 )
-from .tables import DEFAULT_TABLE_WAVELENGTHS, PrecomputedAtmosphere, TableSizes
+from .tables import DEFAULT_ORDERS, DEFAULT_TABLE_WAVELENGTHS, PrecomputedAtmosphere, TableSizes
 
 __all__ = [
+    "DEFAULT_ORDERS",
     "DEFAULT_TABLE_WAVELENGTHS",
     "AtmosphereParameters",
     "BrunetonSky",

@@ -35,8 +35,10 @@ DEFAULT_TABLE_WAVELENGTHS = tuple(float(w) for w in range(400, 701, 20))
 RGB_TABLE_WAVELENGTHS = (440.0, 550.0, 680.0)
 #: Names accepted for ``wavelengths``: ``"spectral"`` (the default) and ``"rgb"`` (the 3-wavelength mode).
 NAMED_WAVELENGTHS = {"spectral": DEFAULT_TABLE_WAVELENGTHS, "rgb": RGB_TABLE_WAVELENGTHS}
-#: Scattering orders computed by default; the rest is the geometric tail (:mod:`.compute`, "Orders").
-DEFAULT_ORDERS = 6
+#: Scattering orders computed by default; the rest is the geometric tail (:mod:`.compute`, "Orders"). 8, not 6
+#: (until 2026-12-05): in hazy air at 400 nm the orders' ratio is still rising at the sixth order, and the tail
+#: after 6 orders was up to 18 % short of the converged sum near the ground in twilight (3 % with the sun up).
+DEFAULT_ORDERS = 8
 
 
 @dataclass(frozen=True)
