@@ -42,8 +42,8 @@ def directions() -> tuple[np.ndarray, list[tuple[float, float]]]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--samples", type=int, default=4096, help="paths per direction with the sun above the horizon")
-    ap.add_argument("--twilight-samples", type=int, default=32768,
+    ap.add_argument("--samples", type=int, default=65536, help="paths per direction with the sun above the horizon")
+    ap.add_argument("--twilight-samples", type=int, default=262144,
                     help="paths per direction with the sun below the horizon (few paths reach the lit upper air)")
     ap.add_argument("--out", default="docs/images/montecarlo_vs_tables.png")
     ap.add_argument("--json", default=None, help="also write the numbers to this JSON file")
