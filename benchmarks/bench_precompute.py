@@ -1,9 +1,9 @@
 """Benchmark of the precomputed atmosphere (Bruneton & Neyret 2008), printed as a small report.
 
 1. JIT compilation of all kernels, from an empty numba cache (a temporary NUMBA_CACHE_DIR).
-2. Precomputation with the default table sizes (256 x 64, 64 x 16, 32 x 128 x 32 x 8), orders (6 and the tail)
-   and wavelengths (16, 400-700 nm), then the 3-wavelength mode, compiled code (best of ``--repeat`` runs; wall
-   and CPU time).
+2. Precomputation with the default table sizes (256 x 64, 64 x 16, 32 x 128 x 32 x 8), orders (the default 8 and
+   the tail; 6 until 2026-12-05) and wavelengths (16, 400-700 nm), then the 3-wavelength mode, compiled code (best
+   of ``--repeat`` runs; wall and CPU time).
 3. A 1024 x 768 sky-and-ground camera view from 1 km altitude looking 10 deg down, from the tables.
 4. Radiance's genssky (shipped in pyradiance's ``bin/``), which also precomputes multiple-scattering tables
    (Bruneton's 2017 scheme, 20 wavelengths), timed from an empty data folder in the same run; the ratio of

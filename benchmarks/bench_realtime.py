@@ -1,6 +1,6 @@
 """Benchmark of the real-time path (skyscatter.realtime), printed as a small report.
 
-1. Export of the default tables (16 wavelengths, 256 x 64, 64 x 16, 32 x 128 x 32 x 8, 6 orders) from the cache:
+1. Export of the default tables (16 wavelengths, 256 x 64, 64 x 16, 32 x 128 x 32 x 8, 8 orders) from the cache:
    reading the cached tables, then the engine-ready textures (rgba32f + rgba16f, the fold into colour included),
    then ``skyscatter export-luts`` with its default formats (the same two) and with ``--formats raw`` (the spectral
    float32 files, 270 MB), each from a fresh process state (the cache read included). Target: <= 10 s. Best of
