@@ -503,6 +503,21 @@ def test_geometric_tail_in_hazy_twilight():
             assert np.max(np.abs(rad[6] / rad[16] - 1)) > 0.02, s
 
 
+def test_command_line_tables_take_the_library_orders():
+    """``--orders`` of the table commands (precompute, export-luts, view) defaults to the library's
+    ``DEFAULT_ORDERS``, which its help names; an explicit count is kept."""
+    import argparse
+
+    from skyscatter.cli.precompute import add_table_options, tables_from_args
+    from skyscatter.precomputed import DEFAULT_ORDERS
+
+    p = argparse.ArgumentParser()
+    add_table_options(p)
+    assert tables_from_args(p.parse_args([]))[2]["orders"] == DEFAULT_ORDERS
+    assert tables_from_args(p.parse_args(["--orders", "3"]))[2]["orders"] == 3
+    assert f"the library's, {DEFAULT_ORDERS}:" in " ".join(p.format_help().split())
+
+
 def test_streaming_and_chunks_do_not_change_the_tables(monkeypatch):
     """The tables do not depend on how the computation is cut (bit for bit): wavelength chunks of 1, 2 or all,
     blocks of 1, 3 or 4 radii streamed to the scratch files (6 radii: a partial last block), the first order's

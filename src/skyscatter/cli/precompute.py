@@ -52,8 +52,9 @@ def add_table_options(p: argparse.ArgumentParser, exclude: tuple[str, ...] = ())
     t = p.add_argument_group("tables")
     t.add_argument("--max-sun-zenith", type=float_in(102.0, 180.0), default=102.0, metavar="DEG",
                    help="largest sun zenith angle tabulated [deg]; the sky is dark beyond it")
-    t.add_argument("--orders", type=positive_int, default=6, metavar="N",
-                   help="scattering orders computed one by one; from 3 on the later orders are added as their "
+    t.add_argument("--orders", type=positive_int, default=None, metavar="N",
+                   help="scattering orders computed one by one (default: the library's, 8: "
+                        "skyscatter.precomputed.DEFAULT_ORDERS); from 3 on the later orders are added as their "
                         "geometric tail (docs/bruneton.md)")
     t.add_argument("--tables", choices=["spectral", "rgb"], default=None,
                    help="named set of table wavelengths: spectral (the default: 400:700:20, 16 wavelengths, colour "
@@ -77,7 +78,7 @@ def tables_from_args(args: argparse.Namespace):
     keywords (``tables`` or ``wavelengths``, ``orders``) go to :func:`~skyscatter.precomputed.cached_atmosphere`."""
     import math
 
-    from ..precomputed import TableSizes
+    from ..precomputed import DEFAULT_ORDERS, TableSizes
 
     params = atmosphere_from_args(args, max_sun_zenith=math.radians(args.max_sun_zenith))
     mu, r = args.transmittance_size
@@ -94,7 +95,8 @@ def tables_from_args(args: argparse.Namespace):
         tables, wavelengths = wavelengths, None
     if tables is not None and wavelengths is not None:
         raise InvalidParameterError("give either --tables (a named set) or --wavelengths [nm], not both")
-    return params, sizes, {"tables": tables, "wavelengths": wavelengths, "orders": args.orders}
+    orders = DEFAULT_ORDERS if args.orders is None else args.orders
+    return params, sizes, {"tables": tables, "wavelengths": wavelengths, "orders": orders}
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
