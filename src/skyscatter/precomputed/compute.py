@@ -35,16 +35,16 @@ it 0.00 / 0.01 / 0.26 %; turbidity 3 over albedo 0.3, 23 / 34 / 43 % and 0.15 / 
 aerosol optical depth 0.5 over albedo 0.8, 6 orders with the tail are within 0.9 % of 16 orders
 (``docs/bruneton.md``). Four orders are too few for the tail (the shape has not settled: +10 % in that case).
 Six (the default until 2026-12-05) are too few in hazy air at short wavelengths: with aerosol optical depth 0.5 at
-400 nm the ratio of successive orders' sums is still rising at the sixth order (orders 4 / 3: 0.33-0.51 by sun
-zenith texel, 5 / 4: 0.42-0.58, 8 / 7: 0.61-0.64), so the tail from the last two is too small, and most so where
-the later orders carry the light: near the ground in twilight. Against 20 orders (default sizes, 400 / 560 nm,
+400 nm the ratio of successive orders' sums is still rising at the sixth order (sun-zenith texels from -12 to +9.5
+deg: orders 4 / 3 0.33-0.51, 5 / 4 0.42-0.58, 8 / 7 0.61-0.64), so the tail from the last two is too small, most so
+where the later orders carry the light: near the ground in twilight. Against 20 orders (default sizes, 400 / 560 nm,
 radius rows 0-3, suns -12 to -0.4 deg, every view and azimuth texel; median / 90th percentile / largest) the
-multiple-scattering table with 6 orders was 3.6 / 14.8 / 17.6 % and 0.3 / 2.3 / 4.3 % short, with 8 orders
-0.2 / 1.4 / 2.5 % and 0.1 / 0.3 / 0.6 % (sun -0.4 to +6 deg: 400 nm 2.7 / 3.6 / 4.3 % -> 0.1 / 0.3 / 0.6 %; 10
-orders 0.1 / 0.5 / 1.1 % in twilight): :data:`.sizes.DEFAULT_ORDERS` is 8
-(``tests/test_precomputed_tables.py::test_geometric_tail_in_hazy_twilight``; docs/accuracy.md, "Low sun"). A
-ratio per radius row as well, tried first, overshoots there instead (5.5 / 18.6 / 27.5 %): close to the ground in
-twilight the light of the last orders is still spreading into the shadow, faster than it will decay.
+multiple-scattering table with 6 orders was 3.6 / 14.8 / 17.6 % and 0.3 / 2.3 / 4.3 % short, with 8 orders 0.2 / 1.4
+/ 2.5 % and 0.1 / 0.3 / 0.6 % (sun -0.4 to +6 deg: 400 nm 2.7 / 3.6 / 4.3 % -> 0.1 / 0.3 / 0.6 %; 10 orders 0.1 /
+0.5 / 1.1 % in twilight): :data:`.sizes.DEFAULT_ORDERS` is 8
+(``tests/test_precomputed_tables.py::test_geometric_tail_in_hazy_twilight``; docs/accuracy.md, "Low sun"). A ratio
+per radius row as well, tried first, overshoots there instead (5.5 / 18.6 / 27.5 %): close to the ground in twilight
+the light of the last orders is still spreading into the shadow, faster than it will decay.
 
 Reference: [Bruneton2008].
 """
