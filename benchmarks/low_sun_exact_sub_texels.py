@@ -3,10 +3,13 @@ exact: an emulation from tables of 94 sun-zenith texels (docs/accuracy.md, "Low 
 read"; nothing in src/ changed).
 
 The lookups read the three 4D scattering tables on a sun-zenith axis refined in twilight
-(``lookup.refine_sun_zenith``: the 7 stored cells of the default 32 texels wholly below the horizon split into 3
-sub-cells whose texels hold a four-point Lagrange rule in the logarithm, with fall-backs at the Earth's shadow).
+(``lookup.refine_sun_zenith``: the stored cells of the default 32 texels below and across the horizon, 8 since
+2026-12-05 and 7 before, split into 3 sub-cells whose texels hold a four-point Lagrange rule in the logarithm, with
+fall-backs at the Earth's shadow). Since 2026-12-05 the library computes the single scattering's sub-texels at their
+suns (``compute.stored_single_scattering``): variant (b) below is then the library's own (a), to the 94-texel
+tables' half-precision rounding; before, (a) was the rule for all three tables (64 of 315 with 7 cells and 6 orders).
 The sub-texels sit exactly at texels of tables with 94 sun-zenith texels (texel ``3k`` of 94 is texel ``k`` of
-32; the sub-texels of cell ``k`` are 94-texel texels ``3k + 1``, ``3k + 2``; refined index ``j < 21`` equals
+32; the sub-texels of cell ``k`` are 94-texel texels ``3k + 1``, ``3k + 2``; refined index ``j < 3 cells`` equals
 94-texel index ``j``). Variants, each evaluated with the general per-ray kernel (``sky_radiance`` with one
 position per ray) on the refined tables put in the 32-texel atmosphere's ``_lookup_tables_cache``:
 

@@ -299,3 +299,21 @@ def test_bad_components_are_refused():
     comp = AnalyticParticles("a", DensityProfile.boundary_layer(1500.0, 1000.0), PowerLawSpectrum(1e-5, 550.0, -1.0))
     assert particle_component_from_dict(comp.to_dict()) == comp
     assert abs(comp.density.column(60000.0) - 2500.0) < 1e-3
+
+
+def test_from_cosines_is_the_table_of_its_numba_arrays():
+    """:meth:`PhaseTable.from_cosines` of a table's :meth:`~PhaseTable.numba_arrays` (what a precomputed-table file
+    stores) has the same arrays bit for bit, so the same moments and delta-M fraction (the lookups' sub-texels of a
+    Mie aerosol's single scattering are computed from it); cosines that do not run from -1 to 1 are refused."""
+    wl = [450.0, 650.0]
+    table = PhaseTable.from_function(lambda m: 1.0 + 0.9 * m + 3.0 * np.exp(40.0 * (m - 1.0)), wl)
+    arr = table.numba_arrays()
+    back = PhaseTable.from_cosines(wl, arr.mu, arr.values)
+    for a, b in zip(back.numba_arrays(), arr, strict=True):
+        np.testing.assert_array_equal(a, b)
+    t1, f1 = table.delta_m(32)
+    t2, f2 = back.delta_m(32)
+    np.testing.assert_array_equal(f1, f2)
+    np.testing.assert_array_equal(t1.numba_arrays().values, t2.numba_arrays().values)
+    with pytest.raises(InvalidParameterError, match="from exactly -1 to 1"):
+        PhaseTable.from_cosines(wl, arr.mu[1:], arr.values[:, 1:])

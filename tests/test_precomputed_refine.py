@@ -22,19 +22,18 @@ EARTH = AtmosphereParameters()
 RB, RT, MU_S_MIN = EARTH.bottom_radius, EARTH.top_radius, EARTH.mu_s_min
 
 
-def test_twilight_cells_are_the_cells_wholly_below_the_horizon():
-    """The default 32 texels: 7 cells (-12 .. -0.43 deg); for any count, the last split cell's upper texel is below
-    the horizon and the next texel is not (the cell across the horizon stays whole); one texel below the horizon:
-    none."""
-    assert twilight_cells(RB, RT, MU_S_MIN, 32) == 7
+def test_twilight_cells_are_the_cells_below_and_across_the_horizon():
+    """The default 32 texels: 8 cells (-12 .. +0.78 deg); for any count, the last split cell is the one across the
+    horizon (its lower texel below it, its upper one not); one texel below the horizon: none."""
+    assert twilight_cells(RB, RT, MU_S_MIN, 32) == 8
     for n in (4, 5, 6, 8, 12, 16, 22, 32, 64, 94):
         c = twilight_cells(RB, RT, MU_S_MIN, n)
         mu = mu_s_texels(RB, RT, MU_S_MIN, n)
         below = int(np.sum(mu < 0.0))
-        assert c == (below - 1 if below >= 2 else 0)
+        assert c == (below if below >= 2 else 0)
         if c:
-            assert mu[c] < 0.0 <= mu[c + 1]
-    assert refined_mu_s_count(32, 7) == 46
+            assert mu[c - 1] < 0.0 <= mu[c]
+    assert refined_mu_s_count(32, 8) == 48
 
 
 def test_refined_cell_is_three_times_finer_below_the_split_and_the_stored_axis_above():
@@ -61,8 +60,8 @@ def _column_table(columns):
 def test_refinement_reproduces_an_exponential_of_a_cubic_and_keeps_the_texels():
     """Columns ``exp(cubic(i))`` (four-point Lagrange in the logarithm is exact for cubics, [Abramowitz1964]
     Eq. 25.2.13): every sub-texel within float32 rounding of the function (1e-5; the clamp between the cell's
-    values does not act on a monotone column); the stored texels copied to the bit; above the split the stored
-    columns unchanged."""
+    values does not act on a monotone column), the last split cell's too (its stencil takes the two texels above
+    it); the stored texels copied to the bit; above the split the stored columns unchanged."""
     n, cells = 16, 5
     x = np.arange(n, dtype=float)
     cubics = [(-2.0, 0.9, -0.05, 0.001), (1.0, 0.4, 0.0, 0.0), (0.0, 1.5, -0.09, 0.002)]
@@ -79,6 +78,7 @@ def test_refinement_reproduces_an_exponential_of_a_cubic_and_keeps_the_texels():
     np.testing.assert_array_equal(fine[0, 0, MU_S_SPLIT * cells:], table[0, 0, cells:])
     # only some columns: the same values
     np.testing.assert_array_equal(lookup.refine_sun_zenith(table, cells, (4, 9)), fine[:, :, 4:9])
+    np.testing.assert_array_equal(lookup.refine_sun_zenith(table, cells, (11, 17)), fine[:, :, 11:17])
     with pytest.raises(ValueError, match="outside the refined axis"):
         lookup.refine_sun_zenith(table, cells, (0, n_f + 1))
 
@@ -190,7 +190,7 @@ def test_daytime_lookups_unchanged_and_twilight_refined(coarse_and_fine):
         refined = aerial(sun, atm.lookup_tables, atm._mu_s_cells)
         assert np.all(refined > 0.0)
         assert np.array_equal(refined, aerial(sun, atm.tables, 0)) == equal
-    assert atm.lookup_tables["multiple"].shape[2] == refined_mu_s_count(32, 7)
+    assert atm.lookup_tables["multiple"].shape[2] == refined_mu_s_count(32, 8)
 
 
 def test_refined_caches_are_built_once_across_threads(coarse_and_fine):
@@ -253,3 +253,29 @@ def test_observer_slices_refine_their_own_columns_as_the_kept_layers(coarse_and_
             own = lookup.observer_slices(*tables, r, mu_s, bottom, top, mu_s_min, cells, np.eye(1))
             kept = lookup.observer_slices(*tables, r, mu_s, bottom, top, mu_s_min, cells, np.eye(1), layers=layer)
             assert np.any(own) and np.array_equal(own, kept)
+
+
+def test_single_scattering_sub_texels_are_computed_at_their_suns(coarse_and_fine):
+    """The library's refined single-scattering tables hold, at the sub-texels, the single scattering computed at
+    their suns (``compute.stored_single_scattering`` at ``lookup.sub_texel_suns``): against the independent
+    precomputation with three times the texels, whose texels are those suns, within its half-precision storage
+    (measured 4.8e-4 largest relative difference where the value is above 1e-3 of its radius layer's largest, the
+    scale of the half-precision values; tolerance 2e-3); the suns are its texels to 1e-12; the multiple
+    scattering's sub-texels are the rule's. Given sub-texels of the wrong shape are refused."""
+    coarse, fine = coarse_and_fine
+    cells = coarse._mu_s_cells
+    assert cells == 8
+    suns = lookup.sub_texel_suns(RB, RT, MU_S_MIN, 32, cells)
+    sub = [j for j in range(MU_S_SPLIT * cells) if j % MU_S_SPLIT]
+    np.testing.assert_allclose(suns, mu_s_texels(RB, RT, MU_S_MIN, 94)[sub], rtol=0, atol=1e-12)
+    for name in ("single_rayleigh", "single_mie"):
+        got = coarse.lookup_tables[name][:, :, sub].astype(np.float64)
+        ref = np.asarray(fine.tables[name], dtype=np.float64)[:, :, sub]
+        keep = ref > 1e-3 * ref.max(axis=(1, 2, 3), keepdims=True)
+        assert keep.sum() > 2000 and np.max(np.abs(got[keep] / ref[keep] - 1.0)) < 2e-3, name
+        # the observer's radius layers hold the same values
+        np.testing.assert_array_equal(coarse._lookup_layer(name, 3), coarse.lookup_tables[name][3])
+    rule = lookup.refine_sun_zenith(coarse.tables["multiple"], cells)
+    np.testing.assert_array_equal(coarse.lookup_tables["multiple"], rule)
+    with pytest.raises(ValueError, match="sub_texels must have shape"):
+        lookup.refine_sun_zenith(coarse.tables["single_mie"], cells, sub_texels=np.zeros((1, 1, 1, 1, 1)))

@@ -213,6 +213,11 @@ class PhaseTable:
             raise InvalidParameterError(
                 "phase table: values integrate to "
                 f"{integral.min():.7g}-{integral.max():.7g} over the sphere, not 1 (pass normalise=True)")
+        self._set(wl, th, mu, v_mu)
+
+    def _set(self, wl: NDArray[np.float64], th: NDArray[np.float64], mu: NDArray[np.float64],
+             v_mu: NDArray[np.float64]) -> None:
+        """Keep the validated grid and values (read-only) and the cumulative distribution over ``mu``."""
         seg = 0.5 * (v_mu[:, 1:] + v_mu[:, :-1]) * np.diff(mu) * _TWO_PI
         cdf = np.zeros_like(v_mu)
         cdf[:, 1:] = np.cumsum(seg, axis=-1)
@@ -228,6 +233,22 @@ class PhaseTable:
         self._values = None
 
     # ------------------------------------------------------------------ constructors
+
+    @classmethod
+    def from_cosines(cls, wavelengths: ArrayLike, mu: ArrayLike, values: ArrayLike) -> PhaseTable:
+        """The table whose :meth:`numba_arrays` are ``mu`` (n,) ascending cosines of the scattering angle from -1
+        to 1 and ``values`` (n_wl, n) [sr^-1], normalised: those arrays kept bit for bit (the angles are their arc
+        cosines), so that its moments, :meth:`delta_m` included, are those of the table they came from. For a
+        table read back from a file without its angles (the precomputed tables' aerosol phase)."""
+        m = np.asarray(mu, dtype=float)
+        v = np.asarray(values, dtype=float)
+        if m.ndim != 1 or m.size < 3 or m[0] != -1.0 or m[-1] != 1.0 or np.any(np.diff(m) <= 0):
+            raise InvalidParameterError("phase table: mu must increase strictly from exactly -1 to 1")
+        th = np.arccos(m[::-1])
+        th[0], th[-1] = 0.0, math.pi
+        table = cls(wavelengths, th, np.asarray(v)[..., ::-1], normalise=False)  # validates the values
+        table._set(table._wavelengths, table._angles, np.array(m), np.ascontiguousarray(v, dtype=float))
+        return table
 
     @classmethod
     def from_function(cls, func: Any, wavelengths: ArrayLike, angles: ArrayLike | None = None) -> PhaseTable:

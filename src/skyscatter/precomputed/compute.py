@@ -78,7 +78,8 @@ from .storage import HALF_TABLES, HalfTable, encode_half
 
 __all__ = ["MAX_ORDER_RATIO", "Bookkeeping", "Medium", "Order", "add_geometric_tail", "compute_tables",
            "density_profiles", "direct_irradiance", "indirect_irradiance", "multiple_scattering",
-           "scattering_density", "single_scattering", "transmittance_table"]
+           "scattering_density", "single_scattering", "single_scattering_source", "stored_single_scattering",
+           "transmittance_table"]
 
 #: Largest ratio of successive orders used for the tail (a bound against a noisy estimate: 1 would be infinite).
 MAX_ORDER_RATIO = 0.95
@@ -153,13 +154,15 @@ class Medium:
     lobe: float = 0.0
 
     @classmethod
-    def of(cls, atmosphere: AtmosphereParameters, wavelengths: F64, sizes: TableSizes | None = None) -> Medium:
+    def of(cls, atmosphere: AtmosphereParameters, wavelengths: F64, sizes: TableSizes | None = None,
+           phase: tuple[F64, F64] | None = None) -> Medium:
         """``atmosphere`` sampled at ``wavelengths`` [nm] (``sizes`` set the delta-M truncation of a tabulated
-        phase)."""
+        phase; ``phase``, if given, the tabulated aerosol phase there as ascending cosines and values, as
+        :meth:`.PhaseTable.numba_arrays` gives them, instead of computing it)."""
         profiles, counts = density_profiles(atmosphere)
-        kind, g, phase = aerosol_phase_arrays(atmosphere, wavelengths, sizes)
+        kind, g, phase_arrays = aerosol_phase_arrays(atmosphere, wavelengths, sizes, phase)
         return cls(atmosphere.bottom_radius, atmosphere.top_radius, atmosphere.mu_s_min, atmosphere.sun_angular_radius,
-                   g, kind, *phase, profiles, counts,
+                   g, kind, *phase_arrays, profiles, counts,
                    atmosphere.rayleigh_scattering_at(wavelengths), atmosphere.mie_extinction_at(wavelengths),
                    atmosphere.mie_scattering_at(wavelengths), atmosphere.ozone_absorption_at(wavelengths),
                    atmosphere.ground_albedo_at(wavelengths), atmosphere.solar_irradiance_at(wavelengths),
@@ -201,8 +204,8 @@ class Medium:
                       self.ground_albedo[ch], self.solar_irradiance[ch], self.lobe)
 
 
-def aerosol_phase_arrays(atmosphere: AtmosphereParameters, wavelengths: F64,
-                         sizes: TableSizes | None = None) -> tuple[int, float, tuple[F64, F64, F64, F64]]:
+def aerosol_phase_arrays(atmosphere: AtmosphereParameters, wavelengths: F64, sizes: TableSizes | None = None,
+                         phase: tuple[F64, F64] | None = None) -> tuple[int, float, tuple[F64, F64, F64, F64]]:
     """``(mie_kind, g, (phase_mu, phase_full, phase_trunc, forward))`` of the aerosol for the kernels.
 
     An analytic phase (:attr:`.AtmosphereParameters.aerosol_component` ``.analytic_phase``) gives its kind and
@@ -210,7 +213,9 @@ def aerosol_phase_arrays(atmosphere: AtmosphereParameters, wavelengths: F64,
     :data:`.sampling.TABLE_PHASE` and its table at ``wavelengths``. Both give the delta-M truncation for
     :data:`DELTA_M_STREAMS_PER_SAMPLE` x ``sizes.density_sphere_samples`` streams (Medium's docstring), an
     analytic phase's from the formula tabulated (:meth:`.PhaseTable.from_analytic`): one way to split off the
-    forward peak for the first-order irradiance whatever the phase.
+    forward peak for the first-order irradiance whatever the phase. ``phase`` (ascending cosines, values), if given,
+    is the tabulated phase at ``wavelengths`` already known (a table file's: :meth:`.PhaseTable.from_cosines`), so
+    that the Mie sums are not made again.
     """
     sz = TableSizes() if sizes is None else sizes
     analytic = atmosphere.aerosol_component.analytic_phase
@@ -218,7 +223,8 @@ def aerosol_phase_arrays(atmosphere: AtmosphereParameters, wavelengths: F64,
         table = PhaseTable.from_analytic(analytic.kind, analytic.g, wavelengths)
         kind, g, mu, full = aerosol_phase_kind(analytic.kind), analytic.g, np.array([-1.0, 1.0]), np.zeros((1, 2))
     else:
-        table = atmosphere.aerosol_phase_table(wavelengths)
+        table = (atmosphere.aerosol_phase_table(wavelengths) if phase is None
+                 else PhaseTable.from_cosines(wavelengths, *phase))
         arr = table.numba_arrays()
         kind, g, mu, full = TABLE_PHASE, 0.0, arr.mu, arr.values
     trunc, f = table.delta_m(DELTA_M_STREAMS_PER_SAMPLE * sz.density_sphere_samples)
@@ -265,20 +271,58 @@ def direct_irradiance(medium: Medium, sizes: TableSizes, transmittance: F32) -> 
     return out
 
 
-def single_scattering(medium: Medium, sizes: TableSizes, transmittance: F32,
-                      rows: range | None = None) -> tuple[F32, F32]:
+def single_scattering(medium: Medium, sizes: TableSizes, transmittance: F32, rows: range | None = None,
+                      mu_s: F64 | None = None) -> tuple[F32, F32]:
     """Step 2: ``DS = S[L0]`` (Eq. 11 with the sun's light), Rayleigh and Mie apart and without their phase
     functions (Sec. 4, "Angular precision"): two (n_rows, n_mu, n_mu_s, n_nu, n_wavelengths) float32 tables of
-    the radius indices ``rows`` (default all)."""
+    the radius indices ``rows`` (default all), at the suns of zenith cosines ``mu_s`` (default the tables' sun
+    zenith texels; others give the tables' values at those suns, each with its own view-sun azimuth texels)."""
     n_r, n_mu = sizes.scattering_r, sizes.scattering_mu
     rows = range(n_r) if rows is None else rows
-    rayleigh = np.zeros((len(rows), *sizes.scattering_shape[1:], transmittance.shape[-1]), dtype=np.float32)
+    if mu_s is None:
+        mu_s = kernels.mu_s_texels(medium.bottom, medium.top, medium.mu_s_min, sizes.scattering_mu_s)
+    mu_s = np.ascontiguousarray(mu_s, dtype=np.float64)
+    shape = (len(rows), n_mu, mu_s.size, sizes.scattering_nu, transmittance.shape[-1])
+    rayleigh = np.zeros(shape, dtype=np.float32)
     mie = np.zeros_like(rayleigh)
     parallel_for(kernels.single_scattering_kernel, rows.stop * n_mu, transmittance, medium.bottom, medium.top,
-                 medium.mu_s_min, medium.sun_angular_radius, medium.profiles, medium.counts, medium.extinction,
+                 mu_s, medium.sun_angular_radius, medium.profiles, medium.counts, medium.extinction,
                  sizes.ray_samples, n_r, rayleigh, mie, rows.start, begin=rows.start * n_mu)
     rayleigh *= (medium.solar_irradiance * medium.rayleigh_scattering).astype(np.float32)
     mie *= (medium.solar_irradiance * medium.mie_scattering).astype(np.float32)
+    return rayleigh, mie
+
+
+def single_scattering_source(medium: Medium, sizes: TableSizes, orders: int,
+                             transmittance: F32) -> tuple[Medium, F32, F32]:
+    """The medium and transmittance table (n_r, n_mu, n_wavelengths) float32 whose single scattering the tables
+    store, and the factor per wavelength it is stored with: ``medium`` itself, ``transmittance`` and 1; for a
+    tabulated aerosol phase with ``orders`` >= 2 the delta-M scaled medium (:meth:`Medium.delta_m_scaled`), its
+    own transmittance (computed here) and ``1 / (1 - f)``: its single scattering is the orders' source and, per unit
+    scattering coefficient, the stored single scattering (the full phase applied at lookup: the TMS correction)."""
+    if medium.mie_kind == TABLE_PHASE and orders >= 2:
+        scaled = medium.delta_m_scaled()
+        return scaled, transmittance_table(scaled, sizes), (1.0 / (1.0 - medium.forward)).astype(np.float32)
+    return medium, transmittance, np.ones(medium.solar_irradiance.shape, dtype=np.float32)
+
+
+def stored_single_scattering(source: tuple[Medium, F32, F32], sizes: TableSizes, mu_s: ArrayLike,
+                             rows: range | None = None) -> tuple[F32, F32]:
+    """The single-scattering tables (Rayleigh, aerosol) as :func:`compute_tables` stores them, at the suns of zenith
+    cosines ``mu_s`` instead of the sun-zenith texels: two (n_rows, n_mu, len(mu_s), n_nu, n_wavelengths) float32
+    arrays for the radius indices ``rows`` (default all). ``source``: :func:`single_scattering_source` of the
+    tables' medium (:meth:`Medium.of` their atmosphere and wavelengths; a tabulated phase as the tables' lookups
+    hold it, ``phase``, spares the Mie sums), orders and transmittance table; ``sizes`` the tables'.
+
+    The rendering lookups' sub-texels of the single scattering (:func:`.lookup.refine_sun_zenith`): computed, not
+    interpolated, because the single scattering has a kink in the sun zenith wherever the sun sets for a point of
+    the ray (the Earth's shadow), which no rule through the stored texels follows (the four-point rule in the
+    logarithm -52 to +18 %, the linear read +8 to +18 %, against tables of three times the texels opposite a sun on
+    the horizon, clear air, views 0.2-2 deg; docs/accuracy.md, "Low sun")."""
+    medium, transmittance, per_beta = source
+    rayleigh, mie = single_scattering(medium, sizes, np.ascontiguousarray(transmittance, dtype=np.float32), rows,
+                                      np.asarray(mu_s, dtype=np.float64))
+    mie *= per_beta
     return rayleigh, mie
 
 
@@ -374,13 +418,8 @@ def _orders(medium: Medium, sizes: TableSizes, transmittance: F32, orders: int, 
             # A tabulated phase: the orders in the delta-M scaled medium (Medium.delta_m_scaled), whose single
             # scattering is both their source (with (1 - f) beta_sca and p*) and, per unit beta_sca, the stored
             # single scattering (with the full phase at lookup: the TMS correction, tables.py).
-            scaled, t_scaled, e_source = medium, transmittance, e_direct
-            per_beta = np.ones(n_l, dtype=np.float32)
-            if medium.mie_kind == TABLE_PHASE and orders >= 2:
-                scaled = medium.delta_m_scaled()
-                t_scaled = transmittance_table(scaled, sizes)
-                e_source = direct_irradiance(scaled, sizes, t_scaled)
-                per_beta = (1.0 / (1.0 - medium.forward)).astype(np.float32)
+            scaled, t_scaled, per_beta = single_scattering_source(medium, sizes, orders, transmittance)
+            e_source = e_direct if scaled is medium else direct_irradiance(scaled, sizes, t_scaled)
             for rows in blocks:
                 ray, mie = single_scattering(scaled, sizes, t_scaled, rows)
                 s_r.write(rows, ray)

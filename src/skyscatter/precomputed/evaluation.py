@@ -27,6 +27,7 @@ from ..sun.disc import solar_disc_solid_angle
 from .conversion import SPECTRAL_MODE_MIN_WAVELENGTHS, ColourConversion, xyz_matrix
 from .parallel import parallel_for
 from .parameters import AtmosphereParameters
+from .sizes import TableSizes
 
 __all__ = ["TableLookups"]
 
@@ -77,6 +78,8 @@ class TableLookups:
 
     parameters: AtmosphereParameters
     wavelengths: NDArray[np.float64]
+    sizes: TableSizes
+    orders: int
     if TYPE_CHECKING:  # the float32 tables: a property of the subclass that holds them (PrecomputedAtmosphere)
         @property
         def tables(self) -> dict[str, NDArray[np.float32]]: ...
@@ -190,7 +193,8 @@ class TableLookups:
     def lookup_tables(self) -> dict[str, NDArray[np.float32]]:
         """The tables the per-ray lookups read (the general sky and the aerial perspective): :attr:`tables` with
         the three 4D scattering tables refined along the sun zenith in twilight (:func:`.lookup.refine_sun_zenith`;
-        46 sun-zenith texels for the stored 32), float32, built on first use from the stored tables one at a time.
+        48 sun-zenith texels for the stored 32; the single scattering's sub-texels computed at their suns,
+        :meth:`_single_sub_texels`), float32, built on first use from the stored tables one at a time.
         The observer's lookups read the same values from refined radius layers (:meth:`_lookup_layer`)."""
         cached = getattr(self, "_lookup_tables_cache", None)
         if cached is not None:
@@ -202,15 +206,49 @@ class TableLookups:
             lookup = _kernels()
             cells = self._mu_s_cells
             cached = dict(self.stored)
-            for name in ("single_rayleigh", "single_mie", "multiple"):
-                t = self.stored[name]
-                n_r, n_mu, n_s, n_nu, n_l = t.shape
-                out = np.empty((n_r, n_mu, lookup.refined_mu_s_count(n_s, cells), n_nu, n_l), dtype=np.float32)
-                for i in range(n_r):  # one radius layer at a time: no whole decoded table besides the result
-                    lookup.refine_sun_zenith(lookup.radius_layer(t, i)[None], cells, out=out[i:i + 1])
-                cached[name] = out
+            names = ("single_rayleigh", "single_mie", "multiple")
+            n_r, n_mu, n_s, n_nu, n_l = self.stored["multiple"].shape
+            for name in names:
+                cached[name] = np.empty((n_r, n_mu, lookup.refined_mu_s_count(n_s, cells), n_nu, n_l),
+                                        dtype=np.float32)
+            for i in range(n_r):  # one radius layer at a time: no whole decoded table besides the result
+                singles = self._single_sub_texels(i)
+                for name in names:
+                    lookup.refine_sun_zenith(lookup.radius_layer(self.stored[name], i)[None], cells,
+                                             out=cached[name][i:i + 1], sub_texels=singles.get(name))
             self._lookup_tables_cache = cached
             return cached
+
+    def _single_sub_texels(self, i_r: int) -> dict[str, NDArray[np.float32]]:
+        """The single-scattering tables' sub-texels of the refined sun-zenith axis at the radius index ``i_r``,
+        computed at their suns (:func:`.compute.stored_single_scattering`, :func:`.lookup.sub_texel_suns`):
+        ``{"single_rayleigh": ..., "single_mie": ...}``, each (1, n_mu, 2 cells, n_nu, n_wavelengths) float32;
+        empty when no cell is split. The medium they come from is built once per atmosphere (a tabulated phase
+        from the lookups' table, a file's: no Mie sums again) and the last row's pair is kept (the observer's
+        layers ask for the two tables of a row one after the other). Called with the refine lock held."""
+        cells = self._mu_s_cells
+        if cells == 0:
+            return {}
+        kept = self.__dict__.get("_sub_texel_row")
+        if kept is not None and kept[0] == i_r:
+            return kept[1]
+        from .compute import Medium, single_scattering_source, stored_single_scattering
+
+        lookup = _kernels()
+        source = self.__dict__.get("_sub_texel_source")
+        if source is None:
+            kind, _, mu, values = self._aerosol_phase
+            medium = Medium.of(self.parameters, self.wavelengths, self.sizes,
+                               (mu, values) if kind == lookup.TABLE_PHASE else None)
+            bottom, top, mu_s_min = self._geometry()
+            suns = lookup.sub_texel_suns(bottom, top, mu_s_min, self.stored["multiple"].shape[2], cells)
+            transmittance = np.asarray(self.stored["transmittance"], dtype=np.float32)
+            source = self.__dict__["_sub_texel_source"] = (
+                single_scattering_source(medium, self.sizes, self.orders, transmittance), suns)
+        ray, mie = stored_single_scattering(source[0], self.sizes, source[1], range(i_r, i_r + 1))
+        out = {"single_rayleigh": ray, "single_mie": mie}
+        self.__dict__["_sub_texel_row"] = (i_r, out)
+        return out
 
     @property
     def _refine_lock(self) -> threading.Lock:
@@ -237,8 +275,9 @@ class TableLookups:
                 layer = layers.get(key)
                 if layer is None:
                     lookup = _kernels()
+                    given = self._single_sub_texels(i_r).get(name)
                     layer = lookup.refine_sun_zenith(lookup.radius_layer(self.stored[name], i_r)[None],
-                                                     self._mu_s_cells)[0]
+                                                     self._mu_s_cells, sub_texels=given)[0]
                     while len(layers) >= 6:
                         layers.pop(next(iter(layers)))
                     layers[key] = layer

@@ -609,26 +609,31 @@ def scattering_mu_s_coord(mu_s: float, bottom: float, top: float, mu_s_min: floa
                                    n_mu_s)
 
 
-#: Sub-cells into which the rendering lookups split each sun-zenith cell of the 4D tables that lies wholly below
-#: the horizon (:func:`twilight_cells`): the lookups read tables refined along the sun zenith
-#: (:func:`.lookup.refine_sun_zenith`), whose sub-texels hold :func:`log_cubic_value` of the stored texels, linearly
-#: between them (docs/accuracy.md, "Low sun").
+#: Sub-cells into which the rendering lookups split each sun-zenith cell of the 4D tables below and across the
+#: horizon (:func:`twilight_cells`): the lookups read tables refined along the sun zenith
+#: (:func:`.lookup.refine_sun_zenith`), whose sub-texels hold the single scattering computed at their suns and
+#: :func:`log_cubic_value` of the stored texels for the multiple scattering, linearly between them
+#: (docs/accuracy.md, "Low sun").
 MU_S_SPLIT = 3
 
 
 def twilight_cells(bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> int:
-    """Number of sun-zenith cells of a 4D table of ``n_mu_s`` texels that lie wholly below the horizon (both texels
-    at ``mu_s < 0``: 7 of the default 32, from -12 to -0.43 deg), which the rendering lookups split into
-    :data:`MU_S_SPLIT` sub-cells from the texels below the horizon and the first above it (texels ``0 .. cells +
-    1``; the four-point rule where there are four, :func:`.lookup.refine_sun_zenith`); 0 where fewer than two texels
-    lie below the horizon. The cell across the horizon is not split:
-    there the sun rises over the ground's own horizon, a kink in every column that the four-point rule does not
-    follow (measured: 29 % from tables of three times the texels, grazing views away from the sun, where the
-    linear read is within 3 %; docs/accuracy.md, "Low sun"). ``bottom``, ``top``: the planet's and the
-    atmosphere's radii [m]; ``mu_s_min``: the tables' smallest sun zenith cosine."""
+    """Number of sun-zenith cells of a 4D table of ``n_mu_s`` texels that the rendering lookups split into
+    :data:`MU_S_SPLIT` sub-cells (:func:`.lookup.refine_sun_zenith`): those wholly below the horizon (both texels
+    at ``mu_s < 0``) and the one across it, 8 of the default 32 (-12 to +0.78 deg); 0 where fewer than two
+    texels lie below the horizon. In the cell across the horizon the sun sets for the ground's own point, a kink in
+    the single scattering's columns near the ground that no rule through the texels follows (the four-point rule
+    -52 to +18 %, the linear read +8 to +18 %, against tables of three times the texels opposite a sun on the
+    horizon, clear air, views 0.2-2 deg; computed: within 2.5 %); the lookups compute the single scattering's
+    sub-texels instead (:func:`.compute.stored_single_scattering`) and take the four-point rule for the multiple
+    scattering's, which is smooth there. Split so, the sun on the
+    horizon went from 12 to 3 of 45 directions outside 5 % of the Monte Carlo (docs/accuracy.md, "Low sun"; until
+    2026-12-05 the cell was read linearly: up to +19.5 % at 2 deg elevation towards the sun, turbidity 3).
+    ``bottom``, ``top``: the planet's and the atmosphere's radii [m]; ``mu_s_min``: the tables' smallest sun zenith
+    cosine."""
     p0 = scattering_mu_s_coord(0.0, bottom, top, mu_s_min, n_mu_s)
-    below = min(int(math.ceil(p0)), n_mu_s)  # texels at mu_s < 0
-    return below - 1 if below >= 2 else 0
+    below = min(int(math.ceil(p0)), n_mu_s - 1)  # texels at mu_s < 0 (at least one texel above)
+    return below if below >= 2 else 0
 
 
 def refined_mu_s_count(n_mu_s: int, cells: int) -> int:

@@ -175,13 +175,15 @@ def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, 
 
 
 @kernel
-def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profiles, counts, extinction, n_samples,
+def single_scattering_kernel(transmittance, bottom, top, mu_s_tab, alpha, profiles, counts, extinction, n_samples,
                              n_r, ray, mie, first_r, start, stop):
     """Single scattering integrals per unit solar irradiance and unit scattering coefficient.
 
     Fills ``ray`` and ``mie`` (n_rows, n_mu, n_mu_s, n_nu, n_wavelengths) float32, radius indices ``first_r`` to
-    ``first_r + n_rows - 1`` of a table of ``n_r`` radii (a block of rows: the driver streams them), for flat
-    (r, mu) indices ``start..stop`` of the whole table with
+    ``first_r + n_rows - 1`` of a table of ``n_r`` radii (a block of rows: the driver streams them), at the sun
+    zenith cosines ``mu_s_tab`` (n_mu_s: the tables' texels, :func:`mu_s_texels`, or any others: the rendering
+    lookups' sub-texels, :func:`.compute.stored_single_scattering`), for flat (r, mu) indices ``start..stop`` of the
+    whole table with
     ``integral rho_i(y) T(x, y) T_sun(y) dy`` from the texel's point to the ground or the top
     (Bruneton & Neyret 2008, Eqs. 9 and 11; the phase functions and coefficients are applied later). ``T(x, y)``
     is integrated along the ray's own samples (:func:`.sampling.ray_transmittance`, ``extinction`` (3, n_wl) the
@@ -206,7 +208,6 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_min, alpha, profil
     cell = np.empty(n_suns, dtype=np.int64)
     w_sun = np.empty(n_suns)
     frac = np.empty(n_suns)
-    mu_s_tab = mu_s_texels(bottom, top, mu_s_min, n_mu_s)
     mu_s_flat = np.repeat(mu_s_tab, n_nu)
     for idx in range(start, stop):
         i_r = idx // n_mu

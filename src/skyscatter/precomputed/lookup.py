@@ -47,6 +47,7 @@ from .geometry import (
     point_along_ray,
     ray_hits_ground,
     refined_mu_s_count,
+    scattering_mu_s_param,
     scattering_nu_azimuth,
     scattering_nu_coord,
     scattering_r_mu_coord,
@@ -329,22 +330,24 @@ def _sub_texel(y, lg, k, m, i, w, last, j0, c0, c1, c2, c3):
 
 
 @kernel
-def refine_mu_s_kernel(table, cells, j_lo, out, start, stop):
+def refine_mu_s_kernel(table, cells, j_lo, given, out, start, stop):
     """Columns ``j_lo .. j_lo + out.shape[2] - 1`` of the sun-zenith axis of ``table`` (n_r, n_mu, n_mu_s, n_nu,
     n_wavelengths) with its first ``cells`` cells split into :data:`.geometry.MU_S_SPLIT` sub-cells, into ``out``
     (n_r, n_mu, n_columns, n_nu, n_wavelengths), rows ``start..stop`` of the flattened (r, mu) axes: a stored texel
     is copied; a sub-texel at the fraction ``w`` of its cell holds :func:`_sub_texel` of the texels ``0 .. cells +
-    1`` (those below the horizon and the first above it: in the last split cell a stencil that ends there was 2-3
-    times further from tables of 94 texels, 90th percentile, than one that takes the next texel; the cell across the
-    horizon itself is not split), each (nu, wavelength) its own. The logarithms of those texels are taken once per
-    row."""
+    1`` (with the default split, :func:`.geometry.twilight_cells`, those below the horizon and the first two above
+    it: in the last cell below the horizon a stencil that ended below the horizon was 2-3 times further from tables
+    of 94 texels, 90th percentile, than one that takes the next texel), each (nu, wavelength) its own. The
+    logarithms of those texels are taken once per row. Where ``given`` is not empty (n_r, n_mu, (MU_S_SPLIT - 1)
+    cells, n_nu, n_wavelengths: the sub-texels' values computed, in the order of the refined axis), the sub-texels
+    are those values instead."""
     n_mu, n_nu, n_l = table.shape[1], table.shape[3], table.shape[4]
     n_out = out.shape[2]
     split = MU_S_SPLIT * cells
-    last = min(cells + 1, table.shape[2] - 1)  # the stencil's texels: up to the first above the horizon
+    last = min(cells + 1, table.shape[2] - 1)  # the stencils' texels: up to the second above the horizon
     y = np.empty((last + 1, n_nu, n_l))
     lg = np.empty((last + 1, n_nu, n_l))
-    need = j_lo < split
+    need = j_lo < split and given.shape[2] == 0
     # the stored texels the asked columns' stencils and fall-backs read (all of them for the whole axis)
     i_hi = min((j_lo + n_out - 1) // MU_S_SPLIT, cells - 1)
     t_lo = max(0, min(j_lo // MU_S_SPLIT - 1, last - 3))
@@ -369,6 +372,12 @@ def refine_mu_s_kernel(table, cells, j_lo, out, start, stop):
                 continue
             i = j // MU_S_SPLIT
             w = (j % MU_S_SPLIT) / MU_S_SPLIT
+            if given.shape[2] > 0:
+                g = i * (MU_S_SPLIT - 1) + j % MU_S_SPLIT - 1
+                for k in range(n_nu):
+                    for m in range(n_l):
+                        out[i_r, i_m, jj, k, m] = given[i_r, i_m, g, k, m]
+                continue
             if i >= 1 and last >= 4:
                 # texels 1 .. last: the tables' last texel (at mu_s_min) is left out of the stencils of the cells
                 # above it (in the cell -9.65..-7.63 deg of the default tables the 90th percentile against tables
@@ -390,21 +399,38 @@ def radius_layer(table, i_r):
     return table.radius_layer(i_r) if hasattr(table, "radius_layer") else np.asarray(table[i_r], dtype=np.float32)
 
 
-def refine_sun_zenith(table, cells, columns=None, out=None):
+def sub_texel_suns(bottom, top, mu_s_min, n_mu_s, cells):
+    """Zenith cosines of the suns of the sub-texels of a sun-zenith axis of ``n_mu_s`` texels whose first ``cells``
+    cells are split into :data:`.geometry.MU_S_SPLIT` (:func:`refine_sun_zenith`), in the order of the refined
+    axis ((MU_S_SPLIT - 1) cells of them): the sub-texel at the fraction ``m / MU_S_SPLIT`` of cell ``i`` is the
+    texel ``MU_S_SPLIT i + m`` of an axis of ``MU_S_SPLIT (n_mu_s - 1) + 1`` texels (the mapping is the same
+    fraction of either axis, :func:`.geometry.scattering_mu_s_coord`). ``bottom``, ``top`` [m]."""
+    n_fine = MU_S_SPLIT * (n_mu_s - 1) + 1
+    return np.array([scattering_mu_s_param(MU_S_SPLIT * i + m, bottom, top, mu_s_min, n_fine)
+                     for i in range(cells) for m in range(1, MU_S_SPLIT)], dtype=np.float64)
+
+
+def refine_sun_zenith(table, cells, columns=None, out=None, sub_texels=None):
     """A 4D scattering table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths; float32, or a :class:`.storage.HalfTable`,
-    decoded) refined along the sun zenith for the rendering lookups: its first ``cells`` cells (those wholly below
-    the horizon, :func:`.geometry.twilight_cells`) split into :data:`.geometry.MU_S_SPLIT` sub-cells
+    decoded) refined along the sun zenith for the rendering lookups: its first ``cells`` cells (those below and the
+    one across the horizon, :func:`.geometry.twilight_cells`) split into :data:`.geometry.MU_S_SPLIT` sub-cells
     (:func:`refine_mu_s_kernel`), float32, read with :func:`.geometry.refined_mu_s_cell`; ``columns`` (start,
     stop), if given, only those columns of the refined axis; written into ``out`` if given (float32, C-contiguous,
-    of the result's shape). The stored texels keep their values, so a read above the split cells is the stored
-    table's to the bit.
+    of the result's shape); ``sub_texels`` (n_r, n_mu, (MU_S_SPLIT - 1) cells, n_nu, n_wavelengths), if given, the
+    sub-texels' values computed at their suns (:func:`sub_texel_suns`; the single scattering,
+    :func:`.compute.stored_single_scattering`), which then replace the rule. The stored texels keep their values,
+    so a read above the split cells is the stored table's to the bit.
 
     Why: in twilight the sky falls by 2-5 times across one cell of the default 32 sun-zenith texels and the slope
     of its logarithm turns within a few cells, so no linear read between two texels follows it (+23 to +34 %
     median between the texels from -7 to -4.5 deg against tables of 94 texels); the four-point rule in the
     logarithm follows it to 0.6-0.7 % there (docs/accuracy.md, "Low sun"). Done as data, once per table (or per
     observer's two radius rows), every lookup stays a linear read: the same cost per ray, and the real-time
-    textures folded to colour read as the spectra do."""
+    textures folded to colour read as the spectra do. The library gives the single-scattering tables their
+    sub-texels computed (``sub_texels``): where the Earth's shadow reaches a column within a cell (below the
+    horizon, and across it for the ground's own point) no rule through the texels follows the single scattering
+    (the four-point rule -52 to +18 %, the linear read +8 to +18 %, against the 94-texel tables opposite a sun on
+    the horizon, clear air, views 0.2-2 deg)."""
     values = np.ascontiguousarray(table[:] if not isinstance(table, np.ndarray) else table, dtype=np.float32)
     n_r, n_mu, n_s, n_nu, n_l = values.shape
     n_f = refined_mu_s_count(n_s, cells)
@@ -416,7 +442,14 @@ def refine_sun_zenith(table, cells, columns=None, out=None):
         out = np.empty(shape, dtype=np.float32)
     elif out.shape != shape or out.dtype != np.float32 or not out.flags.c_contiguous:
         raise ValueError(f"out must be a C-contiguous float32 array of shape {shape}")
-    parallel_for(refine_mu_s_kernel, n_r * n_mu, values, int(cells), lo, out, grain=64)
+    if sub_texels is None:
+        given = np.empty((0, 0, 0, 0, 0), dtype=np.float32)
+    else:
+        given = np.ascontiguousarray(sub_texels, dtype=np.float32)
+        want = (n_r, n_mu, (MU_S_SPLIT - 1) * cells, n_nu, n_l)
+        if given.shape != want:
+            raise ValueError(f"sub_texels must have shape {want}; got {given.shape}")
+    parallel_for(refine_mu_s_kernel, n_r * n_mu, values, int(cells), lo, given, out, grain=64)
     return out
 
 

@@ -36,12 +36,14 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
   ``irradiance_uvs``, ``irradiance_lerp`` and ``log_quadratic_weight`` of the mappings).
 * ``rayleigh``, ``mie``, ``multiple`` 3D, width n_nu * n_mu_s (x = i_nu * n_mu_s + i_mu_s), height n_mu, depth n_r:
   the library's lookup tables (:attr:`skyscatter.precomputed.PrecomputedAtmosphere.lookup_tables`): the stored
-  tables refined along the sun zenith (manifest version 11), their first C cells (those wholly below the horizon,
-  both texels at mu_s < 0: :func:`skyscatter.precomputed.geometry.twilight_cells`, 7 of the default 32, -12 to
-  -0.43 deg; none where fewer than two texels lie below it) split into ``MU_S_SPLIT`` (3) sub-cells whose texels
-  hold the four-point Lagrange rule in the logarithm of the stored texels below the horizon (fewer than four: the
-  fall-backs of :func:`skyscatter.precomputed.lookup.refine_sun_zenith`), so n_mu_s = the stored count + 2 C (46
-  of the default 32). The refinement is per wavelength and not linear, so it is done before the fold: the texture
+  tables refined along the sun zenith (manifest version 11), their first C cells (those below the horizon and the
+  one across it: :func:`skyscatter.precomputed.geometry.twilight_cells`, 8 of the default 32, -12 to +0.78 deg; 7
+  until 2026-12-05, the cells wholly below the horizon; none where fewer than two texels lie below it) split into
+  ``MU_S_SPLIT`` (3) sub-cells whose texels hold the single scattering computed at their suns
+  (:func:`skyscatter.precomputed.compute.stored_single_scattering`) and the four-point Lagrange rule in the logarithm
+  of the stored texels for the multiple scattering (fewer than four: the fall-backs of
+  :func:`skyscatter.precomputed.lookup.refine_sun_zenith`), so n_mu_s = the stored count + 2 C (48 of the default
+  32). The refinement is per wavelength and not linear, so it is done before the fold: the texture
   unit's linear read of a folded texel column is then the fold of the library's linear read of the refined
   spectra. The mu_s position of a read is the stored axis' p, times 3 in the split cells (p < C), else p + 2 C
   (``scattering_mu_s_index`` of the mappings, :func:`skyscatter.precomputed.geometry.refined_mu_s_cell`).
@@ -110,9 +112,10 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: the multiple scattering divided by the lobe MultipleLobe(nu) (constants MULTIPLE_LOBE, MULTIPLE_LOBE_G; multiple_lobe
 #: and inscattered_radiance of the mappings; skyscatter table format 19); the irradiance texture's alpha is 0 (was the
 #: illuminance, unread since version 9). 11: the scattering textures hold the library's lookup tables refined along
-#: the sun zenith (the cells wholly below the horizon split into MU_S_SPLIT sub-cells; SCATTERING_N_MU_S is the
-#: refined count, the constants SCATTERING_MU_S_CELLS and MU_S_SPLIT; scattering_mu_s_index of the mappings returns
-#: the refined position).
+#: the sun zenith (the first SCATTERING_MU_S_CELLS cells split into MU_S_SPLIT sub-cells; SCATTERING_N_MU_S is the
+#: refined count; scattering_mu_s_index of the mappings returns the refined position). Which cells are split and
+#: what their sub-texels hold (since 2026-12-05 also the cell across the horizon, and the single scattering
+#: computed) is the library's, carried by those constants: a version-11 reader reads either export.
 MANIFEST_VERSION = 11
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
