@@ -220,6 +220,14 @@ def test_saved_tables_carry_the_phase_table(mie_params, tmp_path, monkeypatch):
         mp.setattr(AtmosphereParameters, "aerosol_phase_table", no_phase)
         loaded = PrecomputedAtmosphere.load(path)
         np.testing.assert_array_equal(loaded.sky_radiance([0.0, 0.0, r], d, sun), expected)
+        # in twilight the lookups compute the single scattering's sub-texels from the stored phase table (no Mie
+        # sums either), as the tables that were saved do, observer and per-ray paths; the stored arrays stay
+        # writable (a frozen array would make numba compile the lookups again for it)
+        dusk = np.array([0.0, math.cos(math.radians(-3.0)), math.sin(math.radians(-3.0))])
+        many = np.broadcast_to([0.0, 0.0, r + 5.0], d.shape)
+        for where in ([0.0, 0.0, r], many):
+            np.testing.assert_array_equal(loaded.sky_radiance(where, d, dusk), atm.sky_radiance(where, d, dusk))
+        assert loaded.computed and all(a.flags.writeable for a in loaded._aerosol_phase[2:])
 
     damaged = tmp_path / "damaged.npz"
     with zipfile.ZipFile(path) as src, zipfile.ZipFile(damaged, "w", zipfile.ZIP_STORED) as dst:

@@ -218,7 +218,7 @@ def test_refined_caches_are_built_once_across_threads(coarse_and_fine):
         return out
 
     def fresh():
-        for name in ("_lookup_tables_cache", "_lookup_layers"):
+        for name in ("_lookup_tables_cache", "_lookup_layers", "_sub_texel_row", "_sub_texel_source"):
             atm.__dict__.pop(name, None)
 
     for per_ray_too in (False, True):  # the observer's layers alone, then with the whole refined tables
@@ -260,11 +260,18 @@ def test_single_scattering_sub_texels_are_computed_at_their_suns(coarse_and_fine
     their suns (``compute.stored_single_scattering`` at ``lookup.sub_texel_suns``): against the independent
     precomputation with three times the texels, whose texels are those suns, within its half-precision storage
     (measured 4.8e-4 largest relative difference where the value is above 1e-3 of its radius layer's largest, the
-    scale of the half-precision values; tolerance 2e-3); the suns are its texels to 1e-12; the multiple
-    scattering's sub-texels are the rule's. Given sub-texels of the wrong shape are refused."""
+    scale of the half-precision values; tolerance 2e-3); the suns are its texels to 1e-12; the observer's radius
+    layers, built first, hold the same values; the multiple scattering's sub-texels are the rule's, and so are all
+    of them for tables constructed directly (``computed`` False). Given sub-texels of the wrong shape are
+    refused."""
     coarse, fine = coarse_and_fine
     cells = coarse._mu_s_cells
-    assert cells == 8
+    assert cells == 8 and coarse.computed
+    # the observer's radius layers, built before the whole refined tables (a fresh state), hold the same values
+    for name in ("_lookup_tables_cache", "_lookup_layers", "_sub_texel_row", "_sub_texel_source"):
+        coarse.__dict__.pop(name, None)
+    layers = {name: coarse._lookup_layer(name, 3).copy() for name in ("single_rayleigh", "single_mie", "multiple")}
+    assert "_lookup_tables_cache" not in coarse.__dict__
     suns = lookup.sub_texel_suns(RB, RT, MU_S_MIN, 32, cells)
     sub = [j for j in range(MU_S_SPLIT * cells) if j % MU_S_SPLIT]
     np.testing.assert_allclose(suns, mu_s_texels(RB, RT, MU_S_MIN, 94)[sub], rtol=0, atol=1e-12)
@@ -273,9 +280,16 @@ def test_single_scattering_sub_texels_are_computed_at_their_suns(coarse_and_fine
         ref = np.asarray(fine.tables[name], dtype=np.float64)[:, :, sub]
         keep = ref > 1e-3 * ref.max(axis=(1, 2, 3), keepdims=True)
         assert keep.sum() > 2000 and np.max(np.abs(got[keep] / ref[keep] - 1.0)) < 2e-3, name
-        # the observer's radius layers hold the same values
-        np.testing.assert_array_equal(coarse._lookup_layer(name, 3), coarse.lookup_tables[name][3])
+        np.testing.assert_array_equal(layers[name], coarse.lookup_tables[name][3])
+        # tables that are not the precomputation's of their parameters (constructed directly): the rule
+        rule = lookup.refine_sun_zenith(coarse.tables[name], cells)
+        assert not np.array_equal(coarse.lookup_tables[name], rule)
+        other = PrecomputedAtmosphere(coarse.parameters, coarse.wavelengths, coarse.sizes, coarse.orders,
+                                      coarse.stored)
+        assert not other.computed
+        np.testing.assert_array_equal(other.lookup_tables[name], rule)
+    np.testing.assert_array_equal(layers["multiple"], coarse.lookup_tables["multiple"][3])
     rule = lookup.refine_sun_zenith(coarse.tables["multiple"], cells)
-    np.testing.assert_array_equal(coarse.lookup_tables["multiple"], rule)
+    np.testing.assert_array_equal(coarse.lookup_tables["multiple"], rule)  # the multiple's sub-texels: the rule
     with pytest.raises(ValueError, match="sub_texels must have shape"):
         lookup.refine_sun_zenith(coarse.tables["single_mie"], cells, sub_texels=np.zeros((1, 1, 1, 1, 1)))

@@ -83,10 +83,11 @@ def test_manifest_mappings_and_textures_give_the_spectral_lookup(atm, luts):
 def test_twilight_reads_between_the_stored_sun_zenith_texels_give_the_lookup(atm, luts):
     """With the sun 3.5 and 5.5 deg below the horizon the read lies within the split sun-zenith cell, between the
     stored texels and within two different sub-cells: SMALL's 6 texels have 2 below the horizon (-12 and -1.41
-    deg), so 1 cell wholly below it is split (geometry.twilight_cells; the sub-texels the geometric interpolation of
-    its two texels, too few below the horizon for the four-point rule) and the refined axis has 6 + 2 = 8 texels;
-    -3.5 deg reads at 0.74 of the stored axis, 2.22 of the refined one (between sub-texel 2 and the stored texel 1
-    at 3), -5.5 deg at 0.52 (mid-cell), 1.57 (between sub-texels 1 and 2). The textures hold the lookups' refined
+    deg), so the cell between them and the one across the horizon are split (geometry.twilight_cells; the single
+    scattering's sub-texels computed at their suns, the multiple scattering's the four-point rule over texels 0-3)
+    and the refined axis has 6 + 2 x 2 = 10 texels; -3.5 deg reads at 0.74 of the stored axis, 2.22 of the refined
+    one (between sub-texel 2 and the stored texel 1 at 3), -5.5 deg at 0.52 (mid-cell), 1.57 (between sub-texels 1
+    and 2). The textures hold the lookups' refined
     tables folded, and the mappings' position on the refined axis is the lookups', so the GPU read gives the
     spectral lookup to rounding there too (measured worst 2.6e-7; the stored axis' textures, version 10's: 36; a
     linear read between the stored texels is off by far more:
@@ -103,7 +104,7 @@ def test_twilight_reads_between_the_stored_sun_zenith_texels_give_the_lookup(atm
     assert ns["SCATTERING_MU_S_CELLS"] == cells and ns["MU_S_SPLIT"] == MU_S_SPLIT
     rng = np.random.default_rng(17)
     worst = 0.0
-    for el in (-3.5, -5.5):  # SMALL's 6 texels, 1 split cell: at 2.22 and 1.57 of the refined axis of 8
+    for el in (-3.5, -5.5):  # SMALL's 6 texels, 2 split cells: at 2.22 and 1.57 of the refined axis of 10
         sun = direction_from_angles(np.radians(90.0 - el), 0.4)
         stored = scattering_mu_s_coord(float(sun[2]), p.bottom_radius, p.top_radius, p.mu_s_min, n_s)
         fine = ns["scattering_mu_s_index"](float(sun[2]))

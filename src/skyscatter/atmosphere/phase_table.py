@@ -247,7 +247,7 @@ class PhaseTable:
         th = np.arccos(m[::-1])
         th[0], th[-1] = 0.0, math.pi
         table = cls(wavelengths, th, np.asarray(v)[..., ::-1], normalise=False)  # validates the values
-        table._set(table._wavelengths, table._angles, np.array(m), np.ascontiguousarray(v, dtype=float))
+        table._set(table._wavelengths, table._angles, np.array(m), np.array(v, dtype=float))  # copies: frozen
         return table
 
     @classmethod

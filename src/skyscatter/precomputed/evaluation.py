@@ -80,6 +80,7 @@ class TableLookups:
     wavelengths: NDArray[np.float64]
     sizes: TableSizes
     orders: int
+    computed: bool
     if TYPE_CHECKING:  # the float32 tables: a property of the subclass that holds them (PrecomputedAtmosphere)
         @property
         def tables(self) -> dict[str, NDArray[np.float32]]: ...
@@ -223,11 +224,13 @@ class TableLookups:
         """The single-scattering tables' sub-texels of the refined sun-zenith axis at the radius index ``i_r``,
         computed at their suns (:func:`.compute.stored_single_scattering`, :func:`.lookup.sub_texel_suns`):
         ``{"single_rayleigh": ..., "single_mie": ...}``, each (1, n_mu, 2 cells, n_nu, n_wavelengths) float32;
-        empty when no cell is split. The medium they come from is built once per atmosphere (a tabulated phase
-        from the lookups' table, a file's: no Mie sums again) and the last row's pair is kept (the observer's
-        layers ask for the two tables of a row one after the other). Called with the refine lock held."""
+        empty when no cell is split or the tables are not the precomputation's of :attr:`parameters`
+        (:attr:`computed` False: then the sub-texels take the rule). The medium they come from is built once per
+        atmosphere (a tabulated phase from the lookups' table, a file's: no Mie sums again) and the last row's pair
+        is kept (the observer's layers ask for the two tables of a row one after the other). Called with the refine
+        lock held."""
         cells = self._mu_s_cells
-        if cells == 0:
+        if cells == 0 or not self.computed:
             return {}
         kept = self.__dict__.get("_sub_texel_row")
         if kept is not None and kept[0] == i_r:
@@ -275,7 +278,7 @@ class TableLookups:
                 layer = layers.get(key)
                 if layer is None:
                     lookup = _kernels()
-                    given = self._single_sub_texels(i_r).get(name)
+                    given = self._single_sub_texels(i_r).get(name) if name != "multiple" else None
                     layer = lookup.refine_sun_zenith(lookup.radius_layer(self.stored[name], i_r)[None],
                                                      self._mu_s_cells, sub_texels=given)[0]
                     while len(layers) >= 6:

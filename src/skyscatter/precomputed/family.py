@@ -7,8 +7,10 @@ the parameters that change from hour to hour, and gives any quantity computed fr
 patches, irradiance, the sun) at intermediate parameters by multilinear interpolation between the ``2^k`` nodes
 of the grid cell that holds them. Interpolating the quantity is the same as interpolating the tables (every
 lookup is linear in the table values), so the result is the sky of the interpolated tables; with the sun below the
-horizon, where the lookups read sub-texels that are not linear in the stored texels
-(:func:`.lookup.refine_sun_zenith`), it is the interpolation of the nodes' skies.
+horizon or within the cell across it (up to +0.78 deg with the default tables), where the lookups read sub-texels
+that are not linear in the stored texels or are computed (:func:`.lookup.refine_sun_zenith`), it is the
+interpolation of the nodes' skies. The ground-only nodes (two rows, the second repeating the ground's) take the
+interpolation rule for the single scattering's sub-texels too (``computed`` False).
 
 **Axes.** A :class:`GridAxis` names one parameter and its node values (increasing). The parameter is set on the
 family's base atmosphere by the axis's *setter*, one function registered by name in :data:`AXIS_SETTERS`:
@@ -218,6 +220,7 @@ class TableFamily:
                 atm = PrecomputedAtmosphere.load(path)
                 if atm.parameters.canonical_json() == atmosphere.canonical_json() and atm.orders == self.orders \
                         and np.array_equal(atm.wavelengths, self.wavelengths):
+                    atm.computed = False  # its second row repeats the ground's: not the precomputation's
                     return atm
             except (FileFormatError, OSError):
                 pass  # rebuilt below

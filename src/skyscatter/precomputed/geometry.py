@@ -390,9 +390,10 @@ def log_cubic_value(a: float, b: float, l0: float, l1: float, l2: float, l3: flo
     texels and ``c0 .. c3`` the weights of :func:`log_cubic_nodes`, kept between the values ``a``, ``b`` at the
     ends of the read's cell, so that it meets both at the cell's ends and never leaves them.
 
-    The values of the rendering lookups' sub-texels along the sun zenith in the cells below the horizon
-    (:func:`refined_mu_s_cell`, :func:`.lookup.refine_sun_zenith`): there the sky falls by 2-5 times across one
-    cell of the default 32 texels and the slope of its logarithm turns (docs/accuracy.md, "Low sun")."""
+    The values of the rendering lookups' sub-texels of the multiple scattering along the sun zenith in the cells
+    below and across the horizon (:func:`refined_mu_s_cell`, :func:`.lookup.refine_sun_zenith`; the single
+    scattering's are computed): there the sky falls by 2-5 times across one cell of the default 32 texels and the
+    slope of its logarithm turns (docs/accuracy.md, "Low sun")."""
     y = math.exp(c0 * l0 + c1 * l1 + c2 * l2 + c3 * l3)
     if a < b:
         return min(max(y, a), b)

@@ -465,9 +465,11 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     the shares of the lower and the upper row, which the lookup reads each at its own ``mu`` coordinate (the ground
     half of the ``mu`` axis at the same coordinate in both). The tables are the stored ones; their two radius rows
     around the observer are refined along the sun zenith here (:func:`refine_sun_zenith`, ``cells`` split cells,
-    only the two columns read), as the other lookups read the whole tables refined; or, with ``layers`` (a function
-    of the table's index, 0 single Rayleigh, 1 single Mie, 2 multiple, and a radius index), its columns read from
-    the refined radius layers it returns (n_mu, n_mu_s refined, n_nu, n_wavelengths), which a caller may keep.
+    only the two columns read, every sub-texel from the rule: the single scattering's computed sub-texels need the
+    atmosphere, which the tables alone do not carry); or, with ``layers`` (a function of the table's index, 0 single
+    Rayleigh, 1 single Mie, 2 multiple, and a radius index), its columns read from the refined radius layers it
+    returns (n_mu, n_mu_s refined, n_nu, n_wavelengths), which a caller may keep: the library passes its own
+    (:meth:`.PrecomputedAtmosphere._lookup_layer`), as the other lookups read its whole refined tables.
 
     The lookup is linear in ``r``, ``mu`` and ``mu_s``, so fixing the ``r`` and ``mu_s`` weights once and
     interpolating the slice in (``mu``, ``nu``) gives the same values as the 4D lookup; its weight along ``nu`` is

@@ -453,7 +453,8 @@ def read_tables(cls: type[PrecomputedAtmosphere], path: str | os.PathLike[str], 
     try:
         atmosphere = AtmosphereParameters.from_dict(meta["parameters"])
         sizes = TableSizes(**meta["sizes"])
-        atm = cls(atmosphere, meta["wavelengths"], sizes, meta["orders"], tables, meta.get("timings"))
+        # a file's tables are the precomputation's of its parameters (its key is checked below)
+        atm = cls(atmosphere, meta["wavelengths"], sizes, meta["orders"], tables, meta.get("timings"), computed=True)
     except (KeyError, TypeError, InvalidParameterError) as exc:
         raise FileFormatError(f"{p}: inconsistent table description ({exc})") from None
     if atm.cache_key != meta.get("key"):
@@ -470,9 +471,9 @@ def _set_phase(atm: PrecomputedAtmosphere, phase: dict[str, NDArray[Any]], p: Pa
     from .sampling import TABLE_PHASE
 
     mu, values = phase["aerosol_phase_mu"], phase["aerosol_phase_values"]
-    if (atm.parameters.aerosol_component.analytic_phase is not None or mu.ndim != 1 or mu.size < 2
-            or values.shape != (len(atm.wavelengths), mu.size) or not np.all(np.diff(mu) > 0)
-            or not np.all(np.isfinite(values))):
+    if (atm.parameters.aerosol_component.analytic_phase is not None or mu.ndim != 1 or mu.size < 3
+            or mu[0] != -1.0 or mu[-1] != 1.0 or values.shape != (len(atm.wavelengths), mu.size)
+            or not np.all(np.diff(mu) > 0) or not np.all(np.isfinite(values)) or np.any(values < 0)):
         raise FileFormatError(f"{p}: inconsistent stored aerosol phase table")
     atm._aerosol_phase_cache = (TABLE_PHASE, 0.0, mu, values)
 

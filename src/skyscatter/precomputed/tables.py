@@ -69,11 +69,20 @@ class PrecomputedAtmosphere(TableLookups):
     planet's centre at the origin); directions are unit vectors in the same frame. Radiance is spectral, at
     :attr:`wavelengths`; :meth:`to_xyz` converts it (see :mod:`.conversion`). The lookups are those of
     :class:`.evaluation.TableLookups`.
+
+    Constructed directly (``PrecomputedAtmosphere(atmosphere, wavelengths, sizes, orders, tables)``), the tables may
+    be anyone's; ``computed=True`` says that they are the precomputation's of ``atmosphere`` (what :meth:`compute`
+    and :meth:`load` give), so that the lookups may compute values the tables do not hold from ``atmosphere`` itself:
+    the single scattering at the sub-texels of the refined sun-zenith axis (:func:`.lookup.refine_sun_zenith`;
+    without it they take the interpolation rule there).
     """
 
     def __init__(self, atmosphere: AtmosphereParameters, wavelengths: ArrayLike, sizes: TableSizes, orders: int,
-                 tables: Mapping[str, NDArray[np.float32]], timings: Mapping[str, float] | None = None) -> None:
+                 tables: Mapping[str, NDArray[np.float32]], timings: Mapping[str, float] | None = None, *,
+                 computed: bool = False) -> None:
         self.parameters = atmosphere
+        #: True when the tables are the precomputation's of :attr:`parameters` (class docstring)
+        self.computed = bool(computed)
         self.wavelengths = np.asarray(wavelengths, dtype=float)
         self.sizes = sizes
         self.orders = int(orders)
@@ -156,7 +165,7 @@ class PrecomputedAtmosphere(TableLookups):
         atmosphere = AtmosphereParameters() if atmosphere is None else atmosphere
         wl, sz, arrays, timings = compute_tables(atmosphere, orders=orders, wavelengths=wavelengths, preset=tables,
                                                  sizes=sizes, progress=progress, chunk_size=chunk_size)
-        return cls(atmosphere, wl, sz, orders, arrays, timings)
+        return cls(atmosphere, wl, sz, orders, arrays, timings, computed=True)
 
     # ------------------------------------------------------------------ identity
 

@@ -18,7 +18,7 @@
 //   const int TRANSMITTANCE_N_R, TRANSMITTANCE_N_MU, IRRADIANCE_N_R, IRRADIANCE_N_MU_S,
 //             SCATTERING_N_R, SCATTERING_N_MU, SCATTERING_N_MU_S, SCATTERING_N_NU   texel counts
 //   const int SCATTERING_MU_S_CELLS, MU_S_SPLIT     the first SCATTERING_MU_S_CELLS cells of the stored sun-zenith
-//             axis (those wholly below the horizon) split into MU_S_SPLIT sub-cells each in the scattering
+//             axis (those below and across the horizon) split into MU_S_SPLIT sub-cells each in the scattering
 //             textures, whose SCATTERING_N_MU_S counts the refined axis (ScatteringMuSIndex)
 //   const float LOG_LERP_FLOOR                               floor of the smaller value's ratio in LogLerpWeight
 //   const float SHADOW_RATIO_MAX                             largest shadow factor in ShadowFactors
@@ -210,9 +210,9 @@ float MuSDistanceUnit(float mu_s) {
 // SCATTERING_N_MU_S - 1 at the zenith). On the stored axis (SCATTERING_N_MU_S - (MU_S_SPLIT - 1)
 // SCATTERING_MU_S_CELLS texels) it is p, the mean of max(1 - a / A, 0) / (1 + a) ([Bruneton2017], A = a(MU_S_MIN))
 // and 1 - theta_s / theta_max (theta_max = Acos(MU_S_MIN)); the first SCATTERING_MU_S_CELLS cells are split into
-// MU_S_SPLIT sub-cells (the cells wholly below the horizon; sub-texels from the four-point Lagrange rule in the
-// logarithm, [Abramowitz1964] Eq. 25.2.13, of the stored texels below the horizon: the twilight sky falls by 2-5
-// times across one stored cell), so the position is MU_S_SPLIT p there and p + (MU_S_SPLIT - 1)
+// MU_S_SPLIT sub-cells (the cells below and across the horizon; sub-texels of the single scattering computed at
+// their suns, of the multiple scattering from the four-point Lagrange rule in the logarithm, [Abramowitz1964]
+// Eq. 25.2.13, of the stored texels: the twilight sky falls by 2-5 times across one stored cell), so the position is MU_S_SPLIT p there and p + (MU_S_SPLIT - 1)
 // SCATTERING_MU_S_CELLS above (continuous at the split's end; skyscatter.precomputed.geometry.refined_mu_s_cell).
 float ScatteringMuSIndex(float mu_s) {
   float a = MuSDistanceUnit(mu_s);
