@@ -46,7 +46,7 @@ def subset(atm, wavelengths):
     if not np.allclose(atm.wavelengths[idx], wavelengths):
         raise SystemExit(f"{wavelengths} is not a subset of the reference wavelengths")
     return PrecomputedAtmosphere(atm.parameters, atm.wavelengths[idx], atm.sizes, atm.orders,
-                                 {k: v[..., idx] for k, v in atm.tables.items()})
+                                 {k: v[..., idx] for k, v in atm.tables.items()}, computed=True)
 
 
 def chromaticity(xyz: np.ndarray) -> np.ndarray:

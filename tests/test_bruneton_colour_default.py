@@ -31,7 +31,7 @@ def _subset(atm, wavelengths):
     idx = [int(np.argmin(np.abs(atm.wavelengths - w))) for w in wavelengths]
     assert np.allclose(atm.wavelengths[idx], wavelengths)
     return PrecomputedAtmosphere(atm.parameters, atm.wavelengths[idx], atm.sizes, atm.orders,
-                                 {k: v[..., idx] for k, v in atm.tables.items()})
+                                 {k: v[..., idx] for k, v in atm.tables.items()}, computed=True)
 
 
 @pytest.fixture(scope="module")

@@ -81,6 +81,7 @@ class TableLookups:
     sizes: TableSizes
     orders: int
     computed: bool
+    ground_rows: bool
     if TYPE_CHECKING:  # the float32 tables: a property of the subclass that holds them (PrecomputedAtmosphere)
         @property
         def tables(self) -> dict[str, NDArray[np.float32]]: ...
@@ -225,13 +226,16 @@ class TableLookups:
         computed at their suns (:func:`.compute.stored_single_scattering`, :func:`.lookup.sub_texel_suns`):
         ``{"single_rayleigh": ..., "single_mie": ...}``, each (1, n_mu, 2 cells, n_nu, n_wavelengths) float32;
         empty when no cell is split or the tables are not the precomputation's of :attr:`parameters`
-        (:attr:`computed` False: then the sub-texels take the rule). The medium they come from is built once per
+        (:attr:`computed` False: then the sub-texels take the rule); the ground's in every row where
+        :attr:`ground_rows`. The medium they come from is built once per
         atmosphere (a tabulated phase from the lookups' table, a file's: no Mie sums again) and the last row's pair
         is kept (the observer's layers ask for the two tables of a row one after the other). Called with the refine
         lock held."""
         cells = self._mu_s_cells
         if cells == 0 or not self.computed:
             return {}
+        if self.ground_rows:
+            i_r = 0  # every row holds the ground's
         kept = self.__dict__.get("_sub_texel_row")
         if kept is not None and kept[0] == i_r:
             return kept[1]

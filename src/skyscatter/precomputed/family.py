@@ -9,8 +9,8 @@ of the grid cell that holds them. Interpolating the quantity is the same as inte
 lookup is linear in the table values), so the result is the sky of the interpolated tables; with the sun below the
 horizon or within the cell across it (up to +0.78 deg with the default tables), where the lookups read sub-texels
 that are not linear in the stored texels or are computed (:func:`.lookup.refine_sun_zenith`), it is the
-interpolation of the nodes' skies. The ground-only nodes (two rows, the second repeating the ground's) take the
-interpolation rule for the single scattering's sub-texels too (``computed`` False).
+interpolation of the nodes' skies. The ground-only nodes (two rows, the second repeating the ground's) compute the
+single scattering's sub-texels at the ground in both rows (``ground_rows``).
 
 **Axes.** A :class:`GridAxis` names one parameter and its node values (increasing). The parameter is set on the
 family's base atmosphere by the axis's *setter*, one function registered by name in :data:`AXIS_SETTERS`:
@@ -220,7 +220,7 @@ class TableFamily:
                 atm = PrecomputedAtmosphere.load(path)
                 if atm.parameters.canonical_json() == atmosphere.canonical_json() and atm.orders == self.orders \
                         and np.array_equal(atm.wavelengths, self.wavelengths):
-                    atm.computed = False  # its second row repeats the ground's: not the precomputation's
+                    atm.ground_rows = True  # its second row repeats the ground's
                     return atm
             except (FileFormatError, OSError):
                 pass  # rebuilt below
@@ -230,7 +230,8 @@ class TableFamily:
         for name in ("single_rayleigh", "single_mie", "multiple"):
             tables[name] = np.repeat(full.tables[name][:1], 2, axis=0)
         sizes = dataclasses.replace(self.sizes, scattering_r=2)
-        atm = PrecomputedAtmosphere(atmosphere, full.wavelengths, sizes, full.orders, tables, full.timings)
+        atm = PrecomputedAtmosphere(atmosphere, full.wavelengths, sizes, full.orders, tables, full.timings,
+                                    computed=True, ground_rows=True)
         try:
             atm.save(path)
         except (OSError, OutputError) as exc:

@@ -74,15 +74,19 @@ class PrecomputedAtmosphere(TableLookups):
     be anyone's; ``computed=True`` says that they are the precomputation's of ``atmosphere`` (what :meth:`compute`
     and :meth:`load` give), so that the lookups may compute values the tables do not hold from ``atmosphere`` itself:
     the single scattering at the sub-texels of the refined sun-zenith axis (:func:`.lookup.refine_sun_zenith`;
-    without it they take the interpolation rule there).
+    without it they take the interpolation rule there). ``ground_rows=True`` says that every radius row of the 4D
+    tables holds the ground's (the weather family's ground-only nodes): those values are then the ground's in every
+    row.
     """
 
     def __init__(self, atmosphere: AtmosphereParameters, wavelengths: ArrayLike, sizes: TableSizes, orders: int,
                  tables: Mapping[str, NDArray[np.float32]], timings: Mapping[str, float] | None = None, *,
-                 computed: bool = False) -> None:
+                 computed: bool = False, ground_rows: bool = False) -> None:
         self.parameters = atmosphere
         #: True when the tables are the precomputation's of :attr:`parameters` (class docstring)
         self.computed = bool(computed)
+        #: True when every radius row of the 4D tables holds the ground's (class docstring)
+        self.ground_rows = bool(ground_rows)
         self.wavelengths = np.asarray(wavelengths, dtype=float)
         self.sizes = sizes
         self.orders = int(orders)
