@@ -227,10 +227,9 @@ class TableLookups:
         ``{"single_rayleigh": ..., "single_mie": ...}``, each (1, n_mu, 2 cells, n_nu, n_wavelengths) float32;
         empty when no cell is split or the tables are not the precomputation's of :attr:`parameters`
         (:attr:`computed` False: then the sub-texels take the rule); the ground's in every row where
-        :attr:`ground_rows`. The medium they come from is built once per
-        atmosphere (a tabulated phase from the lookups' table, a file's: no Mie sums again) and the last row's pair
-        is kept (the observer's layers ask for the two tables of a row one after the other). Called with the refine
-        lock held."""
+        :attr:`ground_rows`. The medium they come from is built once per atmosphere (a tabulated phase from the
+        lookups' table, a file's: no Mie sums again) and the last row's pair is kept (the observer's layers ask for
+        the two tables of a row one after the other). Called with the refine lock held."""
         cells = self._mu_s_cells
         if cells == 0 or not self.computed:
             return {}

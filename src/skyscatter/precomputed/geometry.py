@@ -627,9 +627,9 @@ def twilight_cells(bottom: float, top: float, mu_s_min: float, n_mu_s: int) -> i
     -52 to +18 %, the linear read +8 to +18 %, against tables of three times the texels opposite a sun on the
     horizon, clear air, views 0.2-2 deg; computed: within 2.5 %); the lookups compute the single scattering's
     sub-texels instead (:func:`.compute.stored_single_scattering`) and take the four-point rule for the multiple
-    scattering's, which is smooth there. Split so, the sun on the
-    horizon went from 12 to 3 of 45 directions outside 5 % of the Monte Carlo (docs/accuracy.md, "Low sun"; until
-    2026-12-05 the cell was read linearly: up to +19.5 % at 2 deg elevation towards the sun, turbidity 3).
+    scattering's, which is smooth there. Split so, the sun on the horizon went from 12 to 3 of 45 directions outside
+    5 % of the Monte Carlo (docs/accuracy.md, "Low sun"; until 2026-12-05 the cell was read linearly: up to +19.5 %
+    at 2 deg elevation towards the sun, turbidity 3).
     ``bottom``, ``top``: the planet's and the atmosphere's radii [m]; ``mu_s_min``: the tables' smallest sun zenith
     cosine."""
     p0 = scattering_mu_s_coord(0.0, bottom, top, mu_s_min, n_mu_s)
