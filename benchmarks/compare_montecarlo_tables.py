@@ -7,7 +7,8 @@ azimuths 0, 90 and 180 deg from the sun), it prints a Markdown table of the rela
 Tables: the default orders (``DEFAULT_ORDERS``: 6 until 2026-12-05, then 8; and the geometric tail) and sizes,
 computed at exactly these three wavelengths (``tables="rgb"``: per-wavelength radiance, no colour rule involved;
 cached on disk). Re-run after a change to the tables:
-``python benchmarks/compare_montecarlo_tables.py [--samples N] [--out docs/images/montecarlo_vs_tables.png]``.
+``python benchmarks/compare_montecarlo_tables.py [--samples N] [--out docs/images/montecarlo_vs_tables.png]
+[--sizes scattering_nu=16,...]``.
 """
 
 from __future__ import annotations
@@ -47,13 +48,15 @@ def main() -> None:
                     help="paths per direction with the sun below the horizon (few paths reach the lit upper air)")
     ap.add_argument("--out", default="docs/images/montecarlo_vs_tables.png")
     ap.add_argument("--json", default=None, help="also write the numbers to this JSON file")
+    ap.add_argument("--sizes", default="", help="table size overrides, e.g. scattering_nu=16,scattering_mu=64")
     args = ap.parse_args()
+    sizes = {k: int(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)} or None
     dirs, labels = directions()
     cases = {"Earth defaults": AtmosphereParameters(), "hazy (turbidity 3)": AtmosphereParameters.from_turbidity(3.0)}
     results = {}
     t0 = time.perf_counter()
     for name, params in cases.items():
-        tables = cached_atmosphere(params, tables="rgb", progress=False)
+        tables = cached_atmosphere(params, tables="rgb", sizes=sizes, progress=False)
         pos = np.array([0.0, 0.0, params.bottom_radius])
         for se in SUN_ELEVATIONS:
             zen = math.radians(90.0 - se)
