@@ -401,7 +401,8 @@ def _emulate_aerial(ns, tex, cam, point, sun):
 
         parts = [ns["single_scattering_lerp"](read(n, uvw0), read(n, uvw1), r, mu, mu_s, nu, w, n)
                  for n in ("rayleigh", "mie")]
-        parts.append(ns["azimuth_lerp"](read("multiple", uvw0), read("multiple", uvw1), w))
+        uvws, w4, lagrange = ns["scattering_uvw4"](r, mu, mu_s, nu, hits)
+        parts.append(ns["azimuth_read"]([read("multiple", q) for q in uvws], w4, lagrange))
         return np.array(ns["inscattered_radiance"](*parts, nu))
 
     def to_point(r, mu, mu_s, nu, d, hits):

@@ -48,7 +48,8 @@ def _gpu_sky(ns, tex, r, mu, mu_s, nu):
 
     parts = [ns["single_scattering_lerp"](read(n, uvw0), read(n, uvw1), r, mu, mu_s, nu, w, n)
              for n in ("rayleigh", "mie")]
-    parts.append(ns["azimuth_lerp"](read("multiple", uvw0), read("multiple", uvw1), w))
+    uvws, w4, lagrange = ns["scattering_uvw4"](r, mu, mu_s, nu, hits)
+    parts.append(ns["azimuth_read"]([read("multiple", q) for q in uvws], w4, lagrange))
     return np.array(ns["inscattered_radiance"](*parts, nu))
 
 
@@ -237,13 +238,14 @@ def test_half_and_exr_match_float32(luts):
 
 def test_manifest_states_version_units_scale_and_code(luts):
     manifest = json.loads((luts / MANIFEST_NAME).read_text())
-    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 11
+    assert manifest["format"] == "skyscatter-realtime-luts" and manifest["version"] == 12
     assert manifest["hdr_scale"]["cd_m2_per_unit_Y"] == 683.0
     assert manifest["mappings"]["glsl"] == glsl_mappings() and manifest["mappings"]["glsl"] in glsl_library()
-    for name in ("transmittance_uv", "irradiance_uv", "irradiance_uvs", "irradiance_lerp", "scattering_uvw"):
+    for name in ("transmittance_uv", "irradiance_uv", "irradiance_uvs", "irradiance_lerp", "scattering_uvw",
+                 "scattering_uvw4", "azimuth_read"):
         assert f"def {name}(" in manifest["mappings"]["python"]
     for glsl in ("TransmittanceUv", "IrradianceUv", "IrradianceUvs", "IrradianceLerp", "ScatteringMuRCoords",
-                 "ScatteringMuSIndex", "ScatteringNuIndex"):
+                 "ScatteringMuSIndex", "ScatteringNuIndex", "AzimuthRead"):
         assert glsl in manifest["mappings"]["glsl"]
     for name, entry in manifest["textures"].items():
         f = entry["files"]["rgba32f"]
@@ -308,7 +310,7 @@ def test_server_serves_the_viewer_and_only_the_exports_files(luts, tmp_path):
         assert b"GetSkyRadianceToPoint" in get("/glsl/atmosphere.glsl")
         for path in ("/", "/viewer/viewer.js", "/viewer/style.css"):  # nothing loaded from the network
             assert b"http://" not in get(path) and b"https://" not in get(path) and b"//cdn" not in get(path)
-        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 11
+        assert json.loads(get(f"/luts/{MANIFEST_NAME}"))["version"] == 12
         assert len(get("/luts/rayleigh.rgba32f")) == (luts / "rayleigh.rgba32f").stat().st_size
         for path in ("/luts/secret.txt", "/luts/../secret.txt", "/etc/passwd", "/viewer/../export.py"):
             with pytest.raises(urllib.error.HTTPError, match="404"):

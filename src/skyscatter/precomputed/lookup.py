@@ -30,6 +30,8 @@ from .geometry import (
     MU_S_LIMIT_TOLERANCE,
     MU_S_SPLIT,
     acos_table,
+    azimuth_four_point,
+    azimuth_read_weights,
     bilinear_weights,
     clamp,
     distance_to_bottom,
@@ -62,6 +64,7 @@ from .sampling import (
     irradiance_lookup,
     irradiance_read,
     lookup4_cell,
+    lookup4_cell_azimuth,
     lookup4_cell_spectral,
     lookup4_cell_weighted,
     lookup4_cell_weighted_spectral,
@@ -110,7 +113,8 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, cel
     used instead of ``p_m``; ``lobe``: the weight of :func:`.sampling.multiple_lobe`, by which the multiple
     scattering is stored divided and which it is multiplied by here at ``nu``); zero below the sun-zenith limit.
 
-    Along the azimuth (nu) the tables are interpolated log-linearly (:func:`.sampling.lookup4_cell`), except the
+    Along the azimuth (nu) the single-scattering tables are interpolated log-linearly (:func:`.sampling.lookup4_cell`)
+    and the multiple scattering through four azimuth texels (:func:`.sampling.lookup4_cell_azimuth`), except the
     single-scattering tables where the point lies in the Earth's shadow (:func:`.geometry.in_earth_shadow`, one
     test): there with the weights of :func:`.sampling.shadow_nu_weights` (the rule of the second order's scattering
     density; the Rayleigh and aerosol density profiles ``profiles[0]``, ``profiles[1]`` of
@@ -146,7 +150,7 @@ def _inscatter(ray, mie, mult, r, mu, mu_s, nu, hits, bottom, top, mu_s_min, cel
             lookup4_cell_spectral(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, p_m_spec, out)
         else:
             lookup4_cell(mie, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, p_m, out)
-    lookup4_cell(mult, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, multiple_lobe(nu, lobe), out)
+    lookup4_cell_azimuth(mult, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, multiple_lobe(nu, lobe), out)
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -606,8 +610,9 @@ def _observer_row_cells(dirs, px, py, pz, r, bottom, top, n_r, n_mu, n_nu, cell,
 
 @helper(fastmath=CONTRACT_ARCP)
 def _observer_nu_weights(slices, slices1, two_rows, n_nu, n_c, cell, w_mu, cell1, w_mu1, w_nu, w_tab, ends):
-    """The azimuth weights (:func:`.sampling.nu_weight`) of the three tables of the observer slices (n_mu * n_nu,
-    n_c + 1, 4) for a block of rays into ``w_tab`` (3, >= m), from the middle wavelength in channel ``n_c``. Two
+    """The azimuth weights (:func:`.sampling.nu_weight`) of the two single-scattering tables of the observer slices
+    (n_mu * n_nu, n_c + 1, 4) for a block of rays into ``w_tab[0]``, ``w_tab[1]``, from the middle wavelength in
+    channel ``n_c`` (the multiple scattering's: :func:`_observer_azimuth_weights`). Two
     passes: the ends of each table's cell (linear along mu at the two nu texels) gathered into ``ends`` (2, 3, >= m,
     float32), then :func:`.geometry.log_lerp_weight` over those contiguous values in float32, which runs on SIMD
     lanes (a loop that gathers and divides at once stays scalar; measured). With ``two_rows`` the ends are the sums
@@ -618,7 +623,7 @@ def _observer_nu_weights(slices, slices1, two_rows, n_nu, n_c, cell, w_mu, cell1
         a = cell[k]
         b = a + n_nu
         wm = w_mu[k]
-        for t in range(3):
+        for t in range(2):
             e0 = (1.0 - wm) * slices[a, n_c, t] + wm * slices[b, n_c, t]
             e1 = (1.0 - wm) * slices[a + 1, n_c, t] + wm * slices[b + 1, n_c, t]
             if two_rows:
@@ -629,12 +634,49 @@ def _observer_nu_weights(slices, slices1, two_rows, n_nu, n_c, cell, w_mu, cell1
                 e1 += (1.0 - wm1) * slices1[a1 + 1, n_c, t] + wm1 * slices1[b1 + 1, n_c, t]
             ends[0, t, k] = e0
             ends[1, t, k] = e1
-    for t in range(3):
+    for t in range(2):
         e0 = ends[0, t]
         e1 = ends[1, t]
         wt = w_tab[t]
         for k in range(m):
             wt[k] = log_lerp_weight(e0[k], e1[k], np.float32(w_nu[k]))
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _observer_azimuth_weights(slices, slices1, two_rows, n_nu, n_c, cell, w_mu, cell1, w_mu1, w_nu, w4, off):
+    """The multiple scattering's weights of its four azimuth texels (:func:`.sampling.lookup4_cell_azimuth`:
+    :func:`.geometry.azimuth_four_point`, :func:`.geometry.azimuth_read_weights`) for a block of rays of the
+    observer slices (n_mu * n_nu, n_c + 1, 4; the middle wavelength in channel ``n_c``) into ``w4`` (4, >= m), and
+    the outer texels' offsets from the cell's first (``off`` (2, >= m)); each texel's value linear along mu at the
+    ray's cell, with ``two_rows`` the sum of the two rows' shares (``slices1`` at ``cell1``, ``w_mu1``), as
+    :func:`.sampling.lookup4_cell_azimuth` sums the rows."""
+    for k in range(cell.shape[0]):
+        a = cell[k]
+        i_n = a % n_nu
+        j0, j3, l0, l1, l2, l3 = azimuth_four_point(i_n, w_nu[k], n_nu)
+        o0 = j0 - i_n
+        o3 = j3 - i_n
+        wm = w_mu[k]
+        b = a + n_nu
+        v0 = (1.0 - wm) * slices[a + o0, n_c, 2] + wm * slices[b + o0, n_c, 2]
+        v1 = (1.0 - wm) * slices[a, n_c, 2] + wm * slices[b, n_c, 2]
+        v2 = (1.0 - wm) * slices[a + 1, n_c, 2] + wm * slices[b + 1, n_c, 2]
+        v3 = (1.0 - wm) * slices[a + o3, n_c, 2] + wm * slices[b + o3, n_c, 2]
+        if two_rows:
+            a1 = cell1[k]
+            b1 = a1 + n_nu
+            wm1 = w_mu1[k]
+            v0 += (1.0 - wm1) * slices1[a1 + o0, n_c, 2] + wm1 * slices1[b1 + o0, n_c, 2]
+            v1 += (1.0 - wm1) * slices1[a1, n_c, 2] + wm1 * slices1[b1, n_c, 2]
+            v2 += (1.0 - wm1) * slices1[a1 + 1, n_c, 2] + wm1 * slices1[b1 + 1, n_c, 2]
+            v3 += (1.0 - wm1) * slices1[a1 + o3, n_c, 2] + wm1 * slices1[b1 + o3, n_c, 2]
+        w0, w1, w2, w3 = azimuth_read_weights(v0, v1, v2, v3, w_nu[k], l0, l1, l2, l3)
+        w4[0, k] = w0
+        w4[1, k] = w1
+        w4[2, k] = w2
+        w4[3, k] = w3
+        off[0, k] = o0
+        off[1, k] = o3
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -674,13 +716,15 @@ def _observer_shadow_weights(dirs, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, 
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, p_l, out):
+def _observer_gather(slices, n_nu, cell, w_mu, w_tab, w4, off, p_r, p_m, p_l, out):
     """Interpolation of the observer slices (:func:`observer_slices` as (n_mu * n_nu, C + 1, 4)) for a block of
-    rays from :func:`_observer_coords`, linear along mu and along nu with the weights ``w_tab`` (3, >= m) of
-    :func:`_observer_nu_weights`, phase factors applied: ``out`` (m, C).
+    rays from :func:`_observer_coords`, linear along mu; along nu the two single-scattering tables with the weights
+    ``w_tab`` (2, >= m) of :func:`_observer_nu_weights` and the multiple scattering through its four azimuth texels
+    (weights ``w4``, outer offsets ``off``: :func:`_observer_azimuth_weights`); phase factors applied: ``out`` (m, C).
 
-    One channel (luminance) has its own loop: with the channel count known to be 1 the compiler turns the four
-    texel reads into SIMD gathers (gather 6.6 -> 4.7 ns per ray); for C channels it leaves the loop scalar."""
+    One channel (luminance) has its own loop: with the channel count known to be 1 the compiler turns the texel
+    reads into SIMD gathers (gather 6.6 -> 4.7 ns per ray, two-texel reads); for C channels it leaves the loop
+    scalar."""
     n_c = out.shape[1]
     if n_c == 1:
         for k in range(cell.shape[0]):
@@ -693,31 +737,38 @@ def _observer_gather(slices, n_nu, cell, w_mu, w_tab, p_r, p_m, p_l, out):
             w00, w01, w10, w11 = bilinear_weights(wm, w_tab[1, k])
             v += p_m[k] * (w00 * slices[a, 0, 1] + w01 * slices[a + 1, 0, 1] + w10 * slices[b, 0, 1]
                            + w11 * slices[b + 1, 0, 1])
-            w00, w01, w10, w11 = bilinear_weights(wm, w_tab[2, k])
-            out[k, 0] = v + p_l[k] * (w00 * slices[a, 0, 2] + w01 * slices[a + 1, 0, 2] + w10 * slices[b, 0, 2]
-                                      + w11 * slices[b + 1, 0, 2])
+            a0 = a + off[0, k]
+            a3 = a + off[1, k]
+            u = (w4[0, k] * ((1.0 - wm) * slices[a0, 0, 2] + wm * slices[a0 + n_nu, 0, 2])
+                 + w4[1, k] * ((1.0 - wm) * slices[a, 0, 2] + wm * slices[b, 0, 2])
+                 + w4[2, k] * ((1.0 - wm) * slices[a + 1, 0, 2] + wm * slices[b + 1, 0, 2])
+                 + w4[3, k] * ((1.0 - wm) * slices[a3, 0, 2] + wm * slices[a3 + n_nu, 0, 2]))
+            out[k, 0] = v + p_l[k] * u
         return
     for k in range(cell.shape[0]):
         wm = w_mu[k]
         a = cell[k]
         b = a + n_nu
-        # the phase factors folded into each table's four weights, held for every channel
+        a0 = a + off[0, k]
+        a3 = a + off[1, k]
+        # the phase factors folded into each table's weights, held for every channel
         r00, r01, r10, r11 = bilinear_weights(wm, w_tab[0, k])
         pr = p_r[k]
         r00, r01, r10, r11 = pr * r00, pr * r01, pr * r10, pr * r11
         m00, m01, m10, m11 = bilinear_weights(wm, w_tab[1, k])
         pm = p_m[k]
         m00, m01, m10, m11 = pm * m00, pm * m01, pm * m10, pm * m11
-        u00, u01, u10, u11 = bilinear_weights(wm, w_tab[2, k])
         pl = p_l[k]
-        u00, u01, u10, u11 = pl * u00, pl * u01, pl * u10, pl * u11
+        u0, u1, u2, u3 = pl * w4[0, k], pl * w4[1, k], pl * w4[2, k], pl * w4[3, k]
         for c in range(n_c):
             out[k, c] = (r00 * slices[a, c, 0] + r01 * slices[a + 1, c, 0] + r10 * slices[b, c, 0]
                          + r11 * slices[b + 1, c, 0]
                          + m00 * slices[a, c, 1] + m01 * slices[a + 1, c, 1] + m10 * slices[b, c, 1]
                          + m11 * slices[b + 1, c, 1]
-                         + u00 * slices[a, c, 2] + u01 * slices[a + 1, c, 2] + u10 * slices[b, c, 2]
-                         + u11 * slices[b + 1, c, 2])
+                         + u0 * ((1.0 - wm) * slices[a0, c, 2] + wm * slices[a0 + n_nu, c, 2])
+                         + u1 * ((1.0 - wm) * slices[a, c, 2] + wm * slices[b, c, 2])
+                         + u2 * ((1.0 - wm) * slices[a + 1, c, 2] + wm * slices[b + 1, c, 2])
+                         + u3 * ((1.0 - wm) * slices[a3, c, 2] + wm * slices[a3 + n_nu, c, 2]))
 
 
 @kernel
@@ -756,8 +807,10 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
     w_mu1 = np.empty(OBSERVER_BLOCK)
     upper = np.empty((OBSERVER_BLOCK, n_c))
     w_nu = np.empty(OBSERVER_BLOCK)
-    w_tab = np.empty((3, OBSERVER_BLOCK))
-    ends = np.empty((2, 3, OBSERVER_BLOCK), dtype=np.float32)
+    w_tab = np.empty((2, OBSERVER_BLOCK))
+    ends = np.empty((2, 2, OBSERVER_BLOCK), dtype=np.float32)
+    w4 = np.empty((4, OBSERVER_BLOCK))
+    off = np.empty((2, OBSERVER_BLOCK), dtype=np.int64)
     p_r = np.empty(OBSERVER_BLOCK)
     p_m = np.empty(OBSERVER_BLOCK)
     p_l = np.empty(OBSERVER_BLOCK)
@@ -811,12 +864,15 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
                 bad[b0 + k] = True
         _observer_nu_weights(flat, flat1, two_rows, n_nu, n_c, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m], w_nu[:m],
                              w_tab, ends)
+        _observer_azimuth_weights(flat, flat1, two_rows, n_nu, n_c, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m],
+                                  w_nu[:m], w4, off)
         if shadowed:
             _observer_shadow_weights(block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, cos_phi, profiles,
                                      counts, cell[:m], w_nu[:m], w_tab, p_r[:m], p_m[:m])
-        _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_tab, p_r[:m], p_m[:m], p_l[:m], out[b0:b1])
+        _observer_gather(flat, n_nu, cell[:m], w_mu[:m], w_tab, w4, off, p_r[:m], p_m[:m], p_l[:m], out[b0:b1])
         if two_rows:
-            _observer_gather(flat1, n_nu, cell1[:m], w_mu1[:m], w_tab, p_r[:m], p_m[:m], p_l[:m], upper[:m])
+            _observer_gather(flat1, n_nu, cell1[:m], w_mu1[:m], w_tab, w4, off, p_r[:m], p_m[:m], p_l[:m],
+                             upper[:m])
             for k in range(m):
                 for ch in range(n_c):
                     out[b0 + k, ch] += upper[k, ch]

@@ -25,6 +25,8 @@ from ..jit import helper
 from .geometry import (
     MU_S_SPLIT,
     acos_table,
+    azimuth_four_point,
+    azimuth_read_weights,
     bilinear_weights,
     clamp,
     irradiance_coord,
@@ -407,6 +409,60 @@ def lookup4_cell(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n
                     we *= scale
                     for k in range(n_l):
                         out[k] += we * table[i_r + a, i_mu + b, i_s + c, i_n + e, k]
+
+
+@helper
+def _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j):
+    """A 4D table's azimuth texel ``j`` at its middle wavelength, interpolated linearly in r, mu and mu_s (the
+    cell of :func:`nu_weight`)."""
+    k = table.shape[4] // 2
+    v = 0.0
+    for a in range(2):
+        wa = w_r if a else 1.0 - w_r
+        i_mu = i_mu1 if a else i_mu0
+        w_mu = w_mu1 if a else w_mu0
+        for b in range(2):
+            wb = wa * (w_mu if b else 1.0 - w_mu)
+            for c in range(2):
+                v += wb * (w_s if c else 1.0 - w_s) * table[i_r + a, i_mu + b, i_s + c, j, k]
+    return v
+
+
+@helper
+def lookup4_cell_azimuth(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n, scale, out):
+    """``out += scale * table(cell)``: :func:`lookup4_cell` with the read along nu through four azimuth texels
+    (:func:`.geometry.azimuth_four_point`, :func:`.geometry.azimuth_read_weights`: the four-point rule where the
+    texels' values are smooth, the log-linear read of the cell where they fall steeply), its weights from the
+    middle wavelength; the multiple-scattering table's read in every rendering lookup (its ratio to the lobe,
+    :func:`multiple_lobe`)."""
+    n_l = table.shape[4]
+    j0, j3, l0, l1, l2, l3 = azimuth_four_point(i_n, w_n, table.shape[3])
+    v0 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j0)
+    v1 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n)
+    v2 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n + 1)
+    v3 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j3)
+    l0, l1, l2, l3 = azimuth_read_weights(v0, v1, v2, v3, w_n, l0, l1, l2, l3)
+    for e in range(4):
+        j = j0 if e == 0 else (i_n if e == 1 else (i_n + 1 if e == 2 else j3))
+        we = scale * (l0 if e == 0 else (l1 if e == 1 else (l2 if e == 2 else l3)))
+        if we == 0.0:
+            continue
+        for a in range(2):
+            wa = w_r if a else 1.0 - w_r
+            if wa == 0.0:
+                continue
+            i_mu = i_mu1 if a else i_mu0
+            w_mu = w_mu1 if a else w_mu0
+            for b in range(2):
+                wb = wa * (w_mu if b else 1.0 - w_mu)
+                if wb == 0.0:
+                    continue
+                for c in range(2):
+                    wc = we * wb * (w_s if c else 1.0 - w_s)
+                    if wc == 0.0:
+                        continue
+                    for k in range(n_l):
+                        out[k] += wc * table[i_r + a, i_mu + b, i_s + c, j, k]
 
 
 @helper

@@ -115,8 +115,11 @@ MANIFEST_FORMAT = "skyscatter-realtime-luts"
 #: the sun zenith (the first SCATTERING_MU_S_CELLS cells split into MU_S_SPLIT sub-cells; SCATTERING_N_MU_S is the
 #: refined count; scattering_mu_s_index of the mappings returns the refined position). Which cells are split and
 #: what their sub-texels hold (since 2026-12-05 also the cell across the horizon, and the single scattering
-#: computed) is the library's, carried by those constants: a version-11 reader reads either export.
-MANIFEST_VERSION = 11
+#: computed) is the library's, carried by those constants: a version-11 reader reads either export. 12: the
+#: multiple-scattering texture is read along the azimuth through four nu slices (scattering_uvw4, azimuth_read of the
+#: mappings; constants AZIMUTH_RATIO_FOUR_POINT, AZIMUTH_RATIO_LOG_LINEAR), as the library's lookups since
+#: 2026-12-06 (skyscatter.precomputed.sampling.lookup4_cell_azimuth); the textures are unchanged.
+MANIFEST_VERSION = 12
 #: File formats: suffix and description.
 FORMATS = {"rgba32f": "raw little-endian float32 RGBA", "rgba16f": "raw little-endian IEEE 754 half RGBA",
            "exr": "OpenEXR, float32 R, G, B, A (3D textures: depth slices stacked vertically, r slowest)"}
@@ -349,6 +352,41 @@ def azimuth_lerp(s0, s1, w):
     k = log_lerp_weight(s0[3], s1[3], w)
     return [a + k * (b - a) for a, b in zip(s0[:3], s1[:3])]
 
+def scattering_uvw4(r, mu, mu_s, nu, hits_ground):
+    """The multiple scattering's read along the azimuth: the texture coordinates of four nu slices (the cell's two,
+    those of scattering_uvw, and one on each side; the axis runs over the view-sun azimuth from pi to 0 and the sky
+    is symmetric about both ends, so the slice before the first is the second and the one after the last the one
+    before it), the fraction w of the cell and the four-point Lagrange weights at w (-w (w - 1) (w - 2) / 6,
+    (w + 1) (w - 1) (w - 2) / 2, -(w + 1) w (w - 2) / 2, (w + 1) w (w - 1) / 6), for azimuth_read."""
+    uvw0, uvw1, w = scattering_uvw(r, mu, mu_s, nu, hits_ground)
+    p_n = clamp(scattering_nu_index(mu, mu_s, nu), 0.0, SCATTERING_N_NU - 1)
+    i_n = min(math.floor(p_n), SCATTERING_N_NU - 2)
+    j0 = i_n - 1 if i_n > 0 else 1
+    j3 = i_n + 2 if i_n + 2 <= SCATTERING_N_NU - 1 else 2 * (SCATTERING_N_NU - 1) - (i_n + 2)
+    du = 1.0 / SCATTERING_N_NU  # one nu slice along x
+    uvws = [(uvw0[0] + (j0 - i_n) * du, uvw0[1], uvw0[2]), uvw0, uvw1, (uvw0[0] + (j3 - i_n) * du, uvw0[1], uvw0[2])]
+    lagrange = (-w * (w - 1.0) * (w - 2.0) / 6.0, 0.5 * (w + 1.0) * (w - 1.0) * (w - 2.0),
+                -0.5 * (w + 1.0) * w * (w - 2.0), (w + 1.0) * w * (w - 1.0) / 6.0)
+    return uvws, w, lagrange
+
+def azimuth_read(s, w, lagrange):
+    """RGB of the multiple-scattering texture from the reads s[0] .. s[3] (RGBA) of its four nu slices
+    (scattering_uvw4): the four-point weights where the four alphas (the table's middle wavelength) lie within a
+    factor AZIMUTH_RATIO_FOUR_POINT of each other, the log-linear read of the middle two (log_lerp_weight of their
+    alphas) beyond AZIMUTH_RATIO_LOG_LINEAR or where an alpha is not positive, blended linearly in the ratio in
+    between; one set of weights for every channel."""
+    a = [x[3] for x in s]
+    lo = min(a)
+    hi = max(a)
+    beta = 0.0
+    if lo > 0.0:
+        beta = clamp((AZIMUTH_RATIO_LOG_LINEAR - hi / lo) / (AZIMUTH_RATIO_LOG_LINEAR - AZIMUTH_RATIO_FOUR_POINT),
+                     0.0, 1.0)
+    g = log_lerp_weight(a[1], a[2], w)
+    k = (beta * lagrange[0], beta * lagrange[1] + (1.0 - beta) * (1.0 - g), beta * lagrange[2] + (1.0 - beta) * g,
+         beta * lagrange[3])
+    return [sum(k[e] * s[e][c] for e in range(4)) for c in range(3)]
+
 def shadow_lerp(s0, s1, w, f):
     """RGB of a single-scattering texture between the reads s0, s1 (RGBA) of its two nu slices where the point is
     in the Earth's shadow (in_earth_shadow): linear, each slice times its shadow factor f[0], f[1]
@@ -357,7 +395,7 @@ def shadow_lerp(s0, s1, w, f):
 
 def single_scattering_lerp(s0, s1, r, mu, mu_s, nu, w, constituent):
     """A single-scattering lookup ("rayleigh" or "mie") between its two nu slices: shadow_lerp where the point is in
-    the Earth's shadow, else azimuth_lerp (the multiple scattering is always azimuth_lerp)."""
+    the Earth's shadow, else azimuth_lerp (the multiple scattering: azimuth_read of four slices)."""
     if in_earth_shadow(r, max(mu_s, MU_S_MIN)):
         return shadow_lerp(s0, s1, w, shadow_factors(r, mu, mu_s, nu, constituent))
     return azimuth_lerp(s0, s1, w)
@@ -545,7 +583,14 @@ def engine_textures(atm: PrecomputedAtmosphere) -> dict[str, NDArray[np.float32]
 def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
     from ..atmosphere.phase import aerosol_phase_kind
     from ..precomputed.compute import density_profiles
-    from ..precomputed.geometry import LOG_LERP_FLOOR, MU_S_SPLIT, refined_mu_s_count, twilight_cells
+    from ..precomputed.geometry import (
+        AZIMUTH_RATIO_FOUR_POINT,
+        AZIMUTH_RATIO_LOG_LINEAR,
+        LOG_LERP_FLOOR,
+        MU_S_SPLIT,
+        refined_mu_s_count,
+        twilight_cells,
+    )
     from ..precomputed.sampling import MULTIPLE_LOBE_G, SHADOW_RATIO_MAX, lobe_weight
     from ..sun.disc import solar_disc_solid_angle
 
@@ -571,6 +616,8 @@ def _constants(atm: PrecomputedAtmosphere) -> dict[str, Any]:
         "SCATTERING_N_R": n_r, "SCATTERING_N_MU": n_mu, "SCATTERING_N_MU_S": refined_mu_s_count(n_s, cells),
         "SCATTERING_N_NU": n_n, "SCATTERING_MU_S_CELLS": cells, "MU_S_SPLIT": MU_S_SPLIT,
         "LOG_LERP_FLOOR": float(LOG_LERP_FLOOR), "SHADOW_RATIO_MAX": float(SHADOW_RATIO_MAX),
+        "AZIMUTH_RATIO_FOUR_POINT": float(AZIMUTH_RATIO_FOUR_POINT),
+        "AZIMUTH_RATIO_LOG_LINEAR": float(AZIMUTH_RATIO_LOG_LINEAR),
         "DENSITY_MAX_LAYERS": n_layers,
         "RAYLEIGH_DENSITY_LAYERS": int(counts[0]), "MIE_DENSITY_LAYERS": int(counts[1]),
         "RAYLEIGH_DENSITY": [float(v) for v in profiles[0, :n_layers].ravel()],

@@ -22,6 +22,7 @@
 //             textures, whose SCATTERING_N_MU_S counts the refined axis (ScatteringMuSIndex)
 //   const float LOG_LERP_FLOOR                               floor of the smaller value's ratio in LogLerpWeight
 //   const float SHADOW_RATIO_MAX                             largest shadow factor in ShadowFactors
+//   const float AZIMUTH_RATIO_FOUR_POINT, AZIMUTH_RATIO_LOG_LINEAR   bounds of the four-point read in AzimuthRead
 //   const int DENSITY_MAX_LAYERS; const int RAYLEIGH_DENSITY_LAYERS, MIE_DENSITY_LAYERS   layers of the profiles
 //   const float RAYLEIGH_DENSITY[5 * DENSITY_MAX_LAYERS], MIE_DENSITY[...]   relative density profiles of air and
 //             aerosol, per layer (width [m], exp_term, exp_scale [1/m], linear_term [1/m], constant_term)
@@ -252,6 +253,26 @@ float LogLerpWeight(float a, float b, float w) {
 // sampling.nu_weight does), applied to every channel.
 vec3 AzimuthLerp(vec4 s0, vec4 s1, float w) { return mix(s0.rgb, s1.rgb, LogLerpWeight(s0.a, s1.a, w)); }
 
+// RGB of the multiple-scattering texture from the reads s0 .. s3 of four nu slices (the cell's two, s1 and s2, and
+// one on each side, mirrored at the axis' ends) at the fraction w of the cell: the four-point Lagrange weights
+// [Abramowitz1964] Eq. 25.2.13 where the four alphas (the table's middle wavelength) lie within a factor
+// AZIMUTH_RATIO_FOUR_POINT of each other, the log-linear read of s1, s2 (AzimuthLerp) beyond
+// AZIMUTH_RATIO_LOG_LINEAR or where an alpha is not positive, blended linearly in the ratio in between
+// (skyscatter.precomputed.sampling.lookup4_cell_azimuth, geometry.azimuth_read_weights).
+vec3 AzimuthRead(vec4 s0, vec4 s1, vec4 s2, vec4 s3, float w) {
+  float lo = min(min(s0.a, s1.a), min(s2.a, s3.a));
+  float hi = max(max(s0.a, s1.a), max(s2.a, s3.a));
+  float beta = lo > 0.0 ? clamp((AZIMUTH_RATIO_LOG_LINEAR - hi / lo) /
+                                (AZIMUTH_RATIO_LOG_LINEAR - AZIMUTH_RATIO_FOUR_POINT), 0.0, 1.0) : 0.0;
+  float g = LogLerpWeight(s1.a, s2.a, w);
+  float l0 = -w * (w - 1.0) * (w - 2.0) / 6.0;
+  float l1 = 0.5 * (w + 1.0) * (w - 1.0) * (w - 2.0);
+  float l2 = -0.5 * (w + 1.0) * w * (w - 2.0);
+  float l3 = (w + 1.0) * w * (w - 1.0) / 6.0;
+  return beta * l0 * s0.rgb + (beta * l1 + (1.0 - beta) * (1.0 - g)) * s1.rgb +
+         (beta * l2 + (1.0 - beta) * g) * s2.rgb + beta * l3 * s3.rgb;
+}
+
 // Weight of the upper end of the cell around t (y0, y1 for t < 0, else y1, y2) for lo + weight (hi - lo) following
 // ln y quadratic through three values at consecutive texels (t in [-1, 1] relative to the middle one): the
 // three-point Lagrange formula in the logarithm [Abramowitz1964] Eq. 25.2.11, kept between the cell's two values;
@@ -481,7 +502,8 @@ vec3 GetTransmittanceToSun(float r, float mu_s) {
 // The three scattering textures at (r, mu, mu_s, nu): trilinear by the texture unit in (mu_s, mu, r) (within the
 // cell touching the ground two bilinear reads, one per row: ScatteringTexture) and by hand along nu (the nu slices
 // lie side by side along x: x = i_nu * n_mu_s + i_mu_s, [Bruneton2008] Sec. 6), log-linear
-// there with each texture's own weight (AzimuthLerp), as skyscatter's lookups since table format 12, except the
+// there with each texture's own weight (AzimuthLerp), as skyscatter's lookups since table format 12 (the multiple
+// scattering through four slices since manifest version 12: AzimuthRead), except the
 // single-scattering textures where the point is in the Earth's shadow: linear with the shadow factors of their
 // constituent's density (ShadowLerp, ShadowFactors), as skyscatter's lookups (skyscatter.precomputed.lookup). Returns single
 // Rayleigh (no phase); single Mie (no phase) and multiple scattering in the out parameters. Zero below the tables'
@@ -500,8 +522,13 @@ vec3 GetScattering(float r, float mu, float mu_s, float nu, bool hits_ground, ou
   vec3 uvw0 = vec3((i_n * float(SCATTERING_N_MU_S) + p_s + 0.5) / n_x, vw.x, vw.y);
   vec3 uvw1 = vec3(uvw0.x + float(SCATTERING_N_MU_S) / n_x, vw.x, vw.y);
   vec4 g = ScatteringGroundCell(r, mu, hits_ground);
-  multiple = AzimuthLerp(ScatteringTexture(multiple_texture, uvw0, g), ScatteringTexture(multiple_texture, uvw1, g),
-                         w_n);
+  // the multiple scattering through four nu slices, the outer two mirrored at the axis' ends (AzimuthRead)
+  float j0 = i_n > 0.0 ? i_n - 1.0 : 1.0;
+  float j3 = i_n + 2.0 <= float(SCATTERING_N_NU - 1) ? i_n + 2.0 : 2.0 * float(SCATTERING_N_NU - 1) - i_n - 2.0;
+  float du = float(SCATTERING_N_MU_S) / n_x;
+  multiple = AzimuthRead(ScatteringTexture(multiple_texture, vec3(uvw0.x + (j0 - i_n) * du, vw.x, vw.y), g),
+                         ScatteringTexture(multiple_texture, uvw0, g), ScatteringTexture(multiple_texture, uvw1, g),
+                         ScatteringTexture(multiple_texture, vec3(uvw0.x + (j3 - i_n) * du, vw.x, vw.y), g), w_n);
   if (InEarthShadow(r, mu_s)) {
     vec3 h = ShadowExitAltitudes(r, mu, mu_s, nu, i_n);
     mie = ShadowLerp(ScatteringTexture(mie_texture, uvw0, g), ScatteringTexture(mie_texture, uvw1, g), w_n,

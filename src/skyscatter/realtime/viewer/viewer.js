@@ -5,7 +5,7 @@
 "use strict";
 
 const MANIFEST_FORMAT = "skyscatter-realtime-luts";
-const MANIFEST_VERSION = 11;
+const MANIFEST_VERSION = 12;
 const TEXTURES = ["transmittance", "optical_depth", "irradiance", "rayleigh", "mie", "multiple"];
 const SAMPLERS = {transmittance: "transmittance_texture", optical_depth: "optical_depth_texture",
                   irradiance: "irradiance_texture",
