@@ -13,6 +13,9 @@ sets the paths per direction with the sun up, twice that at -3 and -2.3 deg and 
 
 The cases at -2.3 and -5.1 deg (:data:`MID_SUNS`, added 2026-12-04) were made with ``--paths 262144 --seed 100``
 (524288 and 2097152 paths per direction; 216-1127 s each on the shared machine at load 5-9).
+The -6 deg cases were made again on 2026-12-06 with ``--suns=-6 --paths 1048576 --seed 300`` (8388608 paths per
+direction; 289-974 s each) into a new file and put in place of the earlier ones (1048576 paths, seeds 105, 110,
+115).
 
 Each case has its own random stream, seed ``--seed`` plus its place in :data:`CASE_ORDER` (since 2026-12-03, with
 131072 paths: the values stored before used seed 1 in every case and 32768 paths, so a direction's draw repeated at

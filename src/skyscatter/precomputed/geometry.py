@@ -51,6 +51,7 @@ from ..jit import CONTRACT_ARCP, helper
 __all__ = [
     "acos_table",
     "azimuth_four_point",
+    "azimuth_lagrange",
     "azimuth_read_weights",
     "bilinear_weights",
     "clamp",
@@ -415,20 +416,31 @@ AZIMUTH_RATIO_LOG_LINEAR = 4.0
 
 
 @helper(fastmath=CONTRACT_ARCP)
+def azimuth_lagrange(t: float) -> tuple[float, float, float, float]:
+    """The four-point Lagrange weights ([Abramowitz1964] Eq. 25.2.13) at the fraction ``t`` of the cell between the
+    middle two of four texels at -1, 0, 1, 2: ``-t (t - 1) (t - 2) / 6``, ``(t + 1) (t - 1) (t - 2) / 2``,
+    ``-(t + 1) t (t - 2) / 2``, ``(t + 1) t (t - 1) / 6`` (float32 for a float32 ``t``)."""
+    half = t - t + 0.5  # the constants in t's type: float32 arithmetic stays float32 (SIMD lanes)
+    one = half + half
+    two = one + one
+    sixth = half / (one + two)
+    return (-t * (t - one) * (t - two) * sixth, half * (t + one) * (t - one) * (t - two),
+            -half * (t + one) * t * (t - two), (t + one) * t * (t - one) * sixth)
+
+
+@helper(fastmath=CONTRACT_ARCP)
 def azimuth_four_point(i_n: int, w_n: float, n_nu: int) -> tuple[int, int, float, float, float, float]:
     """The outer texels ``j0``, ``j3`` of the four around the azimuth cell ``i_n``, ``i_n + 1`` of an axis of
-    ``n_nu`` (>= 2) texels (the inner ones are ``i_n`` and ``i_n + 1``) and the four-point Lagrange weights
-    ([Abramowitz1964] Eq. 25.2.13) of the four at the fraction ``w_n`` of the cell: ``-t (t - 1) (t - 2) / 6``,
-    ``(t + 1) (t - 1) (t - 2) / 2``, ``-(t + 1) t (t - 2) / 2``, ``(t + 1) t (t - 1) / 6``. The axis is the view-sun
-    azimuth from 0 to pi (:func:`scattering_nu_azimuth`), and the sky is symmetric about both ends (the azimuths
-    ``-phi`` and ``phi`` are the same view-sun angle, as are ``pi + phi`` and ``pi - phi``), so the texel before the
-    first is the second and the one after the last the one before it: the read is exact for a cubic in the
-    azimuth that is even about both ends, and its slope is zero there, as the sky's is."""
+    ``n_nu`` (>= 2) texels (the inner ones are ``i_n`` and ``i_n + 1``) and the four-point weights
+    (:func:`azimuth_lagrange`) of the four at the fraction ``w_n`` of the cell. The axis is the view-sun azimuth
+    from 0 to pi (:func:`scattering_nu_azimuth`), and the sky is symmetric about both ends (the azimuths ``-phi`` and
+    ``phi`` are the same view-sun angle, as are ``pi + phi`` and ``pi - phi``), so the texel before the first is the
+    second and the one after the last the one before it: the read is exact for a cubic in the azimuth that is even
+    about both ends, and its slope is zero there, as the sky's is."""
     j0 = i_n - 1 if i_n > 0 else 1
     j3 = i_n + 2 if i_n + 2 <= n_nu - 1 else 2 * (n_nu - 1) - (i_n + 2)
-    t = w_n
-    return (j0, j3, -t * (t - 1.0) * (t - 2.0) / 6.0, 0.5 * (t + 1.0) * (t - 1.0) * (t - 2.0),
-            -0.5 * (t + 1.0) * t * (t - 2.0), (t + 1.0) * t * (t - 1.0) / 6.0)
+    l0, l1, l2, l3 = azimuth_lagrange(w_n)
+    return j0, j3, l0, l1, l2, l3
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -440,21 +452,26 @@ def azimuth_read_weights(s0: float, s1: float, s2: float, s3: float, w_n: float,
     four-point weights ``l0 .. l3`` where the values lie within a factor :data:`AZIMUTH_RATIO_FOUR_POINT` of each
     other, the log-linear read of the cell (``0, 1 - g, g, 0``, ``g`` :func:`log_lerp_weight` of ``s1``, ``s2`` at
     ``w_n``) beyond :data:`AZIMUTH_RATIO_LOG_LINEAR` (or where a value is not positive), blended linearly in the
-    ratio in between. The weights sum to 1 and give ``s1`` at ``w_n = 0``, ``s2`` at ``w_n = 1``.
+    ratio in between. The weights sum to 1 and give ``s1`` at ``w_n = 0``, ``s2`` at ``w_n = 1``. Branch-free, and
+    float32 throughout for float32 arguments (the observer's loop over rays runs on SIMD lanes).
 
     Why: the multiple scattering over its lobe (:func:`.sampling.multiple_lobe`) is U-shaped along the azimuth,
     lowest between two of the 8 texels (25.7 deg apart) 70-110 deg from the sun, where a read through two texels
     is a few per cent high: +3 % at 90 deg from a sun 3 deg up, optical depth 0.5 (the tables of 16 texels hold
-    0.840, 0.832, 0.844 around it, the two-texel read 0.861). Measured against the stored low-sun Monte Carlo with
-    the general per-ray kernel: 40 -> 27 of 315 directions outside (docs/accuracy.md, "Low sun")."""
+    0.840, 0.832, 0.844 around it, the two-texel read 0.861). Measured against the stored low-sun Monte Carlo:
+    40 -> 27 of 315 directions outside (docs/accuracy.md, "Low sun")."""
+    zero = w_n - w_n
+    one = zero + 1.0
     lo = min(min(s0, s1), min(s2, s3))
     hi = max(max(s0, s1), max(s2, s3))
-    beta = 0.0
-    if lo > 0.0:
-        beta = min(max((AZIMUTH_RATIO_LOG_LINEAR - hi / lo) / (AZIMUTH_RATIO_LOG_LINEAR - AZIMUTH_RATIO_FOUR_POINT),
-                       0.0), 1.0)
+    # hi <= R lo <=> the ratio within R; written without a division by lo (which may be zero)
+    r4 = zero + AZIMUTH_RATIO_FOUR_POINT
+    rl = zero + AZIMUTH_RATIO_LOG_LINEAR
+    num = rl * lo - hi  # (R_log - ratio) lo
+    den = (rl - r4) * lo
+    beta = min(max(num / den, zero), one) if den > zero else zero
     g = log_lerp_weight(s1, s2, w_n)
-    return (beta * l0, beta * l1 + (1.0 - beta) * (1.0 - g), beta * l2 + (1.0 - beta) * g, beta * l3)
+    return (beta * l0, beta * l1 + (one - beta) * (one - g), beta * l2 + (one - beta) * g, beta * l3)
 
 
 # --------------------------------------------------------------------------------------------- scattering

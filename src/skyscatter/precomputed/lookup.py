@@ -30,7 +30,7 @@ from .geometry import (
     MU_S_LIMIT_TOLERANCE,
     MU_S_SPLIT,
     acos_table,
-    azimuth_four_point,
+    azimuth_lagrange,
     azimuth_read_weights,
     bilinear_weights,
     clamp,
@@ -538,7 +538,7 @@ def _unit_block(dirs):
 
 @helper(fastmath=CONTRACT_ARCP)
 def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho, big_h, theta_h, g,
-                     mie_kind, lobe, n_mu, n_nu, cell, w_mu, w_nu, p_r, p_m, p_l, kind):
+                     mie_kind, lobe, n_mu, n_nu, cell, w_mu, w_nu, nu_i, p_r, p_m, p_l, kind):
     """Table cells, weights and phase factors of a block of rays from one observer (the first pass of
     :func:`observer_kernel`; ``p_l`` the multiple scattering's :func:`.sampling.multiple_lobe` of weight
     ``lobe``); ``unit``: the block's directions are unit vectors (:func:`_unit_block`), so the
@@ -569,6 +569,7 @@ def _observer_coords(dirs, unit, px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, to
         cell[k] = i_mu * n_nu + i_n
         w_mu[k] = wm
         w_nu[k] = wn
+        nu_i[k] = i_n  # for the multiple scattering's four azimuth texels (_observer_azimuth_weights)
         p_r[k] = rayleigh_phase(nu)
         p_m[k] = aerosol_phase(nu, g, mie_kind)
         p_l[k] = multiple_lobe(nu, lobe)
@@ -643,19 +644,25 @@ def _observer_nu_weights(slices, slices1, two_rows, n_nu, n_c, cell, w_mu, cell1
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _observer_azimuth_weights(slices, slices1, two_rows, n_nu, n_c, cell, w_mu, cell1, w_mu1, w_nu, w4, off):
+def _observer_azimuth_weights(slices, slices1, two_rows, n_nu, n_c, cell, nu_i, w_mu, cell1, w_mu1, w_nu, w4, off,
+                              ends):
     """The multiple scattering's weights of its four azimuth texels (:func:`.sampling.lookup4_cell_azimuth`:
     :func:`.geometry.azimuth_four_point`, :func:`.geometry.azimuth_read_weights`) for a block of rays of the
-    observer slices (n_mu * n_nu, n_c + 1, 4; the middle wavelength in channel ``n_c``) into ``w4`` (4, >= m), and
-    the outer texels' offsets from the cell's first (``off`` (2, >= m)); each texel's value linear along mu at the
-    ray's cell, with ``two_rows`` the sum of the two rows' shares (``slices1`` at ``cell1``, ``w_mu1``), as
-    :func:`.sampling.lookup4_cell_azimuth` sums the rows."""
-    for k in range(cell.shape[0]):
+    observer slices (n_mu * n_nu, n_c + 1, 4; the middle wavelength in channel ``n_c``) into ``w4`` (4, >= m,
+    float32), and the outer texels' offsets from the cell's first into ``off`` (2, >= m; ``nu_i`` the cells'
+    azimuth indices, of :func:`_observer_coords`); each texel's value linear
+    along mu at the ray's cell, with ``two_rows`` the sum of the two rows' shares (``slices1`` at ``cell1``,
+    ``w_mu1``), as :func:`.sampling.lookup4_cell_azimuth` sums the rows. Two passes, as
+    :func:`_observer_nu_weights`: the four values gathered into ``ends`` (4, >= m, float32), then the weights in
+    float32 over those contiguous values (branch-free: SIMD lanes; the same rule, rounded to float32)."""
+    m = cell.shape[0]
+    for k in range(m):
         a = cell[k]
-        i_n = a % n_nu
-        j0, j3, l0, l1, l2, l3 = azimuth_four_point(i_n, w_nu[k], n_nu)
-        o0 = j0 - i_n
-        o3 = j3 - i_n
+        i_n = nu_i[k]
+        o0 = -1 if i_n > 0 else 1  # the texel before the first is the second
+        o3 = 2 if i_n < n_nu - 2 else 0  # the one after the last is the one before it
+        off[0, k] = o0
+        off[1, k] = o3
         wm = w_mu[k]
         b = a + n_nu
         v0 = (1.0 - wm) * slices[a + o0, n_c, 2] + wm * slices[b + o0, n_c, 2]
@@ -670,13 +677,22 @@ def _observer_azimuth_weights(slices, slices1, two_rows, n_nu, n_c, cell, w_mu, 
             v1 += (1.0 - wm1) * slices1[a1, n_c, 2] + wm1 * slices1[b1, n_c, 2]
             v2 += (1.0 - wm1) * slices1[a1 + 1, n_c, 2] + wm1 * slices1[b1 + 1, n_c, 2]
             v3 += (1.0 - wm1) * slices1[a1 + o3, n_c, 2] + wm1 * slices1[b1 + o3, n_c, 2]
-        w0, w1, w2, w3 = azimuth_read_weights(v0, v1, v2, v3, w_nu[k], l0, l1, l2, l3)
+        ends[0, k] = v0
+        ends[1, k] = v1
+        ends[2, k] = v2
+        ends[3, k] = v3
+    e0 = ends[0]
+    e1 = ends[1]
+    e2 = ends[2]
+    e3 = ends[3]
+    for k in range(m):
+        t = np.float32(w_nu[k])
+        l0, l1, l2, l3 = azimuth_lagrange(t)
+        w0, w1, w2, w3 = azimuth_read_weights(e0[k], e1[k], e2[k], e3[k], t, l0, l1, l2, l3)
         w4[0, k] = w0
         w4[1, k] = w1
         w4[2, k] = w2
         w4[3, k] = w3
-        off[0, k] = o0
-        off[1, k] = o3
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -809,8 +825,10 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
     w_nu = np.empty(OBSERVER_BLOCK)
     w_tab = np.empty((2, OBSERVER_BLOCK))
     ends = np.empty((2, 2, OBSERVER_BLOCK), dtype=np.float32)
-    w4 = np.empty((4, OBSERVER_BLOCK))
+    w4 = np.empty((4, OBSERVER_BLOCK), dtype=np.float32)
     off = np.empty((2, OBSERVER_BLOCK), dtype=np.int64)
+    ends4 = np.empty((4, OBSERVER_BLOCK), dtype=np.float32)
+    nu_i = np.empty(OBSERVER_BLOCK, dtype=np.int64)
     p_r = np.empty(OBSERVER_BLOCK)
     p_m = np.empty(OBSERVER_BLOCK)
     p_l = np.empty(OBSERVER_BLOCK)
@@ -839,7 +857,7 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
         block = flat_dirs[3 * b0:3 * b1]
         special = _observer_coords(block, _unit_block(block), px, py, pz, r, rc, sx, sy, sz, mu_s, bottom, top, rho,
                                    big_h, theta_h, g, mie_kind, lobe, n_mu, n_nu, cell[:m], w_mu[:m], w_nu[:m],
-                                   p_r[:m], p_m[:m], p_l[:m], kind[:m])
+                                   nu_i[:m], p_r[:m], p_m[:m], p_l[:m], kind[:m])
         if two_rows:
             _observer_row_cells(block, px, py, pz, r, bottom, top, n_r, n_mu, n_nu, cell[:m], w_mu[:m], cell1[:m],
                                 w_mu1[:m])
@@ -864,8 +882,8 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
                 bad[b0 + k] = True
         _observer_nu_weights(flat, flat1, two_rows, n_nu, n_c, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m], w_nu[:m],
                              w_tab, ends)
-        _observer_azimuth_weights(flat, flat1, two_rows, n_nu, n_c, cell[:m], w_mu[:m], cell1[:m], w_mu1[:m],
-                                  w_nu[:m], w4, off)
+        _observer_azimuth_weights(flat, flat1, two_rows, n_nu, n_c, cell[:m], nu_i[:m], w_mu[:m], cell1[:m],
+                                  w_mu1[:m], w_nu[:m], w4, off, ends4)
         if shadowed:
             _observer_shadow_weights(block, px, py, pz, r, rc, sx, sy, sz, mu_s_t, bottom, top, cos_phi, profiles,
                                      counts, cell[:m], w_nu[:m], w_tab, p_r[:m], p_m[:m])

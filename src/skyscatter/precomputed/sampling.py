@@ -357,6 +357,23 @@ def r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_mu_s, cells):
 
 
 @helper
+def _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j):
+    """A 4D table's azimuth texel ``j`` at its middle wavelength, interpolated linearly in r, mu and mu_s (the
+    cell of :func:`nu_weight`)."""
+    k = table.shape[4] // 2
+    v = 0.0
+    for a in range(2):
+        wa = w_r if a else 1.0 - w_r
+        i_mu = i_mu1 if a else i_mu0
+        w_mu = w_mu1 if a else w_mu0
+        for b in range(2):
+            wb = wa * (w_mu if b else 1.0 - w_mu)
+            for c in range(2):
+                v += wb * (w_s if c else 1.0 - w_s) * table[i_r + a, i_mu + b, i_s + c, j, k]
+    return v
+
+
+@helper
 def nu_weight(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n):
     """The weight of texel ``i_n + 1`` along the azimuth (nu) axis of a cell of a 4D table (..., n_wavelengths):
     :func:`.geometry.log_lerp_weight` of the table's middle wavelength (index ``n_wavelengths // 2``: 560 nm of the
@@ -365,19 +382,8 @@ def nu_weight(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n):
     ``w_n`` the linear weight. One wavelength, not all: the weight then reads 16 texel values instead of
     16 per wavelength, and a table's radiance at a wavelength depends on its other wavelengths only through the
     middle one's."""
-    k = table.shape[4] // 2
-    s0 = 0.0
-    s1 = 0.0
-    for a in range(2):
-        wa = w_r if a else 1.0 - w_r
-        i_mu = i_mu1 if a else i_mu0
-        w_mu = w_mu1 if a else w_mu0
-        for b in range(2):
-            wb = wa * (w_mu if b else 1.0 - w_mu)
-            for c in range(2):
-                wc = wb * (w_s if c else 1.0 - w_s)
-                s0 += wc * table[i_r + a, i_mu + b, i_s + c, i_n, k]
-                s1 += wc * table[i_r + a, i_mu + b, i_s + c, i_n + 1, k]
+    s0 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n)
+    s1 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n + 1)
     return log_lerp_weight(s0, s1, w_n)
 
 
@@ -409,23 +415,6 @@ def lookup4_cell(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n
                     we *= scale
                     for k in range(n_l):
                         out[k] += we * table[i_r + a, i_mu + b, i_s + c, i_n + e, k]
-
-
-@helper
-def _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j):
-    """A 4D table's azimuth texel ``j`` at its middle wavelength, interpolated linearly in r, mu and mu_s (the
-    cell of :func:`nu_weight`)."""
-    k = table.shape[4] // 2
-    v = 0.0
-    for a in range(2):
-        wa = w_r if a else 1.0 - w_r
-        i_mu = i_mu1 if a else i_mu0
-        w_mu = w_mu1 if a else w_mu0
-        for b in range(2):
-            wb = wa * (w_mu if b else 1.0 - w_mu)
-            for c in range(2):
-                v += wb * (w_s if c else 1.0 - w_s) * table[i_r + a, i_mu + b, i_s + c, j, k]
-    return v
 
 
 @helper
