@@ -184,6 +184,7 @@ LOG_LERP_FLOOR = float(np.float32(1e-3))  # 1e-3 as float32 holds it (1.00000005
 # float32 constants: they keep float32 arithmetic float32 (log_lerp_weight); typed float for the annotations
 _FLOOR32 = cast(float, np.float32(LOG_LERP_FLOOR))
 _ONE32 = cast(float, np.float32(1.0))
+_HALF32 = cast(float, np.float32(0.5))
 
 
 @helper(fastmath=CONTRACT_ARCP)
@@ -197,8 +198,9 @@ def log_lerp_weight(a: float, b: float, w: float) -> float:
     root and a division, where the exact ``((b / a)^w - 1) / (b / a - 1)`` costs a power, a libm call that keeps the
     lookup loops off the SIMD lanes (4x slower luminance lookups, measured).
 
-    Used along the view-sun azimuth of the scattering tables (except the single-scattering tables read from a point
-    in the Earth's shadow, :func:`.sampling.shadow_nu_weights`) and, in the orders' ray integrals, along the sun
+    Used along the view-sun azimuth of the single-scattering tables (except read from a point in the Earth's shadow,
+    :func:`.sampling.shadow_nu_weights`) and of the multiple scattering where its texels fall steeply
+    (:func:`azimuth_read_weights`) and, in the orders' ray integrals, along the sun
     zenith and azimuth of the scattering density. At low sun the single-scattered radiance falls by orders of magnitude
     across one azimuth cell where the view ray passes into the Earth's shadow, and a linear interpolation of such a
     fall overshoots: +255 % single scattering at 90 deg from a sun 6 deg below the horizon (2 deg view elevation,
@@ -410,17 +412,21 @@ def log_cubic_value(a: float, b: float, l0: float, l1: float, l2: float, l3: flo
 #: 10, 1, 0.1 give -0.07 half way between 10 and 1, where the geometric value is 3.2): that is the Earth's shadow's
 #: fall in twilight, which the log-linear weight follows. Measured against the stored low-sun Monte Carlo
 #: (docs/accuracy.md, "Low sun"): bounds (2, 4), (4, 16) and the four-point rule everywhere gave the same count of
-#: directions outside; (2, 4) keeps the rule to where it holds.
+#: directions outside (27 of 315, the reference before the -6 deg cases were remade); (2, 4) keeps the rule to
+#: where it holds.
 AZIMUTH_RATIO_FOUR_POINT = 2.0
 AZIMUTH_RATIO_LOG_LINEAR = 4.0
+# float32 copies (exact): float32 arguments keep azimuth_read_weights in float32
+_RATIO_FOUR_POINT32 = cast(float, np.float32(AZIMUTH_RATIO_FOUR_POINT))
+_RATIO_LOG_LINEAR32 = cast(float, np.float32(AZIMUTH_RATIO_LOG_LINEAR))
 
 
 @helper(fastmath=CONTRACT_ARCP)
 def azimuth_lagrange(t: float) -> tuple[float, float, float, float]:
     """The four-point Lagrange weights ([Abramowitz1964] Eq. 25.2.13) at the fraction ``t`` of the cell between the
     middle two of four texels at -1, 0, 1, 2: ``-t (t - 1) (t - 2) / 6``, ``(t + 1) (t - 1) (t - 2) / 2``,
-    ``-(t + 1) t (t - 2) / 2``, ``(t + 1) t (t - 1) / 6`` (float32 for a float32 ``t``)."""
-    half = t - t + 0.5  # the constants in t's type: float32 arithmetic stays float32 (SIMD lanes)
+    ``-(t + 1) t (t - 2) / 2``, ``(t + 1) t (t - 1) / 6``, in the type of ``t`` (float32 for a float32 ``t``)."""
+    half = t - t + _HALF32  # the constants in t's type (0.5 exact in both): float32 stays float32 (SIMD lanes)
     one = half + half
     two = one + one
     sixth = half / (one + two)
@@ -435,8 +441,9 @@ def azimuth_four_point(i_n: int, w_n: float, n_nu: int) -> tuple[int, int, float
     (:func:`azimuth_lagrange`) of the four at the fraction ``w_n`` of the cell. The axis is the view-sun azimuth
     from 0 to pi (:func:`scattering_nu_azimuth`), and the sky is symmetric about both ends (the azimuths ``-phi`` and
     ``phi`` are the same view-sun angle, as are ``pi + phi`` and ``pi - phi``), so the texel before the first is the
-    second and the one after the last the one before it: the read is exact for a cubic in the azimuth that is even
-    about both ends, and its slope is zero there, as the sky's is."""
+    second and the one after the last the one before it. The read is exact for a cubic in the texel index in the
+    interior cells, and in the two end cells for a quadratic even about the nearer end (the sky's slope along the
+    azimuth is zero at both ends; the read's slope there is not exactly zero, so it has a small kink at 0 and pi)."""
     j0 = i_n - 1 if i_n > 0 else 1
     j3 = i_n + 2 if i_n + 2 <= n_nu - 1 else 2 * (n_nu - 1) - (i_n + 2)
     l0, l1, l2, l3 = azimuth_lagrange(w_n)
@@ -459,14 +466,15 @@ def azimuth_read_weights(s0: float, s1: float, s2: float, s3: float, w_n: float,
     lowest between two of the 8 texels (25.7 deg apart) 70-110 deg from the sun, where a read through two texels
     is a few per cent high: +3 % at 90 deg from a sun 3 deg up, optical depth 0.5 (the tables of 16 texels hold
     0.840, 0.832, 0.844 around it, the two-texel read 0.861). Measured against the stored low-sun Monte Carlo:
-    40 -> 27 of 315 directions outside (docs/accuracy.md, "Low sun")."""
+    40 -> 27 of 315 directions outside, 42 -> 31 against the reference whose -6 deg cases have 8x the paths
+    (docs/accuracy.md, "Low sun")."""
     zero = w_n - w_n
-    one = zero + 1.0
+    one = zero + _ONE32
     lo = min(min(s0, s1), min(s2, s3))
     hi = max(max(s0, s1), max(s2, s3))
     # hi <= R lo <=> the ratio within R; written without a division by lo (which may be zero)
-    r4 = zero + AZIMUTH_RATIO_FOUR_POINT
-    rl = zero + AZIMUTH_RATIO_LOG_LINEAR
+    r4 = zero + _RATIO_FOUR_POINT32
+    rl = zero + _RATIO_LOG_LINEAR32
     num = rl * lo - hi  # (R_log - ratio) lo
     den = (rl - r4) * lo
     beta = min(max(num / den, zero), one) if den > zero else zero

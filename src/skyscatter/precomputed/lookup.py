@@ -463,8 +463,9 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     (2, n_mu, n_nu, C + 1, 4) holding, for each channel, single Rayleigh, single Mie and multiple scattering over the
     view axes (and a zero, so that each texel's three values are one aligned 32-byte load), each
     ``table @ projection.T`` (``projection`` (C, n_wavelengths): the identity for spectra, the XYZ matrix for
-    colour); channel C (the last of C + 1) holds each table at its middle wavelength, from which the azimuth weight
-    of the lookup is computed (:func:`.sampling.nu_weight`). ``[0]`` holds the slices and ``[1]`` zeros, except
+    colour); channel C (the last of C + 1) holds each table at its middle wavelength, from which the azimuth weights
+    of the lookup are computed (:func:`.sampling.nu_weight`; the multiple scattering's four,
+    :func:`_observer_azimuth_weights`). ``[0]`` holds the slices and ``[1]`` zeros, except
     for an observer within the cell touching the ground (:func:`observer_two_rows`): there ``[0]`` and ``[1]`` hold
     the shares of the lower and the upper row, which the lookup reads each at its own ``mu`` coordinate (the ground
     half of the ``mu`` axis at the same coordinate in both). The tables are the stored ones; their two radius rows
@@ -654,7 +655,7 @@ def _observer_azimuth_weights(slices, slices1, two_rows, n_nu, n_c, cell, nu_i, 
     along mu at the ray's cell, with ``two_rows`` the sum of the two rows' shares (``slices1`` at ``cell1``,
     ``w_mu1``), as :func:`.sampling.lookup4_cell_azimuth` sums the rows. Two passes, as
     :func:`_observer_nu_weights`: the four values gathered into ``ends`` (4, >= m, float32), then the weights in
-    float32 over those contiguous values (branch-free: SIMD lanes; the same rule, rounded to float32)."""
+    float32 over those contiguous values (branch-free; the same rule, rounded to float32)."""
     m = cell.shape[0]
     for k in range(m):
         a = cell[k]

@@ -57,7 +57,11 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
   :func:`skyscatter.precomputed.geometry.log_lerp_weight` of that wavelength's values in the two slices, each
   interpolated linearly in (mu_s, mu, r) (:func:`skyscatter.precomputed.sampling.nu_weight`), and apply it to every
   wavelength: the texture unit's trilinear read of A gives those two values, so a shader computes the same weight
-  and applies it to RGB (``log_lerp_weight`` and ``azimuth_lerp`` of the mappings). Except for the single scattering
+  and applies it to RGB (``log_lerp_weight`` and ``azimuth_lerp`` of the mappings). The multiple scattering since
+  manifest version 12 through four nu slices (:func:`skyscatter.precomputed.sampling.lookup4_cell_azimuth`: the
+  four-point Lagrange rule where the four A lie within ``AZIMUTH_RATIO_FOUR_POINT`` of each other, the weight above
+  beyond ``AZIMUTH_RATIO_LOG_LINEAR``, blended between; ``scattering_uvw4`` and ``azimuth_read`` of the mappings).
+  Except for the single scattering
   where the point is in the Earth's shadow (manifest version 3): there the library interpolates the two slices
   linearly, each times the density of its constituent where the query's ray leaves the shadow over that where the
   slice's ray leaves it, at most 1 (:func:`skyscatter.precomputed.sampling.shadow_nu_weights`;
@@ -323,9 +327,9 @@ def scattering_nu_index(mu, mu_s, nu):
 
 def scattering_uvw(r, mu, mu_s, nu, hits_ground):
     """The two texture coordinates (u, v, w) of the nu slices around nu and the fraction w of the cell between
-    them: a lookup is azimuth_lerp(texture(uvw0), texture(uvw1), w), each read trilinear (the single scattering:
-    single_scattering_lerp), or within the cell touching the ground with scattering_texture(texture, uvw,
-    scattering_ground_cell(r, mu, hits_ground))."""
+    them: a single-scattering lookup is single_scattering_lerp(texture(uvw0), texture(uvw1), ...), each read
+    trilinear, or within the cell touching the ground with scattering_texture(texture, uvw,
+    scattering_ground_cell(r, mu, hits_ground)); the multiple scattering reads four slices (scattering_uvw4)."""
     v, w = scattering_mu_r_coords(r, mu, hits_ground)
     p_s = scattering_mu_s_index(max(mu_s, MU_S_MIN))
     p_n = clamp(scattering_nu_index(mu, mu_s, nu), 0.0, SCATTERING_N_NU - 1)
@@ -650,9 +654,12 @@ def _glsl_float(v: float) -> str:
 
 #: What the scattering textures' alpha holds (manifest meaning).
 _ALPHA = ("the table's spectral value at azimuth_weight_wavelength_nm (its middle wavelength) [W m^-2 nm^-1; "
-          "multiple: W m^-2 sr^-1 nm^-1; not folded, not on the HDR scale], for the weight of the interpolation "
-          "between two nu slices: log_lerp_weight(A0, A1, w) of the mappings, applied to RGB (azimuth_lerp; the single "
-          "scattering where the point is in the Earth's shadow: shadow_lerp, which does not read A)")
+          "multiple: W m^-2 sr^-1 nm^-1; not folded, not on the HDR scale], for the weights of the interpolation "
+          "along nu, applied to RGB: the single scattering between two nu slices, log_lerp_weight(A0, A1, w) of the "
+          "mappings (azimuth_lerp; where the point is in the Earth's shadow shadow_lerp, which does not read A), the "
+          "multiple scattering through four (scattering_uvw4, azimuth_read: the four-point rule where the four A lie "
+          "within AZIMUTH_RATIO_FOUR_POINT of each other, log_lerp_weight of the middle two beyond "
+          "AZIMUTH_RATIO_LOG_LINEAR)")
 
 
 def _texture_entry(name: str, shape: tuple[int, ...]) -> dict[str, Any]:
@@ -758,10 +765,11 @@ def export_realtime(atm: PrecomputedAtmosphere, folder: str | Path, *,
             "formats": {f: FORMATS[f] for f in formats},
             "constants": constants,
             "textures": entries,
-            "filtering": "LINEAR with CLAMP_TO_EDGE on every axis; nu is interpolated by hand between two lookups "
-                         "with the log-linear weight of their alpha (azimuth_lerp of the mappings); the single "
-                         "scattering where the point is in the Earth's shadow linearly with the shadow factors of "
-                         "its constituent's density (single_scattering_lerp)",
+            "filtering": "LINEAR with CLAMP_TO_EDGE on every axis; nu is interpolated by hand: the single "
+                         "scattering between two lookups with the log-linear weight of their alpha (azimuth_lerp of "
+                         "the mappings), where the point is in the Earth's shadow linearly with the shadow factors "
+                         "of its constituent's density (single_scattering_lerp); the multiple scattering through "
+                         "four lookups (scattering_uvw4, azimuth_read)",
             "mappings": {"python": PYTHON_MAPPINGS, "glsl": glsl_mappings()},
             "glsl_constants": glsl_constants(constants),
             "segment_transmittance": SEGMENT_RULE,

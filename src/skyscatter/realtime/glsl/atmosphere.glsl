@@ -1,5 +1,5 @@
 // skyscatter real-time atmosphere: GLSL ES 3.00 functions reading the textures of `skyscatter export-luts`
-// (manifest skyscatter_realtime.json, format "skyscatter-realtime-luts" version 11).
+// (manifest skyscatter_realtime.json, format "skyscatter-realtime-luts" version 12).
 //
 // Reference: E. Bruneton, F. Neyret, Precomputed Atmospheric Scattering, EGSR 2008 [Bruneton2008], equation numbers
 // below are the paper's; the distance-based texture mappings and the horizon blend follow Bruneton's 2017 rewrite
