@@ -357,10 +357,9 @@ def r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_mu_s, cells):
 
 
 @helper
-def _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j):
-    """A 4D table's azimuth texel ``j`` at its middle wavelength, interpolated linearly in r, mu and mu_s (the
-    cell of :func:`nu_weight`)."""
-    k = table.shape[4] // 2
+def _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j, k):
+    """A 4D table's azimuth texel ``j`` at wavelength index ``k``, interpolated linearly in r, mu and mu_s (the cell
+    of :func:`nu_weight`)."""
     v = 0.0
     for a in range(2):
         wa = w_r if a else 1.0 - w_r
@@ -382,8 +381,8 @@ def nu_weight(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n):
     ``w_n`` the linear weight. One wavelength, not all: the weight then reads 16 texel values instead of
     16 per wavelength, and a table's radiance at a wavelength depends on its other wavelengths only through the
     middle one's."""
-    s0 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n)
-    s1 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n + 1)
+    s0 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, table.shape[4] // 2)
+    s1 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n + 1, table.shape[4] // 2)
     return log_lerp_weight(s0, s1, w_n)
 
 
@@ -425,11 +424,12 @@ def lookup4_cell_azimuth(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, 
     middle wavelength; the multiple-scattering table's read in every rendering lookup (its ratio to the lobe,
     :func:`multiple_lobe`)."""
     n_l = table.shape[4]
+    km = n_l // 2
     j0, j3, l0, l1, l2, l3 = azimuth_four_point(i_n, w_n, table.shape[3])
-    v0 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j0)
-    v1 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n)
-    v2 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n + 1)
-    v3 = _column_middle(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j3)
+    v0 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j0, km)
+    v1 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, km)
+    v2 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n + 1, km)
+    v3 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j3, km)
     l0, l1, l2, l3 = azimuth_read_weights(v0, v1, v2, v3, w_n, l0, l1, l2, l3)
     for e in range(4):
         j = j0 if e == 0 else (i_n if e == 1 else (i_n + 1 if e == 2 else j3))
@@ -452,6 +452,22 @@ def lookup4_cell_azimuth(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, 
                         continue
                     for k in range(n_l):
                         out[k] += wc * table[i_r + a, i_mu + b, i_s + c, j, k]
+
+
+@helper
+def lookup4_cell_azimuth_each(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n, scale, out):
+    """``out += scale * table(cell)``: :func:`lookup4_cell_azimuth` with each wavelength's own weights along nu
+    (from its own four texel values), so that a table's value at a wavelength does not depend on the others: the
+    precomputation's read (:func:`scattering_lookup`), whose tables must not depend on how the wavelengths are
+    chunked; the rendering lookups take the middle wavelength's weights for all, which folds into colour."""
+    j0, j3, l0, l1, l2, l3 = azimuth_four_point(i_n, w_n, table.shape[3])
+    for k in range(table.shape[4]):
+        v0 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j0, k)
+        v1 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, k)
+        v2 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n + 1, k)
+        v3 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j3, k)
+        a0, a1, a2, a3 = azimuth_read_weights(v0, v1, v2, v3, w_n, l0, l1, l2, l3)
+        out[k] += scale * (a0 * v0 + a1 * v1 + a2 * v2 + a3 * v3)
 
 
 @helper
@@ -484,19 +500,23 @@ def lookup4_cell_spectral(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s,
 
 @helper
 def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min, scale, out):
-    """``out += scale * S(r, mu, mu_s, nu)`` for a 4D table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths), quadrilinear.
+    """``out += scale * S(r, mu, mu_s, nu)`` for a 4D table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths): linear in r,
+    mu and mu_s, through four azimuth texels along nu (:func:`lookup4_cell_azimuth_each`, the rule of the rendering
+    lookups' read of the multiple scattering with each wavelength's own weights: the four-point rule where the texels
+    are smooth, the log-linear read of the cell where they fall steeply).
 
-    The precomputation's integrals over the sphere (scattering density, irradiance) read the tables here, linearly
-    also along nu (except the second order's density, which reads the single scattering with the shadow-following
-    weights of :func:`scattering_lookup_shadow`): the log-linear weight of the rendering lookups
-    (:func:`lookup4_cell`) is never above the linear one, so over a whole sphere of smooth daytime radiance it
-    biased these integrals low (the hardest daytime case of ``tests/test_precomputed_disort.py`` against the Monte
-    Carlo, optical depth 0.5 over albedo 0.8: mean -1.15 -> -2.03 %, measured); there it had taken the low-sun
-    directions outside the target from 68 to 48 of 225 (hazy, near the sun: docs/accuracy.md, "Low sun")."""
+    The scattering density's integral over the sphere reads the previous order here (the second order's reads the
+    single scattering with the shadow-following weights of :func:`scattering_lookup_shadow`). Until table format 19
+    it read linearly along nu (the log-linear weight, never above the linear one, had biased the sphere integrals of
+    smooth daytime radiance low: optical depth 0.5 over albedo 0.8 against the Monte Carlo, mean -1.15 -> -2.03 %);
+    the multiple scattering over its lobe is U-shaped along the azimuth with its bottom between two of the 8 texels,
+    which a read through two texels over-reads, order after order. Format 20: the low-sun directions outside the
+    target 31 -> 25 of 315 (optical depth 0.5 14 -> 8: the 400 nm cells towards a sun at +3 deg pass), measured
+    against the stored Monte Carlo (docs/accuracy.md, "Low sun")."""
     n_r, n_mu, n_s, n_n, n_l = table.shape
     i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n, 0)
-    _lookup4_weighted(table, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, (1.0 - w_n) * scale, w_n * scale, out)
+    lookup4_cell_azimuth_each(table, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, scale, out)
 
 
 @helper

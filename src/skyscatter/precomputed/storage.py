@@ -99,7 +99,9 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "PHASE_NAMES", "STORE
 #: 19: the same layout; the multiple-scattering table (and the orders' scattering densities) hold their values
 #: divided by the lobe :func:`.sampling.multiple_lobe` at each texel's view-sun cosine, so that every read between
 #: the azimuth texels follows the aerosol's forward lobe; the lookups multiply by it at the read's own ``nu``.
-FORMAT_VERSION = 19
+#: 20: the same layout; the scattering density's sphere integral reads the previous order through four azimuth
+#: texels (:func:`.sampling.scattering_lookup`, the rendering lookups' read of the multiple scattering), not linearly.
+FORMAT_VERSION = 20
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).
