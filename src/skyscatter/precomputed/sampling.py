@@ -50,16 +50,20 @@ if TYPE_CHECKING:
     from .parameters import AtmosphereParameters
 
 PI = math.pi
-#: Largest shadow factor of the rendering lookups' single scattering read from the Earth's shadow
-#: (:func:`shadow_ratios_fast`, :func:`.lookup._inscatter`; the GLSL library's ``SHADOW_RATIO_MAX``): a texel whose ray
-#: leaves the shadow in thinner air than the query's is scaled up by the density ratio, at most this much. 1 (the
-#: precomputation's second-order density, :func:`shadow_nu_weights`) only takes light away, so between two texels
-#: whose rays leave the shadow below and above the query's the value falls short: 45 deg from a sun 6 deg below the
-#: horizon, 2 and 5 deg up, Rayleigh, 400 and 560 nm, -10 % of the independent integral of
-#: ``tests/precomputed_reference.py`` on its own texel values where the uncapped ratio gives -1 to -2 % (aerosol
-#: -28 to -40 % against -1 to +4 %). Bounded because the tables' shadow is the sun disc's, soft, and their
-#: penumbra times an unbounded ratio was 10^5 to 10^13 times too bright (measured); 2 against the stored Monte Carlo
-#: (docs/accuracy.md, "Low sun"): Earth defaults 11 -> 7 of 75 directions outside, the hazy skies unchanged.
+#: Largest shadow factor of the single scattering read from the Earth's shadow, in the rendering lookups
+#: (:func:`shadow_ratios_fast`, :func:`.lookup._inscatter`; the GLSL library's ``SHADOW_RATIO_MAX``) and in the
+#: precomputation's second-order scattering density (:func:`shadow_nu_weights`, since table format 21): a texel whose
+#: ray leaves the shadow in thinner air than the query's is scaled up by the density ratio, at most this much. A cap
+#: of 1 only takes light away, so between two texels whose rays leave the shadow below and above the query's the value
+#: falls short: 45 deg from a sun 6 deg below the horizon, 2 and 5 deg up, Rayleigh, 400 and 560 nm, -10 % of the
+#: independent integral of ``tests/precomputed_reference.py`` on its own texel values where the uncapped ratio gives
+#: -1 to -2 % (aerosol -28 to -40 % against -1 to +4 %). Bounded because the tables' shadow is the sun disc's, soft,
+#: and their penumbra times an unbounded ratio was 10^5 to 10^13 times too bright (measured; in the precomputation
+#: the whole twilight sky came out outside the target). Against the stored Monte Carlo (docs/accuracy.md, "Low sun"):
+#: in the lookups, 2 took the Earth defaults from 11 to 7 of 75 directions outside (the hazy skies unchanged); in the
+#: precomputation, where the cap had been 1 until table format 21 (2026-12-06), 2 took the twilight multiple
+#: scattering 1-2.6 % brighter on average at -5.1 and -6 deg (up to +5.6 %) and the directions outside from 25 to 15 of
+#: 315 (4: 15, with more outside at -5.1 deg in optical depth 0.5; unbounded: 209).
 SHADOW_RATIO_MAX = 2.0
 _LOG_SHADOW_RATIO_MAX = math.log(SHADOW_RATIO_MAX)
 
@@ -544,7 +548,8 @@ def shadow_nu_weights(r, mu, mu_s, nu, i_n, w_n, n_nu, bottom, top, profile, n_l
     table of the constituent with density ``profile``, that follow the Earth's shadow: each texel's value is divided
     by the density where the ray of that texel's azimuth (and the query's r, mu, mu_s) leaves the shadow
     (:func:`.geometry.shadow_exit_altitude`), interpolated linearly, and multiplied by that density for the query's
-    ray, each ratio at most 1: ``(1 - w) min(f_q / f_0, 1) S_0 + w min(f_q / f_1, 1) S_1``.
+    ray, each ratio at most :data:`SHADOW_RATIO_MAX` (``c``): ``(1 - w) min(f_q / f_0, c) S_0 + w min(f_q / f_1, c)
+    S_1``.
 
     A ray that starts in the shadow scatters sunlight only beyond its exit, and the singly scattered light is
     nearly proportional to the density there: with the sun 6 deg below the horizon, 2 deg above it and 77 / 90 /
@@ -556,7 +561,7 @@ def shadow_nu_weights(r, mu, mu_s, nu, i_n, w_n, n_nu, bottom, top, profile, n_l
     interpolation exactly. Used by the second order's scattering density (:func:`scattering_lookup_shadow`) and by
     the rendering lookups for points in the shadow (:func:`.lookup._inscatter`, :func:`lookup4_cell_weighted`)."""
     h_q, h_0, h_1 = shadow_exit_altitudes(r, mu, mu_s, nu, i_n, n_nu, bottom, top)
-    a, b = shadow_ratios(h_q, h_0, h_1, profile, n_layers, 1.0)
+    a, b = shadow_ratios(h_q, h_0, h_1, profile, n_layers)
     return (1.0 - w_n) * a, w_n * b
 
 
@@ -583,17 +588,17 @@ def shadow_exit_altitudes_cos(r, mu, mu_s, nu, cos_0, cos_1, bottom, top):
 
 
 @helper
-def shadow_ratios(h_q, h_0, h_1, profile, n_layers, cap):
+def shadow_ratios(h_q, h_0, h_1, profile, n_layers):
     """Shadow factors ``(a, b)`` of the two nu texels of a single-scattering table (:func:`shadow_nu_weights`): the
     density of the constituent (``profile``, ``n_layers`` layers) at the query's shadow exit ``h_q`` [m] over its
-    density at each texel's exit ``h_0``, ``h_1`` [m] (:func:`shadow_exit_altitudes`), each at most ``cap`` (1 in
-    the precomputation, :data:`SHADOW_RATIO_MAX` in the rendering lookups)."""
+    density at each texel's exit ``h_0``, ``h_1`` [m] (:func:`shadow_exit_altitudes`), each at most
+    :data:`SHADOW_RATIO_MAX` (the same cap in the precomputation and the rendering lookups)."""
     fq = density_at(profile, n_layers, h_q)
     f0 = density_at(profile, n_layers, h_0)
     f1 = density_at(profile, n_layers, h_1)
     # bounded: the tables' shadow is soft (the sun's disc), the exit altitude a point sun's, and an unbounded ratio
-    # would multiply their penumbra; with cap 1 the rule only takes light away from a texel whose ray leaves the
-    # shadow lower (denser air) than the query's
+    # would multiply their penumbra
+    cap = SHADOW_RATIO_MAX
     a = fq / f0 if f0 * cap > fq else cap
     b = fq / f1 if f1 * cap > fq else cap
     return a, b
@@ -610,7 +615,7 @@ def shadow_ratios_fast(h_q, h_0, h_1, profile, n_layers):
         x0 = sc * (h_q - h_0)
         x1 = sc * (h_q - h_1)
         return math.exp(min(x0, _LOG_SHADOW_RATIO_MAX)), math.exp(min(x1, _LOG_SHADOW_RATIO_MAX))
-    return shadow_ratios(h_q, h_0, h_1, profile, n_layers, SHADOW_RATIO_MAX)
+    return shadow_ratios(h_q, h_0, h_1, profile, n_layers)
 
 
 @helper

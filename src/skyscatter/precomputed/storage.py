@@ -101,7 +101,10 @@ __all__ = ["FILE_FORMAT", "FORMAT_VERSION", "HALF_TABLES", "PHASE_NAMES", "STORE
 #: the azimuth texels follows the aerosol's forward lobe; the lookups multiply by it at the read's own ``nu``.
 #: 20: the same layout; the scattering density's sphere integral reads the previous order through four azimuth
 #: texels (:func:`.sampling.scattering_lookup`, the rendering lookups' read of the multiple scattering), not linearly.
-FORMAT_VERSION = 20
+#: 21: the same layout; the second order's scattering density reads the single scattering from the Earth's shadow
+#: with shadow factors up to :data:`.sampling.SHADOW_RATIO_MAX` (the rendering lookups' cap; before: 1), so the
+#: multiple-scattering and irradiance tables of sun zeniths below the horizon changed.
+FORMAT_VERSION = 21
 #: The ``format`` entry of a table file's metadata.
 FILE_FORMAT = "skyscatter-bruneton-tables"
 #: The tables of a precomputed atmosphere (their content: :mod:`.tables`).
