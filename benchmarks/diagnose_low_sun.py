@@ -117,10 +117,13 @@ def manual_lookup(atm, dirs, sun, cubic_tables):
 
 
 def split(atm: PrecomputedAtmosphere) -> tuple[PrecomputedAtmosphere, PrecomputedAtmosphere]:
-    """(single only, multiple only) copies of the tables."""
+    """(single only, multiple only) copies of the tables. The single-only copy keeps ``computed`` (so that its
+    lookups compute the single scattering's sub-texels of the refined sun-zenith axis from the atmosphere, as the
+    whole tables' do); the multiple-only copy does not (it would compute single scattering there)."""
     t = dict(atm.tables)
     zero = np.zeros_like(t["multiple"])
-    single = PrecomputedAtmosphere(atm.parameters, atm.wavelengths, atm.sizes, atm.orders, {**t, "multiple": zero})
+    single = PrecomputedAtmosphere(atm.parameters, atm.wavelengths, atm.sizes, atm.orders, {**t, "multiple": zero},
+                                   computed=atm.computed)
     mult = PrecomputedAtmosphere(atm.parameters, atm.wavelengths, atm.sizes, atm.orders,
                                  {**t, "single_rayleigh": zero, "single_mie": zero})
     return single, mult

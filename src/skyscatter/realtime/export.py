@@ -64,7 +64,7 @@ Files (all little-endian, C order, RGBA interleaved per texel, row 0 first = tex
   Except for the single scattering
   where the point is in the Earth's shadow (manifest version 3): there the library interpolates the two slices
   linearly, each times the density of its constituent where the query's ray leaves the shadow over that where the
-  slice's ray leaves it, at most 1 (:func:`skyscatter.precomputed.sampling.shadow_nu_weights`;
+  slice's ray leaves it, at most ``SHADOW_RATIO_MAX`` (:func:`skyscatter.precomputed.sampling.shadow_nu_weights`;
   ``single_scattering_lerp``, ``shadow_factors`` of the mappings, with the density profiles ``RAYLEIGH_DENSITY``,
   ``MIE_DENSITY`` of the constants). The luminance (Y) that A held in manifest version 1 is the RGB's dot product
   with ``hdr_scale.luminance_from_rgb``.
