@@ -372,8 +372,9 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
 
     The incident radiance is the previous order: ``s_a P_R + s_b P_M`` (single Rayleigh and Mie tables, read along
     the azimuth with the shadow-following weights of :func:`.sampling.scattering_lookup_shadow`, factors up to
-    :data:`.sampling.SHADOW_RATIO_MAX` since table format 21) when ``first``, else the table ``s_a`` (multiple scattering, phase included, stored divided by
-    :func:`.sampling.multiple_lobe` of weight ``lobe``: read as ``s_a F(nu)``); plus, for directions that
+    :data:`.sampling.SHADOW_RATIO_MAX` since table format 21) when ``first``, else the table ``s_a`` (multiple
+    scattering, phase included, stored divided by :func:`.sampling.multiple_lobe` of weight ``lobe``: read as
+    ``s_a F(nu)``); plus, for directions that
     meet the ground, the ground's reflection of ``ground_irradiance`` (Eqs. 6 and 10, Lambertian ``albedo``).
     The sphere is sampled with ``n_theta x 2 n_theta`` midpoint directions in a frame whose x axis points to
     the sun's azimuth; for each view direction the phase-function weights are normalised to integrate to one
