@@ -142,3 +142,51 @@ def test_exp_and_log_bound_without_the_wrapper_give_the_same_bits():
     ref_log = np.array([math.log(v) if v > 0.0 else 0.0 for v in x])
     assert np.array_equal(out_exp, ref_exp, equal_nan=True)
     assert np.array_equal(out_log, ref_log, equal_nan=True)
+
+
+def test_package_digest_follows_every_module(tmp_path):
+    """:func:`jit._package_digest` changes when any module's bytes change, not when nothing does, and is empty for a
+    package that is not a folder (a zip import): the stamp numba's cache of every function is checked against."""
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "a.py").write_text("x = 1\n")
+    (pkg / "sub" / "b.py").write_text("y = 2\n")
+    (pkg / "data.txt").write_text("not a module\n")
+    first = jit._package_digest.__wrapped__(pkg)
+    assert len(first) == 64 and first == jit._package_digest.__wrapped__(pkg)
+    (pkg / "data.txt").write_text("changed, still not a module\n")
+    assert jit._package_digest.__wrapped__(pkg) == first
+    (pkg / "sub" / "b.py").write_text("y = 3\n")
+    assert jit._package_digest.__wrapped__(pkg) != first
+    assert jit._package_digest.__wrapped__(tmp_path / "missing.zip") == ""
+    assert jit._package_digest() == jit._package_digest.__wrapped__(SRC)  # the package's own, once per process
+
+
+def test_a_change_anywhere_in_the_package_invalidates_the_cache(tmp_path):
+    """numba checks a cached function against its own file only; the decorators add the package's digest to that
+    stamp (skyscatter.jit module docstring), so that a kernel whose file did not change is compiled again when a
+    helper in another module did. Each run is a new process with its own numba cache folder: compiled and saved,
+    loaded, compiled again under another package digest (as after an edit elsewhere), and again under the real one."""
+    import subprocess
+    import sys
+
+    (tmp_path / "stampdemo.py").write_text(
+        "from skyscatter import jit\n\n\n@jit.kernel\ndef plus_one(x):\n    return x + 1.0\n")
+    child = (
+        "import os\nfrom skyscatter import jit\nfake = os.environ.get('FAKE_DIGEST')\n"
+        "if fake:\n    jit._package_digest = lambda root=None: fake\n"
+        "import stampdemo\nassert stampdemo.plus_one(1.5) == 2.5\n"
+        "s = stampdemo.plus_one.stats\nprint(sum(s.cache_misses.values()), sum(s.cache_hits.values()))\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), str(SRC.parent)]),
+               NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    env.pop("NUMBA_DISABLE_JIT", None)
+
+    def run(**extra: str) -> list[str]:
+        out = subprocess.run([sys.executable, "-c", child], env={**env, **extra}, cwd=tmp_path, capture_output=True,
+                             text=True, timeout=120, check=True)
+        return out.stdout.split()
+
+    assert run() == ["1", "0"]  # compiled (and saved)
+    assert run() == ["0", "1"]  # loaded
+    assert run(FAKE_DIGEST="0" * 64) == ["1", "0"]  # another package: compiled again
+    assert run() == ["1", "0"]  # and back

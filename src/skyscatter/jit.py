@@ -48,6 +48,15 @@ taken inside numba's own (per-process, re-entrant) compiler lock, and a process 
 lock (numba compiles callees while compiling their caller) does not take it again. Functions call each other
 without cycles, so processes that hold some locks and wait for others cannot wait for each other in a circle.
 
+Numba checks a cached function against its own source file only (a hash of that file): a kernel whose file did not
+change keeps the machine code of the helpers it called from another file when they did, in a developer's tree or an
+editable install, so the tables of a changed helper were computed with its old code until the kernel's file changed
+too (it happened: numba's in-tree cache kept a changed ``sampling`` helper in an unchanged ``kernels`` module's
+code, 2026-12-06). Every function here is checked against the whole package's source as well
+(:func:`_package_digest`, added to the cache index's stamp by :func:`_stamp_with_package`): any change to any
+module of the package compiles every function again on first use (a minute of CPU for the precomputation's
+kernels), and an installed package, whose files do not change, loads its cache as before.
+
 A function is compiled for the types of its arguments, never for their values: numba types a constant argument of
 a call from compiled code as a literal (``Literal[bool](True)``, ``Literal[int](0)``) and would compile the callee
 once per constant and once more for a variable (``geometry.scattering_r_mu_coord`` 5 times, ``sampling.r_mu_cell``
@@ -72,6 +81,8 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
+import hashlib
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -193,11 +204,42 @@ def _lock_compilation(dispatcher: Any) -> Any:
     return dispatcher
 
 
+@functools.cache
+def _package_digest(root: Path | None = None) -> str:
+    """SHA-256 (hex) of every ``.py`` file under ``root`` (default: this package), each file's path relative to
+    ``root`` and its bytes, in sorted order (module docstring); empty where the package is not a folder of files
+    (a zip import, a frozen application) or a file cannot be read."""
+    root = Path(__file__).resolve().parent if root is None else Path(root)
+    if not root.is_dir():
+        return ""
+    h = hashlib.sha256()
+    try:
+        for path in sorted(root.rglob("*.py")):
+            h.update(path.relative_to(root).as_posix().encode())
+            h.update(b"\0")
+            h.update(path.read_bytes())
+            h.update(b"\0")
+    except OSError:
+        return ""
+    return h.hexdigest()
+
+
+def _stamp_with_package(dispatcher: Any) -> Any:
+    """Add :func:`_package_digest` to the source stamp that numba stores in a cached function's index and compares
+    when it loads it (module docstring), so that a change anywhere in the package invalidates the cache; without a
+    numba on-disk cache (or a numba whose cache keeps its stamp elsewhere) the function is returned unchanged."""
+    cache_file: Any = getattr(getattr(dispatcher, "_cache", None), "_cache_file", None)
+    stamp = getattr(cache_file, "_source_stamp", None)
+    if stamp is not None:
+        cache_file._source_stamp = (stamp, _package_digest())
+    return dispatcher
+
+
 def _decorator(fastmath: frozenset[str] | None, **options: Any) -> Callable[[F], F]:
     njit = numba.njit(**_COMMON, fastmath=_fastmath(fastmath), **options)
 
     def deco(func: F) -> F:
-        locked: F = _lock_compilation(njit(func))
+        locked: F = _lock_compilation(_stamp_with_package(njit(func)))
         return locked
     return deco
 
