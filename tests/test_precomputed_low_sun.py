@@ -107,7 +107,7 @@ def test_reference_records_how_it_was_made(reference):
 #: 400 nm cells towards the sun; 0 deg 2 -> 1, -3 deg 3 -> 2, -2.3 deg passes, -5.1 deg 2 -> 1; -6 deg 3 -> 4).
 #: Table format 21 (2026-12-06: the second order's scattering density reads the single scattering from the Earth's
 #: shadow with the lookups' shadow factors, up to ``sampling.SHADOW_RATIO_MAX``, not 1): 15 of 315, the twilight
-#: multiple scattering 1-2.6 % brighter on average at -5.1 and -6 deg; turbidity 3 -6 deg passes (4 -> 0), Earth -6
+#: multiple scattering 1.2-2.7 % brighter on average at -5.1 and -6 deg; turbidity 3 -6 deg passes (4 -> 0), Earth -6
 #: deg 7 -> 4 and -5.1 deg 5 -> 4, optical depth 0.5 -6 deg 4 -> 1, -5.1 deg 1 -> 2.
 OUTSIDE = {
     ("earth", -6.0): "4 of 15 directions outside; worst 2/90 deg: -9.0±0.8 %",

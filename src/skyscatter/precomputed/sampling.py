@@ -62,8 +62,8 @@ PI = math.pi
 #: the whole twilight sky came out outside the target). Against the stored Monte Carlo (docs/accuracy.md, "Low sun"):
 #: in the lookups, 2 took the Earth defaults from 11 to 7 of 75 directions outside (the hazy skies unchanged); in the
 #: precomputation, where the cap had been 1 until table format 21 (2026-12-06), 2 took the twilight multiple
-#: scattering 1-2.6 % brighter on average at -5.1 and -6 deg (up to +5.6 %) and the directions outside from 25 to 15 of
-#: 315 (4: 15, with more outside at -5.1 deg in optical depth 0.5; unbounded: 209).
+#: scattering 1.2-2.7 % brighter on average at -5.1 and -6 deg (up to +5.6 %) and the directions outside from 25 to
+#: 15 of 315 (4: 15, with more outside at -5.1 deg in optical depth 0.5; unbounded: 209).
 SHADOW_RATIO_MAX = 2.0
 _LOG_SHADOW_RATIO_MAX = math.log(SHADOW_RATIO_MAX)
 
