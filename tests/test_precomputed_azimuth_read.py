@@ -19,7 +19,13 @@ from skyscatter.precomputed.geometry import (
     azimuth_read_weights,
     log_lerp_weight,
 )
-from skyscatter.precomputed.sampling import lookup4_cell, lookup4_cell_azimuth
+from skyscatter.precomputed.sampling import (
+    TEXEL_SNAP,
+    lookup4_cell,
+    lookup4_cell_azimuth,
+    lookup4_cell_azimuth_each,
+    snap_to_texel,
+)
 
 
 def _read(values, i_n, w):
@@ -144,3 +150,48 @@ def test_the_table_read_matches_the_rule():
     lookup4_cell_azimuth(steep, *cell, 3, 0.5, 1.0, out4)
     lookup4_cell(steep, *cell, 3, 0.5, 1.0, out2)
     np.testing.assert_allclose(out4, out2, rtol=1e-6)
+
+
+@pytest.mark.parametrize("cell", [
+    (1, 0.3, 1, 0.6, 2, 0.25, 1, 0.4),  # inside every cell
+    (1, 0.0, 1, 0.6, 2, 0.25, 1, 0.0),  # at a radius and a sun-zenith texel: the scattering density's reads
+    (0, 1.0, 1, 0.6, 2, 0.25, 1, 1.0),  # the same texels from the cell below
+])
+def test_the_precomputations_read_has_each_wavelengths_own_weights(cell):
+    """:func:`lookup4_cell_azimuth_each` (the scattering density's read of the previous order) against the rule by
+    hand at every wavelength: each azimuth texel's column interpolated in r, mu and mu_s, the rule's weights from
+    that wavelength's own four values, so that a wavelength's value does not depend on the others (the tables do
+    not depend on the wavelength chunking); corners of zero weight are skipped without changing the value."""
+    rng = np.random.default_rng(5)
+    shape = (3, 4, 3, 8, 5)
+    # smooth at some wavelengths, steep at others: both rules of the read
+    table = (1.0 + 0.1 * rng.random(shape)).astype(np.float32)
+    table[..., 3:] *= (10.0 ** -np.arange(8.0))[:, None].astype(np.float32)
+    i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s = cell
+    for i_n, w in ((0, 0.35), (3, 0.5), (6, 0.8)):
+        out = np.zeros(5)
+        lookup4_cell_azimuth_each(table, *cell, i_n, w, 2.0, out, np.empty((4, 5)))
+        cols = np.zeros((8, 5))
+        for a, wa in ((0, 1 - w_r), (1, w_r)):
+            i_mu, w_mu = (i_mu1, w_mu1) if a else (i_mu0, w_mu0)
+            for b, wb in ((0, 1 - w_mu), (1, w_mu)):
+                for c, wc in ((0, 1 - w_s), (1, w_s)):
+                    if wa * wb * wc:
+                        cols += wa * wb * wc * table[i_r + a, i_mu + b, i_s + c]
+        j0, j3, l0, l1, l2, l3 = azimuth_four_point(i_n, w, 8)
+        taps = (j0, i_n, i_n + 1, j3)
+        for k in range(5):
+            weights = azimuth_read_weights(*(cols[j, k] for j in taps), w, l0, l1, l2, l3)
+            want = 2.0 * sum(wt * cols[j, k] for wt, j in zip(weights, taps, strict=True))
+            np.testing.assert_allclose(out[k], want, rtol=2e-6)
+
+
+def test_weights_within_the_snap_read_the_texel():
+    """:func:`snap_to_texel`: 0 and 1 within :data:`TEXEL_SNAP` (the rounding of the mappings at the texels, up to
+    1e-11), the weight itself elsewhere, and monotonic."""
+    assert TEXEL_SNAP == 1e-9
+    for w, want in ((0.0, 0.0), (1e-11, 0.0), (1.0 - 1e-11, 1.0), (1.0, 1.0), (2e-9, 2e-9), (0.5, 0.5),
+                    (1.0 - 2e-9, 1.0 - 2e-9)):
+        assert snap_to_texel(w) == want
+    ws = np.linspace(0.0, 1.0, 10001)
+    assert np.all(np.diff([snap_to_texel(w) for w in ws]) >= 0.0)

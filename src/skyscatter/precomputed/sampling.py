@@ -333,6 +333,23 @@ def r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu):
     return i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1
 
 
+#: A linear weight within this of 0 or 1 is the texel itself (:func:`snap_to_texel`).
+TEXEL_SNAP = 1e-9
+
+
+@helper
+def snap_to_texel(w):
+    """The linear weight ``w`` of a cell, 0 or 1 when it is within :data:`TEXEL_SNAP` of either: the scattering
+    density is computed at the tables' radii and sun zeniths, whose coordinates come back from the mappings a
+    rounding error (up to 1e-11) off the texel; with the weight exact the reads skip the other texel's corners
+    (three quarters of them)."""
+    if w < TEXEL_SNAP:
+        return 0.0
+    if w > 1.0 - TEXEL_SNAP:
+        return 1.0
+    return w
+
+
 @helper
 def mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_mu_s, n_nu, cells):
     """Interpolation cell (i_mu_s, w_mu_s, i_nu, w_nu) in the 4D tables (view zenith cosine ``mu``) of ``n_mu_s``
@@ -459,17 +476,37 @@ def lookup4_cell_azimuth(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, 
 
 
 @helper
-def lookup4_cell_azimuth_each(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n, scale, out):
+def lookup4_cell_azimuth_each(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, w_n, scale, out, columns):
     """``out += scale * table(cell)``: :func:`lookup4_cell_azimuth` with each wavelength's own weights along nu
     (from its own four texel values), so that a table's value at a wavelength does not depend on the others: the
     precomputation's read (:func:`scattering_lookup`), whose tables must not depend on how the wavelengths are
-    chunked; the rendering lookups take the middle wavelength's weights for all, which folds into colour."""
+    chunked; the rendering lookups take the middle wavelength's weights for all, which folds into colour.
+    ``columns`` (4, n_wavelengths) float64 is scratch: the four azimuth texels' columns, each interpolated linearly
+    in r, mu and mu_s as :func:`_column` does (the same sums in the same order), all wavelengths at once; corners
+    of zero weight are not read (the scattering density reads at texel radii and suns: 2 of the 8)."""
     j0, j3, l0, l1, l2, l3 = azimuth_four_point(i_n, w_n, table.shape[3])
-    for k in range(table.shape[4]):
-        v0 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j0, k)
-        v1 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n, k)
-        v2 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n + 1, k)
-        v3 = _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j3, k)
+    n_l = table.shape[4]
+    columns[:] = 0.0
+    for a in range(2):
+        wa = w_r if a else 1.0 - w_r
+        if wa == 0.0:
+            continue
+        i_mu = i_mu1 if a else i_mu0
+        w_mu = w_mu1 if a else w_mu0
+        for b in range(2):
+            wb = wa * (w_mu if b else 1.0 - w_mu)
+            for c in range(2):
+                wc = wb * (w_s if c else 1.0 - w_s)
+                if wc == 0.0:
+                    continue
+                row = table[i_r + a, i_mu + b, i_s + c]
+                for k in range(n_l):
+                    columns[0, k] += wc * row[j0, k]
+                    columns[1, k] += wc * row[i_n, k]
+                    columns[2, k] += wc * row[i_n + 1, k]
+                    columns[3, k] += wc * row[j3, k]
+    for k in range(n_l):
+        v0, v1, v2, v3 = columns[0, k], columns[1, k], columns[2, k], columns[3, k]
         a0, a1, a2, a3 = azimuth_read_weights(v0, v1, v2, v3, w_n, l0, l1, l2, l3)
         out[k] += scale * (a0 * v0 + a1 * v1 + a2 * v2 + a3 * v3)
 
@@ -503,7 +540,7 @@ def lookup4_cell_spectral(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s,
 
 
 @helper
-def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min, scale, out):
+def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min, scale, out, columns):
     """``out += scale * S(r, mu, mu_s, nu)`` for a 4D table (n_r, n_mu, n_mu_s, n_nu, n_wavelengths): linear in r,
     mu and mu_s, through four azimuth texels along nu (:func:`lookup4_cell_azimuth_each`, the rule of the rendering
     lookups' read of the multiple scattering with each wavelength's own weights: the four-point rule where the texels
@@ -516,11 +553,14 @@ def scattering_lookup(table, r, mu, mu_s, nu, hits_ground, bottom, top, mu_s_min
     the multiple scattering over its lobe is U-shaped along the azimuth with its bottom between two of the 8 texels,
     which a read through two texels over-reads, order after order. Format 20: the low-sun directions outside the
     target 31 -> 25 of 315 (optical depth 0.5 14 -> 8: the 400 nm cells towards a sun at +3 deg pass), measured
-    against the stored Monte Carlo (docs/accuracy.md, "Low sun")."""
+    against the stored Monte Carlo (docs/accuracy.md, "Low sun"). ``columns`` (4, n_wavelengths) float64 is scratch
+    (:func:`lookup4_cell_azimuth_each`); weights within :data:`TEXEL_SNAP` of a texel read the texel
+    (:func:`snap_to_texel`)."""
     n_r, n_mu, n_s, n_n, n_l = table.shape
     i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n, 0)
-    lookup4_cell_azimuth_each(table, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, w_n, scale, out)
+    lookup4_cell_azimuth_each(table, i_r, snap_to_texel(w_r), i_m0, w_m0, i_m1, w_m1, i_s, snap_to_texel(w_s), i_n,
+                              w_n, scale, out, columns)
 
 
 @helper
@@ -530,12 +570,16 @@ def _lookup4_weighted(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n
     n_l = table.shape[4]
     for a in range(2):
         wa = w_r if a else 1.0 - w_r
+        if wa == 0.0:  # corners of zero weight are not read
+            continue
         i_mu = i_mu1 if a else i_mu0
         w_mu = w_mu1 if a else w_mu0
         for b in range(2):
             wb = wa * (w_mu if b else 1.0 - w_mu)
             for c in range(2):
                 wc = wb * (w_s if c else 1.0 - w_s)
+                if wc == 0.0:
+                    continue
                 for e in range(2):
                     we = wc * (n1 if e else n0)
                     for k in range(n_l):
@@ -650,12 +694,14 @@ def scattering_lookup_shadow(table, r, mu, mu_s, nu, hits_ground, bottom, top, m
                              out):
     """:func:`scattering_lookup` of a single-scattering table with the azimuth weights of
     :func:`shadow_nu_weights` (the constituent's density ``profile``): the incident single scattering of the
-    second order's scattering density at twilight."""
+    second order's scattering density at twilight (weights within :data:`TEXEL_SNAP` of a texel read the texel,
+    :func:`snap_to_texel`)."""
     n_r, n_mu, n_s, n_n, n_l = table.shape
     i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n, 0)
     n0, n1 = shadow_nu_weights(r, mu, mu_s, nu, i_n, w_n, n_n, bottom, top, profile, n_layers)
-    _lookup4_weighted(table, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, n0 * scale, n1 * scale, out)
+    _lookup4_weighted(table, i_r, snap_to_texel(w_r), i_m0, w_m0, i_m1, w_m1, i_s, snap_to_texel(w_s), i_n,
+                      n0 * scale, n1 * scale, out)
 
 
 @helper
