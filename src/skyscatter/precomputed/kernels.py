@@ -717,8 +717,9 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, lobe, phase_trunc, 
 
 #: The multiple-scattering kernel's per-sun loops over the wavelengths run on SIMD lanes only for whole groups of
 #: 4 (the compiler's vectorised tail handles 4 at a time): 3 wavelengths ran as scalar code, 1.80 s of CPU per
-#: order against 1.23 s for 4 and 1.57 s for 16 (default sizes, one thread; 2026-12-06). The loops run over the
-#: wavelengths padded with zero values to a multiple of 4; the padding's sums are never stored.
+#: order against 1.23-1.32 s for 4 and 1.57 s for 16 (default sizes, one thread, 4 of the 32 radii times 8;
+#: 2026-12-06), so the loops run over the wavelengths padded with zero values to a multiple of 4 (3 -> 1.28 s; the
+#: padding's sums are never stored). A fixed inner loop of 8 instead ran 4x slower (not vectorised).
 WAVELENGTH_PAD = 4
 
 
