@@ -225,8 +225,11 @@ def main() -> None:
     ap.add_argument("--views", default="", help="elev/az pairs, e.g. 15/135,5/180")
     ap.add_argument("--sizes", default="", help="table size overrides, e.g. scattering_mu_s=64")
     ap.add_argument("--irradiance", default="", help="sun elevations [deg]: the first-order irradiance instead")
+    ap.add_argument("--sun-radius", type=float, default=1e-5,
+                    help="the tables' sun angular radius [rad]; default 1e-5: a point sun like the integral's "
+                         "(the parameters' default 0.004675 gives the tables a soft shadow the integral has not)")
     args = ap.parse_args()
-    params = ATMOSPHERES[args.atm](ground_albedo=0.0)
+    params = ATMOSPHERES[args.atm](ground_albedo=0.0, sun_angular_radius=args.sun_radius)
     analytic = params.aerosol_component.analytic_phase
     if analytic is None or analytic.kind != "cornette-shanks":
         raise SystemExit("the integral here writes out the Cornette-Shanks phase only")
