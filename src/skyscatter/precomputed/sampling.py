@@ -378,6 +378,19 @@ def r_mu_s_cell(r, mu_s, bottom, top, mu_s_min, n_r, n_mu_s, cells):
 
 
 @helper
+def cell_corner(q, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s):
+    """Corner ``q`` (0-7: bits r, mu, mu_s) of a 4D table's (r, mu, mu_s) cell (the rows ``i_r``, ``i_r + 1`` at
+    their own mu cells, :func:`r_mu_cell`): its indices ``(i_r', i_mu', i_mu_s')`` and its linear weight."""
+    a = q >> 2
+    b = (q >> 1) & 1
+    c = q & 1
+    wa = w_r if a else 1.0 - w_r
+    w_mu = w_mu1 if a else w_mu0
+    return (i_r + a, (i_mu1 if a else i_mu0) + b, i_s + c,
+            wa * (w_mu if b else 1.0 - w_mu) * (w_s if c else 1.0 - w_s))
+
+
+@helper
 def _column(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, j, k):
     """A 4D table's azimuth texel ``j`` at wavelength index ``k``, interpolated linearly in r, mu and mu_s (the cell
     of :func:`nu_weight`)."""
@@ -487,24 +500,16 @@ def lookup4_cell_azimuth_each(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, 
     j0, j3, l0, l1, l2, l3 = azimuth_four_point(i_n, w_n, table.shape[3])
     n_l = table.shape[4]
     columns[:] = 0.0
-    for a in range(2):
-        wa = w_r if a else 1.0 - w_r
-        if wa == 0.0:
+    for q in range(8):
+        c_r, c_mu, c_s, wc = cell_corner(q, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s)
+        if wc == 0.0:
             continue
-        i_mu = i_mu1 if a else i_mu0
-        w_mu = w_mu1 if a else w_mu0
-        for b in range(2):
-            wb = wa * (w_mu if b else 1.0 - w_mu)
-            for c in range(2):
-                wc = wb * (w_s if c else 1.0 - w_s)
-                if wc == 0.0:
-                    continue
-                row = table[i_r + a, i_mu + b, i_s + c]
-                for k in range(n_l):
-                    columns[0, k] += wc * row[j0, k]
-                    columns[1, k] += wc * row[i_n, k]
-                    columns[2, k] += wc * row[i_n + 1, k]
-                    columns[3, k] += wc * row[j3, k]
+        row = table[c_r, c_mu, c_s]
+        for k in range(n_l):
+            columns[0, k] += wc * row[j0, k]
+            columns[1, k] += wc * row[i_n, k]
+            columns[2, k] += wc * row[i_n + 1, k]
+            columns[3, k] += wc * row[j3, k]
     for k in range(n_l):
         v0, v1, v2, v3 = columns[0, k], columns[1, k], columns[2, k], columns[3, k]
         a0, a1, a2, a3 = azimuth_read_weights(v0, v1, v2, v3, w_n, l0, l1, l2, l3)
@@ -568,22 +573,14 @@ def _lookup4_weighted(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n
     """``out += table(cell)``, linear in r, mu and mu_s (each row at its own mu cell, :func:`r_mu_cell`), with the
     weights ``n0``, ``n1`` of the nu texels ``i_n``, ``i_n + 1``."""
     n_l = table.shape[4]
-    for a in range(2):
-        wa = w_r if a else 1.0 - w_r
-        if wa == 0.0:  # corners of zero weight are not read
+    for q in range(8):
+        c_r, c_mu, c_s, wc = cell_corner(q, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s)
+        if wc == 0.0:  # corners of zero weight are not read
             continue
-        i_mu = i_mu1 if a else i_mu0
-        w_mu = w_mu1 if a else w_mu0
-        for b in range(2):
-            wb = wa * (w_mu if b else 1.0 - w_mu)
-            for c in range(2):
-                wc = wb * (w_s if c else 1.0 - w_s)
-                if wc == 0.0:
-                    continue
-                for e in range(2):
-                    we = wc * (n1 if e else n0)
-                    for k in range(n_l):
-                        out[k] += we * table[i_r + a, i_mu + b, i_s + c, i_n + e, k]
+        for e in range(2):
+            we = wc * (n1 if e else n0)
+            for k in range(n_l):
+                out[k] += we * table[c_r, c_mu, c_s, i_n + e, k]
 
 
 @helper
