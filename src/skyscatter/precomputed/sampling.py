@@ -573,14 +573,20 @@ def _lookup4_weighted(table, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s, i_n
     """``out += table(cell)``, linear in r, mu and mu_s (each row at its own mu cell, :func:`r_mu_cell`), with the
     weights ``n0``, ``n1`` of the nu texels ``i_n``, ``i_n + 1``."""
     n_l = table.shape[4]
-    for q in range(8):
-        c_r, c_mu, c_s, wc = cell_corner(q, i_r, w_r, i_mu0, w_mu0, i_mu1, w_mu1, i_s, w_s)
-        if wc == 0.0:  # corners of zero weight are not read
-            continue
-        for e in range(2):
-            we = wc * (n1 if e else n0)
-            for k in range(n_l):
-                out[k] += we * table[c_r, c_mu, c_s, i_n + e, k]
+    # every corner read, zero weights too: a test per corner made the rendering lookups' aerial perspective in
+    # twilight 8-10 % slower (their weights are never zero), and the precomputation's reads gain little from it
+    for a in range(2):
+        wa = w_r if a else 1.0 - w_r
+        i_mu = i_mu1 if a else i_mu0
+        w_mu = w_mu1 if a else w_mu0
+        for b in range(2):
+            wb = wa * (w_mu if b else 1.0 - w_mu)
+            for c in range(2):
+                wc = wb * (w_s if c else 1.0 - w_s)
+                for e in range(2):
+                    we = wc * (n1 if e else n0)
+                    for k in range(n_l):
+                        out[k] += we * table[i_r + a, i_mu + b, i_s + c, i_n + e, k]
 
 
 @helper
@@ -691,14 +697,12 @@ def scattering_lookup_shadow(table, r, mu, mu_s, nu, hits_ground, bottom, top, m
                              out):
     """:func:`scattering_lookup` of a single-scattering table with the azimuth weights of
     :func:`shadow_nu_weights` (the constituent's density ``profile``): the incident single scattering of the
-    second order's scattering density at twilight (weights within :data:`TEXEL_SNAP` of a texel read the texel,
-    :func:`snap_to_texel`)."""
+    second order's scattering density at twilight."""
     n_r, n_mu, n_s, n_n, n_l = table.shape
     i_r, w_r, i_m0, w_m0, i_m1, w_m1 = r_mu_cell(r, mu, hits_ground, bottom, top, n_r, n_mu)
     i_s, w_s, i_n, w_n = mu_s_nu_cell(mu, mu_s, nu, bottom, top, mu_s_min, n_s, n_n, 0)
     n0, n1 = shadow_nu_weights(r, mu, mu_s, nu, i_n, w_n, n_n, bottom, top, profile, n_layers)
-    _lookup4_weighted(table, i_r, snap_to_texel(w_r), i_m0, w_m0, i_m1, w_m1, i_s, snap_to_texel(w_s), i_n,
-                      n0 * scale, n1 * scale, out)
+    _lookup4_weighted(table, i_r, w_r, i_m0, w_m0, i_m1, w_m1, i_s, w_s, i_n, n0 * scale, n1 * scale, out)
 
 
 @helper
