@@ -15,7 +15,13 @@ The cases at -2.3 and -5.1 deg (:data:`MID_SUNS`, added 2026-12-04) were made wi
 (524288 and 2097152 paths per direction; 216-1127 s each on the shared machine at load 5-9).
 The -6 deg cases were made again on 2026-12-06 with ``--suns=-6 --paths 1048576 --seed 300`` (8388608 paths per
 direction; 289-974 s each) into a new file and put in place of the earlier ones (1048576 paths, seeds 105, 110,
-115).
+115). The same day every other case was made again the same way, so that each has at least 1048576 paths per
+direction: ``--suns=-5.1,-3 --paths 1048576 --seed 400`` (8388608 and 2097152 paths, 4 and 8 times as many as
+before; seeds 417-421, 404-414; 303-439 s and 68-104 s each, niced, on the shared 2 cores), ``--suns=-2.3,0
+--paths 1048576 --seed 500`` (2097152 and 1048576 paths, 4 and 8 times; seeds 516-520, 503-513; 40-78 s each) and
+``--suns=3,10 --paths 1048576 --seed 500`` (1048576 paths, 8 times; seeds 501-512; 41-68 s each): standard errors
+median 0.06-1.1 % (were 0.16-2.2 %); the earlier values lie within the errors of the new (|difference| / combined
+standard error median 0.44-0.92 per case, at most 3.16 of 480 values).
 
 Each case has its own random stream, seed ``--seed`` plus its place in :data:`CASE_ORDER` (since 2026-12-03, with
 131072 paths: the values stored before used seed 1 in every case and 32768 paths, so a direction's draw repeated at
