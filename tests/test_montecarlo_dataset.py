@@ -109,6 +109,42 @@ def test_cli_reference(tmp_path, capsys):
     assert main(["reference", str(tmp_path / "b.zarr"), "--turbidity", "2", "--aod", "0.1"]) == 2
 
 
+def test_cli_reference_orders(tmp_path, capsys):
+    """--orders: each window's store equals the direct call with that window; the windows 1, 2 and 3: add up to the
+    store of every order (the same seed: the same paths); the window is part of the job; refusals."""
+    import json
+
+    import xarray as xr
+
+    base = ["--sun-elevation", "30", "--directions", "2", "--samples", "64", "--wavelengths", "500,650",
+            "--no-progress", "--scheduler", "synchronous", "--seed", "4"]
+    stores = {}
+    for window in ("all", "1", "2", "3:"):
+        stores[window] = tmp_path / f"o{window.strip(':')}.zarr"
+        assert main(["reference", str(stores[window]), *base, "--orders", window]) == 0
+    capsys.readouterr()
+    rad = {w: xr.open_zarr(p, consolidated=False)["radiance"].values[0, 0, 0] for w, p in stores.items()}
+    assert np.all(rad["2"] > 0) and np.all(rad["3:"] > 0) and np.all(rad["1"] > rad["2"])
+    np.testing.assert_allclose(rad["1"] + rad["2"] + rad["3:"], rad["all"], rtol=1e-12)
+    atm = AtmosphereParameters().replace(mie_angstrom_alpha=1.3, mie_angstrom_beta=0.04608 * 2.5 - 0.04586)
+    direct = sky_radiance(atm, equal_area_directions(2), [500.0, 650.0], sun_zenith=math.radians(60.0), samples=64,
+                          seed=4, orders=2)
+    np.testing.assert_allclose(rad["2"], direct.radiance, rtol=1e-12)  # the turbidity's beta to rounding
+    job = json.loads(xr.open_zarr(stores["3:"], consolidated=False).attrs["job"])
+    assert job["orders"] == [3, 100_000]
+    assert "orders" not in json.loads(xr.open_zarr(stores["all"], consolidated=False).attrs["job"])
+    assert main(["reference", str(stores["2"]), *base, "--orders", "1"]) == 2  # another job
+    assert "different reference job" in capsys.readouterr().err
+    for bad in ("0", "3:2", "x", "1:2:3"):
+        assert main(["reference", str(tmp_path / "bad.zarr"), *base, "--orders", bad]) == 2
+        assert "--orders" in capsys.readouterr().err
+    assert main(["reference", str(tmp_path / "cloud.zarr"), *base, "--orders", "2", "--cloud-optical-depth",
+                 "5"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "forward peak" in err[-1]
+    assert not (tmp_path / "cloud.zarr").exists() and not (tmp_path / "bad.zarr").exists()
+
+
 def test_an_aerosol_type_keeps_its_mie_optics_per_cell(tmp_path, capsys):
     """With a particle aerosol (an OPAC type) each cell is that aerosol at the cell's optical depth at 550 nm: its
     spectral shape (maritime-clean's Mie extinction, Angstrom exponent about 0.1, not the analytic aerosol's 1.3)

@@ -29,6 +29,22 @@ def _whole_in(low: int, high: int):
     return parse
 
 
+def _orders(text: str) -> tuple[int, int | None] | None:
+    """argparse type of --orders: ``all``, ``K`` (that order alone), ``A:B`` or ``A:`` (from A on)."""
+    t = text.strip().lower()
+    if t == "all":
+        return None
+    lo, sep, hi = t.partition(":")
+    try:
+        first = int(lo)
+        last = None if sep and not hi.strip() else int(hi) if sep else first
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'all', K, A:B or A: (whole numbers >= 1), got {text!r}") from None
+    if first < 1 or (last is not None and last < first):
+        raise argparse.ArgumentTypeError(f"expected orders 1 <= A <= B, got {text!r}")
+    return first, last
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     from ..montecarlo.dataset import MAX_DIRECTIONS, MAX_SAMPLES
 
@@ -84,6 +100,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="random seed, 0 to 2^63 - 1 (results depend only on it and the job)")
     p.add_argument("--altitude", type=float_in(0.0, 1e8), default=0.0, metavar="M",
                    help="observer altitude above the ground [m], 0 to 1e8")
+    p.add_argument("--orders", type=_orders, default=None, metavar="K|A:B|A:",
+                   help="the orders of scattering counted (a ground reflection is one): K that order alone (1: single "
+                   "scattering), A:B orders A to B, A: from A on; 'all' (default) every order. Windows 1, 2 and 3: "
+                   "of one seed add up to the whole. Not with --cloud-optical-depth")
     p.add_argument("--phase", choices=AEROSOL_PHASE_FUNCTIONS, default=None,
                    help="aerosol phase function (asymmetry g = 0.8; default cornette-shanks); not with --aerosol")
     air = p.add_argument_group("air", "the medium every cell starts from (default: the Earth defaults); --aod sets "
@@ -159,7 +179,8 @@ def run(args: argparse.Namespace) -> int:
                        turbidities=turbidity, aerosol_optical_depths=aod, albedos=args.albedo,
                        wavelengths=args.wavelengths, directions=directions,
                        atmosphere=atmosphere, samples=args.samples,
-                       seed=args.seed, altitude=args.altitude, scheduler=args.scheduler, progress=progress)
+                       seed=args.seed, altitude=args.altitude, scheduler=args.scheduler, progress=progress,
+                       orders=args.orders)
     finally:
         if bar is not None:
             bar.close()

@@ -18,7 +18,8 @@ direction_xyz      direction, xyz                                   unit ENU vec
 Each cell is one Zarr chunk of every variable. A cell is written with its checksum first and only then marked
 ``done``, so an interrupted run loses nothing written and a re-run skips the cells already done; on resuming,
 every done cell's data is checked against its checksum and recomputed if it was damaged. The store's attributes
-hold the job description (atmosphere with its aerosol phase function, axes, directions, samples, seed, version)
+hold the job description (atmosphere with its aerosol phase function, axes, directions, samples, seed, the window
+of scattering orders when it is not every order, version)
 and its SHA-256; a store that holds a different job, or lacks a variable, is refused rather than overwritten.
 
 Every argument is checked before the store is touched. A new store is written as a hidden temporary folder
@@ -57,13 +58,16 @@ from .driver import (
     DEFAULT_GROUP_SIZE,
     batch_layout,
     check_directions,
+    check_orders,
     check_scheduler,
     check_wavelengths,
     count_tasks,
+    prepare_medium,
     sky_radiance,
     solar_disc_radiance,
     wavelength_groups,
 )
+from .kernels import MAX_ORDER
 
 __all__ = ["ReferenceJob", "equal_area_directions", "reference"]
 
@@ -126,6 +130,7 @@ class ReferenceJob:
     seed: int
     altitude: float
     group_size: int
+    orders: tuple[int, int] = (1, MAX_ORDER)
 
     def cell_atmosphere(self, k: int, m: int) -> AtmosphereParameters:
         """Medium of aerosol index ``k`` and albedo index ``m``."""
@@ -154,7 +159,7 @@ class ReferenceJob:
             "altitude_m": self.altitude,
             "group_size": self.group_size,
             "method": "skyscatter.montecarlo (docs/montecarlo.md)",
-        }
+        } | ({} if self.orders == (1, MAX_ORDER) else {"orders": list(self.orders)})  # every order: as before
 
     def job_id(self) -> str:
         text = json.dumps(self.description(), sort_keys=True, separators=(",", ":"))
@@ -180,7 +185,7 @@ def _axis(name: str, values: ArrayLike, lo: float, hi: float, unit: str) -> NDAr
 def make_job(*, sun_elevations: ArrayLike, albedos: ArrayLike, wavelengths: ArrayLike, directions: ArrayLike,
              turbidities: ArrayLike | None = None, aerosol_optical_depths: ArrayLike | None = None,
              atmosphere: AtmosphereParameters | None = None, samples: int = 4096, seed: int = 0,
-             altitude: float = 0.0, group_size: int = DEFAULT_GROUP_SIZE) -> ReferenceJob:
+             altitude: float = 0.0, group_size: int = DEFAULT_GROUP_SIZE, orders: Any = None) -> ReferenceJob:
     """Validate the inputs of a reference job (see :func:`reference`)."""
     atm = AtmosphereParameters() if atmosphere is None else atmosphere
     if (turbidities is None) == (aerosol_optical_depths is None):
@@ -209,11 +214,14 @@ def make_job(*, sun_elevations: ArrayLike, albedos: ArrayLike, wavelengths: Arra
     dirs = check_directions(directions)
     if dirs.shape[0] > MAX_DIRECTIONS:
         raise InvalidParameterError(f"at most {MAX_DIRECTIONS} directions; got {dirs.shape[0]}")
+    window = check_orders(orders)
     job = ReferenceJob(atm, _axis("sun elevations", sun_elevations, -math.pi / 2, math.pi / 2, "rad"), kind, aer,
-                       _axis("albedos", albedos, 0.0, 1.0, ""), wl, dirs, samples, seed, alt, group_size)
+                       _axis("albedos", albedos, 0.0, 1.0, ""), wl, dirs, samples, seed, alt, group_size, window)
     # validate every cell's medium and the spectra once, before anything is written
     for k in range(aer.size):
         job.cell_atmosphere(k, 0).check_wavelengths(wl)
+    if window != (1, MAX_ORDER):  # a window needs a medium without a forward peak split off (every cell alike)
+        check_orders(orders, prepare_medium(job.cell_atmosphere(0, 0), wl[:1]))
     return job
 
 
@@ -472,7 +480,7 @@ def reference(store: str | os.PathLike[str], *, sun_elevations: ArrayLike, albed
               aerosol_optical_depths: ArrayLike | None = None, atmosphere: AtmosphereParameters | None = None,
               samples: int = 4096, seed: int = 0, altitude: float = 0.0, group_size: int = DEFAULT_GROUP_SIZE,
               scheduler: Any = None,
-              progress: Callable[[int, int], None] | None = None):
+              progress: Callable[[int, int], None] | None = None, orders: Any = None):
     """Compute (or resume) a reference grid and write it to the Zarr ``store``; return the xarray Dataset.
 
     Parameters
@@ -495,14 +503,15 @@ def reference(store: str | os.PathLike[str], *, sun_elevations: ArrayLike, albed
         ``mie_phase_g`` give the aerosol phase function of every cell; a particle aerosol (``atmosphere.aerosol``,
         e.g. :meth:`~skyscatter.atmosphere.AtmosphereParameters.with_aerosol_type`) is kept, Mie phase and
         spectrum, with its optical depth at 550 nm set per cell (aerosol optical depths only).
-    samples, seed, altitude, group_size, scheduler
-        As :func:`~skyscatter.montecarlo.sky_radiance`.
+    samples, seed, altitude, group_size, scheduler, orders
+        As :func:`~skyscatter.montecarlo.sky_radiance` (``orders``: the orders of scattering counted, part of the
+        job; a store of every order is described as before the option existed).
     progress : callable(done, total), optional
         Task progress over the cells still to compute.
     """
     job = make_job(sun_elevations=sun_elevations, albedos=albedos, wavelengths=wavelengths, directions=directions,
                    turbidities=turbidities, aerosol_optical_depths=aerosol_optical_depths, atmosphere=atmosphere,
-                   samples=samples, seed=seed, altitude=altitude, group_size=group_size)
+                   samples=samples, seed=seed, altitude=altitude, group_size=group_size, orders=orders)
     check_scheduler(scheduler)
     path = check_store_path(store)
     ds = _open_or_create(path, job)
@@ -531,7 +540,7 @@ def reference(store: str | os.PathLike[str], *, sun_elevations: ArrayLike, albed
 
             res = sky_radiance(atm, job.directions, job.wavelengths, sun_zenith=zen, altitude=job.altitude,
                                samples=job.samples, seed=job.seed, scheduler=scheduler, group_size=job.group_size,
-                               progress=cell_progress)
+                               progress=cell_progress, orders=job.orders)
             disc = solar_disc_radiance(atm, job.wavelengths, sun_zenith=zen, altitude=job.altitude)
             try:
                 _write_cell(path, (i, k, m), res.radiance, res.stderr, disc)

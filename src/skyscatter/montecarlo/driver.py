@@ -496,6 +496,29 @@ def check_samples(samples: Any) -> int:
     return whole_number("samples", samples, 1)
 
 
+def check_orders(orders: Any, medium: Medium | None = None) -> tuple[int, int]:
+    """The window of scattering orders ``(first, last)`` from ``None`` (every order), a whole number ``k`` (that
+    order alone) or a pair ``(first, last)`` (``last`` None: no limit); 1 <= first <= last <= ``MAX_ORDER``. A medium
+    with a cloud's forward peak split off takes every order only (``kernels``, "Orders")."""
+    top = kernels.MAX_ORDER
+    if orders is None:
+        return 1, top
+    if isinstance(orders, (tuple, list)):
+        if len(orders) != 2:
+            raise InvalidParameterError(f"orders must be None, a whole number or a pair (first, last); got {orders!r}")
+        lo = whole_number("orders[0]", orders[0], 1)
+        hi = top if orders[1] is None else whole_number("orders[1]", orders[1], 1)
+    else:
+        lo = hi = whole_number("orders", orders, 1)
+    if hi < lo or hi > top:
+        raise InvalidParameterError(f"orders must satisfy 1 <= first <= last <= {top}; got ({lo}, {hi})")
+    if medium is not None and medium.peak_lobe >= 0 and (lo, hi) != (1, top):
+        raise InvalidParameterError("orders: a window of scattering orders is not available for a cloud whose "
+                                    "phase function's forward peak is split off (a tabulated cloud phase function); "
+                                    "pass orders=None")
+    return lo, hi
+
+
 def batch_layout(samples: int) -> tuple[int, int]:
     """(batch_size, n_batches) for a number of paths per direction; the samples used are their product."""
     bs = min(samples, MAX_BATCH_SIZE)
@@ -519,7 +542,7 @@ _CLOUDY = np.zeros(1)
 def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float64], dirs: NDArray[np.float64],
               mode: NDArray[np.int64], suns: NDArray[np.float64], sun_ptr: NDArray[np.int64],
               dir_index: NDArray[np.int64], group: int, wl_index: NDArray[np.int64], batch0: int, n_batches: int,
-              batch_size: int, seed: int
+              batch_size: int, seed: int, orders: tuple[int, int] = (1, kernels.MAX_ORDER)
               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """One task: per-batch sums and sums of squares per hero and wavelength, each (n_rows, n_batches,
     n_group_wavelengths, n_group_wavelengths), the paths per hero (n_rows, n_batches, n_group_wavelengths) and the
@@ -537,7 +560,7 @@ def _run_task(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.f
         m.edges, m.layers, m.nlay, m.sgeo, m.stab, m.ushell, m.coef, m.scat, m.lobe, m.lobe_g, m.lobe_tab, m.tmu,
         m.tval, m.tcdf, m.albedo, m.esun, f.vf, f.vi, f.rho, f.bmax, f.bmin, f.xe, f.ye, f.re, m.fs, m.fss, m.ddis,
         m.ddis_lobe, m.peak_lobe, m.pval, m.pcdf, m.pa, m.nee_roulette, m.split, m.dval, m.dcdf, m.ddis_gate,
-        _CLOUDY if m.cloud_paths else None)]
+        _CLOUDY if m.cloud_paths else None, np.int64(orders[0]), np.int64(orders[1]))]
     kernels.trace_block(*inputs, seed, group, batch0, n_batches, batch_size, sums, sumsq, counts, verts)
     return sums, sumsq, counts, verts
 
@@ -807,12 +830,15 @@ def almucantars(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np
 def trace(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float64], dirs: NDArray[np.float64],
           mode: NDArray[np.int64], sun: NDArray[np.float64], n_wavelengths: int, *, samples: int, seed: int,
           scheduler: Any = None, group_size: int = DEFAULT_GROUP_SIZE, directions_per_task: int | None = None,
-          batches_per_task: int | None = None, progress: Callable[[int, int], None] | None = None
+          batches_per_task: int | None = None, progress: Callable[[int, int], None] | None = None,
+          orders: tuple[int, int] = (1, kernels.MAX_ORDER)
           ) -> tuple[NDArray[np.float64], NDArray[np.float64], int, float]:
     """Run the kernels for N entries (origin, footprint, direction, mode; ``kernels.trace_block``) on dask.
 
     Views of one almucantar share their paths where the medium allows it (:func:`almucantars`); the tasks are
     made of whole entries (``directions_per_task`` counts entries).
+
+    ``orders`` (first, last): the orders of scattering counted (``kernels.trace_block``; :func:`check_orders`).
 
     Returns ``(mean, stderr, samples_used, mean_vertices)``: per entry and wavelength the mean per-path estimate
     and its standard error, the paths per entry and the mean number of scattering and ground vertices per path.
@@ -843,7 +869,8 @@ def trace(medium: Medium, origins: NDArray[np.float64], jitter: NDArray[np.float
             specs[k] = dataclasses.replace(sp, dir_slice=slice(int(ptr[e0]), int(ptr[e1])))  # its rows
             yield (medium, c(origins, sp.dir_slice), c(jitter, sp.dir_slice), c(dirs, sp.dir_slice),
                    c(mode, sp.dir_slice), np.ascontiguousarray(suns[ptr[e0]:ptr[e1]]), ptr[e0:e1 + 1] - ptr[e0],
-                   entry[sp.dir_slice], sp.group, groups[sp.group], sp.batch0, sp.n_batches, batch_size, seed)
+                   entry[sp.dir_slice], sp.group, groups[sp.group], sp.batch0, sp.n_batches, batch_size, seed,
+                   orders)
 
     def add(k: int, result: tuple) -> None:
         a, b, cnt, v = result
@@ -863,8 +890,9 @@ def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavele
                  seed: int = 0, scheduler: Any = None, group_size: int = DEFAULT_GROUP_SIZE,
                  directions_per_task: int | None = None, batches_per_task: int | None = None,
                  progress: Callable[[int, int], None] | None = None, clouds: Any = None,
-                 majorant_block: Any = None) -> MonteCarloResult:
-    """Monte Carlo spectral sky radiance (all orders of scattering, without the directly transmitted sun).
+                 majorant_block: Any = None, orders: Any = None) -> MonteCarloResult:
+    """Monte Carlo spectral sky radiance (all orders of scattering or a window of them, without the directly
+    transmitted sun).
 
     Parameters
     ----------
@@ -899,6 +927,12 @@ def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavele
     majorant_block : int or (int, int, int), optional
         Block edge of the field's majorant grid in voxels (default 8; changes the random numbers, not the
         expectation).
+    orders : None, int or (int, int or None), optional
+        The orders of scattering counted (a ground reflection counts as one): None every order, ``k`` the ``k``-th
+        alone (1: single scattering), ``(first, last)`` those from ``first`` to ``last`` (``last`` None: no limit).
+        The same paths, each ending after its vertex ``last``; the windows ``1``, ``2`` and ``(3, None)`` add up to
+        the whole (``kernels``, "Orders"). Not for a cloud with a tabulated phase function (its forward peak's
+        probes span orders): :class:`~skyscatter.errors.InvalidParameterError`.
     """
     t_start = time.perf_counter()
     dirs = check_directions(directions)
@@ -906,13 +940,15 @@ def sky_radiance(atmosphere: AtmosphereParameters, directions: ArrayLike, wavele
     check_samples(samples)
     sun = _sun_vector(sun_zenith, sun_azimuth)
     r_obs = _observer_radius(atmosphere, altitude)
+    check_orders(orders)
     medium = prepare_medium(atmosphere, wl, _check_clouds(clouds), majorant_block)
+    window = check_orders(orders, medium)
     n = dirs.shape[0]
     origins = np.tile(np.array([0.0, 0.0, r_obs]), (n, 1))
     mean, stderr, used, verts = trace(medium, origins, np.zeros((n, 2)), dirs, np.zeros(n, dtype=np.int64), sun,
                                       wl.size, samples=samples, seed=seed, scheduler=scheduler,
                                       group_size=group_size, directions_per_task=directions_per_task,
-                                      batches_per_task=batches_per_task, progress=progress)
+                                      batches_per_task=batches_per_task, progress=progress, orders=window)
     return MonteCarloResult(mean, stderr, used, time.perf_counter() - t_start, wl, dirs, verts)
 
 

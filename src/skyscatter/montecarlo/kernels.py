@@ -153,6 +153,14 @@ peak probes share one draw: deep in an overcast most vertices, where twenty suns
 point, an exit distance and a bound to learn the same (the job of docs/clouds.md 1.4x faster). Correlated draws
 across the views change no view's distribution. The driver forms the almucantars (``driver.almucantars``).
 
+Orders. The next-event estimate at a path's vertex number ``k`` (counted from the observer; a ground reflection is
+a vertex) is the radiance of the light paths of exactly ``k`` scatterings and reflections through it, so the estimates
+of the vertices ``lo .. hi`` alone estimate those orders alone ([Veach1997] Ch. 8: the path integral split by path
+length), with the same paths: a path ends after vertex ``hi``, and what the vertices below ``lo`` added is taken
+back. A forward peak's probe estimates a chain of any length from one vertex, so a window is refused there. The
+precomputed tables count their orders the same way (Bruneton & Neyret 2008, Sec. 4: the ground's reflection of
+order ``k - 1`` light is in the density of order ``k``).
+
 Observers. Each entry ``j`` of a block has an origin (planet frame), a direction and a mode: 0 - the radiance
 arriving from ``-dirs[j]`` travelling along ... i.e. seen looking along ``dirs[j]``; 1 - a direction drawn per
 path from the cosine distribution about ``dirs[j]``, each path's estimate multiplied by pi, so that the mean is
@@ -187,7 +195,7 @@ from ..vecmath import exp_lane
 from .rng import next_uniform, sample_state, stream_key
 from .tracking import field_box_hit, field_density_at, field_free_path, field_transmittance
 
-__all__ = ["column_along", "disc_transmittance", "trace_block", "LOBE_NONE", "LOBE_RAYLEIGH",
+__all__ = ["column_along", "disc_transmittance", "trace_block", "MAX_ORDER", "LOBE_NONE", "LOBE_RAYLEIGH",
            "LOBE_CORNETTE_SHANKS", "LOBE_HENYEY_GREENSTEIN", "LOBE_TABLE"]
 
 # Small per-collision helpers with many array arguments are inlined (``inline``): a call passes 7 words per array
@@ -200,6 +208,8 @@ __all__ = ["column_along", "disc_transmittance", "trace_block", "LOBE_NONE", "LO
 _GX = (-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526)
 _GW = (0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538)
 _MAX_VERTICES = 100_000
+#: The highest order a window of orders can name (``trace_block``'s ``order_hi`` for every order).
+MAX_ORDER = _MAX_VERTICES
 _RR_THRESHOLD = 0.5
 #: Optical depth of the least extinguished wavelength at which a shadow ray stops (transmittance < 2e-22): deep
 #: in a thick cloud the sun is not marched to; in clear air it is never reached.
@@ -1756,7 +1766,7 @@ def _clear_ground(px, py, pz, dx, dy, dz, t_end, sun, cos_sun, rb, rt, edges, la
 def trace_block(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, cos_sun, rb, rt, edges, layers, nlay, sgeo, stab,
         ushell, coef, scat, lobe, lobe_g, lobe_tab, tmu, tval, tcdf, albedo, esun, fvf, fvi, frho, fbmax, fbmin, fxe,
         fye, fre, fs, fss, ddis, ddis_lobe, peak_lobe, pval, pcdf, pa, nee_roulette, split, dval, dcdf, ddis_gate,
-        cloudy, seed, group, batch0, n_batches, batch_size, sums, sumsq, counts, vertices_out):
+        cloudy, order_lo, order_hi, seed, group, batch0, n_batches, batch_size, sums, sumsq, counts, vertices_out):
     """Trace ``n_batches`` batches of ``batch_size`` paths for each entry of a block; one wavelength group.
 
     Parameters (all SI; arrays float64 unless stated)
@@ -1800,6 +1810,11 @@ def trace_block(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, cos_sun, 
     below are the constant False and LLVM removes the cloud code; that kernel marches the clear sky's three shell
     components (Rayleigh, aerosol, ozone: ``C = 3``, else ValueError) with their coefficients as scalars
     (:func:`_march3_locate`).
+    order_lo, order_hi : int64, the orders of scattering counted (module docstring, "Orders"): a path's estimate
+    takes the next-event estimates of its vertices number ``order_lo .. order_hi`` only (the first vertex is number
+    1; ground reflections count as vertices) and ends after vertex ``order_hi``. ``1, _MAX_VERTICES``: every order
+    (the paths and their random numbers are then those of a kernel without the window). Not with a forward peak
+    split off (``peak_lobe >= 0``), whose probes estimate several orders at once: ValueError.
     seed, group, batch0 : RNG counters (batch numbers batch0 .. batch0 + n_batches - 1).
     sums, sumsq : (m, n_batches, n_wl, n_wl) outputs, one row per sun: per batch, hero and wavelength, sum and sum
     of squares of the per-path estimate (the heroes are the strata of the standard error; a path's wavelengths
@@ -1814,6 +1829,10 @@ def trace_block(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, cos_sun, 
     for j in range(ndir):
         if sun_ptr[j + 1] <= sun_ptr[j] or (cloudy is None and sun_ptr[j + 1] - sun_ptr[j] != 1):
             raise ValueError("each entry takes one sun or more (one in the kernel without the cloud code)")
+    if order_lo < 1 or order_hi < order_lo:
+        raise ValueError("the orders counted must satisfy 1 <= order_lo <= order_hi")
+    if cloudy is not None and peak_lobe >= 0 and (order_lo > 1 or order_hi < _MAX_VERTICES):
+        raise ValueError("a window of orders needs a medium without a forward peak split off")
     st = np.empty(1, dtype=np.uint64)
     f = np.empty(n)
     p = np.empty(n)
@@ -1870,7 +1889,8 @@ def trace_block(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, cos_sun, 
     sst3 = np.empty(n)
     chain = np.empty((_PEAK_MAX_ORDER, 3))
     split_on = clouds_on and split[0] > 1.0
-    stk = np.empty((_SPLIT_STACK, 7))
+    stk = np.empty((_SPLIT_STACK, 8))
+    keep = np.empty((m_sun + 1, n))  # the estimates before a vertex whose order is not counted
     stk_f = np.empty((_SPLIT_STACK, n))
     stk_p = np.empty((_SPLIT_STACK, n))
     f0 = np.empty(n)
@@ -1900,7 +1920,27 @@ def trace_block(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, cos_sun, 
                      vertices_out, n, nc, ndir, st, f, p, contrib, cols, tot, tmp, dens, kh, coef_t, scat_t, sc, ph,
                      tau, tau2, val, val2, ph2, qs2, ddis_active, stt, sst, trf, fstate, rec, cloudy, field, use_ddis,
                      fsmax, fsmin, peak, rr_depth, trs, pk, gch, fp, pp, sc3, stt3, sst3, chain, split_on, stk, stk_f,
-                     stk_p, f0, p0, kmin, active, coef_p, trn)
+                     stk_p, f0, p0, kmin, active, coef_p, trn, order_lo, order_hi, keep)
+
+
+@helper
+def _swap_estimates(contrib, cr, ns, keep, clear3, back):
+    """Keep the path's estimates so far (``back`` False) or put them back (True): the clear kernel's ``contrib``,
+    else the ``ns`` suns' rows of ``cr`` (a vertex outside the window of orders adds nothing; "Orders")."""
+    n = contrib.shape[0]
+    if clear3:
+        for i in range(n):
+            if back:
+                contrib[i] = keep[0, i]
+            else:
+                keep[0, i] = contrib[i]
+    else:
+        for s in range(ns):
+            for i in range(n):
+                if back:
+                    cr[s, i] = keep[s, i]
+                else:
+                    keep[s, i] = cr[s, i]
 
 
 @helper
@@ -1911,7 +1951,7 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, sun, cr,
                  ndir, st, f, p, contrib, cols, tot, tmp, dens, kh, coef_t, scat_t, sc, ph, tau, tau2, val, val2, ph2,
                  qs2, ddis_active, stt, sst, trf, fstate, rec, cloudy, field, use_ddis, fsmax, fsmin, peak, rr_depth,
                  trs, pk, gch, fp, pp, sc3, stt3, sst3, chain, split_on, stk, stk_f, stk_p, f0, p0, kmin, active,
-                 coef_p, trn):
+                 coef_p, trn, order_lo, order_hi, keep):
     """The paths of :func:`trace_block` (its loop over entries, batches and paths), with the buffers it allocated.
     A helper (no reference counting, ``skyscatter.jit``): compiled inside the kernel, every array passed to an
     inlined function was counted up and down at each vertex (atomic operations, some 15 % of the time of a
@@ -1980,11 +2020,16 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, sun, cr,
                 dx, dy, dz = d0x, d0y, d0z
                 first = True
                 vertices = 0
+                depth = 0  # the vertices of this copy's light path so far (its order; "Orders")
                 ws = 1.0  # the copy's share of the path's weight (splitting; 1 without)
                 c_ref = -1  # the class of the path's first medium vertex (splitting)
                 nstk = 0
                 while True:  # the path, then each copy split off it
                     while True:
+                        # a vertex whose order is below the window: its estimates are taken back after it
+                        drop = depth + 1 < order_lo
+                        if drop:
+                            _swap_estimates(contrib, cr, ns, keep, clear3, False)
                         t_end, ground = _exit_distance(px, py, pz, dx, dy, dz, rb, rt)
                         collided = False
                         forced = first and not ground
@@ -2152,6 +2197,8 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, sun, cr,
                                 ratio = ws * split[0] ** (cls - c_ref)
                                 if ratio < 0.75:
                                     if next_uniform(st) >= ratio:
+                                        if drop:
+                                            _swap_estimates(contrib, cr, ns, keep, clear3, True)
                                         break  # this copy ends (roulette: it fell to a less important class)
                                     ws /= ratio
                                 elif ratio > 1.5:
@@ -2171,6 +2218,7 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, sun, cr,
                                 stk[nstk, 4] = ey
                                 stk[nstk, 5] = ez
                                 stk[nstk, 6] = ws
+                                stk[nstk, 7] = depth + 1
                                 for i in range(n):
                                     stk_f[nstk, i] = f[i]
                                     stk_p[nstk, i] = p[i]
@@ -2234,7 +2282,10 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, sun, cr,
                                 f[i] *= albedo[i]
                         first = False
                         vertices += 1
-                        if vertices >= _MAX_VERTICES:
+                        depth += 1
+                        if drop:
+                            _swap_estimates(contrib, cr, ns, keep, clear3, True)
+                        if vertices >= _MAX_VERTICES or depth >= order_hi:
                             break
                         if wmax >= 0.0:
                             if not _roulette_max(f, n, vertices, st, wmax):
@@ -2248,6 +2299,7 @@ def _trace_paths(origins, jitter, dirs, mode, dir_index, suns, sun_ptr, sun, cr,
                     px, py, pz = stk[nstk, 0], stk[nstk, 1], stk[nstk, 2]
                     dx, dy, dz = stk[nstk, 3], stk[nstk, 4], stk[nstk, 5]
                     ws = stk[nstk, 6]
+                    depth = int(stk[nstk, 7])
                     for i in range(n):
                         f[i] = stk_f[nstk, i]
                         p[i] = stk_p[nstk, i]
