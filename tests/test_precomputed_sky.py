@@ -345,12 +345,16 @@ def test_no_seams_between_neighbouring_view_elevations(atm, sun_elevation):
 
 @pytest.mark.parametrize("altitude, sun_elevation", [(0.0, 30.0), (0.0, 1.0), (0.0, -4.0), (10.0, 30.0), (30.0, -4.0),
                                                     (8000.0, 10.0)])
-def test_observer_slices_equal_the_4d_lookup(atm, altitude, sun_elevation):
+def test_observer_slices_equal_the_4d_lookup(atm, altitude, sun_elevation, monkeypatch):
     """One observer and one sun: the lookups on 2D slices of the tables (lookup.observer_slices) give what the
     general 4D kernel gives, spectrum and XYZ, sky and ground (to float32 rounding of the tables: 1e-6); also within
     the cell of rows touching the ground (10 and 30 m), where each row is read at its own mu coordinate (the
-    slices then hold the two rows' shares apart)."""
+    slices then hold the two rows' shares apart). In twilight with the stored texels' read
+    (``compute_twilight_single`` False; the computed single scattering is tested against the Monte Carlo,
+    tests/test_precomputed_low_sun.py)."""
     from skyscatter.precomputed.tables import PrecomputedAtmosphere as PA
+
+    monkeypatch.setattr(atm, "compute_twilight_single", False)
 
     spectral = PA(atm.parameters, np.linspace(400.0, 700.0, 16), atm.sizes, atm.orders,
                   {k: np.repeat(v[..., :1], 16, axis=-1) * np.linspace(1.0, 0.5, 16) for k, v in atm.tables.items()})

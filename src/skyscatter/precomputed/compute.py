@@ -272,11 +272,13 @@ def direct_irradiance(medium: Medium, sizes: TableSizes, transmittance: F32) -> 
 
 
 def single_scattering(medium: Medium, sizes: TableSizes, transmittance: F32, rows: range | None = None,
-                      mu_s: F64 | None = None) -> tuple[F32, F32]:
+                      mu_s: F64 | None = None, disc_nodes: int = 1) -> tuple[F32, F32]:
     """Step 2: ``DS = S[L0]`` (Eq. 11 with the sun's light), Rayleigh and Mie apart and without their phase
     functions (Sec. 4, "Angular precision"): two (n_rows, n_mu, n_mu_s, n_nu, n_wavelengths) float32 tables of
     the radius indices ``rows`` (default all), at the suns of zenith cosines ``mu_s`` (default the tables' sun
-    zenith texels; others give the tables' values at those suns, each with its own view-sun azimuth texels)."""
+    zenith texels; others give the tables' values at those suns, each with its own view-sun azimuth texels).
+    ``disc_nodes``: the solar disc's transmittance at its centre (1, the tables') or by chords near the horizon
+    (:func:`.kernels.single_scattering_kernel`)."""
     n_r, n_mu = sizes.scattering_r, sizes.scattering_mu
     rows = range(n_r) if rows is None else rows
     if mu_s is None:
@@ -287,7 +289,7 @@ def single_scattering(medium: Medium, sizes: TableSizes, transmittance: F32, row
     mie = np.zeros_like(rayleigh)
     parallel_for(kernels.single_scattering_kernel, rows.stop * n_mu, transmittance, medium.bottom, medium.top,
                  mu_s, medium.sun_angular_radius, medium.profiles, medium.counts, medium.extinction,
-                 sizes.ray_samples, n_r, rayleigh, mie, rows.start, begin=rows.start * n_mu)
+                 sizes.ray_samples, n_r, disc_nodes, rayleigh, mie, rows.start, begin=rows.start * n_mu)
     rayleigh *= (medium.solar_irradiance * medium.rayleigh_scattering).astype(np.float32)
     mie *= (medium.solar_irradiance * medium.mie_scattering).astype(np.float32)
     return rayleigh, mie
@@ -307,7 +309,7 @@ def single_scattering_source(medium: Medium, sizes: TableSizes, orders: int,
 
 
 def stored_single_scattering(source: tuple[Medium, F32, F32], sizes: TableSizes, mu_s: ArrayLike,
-                             rows: range | None = None) -> tuple[F32, F32]:
+                             rows: range | None = None, disc_nodes: int = 1) -> tuple[F32, F32]:
     """The single-scattering tables (Rayleigh, aerosol) as :func:`compute_tables` stores them, at the suns of zenith
     cosines ``mu_s`` instead of the sun-zenith texels: two (n_rows, n_mu, len(mu_s), n_nu, n_wavelengths) float32
     arrays for the radius indices ``rows`` (default all). ``source``: :func:`single_scattering_source` of the
@@ -318,10 +320,12 @@ def stored_single_scattering(source: tuple[Medium, F32, F32], sizes: TableSizes,
     interpolated, because the single scattering has a kink in the sun zenith wherever the sun sets for a point of
     the ray (the Earth's shadow), which no rule through the stored texels follows (the four-point rule in the
     logarithm -52 to +18 %, the linear read +8 to +18 %, against tables of three times the texels opposite a sun on
-    the horizon, clear air, views 0.2-2 deg; docs/accuracy.md, "Low sun")."""
+    the horizon, clear air, views 0.2-2 deg; docs/accuracy.md, "Low sun"). Also the observer's single scattering
+    in twilight (:meth:`.PrecomputedAtmosphere._twilight_singles`: one sun, finer azimuths, ``disc_nodes``
+    :data:`.kernels.DISC_NODES`)."""
     medium, transmittance, per_beta = source
     rayleigh, mie = single_scattering(medium, sizes, np.ascontiguousarray(transmittance, dtype=np.float32), rows,
-                                      np.asarray(mu_s, dtype=np.float64))
+                                      np.asarray(mu_s, dtype=np.float64), disc_nodes)
     mie *= per_beta
     return rayleigh, mie
 

@@ -68,14 +68,24 @@ SKY_IRRADIANCE_AZIMUTH_STEP = 2.5
 #: Altitude [m] above which :meth:`TableLookups.ground_irradiance` integrates the sky radiance instead of reading
 #: the irradiance table (whose rows are linear in the altitude, 4 km apart at the default sizes).
 IRRADIANCE_TABLE_MAX_ALTITUDE = 1.0
+#: In twilight the observer's single scattering is computed at its own sun on azimuth cells this many times finer
+#: than the tables' (:meth:`PrecomputedAtmosphere._twilight_singles`; 29 texels for the default 8).
+TWILIGHT_AZIMUTH_SPLIT = 4
 
 
 class TableLookups:
     """The lookups of a precomputed atmosphere: a base of :class:`.PrecomputedAtmosphere`, which provides the
     attributes below. Positions are in metres in a planet-centred frame (the planet's centre at the origin);
     directions are unit vectors in the same frame; spectral results are at :attr:`wavelengths`.
+
+    ``compute_twilight_single`` (default True): in twilight the observer's path (one position: :meth:`sky_radiance`,
+    :meth:`sky_xyz`, :meth:`sky_luminance`, :meth:`sky_radiance_suns`) computes the single scattering at the
+    observer's own sun (:meth:`_twilight_singles`); set it False on an instance to read the stored texels there, as
+    the per-ray lookups and the real-time textures do (to compare with them).
     """
 
+    #: the observer's single scattering in twilight computed (True) or read from the stored texels (False)
+    compute_twilight_single: bool = True
     parameters: AtmosphereParameters
     wavelengths: NDArray[np.float64]
     sizes: TableSizes
@@ -254,6 +264,54 @@ class TableLookups:
         ray, mie = stored_single_scattering(source[0], self.sizes, source[1], range(i_r, i_r + 1))
         out = {"single_rayleigh": ray, "single_mie": mie}
         self.__dict__["_sub_texel_row"] = (i_r, out)
+        return out
+
+    def _twilight_singles(self, r: float, mu_s: float) -> tuple | None:
+        """The single scattering (Rayleigh, aerosol) of the observer slices' two radius rows computed at the
+        observer's own sun, on :data:`TWILIGHT_AZIMUTH_SPLIT` times finer azimuth cells (for
+        :func:`.lookup.observer_slices`' ``singles``: each (2, n_mu, n_f, n_wavelengths) float32, as the tables
+        store it; :func:`.compute.stored_single_scattering`), or None by day: for an observer whose sun lies in the
+        twilight cells of the sun-zenith axis (those the lookups split, :func:`.geometry.twilight_cells`), where
+        the Earth's shadow crosses the views, and only for tables that are the precomputation's of
+        :attr:`parameters` (:attr:`computed`). The last observer's pair is kept (a map asks in blocks).
+
+        Cost: about 10 ms per observer and sun (default sizes, 16 wavelengths, 2 cores), once per call.
+        Measured against the Monte Carlo reference: docs/accuracy.md, "Low sun", "The observer's single scattering
+        computed in twilight"."""
+        n_r, n_mu, n_s, n_nu, _ = self.stored["single_rayleigh"].shape
+        if not self.compute_twilight_single or mu_s > self._twilight_top() or n_nu < 2:
+            return None
+        cells = self._mu_s_cells
+        lookup = _kernels()
+        bottom, top, mu_s_min = self._geometry()
+        mu_s = max(mu_s, mu_s_min)
+        i_r, w_r, _, _, w_g = lookup.r_mu_s_cell(min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, n_r,
+                                                 lookup.refined_mu_s_count(n_s, cells), cells)
+        # the upper row only where it has a weight (an observer on the ground reads the lower alone)
+        upper = i_r + 1 if max(w_r, w_g) > 0.0 else i_r
+        rows = (0, 0) if self.ground_rows else (min(i_r, n_r - 1), min(upper, n_r - 1))
+        key = (rows, mu_s)
+        kept = self.__dict__.get("_twilight_kept")
+        if kept is not None and kept[0] == key:
+            return kept[1]
+        import dataclasses
+
+        from .compute import stored_single_scattering
+        from .kernels import DISC_NODES as disc_nodes
+
+        with self._refine_lock:
+            self._single_sub_texels(rows[0])  # builds the medium and transmittance source once
+            source = self.__dict__["_sub_texel_source"][0]
+        sizes = dataclasses.replace(self.sizes, scattering_nu=TWILIGHT_AZIMUTH_SPLIT * (n_nu - 1) + 1)
+        ray, mie = [], []
+        for i in sorted(set(rows)):
+            a, b = stored_single_scattering(source, sizes, np.array([mu_s]), range(i, i + 1), disc_nodes)
+            ray.append(a[0, :, 0])
+            mie.append(b[0, :, 0])
+        if len(ray) == 1:
+            ray, mie = ray * 2, mie * 2
+        out = (np.stack(ray), np.stack(mie))
+        self.__dict__["_twilight_kept"] = (key, out)
         return out
 
     @property
@@ -452,7 +510,8 @@ class TableLookups:
         stored = self.stored
         slices = lookup.observer_slices(stored["single_rayleigh"], stored["single_mie"], stored["multiple"],
                                         min(max(r, bottom), top), mu_s, bottom, top, mu_s_min, self._mu_s_cells,
-                                        projection, layers=self._slice_layer)
+                                        projection, layers=self._slice_layer,
+                                        singles=self._twilight_singles(r, mu_s))
         out = np.empty((dirs.shape[0], projection.shape[0]))
         bad = np.zeros(dirs.shape[0], dtype=np.bool_)
         # Directions are normalised (and zero, NaN or infinite ones flagged) inside the kernel: no extra passes.
@@ -476,7 +535,8 @@ class TableLookups:
         formed there from the two decoded radius layers of the tables, instead of one Python call, slice and
         kernel launch per sun (a year of hours: several thousand). Where the fast path does not apply (an
         observer outside the atmosphere, a tabulated aerosol phase, bad directions), each sun goes through
-        :meth:`sky_radiance`.
+        :meth:`sky_radiance`; so do the suns in twilight (below the top of the twilight cells of the sun-zenith axis),
+        whose single scattering the observer's path computes at the sun itself (:meth:`_twilight_singles`).
 
         Parameters
         ----------
@@ -537,7 +597,21 @@ class TableLookups:
                      grain=max(1, 4096 // max(dirs.shape[0], 1)))
         if bad.any():
             return one_by_one()
+        for k in np.flatnonzero(mu_s <= self._twilight_top()) if self.compute_twilight_single else ():
+            # the observer's sky in twilight takes its single scattering computed at its own sun
+            # (_twilight_singles), which this kernel's slices do not: those suns as sky_radiance has them
+            if self._twilight_singles(r, float(mu_s[k])) is not None:
+                out[k] = self.sky_radiance(pos, d, s[k], include_ground=include_ground)
         return out
+
+    def _twilight_top(self) -> float:
+        """The sun zenith cosine at the top of the twilight cells (:meth:`_twilight_singles`); -2 without them."""
+        cells = self._mu_s_cells
+        if cells == 0 or not self.computed:
+            return -2.0
+        bottom, top, mu_s_min = self._geometry()
+        return float(_kernels().scattering_mu_s_param(cells, bottom, top, mu_s_min,
+                                                      self.stored["single_rayleigh"].shape[2]))
 
     def sky_radiance(self, positions: ArrayLike, directions: ArrayLike, sun_direction: ArrayLike, *,
                      shadow_length: ArrayLike | None = None, include_ground: bool = True,

@@ -161,23 +161,78 @@ def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
                 out[i_r, i_mu, i_s, i_n] = scattering_nu_param(i_n, mu, mu_s, n_nu)
 
 
+#: Nodes of the solar disc's quadrature across its height (:func:`_sun_transmittance_cells`; the observer's
+#: single scattering in twilight, :meth:`.PrecomputedAtmosphere._twilight_singles`: 12 and 24 nodes change it by
+#: less than 0.2 %), and the height of the disc's centre above the horizon [disc radii, 0.27 deg each] below which
+#: it is used (above: the centre's transmittance, the tables' rule).
+DISC_NODES = 6
+DISC_HORIZON_RADII = 20.0
+
+
 @helper(fastmath=CONTRACT_ARCP)
-def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w, frac):
-    """Transmittance-table ``mu`` cells and weights towards the sun, and the visible fraction of its disc, at a
-    ray sample (distance ``d`` [m] from the texel's point at radius ``r``, radius ``r_i``) for every texel sun
-    (``mu_s_flat``, ``nu_flat``, n_mu_s * n_nu). Its branches are short and side-effect free, so the compiler turns
-    them into selects and vectorises the loop."""
+def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w, frac, disc_x,
+                             disc_w):
+    """Transmittance-table ``mu`` cells and weights towards the sun, and their shares of its disc, at a ray sample
+    (distance ``d`` [m] from the texel's point at radius ``r``, radius ``r_i``) for every texel sun (``mu_s_flat``,
+    ``nu_flat``, n_mu_s * n_nu): ``cell``, ``w``, ``frac`` (n_suns, DISC_NODES), unused nodes with share 0.
+
+    Where the disc's centre is at least :data:`DISC_HORIZON_RADII` radii above the horizon, one node: the centre's
+    transmittance times the visible fraction (1). Nearer the horizon the transmittance changes across the disc by
+    a large factor (a sun ray grazing the Earth 0.27 deg higher passes hundreds of metres to kilometres higher,
+    where the air is thinner), and the disc's mean of a convex function is above its centre's value: there the
+    visible part of the disc (above the horizon) is cut into horizontal chords at ``DISC_NODES`` Gauss-Legendre
+    nodes in the angle ``phi`` of ``u = sin phi`` (``u`` the chord's height in disc radii; the chord's share of the
+    disc ``(2 / pi) cos^2 phi dphi``), each chord's sun rays taking the transmittance at their own zenith angle,
+    the shares scaled to sum to the visible fraction (:func:`.sampling.sun_visible_fraction`). The Monte Carlo
+    draws the disc's points uniformly (docs/montecarlo.md); with the centre alone the observer's single scattering
+    in twilight where the views leave the Earth's shadow came out below the Monte Carlo's first order (Earth
+    defaults, sun -3 deg, 5 deg up opposite the sun: -78 / -27 / -18 % at 400 / 560 / 700 nm; with the disc within
+    its noise at 560 and 700 nm; docs/accuracy.md, "Low sun"). With ``n_k`` 1 (the stored tables), the centre
+    everywhere."""
+    n_k = frac.shape[1]
     for u in range(mu_s_flat.shape[0]):
         mu_s_i = clamp((r * mu_s_flat[u] + d * nu_flat[u]) / r_i, -1.0, 1.0)
-        frac[u] = sun_visible_fraction(r_i, mu_s_i, bottom, alpha)
-        _, p_mu = transmittance_coord(r_i, mu_s_i, bottom, top, 2, n_tmu)
-        cell[u], w[u] = lerp_index(p_mu, 0, n_tmu - 1)
+        f = sun_visible_fraction(r_i, mu_s_i, bottom, alpha)
+        sin_h = bottom / r_i
+        cos_h = -math.sqrt(max(1.0 - sin_h * sin_h, 0.0))
+        h = (mu_s_i - cos_h) / (max(sin_h, 1e-6) * alpha)
+        for k in range(n_k):
+            frac[u, k] = 0.0
+            cell[u, k] = 0
+            w[u, k] = 0.0
+        if f <= 0.0:
+            continue
+        if h >= DISC_HORIZON_RADII or n_k == 1:
+            frac[u, 0] = f
+            _, p_mu = transmittance_coord(r_i, mu_s_i, bottom, top, 2, n_tmu)
+            cell[u, 0], w[u, 0] = lerp_index(p_mu, 0, n_tmu - 1)
+            continue
+        theta = math.acos(mu_s_i)
+        phi_lo = math.asin(max(-1.0, min(1.0, -h)))
+        span = 0.5 * PI - phi_lo
+        total = 0.0
+        for k in range(n_k):
+            phi = phi_lo + span * disc_x[k]
+            c = math.cos(phi)
+            share = c * c * span * disc_w[k]
+            frac[u, k] = share
+            total += share
+            mu_k = math.cos(theta - math.sin(phi) * alpha)
+            _, p_mu = transmittance_coord(r_i, mu_k, bottom, top, 2, n_tmu)
+            cell[u, k], w[u, k] = lerp_index(p_mu, 0, n_tmu - 1)
+        scale = f / total if total > 0.0 else 0.0
+        for k in range(n_k):
+            frac[u, k] *= scale
 
 
 @kernel
 def single_scattering_kernel(transmittance, bottom, top, mu_s_tab, alpha, profiles, counts, extinction, n_samples,
-                             n_r, ray, mie, first_r, start, stop):
+                             n_r, disc_nodes, ray, mie, first_r, start, stop):
     """Single scattering integrals per unit solar irradiance and unit scattering coefficient.
+
+    ``disc_nodes``: 1 for the sun's transmittance at its centre times the visible fraction of its disc (the stored
+    tables), or the chords of :func:`_sun_transmittance_cells` near the horizon (:data:`DISC_NODES`: the observer's
+    single scattering in twilight).
 
     Fills ``ray`` and ``mie`` (n_rows, n_mu, n_mu_s, n_nu, n_wavelengths) float32, radius indices ``first_r`` to
     ``first_r + n_rows - 1`` of a table of ``n_r`` radii (a block of rows: the driver streams them), at the sun
@@ -210,9 +265,13 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_tab, alpha, profil
     w_m32 = np.empty((n_pts, n_l), dtype=np.float32)
     t_sun = np.empty(n_l, dtype=np.float32)
     nu_flat = np.empty(n_suns)
-    cell = np.empty(n_suns, dtype=np.int64)
-    w_sun = np.empty(n_suns)
-    frac = np.empty(n_suns)
+    n_disc = max(disc_nodes, 1)
+    cell = np.empty((n_suns, n_disc), dtype=np.int64)
+    w_sun = np.empty((n_suns, n_disc))
+    frac = np.empty((n_suns, n_disc))
+    disc_x = np.empty(n_disc)
+    disc_w = np.empty(n_disc)
+    gauss_legendre_unit(n_disc, disc_x, disc_w)
     mu_s_flat = np.repeat(mu_s_tab, n_nu)
     for idx in range(start, stop):
         i_r = idx // n_mu
@@ -263,24 +322,26 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_tab, alpha, profil
             p_r, _ = transmittance_coord(rad[i], 1.0, bottom, top, n_tr, n_tmu)
             j_r, w_tr = lerp_index(p_r, 0, n_tr - 1)
             _sun_transmittance_cells(r, dist[i], rad[i], mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell,
-                                     w_sun, frac)
+                                     w_sun, frac, disc_x, disc_w)
             for u in range(n_mu_s * n_nu):
-                f = frac[u]
-                if f <= 0.0:
-                    continue
-                j = cell[u]
-                w = w_sun[u]
-                a00, a01, a10, a11 = bilinear_weights(w_tr, w)
-                b00, b01, b10, b11 = np.float32(f * a00), np.float32(f * a01), np.float32(f * a10), np.float32(f * a11)
-                # Two loops, not one: each then has few enough possible overlaps between the arrays it writes and
-                # reads for the compiler to check them at run time and vectorise it (in one loop it did not, and
-                # these loops were most of the kernel's time).
-                for k in range(n_l):
-                    t_sun[k] = (b00 * transmittance[j_r, j, k] + b01 * transmittance[j_r, j + 1, k]
-                                + b10 * transmittance[j_r + 1, j, k] + b11 * transmittance[j_r + 1, j + 1, k])
-                for k in range(n_l):
-                    acc_r[u, k] += w_r32[i, k] * t_sun[k]
-                    acc_m[u, k] += w_m32[i, k] * t_sun[k]
+                for q in range(n_disc):
+                    f = frac[u, q]
+                    if f <= 0.0:
+                        continue
+                    j = cell[u, q]
+                    w = w_sun[u, q]
+                    a00, a01, a10, a11 = bilinear_weights(w_tr, w)
+                    b00, b01, b10, b11 = (np.float32(f * a00), np.float32(f * a01), np.float32(f * a10),
+                                          np.float32(f * a11))
+                    # Two loops, not one: each then has few enough possible overlaps between the arrays it writes
+                    # and reads for the compiler to check them at run time and vectorise it (in one loop it did
+                    # not, and these loops were most of the kernel's time).
+                    for k in range(n_l):
+                        t_sun[k] = (b00 * transmittance[j_r, j, k] + b01 * transmittance[j_r, j + 1, k]
+                                    + b10 * transmittance[j_r + 1, j, k] + b11 * transmittance[j_r + 1, j + 1, k])
+                    for k in range(n_l):
+                        acc_r[u, k] += w_r32[i, k] * t_sun[k]
+                        acc_m[u, k] += w_m32[i, k] * t_sun[k]
         for i_s in range(n_mu_s):
             for i_n in range(n_nu):
                 u = i_s * n_nu + i_n

@@ -9,7 +9,9 @@ direction per ray; they return spectral quantities at the table wavelengths.
   shadowed length at the near end of each ray gives light shafts by Eq. 18.
 * :func:`observer_kernel` - the same radiance from one observer inside the atmosphere, from 2D slices of the
   4D tables at the observer's radius and sun (:func:`observer_slices`), optionally projected to XYZ: the same
-  values with 4 table reads per ray instead of 16 (and 3 channels instead of 16 for colour).
+  values with 4 table reads per ray instead of 16 (and 3 channels instead of 16 for colour); in twilight the
+  caller may give the single scattering computed at the observer's own sun on a finer azimuth axis instead of the
+  stored texels (``singles``; :meth:`.PrecomputedAtmosphere._twilight_singles`).
 * :func:`aerial_kernel` - transmittance and inscattered radiance between a camera and a point (Eq. 16's
   last two terms, ``S|x - T(x, xs) S|xs``), with an optional shadowed length at the far end (Eq. 17).
 * :func:`irradiance_kernel` - sun and sky irradiance on a surface of any normal (Eq. 14's ambient occlusion
@@ -30,6 +32,7 @@ from .geometry import (
     MU_S_LIMIT_TOLERANCE,
     MU_S_SPLIT,
     acos_table,
+    azimuth_four_point,
     azimuth_lagrange,
     azimuth_read_weights,
     bilinear_weights,
@@ -457,8 +460,31 @@ def refine_sun_zenith(table, cells, columns=None, out=None, sub_texels=None):
     return out
 
 
+@kernel(fastmath=CONTRACT_ARCP)
+def refine_azimuth_kernel(values, out):
+    """``values`` (n_mu, n_nu, C + 1) along an azimuth axis of ``n_nu`` texels read at the ``n_f`` texels of a finer
+    axis (``out`` (n_mu, n_f, C + 1); ``n_f - 1`` a multiple of ``n_nu - 1``, so that every texel of the coarse axis
+    is one of the fine) by the lookups' read of the multiple scattering along the azimuth
+    (:func:`.geometry.azimuth_four_point`, :func:`.geometry.azimuth_read_weights`, weights from channel C, the
+    middle wavelength): at the coarse texels the values themselves."""
+    n_mu, n_nu, n_ch = values.shape
+    n_f = out.shape[1]
+    step = (n_f - 1) // (n_nu - 1)
+    for f in range(n_f):
+        i_n = min(f // step, n_nu - 2)
+        w = (f - i_n * step) / step
+        j0, j3, l0, l1, l2, l3 = azimuth_four_point(i_n, w, n_nu)
+        for m in range(n_mu):
+            w0, w1, w2, w3 = azimuth_read_weights(values[m, j0, n_ch - 1], values[m, i_n, n_ch - 1],
+                                                  values[m, i_n + 1, n_ch - 1], values[m, j3, n_ch - 1], w, l0,
+                                                  l1, l2, l3)
+            for c in range(n_ch):
+                out[m, f, c] = (w0 * values[m, j0, c] + w1 * values[m, i_n, c] + w2 * values[m, i_n + 1, c]
+                                + w3 * values[m, j3, c])
+
+
 def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top, mu_s_min, cells, projection,
-                    layers=None):
+                    layers=None, singles=None):
     """The 4D inscattering tables at one observer radius ``r`` [m] and sun zenith cosine ``mu_s``: an array
     (2, n_mu, n_nu, C + 1, 4) holding, for each channel, single Rayleigh, single Mie and multiple scattering over the
     view axes (and a zero, so that each texel's three values are one aligned 32-byte load), each
@@ -483,11 +509,22 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
     same XYZ as projecting each looked-up spectrum (Bruneton's 2017 rewrite folds its tables to luminance the same
     way). Zero when ``mu_s`` is below ``mu_s_min`` (no data below the tables' sun limit;
     :data:`.geometry.MU_S_LIMIT_TOLERANCE` for rounding).
+
+    ``singles`` (twilight; :meth:`.PrecomputedAtmosphere._twilight_singles`): the single scattering (Rayleigh,
+    aerosol) of the two radius rows computed at the observer's own ``mu_s`` on a finer azimuth axis, each
+    (2, n_mu, n_f, n_wavelengths) float32 as the tables store it, ``n_f - 1`` a multiple of ``n_nu - 1``. The slices
+    then have ``n_f`` azimuth texels: the single scattering from those rows (no read along the sun zenith), the
+    multiple scattering read at the finer texels by the lookups' own azimuth rule (:func:`refine_azimuth_kernel`).
+    Why: in twilight the single scattering seen from the Earth's shadow changes by tens to hundreds of times across
+    one of the 8 azimuth cells, which no read through the stored texels follows (docs/accuracy.md, "Low sun").
     """
     n_r, n_mu, n_s, n_nu, _ = single_rayleigh.shape
     proj = np.asarray(projection, dtype=np.float64)
     n_c = proj.shape[0]
-    out = np.zeros((2, n_mu, n_nu, n_c + 1, 4))
+    n_f = n_nu if singles is None else singles[0].shape[2]
+    if singles is not None and (n_f < n_nu or (n_f - 1) % (n_nu - 1)):
+        raise ValueError(f"the computed single scattering's {n_f} azimuth texels must refine the tables' {n_nu}")
+    out = np.zeros((2, n_mu, n_f, n_c + 1, 4))
     if mu_s < mu_s_min - MU_S_LIMIT_TOLERANCE:
         return out
     mu_s = max(mu_s, mu_s_min)
@@ -506,19 +543,28 @@ def observer_slices(single_rayleigh, single_mie, multiple, r, mu_s, bottom, top,
             rows2 = [radius_layer(table, i)[:, s0:s0 + 2] for i in radii]
         else:  # the observer's two radius rows refined along the sun zenith, in the two columns read
             rows2 = [refine_sun_zenith(radius_layer(table, i)[None], cells, (i_s, i_s + 2))[0] for i in radii]
+        columns = ((0, 1.0 - w_s), (1, w_s))
+        if singles is not None and j < 2:  # computed at the observer's sun: one column, the finer azimuths
+            rows2 = [singles[j][a][:, None] for a in (0, 1)]
+            columns = ((0, 1.0),)
         for part in parts:
-            acc = np.zeros((n_mu, n_nu, rows2[0].shape[-1]))
+            acc = np.zeros((n_mu, rows2[0].shape[2], rows2[0].shape[-1]))
             # the ground half of the mu axis with its own radius weight (.geometry.scattering_r_mu_coord)
             for rows, w in ((slice(0, half), w_g), (slice(half, n_mu), w_r)):
                 for a, wa in ((0, 1.0 - w), (1, w)):
                     if part is not None and a != part:
                         continue
-                    for c, wc in ((0, 1.0 - w_s), (1, w_s)):
+                    for c, wc in columns:
                         if wa * wc > 0.0:
                             acc[rows] += (wa * wc) * rows2[a][rows, c, :, :]
             k = 0 if part is None else part
-            out[k, :, :, :n_c, j] = acc @ proj.T
-            out[k, :, :, n_c, j] = acc[:, :, acc.shape[-1] // 2]
+            values = np.empty((n_mu, acc.shape[1], n_c + 1))
+            values[:, :, :n_c] = acc @ proj.T
+            values[:, :, n_c] = acc[:, :, acc.shape[-1] // 2]
+            if values.shape[1] != n_f:
+                refine_azimuth_kernel(values, out[k, :, :, :, j])
+            else:
+                out[k, :, :, :, j] = values
     return out
 
 
@@ -795,7 +841,8 @@ def observer_kernel(position, sun, slices, n_r, transmittance, irradiance, albed
     atmosphere with one ``sun`` direction, projected to C channels (``out`` (n_rays, C)); ``slices`` of
     :func:`observer_slices` from 4D tables of ``n_r`` radii.
 
-    Inscattering from :func:`observer_slices` (in ``mu`` and ``nu``: the same values as the 4D lookup); the
+    Inscattering from :func:`observer_slices` (in ``mu`` and ``nu``: the same values as the 4D lookup, or in
+    twilight the single scattering computed at the observer's sun on the slices' finer azimuth axis); the
     ground term, a product of spectra (transmittance times irradiance), is formed per wavelength
     and then projected with ``projection`` (C, n_wavelengths). ``dirs`` need not be unit vectors; a zero,
     infinite or NaN one sets ``bad[q]`` (the caller raises). Rays go in blocks of :data:`OBSERVER_BLOCK` in
