@@ -576,7 +576,9 @@ ELSEWHERE = {("demo", "--figure", "all"): "test_cli_demo.py::test_bare_demo_writ
              **{("skymatrix", flag): "test_spectral_skymatrix.py::test_cli_spectral"
                 for flag in ("--radiance", "--report", "--workers")},
              # the paper-size family is 18 table builds (minutes); the coarse preset runs the same code
-             ("skymatrix", "--tables", "default"): "test_spectral_skymatrix.py::test_cli_spectral"}
+             ("skymatrix", "--tables", "default"): "test_spectral_skymatrix.py::test_cli_spectral",
+             # each window's store against the direct call, and the windows adding up to the whole
+             ("reference", "--orders"): "test_montecarlo_dataset.py::test_cli_reference_orders"}
 #: Choice options whose values are entries of a data table rather than code paths (the OPAC aerosol types): one
 #: value run end to end shows the option works; a run per entry would cost a Mie computation each.
 SAMPLED_CHOICES = {"--aerosol"}
