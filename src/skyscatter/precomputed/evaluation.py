@@ -13,6 +13,7 @@ Reference: [Bruneton2008].
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
@@ -275,12 +276,12 @@ class TableLookups:
         the Earth's shadow crosses the views, and only for tables that are the precomputation's of
         :attr:`parameters` (:attr:`computed`). The last observer's pair is kept (a map asks in blocks).
 
-        Cost: about 10 ms per observer and sun (default sizes, 16 wavelengths, 2 cores), once per call.
-        Measured against the Monte Carlo reference: docs/accuracy.md, "Low sun", "The observer's single scattering
-        computed in twilight"."""
-        n_r, n_mu, n_s, n_nu, _ = self.stored["single_rayleigh"].shape
-        if not self.compute_twilight_single or mu_s > self._twilight_top() or n_nu < 2:
+        Cost: about 20-40 ms of CPU per observer on the ground and sun, twice that above it (default sizes, 16
+        wavelengths; docs/bruneton.md, "Performance"), once per call. Measured against the Monte Carlo reference:
+        docs/accuracy.md, "Low sun", "The observer's single scattering computed in twilight"."""
+        if not self._twilight_applies(mu_s):
             return None
+        n_r, n_mu, n_s, n_nu, _ = self.stored["single_rayleigh"].shape
         cells = self._mu_s_cells
         lookup = _kernels()
         bottom, top, mu_s_min = self._geometry()
@@ -294,8 +295,6 @@ class TableLookups:
         kept = self.__dict__.get("_twilight_kept")
         if kept is not None and kept[0] == key:
             return kept[1]
-        import dataclasses
-
         from .compute import stored_single_scattering
         from .kernels import DISC_NODES as disc_nodes
 
@@ -597,12 +596,18 @@ class TableLookups:
                      grain=max(1, 4096 // max(dirs.shape[0], 1)))
         if bad.any():
             return one_by_one()
-        for k in np.flatnonzero(mu_s <= self._twilight_top()) if self.compute_twilight_single else ():
+        for k in range(s.shape[0]):
             # the observer's sky in twilight takes its single scattering computed at its own sun
             # (_twilight_singles), which this kernel's slices do not: those suns as sky_radiance has them
-            if self._twilight_singles(r, float(mu_s[k])) is not None:
+            if self._twilight_applies(float(mu_s[k])):
                 out[k] = self.sky_radiance(pos, d, s[k], include_ground=include_ground)
         return out
+
+    def _twilight_applies(self, mu_s: float) -> bool:
+        """Whether the observer's path computes the single scattering for a sun of zenith cosine ``mu_s``
+        (:meth:`_twilight_singles`)."""
+        return (self.compute_twilight_single and mu_s <= self._twilight_top()
+                and self.stored["single_rayleigh"].shape[3] >= 2)
 
     def _twilight_top(self) -> float:
         """The sun zenith cosine at the top of the twilight cells (:meth:`_twilight_singles`); -2 without them."""
