@@ -215,7 +215,7 @@ def test_twilight_single_switch_continuity_and_many_suns(tables):
 
 
 def test_sun_disc_chords_against_uniform_points():
-    """The sun's disc in chords (``kernels._sun_transmittance_cells``, near the horizon) against the mean over
+    """The sun's disc in chords (``kernels._sun_disc_cells``, near the horizon) against the mean over
     200000 points uniform on the disc of the same transmittance table's value and the planet's blocking of each
     point's own ray: within 0.5 % of the visible disc's mean; the shares sum to the visible fraction of the disc
     (``sampling.sun_visible_fraction``) and by day the centre alone is used."""
@@ -244,10 +244,11 @@ def test_sun_disc_chords_against_uniform_points():
         r = bottom + alt
         mu_h = -math.sqrt(1 - (bottom / r) ** 2)
         mu_s = math.cos(math.acos(mu_h) - elev_radii * alpha)
-        cell = np.empty((1, kernels.DISC_NODES), dtype=np.int64)
-        wc, frac = np.empty((1, kernels.DISC_NODES)), np.empty((1, kernels.DISC_NODES))
-        kernels._sun_transmittance_cells(r, 0.0, r, np.array([mu_s]), np.array([0.0]), bottom, top, alpha, n_tmu,
-                                         cell, wc, frac, x, w)
+        cell = np.empty(kernels.DISC_NODES, dtype=np.int64)
+        wc, frac = np.empty(kernels.DISC_NODES), np.empty(kernels.DISC_NODES)
+        kernels._sun_disc_cells(r, 0.0, r, np.array([mu_s]), np.array([0.0]), bottom, top, alpha, n_tmu, cell, wc,
+                                frac, x, w)
+        cell, wc, frac = cell[None], wc[None], frac[None]  # (one sun, its nodes)
         visible = sampling.sun_visible_fraction(r, mu_s, bottom, alpha)
         assert frac.sum() == pytest.approx(visible, rel=1e-12)
         if elev_radii >= kernels.DISC_HORIZON_RADII:

@@ -271,6 +271,16 @@ def direct_irradiance(medium: Medium, sizes: TableSizes, transmittance: F32) -> 
     return out
 
 
+def _disc_nodes(n: int) -> F64 | None:
+    """The single-scattering kernel's ``disc``: None for the disc's centre (``n`` 1), else ``n`` Gauss-Legendre nodes
+    and weights on [0, 1], (2, n)."""
+    if n <= 1:
+        return None
+    out = np.empty((2, n))
+    kernels.gauss_legendre_unit(n, out[0], out[1])
+    return out
+
+
 def single_scattering(medium: Medium, sizes: TableSizes, transmittance: F32, rows: range | None = None,
                       mu_s: F64 | None = None, disc_nodes: int = 1) -> tuple[F32, F32]:
     """Step 2: ``DS = S[L0]`` (Eq. 11 with the sun's light), Rayleigh and Mie apart and without their phase
@@ -289,7 +299,8 @@ def single_scattering(medium: Medium, sizes: TableSizes, transmittance: F32, row
     mie = np.zeros_like(rayleigh)
     parallel_for(kernels.single_scattering_kernel, rows.stop * n_mu, transmittance, medium.bottom, medium.top,
                  mu_s, medium.sun_angular_radius, medium.profiles, medium.counts, medium.extinction,
-                 sizes.ray_samples, n_r, disc_nodes, rayleigh, mie, rows.start, begin=rows.start * n_mu)
+                 sizes.ray_samples, n_r, _disc_nodes(disc_nodes), rayleigh, mie, rows.start,
+                 begin=rows.start * n_mu)
     rayleigh *= (medium.solar_irradiance * medium.rayleigh_scattering).astype(np.float32)
     mie *= (medium.solar_irradiance * medium.mie_scattering).astype(np.float32)
     return rayleigh, mie

@@ -161,7 +161,7 @@ def texel_nu_kernel(bottom, top, mu_s_min, out, start, stop):
                 out[i_r, i_mu, i_s, i_n] = scattering_nu_param(i_n, mu, mu_s, n_nu)
 
 
-#: Nodes of the solar disc's quadrature across its height (:func:`_sun_transmittance_cells`; the observer's
+#: Nodes of the solar disc's quadrature across its height (:func:`_sun_disc_cells`; the observer's
 #: single scattering in twilight, :meth:`.PrecomputedAtmosphere._twilight_singles`: 12 and 24 nodes change it by
 #: less than 0.2 %), and the height of the disc's centre above the horizon [disc radii, 0.27 deg each] below which
 #: it is used (above: the centre's transmittance, the tables' rule).
@@ -170,11 +170,26 @@ DISC_HORIZON_RADII = 20.0
 
 
 @helper(fastmath=CONTRACT_ARCP)
-def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w, frac, disc_x,
-                             disc_w):
+def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w, frac):
+    """Transmittance-table ``mu`` cells and weights towards the sun, and the visible fraction of its disc, at a
+    ray sample (distance ``d`` [m] from the texel's point at radius ``r``, radius ``r_i``) for every texel sun
+    (``mu_s_flat``, ``nu_flat``, n_mu_s * n_nu): the disc's centre (the stored tables). Its branches are short and
+    side-effect free, so the compiler turns them into selects and vectorises the loop (:func:`_sun_disc_cells`,
+    with the disc in chords near the horizon, does not: used in place of this one the single-scattering kernel of
+    the stored tables took 2.1x the time, measured)."""
+    for u in range(mu_s_flat.shape[0]):
+        mu_s_i = clamp((r * mu_s_flat[u] + d * nu_flat[u]) / r_i, -1.0, 1.0)
+        frac[u] = sun_visible_fraction(r_i, mu_s_i, bottom, alpha)
+        _, p_mu = transmittance_coord(r_i, mu_s_i, bottom, top, 2, n_tmu)
+        cell[u], w[u] = lerp_index(p_mu, 0, n_tmu - 1)
+
+
+@helper(fastmath=CONTRACT_ARCP)
+def _sun_disc_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w, frac, disc_x, disc_w):
     """Transmittance-table ``mu`` cells and weights towards the sun, and their shares of its disc, at a ray sample
     (distance ``d`` [m] from the texel's point at radius ``r``, radius ``r_i``) for every texel sun (``mu_s_flat``,
-    ``nu_flat``, n_mu_s * n_nu): ``cell``, ``w``, ``frac`` (n_suns, DISC_NODES), unused nodes with share 0.
+    ``nu_flat``, n_mu_s * n_nu): ``cell``, ``w``, ``frac`` (n_suns * DISC_NODES, the nodes of a sun contiguous),
+    unused nodes with share 0.
 
     Where the disc's centre is at least :data:`DISC_HORIZON_RADII` radii above the horizon, one node: the centre's
     transmittance times the visible fraction (1). Nearer the horizon the transmittance changes across the disc by
@@ -187,9 +202,8 @@ def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, 
     draws the disc's points uniformly (docs/montecarlo.md); with the centre alone the observer's single scattering
     in twilight where the views leave the Earth's shadow came out below the Monte Carlo's first order (Earth
     defaults, sun -3 deg, 5 deg up opposite the sun: -78 / -27 / -18 % at 400 / 560 / 700 nm; with the disc within
-    its noise at 560 and 700 nm; docs/accuracy.md, "Low sun"). With ``n_k`` 1 (the stored tables), the centre
-    everywhere."""
-    n_k = frac.shape[1]
+    its noise at 560 and 700 nm; docs/accuracy.md, "Low sun")."""
+    n_k = disc_x.shape[0]
     for u in range(mu_s_flat.shape[0]):
         mu_s_i = clamp((r * mu_s_flat[u] + d * nu_flat[u]) / r_i, -1.0, 1.0)
         f = sun_visible_fraction(r_i, mu_s_i, bottom, alpha)
@@ -197,15 +211,15 @@ def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, 
         cos_h = -math.sqrt(max(1.0 - sin_h * sin_h, 0.0))
         h = (mu_s_i - cos_h) / (max(sin_h, 1e-6) * alpha)
         for k in range(n_k):
-            frac[u, k] = 0.0
-            cell[u, k] = 0
-            w[u, k] = 0.0
+            frac[u * n_k + k] = 0.0
+            cell[u * n_k + k] = 0
+            w[u * n_k + k] = 0.0
         if f <= 0.0:
             continue
-        if h >= DISC_HORIZON_RADII or n_k == 1:
-            frac[u, 0] = f
+        if h >= DISC_HORIZON_RADII:
+            frac[u * n_k] = f
             _, p_mu = transmittance_coord(r_i, mu_s_i, bottom, top, 2, n_tmu)
-            cell[u, 0], w[u, 0] = lerp_index(p_mu, 0, n_tmu - 1)
+            cell[u * n_k], w[u * n_k] = lerp_index(p_mu, 0, n_tmu - 1)
             continue
         theta = math.acos(mu_s_i)
         phi_lo = math.asin(max(-1.0, min(1.0, -h)))
@@ -215,24 +229,27 @@ def _sun_transmittance_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, 
             phi = phi_lo + span * disc_x[k]
             c = math.cos(phi)
             share = c * c * span * disc_w[k]
-            frac[u, k] = share
+            frac[u * n_k + k] = share
             total += share
             mu_k = math.cos(theta - math.sin(phi) * alpha)
             _, p_mu = transmittance_coord(r_i, mu_k, bottom, top, 2, n_tmu)
-            cell[u, k], w[u, k] = lerp_index(p_mu, 0, n_tmu - 1)
+            cell[u * n_k + k], w[u * n_k + k] = lerp_index(p_mu, 0, n_tmu - 1)
         scale = f / total if total > 0.0 else 0.0
         for k in range(n_k):
-            frac[u, k] *= scale
+            frac[u * n_k + k] *= scale
 
 
 @kernel
 def single_scattering_kernel(transmittance, bottom, top, mu_s_tab, alpha, profiles, counts, extinction, n_samples,
-                             n_r, disc_nodes, ray, mie, first_r, start, stop):
+                             n_r, disc, ray, mie, first_r, start, stop):
     """Single scattering integrals per unit solar irradiance and unit scattering coefficient.
 
-    ``disc_nodes``: 1 for the sun's transmittance at its centre times the visible fraction of its disc (the stored
-    tables), or the chords of :func:`_sun_transmittance_cells` near the horizon (:data:`DISC_NODES`: the observer's
-    single scattering in twilight).
+    ``disc``: None for the sun's transmittance at its centre times the visible fraction of its disc (the stored
+    tables, :func:`_sun_transmittance_cells`), or (2, n) Gauss-Legendre nodes and weights on [0, 1]
+    (:func:`gauss_legendre_unit`) for the disc in ``n`` chords near the horizon (:func:`_sun_disc_cells`,
+    :data:`DISC_NODES`: the observer's single scattering in twilight). numba compiles a separate kernel for None,
+    without the chords' code: with it in the same kernel the compiler no longer vectorised the centre's reads (the
+    stored tables' kernel 1.1-2.6x slower, measured).
 
     Fills ``ray`` and ``mie`` (n_rows, n_mu, n_mu_s, n_nu, n_wavelengths) float32, radius indices ``first_r`` to
     ``first_r + n_rows - 1`` of a table of ``n_r`` radii (a block of rows: the driver streams them), at the sun
@@ -265,13 +282,10 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_tab, alpha, profil
     w_m32 = np.empty((n_pts, n_l), dtype=np.float32)
     t_sun = np.empty(n_l, dtype=np.float32)
     nu_flat = np.empty(n_suns)
-    n_disc = max(disc_nodes, 1)
-    cell = np.empty((n_suns, n_disc), dtype=np.int64)
-    w_sun = np.empty((n_suns, n_disc))
-    frac = np.empty((n_suns, n_disc))
-    disc_x = np.empty(n_disc)
-    disc_w = np.empty(n_disc)
-    gauss_legendre_unit(n_disc, disc_x, disc_w)
+    n_disc = 1 if disc is None else disc.shape[1]
+    cell = np.empty(n_suns * n_disc, dtype=np.int64)  # a sun's disc nodes contiguous
+    w_sun = np.empty(n_suns * n_disc)
+    frac = np.empty(n_suns * n_disc)
     mu_s_flat = np.repeat(mu_s_tab, n_nu)
     for idx in range(start, stop):
         i_r = idx // n_mu
@@ -321,21 +335,43 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_tab, alpha, profil
             # the transmittance table's r cell is the same for every sun at this sample
             p_r, _ = transmittance_coord(rad[i], 1.0, bottom, top, n_tr, n_tmu)
             j_r, w_tr = lerp_index(p_r, 0, n_tr - 1)
-            _sun_transmittance_cells(r, dist[i], rad[i], mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell,
-                                     w_sun, frac, disc_x, disc_w)
-            for u in range(n_mu_s * n_nu):
-                for q in range(n_disc):
-                    f = frac[u, q]
+            # The stored tables take the disc's centre (one read per sun), the observer's twilight rows its chords
+            # (DISC_NODES reads per sun near the horizon); the read itself is the same, written out in each loop
+            # (in a shared inline function the compiler no longer vectorised it)
+            if disc is None:
+                _sun_transmittance_cells(r, dist[i], rad[i], mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell,
+                                         w_sun, frac)
+                for u in range(n_suns):
+                    f = frac[u]
                     if f <= 0.0:
                         continue
-                    j = cell[u, q]
-                    w = w_sun[u, q]
+                    j = cell[u]
+                    w = w_sun[u]
                     a00, a01, a10, a11 = bilinear_weights(w_tr, w)
                     b00, b01, b10, b11 = (np.float32(f * a00), np.float32(f * a01), np.float32(f * a10),
                                           np.float32(f * a11))
                     # Two loops, not one: each then has few enough possible overlaps between the arrays it writes
                     # and reads for the compiler to check them at run time and vectorise it (in one loop it did
                     # not, and these loops were most of the kernel's time).
+                    for k in range(n_l):
+                        t_sun[k] = (b00 * transmittance[j_r, j, k] + b01 * transmittance[j_r, j + 1, k]
+                                    + b10 * transmittance[j_r + 1, j, k] + b11 * transmittance[j_r + 1, j + 1, k])
+                    for k in range(n_l):
+                        acc_r[u, k] += w_r32[i, k] * t_sun[k]
+                        acc_m[u, k] += w_m32[i, k] * t_sun[k]
+                continue
+            _sun_disc_cells(r, dist[i], rad[i], mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w_sun, frac,
+                            disc[0], disc[1])
+            for u in range(n_suns):
+                for q in range(u * n_disc, (u + 1) * n_disc):
+                    f = frac[q]
+                    if f <= 0.0:
+                        continue
+                    j = cell[q]
+                    w = w_sun[q]
+                    a00, a01, a10, a11 = bilinear_weights(w_tr, w)
+                    b00, b01, b10, b11 = (np.float32(f * a00), np.float32(f * a01), np.float32(f * a10),
+                                          np.float32(f * a11))
                     for k in range(n_l):
                         t_sun[k] = (b00 * transmittance[j_r, j, k] + b01 * transmittance[j_r, j + 1, k]
                                     + b10 * transmittance[j_r + 1, j, k] + b11 * transmittance[j_r + 1, j + 1, k])
