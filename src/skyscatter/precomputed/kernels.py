@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from ..jit import CONTRACT_ARCP, CONTRACT_REASSOC, helper, kernel
+from ..jit import CONTRACT_ARCP, CONTRACT_REASSOC, helper, inline, kernel
 from .geometry import (
     MU_S_LIMIT_TOLERANCE,
     acos_table,
@@ -239,6 +239,25 @@ def _sun_disc_cells(r, d, r_i, mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, ce
             frac[u * n_k + k] *= scale
 
 
+@inline(fastmath=CONTRACT_ARCP)
+def _add_sun(transmittance, j_r, w_tr, j, w, f, w_r32, w_m32, i, u, t_sun, acc_r, acc_m):
+    """Sample ``i``'s share of sun ``u``'s single scattering: the transmittance table read at radius cell ``j_r``
+    (weight ``w_tr``) and ``mu`` cell ``j`` (weight ``w``) times ``f`` (the visible disc, or a chord's share of it)
+    and the sample's ray weights, added to ``acc_r``, ``acc_m`` (float32)."""
+    a00, a01, a10, a11 = bilinear_weights(w_tr, w)
+    b00, b01, b10, b11 = np.float32(f * a00), np.float32(f * a01), np.float32(f * a10), np.float32(f * a11)
+    n_l = t_sun.shape[0]
+    # Two loops, not one: each then has few enough possible overlaps between the arrays it writes and reads for the
+    # compiler to check them at run time and vectorise it (in one loop it did not, and these loops were most of the
+    # single-scattering kernel's time).
+    for k in range(n_l):
+        t_sun[k] = (b00 * transmittance[j_r, j, k] + b01 * transmittance[j_r, j + 1, k]
+                    + b10 * transmittance[j_r + 1, j, k] + b11 * transmittance[j_r + 1, j + 1, k])
+    for k in range(n_l):
+        acc_r[u, k] += w_r32[i, k] * t_sun[k]
+        acc_m[u, k] += w_m32[i, k] * t_sun[k]
+
+
 @kernel
 def single_scattering_kernel(transmittance, bottom, top, mu_s_tab, alpha, profiles, counts, extinction, n_samples,
                              n_r, disc, ray, mie, first_r, start, stop):
@@ -248,8 +267,8 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_tab, alpha, profil
     tables, :func:`_sun_transmittance_cells`), or (2, n) Gauss-Legendre nodes and weights on [0, 1]
     (:func:`gauss_legendre_unit`) for the disc in ``n`` chords near the horizon (:func:`_sun_disc_cells`,
     :data:`DISC_NODES`: the observer's single scattering in twilight). numba compiles a separate kernel for None,
-    without the chords' code: with it in the same kernel the compiler no longer vectorised the centre's reads (the
-    stored tables' kernel 1.1-2.6x slower, measured).
+    without the chords' code: with it in the same compiled kernel the compiler no longer vectorised the centre's
+    reads (the stored tables' kernel 1.1-2.6x slower, measured; compiled apart, 0.68-0.74 s of CPU as before).
 
     Fills ``ray`` and ``mie`` (n_rows, n_mu, n_mu_s, n_nu, n_wavelengths) float32, radius indices ``first_r`` to
     ``first_r + n_rows - 1`` of a table of ``n_r`` radii (a block of rows: the driver streams them), at the sun
@@ -336,48 +355,22 @@ def single_scattering_kernel(transmittance, bottom, top, mu_s_tab, alpha, profil
             p_r, _ = transmittance_coord(rad[i], 1.0, bottom, top, n_tr, n_tmu)
             j_r, w_tr = lerp_index(p_r, 0, n_tr - 1)
             # The stored tables take the disc's centre (one read per sun), the observer's twilight rows its chords
-            # (DISC_NODES reads per sun near the horizon); the read itself is the same, written out in each loop
-            # (in a shared inline function the compiler no longer vectorised it)
+            # (DISC_NODES reads per sun near the horizon)
             if disc is None:
                 _sun_transmittance_cells(r, dist[i], rad[i], mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell,
                                          w_sun, frac)
                 for u in range(n_suns):
-                    f = frac[u]
-                    if f <= 0.0:
-                        continue
-                    j = cell[u]
-                    w = w_sun[u]
-                    a00, a01, a10, a11 = bilinear_weights(w_tr, w)
-                    b00, b01, b10, b11 = (np.float32(f * a00), np.float32(f * a01), np.float32(f * a10),
-                                          np.float32(f * a11))
-                    # Two loops, not one: each then has few enough possible overlaps between the arrays it writes
-                    # and reads for the compiler to check them at run time and vectorise it (in one loop it did
-                    # not, and these loops were most of the kernel's time).
-                    for k in range(n_l):
-                        t_sun[k] = (b00 * transmittance[j_r, j, k] + b01 * transmittance[j_r, j + 1, k]
-                                    + b10 * transmittance[j_r + 1, j, k] + b11 * transmittance[j_r + 1, j + 1, k])
-                    for k in range(n_l):
-                        acc_r[u, k] += w_r32[i, k] * t_sun[k]
-                        acc_m[u, k] += w_m32[i, k] * t_sun[k]
+                    if frac[u] > 0.0:
+                        _add_sun(transmittance, j_r, w_tr, cell[u], w_sun[u], frac[u], w_r32, w_m32, i, u, t_sun,
+                                 acc_r, acc_m)
                 continue
             _sun_disc_cells(r, dist[i], rad[i], mu_s_flat, nu_flat, bottom, top, alpha, n_tmu, cell, w_sun, frac,
                             disc[0], disc[1])
             for u in range(n_suns):
                 for q in range(u * n_disc, (u + 1) * n_disc):
-                    f = frac[q]
-                    if f <= 0.0:
-                        continue
-                    j = cell[q]
-                    w = w_sun[q]
-                    a00, a01, a10, a11 = bilinear_weights(w_tr, w)
-                    b00, b01, b10, b11 = (np.float32(f * a00), np.float32(f * a01), np.float32(f * a10),
-                                          np.float32(f * a11))
-                    for k in range(n_l):
-                        t_sun[k] = (b00 * transmittance[j_r, j, k] + b01 * transmittance[j_r, j + 1, k]
-                                    + b10 * transmittance[j_r + 1, j, k] + b11 * transmittance[j_r + 1, j + 1, k])
-                    for k in range(n_l):
-                        acc_r[u, k] += w_r32[i, k] * t_sun[k]
-                        acc_m[u, k] += w_m32[i, k] * t_sun[k]
+                    if frac[q] > 0.0:
+                        _add_sun(transmittance, j_r, w_tr, cell[q], w_sun[q], frac[q], w_r32, w_m32, i, u, t_sun,
+                                 acc_r, acc_m)
         for i_s in range(n_mu_s):
             for i_n in range(n_nu):
                 u = i_s * n_nu + i_n
