@@ -552,10 +552,12 @@ def test_streaming_and_chunks_do_not_change_the_tables(monkeypatch):
 def test_multiple_scattering_kernel_against_a_float64_reference():
     """The orders' ray integral (:func:`.kernels.multiple_scattering_kernel`, float32 arithmetic per sun and
     wavelength) against the same integral written out in float64 here: samples, product-integration weights,
-    the density interpolated linearly in r and mu and log-linearly in mu_s and nu (``w' = w a / (w a + (1 - w)
-    sqrt(a b))``, the smaller end floored at ``LOG_LERP_FLOOR`` times the larger). A density falling by up to 10^9
-    along mu_s exercises the log-linear weights and the floor. Tolerance 2e-6 relative: float32 rounding of the
-    slice and of the weights (6e-8 each), summed over the samples in float64."""
+    the density interpolated linearly in r, mu and nu, and along mu_s log-linearly (``w' = w a / (w a + (1 - w)
+    sqrt(a b))``, the smaller end floored at ``LOG_LERP_FLOOR`` times the larger) in the cells whose lower texel has
+    the sun below ``LOG_SUN_ZENITH_BELOW`` (6 deg), linearly above. A density falling by up to 10^9 along mu_s
+    exercises the log-linear weights and the floor, and makes the two reads differ where a cell is read linearly.
+    Tolerance 2e-6 relative: float32 rounding of the slice and of the weights (6e-8 each), summed over the samples
+    in float64."""
     from skyscatter.precomputed import geometry
     from skyscatter.precomputed.compute import Medium
 
@@ -581,6 +583,9 @@ def test_multiple_scattering_kernel_against_a_float64_reference():
         a, b = np.maximum(a, lo), np.maximum(b, lo)
         return w * a / (w * a + (1.0 - w) * np.sqrt(a * b))
 
+    j_log = int(np.sum(mu_s_tab < math.sin(kernels.LOG_SUN_ZENITH_BELOW)))
+    assert kernels.LOG_SUN_ZENITH_BELOW == pytest.approx(math.radians(6.0)) and 0 < j_log < n_s - 1
+    reads = {True: 0, False: 0}  # cells read log-linearly / linearly along mu_s
     checked = 0
     for i_r, i_mu in ((1, 1), (1, 6), (2, 3), (3, 2), (2, 0), (3, 7)):  # radius 0 looking down, the top up: no ray
         r, mu, hits = geometry.scattering_r_mu_params(i_r, i_mu, bottom, top, n_r, n_mu)
@@ -615,12 +620,13 @@ def test_multiple_scattering_kernel_against_a_float64_reference():
                                                  0, n_s - 1)
                     jn, wn = geometry.lerp_index(geometry.scattering_nu_coord(mu_i, mu_s_i, nu, n_n), 0, n_n - 1)
                     v00, v01, v10, v11 = sl[js, jn], sl[js, jn + 1], sl[js + 1, jn], sl[js + 1, jn + 1]
-                    gs = log_weight((1 - wn) * v00 + wn * v01, (1 - wn) * v10 + wn * v11, ws)
-                    gn = log_weight((1 - ws) * v00 + ws * v10, (1 - ws) * v01 + ws * v11, wn)
-                    value = (1 - gs) * ((1 - gn) * v00 + gn * v01) + gs * ((1 - gn) * v10 + gn * v11)
+                    a0, a1 = (1 - wn) * v00 + wn * v01, (1 - wn) * v10 + wn * v11
+                    reads[bool(js < j_log)] += 1
+                    gs = log_weight(a0, a1, ws) if js < j_log else ws
+                    value = a0 + gs * (a1 - a0)
                     expected[i_s, i_n] += q[i] * value
         got = out[i_r, i_mu]
         assert (expected > 0).mean() > 0.9  # zero only for suns beyond the tables' limit at every sample
         np.testing.assert_allclose(got, expected, rtol=2e-6, atol=0, err_msg=f"texel {(i_r, i_mu)}")
         checked += 1
-    assert checked == 6
+    assert checked == 6 and min(reads.values()) > 100, reads
