@@ -549,7 +549,8 @@ def test_streaming_and_chunks_do_not_change_the_tables(monkeypatch):
         assert ref["multiple"][0].any() == (orders > 1)
 
 
-def test_multiple_scattering_kernel_against_a_float64_reference():
+@pytest.mark.parametrize("wl", [(440.0, 550.0, 680.0), (420.0, 500.0, 580.0, 660.0)])
+def test_multiple_scattering_kernel_against_a_float64_reference(wl):
     """The orders' ray integral (:func:`.kernels.multiple_scattering_kernel`, float32 arithmetic per sun and
     wavelength) against the same integral written out in float64 here: samples, product-integration weights,
     the density interpolated linearly in r, mu and nu, and along mu_s log-linearly (``w' = w a / (w a + (1 - w)
@@ -557,13 +558,14 @@ def test_multiple_scattering_kernel_against_a_float64_reference():
     the sun below ``LOG_SUN_ZENITH_BELOW`` (6 deg), linearly above. A density falling by up to 10^9 along mu_s
     exercises the log-linear weights and the floor, and makes the two reads differ where a cell is read linearly.
     Tolerance 2e-6 relative: float32 rounding of the slice and of the weights (6e-8 each), summed over the samples
-    in float64."""
+    in float64. Three wavelengths (padded to four in the kernel's loops) and four (the slice's layout the table's:
+    one loop over the slice)."""
     from skyscatter.precomputed import geometry
     from skyscatter.precomputed.compute import Medium
 
     sizes = TableSizes.coerce(dict(transmittance_mu=16, transmittance_r=4, irradiance_mu_s=4, irradiance_r=4,
                                    scattering_r=4, scattering_mu=8, scattering_mu_s=6, scattering_nu=4))
-    wl = np.array([440.0, 550.0, 680.0])
+    wl = np.array(wl)
     med = Medium.of(EARTH, wl, sizes)
     n_r, n_mu, n_s, n_n = sizes.scattering_shape
     rng = np.random.default_rng(7)
