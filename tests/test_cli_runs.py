@@ -338,6 +338,9 @@ RUNS = {
                          _exr("sky.exr")),
     "sky-bruneton-spectral": (["sky", *S, "--model", "bruneton", "--tables", "spectral", "--sun-elevation",
                                "-3"], _exr("sky.exr")),
+    # a sun below the fisheye's horizon: until 2026-12-06 the sun's disc stopped this with a numpy casting error
+    "sky-bruneton-twilight-fisheye": (["sky", *S, "--model", "bruneton", "--tables", "rgb", "--sun-elevation", "-3",
+                                       "--projection", "fisheye"], _exr("sky.exr", (24, 24, 3))),
     "sky-montecarlo": (["sky", "--width", "8", "--model", "montecarlo", "--samples", "2", "--seed", "4",
                         "--altitude", "10"], _exr("sky.exr", (4, 8, 3))),
     "sky-montecarlo-cloud": (["sky", "--width", "8", "--model", "montecarlo", "--samples", "2", "--cloud-optical-depth",

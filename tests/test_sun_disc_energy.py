@@ -168,3 +168,18 @@ def test_bruneton_views_carry_the_transmitted_sun(view):
         omega = pixel_solid_angles("fisheye", 200)
     flux = float(((both[0] - both[1])[..., 1] * omega).sum())
     assert flux == pytest.approx(sky.sun.illuminance_normal(), rel=1e-6)
+
+
+@pytest.mark.parametrize("elevation_deg", [-0.5, -3.0, -20.0])
+def test_a_disc_below_a_fisheye_horizon_deposits_nothing(elevation_deg):
+    """A sun below the horizon of the upper-hemisphere fisheye lies outside its circle: no pixels (None), not an
+    error (until 2026-12-06 ``skyscatter sky --projection fisheye`` with a twilight sun stopped with a numpy casting
+    error: np.bincount of no samples is an integer array). Just above the horizon the visible part is deposited."""
+    e = math.radians(elevation_deg)
+    proj = projection_for("fisheye", 64, None, 0.0, 0.0, 1.0)
+    direction = np.array([0.0, math.cos(e), math.sin(e)])
+    assert disc_deposit(direction, math.radians(0.27), proj) is None
+    e = math.radians(0.5)
+    dep = disc_deposit(np.array([0.0, math.cos(e), math.sin(e)]), math.radians(0.27), proj)
+    assert dep is not None and dep.rows.size > 0 and np.all(dep.weights > 0)
+

@@ -343,6 +343,10 @@ def disc_deposit(direction: NDArray[np.float64], angular_radius: float, proj: _P
         return None
     keys = np.concatenate(keys_parts)
     vals = np.concatenate(vals_parts)
+    if keys.size == 0:
+        # every sub-sample outside the image's allowed pixels (a sun below the horizon of a fisheye: its box lies in
+        # the image's corners); np.bincount of nothing is an integer array, which the scaling below cannot take
+        return None
     # per pixel and node: the pixels touched, then their weights (one sort of the pixel numbers)
     pix_all, node_all = np.divmod(keys, nodes)
     upix, pinv = np.unique(pix_all, return_inverse=True)
