@@ -481,7 +481,10 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     on that grid, so a uniform radiance field is scattered without loss or gain of energy even where the
     forward Mie peak is under-resolved. The Rayleigh phase is a quadratic in ``v . w``, so its integral is
     ``3 / (16 pi) (M0 + v^T M2 v)`` with the radiance moments ``M0 = sum L dw`` and ``M2 = sum w w^T L dw``:
-    exact on the grid and without a loop per view.
+    exact on the grid and without a loop per view. The incident radiance and the grid are symmetric about the
+    sun's vertical plane (x-z), so each mirrored pair of grid directions is read once and scattered with the sum of
+    its two phase values, and the moments' xy and yz components vanish (table format 22: half the reads and half
+    the product; the density within float32 rounding of the whole grid's, at most 9e-6 relative, measured).
 
     The view direction of texel (mu, nu) in that frame is ``(sin theta cos phi, sin theta sin phi, mu)`` with
     ``phi`` the texel's view-sun azimuth (:func:`.geometry.scattering_nu_azimuth`), the same for every sun
