@@ -452,6 +452,22 @@ def sphere_quadrature(n_theta, hemisphere):
     return om, dom
 
 
+@kernel
+def mirror_pairs(n_theta):
+    """The mirrored pairs of :func:`sphere_quadrature`'s directions about the sun's vertical plane (x-z): two
+    (n_theta * n_theta,) index arrays, each pair's first direction (azimuths 0 to pi, j < n_theta of a zenith row's
+    2 n_theta midpoints) and its mirror image (2 n_theta - 1 - j). The incident radiance of the scattering density
+    and of the irradiance is symmetric about that plane, so each pair is read once (table format 22)."""
+    n_phi = 2 * n_theta
+    first = np.empty(n_theta * n_theta, dtype=np.int64)
+    mirror = np.empty(n_theta * n_theta, dtype=np.int64)
+    for i in range(n_theta):
+        for j in range(n_theta):
+            first[i * n_theta + j] = i * n_phi + j
+            mirror[i * n_theta + j] = i * n_phi + n_phi - 1 - j
+    return first, mirror
+
+
 @kernel(fastmath=CONTRACT_REASSOC)
 def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance, albedo, beta_r, beta_m, g, mie_kind,
                               lobe, phase_mu, phase_full, phase_trunc, profiles, counts, bottom, top, mu_s_min, n_theta,
@@ -515,15 +531,9 @@ def scattering_density_kernel(transmittance, s_a, s_b, first, ground_irradiance,
     # each read takes the direction's height and view-sun cosine, the ground's reflection its x and z, none its y.
     # The azimuth grid is symmetric too (the midpoints j and 2 n_theta - 1 - j mirror each other), so each pair of
     # mirrored directions is read once and scattered with the sum of the two phase values: half the reads and half
-    # the product's terms (the y moments of the Rayleigh sums vanish). The pair's first direction, j < n_theta:
-    n_phi = 2 * n_theta
-    n_h = n_om // 2
-    pair_a = np.empty(n_h, dtype=np.int64)
-    pair_b = np.empty(n_h, dtype=np.int64)
-    for i in range(n_theta):
-        for j in range(n_theta):
-            pair_a[i * n_theta + j] = i * n_phi + j
-            pair_b[i * n_theta + j] = i * n_phi + n_phi - 1 - j
+    # the product's terms (the y moments of the Rayleigh sums vanish)
+    pair_a, pair_b = mirror_pairs(n_theta)
+    n_h = pair_a.shape[0]
     # per direction pair, the (sun zenith, wavelength) radiances contiguous: the product below then gives each view's
     # values over the suns and wavelengths contiguous, and the final loop runs over the wavelengths on SIMD lanes
     # (the phase per view and direction pair, phase_m, transposed to match)
@@ -810,11 +820,7 @@ def indirect_irradiance_kernel(s_a, s_b, first, g, mie_kind, lobe, phase_trunc, 
     """
     n_r, n_mu_s, n_l = out.shape
     om, dom = sphere_quadrature(n_theta, True)
-    # the first half of each zenith row's 2 n_theta azimuths (0 to pi): mirrored by the second (_hemisphere_irradiance)
-    half = np.empty(n_theta * n_theta, dtype=np.int64)
-    for i in range(n_theta):
-        for j in range(n_theta):
-            half[i * n_theta + j] = i * 2 * n_theta + j
+    half, _ = mirror_pairs(n_theta)  # each pair's first direction, counted twice (_hemisphere_irradiance)
     n_s = s_a.shape[2]
     acc = np.zeros(n_l)
     sums = np.zeros((3, n_l))
