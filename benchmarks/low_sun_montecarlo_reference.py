@@ -109,13 +109,18 @@ def run_case(name: str, sun_elev: float, paths: int, seed: int) -> dict:
             "seconds": round(time.perf_counter() - t0, 1)}
 
 
+def check_new_seed(stored: dict, seed: int) -> None:
+    """Raise ValueError if ``seed`` already made a run of the stored case (pooling needs an independent stream)."""
+    if seed == stored["seed"] or seed in {r["seed"] for r in stored.get("pooled_runs", [])}:
+        raise ValueError(f"seed {seed} was already used for this case: pooling needs an independent stream")
+
+
 def pool_runs(stored: dict, new: dict) -> dict:
     """One case from two independent runs of the same estimator (different seeds): the mean over all their paths,
     ``(n1 m1 + n2 m2) / (n1 + n2)``, and its standard error ``sqrt(n1^2 s1^2 + n2^2 s2^2) / (n1 + n2)`` (the runs'
     standard errors of the mean ``s1``, ``s2``). ``seed`` stays the first run's; every later run is listed in
     ``pooled_runs`` with its seed, paths and seconds."""
-    if stored["seed"] == new["seed"] or new["seed"] in {r["seed"] for r in stored.get("pooled_runs", [])}:
-        raise ValueError(f"seed {new['seed']} was already used for this case: pooling needs an independent stream")
+    check_new_seed(stored, new["seed"])
     n1, n2 = stored["paths"], new["paths"]
     m1, m2 = np.array(stored["radiance"]), np.array(new["radiance"])
     s1, s2 = np.array(stored["radiance_stderr"]), np.array(new["radiance_stderr"])
@@ -150,7 +155,10 @@ def main() -> None:
         for s in (float(x) for x in args.suns.split(",")):
             if (name, s) in done and not args.pool:
                 continue
-            case = run_case(name, s, args.paths, args.seed + 1 + CASE_ORDER.index((name, s)))
+            seed = args.seed + 1 + CASE_ORDER.index((name, s))
+            if (name, s) in done:
+                check_new_seed(doc["cases"][done[(name, s)]], seed)  # before the run, not after it
+            case = run_case(name, s, args.paths, seed)
             if (name, s) in done:
                 i = done[(name, s)]
                 doc["cases"][i] = case = pool_runs(doc["cases"][i], case)
